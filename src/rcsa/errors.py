@@ -1,0 +1,58 @@
+"""Exceptions raised by :mod:`rcsa`.
+
+Every error a user can cause is an :class:`InputError` (a ``ValueError``) that names the
+offending field with a JSON-pointer-like dotted path and the rule it broke, so the CLI can
+print one line and the service can answer ``422`` with ``application/problem+json``.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "FrequencyMismatch",
+    "InputError",
+    "NotFoundError",
+    "RcsaError",
+    "StoreError",
+]
+
+
+class RcsaError(Exception):
+    """Base class of every error raised on purpose by :mod:`rcsa`."""
+
+
+class InputError(RcsaError, ValueError):
+    """Invalid user input.
+
+    Parameters
+    ----------
+    field : str
+        Dotted path of the offending field, e.g. ``"holder.segments[2].length_m"``;
+        empty for an error about the whole document.
+    rule : str
+        What the field must satisfy, phrased so a person can act on it.
+    """
+
+    def __init__(self, field: str, rule: str) -> None:
+        self.field = field
+        self.rule = rule
+        super().__init__(f"{field}: {rule}" if field else rule)
+
+
+class FrequencyMismatch(InputError):
+    """Two receptances that must share a frequency axis do not (never interpolated silently)."""
+
+
+class NotFoundError(RcsaError, KeyError):
+    """A stored object (measurement, job, library) does not exist."""
+
+    def __init__(self, what: str, ident: str) -> None:
+        self.what = what
+        self.ident = ident
+        super().__init__(f"{what} {ident!r} not found")
+
+    def __str__(self) -> str:  # KeyError would quote the message
+        return f"{self.what} {self.ident!r} not found"
+
+
+class StoreError(RcsaError):
+    """The store is unreadable, has a foreign schema, or a write could not be committed."""
