@@ -1,0 +1,184 @@
+"""Exact end receptances and dynamic stiffness of a uniform Timoshenko segment.
+
+The field transfer matrix of a uniform Timoshenko segment is written with the entire
+functions ``C(s, x) = cos(√s x)`` and ``S(s, x) = sin(√s x)/√s`` of the squared wavenumbers
+``s₁, s₂`` (``domain.md`` §2.2–2.3). They are even in √s, so no branch switch is needed at
+the shear cut-off ω_c = √(κGA/ρI), and complex moduli (hysteretic damping) need no special
+case. Euler–Bernoulli is the same code with zero shear flexibility and zero rotary inertia.
+
+State ``y = [w, ψ, V, M]`` with ``V = κGA (w' − ψ)`` and ``M = EI ψ'``; external end loads
+``f₀ = −[V, M](0)`` and ``f_L = +[V, M](L)``; DOF order ``(w₀, ψ₀, w_L, ψ_L)`` (§2.4).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .linalg2 import inv2
+from .sections import Section
+
+__all__ = [
+    "dynamic_stiffness",
+    "free_free_receptance",
+    "static_stiffness",
+    "transfer_matrix",
+    "wavenumbers",
+]
+
+_SERIES_LIMIT = 1e-2
+
+
+def wavenumbers(omega_rad_s: np.ndarray, section: Section) -> tuple[np.ndarray, np.ndarray]:
+    """Squared wavenumbers ``s₁, s₂`` (1/m²) of the Timoshenko dispersion relation.
+
+    ``EI s² − (ρIω² + EI ρAω²/κGA) s − ρAω² (1 − ρIω²/κGA) = 0`` (``domain.md`` §2.2),
+    solved without cancellation (the larger root first, the other from the product).
+
+    Parameters
+    ----------
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+    section : Section
+
+    Returns
+    -------
+    s1, s2 : numpy.ndarray, shape (nfreq,), complex
+    """
+    w2 = np.asarray(omega_rad_s, dtype=float) ** 2
+    ei, fs = section.ei, section.shear_flexibility
+    ra, ri = section.rho_a * w2, section.rho_i * w2
+    b = ri + ei * ra * fs
+    c = ra * (1.0 - ri * fs)
+    r = np.sqrt(b * b + 4.0 * ei * c + 0j)
+    r = np.where((np.conj(b) * r).real < 0, -r, r)
+    s1 = (b + r) / (2.0 * ei)
+    s2 = -c / (ei * s1)
+    return s1, s2
+
+
+def _c_and_s(s: np.ndarray, length_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``C = cos(√s L)``, ``S = sin(√s L)/√s`` and ``sS = √s sin(√s L)``, series near √s L = 0."""
+    k = np.sqrt(s + 0j)
+    z = k * length_m
+    c = np.cos(z)
+    sin_z = np.sin(z)
+    small = np.abs(z) < _SERIES_LIMIT
+    with np.errstate(invalid="ignore", divide="ignore"):
+        s_fun = np.where(small, length_m * (1.0 - z * z / 6.0 + z**4 / 120.0), sin_z / k)
+    return c, s_fun, k * sin_z
+
+
+def transfer_matrix(omega_rad_s: np.ndarray, section: Section, length_m: float) -> np.ndarray:
+    """Field transfer matrix ``T(L)`` with ``y(L) = T y(0)``, ``y = [w, ψ, V, M]``.
+
+    Closed form of ``B(L) B(0)⁻¹`` (``domain.md`` §2.3) with ``q_j = s_j − ρAω²/κGA``.
+
+    Parameters
+    ----------
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies > 0, rad/s.
+    section : Section
+    length_m : float
+
+    Returns
+    -------
+    numpy.ndarray, shape (nfreq, 4, 4), complex
+    """
+    w2 = np.asarray(omega_rad_s, dtype=float) ** 2
+    ei = section.ei
+    ra = section.rho_a * w2
+    s1, s2 = wavenumbers(omega_rad_s, section)
+    q1 = s1 - ra * section.shear_flexibility
+    q2 = s2 - ra * section.shear_flexibility
+    c1, sf1, ss1 = _c_and_s(s1, length_m)
+    c2, sf2, ss2 = _c_and_s(s2, length_m)
+    d = s1 - s2
+    qq = q1 * q2
+    t = np.empty((w2.size, 4, 4), dtype=complex)
+    # column w0
+    t[:, 0, 0] = (q1 * c2 - q2 * c1) / d
+    t[:, 1, 0] = qq * (sf1 - sf2) / d
+    t[:, 2, 0] = ra * (q2 * sf1 - q1 * sf2) / d
+    t[:, 3, 0] = ei * qq * (c1 - c2) / d
+    # column psi0
+    t[:, 0, 1] = (ss1 - ss2) / d
+    t[:, 1, 1] = (q1 * c1 - q2 * c2) / d
+    t[:, 2, 1] = ra * (c1 - c2) / d
+    t[:, 3, 1] = -ei * (q1 * ss1 - q2 * ss2) / d
+    # column V0
+    t[:, 0, 2] = (q1 * ss2 - q2 * ss1) / (ra * d)
+    t[:, 1, 2] = qq * (c2 - c1) / (ra * d)
+    t[:, 2, 2] = (q1 * c2 - q2 * c1) / d
+    t[:, 3, 2] = ei * qq * (ss1 - ss2) / (ra * d)
+    # column M0
+    t[:, 0, 3] = (c2 - c1) / (ei * d)
+    t[:, 1, 3] = (q1 * sf1 - q2 * sf2) / (ei * d)
+    t[:, 2, 3] = ra * (sf1 - sf2) / (ei * d)
+    t[:, 3, 3] = (q1 * c1 - q2 * c2) / d
+    return t
+
+
+def _blocks(t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    return t[:, :2, :2], t[:, :2, 2:], t[:, 2:, :2], t[:, 2:, 2:]
+
+
+def dynamic_stiffness(omega_rad_s: np.ndarray, section: Section, length_m: float) -> np.ndarray:
+    """Exact dynamic stiffness ``D``: ``[f₀; f_L] = D [d₀; d_L]``, DOFs ``(w₀, ψ₀, w_L, ψ_L)``.
+
+    ``D = [[T_ds⁻¹T_dd, −T_ds⁻¹], [·, T_ss T_ds⁻¹]]`` (``domain.md`` §2.4); the lower-left
+    block is taken as the transpose of the upper-right one (reciprocity), which avoids the
+    cancellation of the direct formula for long evanescent segments.
+
+    Returns
+    -------
+    numpy.ndarray, shape (nfreq, 4, 4), complex
+        Units: N/m, N/rad, N·m/m, N·m/rad in the blocks' positions.
+    """
+    t_dd, t_ds, _, t_ss = _blocks(transfer_matrix(omega_rad_s, section, length_m))
+    inv_ds = inv2(t_ds)
+    out = np.empty((t_dd.shape[0], 4, 4), dtype=complex)
+    out[:, :2, :2] = inv_ds @ t_dd
+    out[:, :2, 2:] = -inv_ds
+    out[:, 2:, :2] = -np.swapaxes(inv_ds, 1, 2)
+    out[:, 2:, 2:] = t_ss @ inv_ds
+    return out
+
+
+def free_free_receptance(omega_rad_s: np.ndarray, section: Section, length_m: float) -> np.ndarray:
+    """Exact free-free receptance ``R``: ``[d₀; d_L] = R [f₀; f_L]``.
+
+    ``R = [[T_sd⁻¹T_ss, T_sd⁻¹], [·, T_dd T_sd⁻¹]]`` (``domain.md`` §2.4), lower-left block by
+    reciprocity.
+
+    Returns
+    -------
+    numpy.ndarray, shape (nfreq, 4, 4), complex
+    """
+    t_dd, _, t_sd, t_ss = _blocks(transfer_matrix(omega_rad_s, section, length_m))
+    inv_sd = inv2(t_sd)
+    out = np.empty((t_dd.shape[0], 4, 4), dtype=complex)
+    out[:, :2, :2] = inv_sd @ t_ss
+    out[:, :2, 2:] = inv_sd
+    out[:, 2:, :2] = np.swapaxes(inv_sd, 1, 2)
+    out[:, 2:, 2:] = t_dd @ inv_sd
+    return out
+
+
+def static_stiffness(section: Section, length_m: float) -> np.ndarray:
+    """Exact static Timoshenko stiffness matrix (the ω → 0 limit of :func:`dynamic_stiffness`).
+
+    ``EI/((1+Φ)L³) [[12, 6L, −12, 6L], [6L, (4+Φ)L², −6L, (2−Φ)L²], …]``, Φ = 12EI/(κGA L²)
+    (``domain.md`` §2.4), with the section's complex moduli.
+
+    Returns
+    -------
+    numpy.ndarray, shape (4, 4), complex
+    """
+    ei, lm = section.ei, length_m
+    phi = 12.0 * ei * section.shear_flexibility / lm**2
+    k = np.array([
+        [12.0, 6 * lm, -12.0, 6 * lm],
+        [6 * lm, (4 + phi) * lm**2, -6 * lm, (2 - phi) * lm**2],
+        [-12.0, -6 * lm, 12.0, -6 * lm],
+        [6 * lm, (2 - phi) * lm**2, -6 * lm, (4 + phi) * lm**2],
+    ], dtype=complex)
+    return ei / ((1 + phi) * lm**3) * k
