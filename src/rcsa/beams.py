@@ -19,14 +19,12 @@ from .sections import Section
 
 __all__ = [
     "dynamic_stiffness",
+    "stiffness_terms",
     "free_free_receptance",
     "static_stiffness",
     "transfer_matrix",
     "wavenumbers",
 ]
-
-_SERIES_LIMIT = 1e-2
-
 
 def wavenumbers(omega_rad_s: np.ndarray, section: Section) -> tuple[np.ndarray, np.ndarray]:
     """Squared wavenumbers ``s₁, s₂`` (1/m²) of the Timoshenko dispersion relation.
@@ -56,15 +54,20 @@ def wavenumbers(omega_rad_s: np.ndarray, section: Section) -> tuple[np.ndarray, 
 
 
 def _c_and_s(s: np.ndarray, length_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``C = cos(√s L)``, ``S = sin(√s L)/√s`` and ``sS = √s sin(√s L)``, series near √s L = 0."""
-    k = np.sqrt(s + 0j)
+    """``C = cos(√s L)``, ``S = sin(√s L)/√s`` and ``sS = √s sin(√s L)``.
+
+    ``sin(z)/k`` keeps full relative precision for small ``z = kL``; only ``k = 0`` exactly
+    (a segment at its shear cut-off) needs the limit ``S = L``.
+    """
+    k = np.sqrt(s.astype(complex, copy=False))
     z = k * length_m
-    c = np.cos(z)
     sin_z = np.sin(z)
-    small = np.abs(z) < _SERIES_LIMIT
     with np.errstate(invalid="ignore", divide="ignore"):
-        s_fun = np.where(small, length_m * (1.0 - z * z / 6.0 + z**4 / 120.0), sin_z / k)
-    return c, s_fun, k * sin_z
+        s_fun = sin_z / k
+    zero = k == 0
+    if zero.any():
+        s_fun[zero] = length_m
+    return np.cos(z), s_fun, k * sin_z
 
 
 def transfer_matrix(omega_rad_s: np.ndarray, section: Section, length_m: float) -> np.ndarray:
@@ -121,26 +124,72 @@ def _blocks(t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarr
     return t[:, :2, :2], t[:, :2, 2:], t[:, 2:, :2], t[:, 2:, 2:]
 
 
+class _Waves:
+    """Wavenumber data of one section on one frequency grid (shared by equal sections)."""
+
+    __slots__ = ("d", "q1", "q2", "ra", "s1", "s2")
+
+    def __init__(self, omega_rad_s: np.ndarray, section: Section) -> None:
+        self.ra = section.rho_a * np.asarray(omega_rad_s, dtype=float) ** 2
+        self.s1, self.s2 = wavenumbers(omega_rad_s, section)
+        self.q1 = self.s1 - self.ra * section.shear_flexibility
+        self.q2 = self.s2 - self.ra * section.shear_flexibility
+        self.d = self.s1 - self.s2
+
+
+def stiffness_terms(omega_rad_s: np.ndarray, section: Section, length_m: float,
+                    waves: _Waves | None = None) -> tuple[np.ndarray, ...]:
+    """The six distinct entries ``(A, B, C, E, F, G)`` of a uniform segment's dynamic stiffness.
+
+    By reciprocity and the mirror symmetry of a uniform segment::
+
+        D = [[ A,  B,  E,  F],
+             [ B,  C, -F,  G],
+             [ E, -F,  A, -B],
+             [ F,  G, -B,  C]]
+
+    computed from the transfer-matrix entries of :func:`transfer_matrix` (their common
+    factor 1/(s₁ − s₂) cancels): ``D11 = T_ds⁻¹ T_dd`` and ``D12 = −T_ds⁻¹`` (``domain.md`` §2.4).
+
+    Returns
+    -------
+    tuple of numpy.ndarray, each shape (nfreq,), complex
+    """
+    wv = waves if waves is not None else _Waves(omega_rad_s, section)
+    ei, ra, q1, q2 = section.ei, wv.ra, wv.q1, wv.q2
+    c1, sf1, ss1 = _c_and_s(wv.s1, length_m)
+    c2, sf2, ss2 = _c_and_s(wv.s2, length_m)
+    dc = c2 - c1
+    # transfer-matrix entries times (s1 - s2)
+    t_ww = q1 * c2 - q2 * c1
+    t_pw = q1 * q2 * (sf1 - sf2)
+    t_wp = ss1 - ss2
+    t_pp = q1 * c1 - q2 * c2
+    t_wv = (q1 * ss2 - q2 * ss1) / ra
+    t_pv = q1 * q2 * dc / ra
+    t_wm = dc / ei
+    t_pm = (q1 * sf1 - q2 * sf2) / ei
+    inv_det = 1.0 / (t_wv * t_pm - t_wm * t_pv)
+    a = (t_pm * t_ww - t_wm * t_pw) * inv_det
+    b = (t_pm * t_wp - t_wm * t_pp) * inv_det
+    c = (t_wv * t_pp - t_pv * t_wp) * inv_det
+    scale = wv.d * inv_det
+    return a, b, c, -t_pm * scale, t_wm * scale, -t_wv * scale
+
+
 def dynamic_stiffness(omega_rad_s: np.ndarray, section: Section, length_m: float) -> np.ndarray:
     """Exact dynamic stiffness ``D``: ``[f₀; f_L] = D [d₀; d_L]``, DOFs ``(w₀, ψ₀, w_L, ψ_L)``.
 
-    ``D = [[T_ds⁻¹T_dd, −T_ds⁻¹], [·, T_ss T_ds⁻¹]]`` (``domain.md`` §2.4); the lower-left
-    block is taken as the transpose of the upper-right one (reciprocity), which avoids the
-    cancellation of the direct formula for long evanescent segments.
+    Assembled from :func:`stiffness_terms`.
 
     Returns
     -------
     numpy.ndarray, shape (nfreq, 4, 4), complex
         Units: N/m, N/rad, N·m/m, N·m/rad in the blocks' positions.
     """
-    t_dd, t_ds, _, t_ss = _blocks(transfer_matrix(omega_rad_s, section, length_m))
-    inv_ds = inv2(t_ds)
-    out = np.empty((t_dd.shape[0], 4, 4), dtype=complex)
-    out[:, :2, :2] = inv_ds @ t_dd
-    out[:, :2, 2:] = -inv_ds
-    out[:, 2:, :2] = -np.swapaxes(inv_ds, 1, 2)
-    out[:, 2:, 2:] = t_ss @ inv_ds
-    return out
+    a, b, c, e, f, g = stiffness_terms(omega_rad_s, section, length_m)
+    rows = [[a, b, e, f], [b, c, -f, g], [e, -f, a, -b], [f, g, -b, c]]
+    return np.stack([np.stack(r, axis=-1) for r in rows], axis=-2)
 
 
 def free_free_receptance(omega_rad_s: np.ndarray, section: Section, length_m: float) -> np.ndarray:

@@ -25,43 +25,71 @@ import math
 
 import numpy as np
 
-from .beams import dynamic_stiffness, static_stiffness
+from .beams import _Waves, static_stiffness, stiffness_terms
 from .chain import Beam, Chain, Ground, Spring
 from .linalg2 import inv2, negative_count_sym2
+from .sections import Section
 
 __all__ = ["march", "static_tip_receptance", "subdivide", "tip_receptance", "wittrick_williams_count"]
 
 
-def _beam_step(k: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    p = k + d[:, :2, :2]
-    pi = inv2(p)
-    return d[:, 2:, 2:] - d[:, 2:, :2] @ pi @ d[:, :2, 2:], p
+_BLOCK = 4096
+
+# A symmetric 2×2 stiffness is carried as its three entries (k11, k12, k22), each (nfreq,).
+Sym = tuple[np.ndarray, np.ndarray, np.ndarray]
 
 
-def _spring_step(k: np.ndarray, spring: Spring, omega_rad_s: np.ndarray
-                 ) -> tuple[np.ndarray, np.ndarray | None]:
-    """Condense across an elastic joint; rigid DOFs are shared, not penalised.
+def _to_sym(k: np.ndarray) -> Sym:
+    return (k[:, 0, 0].copy(), 0.5 * (k[:, 0, 1] + k[:, 1, 0]), k[:, 1, 1].copy())
 
-    Returns the new ``K`` and the pivot (2×2, 1×1 as (n,1,1), or None when fully rigid).
+
+def _from_sym(k: Sym) -> np.ndarray:
+    out = np.empty((k[0].size, 2, 2), dtype=complex)
+    out[:, 0, 0], out[:, 0, 1], out[:, 1, 0], out[:, 1, 1] = k[0], k[1], k[1], k[2]
+    return out
+
+
+def _beam_step(k: Sym, terms: tuple[np.ndarray, ...]) -> tuple[Sym, Sym]:
+    """``P = K + D11``; ``K ← D22 − D21 P⁻¹ D12`` with the six-term segment stiffness."""
+    a, b, c, e, f, g = terms
+    p11, p12, p22 = k[0] + a, k[1] + b, k[2] + c
+    inv_det = 1.0 / (p11 * p22 - p12 * p12)
+    x11 = (p22 * e + p12 * f) * inv_det
+    x12 = (p22 * f - p12 * g) * inv_det
+    x21 = -(p12 * e + p11 * f) * inv_det
+    x22 = (p11 * g - p12 * f) * inv_det
+    return (a - (e * x11 - f * x21), -b - (e * x12 - f * x22), c - (f * x12 + g * x22)), (p11, p12, p22)
+
+
+def _spring_step(k: Sym, spring: Spring, omega_rad_s: np.ndarray) -> tuple[Sym, Sym | np.ndarray | None]:
+    """Condense across an elastic joint; rigid DOFs are shared by both nodes, not penalised.
+
+    Returns the new ``K`` and the pivot (a symmetric 2×2, a scalar array when one DOF is
+    rigid, or None when the joint is rigid).
     """
     kt, kr = spring.translational(omega_rad_s), spring.rotational(omega_rad_s)
+    k11, k12, k22 = k
     if kt is None and kr is None:
         return k, None
     if kt is not None and kr is not None:
-        kj = np.zeros_like(k)
-        kj[:, 0, 0], kj[:, 1, 1] = kt, kr
-        p = k + kj
-        return kj - kj @ inv2(p) @ kj, p
-    # One DOF elastic (index e), the other rigid (index r, shared by both nodes).
-    e, kv = (0, kt) if kt is not None else (1, kr)
-    r = 1 - e
-    p = k[:, e, e] + kv
-    out = np.empty_like(k)
-    out[:, e, e] = kv - kv * kv / p
-    out[:, e, r] = kv * k[:, e, r] / p
-    out[:, r, e] = k[:, r, e] * kv / p
-    out[:, r, r] = k[:, r, r] - k[:, r, e] * k[:, e, r] / p
-    return out, p[:, None, None]
+        p11, p12, p22 = k11 + kt, k12, k22 + kr
+        inv_det = 1.0 / (p11 * p22 - p12 * p12)
+        return (kt - kt * kt * p22 * inv_det, kt * kr * p12 * inv_det, kr - kr * kr * p11 * inv_det), \
+            (p11, p12, p22)
+    if kt is not None:  # rotation rigid: eliminate the old node's w only
+        p = k11 + kt
+        return (kt - kt * kt / p, kt * k12 / p, k22 - k12 * k12 / p), p
+    p = k22 + kr  # translation rigid: eliminate the old node's ψ only
+    return (k11 - k12 * k12 / p, kr * k12 / p, kr - kr * kr / p), p
+
+
+def _negatives(pivot: Sym | np.ndarray) -> np.ndarray:
+    if isinstance(pivot, np.ndarray):
+        return (pivot.real < 0).astype(int)
+    p11, p12, p22 = (x.real for x in pivot)
+    det = p11 * p22 - p12 * p12
+    tr = p11 + p22
+    return np.where(det < 0, 1, np.where((det >= 0) & (tr < 0), 2 - (det == 0), 0))
 
 
 def march(chain: Chain, omega_rad_s: np.ndarray, start: np.ndarray | None = None,
@@ -74,7 +102,7 @@ def march(chain: Chain, omega_rad_s: np.ndarray, start: np.ndarray | None = None
     omega_rad_s : numpy.ndarray, shape (nfreq,)
     start : numpy.ndarray, shape (nfreq, 2, 2), optional
         Dynamic stiffness already attached at the first node (e.g. a condensed spindle, or
-        the inverse of a measured base receptance); zero (free end) by default.
+        the inverse of a measured base receptance; symmetrised); zero (free end) by default.
     count : bool
         Also return the number of negative pivot eigenvalues per frequency (undamped chains).
 
@@ -86,27 +114,35 @@ def march(chain: Chain, omega_rad_s: np.ndarray, start: np.ndarray | None = None
         Negative eigenvalues of the eliminated pivots (excluding the returned ``k``).
     """
     w = np.asarray(omega_rad_s, dtype=float)
-    k = np.zeros((w.size, 2, 2), dtype=complex) if start is None else np.array(start, dtype=complex)
+    if w.size > _BLOCK:  # blocks of the frequency axis keep temporaries in cache
+        parts = [march(chain, w[i:i + _BLOCK], None if start is None else start[i:i + _BLOCK], count)
+                 for i in range(0, w.size, _BLOCK)]
+        k_all = np.concatenate([p[0] for p in parts])
+        return k_all, (np.concatenate([p[1] for p in parts]) if count else None)  # type: ignore[misc]
+    if start is None:
+        zero = np.zeros(w.size, dtype=complex)
+        k: Sym = (zero, zero, zero)
+    else:
+        k = _to_sym(np.asarray(start, dtype=complex))
     neg = np.zeros(w.size, dtype=int) if count else None
+    waves: dict[Section, _Waves] = {}
     for item in chain:
-        pivot = None
+        pivot: Sym | np.ndarray | None = None
         if isinstance(item, Beam):
-            k, pivot = _beam_step(k, dynamic_stiffness(w, item.section, item.length_m))
+            wv = waves.get(item.section)
+            if wv is None:
+                wv = waves[item.section] = _Waves(w, item.section)
+            k, pivot = _beam_step(k, stiffness_terms(w, item.section, item.length_m, wv))
         elif isinstance(item, Spring):
             k, pivot = _spring_step(k, item, w)
         elif isinstance(item, Ground):
-            k = k + item.stiffness(w)
+            g = item.stiffness(w)
+            k = (k[0] + g[:, 0, 0], k[1], k[2] + g[:, 1, 1])
         else:  # pragma: no cover - Chain is a closed union
             raise TypeError(f"unknown chain item {item!r}")
-        if count and pivot is not None:
+        if neg is not None and pivot is not None:
             neg += _negatives(pivot)
-    return k, neg
-
-
-def _negatives(pivot: np.ndarray) -> np.ndarray:
-    if pivot.shape[-1] == 1:
-        return (pivot[:, 0, 0].real < 0).astype(int)
-    return negative_count_sym2(pivot)
+    return _from_sym(k), neg
 
 
 def tip_receptance(chain: Chain, omega_rad_s: np.ndarray, start: np.ndarray | None = None) -> np.ndarray:
@@ -167,18 +203,20 @@ def static_tip_receptance(chain: Chain) -> np.ndarray | None:
     Uses the exact static Timoshenko stiffness of each beam; ``None`` when the chain is not
     grounded (a free body has no static stiffness).
     """
-    k = np.zeros((1, 2, 2))
+    zero = np.zeros(1, dtype=complex)
+    k: Sym = (zero, zero, zero)
     for item in chain:
         if isinstance(item, Beam):
-            d = static_stiffness(item.section.undamped(), item.length_m).real[None]
-            k = _beam_step(k, d)[0]  # P = K + D11 is positive definite: K ≥ 0, D11 > 0
+            d = static_stiffness(item.section.undamped(), item.length_m)
+            terms = tuple(np.array([d[i, j]]) for i, j in ((0, 0), (0, 1), (1, 1), (0, 2), (0, 3), (1, 3)))
+            k = _beam_step(k, terms)[0]  # P = K + D11 is positive definite: K >= 0, D11 > 0
         elif isinstance(item, Spring):
             stiff = Spring(item.stiffness_n_m, 0.0, item.rotational_stiffness_nm_rad, 0.0)
-            k = _spring_step(k.astype(complex), stiff, np.zeros(1))[0].real
+            k = _spring_step(k, stiff, np.zeros(1))[0]
         else:
-            k = k + np.diag([item.stiffness_n_m, item.rotational_stiffness_nm_rad])[None]
-    det = np.linalg.det(k[0])
-    scale = max(abs(k[0, 0, 0]) * abs(k[0, 1, 1]), 1e-300)
-    if abs(det) <= 1e-12 * scale:
+            k = (k[0] + item.stiffness_n_m, k[1], k[2] + item.rotational_stiffness_nm_rad)
+    k11, k12, k22 = (float(x[0].real) for x in k)
+    det = k11 * k22 - k12 * k12
+    if abs(det) <= 1e-12 * max(abs(k11 * k22), 1e-300):
         return None
-    return np.linalg.inv(k[0])
+    return np.array([[k22, -k12], [-k12, k11]]) / det

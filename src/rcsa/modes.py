@@ -15,7 +15,7 @@ from scipy.signal import find_peaks
 from .chain import Chain, undamped
 from .dsm import subdivide, wittrick_williams_count
 
-__all__ = ["find_frf_peaks", "natural_frequencies_hz"]
+__all__ = ["find_frf_peaks", "modal_fit_peaks", "natural_frequencies_hz"]
 
 _TWO_PI = 2.0 * np.pi
 
@@ -82,3 +82,41 @@ def find_frf_peaks(frequency_hz: np.ndarray, h: np.ndarray, *, rel_prominence: f
         return []
     idx, _ = find_peaks(mag, prominence=rel_prominence * float(mag.max()))
     return [{"frequency_hz": float(frequency_hz[i]), "magnitude_m_n": float(mag[i])} for i in idx]
+
+
+def modal_fit_peaks(frequency_hz: np.ndarray, h: np.ndarray, *, rel_prominence: float = 0.01,
+                    half_width_lines: int = 6) -> list[dict[str, float]]:
+    """Single-mode fits around each peak of ``h`` (for FRFs without an exact model).
+
+    Around every peak, ``h ≈ (c₀ + c₁ iω + c₂ (iω)²) / (ω_n² + 2ζω_n iω + (iω)²)`` is fitted by
+    Levy's linearised least squares (one mode plus residual terms). Used for hybrid
+    predictions, where the spindle is known only through measured FRFs.
+
+    Returns
+    -------
+    list of dict
+        ``{"frequency_hz", "damping_ratio"}`` per peak whose fit is a stable mode.
+    """
+    out = []
+    for peak in find_frf_peaks(frequency_hz, h, rel_prominence=rel_prominence):
+        i = int(np.searchsorted(frequency_hz, peak["frequency_hz"]))
+        lo, hi = max(0, i - half_width_lines), min(frequency_hz.size, i + half_width_lines + 1)
+        if hi - lo < 5:
+            continue
+        s = 2j * np.pi * frequency_hz[lo:hi]
+        hh = h[lo:hi]
+        scale = float(np.abs(s).max())
+        sn = s / scale
+        # unknowns: a0, a1, c0, c1, c2 (real), normalised frequency sn
+        cols = np.stack([hh, hh * sn, -np.ones_like(sn), -sn, -(sn**2)], axis=1)
+        rhs = -hh * sn**2
+        a = np.concatenate([cols.real, cols.imag])
+        b = np.concatenate([rhs.real, rhs.imag])
+        col_scale = np.linalg.norm(a, axis=0)
+        x = np.linalg.lstsq(a / col_scale, b, rcond=None)[0] / col_scale
+        a0, a1 = x[0], x[1]
+        if a0 <= 0 or a1 <= 0:
+            continue
+        wn = np.sqrt(a0) * scale
+        out.append({"frequency_hz": float(wn / (2 * np.pi)), "damping_ratio": float(a1 / (2 * np.sqrt(a0)))})
+    return out

@@ -1,0 +1,179 @@
+"""Tool-point prediction of an assembly: the receptance and what users read from it.
+
+:func:`predict_model` solves an :class:`~rcsa.assembly.AssemblyModel` and returns a
+:class:`Prediction`, which is both a typed object (numpy arrays) and a read-only mapping in
+exactly the contract's JSON shape (``contract.md`` "Prediction result").
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .assembly import AssemblyModel
+from .chain import Chain, undamped
+from .dsm import march, static_tip_receptance
+from .frf import Receptance
+from .linalg2 import inv2
+from .modes import find_frf_peaks, modal_fit_peaks, natural_frequencies_hz
+
+__all__ = ["Prediction", "SubassemblyCache", "complex_to_json", "predict_model"]
+
+
+def complex_to_json(x: np.ndarray) -> dict[str, list[float]]:
+    """A complex array as the contract's ``{"real": [...], "imag": [...]}``."""
+    x = np.asarray(x)
+    return {"real": x.real.tolist(), "imag": x.imag.tolist()}
+
+
+@dataclass(frozen=True)
+class Prediction(Mapping[str, Any]):
+    """Result of a tool-point prediction.
+
+    Attributes
+    ----------
+    tool_point : Receptance
+        ``[[h, l], [n, p]]`` at the tool tip, shape (nfreq, 2, 2).
+    natural_frequencies_hz : numpy.ndarray, shape (nmodes,)
+        Exact undamped natural frequencies in the band (analytical), or modal-fit estimates
+        (hybrid; ``natural_frequencies_method == "modal_fit"``).
+    peaks : list of dict
+        ``{"frequency_hz", "magnitude_m_n"}`` local maxima of ``|h|``.
+    static_stiffness_n_m : float or None
+        1 / h at 0 Hz of the undamped model; ``None`` when it cannot be given.
+    min_real_m_n, min_real_frequency_hz : float
+        Most negative real part of h and where it occurs.
+    notes : tuple of str
+        What the numbers mean where it is not obvious (hybrid estimates, uncertainty).
+    extra : dict
+        Further JSON fields (e.g. the hybrid identification report).
+    """
+
+    tool_point: Receptance
+    natural_frequencies_hz: np.ndarray
+    natural_frequencies_method: str
+    peaks: list[dict[str, float]]
+    static_stiffness_n_m: float | None
+    min_real_m_n: float
+    min_real_frequency_hz: float
+    notes: tuple[str, ...] = ()
+    extra: Mapping[str, Any] = field(default_factory=dict)
+
+    @property
+    def frequency_hz(self) -> np.ndarray:
+        """Frequency grid, Hz, shape (nfreq,)."""
+        return self.tool_point.frequency_hz
+
+    def to_dict(self) -> dict[str, Any]:
+        """The contract's prediction result (JSON-ready)."""
+        tp = self.tool_point
+        out: dict[str, Any] = {
+            "frequency_hz": tp.frequency_hz.tolist(),
+            "tool_point": {k: complex_to_json(getattr(tp, k)) for k in ("h", "l", "n", "p")},
+            "natural_frequencies_hz": self.natural_frequencies_hz.tolist(),
+            "natural_frequencies_method": self.natural_frequencies_method,
+            "peaks": [dict(p) for p in self.peaks],
+            "static_stiffness_n_m": self.static_stiffness_n_m,
+            "min_real_m_n": self.min_real_m_n,
+            "min_real_frequency_hz": self.min_real_frequency_hz,
+            "notes": list(self.notes),
+        }
+        out.update(self.extra)
+        return out
+
+    def _dict(self) -> dict[str, Any]:
+        cached = self.__dict__.get("_cached")
+        if cached is None:
+            cached = self.to_dict()
+            object.__setattr__(self, "_cached", cached)
+        return cached
+
+    def __getitem__(self, key: str) -> Any:
+        return self._dict()[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._dict())
+
+    def __len__(self) -> int:
+        return len(self._dict())
+
+
+class SubassemblyCache:
+    """Condensed substructures on one frequency grid, reused across tools.
+
+    Keys are the (hashable, immutable) chains themselves, so two tools with the same
+    holder, shank and insertion share the spindle + holder condensation exactly.
+    """
+
+    def __init__(self, omega_rad_s: np.ndarray, base_stiffness: np.ndarray | None = None) -> None:
+        self.omega_rad_s = np.asarray(omega_rad_s, dtype=float)
+        self.base_stiffness = base_stiffness
+        self._store: dict[Chain, np.ndarray] = {}
+
+    def condensed(self, chain: Chain) -> np.ndarray:
+        """Dynamic stiffness at the end of ``chain`` (plus the base), shape (nfreq, 2, 2)."""
+        hit = self._store.get(chain)
+        if hit is None:
+            hit = march(chain, self.omega_rad_s, self.base_stiffness)[0]
+            self._store[chain] = hit
+        return hit
+
+
+def predict_model(model: AssemblyModel, frequency_hz: np.ndarray, *,
+                  base_receptance: np.ndarray | None = None,
+                  cache: SubassemblyCache | None = None,
+                  natural_frequencies: bool = True,
+                  notes: tuple[str, ...] = (), extra: Mapping[str, Any] | None = None) -> Prediction:
+    """Solve a chain model for its tool-point receptance and derived quantities.
+
+    Parameters
+    ----------
+    model : AssemblyModel
+    frequency_hz : numpy.ndarray, shape (nfreq,)
+    base_receptance : numpy.ndarray, shape (nfreq, 2, 2), optional
+        Measured spindle-side receptance at the first node (hybrid); then natural
+        frequencies are modal-fit estimates and the static stiffness is not given.
+    cache : SubassemblyCache, optional
+        Reuse of the spindle + holder condensation across calls on the same grid.
+    natural_frequencies : bool
+        Compute the exact natural frequencies (analytical models).
+
+    Returns
+    -------
+    Prediction
+    """
+    f = np.asarray(frequency_hz, dtype=float)
+    omega = 2.0 * np.pi * f
+    if cache is None:
+        cache = SubassemblyCache(omega, None if base_receptance is None else inv2(base_receptance))
+    k_tip = march(model.tool if model.holder_tool is None else (model.holder_tool, *model.tool),
+                  omega, cache.condensed(model.to_holder_tip()))[0]
+    g = inv2(k_tip)
+    tool_point = Receptance(f, g)
+    h = g[:, 0, 0]
+    notes_out = list(notes)
+    if base_receptance is None:
+        nat = natural_frequencies_hz(model.chain(), float(f[0]), float(f[-1])) if natural_frequencies \
+            else np.empty(0)
+        method = "wittrick_williams"
+        static = static_tip_receptance(undamped(model.chain()))
+        static_k = None if static is None else float(1.0 / static[0, 0])
+        if static is None:
+            notes_out.append("static_stiffness_n_m is null: the assembly is not grounded (no bearings)")
+    else:
+        fits = modal_fit_peaks(f, h)
+        nat = np.array([m["frequency_hz"] for m in fits])
+        method = "modal_fit"
+        static_k = None
+        notes_out.append("hybrid assembly: natural_frequencies_hz are single-mode fits to the predicted "
+                         "tool-point h around its peaks, not exact eigenvalues; static stiffness is not "
+                         "available from a measured spindle")
+        extra = {**(extra or {}), "modal_fit": fits}
+    i_min = int(np.argmin(h.real))
+    return Prediction(tool_point=tool_point, natural_frequencies_hz=np.asarray(nat, dtype=float),
+                      natural_frequencies_method=method, peaks=find_frf_peaks(f, h),
+                      static_stiffness_n_m=static_k, min_real_m_n=float(h.real[i_min]),
+                      min_real_frequency_hz=float(f[i_min]), notes=tuple(notes_out), extra=dict(extra or {}))
