@@ -652,7 +652,7 @@ def _check_tool_lengths(geo: Mapping[str, Any], stickout: float) -> None:
     if stickout >= geo["OAL"]:
         raise InputError("geometry.LB", f"stickout {_mm(stickout)} must be less than the overall "
                                         f"length OAL {_mm(geo['OAL'])}")
-    if geo["LCF"] > stickout + _LENGTH_TOL_M:
+    if geo["LCF"] > stickout:
         raise InputError("geometry.LCF", f"flute length {_mm(geo['LCF'])} exceeds the stickout "
                                          f"LB {_mm(stickout)}")
 
