@@ -351,9 +351,11 @@ class LibraryImport:
     library_sha256: str
 
     def __iter__(self) -> Iterator[Combination]:
+        """Iterate over the combinations in library order."""
         return iter(self.combinations)
 
     def __len__(self) -> int:
+        """Return the number of library items."""
         return len(self.combinations)
 
     def to_dict(self) -> dict[str, Any]:
@@ -585,7 +587,7 @@ def _mm(x_m: float) -> str:
 
 
 def _number(obj: Mapping[str, Any], key: str, path: str, *, required: bool) -> float | None:
-    """A finite number > 0 from ``obj[key]`` (in the object's unit), or None when absent."""
+    """Return ``obj[key]``, a finite number > 0 in the object's unit, or None when absent."""
     value = obj.get(key)
     if value is None:
         if required:
@@ -791,9 +793,10 @@ def _neck(geo: Mapping[str, Any], stickout: float, shaft: list[_Segment] | None,
     lcf, sfdm, tol = geo["LCF"], geo["SFDM"], _LENGTH_TOL_M
     shoulder, body_d = geo["shoulder-length"], geo["shoulder-diameter"]
     pieces: list[tuple[float, float, float, float]] = []   # (z0, z1, d0, d1) from the tip
-    z = lcf
+    z, body_at_dc = lcf, False
     if shoulder is not None and shoulder > lcf + tol and not (shaft and origin == "flute_end"):
         d = body_d if body_d is not None else geo["DC"]
+        body_at_dc = body_d is None and d < sfdm - tol
         pieces.append((lcf, shoulder, d, d))
         z = shoulder
     for s in shaft or ():
@@ -823,8 +826,7 @@ def _neck(geo: Mapping[str, Any], stickout: float, shaft: list[_Segment] | None,
     if d_max - d_min > tol:
         warnings.append(f"neck profile between {_mm(lcf)} and {_mm(end)} from the tip varies from "
                         f"{_mm(d_min)} to {_mm(d_max)}; modelled as one neck at {_mm(d_min)}")
-    if body_d is None and shoulder is not None and pieces and pieces[0][2] == geo["DC"] \
-            and geo["DC"] < sfdm - tol and not shaft:
+    if body_at_dc:
         warnings.append("shoulder-diameter missing; the body up to shoulder-length taken at DC")
     inside = [c for p in pieces if (c := clipped(p, stickout, stickout + 1.0)) is not None
               and min(c[2], c[3]) < sfdm - tol]
