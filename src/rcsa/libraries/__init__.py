@@ -1,6 +1,7 @@
 """Tool-library importers: CAM tool libraries → tool–holder combinations (contract format).
 
-:mod:`rcsa.libraries.fusion` reads Autodesk Fusion / HSM libraries (``.json``, ``.tools``).
+:mod:`rcsa.libraries.fusion` reads Autodesk Fusion / HSM libraries (``.json``, ``.tools``);
+:mod:`rcsa.libraries.freecad` maps a FreeCAD toolbit (``.fctb``) in a holder (``.fcholder``).
 Every importer returns one :class:`Combination` per library item with ``status`` ``"ok"``,
 ``"skipped"`` or ``"error"``; the ``ok`` ones carry ``holder`` and ``tool`` dicts in the
 contract's assembly format (SI metres).
@@ -8,6 +9,7 @@ contract's assembly format (SI metres).
 
 from __future__ import annotations
 
+from .freecad import freecad_combination, load_freecad_object, parse_length_m
 from .fusion import (
     SUPPORTED_TOOL_TYPES,
     Combination,
@@ -25,7 +27,10 @@ __all__ = [
     "FusionLibrary",
     "LibraryImport",
     "cone_cylinders",
+    "freecad_combination",
     "library_combinations",
+    "load_freecad_object",
     "load_fusion_library",
+    "parse_length_m",
     "unit_to_metres",
 ]
