@@ -363,6 +363,31 @@ def test_uncovered_speeds_are_nan_and_null():
     assert d["depth_limit_m"][0] is None and d["chatter_frequency_hz"][0] is None
 
 
+def test_too_few_lobes_never_overstate_stability():
+    """Stiff 300 Hz mode + flexible 800 Hz mode, 3 lobes only: at low speeds the 300 Hz
+    lobes exist but the governing 800 Hz lobes (k >= 3) are missing. Those speeds must be
+    NaN rather than the (higher, unsafe) 300 Hz value; elsewhere the result equals the
+    complete one."""
+    f = np.linspace(150.0, 1400.0, 2501)
+    h = single_mode(f, 300.0, 0.03, 2e8) + single_mode(f, 800.0, 0.03, 2e7)
+    kw = {
+        "teeth": 4, "tangential_coefficient_n_m2": 7e8, "radial_ratio": 0.3, "radial_immersion": 0.5,
+        "milling": "down", "spindle_speed_rpm": np.linspace(1000, 30000, 600),
+    }  # fmt: skip
+    full = stability_lobes(f, h, **kw)
+    few = stability_lobes(f, h, n_lobes=3, **kw)
+    assert np.all(np.isfinite(full.depth_limit_m))
+    withdrawn = np.isnan(few.depth_limit_m)
+    assert withdrawn.sum() > 20 and np.all(few.governing_lobe[withdrawn] == -1)
+    kept = ~withdrawn
+    np.testing.assert_array_equal(few.depth_limit_m[kept], full.depth_limit_m[kept])
+    # without the check, 300 Hz lobes would have been reported at some withdrawn speeds
+    lobe_cover = np.zeros(few.spindle_speed_rpm.size, dtype=bool)
+    for lobe in few.lobes:
+        lobe_cover |= np.isin(few.spindle_speed_rpm, lobe.spindle_speed_rpm)
+    assert np.any(withdrawn & lobe_cover)
+
+
 def test_automatic_lobe_count_covers_the_lowest_speed():
     f = np.linspace(400.0, 1400.0, 1001)
     r = stability_lobes(

@@ -258,6 +258,40 @@ def _curve_on_grid(
     return j, b, f
 
 
+def _needs_more_lobes(
+    frequency_hz: np.ndarray,
+    depth_m: np.ndarray,
+    epsilon_rad: np.ndarray,
+    teeth: int,
+    lobes_count: int,
+    grid_rpm: np.ndarray,
+    envelope_m: np.ndarray,
+) -> np.ndarray:
+    """Grid speeds where an uncomputed lobe (``k >= lobes_count``) could be lower.
+
+    Lobes ``k >= K`` map a chatter frequency ω only to speeds ``<= n_K(ω)``. At speed
+    ``s`` the omitted points therefore have depths ``{b(ω) : n_K(ω) >= s}``; if the
+    smallest is below the envelope, the envelope there is not the true limit (it would
+    overstate stability) and is withdrawn. Point-wise bound, vectorised with a running
+    minimum over points sorted by ``n_K``.
+    """
+    ok = np.isfinite(depth_m)
+    n_next = np.stack(
+        [_lobe_speed_rpm(frequency_hz, epsilon_rad[:, e], teeth, lobes_count) for e in range(2)],
+        axis=1,
+    )[ok]
+    b = depth_m[ok]
+    order = np.argsort(n_next)
+    n_sorted = n_next[order]
+    # running minimum of b over points in decreasing speed order
+    b_desc_min = np.minimum.accumulate(b[order][::-1])
+    count_at_or_above = n_sorted.size - np.searchsorted(n_sorted, grid_rpm, side="left")
+    missing_min = np.where(
+        count_at_or_above > 0, b_desc_min[np.maximum(count_at_or_above - 1, 0)], np.inf
+    )
+    return np.isfinite(envelope_m) & (missing_min < envelope_m)
+
+
 def _min_per_index(
     j: np.ndarray, b: np.ndarray, f: np.ndarray, size: int
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -297,7 +331,8 @@ class LobeResult:
     spindle_speed_rpm : numpy.ndarray, shape (nspeed,)
         Requested speed grid, rpm.
     depth_limit_m : numpy.ndarray, shape (nspeed,)
-        Lower envelope over all lobes, m; NaN where no computed lobe reaches the speed.
+        Lower envelope over all lobes, m; NaN where no computed lobe reaches the speed,
+        or where a lobe beyond ``n_lobes`` could be lower (never an optimistic value).
     chatter_frequency_hz : numpy.ndarray, shape (nspeed,)
         Chatter frequency of the governing lobe, Hz (NaN where uncovered).
     governing_lobe : numpy.ndarray, shape (nspeed,)
@@ -421,7 +456,9 @@ def stability_lobes(
     n_lobes : int, optional
         Lobes ``k = 0 … n_lobes − 1``. Default: enough for the lowest grid speed at the
         highest chatter frequency (``ceil(60 f_max/(N n_min)) + 1``), at most
-        ``MAX_AUTO_LOBES``; speeds below the last lobe are left NaN (never guessed).
+        ``MAX_AUTO_LOBES``. Speeds that the computed lobes do not settle — none reaches
+        them, or an omitted higher lobe could give a smaller depth there — are NaN in
+        the envelope (never an optimistic guess).
 
     Returns
     -------
@@ -509,6 +546,8 @@ def stability_lobes(
         env_k[better] = k
 
     env[~np.isfinite(env)] = np.nan
+    unsure = _needs_more_lobes(f, depth, epsilon, n_teeth, lobes_count, grid, env)
+    env[unsure], env_f[unsure], env_k[unsure] = np.nan, np.nan, -1
     for lobe in lobes:
         lobe.spindle_speed_rpm.flags.writeable = False
         lobe.depth_limit_m.flags.writeable = False

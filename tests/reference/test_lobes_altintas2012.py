@@ -114,7 +114,8 @@ def result(frf):
         radial_immersion=IMMERSION,
         milling="down",
         spindle_speed_rpm=np.linspace(2000.0, 16000.0, 2801),
-        n_lobes=20,  # the script plots 20 lobes
+        # automatic lobe count: the script's 20 lobes stop short of 2000 rpm for the
+        # 1441 Hz chatter (k ≈ 60·1441/(2·2000) ≈ 21.6 is needed there)
     )
 
 
