@@ -24,10 +24,10 @@ from rcsa.lobes import (
     LobeResult,
     directional_factors,
     engagement_angles_rad,
-    parse_lobes_request,
     stability_lobes,
     zoa_depth_limit,
 )
+from rcsa.lobes_request import parse_lobes_request
 
 # Identities evaluated in float64 on O(1e3) values: a few ulps of relative error.
 RTOL_ALGEBRA = 1e-10
