@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import struct
 import subprocess
 import sys
@@ -10,6 +11,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
+import rcsa
 from rcsa.errors import InputError
 from rcsa.lobes import stability_lobes
 from rcsa.plots import frf_figure, lobes_figure, save_figure
@@ -154,4 +156,9 @@ def test_no_pyplot_and_no_global_state():
         "assert 'matplotlib.pyplot' not in sys.modules, 'pyplot imported'\n"
         "assert snap() == before, 'rcParams changed'\n"
     )
-    subprocess.run([sys.executable, "-c", code], check=True, env=None)
+    src = os.path.dirname(os.path.dirname(rcsa.__file__))  # works installed or not
+    env = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join(filter(None, [src, os.environ.get("PYTHONPATH")])),
+    }
+    subprocess.run([sys.executable, "-c", code], check=True, env=env)
