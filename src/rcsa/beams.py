@@ -12,6 +12,8 @@ State ``y = [w, ψ, V, M]`` with ``V = κGA (w' − ψ)`` and ``M = EI ψ'``; ex
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .linalg2 import inv2
@@ -19,6 +21,8 @@ from .sections import Section
 
 __all__ = [
     "dynamic_stiffness",
+    "MAX_DECAY_PER_PIECE",
+    "segment_terms",
     "stiffness_terms",
     "free_free_receptance",
     "static_stiffness",
@@ -124,10 +128,15 @@ def _blocks(t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarr
     return t[:, :2, :2], t[:, :2, 2:], t[:, 2:, :2], t[:, 2:, 2:]
 
 
+#: Largest decay exponent |Im √s|·L of one piece: the closed forms subtract terms of size
+#: e^{2|Im √s| L} whose difference is O(1), so a piece keeps ~e^{2·3}·ε ≈ 1e-13 relative accuracy.
+MAX_DECAY_PER_PIECE = 3.0
+
+
 class _Waves:
     """Wavenumber data of one section on one frequency grid (shared by equal sections)."""
 
-    __slots__ = ("d", "q1", "q2", "ra", "s1", "s2")
+    __slots__ = ("d", "decay_per_m", "q1", "q2", "ra", "s1", "s2")
 
     def __init__(self, omega_rad_s: np.ndarray, section: Section) -> None:
         self.ra = section.rho_a * np.asarray(omega_rad_s, dtype=float) ** 2
@@ -135,6 +144,12 @@ class _Waves:
         self.q1 = self.s1 - self.ra * section.shear_flexibility
         self.q2 = self.s2 - self.ra * section.shear_flexibility
         self.d = self.s1 - self.s2
+        self.decay_per_m = float(max(np.abs(np.sqrt(self.s1).imag).max(initial=0.0),
+                                     np.abs(np.sqrt(self.s2).imag).max(initial=0.0)))
+
+    def pieces(self, length_m: float) -> int:
+        """Number of equal pieces keeping each piece's decay exponent ≤ MAX_DECAY_PER_PIECE."""
+        return max(1, math.ceil(self.decay_per_m * length_m / MAX_DECAY_PER_PIECE))
 
 
 def stiffness_terms(omega_rad_s: np.ndarray, section: Section, length_m: float,
@@ -150,6 +165,8 @@ def stiffness_terms(omega_rad_s: np.ndarray, section: Section, length_m: float,
 
     computed from the transfer-matrix entries of :func:`transfer_matrix` (their common
     factor 1/(s₁ − s₂) cancels): ``D11 = T_ds⁻¹ T_dd`` and ``D12 = −T_ds⁻¹`` (``domain.md`` §2.4).
+    Accurate for pieces whose decay exponent ``|Im √s| L`` is at most ``MAX_DECAY_PER_PIECE``;
+    longer segments are split by the callers (:func:`rcsa.dsm.march`, :func:`dynamic_stiffness`).
 
     Returns
     -------
@@ -177,17 +194,46 @@ def stiffness_terms(omega_rad_s: np.ndarray, section: Section, length_m: float,
     return a, b, c, -t_pm * scale, t_wm * scale, -t_wv * scale
 
 
+def _double(terms: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ...]:
+    """Six-term stiffness of two equal pieces in a row, the middle node condensed.
+
+    For equal pieces the middle pivot is ``P = D22 + D11 = diag(2A, 2C)``, so
+    ``D11' = D11 − D12 P⁻¹ D21`` and ``D12' = −D12 P⁻¹ D12`` reduce to the closed forms below.
+    """
+    a, b, c, e, f, g = terms
+    ia, ic = 0.5 / a, 0.5 / c
+    return (a - e * e * ia - f * f * ic, b + e * f * ia - f * g * ic, c - f * f * ia - g * g * ic,
+            f * f * ic - e * e * ia, -(e * ia + g * ic) * f, f * f * ia - g * g * ic)
+
+
+def segment_terms(omega_rad_s: np.ndarray, section: Section, length_m: float,
+                  waves: _Waves | None = None) -> tuple[np.ndarray, ...]:
+    """:func:`stiffness_terms` of a whole segment of any length.
+
+    A segment whose decay exponent exceeds ``MAX_DECAY_PER_PIECE`` is computed as ``2^m``
+    equal pieces joined by :func:`_double`, which is exact and keeps full precision for long,
+    strongly evanescent segments.
+    """
+    wv = waves if waves is not None else _Waves(omega_rad_s, section)
+    m = math.ceil(math.log2(wv.pieces(length_m)))
+    terms = stiffness_terms(omega_rad_s, section, length_m / 2**m, wv)
+    for _ in range(m):
+        terms = _double(terms)
+    return terms
+
+
 def dynamic_stiffness(omega_rad_s: np.ndarray, section: Section, length_m: float) -> np.ndarray:
     """Exact dynamic stiffness ``D``: ``[f₀; f_L] = D [d₀; d_L]``, DOFs ``(w₀, ψ₀, w_L, ψ_L)``.
 
-    Assembled from :func:`stiffness_terms`.
+    Assembled from :func:`stiffness_terms`; a segment too long for one piece (strongly
+    evanescent waves) is condensed from equal pieces.
 
     Returns
     -------
     numpy.ndarray, shape (nfreq, 4, 4), complex
         Units: N/m, N/rad, N·m/m, N·m/rad in the blocks' positions.
     """
-    a, b, c, e, f, g = stiffness_terms(omega_rad_s, section, length_m)
+    a, b, c, e, f, g = segment_terms(omega_rad_s, section, length_m)
     rows = [[a, b, e, f], [b, c, -f, g], [e, -f, a, -b], [f, g, -b, c]]
     return np.stack([np.stack(r, axis=-1) for r in rows], axis=-2)
 
@@ -196,19 +242,28 @@ def free_free_receptance(omega_rad_s: np.ndarray, section: Section, length_m: fl
     """Exact free-free receptance ``R``: ``[d₀; d_L] = R [f₀; f_L]``.
 
     ``R = [[T_sd⁻¹T_ss, T_sd⁻¹], [·, T_dd T_sd⁻¹]]`` (``domain.md`` §2.4), lower-left block by
-    reciprocity.
+    reciprocity. At frequencies where the segment is too long for one piece (strongly
+    evanescent waves, where that form cancels catastrophically) ``R = D⁻¹`` is used instead;
+    there the free-free rigid-body singularity of ``D`` is far away.
 
     Returns
     -------
     numpy.ndarray, shape (nfreq, 4, 4), complex
     """
-    t_dd, _, t_sd, t_ss = _blocks(transfer_matrix(omega_rad_s, section, length_m))
+    w = np.asarray(omega_rad_s, dtype=float)
+    wv = _Waves(w, section)
+    decay = np.maximum(np.abs(np.sqrt(wv.s1).imag), np.abs(np.sqrt(wv.s2).imag)) * length_m
+    long = decay > MAX_DECAY_PER_PIECE
+    out = np.empty((w.size, 4, 4), dtype=complex)
+    if long.any():
+        out[long] = np.linalg.inv(dynamic_stiffness(w[long], section, length_m))
+    short = ~long
+    t_dd, _, t_sd, t_ss = _blocks(transfer_matrix(w[short], section, length_m))
     inv_sd = inv2(t_sd)
-    out = np.empty((t_dd.shape[0], 4, 4), dtype=complex)
-    out[:, :2, :2] = inv_sd @ t_ss
-    out[:, :2, 2:] = inv_sd
-    out[:, 2:, :2] = np.swapaxes(inv_sd, 1, 2)
-    out[:, 2:, 2:] = t_dd @ inv_sd
+    out[short, :2, :2] = inv_sd @ t_ss
+    out[short, :2, 2:] = inv_sd
+    out[short, 2:, :2] = np.swapaxes(inv_sd, 1, 2)
+    out[short, 2:, 2:] = t_dd @ inv_sd
     return out
 
 

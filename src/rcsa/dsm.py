@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from .beams import _Waves, static_stiffness, stiffness_terms
+from .beams import _Waves, segment_terms, static_stiffness
 from .chain import Beam, Chain, Ground, Spring
 from .linalg2 import inv2, negative_count_sym2
 from .sections import Section
@@ -71,16 +71,18 @@ def _spring_step(k: Sym, spring: Spring, omega_rad_s: np.ndarray) -> tuple[Sym, 
     k11, k12, k22 = k
     if kt is None and kr is None:
         return k, None
+    # K_new = (K⁻¹ + K_j⁻¹)⁻¹ written as K_j P⁻¹ K (P = K + K_j): no cancellation for stiff joints
     if kt is not None and kr is not None:
         p11, p12, p22 = k11 + kt, k12, k22 + kr
         inv_det = 1.0 / (p11 * p22 - p12 * p12)
-        return (kt - kt * kt * p22 * inv_det, kt * kr * p12 * inv_det, kr - kr * kr * p11 * inv_det), \
-            (p11, p12, p22)
+        det_k = k11 * k22 - k12 * k12
+        return (kt * (det_k + kr * k11) * inv_det, kt * kr * k12 * inv_det,
+                kr * (det_k + kt * k22) * inv_det), (p11, p12, p22)
     if kt is not None:  # rotation rigid: eliminate the old node's w only
         p = k11 + kt
-        return (kt - kt * kt / p, kt * k12 / p, k22 - k12 * k12 / p), p
+        return (kt * k11 / p, kt * k12 / p, k22 - k12 * k12 / p), p
     p = k22 + kr  # translation rigid: eliminate the old node's ψ only
-    return (k11 - k12 * k12 / p, kr * k12 / p, kr - kr * kr / p), p
+    return (k11 - k12 * k12 / p, kr * k12 / p, kr * k22 / p), p
 
 
 def _negatives(pivot: Sym | np.ndarray) -> np.ndarray:
@@ -132,7 +134,7 @@ def march(chain: Chain, omega_rad_s: np.ndarray, start: np.ndarray | None = None
             wv = waves.get(item.section)
             if wv is None:
                 wv = waves[item.section] = _Waves(w, item.section)
-            k, pivot = _beam_step(k, stiffness_terms(w, item.section, item.length_m, wv))
+            k, pivot = _beam_step(k, segment_terms(w, item.section, item.length_m, wv))
         elif isinstance(item, Spring):
             k, pivot = _spring_step(k, item, w)
         elif isinstance(item, Ground):

@@ -30,11 +30,17 @@ __all__ = [
     "SegmentSpec",
     "SpindleSpec",
     "ToolSpec",
+    "CombinationSpec",
+    "CommonSpec",
+    "assemble",
     "parse_assembly",
+    "parse_combination",
+    "parse_common",
     "parse_frequency",
     "parse_holder",
     "parse_joint",
     "parse_materials",
+    "parse_spindle",
     "parse_tool",
 ]
 
@@ -285,20 +291,22 @@ def _segments(value: object, path: str, materials: Mapping[str, Material]) -> tu
     return tuple(out)
 
 
-def _spindle(value: object, materials: Mapping[str, Material]) -> SpindleSpec | MeasuredSpindleSpec:
-    o = _Obj(value, "spindle")
+def parse_spindle(value: object, materials: Mapping[str, Material], path: str = "spindle"
+                  ) -> SpindleSpec | MeasuredSpindleSpec:
+    """An analytical spindle (segments nose → rear, bearings) or a stored measurement id."""
+    o = _Obj(value, path)
     if "measurement_id" in o.value:
         o.only("measurement_id")
         return MeasuredSpindleSpec(o.string("measurement_id"))
     o.only("segments", "bearings")
-    segments = _segments(o.value.get("segments"), "spindle.segments", materials)
+    segments = _segments(o.value.get("segments"), o.at("segments"), materials)
     total = sum(s.length_m for s in segments)
     raw_bearings = o.value.get("bearings", [])
     if not isinstance(raw_bearings, list):
-        raise InputError("spindle.bearings", "must be a list")
+        raise InputError(o.at("bearings"), "must be a list")
     bearings = []
     for i, raw in enumerate(raw_bearings):
-        b = _Obj(raw, f"spindle.bearings[{i}]")
+        b = _Obj(raw, f"{o.at('bearings')}[{i}]")
         b.only("position_m", "stiffness_n_m", "damping_ns_m", "rotational_stiffness_nm_rad",
                "rotational_damping_nms_rad")
         pos = b.number("position_m", ge=0.0)
@@ -361,8 +369,83 @@ def parse_joint(value: object, path: str) -> JointSpec | None:
                      o.number("rotational_damping_nms_rad", ge=0.0, default=0.0))
 
 
-_TOP_FIELDS = ("frequency", "beam_theory", "shear_coefficient", "materials", "spindle", "holder",
-               "tool", "joints", "name", "description")
+@dataclass(frozen=True, slots=True)
+class CombinationSpec:
+    """One tool–holder combination of a batch: holder, tool and joints."""
+
+    holder: HolderSpec | None
+    tool: ToolSpec
+    spindle_holder: JointSpec | None
+    holder_tool: JointSpec | None
+
+
+def parse_combination(value: object, materials: Mapping[str, Material], path: str = "",
+                      extra_fields: tuple[str, ...] = ()) -> CombinationSpec:
+    """Holder, tool and joints of one assembly or batch combination.
+
+    Parameters
+    ----------
+    value : dict
+        Object holding ``holder`` (optional), ``tool`` and ``joints`` (optional).
+    path : str
+        Path prefix for error messages (``"combinations[3]"``).
+    extra_fields : tuple of str
+        Other keys allowed in ``value`` (checked by the caller).
+    """
+    o = _Obj(value, path)
+    o.only("holder", "tool", "joints", *extra_fields)
+    holder = parse_holder(o.value["holder"], materials, o.at("holder")) if o.has("holder") else None
+    if not o.has("tool"):
+        raise InputError(o.at("tool"), "is required")
+    tool = parse_tool(o.value["tool"], materials, o.at("tool"))
+    joints = _Obj(o.value.get("joints") or {}, o.at("joints"))
+    joints.only("spindle_holder", "holder_tool")
+    return CombinationSpec(holder, tool,
+                           parse_joint(joints.value.get("spindle_holder"), joints.at("spindle_holder")),
+                           parse_joint(joints.value.get("holder_tool"), joints.at("holder_tool")))
+
+
+@dataclass(frozen=True, slots=True)
+class CommonSpec:
+    """What every combination of an assembly or batch shares: grid, options, materials, spindle."""
+
+    frequency_hz: np.ndarray
+    beam_theory: BeamTheory
+    shear_coefficient: ShearModel | float
+    materials: Mapping[str, Material]
+    spindle: SpindleSpec | MeasuredSpindleSpec
+
+
+_COMMON_FIELDS = ("frequency", "beam_theory", "shear_coefficient", "materials", "spindle")
+
+
+def parse_common(document: object, path: str = "", max_lines: int = MAX_FREQUENCY_LINES) -> CommonSpec:
+    """Frequency grid, beam theory, shear coefficient, materials and spindle of a document."""
+    o = _Obj(document, path)
+    if "frequency" not in o.value:
+        raise InputError(o.at("frequency"), "is required")
+    frequency = parse_frequency(o.value["frequency"], o.at("frequency"), max_lines=max_lines)
+    theory = o.string("beam_theory", "timoshenko", ("timoshenko", "euler_bernoulli"))
+    if isinstance(o.value.get("shear_coefficient", "hutchinson"), str):
+        kappa: ShearModel | float = o.string("shear_coefficient", "hutchinson", ("hutchinson", "cowper"))  # type: ignore[assignment]
+    else:
+        kappa = o.number("shear_coefficient", gt=0.0, le=1.5)
+    materials = parse_materials(o.value.get("materials"), o.at("materials"))
+    if "spindle" not in o.value:
+        raise InputError(o.at("spindle"), "is required")
+    spindle = parse_spindle(o.value["spindle"], materials, o.at("spindle"))
+    return CommonSpec(frequency, theory, kappa, materials, spindle)  # type: ignore[arg-type]
+
+
+def assemble(common: CommonSpec, combination: CombinationSpec) -> AssemblySpec:
+    """An assembly from the shared part and one combination."""
+    if combination.holder is None and isinstance(common.spindle, SpindleSpec):
+        raise InputError("holder", "is required for an analytical spindle")
+    return AssemblySpec(
+        frequency_hz=common.frequency_hz, spindle=common.spindle, holder=combination.holder,
+        tool=combination.tool, spindle_holder=combination.spindle_holder,
+        holder_tool=combination.holder_tool, beam_theory=common.beam_theory,
+        shear_coefficient=common.shear_coefficient, materials=common.materials)
 
 
 def parse_assembly(document: object, max_lines: int = MAX_FREQUENCY_LINES) -> AssemblySpec:
@@ -385,31 +468,7 @@ def parse_assembly(document: object, max_lines: int = MAX_FREQUENCY_LINES) -> As
         Naming the offending field and the rule.
     """
     o = _Obj(document, "")
-    o.only(*_TOP_FIELDS)
-    if "frequency" not in o.value:
-        raise InputError("frequency", "is required")
-    frequency = parse_frequency(o.value["frequency"], max_lines=max_lines)
-    theory = o.string("beam_theory", "timoshenko", ("timoshenko", "euler_bernoulli"))
-    raw_kappa = o.value.get("shear_coefficient", "hutchinson")
-    if isinstance(raw_kappa, str):
-        kappa: ShearModel | float = o.string("shear_coefficient", "hutchinson", ("hutchinson", "cowper"))  # type: ignore[assignment]
-    else:
-        kappa = o.number("shear_coefficient", gt=0.0, le=1.5)
-    materials = parse_materials(o.value.get("materials"))
-    if "spindle" not in o.value:
-        raise InputError("spindle", "is required")
-    spindle = _spindle(o.value["spindle"], materials)
-    holder = parse_holder(o.value["holder"], materials) if o.has("holder") else None
-    if holder is None and isinstance(spindle, SpindleSpec):
-        raise InputError("holder", "is required for an analytical spindle")
-    if "tool" not in o.value:
-        raise InputError("tool", "is required")
-    tool = parse_tool(o.value["tool"], materials)
-    joints = _Obj(o.value.get("joints", {}), "joints")
-    joints.only("spindle_holder", "holder_tool")
-    return AssemblySpec(
-        frequency_hz=frequency, spindle=spindle, holder=holder, tool=tool,
-        spindle_holder=parse_joint(joints.value.get("spindle_holder"), "joints.spindle_holder"),
-        holder_tool=parse_joint(joints.value.get("holder_tool"), "joints.holder_tool"),
-        beam_theory=theory,  # type: ignore[arg-type]
-        shear_coefficient=kappa, materials=materials)
+    o.only(*_COMMON_FIELDS, "holder", "tool", "joints", "name", "description")
+    common = parse_common(document, max_lines=max_lines)
+    rest = {k: v for k, v in o.value.items() if k in ("holder", "tool", "joints")}
+    return assemble(common, parse_combination(rest, common.materials))

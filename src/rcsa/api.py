@@ -1,0 +1,155 @@
+"""The application layer: what the CLI and the REST service both call.
+
+Each function takes and returns plain contract documents (dicts) or the library's own
+objects, validates at the edge, and never depends on how it was reached. The service's
+routes and the CLI's commands are thin doors onto these functions.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import numpy as np
+
+from .assembly import build_model
+from .errors import InputError
+from .prediction import Prediction, SubassemblyCache, predict_model
+from .spec import (
+    MAX_FREQUENCY_LINES,
+    AssemblySpec,
+    CommonSpec,
+    MeasuredSpindleSpec,
+    assemble,
+    parse_assembly,
+    parse_combination,
+    parse_common,
+)
+
+__all__ = ["MAX_BATCH_COMBINATIONS", "predict", "predict_batch"]
+
+MAX_BATCH_COMBINATIONS = 10_000
+
+Progress = Callable[[int, int], None]
+
+
+class _SpindleContext:
+    """The spindle side shared by all combinations: plane, base receptance and cache."""
+
+    def __init__(self, common: CommonSpec, store: Any = None) -> None:
+        self.common = common
+        self.base_plane: str | None = None
+        self.base_receptance: np.ndarray | None = None
+        self.notes: tuple[str, ...] = ()
+        self.extra: dict[str, Any] = {}
+        if isinstance(common.spindle, MeasuredSpindleSpec):
+            from .hybrid import measured_base  # local: only hybrid requests need the store
+
+            base = measured_base(common.spindle.measurement_id, common.frequency_hz, store)
+            self.base_plane, self.base_receptance = base.plane, base.receptance
+            self.notes, self.extra = base.notes, {"spindle_measurement": base.report}
+        self.cache = SubassemblyCache(2 * np.pi * common.frequency_hz,
+                                      None if self.base_receptance is None else np.linalg.inv(self.base_receptance))
+
+    def predict(self, spec: AssemblySpec, natural_frequencies: bool = True) -> Prediction:
+        model = build_model(spec, self.base_plane)
+        return predict_model(model, spec.frequency_hz, base_receptance=self.base_receptance,
+                             cache=self.cache, natural_frequencies=natural_frequencies,
+                             notes=self.notes, extra=self.extra)
+
+
+def predict(assembly: Mapping[str, Any] | AssemblySpec, *, store: Any = None,
+            max_lines: int = MAX_FREQUENCY_LINES) -> Prediction:
+    """Tool-point prediction of one assembly (``contract.md`` "Python API").
+
+    Parameters
+    ----------
+    assembly : dict or AssemblySpec
+        The contract's assembly document (SI units), or an already parsed spec.
+    store : MeasurementStore, optional
+        Where ``"spindle": {"measurement_id": ...}`` is looked up; the default store
+        (``RCSA_STORE`` or the per-user location) when omitted.
+    max_lines : int
+        Largest accepted number of frequency lines.
+
+    Returns
+    -------
+    Prediction
+        Typed result; also a read-only mapping in the contract's JSON shape
+        (``result["natural_frequencies_hz"]``, ``result.to_dict()``).
+
+    Examples
+    --------
+    >>> from rcsa.reference import ra1
+    >>> result = predict(ra1({"start_hz": 500.0, "stop_hz": 1500.0, "step_hz": 1.0}))
+    >>> [round(f, 2) for f in result["natural_frequencies_hz"]]
+    [599.85, 921.69, 1115.51, 1383.61, 1444.68]
+    """
+    spec = assembly if isinstance(assembly, AssemblySpec) else parse_assembly(assembly, max_lines)
+    common = CommonSpec(spec.frequency_hz, spec.beam_theory, spec.shear_coefficient, spec.materials,
+                        spec.spindle)
+    return _SpindleContext(common, store).predict(spec)
+
+
+_BATCH_FIELDS = ("frequency", "beam_theory", "shear_coefficient", "materials", "spindle", "combinations",
+                 "natural_frequencies")
+
+
+def predict_batch(request: Mapping[str, Any], *, store: Any = None, max_lines: int = MAX_FREQUENCY_LINES,
+                  max_combinations: int = MAX_BATCH_COMBINATIONS, progress: Progress | None = None
+                  ) -> dict[str, Any]:
+    """Tool-point FRFs of many tool–holder combinations on one spindle.
+
+    The spindle (and each distinct spindle + holder + insertion) is condensed once and
+    reused. Results come in input order, each with its own ``status``; a bad combination
+    never fails the others.
+
+    Parameters
+    ----------
+    request : dict
+        ``{"spindle", "frequency", "combinations": [{"id", "holder", "tool", "joints"}]}``,
+        optionally ``materials``, ``beam_theory``, ``shear_coefficient`` and
+        ``natural_frequencies`` (bool, default true).
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each combination.
+
+    Returns
+    -------
+    dict
+        ``{"results": [{"id", "status": "ok", ...prediction} | {"id", "status": "error",
+        "error": {"field", "detail"}}], "summary": {"ok", "error"}}``
+    """
+    if not isinstance(request, Mapping):
+        raise InputError("", "the batch request must be a JSON object")
+    unknown = sorted(set(request) - set(_BATCH_FIELDS))
+    if unknown:
+        raise InputError(unknown[0], f"unknown field (allowed: {', '.join(_BATCH_FIELDS)})")
+    combos = request.get("combinations")
+    if not isinstance(combos, list) or not combos:
+        raise InputError("combinations", "must be a non-empty list")
+    if len(combos) > max_combinations:
+        raise InputError("combinations", f"at most {max_combinations} combinations per request, got {len(combos)}")
+    with_modes = request.get("natural_frequencies", True)
+    if not isinstance(with_modes, bool):
+        raise InputError("natural_frequencies", "must be true or false")
+    common = parse_common({k: v for k, v in request.items() if k not in ("combinations", "natural_frequencies")},
+                          max_lines=max_lines)
+    context = _SpindleContext(common, store)
+    results = []
+    for i, raw in enumerate(combos):
+        ident = raw.get("id") if isinstance(raw, Mapping) else None
+        path = f"combinations[{i}]"
+        try:
+            if not isinstance(ident, str) or not ident:
+                raise InputError(f"{path}.id", "is required (a non-empty string)")
+            spec = assemble(common, parse_combination(raw, common.materials, path, extra_fields=("id",)))
+            result = {"id": ident, "status": "ok", **context.predict(spec, with_modes).to_dict()}
+        except InputError as exc:
+            field = exc.field if exc.field.startswith(path) else f"{path}.{exc.field}".rstrip(".")
+            result = {"id": ident if isinstance(ident, str) else None, "status": "error",
+                      "error": {"field": field, "detail": exc.rule}}
+        results.append(result)
+        if progress is not None:
+            progress(i + 1, len(combos))
+    ok = sum(r["status"] == "ok" for r in results)
+    return {"results": results, "summary": {"ok": ok, "error": len(results) - ok}}

@@ -1,0 +1,32 @@
+"""Command-line interface: ``rcsa predict | serve | store | ...``.
+
+Every command is a thin door onto :mod:`rcsa.api` (the REST service is the other door).
+A failure prints one line ``error: <field>: <rule>`` on stderr and exits with status 1.
+"""
+
+from __future__ import annotations
+
+import typer
+
+from ._common import run_guarded
+from .predict_cmd import register as _register_predict
+from .serve_cmd import register as _register_serve
+from .store_cmd import store_app
+
+__all__ = ["app", "main", "run_guarded"]
+
+app = typer.Typer(
+    name="rcsa",
+    help="Tool-point FRFs of spindle-holder-tool assemblies by exact Timoshenko receptance coupling.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+_register_predict(app)
+_register_serve(app)
+app.add_typer(store_app, name="store", help="Import, list, show and delete measured spindle FRFs.")
+
+
+def main() -> None:
+    """Console-script entry point."""
+    app()

@@ -1,0 +1,61 @@
+"""Shared plumbing of the CLI commands: reading JSON, writing results, one-line errors."""
+
+from __future__ import annotations
+
+import json
+import sys
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any, TypeVar
+
+import orjson
+import typer
+
+from ..errors import InputError, NotFoundError, RcsaError
+
+__all__ = ["fail", "read_json", "run_guarded", "write_json"]
+
+T = TypeVar("T")
+
+
+def fail(message: str, code: int = 1) -> typer.Exit:
+    """Print ``error: message`` (one line) on stderr and return the exit to raise."""
+    typer.echo(f"error: {' '.join(str(message).split())}", err=True)
+    return typer.Exit(code)
+
+
+def read_json(path: Path) -> Any:
+    """Parse a JSON file, or fail with a one-line reason."""
+    try:
+        text = sys.stdin.read() if str(path) == "-" else path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise fail(f"cannot read {path}: {exc.strerror or exc}") from None
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise fail(f"{path} is not valid JSON: {exc.msg} at line {exc.lineno} column {exc.colno}") from None
+
+
+def write_json(document: Any, out: Path | None) -> None:
+    """Write a JSON document to ``out``, or to stdout when ``out`` is None."""
+    data = orjson.dumps(document, option=orjson.OPT_SERIALIZE_NUMPY | orjson.OPT_INDENT_2)
+    if out is None:
+        sys.stdout.buffer.write(data + b"\n")
+        sys.stdout.flush()
+    else:
+        try:
+            out.write_bytes(data + b"\n")
+        except OSError as exc:
+            raise fail(f"cannot write {out}: {exc.strerror or exc}") from None
+
+
+def run_guarded(fn: Callable[[], T]) -> T:
+    """Run ``fn`` and turn library errors into a one-line message and exit status 1."""
+    try:
+        return fn()
+    except InputError as exc:
+        raise fail(str(exc)) from None
+    except NotFoundError as exc:
+        raise fail(str(exc)) from None
+    except RcsaError as exc:
+        raise fail(str(exc)) from None

@@ -1,0 +1,30 @@
+"""``rcsa predict ASSEMBLY.json [-o OUT.json]``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ._common import read_json, run_guarded, write_json
+
+StoreOption = Annotated[Path | None, typer.Option("--store", help="Measurement store (default: RCSA_STORE or the per-user store).")]
+
+
+def register(app: typer.Typer) -> None:
+    """Add the ``predict`` command to ``app``."""
+
+    @app.command()
+    def predict(
+        assembly: Annotated[Path, typer.Argument(help="Assembly JSON (contract format, SI units); '-' for stdin.")],
+        out: Annotated[Path | None, typer.Option("-o", "--out", help="Write the result here instead of stdout.")] = None,
+        store: StoreOption = None,
+    ) -> None:
+        """Predict the tool-point FRF of an assembly; prints the contract's result JSON."""
+        from .. import api
+        from ..store import MeasurementStore
+
+        doc = read_json(assembly)
+        result = run_guarded(lambda: api.predict(doc, store=MeasurementStore(store) if store else None))
+        write_json(result.to_dict(), out)

@@ -1,0 +1,23 @@
+"""``rcsa serve [--host HOST] [--port PORT] [--workers N]``."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+import typer
+
+
+def register(app: typer.Typer) -> None:
+    """Add the ``serve`` command to ``app``."""
+
+    @app.command()
+    def serve(
+        host: Annotated[str, typer.Option(help="Interface to bind.")] = "127.0.0.1",
+        port: Annotated[int, typer.Option(help="TCP port.")] = 8000,
+        workers: Annotated[int, typer.Option(help="Worker processes (all share one store safely).")] = 1,
+    ) -> None:
+        """Run the REST service (uvicorn) with the store from RCSA_STORE or the default location."""
+        import uvicorn
+
+        uvicorn.run("service.main:create_app", factory=True, host=host, port=port, workers=workers,
+                    log_level="info")

@@ -1,0 +1,108 @@
+"""The paper's receptance-coupling path (Budak, Ertürk & Özgüven 2006), step by step.
+
+An independent route to the tool-point receptance, written the way the RCSA literature
+states it (``domain.md`` §3.1–3.4), used to cross-check the dynamic-stiffness solver
+(:mod:`rcsa.dsm`, the production path) and for measured substructures:
+
+1. free-free segment receptances (:func:`rcsa.beams.free_free_receptance`) coupled rigidly
+   into the free-free spindle, keeping the nose and the bearing nodes (general LM-FBS);
+2. bearings added by Özgüven's structural modification → spindle-nose receptance ``S``;
+3. holder: rigid chain → ``SH22 = H22 − H21 (H11 + K_sh⁻¹ + S)⁻¹ H12`` (paper eq. 6);
+4. tool: rigid chain → ``G_tt = T_tt − T_tb (T_bb + K_ht⁻¹ + SH22)⁻¹ T_bt`` (paper eq. 7).
+
+Free-free receptances grow like 1/ω² at low frequency, so this path loses digits below
+~5 Hz where the dynamic-stiffness path does not (``domain.md`` §2.7).
+"""
+
+from __future__ import annotations
+
+from functools import reduce
+
+import numpy as np
+
+from .assembly import AssemblyModel
+from .beams import free_free_receptance
+from .chain import Beam, Chain, Ground, Spring
+from .coupling import couple, couple_general, couple_to_base, modify
+
+__all__ = ["component_receptance", "spindle_nose_receptance", "tool_point_receptance"]
+
+
+def component_receptance(chain: Chain, omega_rad_s: np.ndarray) -> np.ndarray:
+    """Free-free two-end receptance of a rigid chain of beams, shape (nfreq, 4, 4)."""
+    beams = [item for item in chain if isinstance(item, Beam)]
+    if len(beams) != len(chain):
+        raise ValueError("a rigid component holds beams only")
+    parts = [free_free_receptance(omega_rad_s, b.section, b.length_m) for b in beams]
+    return reduce(couple, parts)
+
+
+def spindle_nose_receptance(spindle: Chain, omega_rad_s: np.ndarray) -> np.ndarray:
+    """Receptance at the last node (the nose) of a spindle chain with grounded bearings.
+
+    The beams are coupled rigidly with every node retained (block-diagonal ``Y``, signed
+    Boolean ``B``, ``G = Y − Y Bᵀ (B Y Bᵀ)⁻¹ B Y``); the grounds then modify their nodes.
+
+    Returns
+    -------
+    numpy.ndarray, shape (nfreq, 2, 2)
+    """
+    beams: list[Beam] = []
+    grounds: list[tuple[int, Ground]] = []  # (node index, ground)
+    for item in spindle:
+        if isinstance(item, Beam):
+            beams.append(item)
+        elif isinstance(item, Ground):
+            grounds.append((len(beams), item))
+        else:
+            raise ValueError("a spindle chain holds beams and grounds only")
+    m = len(beams)
+    y = np.zeros((omega_rad_s.size, 4 * m, 4 * m), dtype=complex)
+    for j, b in enumerate(beams):
+        y[:, 4 * j:4 * j + 4, 4 * j:4 * j + 4] = free_free_receptance(omega_rad_s, b.section, b.length_m)
+    rows = []
+    for j in range(m - 1):  # end 2 of beam j == end 1 of beam j+1, both DOFs
+        for dof in range(2):
+            r = np.zeros(4 * m)
+            r[4 * j + 2 + dof], r[4 * (j + 1) + dof] = 1.0, -1.0
+            rows.append(r)
+    g = couple_general(y, np.array(rows).reshape(-1, 4 * m)) if rows else y
+
+    def node_dofs(node: int) -> list[int]:
+        return [0, 1] if node == 0 else [4 * (node - 1) + 2, 4 * (node - 1) + 3]
+
+    if grounds:
+        dofs = [d for node, _ in grounds for d in node_dofs(node)]
+        delta = np.zeros((omega_rad_s.size, len(dofs), len(dofs)), dtype=complex)
+        for i, (_, ground) in enumerate(grounds):
+            delta[:, 2 * i:2 * i + 2, 2 * i:2 * i + 2] = ground.stiffness(omega_rad_s)
+        g = modify(g, dofs, delta)
+    nose = node_dofs(m)
+    return g[:, nose][:, :, nose]
+
+
+def _compliance(spring: Spring | None, omega_rad_s: np.ndarray) -> np.ndarray | None:
+    return None if spring is None else spring.compliance(omega_rad_s)
+
+
+def tool_point_receptance(model: AssemblyModel, omega_rad_s: np.ndarray,
+                          base_receptance: np.ndarray | None = None) -> np.ndarray:
+    """Tool-point receptance by the paper's receptance-coupling steps.
+
+    Parameters
+    ----------
+    model : AssemblyModel
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+    base_receptance : numpy.ndarray, shape (nfreq, 2, 2), optional
+        Measured spindle-side receptance (replaces the analytical spindle).
+
+    Returns
+    -------
+    numpy.ndarray, shape (nfreq, 2, 2)
+    """
+    s = base_receptance if base_receptance is not None else spindle_nose_receptance(model.spindle, omega_rad_s)
+    if model.holder:
+        s = couple_to_base(component_receptance(model.holder, omega_rad_s), s,
+                           _compliance(model.spindle_holder, omega_rad_s))
+    return couple_to_base(component_receptance(model.tool, omega_rad_s), s,
+                          _compliance(model.holder_tool, omega_rad_s))

@@ -1,0 +1,28 @@
+"""Fixtures shared by the whole suite."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, settings
+
+settings.register_profile("ci", derandomize=True, max_examples=30, deadline=None,
+                          suppress_health_check=[HealthCheck.too_slow])
+settings.register_profile("dev", max_examples=30, deadline=None)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+
+
+@pytest.fixture
+def rng() -> np.random.Generator:
+    """A seeded generator: tests never use global randomness."""
+    return np.random.default_rng(1234)
+
+
+@pytest.fixture
+def tmp_store_path(tmp_path, monkeypatch):
+    """An empty store directory, also set as RCSA_STORE for code that uses the default."""
+    path = tmp_path / "store"
+    monkeypatch.setenv("RCSA_STORE", str(path))
+    return path
