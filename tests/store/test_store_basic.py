@@ -258,3 +258,23 @@ def test_invalid_measurements_name_the_field():
         with pytest.raises(InputError) as err:
             build()
         assert err.value.field == field, (field, str(err.value))
+
+
+def test_threads_share_one_store(store):
+    import threading
+
+    ids, errors = [], []
+
+    def writer(k):
+        try:
+            ids.extend(store.put(make_measurement(100 * k + j, nfreq=30)) for j in range(8))
+        except Exception as e:  # pragma: no cover - reported below
+            errors.append(e)
+
+    threads = [threading.Thread(target=writer, args=(k,)) for k in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert errors == [] and len(set(ids)) == 32
+    assert {i.id for i in store.list()} == set(ids)
