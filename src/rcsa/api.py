@@ -38,24 +38,46 @@ class _SpindleContext:
 
     def __init__(self, common: CommonSpec, store: Any = None) -> None:
         self.common = common
-        self.base_plane: str | None = None
-        self.base_receptance: np.ndarray | None = None
-        self.notes: tuple[str, ...] = ()
-        self.extra: dict[str, Any] = {}
+        self.base = None
+        omega = 2 * np.pi * common.frequency_hz
         if isinstance(common.spindle, MeasuredSpindleSpec):
             from .hybrid import measured_base  # local: only hybrid requests need the store
 
-            base = measured_base(common.spindle.measurement_id, common.frequency_hz, store)
-            self.base_plane, self.base_receptance = base.plane, base.receptance
-            self.notes, self.extra = base.notes, {"spindle_measurement": base.report}
-        self.cache = SubassemblyCache(2 * np.pi * common.frequency_hz,
-                                      None if self.base_receptance is None else np.linalg.inv(self.base_receptance))
+            sp = common.spindle
+            self.base = measured_base(sp.measurement_id, common.frequency_hz, store,
+                                      artifact_method=sp.artifact_method, effective_length_m=sp.effective_length_m)
+        self.cache = SubassemblyCache(omega, None if self.base is None else self.base.receptance)
+        self.alt_caches = [] if self.base is None else [SubassemblyCache(omega, r) for r in self.base.alternatives]
 
     def predict(self, spec: AssemblySpec, natural_frequencies: bool = True) -> Prediction:
-        model = build_model(spec, self.base_plane)
-        return predict_model(model, spec.frequency_hz, base_receptance=self.base_receptance,
-                             cache=self.cache, natural_frequencies=natural_frequencies,
-                             notes=self.notes, extra=self.extra)
+        base = self.base
+        if base is None:
+            return predict_model(build_model(spec), spec.frequency_hz, cache=self.cache,
+                                 natural_frequencies=natural_frequencies)
+        if base.plane == "holder_tip" and base.artifact_diameter_m is not None and \
+                abs(spec.tool.shank_diameter_m - base.artifact_diameter_m) > 1e-6 * base.artifact_diameter_m:
+            raise InputError("tool.shank_diameter_m",
+                             f"must match the shank the holder-tip measurement was taken with "
+                             f"({base.artifact_diameter_m:g} m); got {spec.tool.shank_diameter_m:g} m")
+        model = build_model(spec, base.plane)
+        extra: dict[str, Any] = {"spindle_measurement": base.report}
+        if self.alt_caches:
+            h = [predict_model(model, spec.frequency_hz, cache=c, natural_frequencies=False).tool_point.h
+                 for c in self.alt_caches]
+            extra["uncertainty"] = _spread(spec.frequency_hz, h)
+        return predict_model(model, spec.frequency_hz, base_receptance=base.receptance, cache=self.cache,
+                             natural_frequencies=natural_frequencies, notes=base.notes, extra=extra)
+
+
+def _spread(frequency_hz: np.ndarray, bounds: list[np.ndarray]) -> dict[str, Any]:
+    """Envelope of the tool-point h over an estimate's bounds, relative to its peak."""
+    lo, hi = bounds
+    ref = max(float(np.max(np.abs(lo))), float(np.max(np.abs(hi))))
+    rel = np.abs(hi - lo) / ref
+    return {"h_bounds": {"low": {"real": lo.real.tolist(), "imag": lo.imag.tolist()},
+                         "high": {"real": hi.real.tolist(), "imag": hi.imag.tolist()}},
+            "max_relative_spread_of_peak": float(rel.max()),
+            "frequency_of_max_spread_hz": float(frequency_hz[int(np.argmax(rel))])}
 
 
 def predict(assembly: Mapping[str, Any] | AssemblySpec, *, store: Any = None,

@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from .beams import _Waves, segment_terms, static_stiffness
+from .beams import _Waves, dynamic_stiffness, segment_terms, static_stiffness
 from .chain import Beam, Chain, Ground, Spring
 from .linalg2 import inv2, negative_count_sym2
 from .sections import Section
@@ -94,8 +94,32 @@ def _negatives(pivot: Sym | np.ndarray) -> np.ndarray:
     return np.where(det < 0, 1, np.where((det >= 0) & (tr < 0), 2 - (det == 0), 0))
 
 
+def _absorb_compliance(chain: Chain, w: np.ndarray, compliance: np.ndarray) -> tuple[np.ndarray, int]:
+    """Attach the leading items of ``chain`` to a grounded base given by its compliance ``S``.
+
+    A measured spindle is known as a receptance, possibly rank-deficient (estimated rotations),
+    so it is never inverted: joints add compliance, grounds give ``S (I + Δ S)⁻¹``, and the
+    first beam turns it into a stiffness ``D22 − D21 S (I + D11 S)⁻¹ D12``.
+
+    Returns the stiffness at the end of the first beam and the number of items consumed.
+    """
+    s = np.array(compliance, dtype=complex)
+    eye = np.eye(2)
+    for i, item in enumerate(chain):
+        if isinstance(item, Spring):
+            s = s + item.compliance(w)
+        elif isinstance(item, Ground):
+            s = s @ inv2(eye + item.stiffness(w) @ s)
+        else:
+            d = dynamic_stiffness(w, item.section, item.length_m)
+            d11, d12, d21, d22 = d[:, :2, :2], d[:, :2, 2:], d[:, 2:, :2], d[:, 2:, 2:]
+            return d22 - d21 @ s @ inv2(eye + d11 @ s) @ d12, i + 1
+    raise ValueError("a chain on a measured base must contain at least one beam")
+
+
 def march(chain: Chain, omega_rad_s: np.ndarray, start: np.ndarray | None = None,
-          count: bool = False) -> tuple[np.ndarray, np.ndarray | None]:
+          count: bool = False, start_compliance: np.ndarray | None = None
+          ) -> tuple[np.ndarray, np.ndarray | None]:
     """Condense a chain onto its last node.
 
     Parameters
@@ -107,6 +131,9 @@ def march(chain: Chain, omega_rad_s: np.ndarray, start: np.ndarray | None = None
         the inverse of a measured base receptance; symmetrised); zero (free end) by default.
     count : bool
         Also return the number of negative pivot eigenvalues per frequency (undamped chains).
+    start_compliance : numpy.ndarray, shape (nfreq, 2, 2), optional
+        Instead of ``start``: the receptance of a grounded base at the first node (a
+        measured spindle), used without inverting it.
 
     Returns
     -------
@@ -116,6 +143,9 @@ def march(chain: Chain, omega_rad_s: np.ndarray, start: np.ndarray | None = None
         Negative eigenvalues of the eliminated pivots (excluding the returned ``k``).
     """
     w = np.asarray(omega_rad_s, dtype=float)
+    if start_compliance is not None:
+        start, used = _absorb_compliance(chain, w, start_compliance)
+        chain = chain[used:]
     if w.size > _BLOCK:  # blocks of the frequency axis keep temporaries in cache
         parts = [march(chain, w[i:i + _BLOCK], None if start is None else start[i:i + _BLOCK], count)
                  for i in range(0, w.size, _BLOCK)]

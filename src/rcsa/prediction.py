@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from .assembly import AssemblyModel
-from .chain import Chain, undamped
+from .chain import Beam, Chain, undamped
 from .dsm import march, static_tip_receptance
 from .frf import Receptance
 from .linalg2 import inv2
@@ -108,16 +108,16 @@ class SubassemblyCache:
     holder, shank and insertion share the spindle + holder condensation exactly.
     """
 
-    def __init__(self, omega_rad_s: np.ndarray, base_stiffness: np.ndarray | None = None) -> None:
+    def __init__(self, omega_rad_s: np.ndarray, base_receptance: np.ndarray | None = None) -> None:
         self.omega_rad_s = np.asarray(omega_rad_s, dtype=float)
-        self.base_stiffness = base_stiffness
+        self.base_receptance = base_receptance
         self._store: dict[Chain, np.ndarray] = {}
 
     def condensed(self, chain: Chain) -> np.ndarray:
         """Dynamic stiffness at the end of ``chain`` (plus the base), shape (nfreq, 2, 2)."""
         hit = self._store.get(chain)
         if hit is None:
-            hit = march(chain, self.omega_rad_s, self.base_stiffness)[0]
+            hit = march(chain, self.omega_rad_s, start_compliance=self.base_receptance)[0]
             self._store[chain] = hit
         return hit
 
@@ -148,9 +148,13 @@ def predict_model(model: AssemblyModel, frequency_hz: np.ndarray, *,
     f = np.asarray(frequency_hz, dtype=float)
     omega = 2.0 * np.pi * f
     if cache is None:
-        cache = SubassemblyCache(omega, None if base_receptance is None else inv2(base_receptance))
-    k_tip = march(model.tool if model.holder_tool is None else (model.holder_tool, *model.tool),
-                  omega, cache.condensed(model.to_holder_tip()))[0]
+        cache = SubassemblyCache(omega, base_receptance)
+    prefix = model.to_holder_tip()
+    rest = model.tool if model.holder_tool is None else (model.holder_tool, *model.tool)
+    if any(isinstance(item, Beam) for item in prefix):
+        k_tip = march(rest, omega, cache.condensed(prefix))[0]
+    else:  # a measured spindle at the holder tip: only the tool is coupled to it
+        k_tip = march(prefix + rest, omega, start_compliance=cache.base_receptance)[0]
     g = inv2(k_tip)
     tool_point = Receptance(f, g)
     h = g[:, 0, 0]

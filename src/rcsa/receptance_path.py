@@ -25,7 +25,7 @@ from .beams import free_free_receptance
 from .chain import Beam, Chain, Ground, Spring
 from .coupling import couple, couple_general, couple_to_base, modify
 
-__all__ = ["component_receptance", "spindle_nose_receptance", "tool_point_receptance"]
+__all__ = ["component_receptance", "free_free_nodes", "spindle_nose_receptance", "tool_point_receptance"]
 
 
 def component_receptance(chain: Chain, omega_rad_s: np.ndarray) -> np.ndarray:
@@ -37,11 +37,38 @@ def component_receptance(chain: Chain, omega_rad_s: np.ndarray) -> np.ndarray:
     return reduce(couple, parts)
 
 
+def free_free_nodes(beams: list[Beam], omega_rad_s: np.ndarray) -> np.ndarray:
+    """Free-free receptance of a rigid chain of beams with every node retained.
+
+    Block-diagonal ``Y`` of the segments, a signed Boolean ``B`` joining end 2 of each beam to
+    end 1 of the next, ``G = Y − Y Bᵀ (B Y Bᵀ)⁻¹ B Y`` (``domain.md`` §3.1–3.2), then one
+    representative of each node kept.
+
+    Returns
+    -------
+    numpy.ndarray, shape (nfreq, 2(m+1), 2(m+1))
+        Node order along the chain, DOFs ``(w, ψ)`` per node.
+    """
+    m = len(beams)
+    y = np.zeros((omega_rad_s.size, 4 * m, 4 * m), dtype=complex)
+    for j, b in enumerate(beams):
+        y[:, 4 * j:4 * j + 4, 4 * j:4 * j + 4] = free_free_receptance(omega_rad_s, b.section, b.length_m)
+    rows = []
+    for j in range(m - 1):  # end 2 of beam j == end 1 of beam j+1, both DOFs
+        for dof in range(2):
+            r = np.zeros(4 * m)
+            r[4 * j + 2 + dof], r[4 * (j + 1) + dof] = 1.0, -1.0
+            rows.append(r)
+    g = couple_general(y, np.array(rows).reshape(-1, 4 * m)) if rows else y
+    keep = [0, 1] + [4 * j + 2 + d for j in range(m) for d in range(2)]
+    return g[:, keep][:, :, keep]
+
+
 def spindle_nose_receptance(spindle: Chain, omega_rad_s: np.ndarray) -> np.ndarray:
     """Receptance at the last node (the nose) of a spindle chain with grounded bearings.
 
-    The beams are coupled rigidly with every node retained (block-diagonal ``Y``, signed
-    Boolean ``B``, ``G = Y − Y Bᵀ (B Y Bᵀ)⁻¹ B Y``); the grounds then modify their nodes.
+    The beams are coupled rigidly with every node retained (:func:`free_free_nodes`); the
+    grounds then modify their nodes (Özgüven, :func:`rcsa.coupling.modify`).
 
     Returns
     -------
@@ -56,28 +83,14 @@ def spindle_nose_receptance(spindle: Chain, omega_rad_s: np.ndarray) -> np.ndarr
             grounds.append((len(beams), item))
         else:
             raise ValueError("a spindle chain holds beams and grounds only")
-    m = len(beams)
-    y = np.zeros((omega_rad_s.size, 4 * m, 4 * m), dtype=complex)
-    for j, b in enumerate(beams):
-        y[:, 4 * j:4 * j + 4, 4 * j:4 * j + 4] = free_free_receptance(omega_rad_s, b.section, b.length_m)
-    rows = []
-    for j in range(m - 1):  # end 2 of beam j == end 1 of beam j+1, both DOFs
-        for dof in range(2):
-            r = np.zeros(4 * m)
-            r[4 * j + 2 + dof], r[4 * (j + 1) + dof] = 1.0, -1.0
-            rows.append(r)
-    g = couple_general(y, np.array(rows).reshape(-1, 4 * m)) if rows else y
-
-    def node_dofs(node: int) -> list[int]:
-        return [0, 1] if node == 0 else [4 * (node - 1) + 2, 4 * (node - 1) + 3]
-
+    g = free_free_nodes(beams, omega_rad_s)
     if grounds:
-        dofs = [d for node, _ in grounds for d in node_dofs(node)]
+        dofs = [2 * node + d for node, _ in grounds for d in range(2)]
         delta = np.zeros((omega_rad_s.size, len(dofs), len(dofs)), dtype=complex)
         for i, (_, ground) in enumerate(grounds):
             delta[:, 2 * i:2 * i + 2, 2 * i:2 * i + 2] = ground.stiffness(omega_rad_s)
         g = modify(g, dofs, delta)
-    nose = node_dofs(m)
+    nose = [2 * len(beams), 2 * len(beams) + 1]
     return g[:, nose][:, :, nose]
 
 

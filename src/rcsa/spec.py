@@ -141,9 +141,17 @@ class SpindleSpec:
 
 @dataclass(frozen=True, slots=True)
 class MeasuredSpindleSpec:
-    """A stored measured spindle (hybrid assembly)."""
+    """A stored measured spindle (hybrid assembly).
+
+    ``artifact_method`` chooses how an ``artifact_frfs`` measurement is identified
+    (``exact`` three-FRF method, or the labelled ``finite_difference`` fallback);
+    ``effective_length_m`` is the equivalent-cantilever length used to estimate the rotations
+    of a ``direct_frf`` measurement (:mod:`rcsa.hybrid`).
+    """
 
     measurement_id: str
+    artifact_method: str = "exact"
+    effective_length_m: float = 0.2
 
 
 @dataclass(frozen=True, slots=True)
@@ -296,8 +304,10 @@ def parse_spindle(value: object, materials: Mapping[str, Material], path: str = 
     """An analytical spindle (segments nose → rear, bearings) or a stored measurement id."""
     o = _Obj(value, path)
     if "measurement_id" in o.value:
-        o.only("measurement_id")
-        return MeasuredSpindleSpec(o.string("measurement_id"))
+        o.only("measurement_id", "artifact_method", "effective_length_m")
+        return MeasuredSpindleSpec(o.string("measurement_id"),
+                                   o.string("artifact_method", "exact", ("exact", "finite_difference")),
+                                   o.number("effective_length_m", gt=0.0, default=0.2))
     o.only("segments", "bearings")
     segments = _segments(o.value.get("segments"), o.at("segments"), materials)
     total = sum(s.length_m for s in segments)
