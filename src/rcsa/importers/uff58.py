@@ -38,7 +38,7 @@ from ..store.measurement import Measurement, MeasurementMeta, Provenance
 from ._common import finish, read_source
 from .units import FrfUnit, parse_frf_unit
 
-__all__ = ["read_uff", "uff_frf_catalogue"]
+__all__ = ["read_uff"]
 
 FUNCTION_TYPES = {
     0: "general or unknown", 1: "time response", 2: "auto spectrum", 3: "cross spectrum",
@@ -73,15 +73,6 @@ def _label(s: Mapping[str, Any], key: str) -> str:
 
 def _frf_id(s: Mapping[str, Any]) -> str:
     return f"rsp {s['rsp_node']}:{s['rsp_dir']} ref {s['ref_node']}:{s['ref_dir']}"
-
-
-def uff_frf_catalogue(sets: list[dict[str, Any]]) -> list[tuple[int, int, int, int, int]]:
-    """``(set index, rsp node, rsp dir, ref node, ref dir)`` of every FRF (type 4) dataset."""
-    return [
-        (i, int(s["rsp_node"]), int(s["rsp_dir"]), int(s["ref_node"]), int(s["ref_dir"]))
-        for i, s in enumerate(sets)
-        if s.get("type") == 58 and s.get("func_type") == 4
-    ]
 
 
 def _unit_from_file(sets: list[dict[str, Any]], frfs: list[dict[str, Any]], quantity: str | None) -> FrfUnit | None:
