@@ -29,7 +29,13 @@ META = MeasurementMeta("demo-hsk63", "x", "spindle_nose", "direct_frf")
 def test_csv_tsv_frf_and_json_agree():
     h = gen.receptance(gen.F)
     csv = read_csv(HERE / "direct_frf_um_per_n.csv", META, units="um/N")
-    tsv = read_csv(HERE / "direct_frf_mag_phase_deg.tsv", META, units="um/N", columns="f,mag,phase", phase_unit="deg")
+    tsv = read_csv(
+        HERE / "direct_frf_mag_phase_deg.tsv",
+        META,
+        units="um/N",
+        columns="f,mag,phase",
+        phase_unit="deg",
+    )
     frf = read_cutpro(HERE / "direct_frf.frf", META)
     pr = read_contract_json(HERE / "point_receptance.json")
     np.testing.assert_allclose(csv.frfs["h"], h, rtol=1e-14, atol=0)
@@ -40,25 +46,52 @@ def test_csv_tsv_frf_and_json_agree():
 
 
 def test_artifact_uff_and_tap():
-    meta = MeasurementMeta("demo-hsk63", "x", "spindle_nose", "artifact_frfs", points_m=(0.0, 0.03),
-                           artifact={"diameter_m": 0.02, "stickout_m": 0.08, "material": "steel"})
-    m = read_uff(HERE / "artifact_frfs_accelerance.uff", meta, roles={"h11": (1, 1), "h21": (2, 1), "h22": (2, 2)})
+    meta = MeasurementMeta(
+        "demo-hsk63",
+        "x",
+        "spindle_nose",
+        "artifact_frfs",
+        points_m=(0.0, 0.03),
+        artifact={"diameter_m": 0.02, "stickout_m": 0.08, "material": "steel"},
+    )
+    m = read_uff(
+        HERE / "artifact_frfs_accelerance.uff",
+        meta,
+        roles={"h11": (1, 1), "h21": (2, 1), "h22": (2, 2)},
+    )
     for name, scale in (("h11", 1.0), ("h21", 0.6), ("h22", 0.45)):
         np.testing.assert_allclose(m.frfs[name], gen.receptance(gen.F, scale), rtol=1e-11, atol=0)
     assert set(m.coherence) == {"h11"}
-    tap = read_tap(HERE / "tap_synthetic.txt", META, force_unit="N", response_unit="m/s^2", max_frequency_hz=1200)
+    tap = read_tap(
+        HERE / "tap_synthetic.txt",
+        META,
+        force_unit="N",
+        response_unit="m/s^2",
+        max_frequency_hz=1200,
+    )
     np.testing.assert_allclose(tap.frfs["h"], gen.receptance(tap.frequency_hz), rtol=1e-6, atol=0)
 
 
-@pytest.mark.parametrize("name", ["direct_frf_um_per_n.csv", "point_receptance.json", "artifact_frfs_accelerance.uff"])
+@pytest.mark.parametrize(
+    "name", ["direct_frf_um_per_n.csv", "point_receptance.json", "artifact_frfs_accelerance.uff"]
+)
 def test_fixtures_store(tmp_path, name):
     store = MeasurementStore(tmp_path / "s")
     if name.endswith(".json"):
         m = read_contract_json(HERE / name)
     elif name.endswith(".uff"):
-        m = read_uff(HERE / name, MeasurementMeta("d", "y", "spindle_nose", "artifact_frfs", points_m=(0.0, 0.03),
-                                                  artifact={"diameter_m": 0.02, "stickout_m": 0.08}),
-                     roles={"h11": (1, 1), "h21": (2, 1), "h22": (2, 2)})
+        m = read_uff(
+            HERE / name,
+            MeasurementMeta(
+                "d",
+                "y",
+                "spindle_nose",
+                "artifact_frfs",
+                points_m=(0.0, 0.03),
+                artifact={"diameter_m": 0.02, "stickout_m": 0.08},
+            ),
+            roles={"h11": (1, 1), "h21": (2, 1), "h22": (2, 2)},
+        )
     else:
         m = read_csv(HERE / name, META, units="um/N")
     got = store.get(store.put(m))

@@ -22,8 +22,17 @@ def _c(z):
 
 
 def point_doc() -> dict:
-    return {"spindle_id": "mc1-hsk63", "direction": "x", "plane": "spindle_nose", "kind": "point_receptance",
-            "frequency_hz": F.tolist(), "h": _c(H), "l": _c(-3 * H), "n": _c(-3 * H), "p": _c(20 * H)}
+    return {
+        "spindle_id": "mc1-hsk63",
+        "direction": "x",
+        "plane": "spindle_nose",
+        "kind": "point_receptance",
+        "frequency_hz": F.tolist(),
+        "h": _c(H),
+        "l": _c(-3 * H),
+        "n": _c(-3 * H),
+        "p": _c(20 * H),
+    }
 
 
 def test_contract_upload_and_export_round_trip_bit_exact(tmp_path):
@@ -34,7 +43,9 @@ def test_contract_upload_and_export_round_trip_bit_exact(tmp_path):
     assert m.provenance.source_format == "contract_json" and m.provenance.source_file == "m.json"
     store = MeasurementStore(tmp_path / "store")
     stored = store.get(store.put(m))
-    exported = json.loads(json.dumps(measurement_to_contract(stored)))  # float64 survives JSON exactly
+    exported = json.loads(
+        json.dumps(measurement_to_contract(stored))
+    )  # float64 survives JSON exactly
     assert exported["units"]["p"] == "rad/(N*m)" and exported["id"] == stored.id
     again = measurement_from_contract(exported)
     for k in "hlnp":
@@ -44,10 +55,22 @@ def test_contract_upload_and_export_round_trip_bit_exact(tmp_path):
 
 
 def test_artifact_document_with_coherence_and_overrides():
-    doc = {"direction": "y", "plane": "holder_tip", "kind": "artifact_frfs", "frequency_hz": F.tolist(),
-           "h11": _c(H), "h21": _c(0.5 * H), "h22": _c(0.7 * H), "points_m": [0.0, 0.03],
-           "artifact": ARTIFACT, "coherence": {"h21": np.full(F.size, 0.9).tolist()}, "notes": "blank"}
-    m = measurement_from_contract(doc, overrides={"spindle_id": "s7", "direction": "y", "machine": None})
+    doc = {
+        "direction": "y",
+        "plane": "holder_tip",
+        "kind": "artifact_frfs",
+        "frequency_hz": F.tolist(),
+        "h11": _c(H),
+        "h21": _c(0.5 * H),
+        "h22": _c(0.7 * H),
+        "points_m": [0.0, 0.03],
+        "artifact": ARTIFACT,
+        "coherence": {"h21": np.full(F.size, 0.9).tolist()},
+        "notes": "blank",
+    }
+    m = measurement_from_contract(
+        doc, overrides={"spindle_id": "s7", "direction": "y", "machine": None}
+    )
     assert m.meta.spindle_id == "s7" and m.meta.points_m == (0.0, 0.03)
     assert dict(m.meta.artifact) == ARTIFACT
     assert set(m.coherence) == {"h21"}

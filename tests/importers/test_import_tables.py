@@ -28,7 +28,9 @@ def _table(rows, sep=",") -> str:
 
 
 def test_csv_real_imag_with_header_and_comments(tmp_path):
-    text = "% exported by an analyser\nFrequency [Hz], Real [m/N], Imag [m/N]\n" + _table(zip(F, H.real, H.imag, strict=True))
+    text = "% exported by an analyser\nFrequency [Hz], Real [m/N], Imag [m/N]\n" + _table(
+        zip(F, H.real, H.imag, strict=True)
+    )
     text = text.replace("\n2050", "\n# a comment in the data\n2050")
     path = tmp_path / "h.csv"
     path.write_text(text)
@@ -47,7 +49,14 @@ def test_tsv_semicolon_and_space_delimiters(tmp_path, sep):
 def test_magnitude_phase_in_degrees_and_khz(tmp_path):
     rows = zip(F / 1e3, np.abs(H) * 1e6, np.degrees(np.angle(H)), strict=True)
     (tmp_path / "mp.csv").write_text(_table(rows))
-    m = read_csv(tmp_path / "mp.csv", META, units="um/N", columns="f,mag,phase", phase_unit="deg", frequency_unit="kHz")
+    m = read_csv(
+        tmp_path / "mp.csv",
+        META,
+        units="um/N",
+        columns="f,mag,phase",
+        phase_unit="deg",
+        frequency_unit="kHz",
+    )
     np.testing.assert_allclose(m.frequency_hz, F, rtol=RTOL, atol=0)
     np.testing.assert_allclose(m.frfs["h"], H, rtol=RTOL, atol=0)
 
@@ -71,7 +80,18 @@ def test_declared_units_and_quantities(tmp_path, unit, to_file):
 
 def test_artifact_columns_with_coherence(tmp_path):
     coh = np.linspace(0.2, 1.0, F.size)
-    rows = zip(F, H.real, H.imag, coh, (0.5 * H).real, (0.5 * H).imag, (0.8 * H).real, (0.8 * H).imag, F, strict=True)
+    rows = zip(
+        F,
+        H.real,
+        H.imag,
+        coh,
+        (0.5 * H).real,
+        (0.5 * H).imag,
+        (0.8 * H).real,
+        (0.8 * H).imag,
+        F,
+        strict=True,
+    )
     (tmp_path / "a.csv").write_text(_table(rows))
     cols = "f,h11.re,h11.im,h11.coh,h21.re,h21.im,h22.re,h22.im,_"
     m = read_csv(tmp_path / "a.csv", ARTIFACT_META, units="m/N", columns=cols)
@@ -118,7 +138,9 @@ def test_point_receptance_table_must_be_si(tmp_path):
     rows = zip(F, H.real, H.imag, H.real, H.imag, H.real, H.imag, H.real, H.imag, strict=True)
     (tmp_path / "p.csv").write_text(_table(rows))
     cols = "f,h.re,h.im,l.re,l.im,n.re,n.im,p.re,p.im"
-    assert read_csv(tmp_path / "p.csv", meta, units="m/N", columns=cols).receptance().values.shape == (F.size, 2, 2)
+    assert read_csv(
+        tmp_path / "p.csv", meta, units="m/N", columns=cols
+    ).receptance().values.shape == (F.size, 2, 2)
     with pytest.raises(InputError) as err:
         read_csv(tmp_path / "p.csv", meta, units="um/N", columns=cols)
     assert err.value.field == "units"
@@ -149,7 +171,9 @@ def test_cutpro_file_as_written_by_matlab2cutpro(tmp_path):
 
 
 def test_cutpro_units_must_be_declared_when_not_m_per_n(tmp_path):
-    (tmp_path / "mm.frf").write_text(_cutpro(F, H * 1e3, first="{f:.6e}\t{re:.6e}\t{im:.6e}\tFreq Hz Real mm/N\n"))
+    (tmp_path / "mm.frf").write_text(
+        _cutpro(F, H * 1e3, first="{f:.6e}\t{re:.6e}\t{im:.6e}\tFreq Hz Real mm/N\n")
+    )
     with pytest.raises(InputError) as err:
         read_cutpro(tmp_path / "mm.frf", META)
     assert err.value.field == "units"

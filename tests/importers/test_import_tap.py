@@ -37,7 +37,9 @@ def _acceleration(force: np.ndarray, h_of_f=two_mode_receptance) -> np.ndarray:
 
 
 def _write(path, *cols) -> str:
-    path.write_text("".join("\t".join(f"{v:.17g}" for v in row) + "\n" for row in zip(*cols, strict=True)))
+    path.write_text(
+        "".join("\t".join(f"{v:.17g}" for v in row) + "\n" for row in zip(*cols, strict=True))
+    )
     return path
 
 
@@ -75,14 +77,35 @@ def test_h1_estimate_with_noise_has_coherence_below_one():
 def test_force_and_exponential_windows(tmp_path):
     force = _pulse()
     acc = _acceleration(force)
-    noisy = force + np.where(T > 0.2, 0.5 * np.sin(2 * np.pi * 50 * T), 0.0)  # noise after the pulse
-    clean = read_tap(_write(tmp_path / "c.txt", T, force, acc), META, force_unit="N", response_unit="m/s^2",
-                     max_frequency_hz=F_MAX)
-    windowed = read_tap(_write(tmp_path / "n.txt", T, noisy, acc), META, force_unit="N", response_unit="m/s^2",
-                        max_frequency_hz=F_MAX, force_window_s=0.01)
-    assert windowed.frfs["h"].tobytes() == clean.frfs["h"].tobytes()  # the window removed exactly the noise
-    expo = read_tap(tmp_path / "c.txt", META, force_unit="N", response_unit="m/s^2", max_frequency_hz=F_MAX,
-                    exponential_tau_s=0.05)
+    noisy = force + np.where(
+        T > 0.2, 0.5 * np.sin(2 * np.pi * 50 * T), 0.0
+    )  # noise after the pulse
+    clean = read_tap(
+        _write(tmp_path / "c.txt", T, force, acc),
+        META,
+        force_unit="N",
+        response_unit="m/s^2",
+        max_frequency_hz=F_MAX,
+    )
+    windowed = read_tap(
+        _write(tmp_path / "n.txt", T, noisy, acc),
+        META,
+        force_unit="N",
+        response_unit="m/s^2",
+        max_frequency_hz=F_MAX,
+        force_window_s=0.01,
+    )
+    assert (
+        windowed.frfs["h"].tobytes() == clean.frfs["h"].tobytes()
+    )  # the window removed exactly the noise
+    expo = read_tap(
+        tmp_path / "c.txt",
+        META,
+        force_unit="N",
+        response_unit="m/s^2",
+        max_frequency_hz=F_MAX,
+        exponential_tau_s=0.05,
+    )
     assert any("exponential window tau=0.05 s" in c for c in expo.provenance.conversions)
     # the added damping lowers the resonance peak
     assert np.abs(expo.frfs["h"]).max() < np.abs(clean.frfs["h"]).max()
@@ -97,18 +120,41 @@ def test_tap_refusals_name_the_field(tmp_path):
     bumpy_t[100] += 0.5 / FS
     cases = [
         (lambda: read_tap(twice, META, force_unit="N", response_unit="m/s^2"), "force"),
-        (lambda: read_tap(_write(tmp_path / "t.txt", bumpy_t, force, acc), META, force_unit="N", response_unit="m/s^2"), "t"),
-        (lambda: read_tap(good, META, force_unit="N", response_unit="m/s^2", columns="t,force"), "columns"),
+        (
+            lambda: read_tap(
+                _write(tmp_path / "t.txt", bumpy_t, force, acc),
+                META,
+                force_unit="N",
+                response_unit="m/s^2",
+            ),
+            "t",
+        ),
+        (
+            lambda: read_tap(good, META, force_unit="N", response_unit="m/s^2", columns="t,force"),
+            "columns",
+        ),
         (lambda: read_tap(good, META, force_unit="m/s^2", response_unit="m/s^2"), "force_unit"),
         (lambda: read_tap(good, META, force_unit="N", response_unit=""), "response_unit"),
-        (lambda: read_tap(good, META, force_unit="N", response_unit="m/s^2", sample_rate_hz=10000.0), "sample_rate_hz"),
+        (
+            lambda: read_tap(
+                good, META, force_unit="N", response_unit="m/s^2", sample_rate_hz=10000.0
+            ),
+            "sample_rate_hz",
+        ),
         (lambda: read_tap(good, ARTIFACT_META, force_unit="N", response_unit="m/s^2"), "kind"),
     ]
     for build, field in cases:
         with pytest.raises(InputError) as err:
             build()
         assert err.value.field == field, str(err.value)
-    m = read_tap(twice, META, force_unit="N", response_unit="m/s^2", allow_double_hit=True, max_frequency_hz=F_MAX)
+    m = read_tap(
+        twice,
+        META,
+        force_unit="N",
+        response_unit="m/s^2",
+        allow_double_hit=True,
+        max_frequency_hz=F_MAX,
+    )
     assert m.n_frequencies == F_MAX
 
 
@@ -120,7 +166,9 @@ def test_sensor_mass_correction_inverts_the_mass_loading(tmp_path):
     assert np.abs(measured - h).max() > 0.05 * np.abs(h).max()  # the mass matters here
     # one division each way: relative error a few ulp of the (1 ± w^2 m H) factors
     np.testing.assert_allclose(remove_sensor_mass(f, measured, mass_kg), h, rtol=1e-12, atol=0)
-    (tmp_path / "m.csv").write_text("".join(f"{a:.17g},{b.real:.17g},{b.imag:.17g}\n" for a, b in zip(f, measured, strict=True)))
+    (tmp_path / "m.csv").write_text(
+        "".join(f"{a:.17g},{b.real:.17g},{b.imag:.17g}\n" for a, b in zip(f, measured, strict=True))
+    )
     m = read_csv(tmp_path / "m.csv", META, units="m/N", sensor_mass_kg=mass_kg)
     np.testing.assert_allclose(m.frfs["h"], h, rtol=1e-12, atol=0)
     assert m.provenance.sensor_mass_kg == mass_kg

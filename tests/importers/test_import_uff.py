@@ -31,8 +31,14 @@ SI = (1, 1.0, 1.0)
 @pytest.mark.parametrize("spacing", [0, 1])
 @pytest.mark.parametrize("quantity", ["receptance", "accelerance", "mobility"])
 def test_uff_with_dataset_164_imports_receptance(tmp_path, binary, spacing, quantity):
-    data, code = {"receptance": (H, 8), "accelerance": (-W2 * H, 12), "mobility": (1j * np.sqrt(W2) * H, 11)}[quantity]
-    path = write_uff(tmp_path / "a.uff", [frf58(F, data, binary=binary, numerator=code, spacing=spacing)], SI)
+    data, code = {
+        "receptance": (H, 8),
+        "accelerance": (-W2 * H, 12),
+        "mobility": (1j * np.sqrt(W2) * H, 11),
+    }[quantity]
+    path = write_uff(
+        tmp_path / "a.uff", [frf58(F, data, binary=binary, numerator=code, spacing=spacing)], SI
+    )
     m = read_uff(path, META)
     assert m.provenance.source_format == ("uff58b" if binary else "uff58")
     assert m.provenance.original_quantity == quantity
@@ -46,10 +52,20 @@ def test_uff_with_dataset_164_imports_receptance(tmp_path, binary, spacing, quan
 def test_same_receptance_through_uff_ascii_binary_and_csv_um_per_n(tmp_path):
     store = MeasurementStore(tmp_path / "store")
     ids = {
-        "uff-bin-recept": store.put(read_uff(write_uff(tmp_path / "1.uff", [frf58(F, H, binary=1)], SI), META)),
-        "uff-bin-accel": store.put(read_uff(write_uff(tmp_path / "2.uff", [frf58(F, -W2 * H, binary=1, numerator=12)], SI), META)),
-        "uff-asc-recept": store.put(read_uff(write_uff(tmp_path / "3.uff", [frf58(F, H)], SI), META)),
-        "uff-asc-accel": store.put(read_uff(write_uff(tmp_path / "4.uff", [frf58(F, -W2 * H, numerator=12)], SI), META)),
+        "uff-bin-recept": store.put(
+            read_uff(write_uff(tmp_path / "1.uff", [frf58(F, H, binary=1)], SI), META)
+        ),
+        "uff-bin-accel": store.put(
+            read_uff(
+                write_uff(tmp_path / "2.uff", [frf58(F, -W2 * H, binary=1, numerator=12)], SI), META
+            )
+        ),
+        "uff-asc-recept": store.put(
+            read_uff(write_uff(tmp_path / "3.uff", [frf58(F, H)], SI), META)
+        ),
+        "uff-asc-accel": store.put(
+            read_uff(write_uff(tmp_path / "4.uff", [frf58(F, -W2 * H, numerator=12)], SI), META)
+        ),
     }
     um = H * 1e6
     csv = "# tool tip, um/N\nfrequency_hz,re_um_n,im_um_n\n" + "".join(
@@ -57,7 +73,13 @@ def test_same_receptance_through_uff_ascii_binary_and_csv_um_per_n(tmp_path):
     )
     (tmp_path / "5.csv").write_text(csv)
     ids["csv-um"] = store.put(read_csv(tmp_path / "5.csv", META, units="µm/N"))
-    tol = {"uff-bin-recept": 0.0, "uff-bin-accel": 1e-14, "uff-asc-recept": 1e-11, "uff-asc-accel": 1e-11, "csv-um": 1e-14}
+    tol = {
+        "uff-bin-recept": 0.0,
+        "uff-bin-accel": 1e-14,
+        "uff-asc-recept": 1e-11,
+        "uff-asc-accel": 1e-11,
+        "csv-um": 1e-14,
+    }
     for name, mid in ids.items():
         got = store.get(mid)
         assert got.frequency_hz.tobytes() == F.tobytes(), name
@@ -68,7 +90,9 @@ def test_same_receptance_through_uff_ascii_binary_and_csv_um_per_n(tmp_path):
 
 def test_inch_units_from_dataset_164(tmp_path):
     h_in = H * IN_LENGTH / IN_FORCE  # in/lbf
-    m = read_uff(write_uff(tmp_path / "in.uff", [frf58(F, h_in, binary=1)], (7, IN_LENGTH, IN_FORCE)), META)
+    m = read_uff(
+        write_uff(tmp_path / "in.uff", [frf58(F, h_in, binary=1)], (7, IN_LENGTH, IN_FORCE)), META
+    )
     np.testing.assert_allclose(m.frfs["h"], H, rtol=1e-14, atol=0)
     assert "code 7" in m.provenance.original_units
 
@@ -85,7 +109,10 @@ def test_g_based_accelerance_declared_by_the_caller(tmp_path):
 
 
 def test_units_from_axis_labels_and_conflicts(tmp_path):
-    good = write_uff(tmp_path / "l.uff", [frf58(F, -W2 * H, binary=1, numerator=12, num_label="m/s^2", den_label="N")])
+    good = write_uff(
+        tmp_path / "l.uff",
+        [frf58(F, -W2 * H, binary=1, numerator=12, num_label="m/s^2", den_label="N")],
+    )
     np.testing.assert_allclose(read_uff(good, META).frfs["h"], H, rtol=1e-14, atol=0)
     g_labels = [frf58(F, -W2 * H, binary=1, numerator=12, num_label="g", den_label="N")]
     clash = write_uff(tmp_path / "c.uff", g_labels, SI)

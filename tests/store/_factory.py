@@ -10,8 +10,13 @@ import numpy as np
 
 from rcsa.store import Measurement, MeasurementMeta, Provenance
 
-ARTIFACT = {"diameter_m": 0.0127, "stickout_m": 0.08, "length_m": 0.1, "material": "steel",
-            "holder": {"description": "shrink-fit HSK63"}}
+ARTIFACT = {
+    "diameter_m": 0.0127,
+    "stickout_m": 0.08,
+    "length_m": 0.1,
+    "material": "steel",
+    "holder": {"description": "shrink-fit HSK63"},
+}
 
 
 def make_measurement(seed: int, kind: str = "direct_frf", nfreq: int | None = None) -> Measurement:
@@ -19,9 +24,15 @@ def make_measurement(seed: int, kind: str = "direct_frf", nfreq: int | None = No
     rng = np.random.default_rng(seed)
     n = int(nfreq if nfreq is not None else rng.integers(20, 4000))
     f = 1.0 + np.cumsum(rng.uniform(0.25, 2.0, n))
-    names = {"direct_frf": ["h"], "point_receptance": ["h", "l", "n", "p"],
-             "artifact_frfs": ["h11", "h21", "h22", "h31"]}[kind]
-    frfs = {k: (rng.normal(size=n) + 1j * rng.normal(size=n)) * 10.0 ** rng.uniform(-9, -5) for k in names}
+    names = {
+        "direct_frf": ["h"],
+        "point_receptance": ["h", "l", "n", "p"],
+        "artifact_frfs": ["h11", "h21", "h22", "h31"],
+    }[kind]
+    frfs = {
+        k: (rng.normal(size=n) + 1j * rng.normal(size=n)) * 10.0 ** rng.uniform(-9, -5)
+        for k in names
+    }
     coherence = {names[0]: rng.uniform(0, 1, n)} if seed % 2 else {}
     meta = MeasurementMeta(
         spindle_id=f"spindle-{seed % 3}",
@@ -33,10 +44,15 @@ def make_measurement(seed: int, kind: str = "direct_frf", nfreq: int | None = No
         artifact=ARTIFACT if kind == "artifact_frfs" else None,
         notes=f"seed {seed} ünïcode",
     )
-    prov = Provenance(source_format="api", source_file=f"s{seed}.csv", source_sha256="ab" * 32,
-                      original_quantity="accelerance", original_units="g/N",
-                      conversions=("scaled", "accelerance -> receptance"),
-                      sensor_mass_kg=0.004 if kind == "direct_frf" else None)
+    prov = Provenance(
+        source_format="api",
+        source_file=f"s{seed}.csv",
+        source_sha256="ab" * 32,
+        original_quantity="accelerance",
+        original_units="g/N",
+        conversions=("scaled", "accelerance -> receptance"),
+        sensor_mass_kg=0.004 if kind == "direct_frf" else None,
+    )
     return Measurement(frequency_hz=f, frfs=frfs, meta=meta, provenance=prov, coherence=coherence)
 
 

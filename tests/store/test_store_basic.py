@@ -107,7 +107,9 @@ def test_deleted_ids_are_never_reused(store, monkeypatch):
     assert store.put(make_measurement(2)) == fresh
 
 
-@pytest.mark.parametrize("bad", ["../etc/passwd", "m-123", "M-0123456789AB", "", "m-0123456789ab/../x"])
+@pytest.mark.parametrize(
+    "bad", ["../etc/passwd", "m-123", "M-0123456789AB", "", "m-0123456789ab/../x"]
+)
 def test_bad_ids_are_not_found_never_opened(store, bad):
     with pytest.raises(NotFoundError):
         store.get(bad)
@@ -145,9 +147,17 @@ def _plant(store, name, build):
 
 def test_foreign_and_newer_files_are_refused_with_a_clear_message(store):
     good = store.put(make_measurement(1))
-    foreign = _plant(store, "m-0000000000f1", lambda f: f.attrs.update({"schema": "anndata", "schema_version": 1}))
+    foreign = _plant(
+        store,
+        "m-0000000000f1",
+        lambda f: f.attrs.update({"schema": "anndata", "schema_version": 1}),
+    )
     untagged = _plant(store, "m-0000000000f2", lambda f: f.create_group("x"))
-    newer = _plant(store, "m-0000000000f3", lambda f: f.attrs.update({"schema": "rcsa.measurement", "schema_version": 99}))
+    newer = _plant(
+        store,
+        "m-0000000000f3",
+        lambda f: f.attrs.update({"schema": "rcsa.measurement", "schema_version": 99}),
+    )
     garbage = "m-0000000000f4"
     (store.path / "measurements" / f"{garbage}.h5").write_bytes(b"not hdf5 at all")
     with pytest.raises(StoreError, match="foreign schema 'anndata'"):
@@ -244,9 +254,20 @@ def test_invalid_measurements_name_the_field():
         (lambda: MeasurementMeta("s", "z", "spindle_nose", "direct_frf"), "direction"),
         (lambda: MeasurementMeta("", "x", "spindle_nose", "direct_frf"), "spindle_id"),
         (lambda: MeasurementMeta("s", "x", "tool_tip", "direct_frf"), "plane"),
-        (lambda: MeasurementMeta("s", "x", "spindle_nose", "artifact_frfs", points_m=(0, 0.02)), "artifact"),
-        (lambda: MeasurementMeta("s", "x", "spindle_nose", "artifact_frfs", artifact=ARTIFACT), "points_m"),
-        (lambda: MeasurementMeta("s", "x", "spindle_nose", "artifact_frfs", points_m=(0.02, 0.01), artifact=ARTIFACT), "points_m"),
+        (
+            lambda: MeasurementMeta("s", "x", "spindle_nose", "artifact_frfs", points_m=(0, 0.02)),
+            "artifact",
+        ),
+        (
+            lambda: MeasurementMeta("s", "x", "spindle_nose", "artifact_frfs", artifact=ARTIFACT),
+            "points_m",
+        ),
+        (
+            lambda: MeasurementMeta(
+                "s", "x", "spindle_nose", "artifact_frfs", points_m=(0.02, 0.01), artifact=ARTIFACT
+            ),
+            "points_m",
+        ),
         (lambda: Measurement(f, {"h": [1, 2], "l": [1, 2]}, meta), "frfs"),
         (lambda: Measurement(f, {"h": [1, np.nan]}, meta), "h"),
         (lambda: Measurement(f, {"h": [1, 2, 3]}, meta), "h"),

@@ -36,7 +36,15 @@ def _env() -> dict[str, str]:
 
 def _start(store: Path, log: Path, seed0: int, count: int, delete_every: int) -> subprocess.Popen:
     return subprocess.Popen(
-        [sys.executable, str(WRITER), str(store), str(log), str(seed0), str(count), str(delete_every)],
+        [
+            sys.executable,
+            str(WRITER),
+            str(store),
+            str(log),
+            str(seed0),
+            str(count),
+            str(delete_every),
+        ],
         env=_env(),
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,
@@ -84,7 +92,18 @@ def test_writers_killed_at_random_moments_lose_nothing_committed(tmp_path):
         for w in range(writers):
             log = tmp_path / f"log-{r}-{w}.txt"
             logs.append(log)
-            procs.append((_start(store_dir, log, seed0=1_000_000 * r + 10_000 * w, count=10_000, delete_every=4), log))
+            procs.append(
+                (
+                    _start(
+                        store_dir,
+                        log,
+                        seed0=1_000_000 * r + 10_000 * w,
+                        count=10_000,
+                        delete_every=4,
+                    ),
+                    log,
+                )
+            )
         for p, log in procs:
             _wait_ready(log, p)
         # kill each writer at its own random moment, 0-400 ms into its write loop
@@ -126,9 +145,11 @@ def test_writers_killed_at_random_moments_lose_nothing_committed(tmp_path):
     store.put(make_measurement(1))
     assert os.listdir(store_dir / "tmp") == []  # stale temporaries cleaned by the next writer
     unlogged = files - set(put)
-    print(f"\ncrash test: {rounds * writers} writers killed, {len(put)} puts and {len(deleted)} deletes "
-          f"committed, {len(in_flight)} deletes killed in flight, {len(unlogged)} puts committed but killed "
-          f"before logging, {len(files)} files, {stale_seen} stale temporaries left by mid-write kills")
+    print(
+        f"\ncrash test: {rounds * writers} writers killed, {len(put)} puts and {len(deleted)} deletes "
+        f"committed, {len(in_flight)} deletes killed in flight, {len(unlogged)} puts committed but killed "
+        f"before logging, {len(files)} files, {stale_seen} stale temporaries left by mid-write kills"
+    )
 
 
 @pytest.mark.slow
@@ -137,7 +158,10 @@ def test_concurrent_writers_and_a_reader_lose_nothing(tmp_path):
     store = MeasurementStore(store_dir)
     n = 40
     logs = [tmp_path / "a.txt", tmp_path / "b.txt"]
-    procs = [_start(store_dir, log, seed0=100_000 * k, count=n, delete_every=0) for k, log in enumerate(logs)]
+    procs = [
+        _start(store_dir, log, seed0=100_000 * k, count=n, delete_every=0)
+        for k, log in enumerate(logs)
+    ]
     reads = 0
     while any(p.poll() is None for p in procs):
         for info in store.list():  # a reader never sees a half-written measurement

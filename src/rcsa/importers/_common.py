@@ -21,7 +21,9 @@ __all__ = ["decode_text", "finish", "numeric_rows", "read_source", "split_line"]
 _COMMENTS = ("#", "%", "//", "!")
 
 
-def read_source(source: str | os.PathLike[str] | bytes, file_name: str = "") -> tuple[bytes, str, str]:
+def read_source(
+    source: str | os.PathLike[str] | bytes, file_name: str = ""
+) -> tuple[bytes, str, str]:
     """Read a whole file (or take uploaded bytes); return ``(bytes, name, sha256 hex)``.
 
     ``file_name`` overrides the recorded name (the only name bytes have). Raises
@@ -127,7 +129,11 @@ def finish(
     f = np.asarray(frequency_hz, dtype=float)
     vals = {k: np.asarray(v, dtype=np.complex128) for k, v in values.items()}
     coh = {k: np.asarray(v, dtype=float) for k, v in (coherence or {}).items()}
-    for name, arr in (("frequency_hz", f), *vals.items(), *(("coherence." + k, v) for k, v in coh.items())):
+    for name, arr in (
+        ("frequency_hz", f),
+        *vals.items(),
+        *(("coherence." + k, v) for k, v in coh.items()),
+    ):
         if arr.shape != f.shape:
             raise InputError(name, f"has {arr.size} values but frequency_hz has {f.size}")
         bad = np.flatnonzero(~np.isfinite(arr))
@@ -154,7 +160,8 @@ def finish(
     if dec.size:
         i = int(dec[0]) + 1
         raise InputError(
-            "frequency_hz", f"must be strictly increasing: {_where(i, lines)} has {f[i]:g} Hz after {f[i - 1]:g} Hz"
+            "frequency_hz",
+            f"must be strictly increasing: {_where(i, lines)} has {f[i]:g} Hz after {f[i - 1]:g} Hz",
         )
     if quantity == "mobility":
         steps.append("mobility -> receptance: H = Y/(i w)")

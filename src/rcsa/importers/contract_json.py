@@ -29,7 +29,16 @@ from ._common import finish, read_source
 
 __all__ = ["measurement_from_contract", "measurement_to_contract", "read_contract_json"]
 
-_META_KEYS = ("spindle_id", "direction", "plane", "kind", "machine", "notes", "points_m", "artifact")
+_META_KEYS = (
+    "spindle_id",
+    "direction",
+    "plane",
+    "kind",
+    "machine",
+    "notes",
+    "points_m",
+    "artifact",
+)
 #: Fields written by measurement_to_contract / MeasurementInfo.to_dict that an upload may carry back.
 _OUTPUT_ONLY = frozenset(
     {"id", "created_utc", "software_version", "source", "frfs", "n_frequencies", "frequency_min_hz",
@@ -61,7 +70,9 @@ def _frf_keys(kind: Any, doc: Mapping[str, Any]) -> list[str]:
         return ["h"]
     if kind == "artifact_frfs":
         return sorted(k for k in doc if ARTIFACT_FRF_NAME.match(k))
-    raise InputError("kind", f"must be one of point_receptance, artifact_frfs, direct_frf; got {kind!r}")
+    raise InputError(
+        "kind", f"must be one of point_receptance, artifact_frfs, direct_frf; got {kind!r}"
+    )
 
 
 def measurement_from_contract(
@@ -100,7 +111,9 @@ def measurement_from_contract(
         if key not in doc:
             raise InputError(key, "is required")
     frf_keys = _frf_keys(doc["kind"], doc)
-    unknown = sorted(set(doc) - set(_META_KEYS) - _OUTPUT_ONLY - set(frf_keys) - {"frequency_hz", "coherence"})
+    unknown = sorted(
+        set(doc) - set(_META_KEYS) - _OUTPUT_ONLY - set(frf_keys) - {"frequency_hz", "coherence"}
+    )
     if unknown:
         raise InputError(unknown[0], f"unknown field for kind {doc['kind']!r}")
     missing = [k for k in frf_keys if k not in doc]
@@ -121,12 +134,16 @@ def measurement_from_contract(
     if isinstance(coherence_doc, list) and frf_keys == ["h"]:
         coherence_doc = {"h": coherence_doc}
     if coherence_doc is not None and not isinstance(coherence_doc, Mapping):
-        raise InputError("coherence", "must be a list (for h alone) or an object of lists by FRF name")
+        raise InputError(
+            "coherence", "must be a list (for h alone) or an object of lists by FRF name"
+        )
     coherence = {k: _numbers(v, f"coherence.{k}") for k, v in (coherence_doc or {}).items()}
     steps, prior_mass = [], None
     src = doc.get("source")
     if isinstance(src, Mapping):  # re-import of an export: keep what was done to the numbers
-        steps.append(f"re-imported rcsa export {doc.get('id', '')} (originally {src.get('format')} {src.get('file')!r})")
+        steps.append(
+            f"re-imported rcsa export {doc.get('id', '')} (originally {src.get('format')} {src.get('file')!r})"
+        )
         steps.extend(str(c) for c in src.get("conversions") or ())
         prior_mass = src.get("sensor_mass_kg")
     prov = Provenance(

@@ -44,14 +44,18 @@ def parse_columns(spec: str, kind: str) -> list[tuple[str, str]]:
     for tok in (t.strip().lower() for t in spec.split(",")):
         name, _, role = tok.rpartition(".")
         if role not in _ROLES:
-            raise InputError("columns", f"unknown column {tok!r}; use f, re, im, mag, phase, coh or _")
+            raise InputError(
+                "columns", f"unknown column {tok!r}; use f, re, im, mag, phase, coh or _"
+            )
         role = _ROLES[role]
         if role in ("f", "skip"):
             if name:
                 raise InputError("columns", f"{tok!r}: only FRF columns take a name prefix")
         elif not name:
             if kind != "direct_frf":
-                raise InputError("columns", f"kind {kind!r} needs named FRF columns, e.g. h11.re,h11.im")
+                raise InputError(
+                    "columns", f"kind {kind!r} needs named FRF columns, e.g. h11.re,h11.im"
+                )
             name = "h"
         if (name, role) in out and role != "skip":
             raise InputError("columns", f"{tok!r} is declared twice")
@@ -60,8 +64,12 @@ def parse_columns(spec: str, kind: str) -> list[tuple[str, str]]:
         raise InputError("columns", "declare exactly one frequency column 'f'")
     for name in {n for n, r in out if n}:
         roles = {r for n, r in out if n == name}
-        if not ({"re", "im"} <= roles or {"mag", "phase"} <= roles) or ({"re", "im"} & roles and {"mag", "phase"} & roles):
-            raise InputError("columns", f"{name!r} needs either re and im, or mag and phase columns")
+        if not ({"re", "im"} <= roles or {"mag", "phase"} <= roles) or (
+            {"re", "im"} & roles and {"mag", "phase"} & roles
+        ):
+            raise InputError(
+                "columns", f"{name!r} needs either re and im, or mag and phase columns"
+            )
     return out
 
 
@@ -110,7 +118,9 @@ def read_csv(
     """
     cols = parse_columns(columns, meta.kind)
     unit = parse_frf_unit(units)
-    if meta.kind == "point_receptance" and (unit.quantity != "receptance" or unit.factor_to_si != 1.0):
+    if meta.kind == "point_receptance" and (
+        unit.quantity != "receptance" or unit.factor_to_si != 1.0
+    ):
         raise InputError("units", "a point_receptance table must be in SI: declare units='m/N'")
     f_factor = frequency_factor_to_hz(frequency_unit)
     ph_factor = phase_factor_to_rad(phase_unit) if any(r == "phase" for _, r in cols) else None
@@ -119,7 +129,8 @@ def read_csv(
     for row, ln in zip(rows, lines, strict=True):
         if len(row) != len(cols):
             raise InputError(
-                "columns", f"line {ln} has {len(row)} values but {len(cols)} columns are declared ({columns!r})"
+                "columns",
+                f"line {ln} has {len(row)} values but {len(cols)} columns are declared ({columns!r})",
             )
     table = np.array(rows, dtype=float)
     col = {key: table[:, i] for i, key in enumerate(cols)}

@@ -59,13 +59,17 @@ def read_cutpro(
         As in :func:`rcsa.importers.read_csv`.
     """
     if meta.kind != "direct_frf":
-        raise InputError("kind", f"a CutPro .frf file holds one FRF: kind must be direct_frf, not {meta.kind!r}")
+        raise InputError(
+            "kind", f"a CutPro .frf file holds one FRF: kind must be direct_frf, not {meta.kind!r}"
+        )
     data, name, sha = read_source(source, file_name)
     text = decode_text(data)
     declared = units is not None
     unit = parse_frf_unit(units if declared else CUTPRO_DEFAULT_UNITS)
     if unit.quantity != "receptance":
-        raise InputError("units", f"CutPro .frf files hold receptance; {unit.text!r} is {unit.quantity}")
+        raise InputError(
+            "units", f"CutPro .frf files hold receptance; {unit.text!r} is {unit.quantity}"
+        )
     named = _units_named_in(text)
     if named and named != {unit.factor_to_si}:
         raise InputError(
@@ -77,15 +81,21 @@ def read_cutpro(
     rows, lines = numeric_rows(text, leading=3)
     for row, ln in zip(rows, lines, strict=True):
         if len(row) != 3:
-            raise InputError("columns", f"line {ln} has {len(row)} values; a .frf line is freq real imag")
+            raise InputError(
+                "columns", f"line {ln} has {len(row)} values; a .frf line is freq real imag"
+            )
     table = np.array(rows, dtype=float)
     prov = Provenance(
         source_format="cutpro_frf",
         source_file=name,
         source_sha256=sha,
         original_quantity="receptance",
-        original_units=unit.text if declared else f"{CUTPRO_DEFAULT_UNITS} (CutPro convention, assumed)",
-        conversions=(f"scaled {unit.text} -> m/N by {unit.factor_to_si:.17g}",) if unit.factor_to_si != 1 else (),
+        original_units=unit.text
+        if declared
+        else f"{CUTPRO_DEFAULT_UNITS} (CutPro convention, assumed)",
+        conversions=(f"scaled {unit.text} -> m/N by {unit.factor_to_si:.17g}",)
+        if unit.factor_to_si != 1
+        else (),
     )
     return finish(
         table[:, 0],

@@ -28,7 +28,9 @@ def _mass(mass_kg: float) -> float:
     return m
 
 
-def remove_sensor_mass(frequency_hz: np.ndarray, h_measured: np.ndarray, mass_kg: float) -> np.ndarray:
+def remove_sensor_mass(
+    frequency_hz: np.ndarray, h_measured: np.ndarray, mass_kg: float
+) -> np.ndarray:
     """Driving-point receptance without the sensor: ``H_m / (1 + ω² m H_m)``.
 
     Parameters
@@ -73,14 +75,24 @@ def correct_sensor_mass(measurement: Measurement, mass_kg: float) -> Measurement
             f"mass correction applies to a driving-point FRF (kind direct_frf), not {measurement.meta.kind!r}",
         )
     if measurement.provenance.sensor_mass_kg is not None:
-        raise InputError("sensor_mass_kg", "this measurement is already corrected for a sensor mass")
+        raise InputError(
+            "sensor_mass_kg", "this measurement is already corrected for a sensor mass"
+        )
     h = remove_sensor_mass(measurement.frequency_hz, measurement.frfs["h"], m)
     prov = dataclasses.replace(
         measurement.provenance,
         sensor_mass_kg=m,
-        conversions=(*measurement.provenance.conversions, f"sensor mass {m:g} kg removed: H = Hm/(1 + w^2 m Hm)"),
+        conversions=(
+            *measurement.provenance.conversions,
+            f"sensor mass {m:g} kg removed: H = Hm/(1 + w^2 m Hm)",
+        ),
     )
     # a corrected copy is a new measurement: it gets its own id when stored
     return dataclasses.replace(
-        measurement, frfs={"h": h}, provenance=prov, id=None, created_utc=None, software_version=None
+        measurement,
+        frfs={"h": h},
+        provenance=prov,
+        id=None,
+        created_utc=None,
+        software_version=None,
     )

@@ -137,27 +137,51 @@ def read_tap(
         Name recorded when a single ``sources`` is bytes.
     """
     if meta.kind != "direct_frf":
-        raise InputError("kind", f"a tap test gives one driving-point FRF: kind must be direct_frf, not {meta.kind!r}")
-    fu, ru = parse_signal_unit(force_unit, "force_unit"), parse_signal_unit(response_unit, "response_unit")
+        raise InputError(
+            "kind",
+            f"a tap test gives one driving-point FRF: kind must be direct_frf, not {meta.kind!r}",
+        )
+    fu, ru = (
+        parse_signal_unit(force_unit, "force_unit"),
+        parse_signal_unit(response_unit, "response_unit"),
+    )
     if fu.kind != "force":
         raise InputError("force_unit", f"{force_unit!r} is not a force unit")
     if ru.kind == "force":
-        raise InputError("response_unit", f"{response_unit!r} is a force; give the response's unit (e.g. m/s^2, g)")
+        raise InputError(
+            "response_unit",
+            f"{response_unit!r} is a force; give the response's unit (e.g. m/s^2, g)",
+        )
     roles = [_ROLES.get(t.strip().lower()) for t in columns.split(",")]
-    if None in roles or roles.count("force") != 1 or roles.count("response") != 1 or roles.count("t") > 1:
-        raise InputError("columns", f"{columns!r}: declare one force and one response column (t optional), e.g. t,force,response")
+    if (
+        None in roles
+        or roles.count("force") != 1
+        or roles.count("response") != 1
+        or roles.count("t") > 1
+    ):
+        raise InputError(
+            "columns",
+            f"{columns!r}: declare one force and one response column (t optional), e.g. t,force,response",
+        )
     if "t" not in roles and sample_rate_hz is None:
         raise InputError("sample_rate_hz", "is required when there is no time column")
-    srcs = [sources] if isinstance(sources, str | bytes | bytearray | os.PathLike) else list(sources)
+    srcs = (
+        [sources] if isinstance(sources, str | bytes | bytearray | os.PathLike) else list(sources)
+    )
     if not srcs:
         raise InputError("file", "no tap file given")
     forces, responses, names, shas, dt = [], [], [], [], None
     for k, src in enumerate(srcs):
         data, name, sha = read_source(src, file_name if len(srcs) == 1 else "")
         rows, lines = numeric_rows(decode_text(data))
-        bad = next((ln for row, ln in zip(rows, lines, strict=True) if len(row) != len(roles)), None)
+        bad = next(
+            (ln for row, ln in zip(rows, lines, strict=True) if len(row) != len(roles)), None
+        )
         if bad is not None:
-            raise InputError("columns", f"{name or f'tap {k + 1}'} line {bad}: expected {len(roles)} values ({columns!r})")
+            raise InputError(
+                "columns",
+                f"{name or f'tap {k + 1}'} line {bad}: expected {len(roles)} values ({columns!r})",
+            )
         table = np.array(rows, dtype=float)
         if not np.all(np.isfinite(table)):
             raise InputError("file", f"{name or f'tap {k + 1}'} contains NaN or infinite values")
@@ -166,13 +190,19 @@ def read_tap(
             t = col["t"]
             steps = np.diff(t)
             if t.size < 8 or np.any(steps <= 0):
-                raise InputError("t", f"{name}: time must be strictly increasing (and at least 8 samples)")
+                raise InputError(
+                    "t", f"{name}: time must be strictly increasing (and at least 8 samples)"
+                )
             dt_k = (t[-1] - t[0]) / (t.size - 1)
             if np.max(np.abs(steps - dt_k)) > _DT_RTOL * dt_k:
-                raise InputError("t", f"{name}: the sampling is not uniform (steps vary by more than 1 %)")
+                raise InputError(
+                    "t", f"{name}: the sampling is not uniform (steps vary by more than 1 %)"
+                )
             if sample_rate_hz is not None:
                 if abs(dt_k * sample_rate_hz - 1) > _DT_RTOL:
-                    raise InputError("sample_rate_hz", f"{name}: the time column gives {1 / dt_k:g} Hz")
+                    raise InputError(
+                        "sample_rate_hz", f"{name}: the time column gives {1 / dt_k:g} Hz"
+                    )
                 dt_k = 1.0 / sample_rate_hz
         else:
             dt_k = 1.0 / sample_rate_hz
@@ -181,7 +211,9 @@ def read_tap(
         dt = dt_k
         force, resp = col["force"] * fu.factor_to_si, col["response"] * ru.factor_to_si
         if not allow_double_hit and (msg := _double_hit(force, dt)):
-            raise InputError("force", f"{name}: double hit: {msg}; repeat the tap or pass allow_double_hit=True")
+            raise InputError(
+                "force", f"{name}: double hit: {msg}; repeat the tap or pass allow_double_hit=True"
+            )
         forces.append(force)
         responses.append(resp)
         names.append(name)
@@ -203,19 +235,29 @@ def read_tap(
         w = np.exp(-t / exponential_tau_s)
         forces = [fk * w for fk in forces]
         responses = [xk * w for xk in responses]
-        steps.append(f"exponential window tau={exponential_tau_s:g} s on force and response (adds damping {1 / exponential_tau_s:g} 1/s)")
+        steps.append(
+            f"exponential window tau={exponential_tau_s:g} s on force and response (adds damping {1 / exponential_tau_s:g} 1/s)"
+        )
     freq, h1, coh = h1_estimate(forces, responses, dt)
     keep = freq > 0
     if max_frequency_hz is not None:
         keep &= freq <= max_frequency_hz
-    steps.append("0 Hz bin dropped" + (f"; kept f <= {max_frequency_hz:g} Hz" if max_frequency_hz is not None else ""))
+    steps.append(
+        "0 Hz bin dropped"
+        + (f"; kept f <= {max_frequency_hz:g} Hz" if max_frequency_hz is not None else "")
+    )
     prov = Provenance(
         source_format="tap",
         source_file=", ".join(names),
         source_sha256=shas[0] if len(shas) == 1 else "",
         original_quantity=_QUANTITY[ru.kind],
         original_units=f"{ru.text} per {fu.text}",
-        conversions=tuple(steps) + (() if len(shas) == 1 else tuple(f"sha256 {n_}: {s}" for n_, s in zip(names, shas, strict=True))),
+        conversions=tuple(steps)
+        + (
+            ()
+            if len(shas) == 1
+            else tuple(f"sha256 {n_}: {s}" for n_, s in zip(names, shas, strict=True))
+        ),
     )
     return finish(
         freq[keep],

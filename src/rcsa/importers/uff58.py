@@ -75,17 +75,23 @@ def _frf_id(s: Mapping[str, Any]) -> str:
     return f"rsp {s['rsp_node']}:{s['rsp_dir']} ref {s['ref_node']}:{s['ref_dir']}"
 
 
-def _unit_from_file(sets: list[dict[str, Any]], frfs: list[dict[str, Any]], quantity: str | None) -> FrfUnit | None:
+def _unit_from_file(
+    sets: list[dict[str, Any]], frfs: list[dict[str, Any]], quantity: str | None
+) -> FrfUnit | None:
     u164 = [s for s in sets if s.get("type") == 164]
     if len({(s["units_code"], s["length"], s["force"]) for s in u164}) > 1:
-        raise InputError("units", "the file holds several different unit datasets (164); declare the units")
+        raise InputError(
+            "units", "the file holds several different unit datasets (164); declare the units"
+        )
     from164 = None
     if u164:
         s = u164[0]
         factor = float(s["force"]) / float(s["length"])
         text = f"UFF 164 code {s['units_code']} ({_UNIT_SYSTEMS.get(s['units_code'], '?')})"
         from164 = FrfUnit(text, quantity or "", factor)
-    labels = {(_label(s, "ordinate_axis_units_lab"), _label(s, "orddenom_axis_units_lab")) for s in frfs}
+    labels = {
+        (_label(s, "ordinate_axis_units_lab"), _label(s, "orddenom_axis_units_lab")) for s in frfs
+    }
     from_labels = None
     if len(labels) == 1:
         num, den = next(iter(labels))
@@ -93,7 +99,9 @@ def _unit_from_file(sets: list[dict[str, Any]], frfs: list[dict[str, Any]], quan
             with contextlib.suppress(InputError):
                 from_labels = parse_frf_unit(f"{num}/{den}")
     if from164 and from_labels:
-        if not np.isclose(from164.factor_to_si, from_labels.factor_to_si, rtol=_UNIT_AGREEMENT_RTOL, atol=0):
+        if not np.isclose(
+            from164.factor_to_si, from_labels.factor_to_si, rtol=_UNIT_AGREEMENT_RTOL, atol=0
+        ):
             raise InputError(
                 "units",
                 f"dataset 164 ({from164.text}) and the axis labels ({from_labels.text}) disagree; declare the units",
@@ -128,7 +136,10 @@ def read_uff(
         As in :func:`rcsa.importers.read_csv`.
     """
     if meta.kind == "point_receptance":
-        raise InputError("kind", "UFF import gives translational FRFs; import a point_receptance as contract JSON")
+        raise InputError(
+            "kind",
+            "UFF import gives translational FRFs; import a point_receptance as contract JSON",
+        )
     data, name, sha = read_source(source, file_name)
     if isinstance(source, bytes | bytearray):
         with tempfile.TemporaryDirectory() as d:
@@ -154,20 +165,30 @@ def read_uff(
     for s in s58:
         if abs(s["rsp_dir"]) not in _AXES or abs(s["ref_dir"]) != abs(s["rsp_dir"]):
             raise InputError(
-                "rsp_dir", f"{_frf_id(s)}: only translational FRFs along one axis (direction codes ±1, ±2, ±3)"
+                "rsp_dir",
+                f"{_frf_id(s)}: only translational FRFs along one axis (direction codes ±1, ±2, ±3)",
             )
-        if s["abscissa_spec_data_type"] not in (0, 18) or _label(s, "abscissa_axis_units_lab").lower() not in ("", "hz"):
-            raise InputError("abscissa_spec_data_type", f"{_frf_id(s)}: the abscissa must be frequency in Hz")
+        if s["abscissa_spec_data_type"] not in (0, 18) or _label(
+            s, "abscissa_axis_units_lab"
+        ).lower() not in ("", "hz"):
+            raise InputError(
+                "abscissa_spec_data_type", f"{_frf_id(s)}: the abscissa must be frequency in Hz"
+            )
     axes = {abs(s["rsp_dir"]) for s in frf_sets}
     if len(axes) > 1:
-        raise InputError("rsp_dir", f"the file mixes FRFs along {sorted(_AXES[a] for a in axes)}; split it per direction")
+        raise InputError(
+            "rsp_dir",
+            f"the file mixes FRFs along {sorted(_AXES[a] for a in axes)}; split it per direction",
+        )
 
     # --- roles: which FRF is which receptance
     by_nodes: dict[tuple[int, int], dict[str, Any]] = {}
     for s in frf_sets:
         key = (int(s["rsp_node"]), int(s["ref_node"]))
         if key in by_nodes:
-            raise InputError("roles", f"two FRFs with response node {key[0]} and reference node {key[1]}")
+            raise InputError(
+                "roles", f"two FRFs with response node {key[0]} and reference node {key[1]}"
+            )
         by_nodes[key] = s
     if roles is None:
         if meta.kind == "direct_frf" and len(frf_sets) == 1:
@@ -176,7 +197,11 @@ def read_uff(
             raise InputError(
                 "roles",
                 f"the file holds FRFs at (response, reference) nodes {sorted(by_nodes)}; say which is which, "
-                + ("e.g. {'h': (1, 1)}" if meta.kind == "direct_frf" else "e.g. {'h11': (1, 1), 'h21': (2, 1), 'h22': (2, 2)}"),
+                + (
+                    "e.g. {'h': (1, 1)}"
+                    if meta.kind == "direct_frf"
+                    else "e.g. {'h11': (1, 1), 'h21': (2, 1), 'h22': (2, 2)}"
+                ),
             )
     chosen: dict[str, dict[str, Any]] = {}
     for role, nodes in roles.items():
@@ -185,7 +210,10 @@ def read_uff(
         except (TypeError, ValueError, IndexError):
             raise InputError(f"roles.{role}", "must be (response node, reference node)") from None
         if key not in by_nodes:
-            raise InputError(f"roles.{role}", f"no FRF at response node {key[0]}, reference node {key[1]}; the file has {sorted(by_nodes)}")
+            raise InputError(
+                f"roles.{role}",
+                f"no FRF at response node {key[0]}, reference node {key[1]}; the file has {sorted(by_nodes)}",
+            )
         chosen[role] = by_nodes[key]
 
     # --- quantity and units
@@ -198,7 +226,8 @@ def read_uff(
         unit = parse_frf_unit(units)
         if coded is not None and unit.quantity != coded:
             raise InputError(
-                "units", f"{unit.text!r} is {unit.quantity} but the file's data-type codes say {coded} {sorted(codes)}"
+                "units",
+                f"{unit.text!r} is {unit.quantity} but the file's data-type codes say {coded} {sorted(codes)}",
             )
         origin = "declared"
     else:
@@ -212,7 +241,8 @@ def read_uff(
         origin = "from the file"
     if coded is not None and unit.quantity and unit.quantity != coded:
         raise InputError(
-            "units", f"the file's unit ({unit.text}) is {unit.quantity} but its data-type codes say {coded}; declare the units"
+            "units",
+            f"the file's unit ({unit.text}) is {unit.quantity} but its data-type codes say {coded}; declare the units",
         )
     quantity = coded or unit.quantity
     if not quantity:
@@ -228,16 +258,25 @@ def read_uff(
     for role, s in chosen.items():
         x = np.asarray(s["x"], dtype=float)
         if x.shape != freq.shape or not np.array_equal(x, freq):
-            raise InputError("frequency_hz", f"{role} ({_frf_id(s)}) is not on the same frequency axis as the others")
+            raise InputError(
+                "frequency_hz",
+                f"{role} ({_frf_id(s)}) is not on the same frequency axis as the others",
+            )
         if s["ord_data_type"] not in (5, 6):
-            raise InputError("ord_data_type", f"{role} ({_frf_id(s)}) is not complex (ordinate data type 5 or 6)")
+            raise InputError(
+                "ord_data_type", f"{role} ({_frf_id(s)}) is not complex (ordinate data type 5 or 6)"
+            )
         sign = int(np.sign(s["rsp_dir"]) * np.sign(s["ref_dir"]))
         if sign < 0:
             steps.append(f"{role}: sign flipped ({_frf_id(s)} -> +/+)")
         values[role] = np.asarray(s["data"], dtype=np.complex128) * (sign * unit.factor_to_si)
         steps.append(f"{role} <- UFF 58 {_frf_id(s)} ({s.get('id1', '').strip()})")
         for c in s58:
-            if c["func_type"] == 6 and _frf_id(c) == _frf_id(s) and np.array_equal(np.asarray(c["x"], float), freq):
+            if (
+                c["func_type"] == 6
+                and _frf_id(c) == _frf_id(s)
+                and np.array_equal(np.asarray(c["x"], float), freq)
+            ):
                 coherence[role] = np.real(np.asarray(c["data"]))
     if unit.factor_to_si != 1.0:
         steps.append(f"scaled {unit.text} -> SI by {unit.factor_to_si:.17g}")

@@ -41,7 +41,13 @@ STANDARD_GRAVITY_M_S2 = 9.80665
 #: Metres per unit of length (inch and foot exact by the 1959 agreement).
 LENGTH_M = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "nm": 1e-9, "in": 0.0254, "ft": 0.3048}
 #: Newtons per unit of force (lbf = 0.45359237 kg × g, exact; kgf = g, exact).
-FORCE_N = {"n": 1.0, "mn": 1e-3, "kn": 1e3, "lbf": 0.45359237 * STANDARD_GRAVITY_M_S2, "kgf": STANDARD_GRAVITY_M_S2}
+FORCE_N = {
+    "n": 1.0,
+    "mn": 1e-3,
+    "kn": 1e3,
+    "lbf": 0.45359237 * STANDARD_GRAVITY_M_S2,
+    "kgf": STANDARD_GRAVITY_M_S2,
+}
 _QUANTITY = {"": "receptance", "/s": "mobility", "/s2": "accelerance"}
 _FRF = re.compile(r"^(?P<num>m|mm|um|nm|in|ft|g)(?P<per>/s2|/s)?/(?P<force>n|mn|kn|lbf|kgf)$")
 _SIGNAL = re.compile(r"^(?P<num>m|mm|um|nm|in|ft|g)(?P<per>/s2|/s)?$")
@@ -50,7 +56,13 @@ _EXAMPLES = "m/N, um/N, mm/N, in/lbf, m/s/N, m/s^2/N, g/N"
 
 def _normalise(text: str) -> str:
     t = text.strip().lower().replace(" ", "").replace("(", "").replace(")", "")
-    t = t.replace("µ", "u").replace("μ", "u").replace("²", "2").replace("^2", "2").replace("**2", "2")
+    t = (
+        t.replace("µ", "u")
+        .replace("μ", "u")
+        .replace("²", "2")
+        .replace("^2", "2")
+        .replace("**2", "2")
+    )
     return t.replace("sec", "s")
 
 

@@ -82,7 +82,9 @@ class Catalogue:
             return
         with closing(self._connect()) as con:
             con.execute("BEGIN IMMEDIATE")
-            con.executemany("INSERT OR REPLACE INTO measurements VALUES (?, ?, ?, ?, ?, ?, ?, ?)", rows)
+            con.executemany(
+                "INSERT OR REPLACE INTO measurements VALUES (?, ?, ?, ?, ?, ?, ?, ?)", rows
+            )
             con.execute("COMMIT")
 
     def remove(self, ids: Iterable[str]) -> None:

@@ -42,7 +42,12 @@ from .measurement import (
 
 __all__ = ["fsync_file", "read_info_file", "read_measurement_file", "write_measurement_file"]
 
-_DATASET_OPTS: dict[str, Any] = {"chunks": True, "compression": "gzip", "shuffle": True, "fletcher32": True}
+_DATASET_OPTS: dict[str, Any] = {
+    "chunks": True,
+    "compression": "gzip",
+    "shuffle": True,
+    "fletcher32": True,
+}
 
 
 def _tag(obj: h5py.HLObject, schema: str) -> None:
@@ -66,7 +71,9 @@ def write_measurement_file(path: Path, m: Measurement) -> None:
     :class:`~rcsa.store.MeasurementStore`); this function closes and fsyncs the file.
     """
     if m.id is None or m.created_utc is None:
-        raise StoreError("internal: a measurement is written only once it has an id and a creation time")
+        raise StoreError(
+            "internal: a measurement is written only once it has an id and a creation time"
+        )
     meta, prov = m.meta, m.provenance
     with h5py.File(path, "w") as f:
         _tag(f, S.MEASUREMENT_SCHEMA)
@@ -79,8 +86,16 @@ def write_measurement_file(path: Path, m: Measurement) -> None:
         a["convention"] = S.CONVENTION
         if meta.points_m is not None:
             a["points_m"] = np.asarray(meta.points_m, dtype=np.float64)
-        a["artifact_json"] = json.dumps(thaw_json(meta.artifact)) if meta.artifact is not None else ""
-        for key in ("source_format", "source_file", "source_sha256", "original_quantity", "original_units"):
+        a["artifact_json"] = (
+            json.dumps(thaw_json(meta.artifact)) if meta.artifact is not None else ""
+        )
+        for key in (
+            "source_format",
+            "source_file",
+            "source_sha256",
+            "original_quantity",
+            "original_units",
+        ):
             a[key] = getattr(prov, key)
         a["conversions_json"] = json.dumps(list(prov.conversions))
         if prov.sensor_mass_kg is not None:

@@ -56,7 +56,9 @@ def freeze_json(value: Any, field_name: str) -> Any:
         if not math.isfinite(float(value)):
             raise InputError(field_name, "must be a finite number")
         return value.item() if isinstance(value, np.generic) else value
-    raise InputError(field_name, f"must be JSON data (object, list, string, number), got {type(value).__name__}")
+    raise InputError(
+        field_name, f"must be JSON data (object, list, string, number), got {type(value).__name__}"
+    )
 
 
 def thaw_json(value: Any) -> Any:
@@ -145,7 +147,9 @@ class MeasurementMeta:
         _text(self.notes, "notes", required=False, max_len=10_000)
         for name, allowed in (("direction", DIRECTIONS), ("plane", PLANES), ("kind", KINDS)):
             if getattr(self, name) not in allowed:
-                raise InputError(name, f"must be one of {', '.join(allowed)}; got {getattr(self, name)!r}")
+                raise InputError(
+                    name, f"must be one of {', '.join(allowed)}; got {getattr(self, name)!r}"
+                )
         if self.artifact is not None:
             if not isinstance(self.artifact, Mapping):
                 raise InputError("artifact", "must be an object (dict)")
@@ -163,9 +167,15 @@ class MeasurementMeta:
             if pts.ndim != 1 or pts.size < 2 or not np.all(np.isfinite(pts)) or np.any(pts < 0):
                 raise InputError("points_m", "must list at least two finite positions >= 0 m")
             if np.any(np.diff(pts) <= 0):
-                raise InputError("points_m", "must be strictly increasing (from the artifact tip toward the spindle)")
+                raise InputError(
+                    "points_m",
+                    "must be strictly increasing (from the artifact tip toward the spindle)",
+                )
             if self.artifact is not None and pts[-1] > float(self.artifact["stickout_m"]):
-                raise InputError("points_m", "points must lie on the artifact's stickout (<= artifact.stickout_m)")
+                raise InputError(
+                    "points_m",
+                    "points must lie on the artifact's stickout (<= artifact.stickout_m)",
+                )
             object.__setattr__(self, "points_m", tuple(float(x) for x in pts))
 
 
@@ -207,24 +217,34 @@ class Provenance:
             raise InputError("original_quantity", "must be receptance, mobility or accelerance")
         object.__setattr__(self, "conversions", tuple(str(c) for c in self.conversions))
         if self.sensor_mass_kg is not None:
-            object.__setattr__(self, "sensor_mass_kg", _positive(self.sensor_mass_kg, "sensor_mass_kg"))
+            object.__setattr__(
+                self, "sensor_mass_kg", _positive(self.sensor_mass_kg, "sensor_mass_kg")
+            )
 
 
 def _frf_names_ok(kind: str, names: set[str], points_m: tuple[float, ...] | None) -> None:
     if kind == "point_receptance" and names != {"h", "l", "n", "p"}:
-        raise InputError("frfs", f"kind 'point_receptance' needs exactly h, l, n, p; got {sorted(names)}")
+        raise InputError(
+            "frfs", f"kind 'point_receptance' needs exactly h, l, n, p; got {sorted(names)}"
+        )
     if kind == "direct_frf" and names != {"h"}:
         raise InputError("frfs", f"kind 'direct_frf' needs exactly h; got {sorted(names)}")
     if kind == "artifact_frfs":
         bad = sorted(n for n in names if not ARTIFACT_FRF_NAME.match(n))
         if bad:
-            raise InputError("frfs", f"artifact FRFs are named h<response><excitation>, e.g. h21; got {bad}")
+            raise InputError(
+                "frfs", f"artifact FRFs are named h<response><excitation>, e.g. h21; got {bad}"
+            )
         missing = sorted({"h11", "h21", "h22"} - names)
         if missing:
-            raise InputError("frfs", f"kind 'artifact_frfs' needs at least h11, h21, h22; missing {missing}")
+            raise InputError(
+                "frfs", f"kind 'artifact_frfs' needs at least h11, h21, h22; missing {missing}"
+            )
         top = max(int(c) for n in names for c in n[1:])
         if points_m is not None and top > len(points_m):
-            raise InputError("points_m", f"the FRFs use point {top} but points_m lists {len(points_m)} points")
+            raise InputError(
+                "points_m", f"the FRFs use point {top} but points_m lists {len(points_m)} points"
+            )
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -281,7 +301,9 @@ class Measurement:
                 raise InputError(f"coherence.{name}", "names no FRF of this measurement")
             c = np.array(self.coherence[name], dtype=np.float64)
             if c.shape != f.shape:
-                raise InputError(f"coherence.{name}", f"has shape {c.shape}, frequency_hz has {f.shape}")
+                raise InputError(
+                    f"coherence.{name}", f"has shape {c.shape}, frequency_hz has {f.shape}"
+                )
             if not np.all(np.isfinite(c)) or np.any(c < 0) or np.any(c > 1 + _COHERENCE_SLACK):
                 raise InputError(f"coherence.{name}", "must be finite numbers between 0 and 1")
             c.flags.writeable = False
@@ -301,7 +323,9 @@ class Measurement:
     def receptance(self) -> Receptance:
         """The 2×2 point receptance of a ``point_receptance`` measurement."""
         if self.meta.kind != "point_receptance":
-            raise InputError("kind", f"only a point_receptance has a 2x2 receptance, this is {self.meta.kind!r}")
+            raise InputError(
+                "kind", f"only a point_receptance has a 2x2 receptance, this is {self.meta.kind!r}"
+            )
         r = self.frfs
         return Receptance.from_hlnp(self.frequency_hz, r["h"], r["l"], r["n"], r["p"])
 

@@ -35,7 +35,17 @@ DELETED = "deleted"
 TMP = "tmp"
 #: Names a store root may contain (anything else means the directory is not ours).
 OWN_NAMES = frozenset(
-    {MARKER, LOCK, INDEX, INDEX + "-wal", INDEX + "-shm", INDEX + "-journal", MEASUREMENTS, DELETED, TMP}
+    {
+        MARKER,
+        LOCK,
+        INDEX,
+        INDEX + "-wal",
+        INDEX + "-shm",
+        INDEX + "-journal",
+        MEASUREMENTS,
+        DELETED,
+        TMP,
+    }
 )
 
 

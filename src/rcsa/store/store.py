@@ -77,7 +77,9 @@ class MeasurementStore:
         How long a writer waits for another writer, s; then :class:`StoreError`.
     """
 
-    def __init__(self, path: str | os.PathLike[str] | None = None, *, lock_timeout_s: float = 60.0) -> None:
+    def __init__(
+        self, path: str | os.PathLike[str] | None = None, *, lock_timeout_s: float = 60.0
+    ) -> None:
         self.path = Path(path).expanduser() if path is not None else P.default_store_path()
         self.lock_timeout_s = float(lock_timeout_s)
         self._measurements = self.path / P.MEASUREMENTS
@@ -98,10 +100,14 @@ class MeasurementStore:
         try:
             self.path.mkdir(parents=True, exist_ok=True)
         except OSError as e:
-            raise StoreError(f"cannot create the store directory {self.path}: {e.strerror}") from None
+            raise StoreError(
+                f"cannot create the store directory {self.path}: {e.strerror}"
+            ) from None
         if not self.path.is_dir():
             raise StoreError(f"{self.path} is not a directory")
-        foreign = sorted(n for n in os.listdir(self.path) if n not in P.OWN_NAMES and not n.startswith("."))
+        foreign = sorted(
+            n for n in os.listdir(self.path) if n not in P.OWN_NAMES and not n.startswith(".")
+        )
         if foreign:
             raise StoreError(
                 f"{self.path} is not an rcsa store (no {P.MARKER}) and is not empty "
@@ -111,7 +117,11 @@ class MeasurementStore:
             if not marker.is_file():
                 for d in (self._measurements, self._deleted, self._tmp):
                     d.mkdir(exist_ok=True)
-                doc = {"schema": STORE_SCHEMA, "schema_version": SCHEMA_VERSION, "created_utc": _utc_now()}
+                doc = {
+                    "schema": STORE_SCHEMA,
+                    "schema_version": SCHEMA_VERSION,
+                    "created_utc": _utc_now(),
+                }
                 tmp = self._tmp / (P.MARKER + ".tmp")
                 tmp.write_text(json.dumps(doc) + "\n", encoding="utf-8")
                 fsync_file(tmp)
@@ -125,7 +135,9 @@ class MeasurementStore:
         except (OSError, ValueError) as e:
             raise StoreError(f"{marker}: unreadable store marker ({e})") from None
         if not isinstance(doc, dict) or doc.get("schema") != STORE_SCHEMA:
-            raise StoreError(f"{marker}: foreign store schema {doc.get('schema') if isinstance(doc, dict) else doc!r}")
+            raise StoreError(
+                f"{marker}: foreign store schema {doc.get('schema') if isinstance(doc, dict) else doc!r}"
+            )
         if doc.get("schema_version") not in SUPPORTED_VERSIONS:
             raise StoreError(
                 f"{marker}: store schema version {doc.get('schema_version')!r} is not supported "
@@ -268,17 +280,29 @@ class MeasurementStore:
         Cheap: reads the catalogue, opening only files it does not know yet. Files that
         cannot be read are left out (see :meth:`check`).
         """
-        filters = {"spindle_id": spindle_id, "machine": machine, "direction": direction, "plane": plane, "kind": kind}
+        filters = {
+            "spindle_id": spindle_id,
+            "machine": machine,
+            "direction": direction,
+            "plane": plane,
+            "kind": kind,
+        }
         on_disk = self._ids_on_disk()
         try:
             known = self._catalogue.ids()
-            new = [i for i in (self._try_info(mid) for mid in sorted(on_disk - known)) if i is not None]
+            new = [
+                i for i in (self._try_info(mid) for mid in sorted(on_disk - known)) if i is not None
+            ]
             self._catalogue.add(new)
             self._catalogue.remove(known - on_disk)
             rows = self._catalogue.query(filters)
         except (sqlite3.Error, OSError):  # catalogue unusable (corrupt, read-only): scan the files
             infos = [i for i in (self._try_info(mid) for mid in sorted(on_disk)) if i is not None]
-            rows = [i for i in infos if all(v is None or getattr(i.meta, k) == v for k, v in filters.items())]
+            rows = [
+                i
+                for i in infos
+                if all(v is None or getattr(i.meta, k) == v for k, v in filters.items())
+            ]
             rows.sort(key=lambda i: (i.created_utc or "", i.id or ""))
         return [r for r in rows if r.id in on_disk]
 
@@ -310,4 +334,3 @@ class MeasurementStore:
                 with contextlib.suppress(FileNotFoundError):
                     os.unlink(str(self.path / P.INDEX) + suffix)
         return len(self.list())
-

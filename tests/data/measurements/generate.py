@@ -31,36 +31,92 @@ def receptance(f: np.ndarray, scale: float = 1.0) -> np.ndarray:
 
 def main() -> None:
     h = receptance(F)
-    rows = "".join(f"{f:.17g},{z.real * 1e6:.17g},{z.imag * 1e6:.17g}\n" for f, z in zip(F, h, strict=True))
-    (HERE / "direct_frf_um_per_n.csv").write_text(
-        "# synthetic tool-tip FRF, receptance in um/N (declare --units um/N)\nfrequency_hz,real_um_n,imag_um_n\n" + rows
+    rows = "".join(
+        f"{f:.17g},{z.real * 1e6:.17g},{z.imag * 1e6:.17g}\n" for f, z in zip(F, h, strict=True)
     )
-    rows = "".join(f"{f:.17g}\t{abs(z) * 1e6:.17g}\t{np.degrees(np.angle(z)):.17g}\n" for f, z in zip(F, h, strict=True))
+    (HERE / "direct_frf_um_per_n.csv").write_text(
+        "# synthetic tool-tip FRF, receptance in um/N (declare --units um/N)\nfrequency_hz,real_um_n,imag_um_n\n"
+        + rows
+    )
+    rows = "".join(
+        f"{f:.17g}\t{abs(z) * 1e6:.17g}\t{np.degrees(np.angle(z)):.17g}\n"
+        for f, z in zip(F, h, strict=True)
+    )
     (HERE / "direct_frf_mag_phase_deg.tsv").write_text("Hz\t|H| um/N\tphase deg\n" + rows)
     first = f"{F[0]:.6e}\t{h[0].real:.6e}\t{h[0].imag:.6e}\tFreq Hz Real m/N Imag Real\n"
-    rest = "".join(f"{f:.6e}\t{z.real:.6e}\t{z.imag:.6e}\n" for f, z in zip(F[1:], h[1:], strict=True))
+    rest = "".join(
+        f"{f:.6e}\t{z.real:.6e}\t{z.imag:.6e}\n" for f, z in zip(F[1:], h[1:], strict=True)
+    )
     (HERE / "direct_frf.frf").write_text(first + rest)
 
     def c(z: np.ndarray) -> dict:
         return {"real": z.real.tolist(), "imag": z.imag.tolist()}
 
-    doc = {"spindle_id": "demo-hsk63", "machine": "demo-mill", "direction": "x", "plane": "spindle_nose",
-           "kind": "point_receptance", "frequency_hz": F.tolist(),
-           "h": c(h), "l": c(-40.0 * h), "n": c(-40.0 * h), "p": c(2000.0 * h)}
+    doc = {
+        "spindle_id": "demo-hsk63",
+        "machine": "demo-mill",
+        "direction": "x",
+        "plane": "spindle_nose",
+        "kind": "point_receptance",
+        "frequency_hz": F.tolist(),
+        "h": c(h),
+        "l": c(-40.0 * h),
+        "n": c(-40.0 * h),
+        "p": c(2000.0 * h),
+    }
     (HERE / "point_receptance.json").write_text(json.dumps(doc, indent=1) + "\n")
 
     w2 = (2 * np.pi * F) ** 2
-    sets = [pyuff.prepare_164(units_code=1, units_description="SI", temp_mode=1, length=1.0, force=1.0,
-                              temp=1.0, temp_offset=273.15)]
+    sets = [
+        pyuff.prepare_164(
+            units_code=1,
+            units_description="SI",
+            temp_mode=1,
+            length=1.0,
+            force=1.0,
+            temp=1.0,
+            temp_offset=273.15,
+        )
+    ]
     for (rsp, ref), scale in {(1, 1): 1.0, (2, 1): 0.6, (2, 2): 0.45}.items():
-        sets.append(pyuff.prepare_58(
-            binary=0, func_type=4, rsp_node=rsp, rsp_dir=1, ref_node=ref, ref_dir=1, data=-w2 * receptance(F, scale),
-            x=F, id1=f"artifact H{rsp}{ref} accelerance", rsp_ent_name="blank", ref_ent_name="blank",
-            abscissa_spacing=1, abscissa_spec_data_type=18, ordinate_spec_data_type=12, orddenom_spec_data_type=13))
-    sets.append(pyuff.prepare_58(
-        binary=0, func_type=6, rsp_node=1, rsp_dir=1, ref_node=1, ref_dir=1, data=np.linspace(0.9, 1.0, F.size),
-        x=F, id1="coherence H11", rsp_ent_name="blank", ref_ent_name="blank", abscissa_spacing=1,
-        abscissa_spec_data_type=18, ordinate_spec_data_type=0, orddenom_spec_data_type=0))
+        sets.append(
+            pyuff.prepare_58(
+                binary=0,
+                func_type=4,
+                rsp_node=rsp,
+                rsp_dir=1,
+                ref_node=ref,
+                ref_dir=1,
+                data=-w2 * receptance(F, scale),
+                x=F,
+                id1=f"artifact H{rsp}{ref} accelerance",
+                rsp_ent_name="blank",
+                ref_ent_name="blank",
+                abscissa_spacing=1,
+                abscissa_spec_data_type=18,
+                ordinate_spec_data_type=12,
+                orddenom_spec_data_type=13,
+            )
+        )
+    sets.append(
+        pyuff.prepare_58(
+            binary=0,
+            func_type=6,
+            rsp_node=1,
+            rsp_dir=1,
+            ref_node=1,
+            ref_dir=1,
+            data=np.linspace(0.9, 1.0, F.size),
+            x=F,
+            id1="coherence H11",
+            rsp_ent_name="blank",
+            ref_ent_name="blank",
+            abscissa_spacing=1,
+            abscissa_spec_data_type=18,
+            ordinate_spec_data_type=0,
+            orddenom_spec_data_type=0,
+        )
+    )
     out = HERE / "artifact_frfs_accelerance.uff"
     out.unlink(missing_ok=True)
     with warnings.catch_warnings():
