@@ -247,6 +247,14 @@ def test_stale_temporary_files_are_cleaned_by_the_next_writer(store):
     assert os.listdir(store.path / "tmp") == []
 
 
+def test_solid_artifact_with_zero_bore_is_accepted():
+    art = {**ARTIFACT, "inner_diameter_m": 0.0}
+    meta = MeasurementMeta(
+        "s", "x", "spindle_nose", "artifact_frfs", points_m=(0, 0.02), artifact=art
+    )
+    assert meta.artifact["inner_diameter_m"] == 0.0
+
+
 def test_invalid_measurements_name_the_field():
     meta = MeasurementMeta("s", "x", "spindle_nose", "direct_frf")
     f = np.array([1.0, 2.0])
@@ -267,6 +275,28 @@ def test_invalid_measurements_name_the_field():
                 "s", "x", "spindle_nose", "artifact_frfs", points_m=(0.02, 0.01), artifact=ARTIFACT
             ),
             "points_m",
+        ),
+        (
+            lambda: MeasurementMeta(
+                "s",
+                "x",
+                "spindle_nose",
+                "artifact_frfs",
+                points_m=(0, 0.02),
+                artifact={**ARTIFACT, "inner_diameter_m": 0.02},
+            ),
+            "artifact.inner_diameter_m",
+        ),
+        (
+            lambda: MeasurementMeta(
+                "s",
+                "x",
+                "spindle_nose",
+                "artifact_frfs",
+                points_m=(0, 0.02),
+                artifact={**ARTIFACT, "diameter_m": -1},
+            ),
+            "artifact.diameter_m",
         ),
         (lambda: Measurement(f, {"h": [1, 2], "l": [1, 2]}, meta), "frfs"),
         (lambda: Measurement(f, {"h": [1, np.nan]}, meta), "h"),

@@ -99,7 +99,13 @@ def _check_artifact(artifact: Mapping[str, Any]) -> None:
             raise InputError(f"artifact.{key}", "is required for kind 'artifact_frfs'")
     for key, v in artifact.items():
         if key.endswith("_m") and not isinstance(v, Mapping | tuple):
-            _positive(v, f"artifact.{key}")
+            if key in ("diameter_m", "stickout_m", "length_m"):
+                _positive(v, f"artifact.{key}")
+            elif isinstance(v, bool) or not isinstance(v, int | float) or not 0 <= v < math.inf:
+                raise InputError(f"artifact.{key}", f"must be a finite length >= 0 m, got {v!r}")
+    d, bore = float(artifact["diameter_m"]), artifact.get("inner_diameter_m", 0.0)
+    if isinstance(bore, int | float) and bore >= d:
+        raise InputError("artifact.inner_diameter_m", "must be smaller than artifact.diameter_m")
     if "length_m" in artifact and float(artifact["length_m"]) < float(artifact["stickout_m"]):
         raise InputError("artifact.length_m", "must be >= artifact.stickout_m")
 
