@@ -8,12 +8,14 @@ routes and the CLI's commands are thin doors onto these functions.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
-from .assembly import build_model
+from .assembly import AssemblyModel, build_model
 from .errors import InputError
+from .modes import natural_frequencies_batch
 from .prediction import Prediction, SubassemblyCache, predict_model
 from .spec import (
     MAX_FREQUENCY_LINES,
@@ -26,7 +28,7 @@ from .spec import (
     parse_common,
 )
 
-__all__ = ["MAX_BATCH_COMBINATIONS", "predict", "predict_batch"]
+__all__ = ["MAX_BATCH_COMBINATIONS", "predict", "predict_batch", "stability_lobes"]
 
 MAX_BATCH_COMBINATIONS = 10_000
 
@@ -50,10 +52,15 @@ class _SpindleContext:
         self.alt_caches = [] if self.base is None else [SubassemblyCache(omega, r) for r in self.base.alternatives]
 
     def predict(self, spec: AssemblySpec, natural_frequencies: bool = True) -> Prediction:
+        return self.predict_with_model(spec, natural_frequencies)[1]
+
+    def predict_with_model(self, spec: AssemblySpec, natural_frequencies: bool = True
+                           ) -> tuple[AssemblyModel, Prediction]:
         base = self.base
         if base is None:
-            return predict_model(build_model(spec), spec.frequency_hz, cache=self.cache,
-                                 natural_frequencies=natural_frequencies)
+            model = build_model(spec)
+            return model, predict_model(model, spec.frequency_hz, cache=self.cache,
+                                        natural_frequencies=natural_frequencies)
         if base.plane == "holder_tip" and base.artifact_diameter_m is not None and \
                 abs(spec.tool.shank_diameter_m - base.artifact_diameter_m) > 1e-6 * base.artifact_diameter_m:
             raise InputError("tool.shank_diameter_m",
@@ -65,8 +72,8 @@ class _SpindleContext:
             h = [predict_model(model, spec.frequency_hz, cache=c, natural_frequencies=False).tool_point.h
                  for c in self.alt_caches]
             extra["uncertainty"] = _spread(spec.frequency_hz, h)
-        return predict_model(model, spec.frequency_hz, base_receptance=base.receptance, cache=self.cache,
-                             natural_frequencies=natural_frequencies, notes=base.notes, extra=extra)
+        return model, predict_model(model, spec.frequency_hz, base_receptance=base.receptance, cache=self.cache,
+                                    natural_frequencies=natural_frequencies, notes=base.notes, extra=extra)
 
 
 def _spread(frequency_hz: np.ndarray, bounds: list[np.ndarray]) -> dict[str, Any]:
@@ -117,9 +124,27 @@ _BATCH_FIELDS = ("frequency", "beam_theory", "shear_coefficient", "materials", "
                  "natural_frequencies")
 
 
+def _fill_natural_frequencies(slots: list, frequency_hz: np.ndarray) -> None:
+    """Exact natural frequencies of every ok combination, tools sharing a holder solved together."""
+    groups: dict[Any, list[int]] = {}
+    for i, slot in enumerate(slots):
+        if not isinstance(slot, dict):
+            groups.setdefault(slot[1].to_holder_tip(), []).append(i)
+    for prefix, members in groups.items():
+        tails = [_tail(slots[i][1]) for i in members]
+        found = natural_frequencies_batch(prefix, tails, float(frequency_hz[0]), float(frequency_hz[-1]))
+        for i, nat in zip(members, found, strict=True):
+            ident, model, prediction = slots[i]
+            slots[i] = (ident, model, replace(prediction, natural_frequencies_hz=nat))
+
+
+def _tail(model: AssemblyModel) -> tuple:
+    return model.tool if model.holder_tool is None else (model.holder_tool, *model.tool)
+
+
 def predict_batch(request: Mapping[str, Any], *, store: Any = None, max_lines: int = MAX_FREQUENCY_LINES,
-                  max_combinations: int = MAX_BATCH_COMBINATIONS, progress: Progress | None = None
-                  ) -> dict[str, Any]:
+                  max_combinations: int = MAX_BATCH_COMBINATIONS, progress: Progress | None = None,
+                  arrays: str = "list") -> dict[str, Any]:
     """Tool-point FRFs of many tool–holder combinations on one spindle.
 
     The spindle (and each distinct spindle + holder + insertion) is condensed once and
@@ -134,6 +159,8 @@ def predict_batch(request: Mapping[str, Any], *, store: Any = None, max_lines: i
         ``natural_frequencies`` (bool, default true).
     progress : callable, optional
         Called as ``progress(done, total)`` after each combination.
+    arrays : {"list", "numpy"}
+        Long arrays of the results as lists (JSON-ready) or numpy arrays (for orjson).
 
     Returns
     -------
@@ -157,7 +184,7 @@ def predict_batch(request: Mapping[str, Any], *, store: Any = None, max_lines: i
     common = parse_common({k: v for k, v in request.items() if k not in ("combinations", "natural_frequencies")},
                           max_lines=max_lines)
     context = _SpindleContext(common, store)
-    results = []
+    slots: list[dict[str, Any] | tuple[str, AssemblyModel, Prediction]] = []
     for i, raw in enumerate(combos):
         ident = raw.get("id") if isinstance(raw, Mapping) else None
         path = f"combinations[{i}]"
@@ -165,13 +192,39 @@ def predict_batch(request: Mapping[str, Any], *, store: Any = None, max_lines: i
             if not isinstance(ident, str) or not ident:
                 raise InputError(f"{path}.id", "is required (a non-empty string)")
             spec = assemble(common, parse_combination(raw, common.materials, path, extra_fields=("id",)))
-            result = {"id": ident, "status": "ok", **context.predict(spec, with_modes).to_dict()}
+            # exact modes come afterwards for all tools at once (natural_frequencies_batch)
+            model, prediction = context.predict_with_model(spec, natural_frequencies=False)
+            slots.append((ident, model, prediction))
         except InputError as exc:
             field = exc.field if exc.field.startswith(path) else f"{path}.{exc.field}".rstrip(".")
-            result = {"id": ident if isinstance(ident, str) else None, "status": "error",
-                      "error": {"field": field, "detail": exc.rule}}
-        results.append(result)
+            slots.append({"id": ident if isinstance(ident, str) else None, "status": "error",
+                          "error": {"field": field, "detail": exc.rule}})
         if progress is not None:
             progress(i + 1, len(combos))
+    if with_modes and context.base is None:
+        _fill_natural_frequencies(slots, common.frequency_hz)
+    results = [s if isinstance(s, dict) else {"id": s[0], "status": "ok", **s[2].to_dict(arrays)} for s in slots]
     ok = sum(r["status"] == "ok" for r in results)
     return {"results": results, "summary": {"ok": ok, "error": len(results) - ok}}
+
+
+def stability_lobes(request: Mapping[str, Any], *, store: Any = None,
+                    max_lines: int = MAX_FREQUENCY_LINES) -> dict[str, Any]:
+    """Stability lobes (``contract.md`` "Stability lobes") from inline FRFs or an assembly.
+
+    With an ``assembly``, its tool-point ``h`` is predicted first and used in x and y (the
+    result says so: ``frf_y_source == "same_as_x"``).
+
+    Returns
+    -------
+    dict
+        The contract response (``spindle_speed_rpm``, ``depth_limit_m``,
+        ``chatter_frequency_hz``, ``lobes``) and the extras of :class:`rcsa.lobes.LobeResult`.
+    """
+    from .lobes_request import parse_lobes_request
+
+    parsed = parse_lobes_request(request)
+    if parsed.assembly is None:
+        return parsed.solve().to_dict()
+    prediction = predict(parsed.assembly, store=store, max_lines=max_lines)
+    return parsed.solve(prediction.frequency_hz, prediction.tool_point.h).to_dict()

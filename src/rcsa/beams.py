@@ -70,7 +70,7 @@ def _c_and_s(s: np.ndarray, length_m: float) -> tuple[np.ndarray, np.ndarray, np
         s_fun = sin_z / k
     zero = k == 0
     if zero.any():
-        s_fun[zero] = length_m
+        s_fun = np.where(zero, length_m, s_fun)
     return np.cos(z), s_fun, k * sin_z
 
 
@@ -147,9 +147,9 @@ class _Waves:
         self.decay_per_m = float(max(np.abs(np.sqrt(self.s1).imag).max(initial=0.0),
                                      np.abs(np.sqrt(self.s2).imag).max(initial=0.0)))
 
-    def pieces(self, length_m: float) -> int:
+    def pieces(self, length_m: float | np.ndarray) -> int:
         """Number of equal pieces keeping each piece's decay exponent ≤ MAX_DECAY_PER_PIECE."""
-        return max(1, math.ceil(self.decay_per_m * length_m / MAX_DECAY_PER_PIECE))
+        return max(1, math.ceil(self.decay_per_m * float(np.max(length_m)) / MAX_DECAY_PER_PIECE))
 
 
 def stiffness_terms(omega_rad_s: np.ndarray, section: Section, length_m: float,

@@ -30,7 +30,7 @@ from .chain import Beam, Chain, Ground, Spring
 from .linalg2 import inv2, negative_count_sym2
 from .sections import Section
 
-__all__ = ["march", "static_tip_receptance", "subdivide", "tip_receptance", "wittrick_williams_count"]
+__all__ = ["march", "static_condense", "static_tip_receptance", "subdivide", "tip_receptance", "wittrick_williams_count"]
 
 
 _BLOCK = 4096
@@ -117,6 +117,23 @@ def _absorb_compliance(chain: Chain, w: np.ndarray, compliance: np.ndarray) -> t
     raise ValueError("a chain on a measured base must contain at least one beam")
 
 
+def _per_row(chain: Chain) -> bool:
+    """True when some item carries per-frequency-row parameters (a stacked chain)."""
+    names = ("length_m", "stiffness_n_m", "damping_ns_m", "rotational_stiffness_nm_rad", "mass_kg")
+    return any(np.ndim(getattr(item, n, None)) > 0 for item in chain for n in names)
+
+
+def _waves(cache: dict[Section, _Waves], w: np.ndarray, section: Section) -> _Waves:
+    """Wavenumbers of a section, shared by equal sections; stacked (array) sections are not cached."""
+    try:
+        hit = cache.get(section)
+    except TypeError:  # unhashable: a section stacked over several tools
+        return _Waves(w, section)
+    if hit is None:
+        hit = cache[section] = _Waves(w, section)
+    return hit
+
+
 def march(chain: Chain, omega_rad_s: np.ndarray, start: np.ndarray | None = None,
           count: bool = False, start_compliance: np.ndarray | None = None
           ) -> tuple[np.ndarray, np.ndarray | None]:
@@ -146,7 +163,7 @@ def march(chain: Chain, omega_rad_s: np.ndarray, start: np.ndarray | None = None
     if start_compliance is not None:
         start, used = _absorb_compliance(chain, w, start_compliance)
         chain = chain[used:]
-    if w.size > _BLOCK:  # blocks of the frequency axis keep temporaries in cache
+    if w.size > _BLOCK and not _per_row(chain):  # blocks of the frequency axis keep temporaries in cache
         parts = [march(chain, w[i:i + _BLOCK], None if start is None else start[i:i + _BLOCK], count)
                  for i in range(0, w.size, _BLOCK)]
         k_all = np.concatenate([p[0] for p in parts])
@@ -161,10 +178,7 @@ def march(chain: Chain, omega_rad_s: np.ndarray, start: np.ndarray | None = None
     for item in chain:
         pivot: Sym | np.ndarray | None = None
         if isinstance(item, Beam):
-            wv = waves.get(item.section)
-            if wv is None:
-                wv = waves[item.section] = _Waves(w, item.section)
-            k, pivot = _beam_step(k, segment_terms(w, item.section, item.length_m, wv))
+            k, pivot = _beam_step(k, segment_terms(w, item.section, item.length_m, _waves(waves, w, item.section)))
         elif isinstance(item, Spring):
             k, pivot = _spring_step(k, item, w)
         elif isinstance(item, Ground):
@@ -204,17 +218,18 @@ def _max_piece_length_m(beam: Beam, omega_rad_s: float) -> float:
 
         ω₁² ≥ min( κGA / (2ρA u),  EI / (2ρA u² + ρI u) ),    u = (ℓ/π)²
 
-    (for Euler–Bernoulli γ = 0 and the bound is EI / (ρA u² + ρI u)).
+    (for Euler–Bernoulli γ = 0 and the bound is EI / (ρA u² + ρI u)). Stacked (array)
+    sections give the shortest piece over all entries.
     """
     s = beam.section
-    ei, ra, ri = s.ei.real, s.rho_a, s.rho_i
+    ei, ra, ri = np.real(s.ei), np.asarray(s.rho_a, dtype=float), np.asarray(s.rho_i, dtype=float)
     w2 = omega_rad_s**2 * 1.0001
-    shear_rigid = s.shear_flexibility == 0
+    shear_rigid = s.is_euler_bernoulli
     a = ra if shear_rigid else 2.0 * ra
-    u = (-ri + math.sqrt(ri * ri + 4.0 * a * ei / w2)) / (2.0 * a)
+    u = (-ri + np.sqrt(ri * ri + 4.0 * a * ei / w2)) / (2.0 * a)
     if not shear_rigid:
-        u = min(u, (1.0 / s.shear_flexibility.real) / (2.0 * ra * w2))
-    return math.pi * math.sqrt(u)
+        u = np.minimum(u, np.real(1.0 / np.asarray(s.shear_flexibility)) / (2.0 * ra * w2))
+    return float(np.min(math.pi * np.sqrt(u)))
 
 
 def subdivide(chain: Chain, omega_max_rad_s: float) -> Chain:
@@ -222,21 +237,21 @@ def subdivide(chain: Chain, omega_max_rad_s: float) -> Chain:
     out: list[Beam | Spring | Ground] = []
     for item in chain:
         if isinstance(item, Beam):
-            n = max(1, math.ceil(item.length_m / _max_piece_length_m(item, omega_max_rad_s)))
+            n = max(1, math.ceil(float(np.max(item.length_m)) / _max_piece_length_m(item, omega_max_rad_s)))
             out.extend([Beam(item.section, item.length_m / n)] * n)
         else:
             out.append(item)
     return tuple(out)
 
 
-def static_tip_receptance(chain: Chain) -> np.ndarray | None:
-    """Static (ω = 0) undamped point receptance at the last node, shape (2, 2).
+def static_condense(chain: Chain, start: np.ndarray | None = None) -> np.ndarray:
+    """Static (ω = 0) undamped stiffness condensed onto the last node, shape (2, 2).
 
-    Uses the exact static Timoshenko stiffness of each beam; ``None`` when the chain is not
-    grounded (a free body has no static stiffness).
+    Uses the exact static Timoshenko stiffness of each beam; ``start`` continues a
+    condensation (e.g. a cached spindle + holder).
     """
-    zero = np.zeros(1, dtype=complex)
-    k: Sym = (zero, zero, zero)
+    k: Sym = tuple(np.array([x]) for x in (0.0j, 0.0j, 0.0j)) if start is None else \
+        tuple(np.array([complex(start[i, j])]) for i, j in ((0, 0), (0, 1), (1, 1)))  # type: ignore[assignment]
     for item in chain:
         if isinstance(item, Beam):
             d = static_stiffness(item.section.undamped(), item.length_m)
@@ -248,7 +263,16 @@ def static_tip_receptance(chain: Chain) -> np.ndarray | None:
         else:
             k = (k[0] + item.stiffness_n_m, k[1], k[2] + item.rotational_stiffness_nm_rad)
     k11, k12, k22 = (float(x[0].real) for x in k)
-    det = k11 * k22 - k12 * k12
-    if abs(det) <= 1e-12 * max(abs(k11 * k22), 1e-300):
+    return np.array([[k11, k12], [k12, k22]])
+
+
+def static_tip_receptance(chain: Chain, start: np.ndarray | None = None) -> np.ndarray | None:
+    """Static (ω = 0) undamped point receptance at the last node, shape (2, 2).
+
+    ``None`` when the chain is not grounded (a free body has no static stiffness).
+    """
+    k = static_condense(chain, start)
+    det = k[0, 0] * k[1, 1] - k[0, 1] ** 2
+    if abs(det) <= 1e-12 * max(abs(k[0, 0] * k[1, 1]), 1e-300):
         return None
-    return np.array([[k22, -k12], [-k12, k11]]) / det
+    return np.array([[k[1, 1], -k[0, 1]], [-k[0, 1], k[0, 0]]]) / det

@@ -9,13 +9,27 @@ the count — not a peak pick.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from dataclasses import fields
+from typing import Any
+
 import numpy as np
 from scipy.signal import find_peaks
 
-from .chain import Chain, undamped
-from .dsm import subdivide, wittrick_williams_count
+from .chain import Beam, Chain, Ground, Spring, undamped
+from .dsm import march, subdivide
+from .linalg2 import negative_count_sym2
+from .sections import Section
 
-__all__ = ["find_frf_peaks", "modal_fit_peaks", "natural_frequencies_hz"]
+__all__ = [
+    "chain_signature",
+    "find_frf_peaks",
+    "modal_fit_peaks",
+    "natural_frequencies_batch",
+    "natural_frequencies_hz",
+    "stack_chains",
+    "take_rows",
+]
 
 _TWO_PI = 2.0 * np.pi
 
@@ -40,26 +54,113 @@ def natural_frequencies_hz(chain: Chain, start_hz: float, stop_hz: float, *, rto
     numpy.ndarray, shape (nmodes,)
         Ascending, Hz. A repeated frequency appears as often as its multiplicity.
     """
-    ch = subdivide(undamped(chain), _TWO_PI * stop_hz)
+    return natural_frequencies_batch(chain, [()], start_hz, stop_hz, rtol=rtol, scan_points=scan_points)[0]
 
-    def count(f_hz: np.ndarray) -> np.ndarray:
-        return wittrick_williams_count(ch, _TWO_PI * f_hz)
 
+def natural_frequencies_batch(prefix: Chain, tails: Sequence[Chain], start_hz: float, stop_hz: float, *,
+                              rtol: float = 1e-11, scan_points: int = 64) -> list[np.ndarray]:
+    """Natural frequencies of many assemblies sharing a prefix (``prefix + tail`` for each tail).
+
+    All assemblies are bracketed and bisected in lockstep: each step counts (Wittrick–Williams)
+    at every open bracket of every assembly at once — the shared prefix in one vectorised
+    pass, the tails stacked into one chain with per-row parameters (:func:`stack_chains`).
+    This is how a batch of tools on one spindle + holder gets exact modes cheaply.
+
+    Returns
+    -------
+    list of numpy.ndarray
+        Natural frequencies (Hz, ascending) of each assembly, in the order of ``tails``.
+    """
+    w_max = _TWO_PI * stop_hz
+    head = subdivide(undamped(prefix), w_max)
     grid = np.geomspace(start_hz, stop_hz, scan_points)
-    j = count(grid)
-    # Mode k (0-based, counting from zero frequency) lies where J first exceeds k.
-    modes = np.arange(j[0], j[-1])
-    if modes.size == 0:
-        return np.empty(0)
-    hi_idx = np.searchsorted(j, modes, side="right")
-    lo = grid[hi_idx - 1].copy()
-    hi = grid[hi_idx].copy()
-    while np.any(hi - lo > rtol * hi):
-        mid = 0.5 * (lo + hi)
-        above = count(mid) > modes
-        hi = np.where(above, mid, hi)
-        lo = np.where(above, lo, mid)
-    return 0.5 * (lo + hi)
+    k_grid, n_grid = march(head, _TWO_PI * grid, count=True)
+    out: list[np.ndarray] = [np.empty(0)] * len(tails)
+    groups: dict[tuple, list[int]] = {}
+    for i, tail in enumerate(tails):
+        groups.setdefault(chain_signature(tail), []).append(i)
+    for members in groups.values():
+        stacked = subdivide(undamped(stack_chains([tails[i] for i in members])), w_max)
+        n_tools = len(members)
+        t_rows = np.repeat(np.arange(n_tools), scan_points)
+        g_rows = np.tile(np.arange(scan_points), n_tools)
+        j = _count_tail(stacked, t_rows, grid[g_rows], k_grid[g_rows], n_grid[g_rows]).reshape(n_tools, scan_points)
+        row_tool, row_mode, lo, hi = [], [], [], []
+        for t in range(n_tools):
+            modes = np.arange(j[t, 0], j[t, -1])
+            idx = np.searchsorted(j[t], modes, side="right")
+            row_tool.append(np.full(modes.size, t))
+            row_mode.append(modes)
+            lo.append(grid[idx - 1])
+            hi.append(grid[idx])
+        rt, rm = np.concatenate(row_tool), np.concatenate(row_mode)
+        lo_a, hi_a = np.concatenate(lo), np.concatenate(hi)
+        while rt.size and np.any(hi_a - lo_a > rtol * hi_a):
+            mid = 0.5 * (lo_a + hi_a)
+            k_mid, n_mid = march(head, _TWO_PI * mid, count=True)
+            above = _count_tail(stacked, rt, mid, k_mid, n_mid) > rm
+            hi_a = np.where(above, mid, hi_a)
+            lo_a = np.where(above, lo_a, mid)
+        found = 0.5 * (lo_a + hi_a)
+        for t, i in enumerate(members):
+            out[i] = found[rt == t]
+    return out
+
+
+def _count_tail(stacked: Chain, rows: np.ndarray, f_hz: np.ndarray, k0: np.ndarray, n0: np.ndarray) -> np.ndarray:
+    """Wittrick–Williams count: prefix negatives ``n0`` plus the stacked tail's, per row."""
+    k, neg = march(take_rows(stacked, rows), _TWO_PI * f_hz, start=k0, count=True)
+    return n0 + neg + negative_count_sym2(k)
+
+
+def chain_signature(chain: Chain) -> tuple:
+    """Structure of a chain (item kinds, rigid joint DOFs): chains with equal signatures stack."""
+    sig = []
+    for item in chain:
+        if isinstance(item, Spring):
+            sig.append(("spring", item.stiffness_n_m is None, item.rotational_stiffness_nm_rad is None))
+        else:
+            sig.append((type(item).__name__,))
+    return tuple(sig)
+
+
+def stack_chains(chains: Sequence[Chain]) -> Chain:
+    """One chain whose parameters are arrays over ``chains`` (which share one signature)."""
+    if not chains or not chains[0]:
+        return ()
+    out: list[Beam | Spring | Ground] = []
+    for items in zip(*chains, strict=True):
+        first = items[0]
+        if isinstance(first, Beam):
+            sec = Section(*(np.array([getattr(i.section, f) for i in items]) for f in ("ei", "shear_flexibility",
+                                                                                      "rho_a", "rho_i")))
+            out.append(Beam(sec, np.array([i.length_m for i in items])))
+        else:
+            names = [f.name for f in fields(first)]
+            values = {n: None if getattr(first, n) is None else np.array([getattr(i, n) for i in items])
+                      for n in names}
+            out.append(type(first)(**values))
+    return tuple(out)
+
+
+def take_rows(chain: Chain, rows: np.ndarray) -> Chain:
+    """The stacked chain with its parameter arrays indexed by ``rows`` (one row per frequency).
+
+    Scalar parameters (shared by all rows, e.g. a damping set to zero) are kept as they are.
+    """
+
+    def pick(value: Any) -> Any:
+        return value if value is None or np.ndim(value) == 0 else np.asarray(value)[rows]
+
+    out: list[Beam | Spring | Ground] = []
+    for item in chain:
+        if isinstance(item, Beam):
+            s = item.section
+            out.append(Beam(Section(pick(s.ei), pick(s.shear_flexibility), pick(s.rho_a), pick(s.rho_i)),
+                            pick(item.length_m)))
+        else:
+            out.append(type(item)(**{f.name: pick(getattr(item, f.name)) for f in fields(item)}))
+    return tuple(out)
 
 
 def find_frf_peaks(frequency_hz: np.ndarray, h: np.ndarray, *, rel_prominence: float = 0.01

@@ -14,11 +14,11 @@ from typing import Any
 import numpy as np
 
 from .assembly import AssemblyModel
-from .chain import Beam, Chain, undamped
-from .dsm import march, static_tip_receptance
+from .chain import Beam, Chain
+from .dsm import march, static_condense, static_tip_receptance
 from .frf import Receptance
 from .linalg2 import inv2
-from .modes import find_frf_peaks, modal_fit_peaks, natural_frequencies_hz
+from .modes import find_frf_peaks, modal_fit_peaks, natural_frequencies_batch
 
 __all__ = ["Prediction", "SubassemblyCache", "complex_to_json", "predict_model"]
 
@@ -67,12 +67,24 @@ class Prediction(Mapping[str, Any]):
         """Frequency grid, Hz, shape (nfreq,)."""
         return self.tool_point.frequency_hz
 
-    def to_dict(self) -> dict[str, Any]:
-        """The contract's prediction result (JSON-ready)."""
+    def to_dict(self, arrays: str = "list") -> dict[str, Any]:
+        """The contract's prediction result.
+
+        Parameters
+        ----------
+        arrays : {"list", "numpy"}
+            ``"list"``: JSON-ready Python lists. ``"numpy"``: the same document with numpy
+            arrays in place of the long lists (for fast serialisers such as orjson).
+        """
         tp = self.tool_point
+
+        def arr(x: np.ndarray) -> Any:
+            return x.tolist() if arrays == "list" else np.ascontiguousarray(x)
+
         out: dict[str, Any] = {
-            "frequency_hz": tp.frequency_hz.tolist(),
-            "tool_point": {k: complex_to_json(getattr(tp, k)) for k in ("h", "l", "n", "p")},
+            "frequency_hz": arr(tp.frequency_hz),
+            "tool_point": {k: {"real": arr(getattr(tp, k).real), "imag": arr(getattr(tp, k).imag)}
+                           for k in ("h", "l", "n", "p")},
             "natural_frequencies_hz": self.natural_frequencies_hz.tolist(),
             "natural_frequencies_method": self.natural_frequencies_method,
             "peaks": [dict(p) for p in self.peaks],
@@ -112,6 +124,14 @@ class SubassemblyCache:
         self.omega_rad_s = np.asarray(omega_rad_s, dtype=float)
         self.base_receptance = base_receptance
         self._store: dict[Chain, np.ndarray] = {}
+        self._static: dict[Chain, np.ndarray] = {}
+
+    def static(self, chain: Chain) -> np.ndarray:
+        """Static undamped stiffness at the end of ``chain`` (cached), shape (2, 2)."""
+        hit = self._static.get(chain)
+        if hit is None:
+            hit = self._static[chain] = static_condense(chain)
+        return hit
 
     def condensed(self, chain: Chain) -> np.ndarray:
         """Dynamic stiffness at the end of ``chain`` (plus the base), shape (nfreq, 2, 2)."""
@@ -160,10 +180,10 @@ def predict_model(model: AssemblyModel, frequency_hz: np.ndarray, *,
     h = g[:, 0, 0]
     notes_out = list(notes)
     if base_receptance is None:
-        nat = natural_frequencies_hz(model.chain(), float(f[0]), float(f[-1])) if natural_frequencies \
+        nat = natural_frequencies_batch(prefix, [rest], float(f[0]), float(f[-1]))[0] if natural_frequencies \
             else np.empty(0)
         method = "wittrick_williams"
-        static = static_tip_receptance(undamped(model.chain()))
+        static = static_tip_receptance(rest, cache.static(prefix))
         static_k = None if static is None else float(1.0 / static[0, 0])
         if static is None:
             notes_out.append("static_stiffness_n_m is null: the assembly is not grounded (no bearings)")

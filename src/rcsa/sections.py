@@ -64,13 +64,25 @@ class Section:
         return complex(np.inf) if self.shear_flexibility == 0 else 1.0 / self.shear_flexibility
 
     def undamped(self) -> Section:
-        """The section with real moduli (damping removed)."""
-        return replace(self, ei=complex(self.ei.real), shear_flexibility=complex(
-            0.0 if self.shear_flexibility == 0 else 1.0 / (1.0 / self.shear_flexibility).real))
+        """The section with real moduli (damping removed); works on stacked (array) sections too."""
+        flex = np.asarray(self.shear_flexibility)
+        with np.errstate(divide="ignore"):
+            real_flex = np.where(flex == 0, 0.0, 1.0 / np.real(1.0 / np.where(flex == 0, 1.0, flex)))
+        return replace(self, ei=_like(np.real(self.ei) + 0j, self.ei), shear_flexibility=_like(real_flex + 0j, flex))
 
     def euler_bernoulli(self) -> Section:
         """The Euler–Bernoulli counterpart: no shear flexibility, no rotary inertia."""
         return replace(self, shear_flexibility=0j, rho_i=0.0)
+
+    @property
+    def is_euler_bernoulli(self) -> bool:
+        """True when rigid in shear (all stacked entries)."""
+        return bool(np.all(np.asarray(self.shear_flexibility) == 0))
+
+
+def _like(value: np.ndarray, template: object) -> complex | np.ndarray:
+    """A Python complex for scalar sections (hashable, cacheable), an array for stacked ones."""
+    return complex(value) if np.ndim(template) == 0 else np.asarray(value)
 
 
 def shear_coefficient(poisson_ratio: float, inner_to_outer: float = 0.0,
