@@ -28,7 +28,7 @@ from .spec import (
     parse_common,
 )
 
-__all__ = ["MAX_BATCH_COMBINATIONS", "predict", "predict_batch", "stability_lobes"]
+__all__ = ["MAX_BATCH_COMBINATIONS", "predict", "predict_batch", "stability_lobes", "stability_lobes_result"]
 
 MAX_BATCH_COMBINATIONS = 10_000
 
@@ -208,23 +208,34 @@ def predict_batch(request: Mapping[str, Any], *, store: Any = None, max_lines: i
     return {"results": results, "summary": {"ok": ok, "error": len(results) - ok}}
 
 
-def stability_lobes(request: Mapping[str, Any], *, store: Any = None,
-                    max_lines: int = MAX_FREQUENCY_LINES) -> dict[str, Any]:
+def stability_lobes_result(request: Mapping[str, Any], *, store: Any = None,
+                           max_lines: int = MAX_FREQUENCY_LINES) -> Any:
     """Stability lobes (``contract.md`` "Stability lobes") from inline FRFs or an assembly.
 
     With an ``assembly``, its tool-point ``h`` is predicted first and used in x and y (the
-    result says so: ``frf_y_source == "same_as_x"``).
+    result says so: ``same_frf_in_y``).
 
     Returns
     -------
-    dict
-        The contract response (``spindle_speed_rpm``, ``depth_limit_m``,
-        ``chatter_frequency_hz``, ``lobes``) and the extras of :class:`rcsa.lobes.LobeResult`.
+    rcsa.lobes.LobeResult
     """
     from .lobes_request import parse_lobes_request
 
     parsed = parse_lobes_request(request)
     if parsed.assembly is None:
-        return parsed.solve().to_dict()
+        return parsed.solve()
     prediction = predict(parsed.assembly, store=store, max_lines=max_lines)
-    return parsed.solve(prediction.frequency_hz, prediction.tool_point.h).to_dict()
+    return parsed.solve(prediction.frequency_hz, prediction.tool_point.h)
+
+
+def stability_lobes(request: Mapping[str, Any], *, store: Any = None,
+                    max_lines: int = MAX_FREQUENCY_LINES) -> dict[str, Any]:
+    """The contract's stability-lobes response (see :func:`stability_lobes_result`).
+
+    Returns
+    -------
+    dict
+        ``spindle_speed_rpm``, ``depth_limit_m``, ``chatter_frequency_hz``, ``lobes`` and
+        the extras of :class:`rcsa.lobes.LobeResult` (``frf_y_source``, minimum depth, …).
+    """
+    return stability_lobes_result(request, store=store, max_lines=max_lines).to_dict()

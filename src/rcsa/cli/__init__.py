@@ -8,9 +8,8 @@ from __future__ import annotations
 
 import typer
 
+from . import lobes_cmd, plot_cmd, predict_cmd, serve_cmd
 from ._common import run_guarded
-from .predict_cmd import register as _register_predict
-from .serve_cmd import register as _register_serve
 from .store_cmd import store_app
 
 __all__ = ["app", "main", "run_guarded"]
@@ -22,8 +21,8 @@ app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
 )
-_register_predict(app)
-_register_serve(app)
+for _module in (predict_cmd, lobes_cmd, plot_cmd, serve_cmd):
+    _module.register(app)
 app.add_typer(store_app, name="store", help="Import, list, show and delete measured spindle FRFs.")
 
 
