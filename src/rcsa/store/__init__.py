@@ -1,10 +1,15 @@
 """Measured spindle FRF store: immutable per-measurement HDF5 files, multi-process and crash safe.
 
->>> from rcsa.store import MeasurementStore          # doctest: +SKIP
->>> store = MeasurementStore()                       # $RCSA_STORE or ~/.local/share/rcsa/store
->>> mid = store.put(measurement)                     # -> "m-0123456789ab"
->>> store.get(mid).frfs["h"]                         # complex receptance, m/N
->>> [i.id for i in store.list(spindle_id="mc1")]     # metadata only
+>>> import tempfile
+>>> import numpy as np
+>>> store = MeasurementStore(tempfile.mkdtemp() + "/store")   # default: $RCSA_STORE or ~/.local/share/rcsa/store
+>>> m = Measurement(np.array([100.0, 200.0]), {"h": [1e-7 - 1e-8j, 2e-7 - 3e-8j]},
+...                 MeasurementMeta("mc1", "x", "spindle_nose", "direct_frf"))
+>>> mid = store.put(m)                                         # -> "m-0123456789ab"
+>>> complex(store.get(mid).frfs["h"][0])                       # complex receptance, m/N
+(1e-07-1e-08j)
+>>> [i.id for i in store.list(spindle_id="mc1")] == [mid]     # metadata only
+True
 >>> store.delete(mid)
 """
 
