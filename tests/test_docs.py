@@ -11,7 +11,7 @@ import pytest
 
 import rcsa
 
-MODULES = sorted(m.name for m in pkgutil.walk_packages(rcsa.__path__, "rcsa."))
+MODULES = ["rcsa", *sorted(m.name for m in pkgutil.walk_packages(rcsa.__path__, "rcsa."))]
 
 
 @pytest.mark.parametrize("name", MODULES)
