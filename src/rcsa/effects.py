@@ -65,6 +65,7 @@ __all__ = [
     "effect_analysis",
     "effects",
     "effects_figure",
+    "effects_report",
     "get_parameter",
     "mode_features",
     "parameter_names",
@@ -349,17 +350,19 @@ def window_peaks(chain: Chain, lo_hz: np.ndarray, hi_hz: np.ndarray, points: int
     found : numpy.ndarray of bool, shape (nwin,)
         False where ``|h|`` has no interior maximum in the window.
     frequency_hz, magnitude_m_n : numpy.ndarray, shape (nwin,)
-        The refined maximum (NaN where not found).
+        The refined maximum; where none is found, the largest ``|h|`` on the window's grid
+        (at one of its edges), so that a fit sees a bounded, continuous residual.
     """
     lo_hz, hi_hz = np.atleast_1d(np.asarray(lo_hz, dtype=float)), np.atleast_1d(np.asarray(hi_hz, dtype=float))
     nw = lo_hz.size
     found = np.zeros(nw, dtype=bool)
-    peak_f, peak_m = np.full(nw, np.nan), np.full(nw, np.nan)
     if nw == 0:
-        return found, peak_f, peak_m
+        return found, np.empty(0), np.empty(0)
     grid = np.geomspace(lo_hz, hi_hz, points, axis=1)
     mag = np.abs(_tip_h(chain, grid))
     interior = (mag[:, 1:-1] > mag[:, :-2]) & (mag[:, 1:-1] >= mag[:, 2:])
+    top = np.argmax(mag, axis=1)
+    peak_f, peak_m = grid[np.arange(nw), top], mag[np.arange(nw), top]
     start = np.empty(nw)
     for i in range(nw):  # one window at a time: pick its largest interior maximum
         idx = np.flatnonzero(interior[i]) + 1
@@ -401,6 +404,7 @@ def mode_features(chain: Chain, frequency_hz: np.ndarray, window_rel: np.ndarray
     zeta = np.full(nm, np.nan)
     lo_hz, hi_hz = fn * (1 - window_rel[:, 0]), fn * (1 + window_rel[:, 1])
     found, peak_f, peak_m = window_peaks(chain, lo_hz, hi_hz)
+    peak_f, peak_m = np.where(found, peak_f, np.nan), np.where(found, peak_m, np.nan)
     for i in np.flatnonzero(found):  # the window, seen from the peak
         below, above = 1 - lo_hz[i] / peak_f[i], hi_hz[i] / peak_f[i] - 1
         zeta[i] = _fit_damping(chain, float(peak_f[i]), (max(below, 1e-4), max(above, 1e-4)))
@@ -674,31 +678,17 @@ def effect_analysis(assembly: Mapping[str, Any] | AssemblySpec, *, parameters: S
 _REQUEST_FIELDS = ("assembly", "parameters", "relative_step", "band_hz")
 
 
-def effects(request: Mapping[str, Any]) -> dict[str, Any]:
-    """Effect analysis as a JSON document (the CLI's and the REST route's entry point).
-
-    Parameters
-    ----------
-    request : dict
-        Either a contract assembly document, or
-        ``{"assembly": {...}, "parameters": [names] (optional, default all),
-        "relative_step": 0.01 (optional, (0, 0.1]), "band_hz": [start, stop] (optional,
-        default the assembly's frequency range)}``.
+def effects_report(request: Mapping[str, Any]) -> EffectReport:
+    """Parse an effect-analysis request and run it (see :func:`effects` for the request).
 
     Returns
     -------
-    dict
-        :meth:`EffectReport.to_dict`.
-
-    Raises
-    ------
-    InputError
-        For a malformed request.
+    EffectReport
     """
     if not isinstance(request, Mapping):
         raise InputError("", "the request must be a JSON object")
     if "assembly" not in request:
-        return effect_analysis(request).to_dict()
+        return effect_analysis(request)
     unknown = sorted(set(request) - set(_REQUEST_FIELDS))
     if unknown:
         raise InputError(unknown[0], f"unknown field (allowed: {', '.join(_REQUEST_FIELDS)})")
@@ -716,7 +706,35 @@ def effects(request: Mapping[str, Any]) -> dict[str, Any]:
         spec = parse_assembly(request["assembly"])
     except InputError as exc:
         raise InputError(f"assembly.{exc.field}".rstrip("."), exc.rule) from None
-    return effect_analysis(spec, parameters=params, relative_step=float(step), band_hz=band).to_dict()
+    return effect_analysis(spec, parameters=params, relative_step=float(step), band_hz=band)
+
+
+def effects(request: Mapping[str, Any]) -> dict[str, Any]:
+    """Effect analysis as a JSON document (the CLI's and the REST route's entry point).
+
+    Parameters
+    ----------
+    request : dict
+        Either a contract assembly document (all parameters, the assembly's frequency
+        range, δ = 1e-3), or ``{"assembly": {...}, "parameters": [names] (optional, default
+        all, see :func:`parameter_names`), "relative_step": 0.001 (optional, in (0, 0.1]),
+        "band_hz": [start, stop] (optional, default the assembly's frequency range)}``.
+        The spindle must be analytical (segments and bearings).
+
+    Returns
+    -------
+    dict
+        :meth:`EffectReport.to_dict`: ``band_hz``, ``relative_step``, ``modes`` (each with
+        ``frequency_hz``, ``tip_residue_1_kg``, ``tip_participation``, peak, damping ratio,
+        ``controlled_by`` and ``controlled_by_interface`` per feature) and ``parameters``
+        (each with its ``value`` and a list of sensitivities per feature, one per mode).
+
+    Raises
+    ------
+    InputError
+        For a malformed request.
+    """
+    return effects_report(request).to_dict()
 
 
 # ---------------------------------------------------------------------------- figure
@@ -733,27 +751,32 @@ def effects_figure(report: EffectReport, features: Sequence[str] = ("frequency_h
     matplotlib.figure.Figure
         Save it with :func:`rcsa.plots.save_figure`.
     """
+    import matplotlib
     from matplotlib.colors import TwoSlopeNorm
 
     from .plots import _freeze_layout, _new_figure
 
     nm, npar = report.frequency_hz.size, len(report.parameters)
-    fig = _new_figure(max(6.0, 0.55 * npar + 2.5), 1.0 + len(features) * max(2.0, 0.35 * nm + 1.2))
-    axes = fig.subplots(len(features), 1, squeeze=False)[:, 0]
-    ylabels = [f"{f:.0f} Hz" for f in report.frequency_hz]
+    fig = _new_figure(max(6.0, 0.5 * npar + 2.5), 2.2 + len(features) * max(1.6, 0.3 * nm + 0.8))
+    axes = fig.subplots(len(features), 1, squeeze=False, sharex=True)[:, 0]
+    part = report.tip_participation
+    ylabels = [f"{f:.0f} Hz ({100 * p:.2g} %)" for f, p in zip(report.frequency_hz, part, strict=True)]
     titles = {"frequency_hz": "natural frequency", "peak_magnitude_m_n": "peak |h|",
               "damping_ratio": "damping ratio", "peak_frequency_hz": "peak frequency"}
+    cmap = matplotlib.colormaps["RdBu_r"].with_extremes(bad="0.85")
     for ax, q in zip(axes, features, strict=True):
         s = np.asarray(report.sensitivity[q], dtype=float)
         lim = float(np.nanmax(np.abs(s))) if np.any(np.isfinite(s)) else 1.0
         lim = lim if lim > 0 else 1.0
-        image = ax.imshow(np.ma.masked_invalid(s), aspect="auto", cmap="RdBu_r",
+        image = ax.imshow(np.ma.masked_invalid(s), aspect="auto", cmap=cmap,
                           norm=TwoSlopeNorm(0.0, -lim, lim), interpolation="nearest")
         for (i, j), v in np.ndenumerate(s):
             if math.isfinite(v) and abs(v) >= 0.01 * lim:
                 ax.text(j, i, f"{v:.2g}", ha="center", va="center", fontsize=6)
         ax.set_yticks(range(nm), ylabels, fontsize=7)
-        ax.set_xticks(range(npar), report.parameters, rotation=60, ha="right", fontsize=7)
         ax.set_title(f"d ln({titles.get(q, q)}) / d ln(parameter)", fontsize=9)
         fig.colorbar(image, ax=ax, shrink=0.9)
+    axes[-1].set_xticks(range(npar), report.parameters, rotation=60, ha="right", fontsize=7)
+    axes[0].text(0.0, 1.12, "modes: natural frequency (tip participation); grey: no peak at the tool point",
+                 transform=axes[0].transAxes, fontsize=7)
     return _freeze_layout(fig)
