@@ -1,0 +1,30 @@
+"""``rcsa identify REQUEST.json [-o OUT.json]``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ._common import read_json, run_guarded, write_json
+
+
+def register(app: typer.Typer) -> None:
+    """Add the ``identify`` command to ``app``."""
+
+    @app.command()
+    def identify(
+        request: Annotated[Path, typer.Argument(
+            help="Identification request JSON: {\"assembly\", \"measurements\"} (contract format); '-' for stdin.")],
+        out: Annotated[Path | None, typer.Option("-o", "--out", help="Write the result here instead of stdout.")] = None,
+    ) -> None:
+        """Identify the joints' translational stiffness and damping from measured tool-point FRFs.
+
+        Prints the result JSON; ``status`` is ``identified`` or ``not_identifiable`` (with a
+        ``detail``), and both exit 0: only a malformed request fails.
+        """
+        from ..jointid import identify as run
+
+        doc = read_json(request)
+        write_json(run_guarded(lambda: run(doc)), out)

@@ -1,0 +1,606 @@
+"""Identification of the joints' translational stiffness and damping from tool-point FRFs.
+
+Given a base assembly (its joints are the starting guess) and one or more measured
+tool-point FRFs (the base assembly with ``tool`` fields overridden, e.g. several
+stickouts), the translational stiffness ``k_t`` and damping ``c_t`` of the spindle–holder
+and holder–tool joints are estimated from the modes they control — never by fitting every
+parameter to the whole band. Rotational values are held at the given values, as the seed
+paper does (Ertürk, Özgüven & Budak, IJMTM 47 (2007) 23–32), and flagged.
+
+Procedure (θ = ln of the parameters, so every step is scale-free):
+
+1. **Coarse match of the stiffnesses.** The prominent peaks of the model FRF are matched
+   to the measured ones (symmetric mean distance in ln f) on a geometric grid of the
+   joint stiffnesses, ±1 decade around the start (9 points each), then ±1/8 decade
+   (5 points each). A best point at the edge of the range means the start is too far off.
+2. **Which mode informs which parameter.** An effect analysis (:mod:`rcsa.effects`) at
+   that point gives ``d ln f / d ln k`` and ``d ln|h|_peak / d ln c`` for every mode in the
+   measured band; each parameter takes its most sensitive mode among those seen as peaks
+   in the measurement (greedily, one mode per parameter, stiffnesses and dampings
+   separately). A parameter whose best ``|S|`` is below 0.05 (stiffness) or 0.1 (damping)
+   is not informed by the data: it is returned unchanged and flagged.
+3. **Stiffness from the frequencies.** Levenberg–Marquardt (``scipy.optimize.least_squares``,
+   trust-region reflective within the bounds) on ``ln f_peak,model − ln f_peak,measured`` of
+   the stiffness modes.
+4. **Damping from the peaks.** The same on ``ln |h|_peak,model − ln |h|_peak,measured`` of
+   the damping modes, stiffnesses held.
+5. **Polish and uncertainty.** All informed parameters together on the complex log residual
+   ``r = w·ln(h_model/h_measured)`` (real part: log magnitude, imaginary part: phase) on the
+   lines within ``±max(2ζ, 0.5 %)`` of each used peak, ``w`` from the coherence when given.
+   The covariance of θ is ``s² (JᵀJ)⁻¹`` with ``s² = ‖r‖²/(m − p)`` (m real residuals, p
+   parameters, J the Jacobian of r at the optimum), and a parameter's standard uncertainty
+   is ``p·σ_θ`` (delta method). It covers the noise only, not model-form error.
+
+Honesty checks, each giving ``status: "not_identifiable"`` with a ``detail``: no peak in the
+band, no parameter informed, a best coarse match at the edge of the search range or at a
+bound, a fitted parameter ending at a bound, a peak the model cannot follow, and an RMS fit
+residual more than ``max_residual_to_noise`` (default 4) times the noise, which is
+estimated from the measurement itself (:func:`rcsa.jointid_measured.relative_noise`).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from .assembly import build_model
+from .chain import Chain
+from .dsm import march
+from .effects import _windows, effect_analysis, get_parameter, set_parameter, window_peaks
+from .jointid_measured import (
+    PEAK_PROMINENCE,
+    MeasuredPeak,
+    coherence_weights,
+    measured_peaks,
+    peaks_ln_hz,
+    relative_noise,
+)
+from .jointid_request import IdentificationRequest, parse_identification_request
+from .linalg2 import inv2
+from .prediction import SubassemblyCache
+from .spec import AssemblySpec
+
+__all__ = ["Identification", "identify", "identify_joints"]
+
+_TWO_PI = 2.0 * np.pi
+_GRID_DECADES = 1.0
+_GRID_POINTS = 9
+_FINE_POINTS = 5
+_GRID_LINES = 1200
+#: Largest acceptable mean ln-frequency mismatch of the coarse peak match (≈ 5 %).
+_MAX_PEAK_MISMATCH = 0.05
+#: A stiffness whose grid line changes the mismatch by less than this (0.1 %) is not seen.
+_FLAT_MISMATCH = 1e-3
+#: Weight of the pull toward the start in the grid search, per decade² (0.2 % mismatch).
+_PRIOR = 2e-3
+#: Smallest |d ln f/d ln k| (stiffness) and |d ln|h|_peak/d ln c| (damping) that informs.
+_MIN_S_STIFFNESS = 0.05
+_MIN_S_DAMPING = 0.1
+#: Half-width of the polishing window around a peak: 2 ζ, at least 0.5 %.
+_WINDOW_ZETAS = 2.0
+_MIN_WINDOW = 0.005
+#: A fitted ln-parameter this close to a bound counts as "at the bound".
+_AT_BOUND = 1e-3
+#: Finite-difference step of the Jacobian in θ = ln(p/p₀), and the scale of θ's steps (a
+#: factor e^0.3 ≈ 1.35 at most in the first trust region).
+_DIFF_STEP = 1e-4
+_X_SCALE = 0.3
+
+
+@dataclass(frozen=True)
+class _Use:
+    """One (measurement, mode) pair used for one parameter."""
+
+    measurement: int
+    parameter: str
+    model_frequency_hz: float
+    model_peak_hz: float
+    peak: MeasuredPeak
+    window_rel: tuple[float, float]
+    sensitivity: float
+
+
+@dataclass
+class Identification:
+    """Result of a joint identification (see :meth:`to_dict` for the contract's JSON).
+
+    Attributes
+    ----------
+    status : {"identified", "not_identifiable"}
+    values : dict of str to float
+        Every joint parameter (identified, or unchanged from the start), SI.
+    uncertainty : dict of str to float
+        Standard uncertainty of each identified parameter, SI.
+    detail : str or None
+        Why the data do not identify the joints (when ``status`` says so).
+    """
+
+    status: str
+    values: dict[str, float]
+    start: dict[str, float]
+    uncertainty: dict[str, float] = field(default_factory=dict)
+    detail: str | None = None
+    uses: list[_Use] = field(default_factory=list)
+    flags: list[dict[str, str]] = field(default_factory=list)
+    residual_db: float | None = None
+    residual_rel: float | None = None
+    noise_rel: float | None = None
+    band_hz: tuple[float, float] = (math.nan, math.nan)
+    windows_hz: list[list[list[float]]] = field(default_factory=list)
+    correlation: list[list[float]] | None = None
+    runtime_s: float = 0.0
+
+    def to_dict(self) -> dict[str, Any]:
+        """The contract's identification response (plus diagnostic fields)."""
+        joints: dict[str, Any] = {}
+        for joint in ("spindle_holder", "holder_tool"):
+            keys = [k for k in self.values if k.startswith(joint + ".")]
+            if not keys:
+                continue
+            entry: dict[str, Any] = {k.split(".", 1)[1]: self.values[k] for k in keys}
+            entry["uncertainty"] = {f: self.uncertainty.get(f"{joint}.{f}")
+                                    for f in ("stiffness_n_m", "damping_ns_m")}
+            joints[joint] = entry
+        out: dict[str, Any] = {
+            "joints": joints,
+            "status": self.status,
+            "modes_used": [{"frequency_hz": u.peak.frequency_hz, "controls": u.parameter,
+                            "measurement": u.measurement, "sensitivity": u.sensitivity} for u in self.uses],
+            "residual_db": self.residual_db,
+            "residual_rel": self.residual_rel,
+            "noise_rel": self.noise_rel,
+            "flags": self.flags,
+            "start": self.start,
+            "band_hz": list(self.band_hz),
+            "windows_hz": self.windows_hz,
+            "runtime_s": self.runtime_s,
+        }
+        if self.correlation is not None:
+            out["correlation"] = self.correlation
+        if self.detail is not None:
+            out["detail"] = self.detail
+        return out
+
+
+class _NotIdentifiable(Exception):
+    """Raised inside the procedure; becomes ``status: not_identifiable`` with this detail."""
+
+
+class _Problem:
+    """Model evaluations of every measured configuration at given joint parameters."""
+
+    def __init__(self, req: IdentificationRequest) -> None:
+        self.req = req
+        self.names = req.parameters
+        self.start = {n: float(get_parameter(req.base, n) or 0.0) for n in self.names}
+
+    def spec(self, m: int, values: Mapping[str, float]) -> AssemblySpec:
+        spec = self.req.measurements[m].spec
+        for name, value in values.items():
+            spec = set_parameter(spec, name, value)
+        return spec
+
+    def chain(self, m: int, values: Mapping[str, float]) -> Chain:
+        return build_model(self.spec(m, values)).chain()
+
+    def h(self, m: int, values: Mapping[str, float], frequency_hz: np.ndarray) -> np.ndarray:
+        g = inv2(march(self.chain(m, values), _TWO_PI * frequency_hz)[0])
+        return g[:, 0, 0]
+
+
+# ---------------------------------------------------------------------------- stage 1
+
+
+def _one_way(a: np.ndarray, b: np.ndarray) -> float:
+    if a.size == 0:
+        return 0.0
+    if b.size == 0:
+        return 1.0
+    return float(np.abs(a[:, None] - b[None, :]).min(axis=1).mean())
+
+
+def _peak_mismatch(model: tuple[np.ndarray, np.ndarray], measured: tuple[np.ndarray, np.ndarray]) -> float:
+    """Symmetric mean nearest ln-frequency distance between model and measured peaks.
+
+    Each side's prominent peaks (≥ 3 %) look for any listed peak (≥ 1 %) on the other side,
+    so a borderline peak seen on one side only costs nothing.
+    """
+    (lm, pm), (ld, pd) = model, measured
+    if not np.any(pm >= PEAK_PROMINENCE):
+        return 1.0
+    return _one_way(lm[pm >= PEAK_PROMINENCE], ld) + _one_way(ld[pd >= PEAK_PROMINENCE], lm)
+
+
+def _coarse_match(problem: _Problem, values: dict[str, float], measured_ln: list[tuple[np.ndarray, np.ndarray]],
+                  k_names: list[str]) -> tuple[dict[str, float], float, dict[str, str]]:
+    """Stage 1: grid search of the joint stiffnesses on the peak-frequency match.
+
+    Returns the best values, their peak mismatch, and for each stiffness whose best grid
+    point lies on the edge of its range, the reason (raised later if it is informed). A
+    stiffness that does not move the peaks at all is held at its start.
+    """
+    grids = []
+    for m in problem.req.measurements:
+        f = np.geomspace(m.frequency_hz[0], m.frequency_hz[-1], min(_GRID_LINES, m.frequency_hz.size))
+        grids.append((f, SubassemblyCache(_TWO_PI * f)))
+
+    def mismatch(k_values: dict[str, float]) -> float:
+        total = 0.0
+        for i, (f, cache) in enumerate(grids):
+            model = build_model(problem.spec(i, {**values, **k_values}))
+            tail = model.tool if model.holder_tool is None else (model.holder_tool, *model.tool)
+            h = inv2(march(tail, cache.omega_rad_s, cache.condensed(model.to_holder_tip()))[0])[:, 0, 0]
+            total += _peak_mismatch(peaks_ln_hz(f, h), measured_ln[i])
+        return total / len(grids)
+
+    def search(axes: list[np.ndarray]) -> tuple[tuple[int, ...], np.ndarray, np.ndarray]:
+        table, prior = np.empty([a.size for a in axes]), np.zeros([a.size for a in axes])
+        for idx in itertools.product(*(range(a.size) for a in axes)):
+            k_values = {n: float(a[i]) for n, a, i in zip(k_names, axes, idx, strict=True)}
+            table[idx] = mismatch(k_values)
+            # a weak pull toward the start decides along valleys (one mode, two stiffnesses)
+            prior[idx] = _PRIOR * sum(math.log10(v / problem.start[n]) ** 2 for n, v in k_values.items())
+        best = tuple(int(i) for i in np.unravel_index(int(np.argmin(table + prior)), table.shape))
+        return best, table, prior
+
+    axes = []
+    for n in k_names:
+        lo, hi = problem.req.bounds[n]
+        s = problem.start[n]
+        axes.append(np.geomspace(max(lo, s / 10**_GRID_DECADES), min(hi, s * 10**_GRID_DECADES), _GRID_POINTS))
+    idx, table, _ = search(axes)
+    half = _GRID_DECADES / (_GRID_POINTS - 1)
+    fine, edges = [], {}
+    for d, (n, a, i) in enumerate(zip(k_names, axes, idx, strict=True)):
+        line = table[tuple(slice(None) if e == d else j for e, j in enumerate(idx))]
+        if float(line.max() - line.min()) < _FLAT_MISMATCH:  # the peaks do not see this stiffness
+            fine.append(np.array([problem.start[n]]))
+            continue
+        lo, hi = problem.req.bounds[n]
+        if i in (0, a.size - 1):
+            where = "a bound of the search range" if a[i] in (lo, hi) else "10× from the starting value"
+            edges[n] = (f"{n}: the measured peaks are best matched at {a[i]:.4g} ({where}); the starting value "
+                        f"{problem.start[n]:.4g} is too far from the data, or the model misses a resonance")
+        fine.append(np.geomspace(max(lo, a[i] / 10**half), min(hi, a[i] * 10**half), _FINE_POINTS))
+    idx, table, _ = search(fine)
+    k_best = {n: float(a[i]) for n, a, i in zip(k_names, fine, idx, strict=True)}
+    return {**values, **k_best}, float(table[idx]), edges
+
+
+def _locate(problem: _Problem, peaks: list[list[MeasuredPeak]]
+            ) -> tuple[dict[str, float], list[_Use], list[dict[str, str]]]:
+    """Stages 1–2: coarse stiffnesses, then which measured mode informs which parameter.
+
+    A stiffness that no measured mode informs is reset to its start and the grid is searched
+    again without it, so it cannot drag the others along a valley.
+    """
+    measured_ln = [(np.log([p.frequency_hz for p in pk]), np.array([p.prominence for p in pk]))
+                   if pk else (np.empty(0), np.empty(0)) for pk in peaks]
+    k_all = [n for n in problem.names if "stiffness" in n]
+    values, mismatch, edges = _coarse_match(problem, dict(problem.start), measured_ln, k_all)
+    uses, flags = _assign(problem, values, peaks)
+    informed = [n for n in k_all if any(u.parameter == n for u in uses)]
+    if informed != k_all:
+        values = {**values, **{n: problem.start[n] for n in k_all if n not in informed}}
+        if informed:
+            values, mismatch, edges = _coarse_match(problem, values, measured_ln, informed)
+        uses, flags = _assign(problem, values, peaks)
+    for n in informed:
+        if n in edges:
+            raise _NotIdentifiable(edges[n])
+    if informed and mismatch > _MAX_PEAK_MISMATCH:
+        raise _NotIdentifiable(
+            f"the model's resonance peaks cannot be matched to the measured ones within the search range "
+            f"(mean mismatch {100 * mismatch:.1f} % in frequency at best)")
+    return values, uses, flags
+
+
+# ---------------------------------------------------------------------------- stage 2
+
+
+def _assign(problem: _Problem, values: dict[str, float], peaks: list[list[MeasuredPeak]]
+            ) -> tuple[list[_Use], list[dict[str, str]]]:
+    """Stage 2: each parameter's most informative measured mode(s), from an effect analysis."""
+    rotational = [f"{j}.rotational_stiffness_nm_rad" for j in ("spindle_holder", "holder_tool")]
+    uses: list[_Use] = []
+    best_rot: dict[str, float] = {}
+    for m, meas in enumerate(problem.req.measurements):
+        spec = problem.spec(m, values)
+        extra = [r for r in rotational if (get_parameter(spec, r) or 0) > 0]
+        report = effect_analysis(spec, parameters=[*problem.names, *extra],
+                                 band_hz=(float(meas.frequency_hz[0]), float(meas.frequency_hz[-1])))
+        modes = report.modes
+        seen = np.flatnonzero(np.isfinite(modes.peak_frequency_hz))
+        model_pk = modes.peak_frequency_hz[seen]
+        # search windows between the model's *visible* peaks (hidden modes make no peak)
+        windows = dict(zip(seen.tolist(), _windows(model_pk, model_pk), strict=True)) if seen.size else {}
+        measured_hz = np.array([p.frequency_hz for p in peaks[m]])
+        match = {}
+        if seen.size and measured_hz.size:
+            d = np.abs(np.log(measured_hz)[:, None] - np.log(model_pk)[None, :])
+            for j, k in enumerate(np.argmin(d, axis=1)):  # mutual nearest, within the window
+                if np.argmin(d[:, k]) == j and d[j, k] < math.log1p(0.5 * min(windows[int(seen[k])])) + 0.02:
+                    match[j] = int(seen[k])
+        candidates = {i: j for j, i in match.items()}
+        for r in extra:
+            s = max((abs(report.column(r)[i]) for i in candidates), default=0.0)
+            best_rot[r] = max(best_rot.get(r, 0.0), s)
+        for kind, feature, threshold in (("stiffness", "frequency_hz", _MIN_S_STIFFNESS),
+                                         ("damping", "peak_magnitude_m_n", _MIN_S_DAMPING)):
+            names = [n for n in problem.names if (kind == "damping") == ("damping" in n)]
+            table = {n: {i: abs(float(report.column(n, feature)[i])) for i in candidates} for n in names}
+            taken: set[int] = set()
+            for n in sorted(names, key=lambda n: -max(table[n].values(), default=0.0)):
+                options = [(s, i) for i, s in table[n].items() if i not in taken and s >= threshold]
+                if not options:
+                    continue
+                s, i = max(options)
+                taken.add(i)
+                uses.append(_Use(m, n, float(modes.frequency_hz[i]), float(modes.peak_frequency_hz[i]),
+                                 peaks[m][candidates[i]], (float(windows[i][0]), float(windows[i][1])),
+                                 float(report.column(n, feature)[i])))
+    used = {u.parameter for u in uses}
+    flags: list[dict[str, str]] = []
+    for n in problem.names:
+        if n not in used:
+            what = "natural frequency" if "stiffness" in n else "peak height"
+            flags.append({"parameter": n, "reason": (
+                f"not informed by the data: no resonance peak in the measured band(s) has a {what} "
+                f"sensitive to it (|d ln / d ln p| below "
+                f"{_MIN_S_STIFFNESS if 'stiffness' in n else _MIN_S_DAMPING}); returned unchanged")})
+    for r, s in best_rot.items():
+        flags.append({"parameter": r, "reason": (
+            f"held at the given value (as the seed paper does); its largest |d ln f / d ln k_r| on a measured "
+            f"peak is {s:.3g}")})
+    return uses, flags
+
+
+# ---------------------------------------------------------------------------- stages 3–5
+
+
+def _vector(names: list[str], values: Mapping[str, float]) -> np.ndarray:
+    return np.log([values[n] for n in names])
+
+
+def _fit(fun: Any, names: list[str], values: dict[str, float], problem: _Problem
+         ) -> tuple[dict[str, float], Any]:
+    """Least squares in θ = ln(p/p₀) within the bounds (p₀: the values on entry).
+
+    Returns the new values and scipy's result (``fun``, ``jac`` at the optimum).
+    """
+    ref = np.array([values[n] for n in names])
+    lo = np.log([problem.req.bounds[n][0] for n in names]) - np.log(ref)
+    hi = np.log([problem.req.bounds[n][1] for n in names]) - np.log(ref)
+    x0 = np.clip(np.zeros(len(names)), lo + 1e-9, hi - 1e-9)
+
+    def at(x: np.ndarray) -> dict[str, float]:
+        return {**values, **{n: float(r * math.exp(v)) for n, r, v in zip(names, ref, x, strict=True)}}
+
+    res = least_squares(lambda x: fun(at(x)), x0, bounds=(lo, hi), method="trf", diff_step=_DIFF_STEP,
+                        x_scale=_X_SCALE, max_nfev=100 * len(names))
+    for n, x, a, b in zip(names, res.x, lo, hi, strict=True):
+        if x - a < _AT_BOUND or b - x < _AT_BOUND:
+            raise _NotIdentifiable(
+                f"{n}: the fit ended at a bound of its search range [{problem.req.bounds[n][0]:.4g}, "
+                f"{problem.req.bounds[n][1]:.4g}]; the data do not support a value inside it (bad start or "
+                "bounds, or a model that cannot follow the data)")
+    return at(res.x), res
+
+
+def _peak_residual(problem: _Problem, uses: list[_Use], magnitude: bool) -> Any:
+    """ln(model/measured) of the peak frequency (or height) of each used mode."""
+    windows = []
+    for u in uses:  # the model's peak at the location stage and the measured one: both inside
+        lo = min(u.peak.frequency_hz, u.model_peak_hz) * (1 - u.window_rel[0])
+        hi = max(u.peak.frequency_hz, u.model_peak_hz) * (1 + u.window_rel[1])
+        windows.append((lo, hi))
+
+    def fun(values: dict[str, float]) -> np.ndarray:
+        out = np.empty(len(uses))
+        for m in {u.measurement for u in uses}:
+            idx = [k for k, u in enumerate(uses) if u.measurement == m]
+            _, f_pk, mag = window_peaks(problem.chain(m, values), np.array([windows[k][0] for k in idx]),
+                                        np.array([windows[k][1] for k in idx]), points=81)
+            for k, fp, mg in zip(idx, f_pk, mag, strict=True):
+                out[k] = math.log(mg / uses[k].peak.magnitude_m_n) if magnitude \
+                    else math.log(fp / uses[k].peak.frequency_hz)
+        return out
+
+    def check(values: dict[str, float]) -> None:
+        for m in {u.measurement for u in uses}:
+            idx = [k for k, u in enumerate(uses) if u.measurement == m]
+            found, _, _ = window_peaks(problem.chain(m, values), np.array([windows[k][0] for k in idx]),
+                                       np.array([windows[k][1] for k in idx]), points=81)
+            if not found.all():
+                k = idx[int(np.flatnonzero(~found)[0])]
+                raise _NotIdentifiable(f"the model has no peak near {uses[k].peak.frequency_hz:.1f} Hz "
+                                       f"(measurement {m}) after fitting {uses[k].parameter}: the data do not "
+                                       "follow the model there")
+
+    fun.check = check  # type: ignore[attr-defined]
+    return fun
+
+
+def _window_lines(problem: _Problem, uses: list[_Use]) -> list[np.ndarray]:
+    """Indices of the measured lines near each used peak, per measurement."""
+    out = []
+    for m, meas in enumerate(problem.req.measurements):
+        mask = np.zeros(meas.frequency_hz.size, dtype=bool)
+        for u in (u for u in uses if u.measurement == m):
+            zeta = u.peak.damping_ratio if math.isfinite(u.peak.damping_ratio) else 0.01
+            half = max(_WINDOW_ZETAS * zeta, _MIN_WINDOW)
+            half = min(half, 0.9 * min(u.window_rel))
+            f = u.peak.frequency_hz
+            mask |= (meas.frequency_hz >= f * (1 - half)) & (meas.frequency_hz <= f * (1 + half))
+        out.append(np.flatnonzero(mask))
+    return out
+
+
+def _frf_residual(problem: _Problem, lines: list[np.ndarray], weighted: bool = True) -> Any:
+    """Complex log residual ``w·ln(h_model/h_measured)`` on the window lines, as reals."""
+    data = [(m, problem.req.measurements[m], idx) for m, idx in enumerate(lines) if idx.size]
+    weights = [coherence_weights(None if meas.coherence is None else meas.coherence[idx], idx.size)
+               if weighted else np.ones(idx.size) for _, meas, idx in data]
+
+    def fun(values: dict[str, float]) -> np.ndarray:
+        parts = []
+        for (m, meas, idx), w in zip(data, weights, strict=True):
+            r = np.log(problem.h(m, values, meas.frequency_hz[idx]) / meas.h[idx])
+            r = r.real + 1j * np.angle(np.exp(1j * r.imag))
+            parts.extend([w * r.real, w * r.imag])
+        return np.concatenate(parts)
+
+    return fun
+
+
+def _windows_hz(problem: _Problem, lines: list[np.ndarray]) -> list[list[list[float]]]:
+    out = []
+    for meas, idx in zip(problem.req.measurements, lines, strict=True):
+        runs = np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1) if idx.size else []
+        out.append([[float(meas.frequency_hz[r[0]]), float(meas.frequency_hz[r[-1]])] for r in runs])
+    return out
+
+
+# ---------------------------------------------------------------------------- driver
+
+
+def _all_joint_values(spec: AssemblySpec) -> dict[str, float]:
+    out = {}
+    for joint in ("spindle_holder", "holder_tool"):
+        spec_joint = getattr(spec, joint)
+        if spec_joint is None:
+            continue
+        for f in ("stiffness_n_m", "damping_ns_m", "rotational_stiffness_nm_rad", "rotational_damping_nms_rad"):
+            v = getattr(spec_joint, f)
+            if v is not None:
+                out[f"{joint}.{f}"] = float(v)
+    return out
+
+
+def identify_joints(req: IdentificationRequest) -> Identification:
+    """Identify the joints' translational stiffness and damping (see the module docstring).
+
+    Parameters
+    ----------
+    req : IdentificationRequest
+        From :func:`rcsa.jointid_request.parse_identification_request`.
+
+    Returns
+    -------
+    Identification
+    """
+    t0 = time.perf_counter()
+    problem = _Problem(req)
+    start = _all_joint_values(req.base)
+    band = (min(float(m.frequency_hz[0]) for m in req.measurements),
+            max(float(m.frequency_hz[-1]) for m in req.measurements))
+    result = Identification("not_identifiable", dict(start), dict(start), band_hz=band)
+    flags: list[dict[str, str]] = []
+    noise = [relative_noise(m.h) for m in req.measurements]
+    try:
+        peaks = [measured_peaks(m.frequency_hz, m.h, s) for m, s in zip(req.measurements, noise, strict=True)]
+        if not any(p.prominence >= PEAK_PROMINENCE for pk in peaks for p in pk):
+            raise _NotIdentifiable(f"no resonance peak stands out of the noise in the measured band "
+                                   f"{band[0]:g}–{band[1]:g} Hz, so no mode controlled by a joint is seen")
+        values, uses, flags = _locate(problem, peaks)
+        if not uses:
+            raise _NotIdentifiable(
+                f"the measured band {band[0]:g}–{band[1]:g} Hz holds no peak of a mode controlled by a joint "
+                f"parameter; measure across the joints' controlling modes ({_where_modes(problem, values)})")
+        k_uses = [u for u in uses if "stiffness" in u.parameter]
+        c_uses = [u for u in uses if "damping" in u.parameter]
+        k_names = list(dict.fromkeys(u.parameter for u in k_uses))
+        c_names = list(dict.fromkeys(u.parameter for u in c_uses))
+        for names_, uses_, magnitude in ((k_names, k_uses, False), (c_names, c_uses, True)):
+            if names_:
+                fun = _peak_residual(problem, uses_, magnitude)
+                values, _ = _fit(fun, names_, values, problem)
+                fun.check(values)
+        lines = _window_lines(problem, uses)
+        names = k_names + c_names
+        values, res = _fit(_frf_residual(problem, lines), names, values, problem)
+        raw = _frf_residual(problem, lines, weighted=False)(values)
+        m_res, p = res.fun.size, len(names)
+        s2 = float(res.fun @ res.fun) / max(m_res - p, 1)
+        cov = s2 * np.linalg.pinv(res.jac.T @ res.jac)
+        sigma = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+        rms = math.sqrt(2.0 * float(raw @ raw) / raw.size)  # per complex line
+        noise_lines = [relative_noise(m.h[idx]) if idx.size >= 12 else s
+                       for m, idx, s in zip(req.measurements, lines, noise, strict=True)]
+        noise_rel = float(np.sqrt(np.nanmean(np.square(noise_lines))))
+        result.residual_rel, result.noise_rel = rms, noise_rel
+        result.residual_db = _db(raw, lines)
+        result.windows_hz = _windows_hz(problem, lines)
+        result.uses = uses
+        d = np.sqrt(np.diag(cov))
+        result.correlation = (cov / np.outer(d, d)).tolist() if np.all(d > 0) else None
+        if rms > req.max_residual_to_noise * noise_rel:
+            raise _NotIdentifiable(
+                f"the fitted model leaves an RMS residual of {100 * rms:.2g} % around the used peaks, "
+                f"{rms / noise_rel:.1f}× the measurement noise ({100 * noise_rel:.2g} %): the model cannot "
+                "reproduce the measurement there (bad start, or a model-form error the joints cannot absorb)")
+        result.status = "identified"
+        result.values = {**start, **{n: values[n] for n in names}}
+        result.uncertainty = {n: float(values[n] * s) for n, s in zip(names, sigma, strict=True)}
+    except _NotIdentifiable as exc:
+        result.status, result.detail = "not_identifiable", str(exc)
+        result.values, result.uncertainty = dict(start), {}
+    result.flags = flags
+    result.runtime_s = time.perf_counter() - t0
+    return result
+
+
+def _db(raw: np.ndarray, lines: list[np.ndarray]) -> float:
+    """RMS of 20 log10|h_model/h_measured| over all window lines, dB."""
+    real_parts, k = [], 0
+    for idx in lines:
+        if idx.size:
+            real_parts.append(raw[k:k + idx.size])
+            k += 2 * idx.size
+    db = 20.0 / math.log(10.0) * np.concatenate(real_parts)
+    return float(np.sqrt(np.mean(db**2)))
+
+
+def _where_modes(problem: _Problem, values: dict[str, float]) -> str:
+    """Where the joint-controlled modes of the first configuration lie (for a detail message)."""
+    spec = problem.spec(0, values)
+    report = effect_analysis(spec, parameters=[n for n in problem.names if "stiffness" in n],
+                             band_hz=(float(spec.frequency_hz[0]) / 3, float(spec.frequency_hz[-1]) * 3))
+    parts = []
+    for n in report.parameters:
+        i = report.controlled_mode(n, min_participation=0.02)
+        if i is not None:
+            parts.append(f"{n}: {report.frequency_hz[i]:.0f} Hz")
+    return "; ".join(parts) or "none found within a factor 3 of the band"
+
+
+def identify(request: Mapping[str, Any]) -> dict[str, Any]:
+    """Joint identification as JSON (the CLI's and the REST route's entry point).
+
+    Parameters
+    ----------
+    request : dict
+        ``{"assembly": {...}, "measurements": [{"tool": {...}, "frequency_hz": [...],
+        "h": {"real": [...], "imag": [...]}, "coherence": [...]}], "bounds": {...},
+        "max_residual_to_noise": 4.0}`` (``contract.md`` "Joint identification";
+        ``bounds`` and ``max_residual_to_noise`` optional).
+
+    Returns
+    -------
+    dict
+        ``{"joints": {...}, "status", "detail" (when not identifiable), "modes_used",
+        "residual_db", "flags", "band_hz", "windows_hz", "runtime_s", ...}``
+
+    Raises
+    ------
+    InputError
+        For a malformed request.
+    """
+    return identify_joints(parse_identification_request(request)).to_dict()
