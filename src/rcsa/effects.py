@@ -70,6 +70,7 @@ __all__ = [
     "mode_features",
     "parameter_names",
     "set_parameter",
+    "single_mode_fit",
     "tip_residues_1_kg",
     "window_peaks",
 ]
@@ -296,13 +297,24 @@ def _refine_peaks(chain: Chain, f_hz: np.ndarray, step_rel: np.ndarray, lo: np.n
     return f, np.abs(_tip_h(chain, f))
 
 
-def _levy_fit(frequency_hz: np.ndarray, h: np.ndarray) -> tuple[float, float]:
-    """One mode with residual terms by Levy's linearised least squares.
+def single_mode_fit(frequency_hz: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, float] | None:
+    """One mode with residual terms fitted by Levy's linearised least squares.
 
-    ``h ≈ (c₀ + c₁s + c₂s²)/(s² + a₁s + a₀)``, ``s = iω``; returns ``(f_n_hz, ζ)``
-    (NaN when the fitted pole is not a stable oscillator).
+    ``h ≈ (c₀ + c₁s + c₂s²)/(s² + a₁s + a₀)`` with the scaled ``s = iω/scale``.
+
+    Parameters
+    ----------
+    frequency_hz : numpy.ndarray, shape (n,)
+    h : numpy.ndarray, shape (n,), complex
+
+    Returns
+    -------
+    (numpy.ndarray, float) or None
+        ``([a0, a1, c0, c1, c2], scale)`` with scale in rad/s (natural frequency
+        ``√a0·scale``, damping ratio ``a1/(2√a0)``), or None when the fitted pole is not a
+        stable oscillator.
     """
-    s = 2j * np.pi * frequency_hz
+    s = 2j * np.pi * np.asarray(frequency_hz, dtype=float)
     scale = float(np.abs(s).max())
     sn = s / scale
     cols = np.stack([h, h * sn, -np.ones_like(sn), -sn, -(sn**2)], axis=1)
@@ -311,10 +323,18 @@ def _levy_fit(frequency_hz: np.ndarray, h: np.ndarray) -> tuple[float, float]:
     b = np.concatenate([rhs.real, rhs.imag])
     col_scale = np.linalg.norm(a, axis=0)
     x = np.linalg.lstsq(a / col_scale, b, rcond=None)[0] / col_scale
-    a0, a1 = float(x[0]), float(x[1])
-    if a0 <= 0 or a1 <= 0:
+    if x[0] <= 0 or x[1] <= 0:
+        return None
+    return x, scale
+
+
+def _levy_fit(frequency_hz: np.ndarray, h: np.ndarray) -> tuple[float, float]:
+    """``(f_n_hz, ζ)`` of :func:`single_mode_fit` (NaN when not a stable oscillator)."""
+    fit = single_mode_fit(frequency_hz, h)
+    if fit is None:
         return math.nan, math.nan
-    return math.sqrt(a0) * scale / _TWO_PI, a1 / (2 * math.sqrt(a0))
+    x, scale = fit
+    return math.sqrt(x[0]) * scale / _TWO_PI, x[1] / (2 * math.sqrt(x[0]))
 
 
 def _fit_damping(chain: Chain, peak_hz: float, window: tuple[float, float]) -> float:

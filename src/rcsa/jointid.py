@@ -40,7 +40,6 @@ estimated from the measurement itself (:func:`rcsa.jointid_measured.relative_noi
 
 from __future__ import annotations
 
-import itertools
 import math
 import time
 from collections.abc import Mapping
@@ -50,39 +49,19 @@ from typing import Any
 import numpy as np
 from scipy.optimize import least_squares
 
-from .assembly import build_model
-from .chain import Chain
-from .dsm import march
-from .effects import _windows, effect_analysis, get_parameter, set_parameter, window_peaks
+from .effects import window_peaks
+from .jointid_locate import NotIdentifiable, Problem, Use, locate, where_modes
 from .jointid_measured import (
     PEAK_PROMINENCE,
-    MeasuredPeak,
     coherence_weights,
     measured_peaks,
-    peaks_ln_hz,
     relative_noise,
 )
 from .jointid_request import IdentificationRequest, parse_identification_request
-from .linalg2 import inv2
-from .prediction import SubassemblyCache
 from .spec import AssemblySpec
 
 __all__ = ["Identification", "identify", "identify_joints"]
 
-_TWO_PI = 2.0 * np.pi
-_GRID_DECADES = 1.0
-_GRID_POINTS = 9
-_FINE_POINTS = 5
-_GRID_LINES = 1200
-#: Largest acceptable mean ln-frequency mismatch of the coarse peak match (≈ 5 %).
-_MAX_PEAK_MISMATCH = 0.05
-#: A stiffness whose grid line changes the mismatch by less than this (0.1 %) is not seen.
-_FLAT_MISMATCH = 1e-3
-#: Weight of the pull toward the start in the grid search, per decade² (0.2 % mismatch).
-_PRIOR = 2e-3
-#: Smallest |d ln f/d ln k| (stiffness) and |d ln|h|_peak/d ln c| (damping) that informs.
-_MIN_S_STIFFNESS = 0.05
-_MIN_S_DAMPING = 0.1
 #: Half-width of the polishing window around a peak: 2 ζ, at least 0.5 %.
 _WINDOW_ZETAS = 2.0
 _MIN_WINDOW = 0.005
@@ -92,19 +71,6 @@ _AT_BOUND = 1e-3
 #: factor e^0.3 ≈ 1.35 at most in the first trust region).
 _DIFF_STEP = 1e-4
 _X_SCALE = 0.3
-
-
-@dataclass(frozen=True)
-class _Use:
-    """One (measurement, mode) pair used for one parameter."""
-
-    measurement: int
-    parameter: str
-    model_frequency_hz: float
-    model_peak_hz: float
-    peak: MeasuredPeak
-    window_rel: tuple[float, float]
-    sensitivity: float
 
 
 @dataclass
@@ -127,7 +93,7 @@ class Identification:
     start: dict[str, float]
     uncertainty: dict[str, float] = field(default_factory=dict)
     detail: str | None = None
-    uses: list[_Use] = field(default_factory=list)
+    uses: list[Use] = field(default_factory=list)
     flags: list[dict[str, str]] = field(default_factory=list)
     residual_db: float | None = None
     residual_rel: float | None = None
@@ -169,199 +135,6 @@ class Identification:
         return out
 
 
-class _NotIdentifiable(Exception):
-    """Raised inside the procedure; becomes ``status: not_identifiable`` with this detail."""
-
-
-class _Problem:
-    """Model evaluations of every measured configuration at given joint parameters."""
-
-    def __init__(self, req: IdentificationRequest) -> None:
-        self.req = req
-        self.names = req.parameters
-        self.start = {n: float(get_parameter(req.base, n) or 0.0) for n in self.names}
-
-    def spec(self, m: int, values: Mapping[str, float]) -> AssemblySpec:
-        spec = self.req.measurements[m].spec
-        for name, value in values.items():
-            spec = set_parameter(spec, name, value)
-        return spec
-
-    def chain(self, m: int, values: Mapping[str, float]) -> Chain:
-        return build_model(self.spec(m, values)).chain()
-
-    def h(self, m: int, values: Mapping[str, float], frequency_hz: np.ndarray) -> np.ndarray:
-        g = inv2(march(self.chain(m, values), _TWO_PI * frequency_hz)[0])
-        return g[:, 0, 0]
-
-
-# ---------------------------------------------------------------------------- stage 1
-
-
-def _one_way(a: np.ndarray, b: np.ndarray) -> float:
-    if a.size == 0:
-        return 0.0
-    if b.size == 0:
-        return 1.0
-    return float(np.abs(a[:, None] - b[None, :]).min(axis=1).mean())
-
-
-def _peak_mismatch(model: tuple[np.ndarray, np.ndarray], measured: tuple[np.ndarray, np.ndarray]) -> float:
-    """Symmetric mean nearest ln-frequency distance between model and measured peaks.
-
-    Each side's prominent peaks (≥ 3 %) look for any listed peak (≥ 1 %) on the other side,
-    so a borderline peak seen on one side only costs nothing.
-    """
-    (lm, pm), (ld, pd) = model, measured
-    if not np.any(pm >= PEAK_PROMINENCE):
-        return 1.0
-    return _one_way(lm[pm >= PEAK_PROMINENCE], ld) + _one_way(ld[pd >= PEAK_PROMINENCE], lm)
-
-
-def _coarse_match(problem: _Problem, values: dict[str, float], measured_ln: list[tuple[np.ndarray, np.ndarray]],
-                  k_names: list[str]) -> tuple[dict[str, float], float, dict[str, str]]:
-    """Stage 1: grid search of the joint stiffnesses on the peak-frequency match.
-
-    Returns the best values, their peak mismatch, and for each stiffness whose best grid
-    point lies on the edge of its range, the reason (raised later if it is informed). A
-    stiffness that does not move the peaks at all is held at its start.
-    """
-    grids = []
-    for m in problem.req.measurements:
-        f = np.geomspace(m.frequency_hz[0], m.frequency_hz[-1], min(_GRID_LINES, m.frequency_hz.size))
-        grids.append((f, SubassemblyCache(_TWO_PI * f)))
-
-    def mismatch(k_values: dict[str, float]) -> float:
-        total = 0.0
-        for i, (f, cache) in enumerate(grids):
-            model = build_model(problem.spec(i, {**values, **k_values}))
-            tail = model.tool if model.holder_tool is None else (model.holder_tool, *model.tool)
-            h = inv2(march(tail, cache.omega_rad_s, cache.condensed(model.to_holder_tip()))[0])[:, 0, 0]
-            total += _peak_mismatch(peaks_ln_hz(f, h), measured_ln[i])
-        return total / len(grids)
-
-    def search(axes: list[np.ndarray]) -> tuple[tuple[int, ...], np.ndarray, np.ndarray]:
-        table, prior = np.empty([a.size for a in axes]), np.zeros([a.size for a in axes])
-        for idx in itertools.product(*(range(a.size) for a in axes)):
-            k_values = {n: float(a[i]) for n, a, i in zip(k_names, axes, idx, strict=True)}
-            table[idx] = mismatch(k_values)
-            # a weak pull toward the start decides along valleys (one mode, two stiffnesses)
-            prior[idx] = _PRIOR * sum(math.log10(v / problem.start[n]) ** 2 for n, v in k_values.items())
-        best = tuple(int(i) for i in np.unravel_index(int(np.argmin(table + prior)), table.shape))
-        return best, table, prior
-
-    axes = []
-    for n in k_names:
-        lo, hi = problem.req.bounds[n]
-        s = problem.start[n]
-        axes.append(np.geomspace(max(lo, s / 10**_GRID_DECADES), min(hi, s * 10**_GRID_DECADES), _GRID_POINTS))
-    idx, table, _ = search(axes)
-    half = _GRID_DECADES / (_GRID_POINTS - 1)
-    fine, edges = [], {}
-    for d, (n, a, i) in enumerate(zip(k_names, axes, idx, strict=True)):
-        line = table[tuple(slice(None) if e == d else j for e, j in enumerate(idx))]
-        if float(line.max() - line.min()) < _FLAT_MISMATCH:  # the peaks do not see this stiffness
-            fine.append(np.array([problem.start[n]]))
-            continue
-        lo, hi = problem.req.bounds[n]
-        if i in (0, a.size - 1):
-            where = "a bound of the search range" if a[i] in (lo, hi) else "10× from the starting value"
-            edges[n] = (f"{n}: the measured peaks are best matched at {a[i]:.4g} ({where}); the starting value "
-                        f"{problem.start[n]:.4g} is too far from the data, or the model misses a resonance")
-        fine.append(np.geomspace(max(lo, a[i] / 10**half), min(hi, a[i] * 10**half), _FINE_POINTS))
-    idx, table, _ = search(fine)
-    k_best = {n: float(a[i]) for n, a, i in zip(k_names, fine, idx, strict=True)}
-    return {**values, **k_best}, float(table[idx]), edges
-
-
-def _locate(problem: _Problem, peaks: list[list[MeasuredPeak]]
-            ) -> tuple[dict[str, float], list[_Use], list[dict[str, str]]]:
-    """Stages 1–2: coarse stiffnesses, then which measured mode informs which parameter.
-
-    A stiffness that no measured mode informs is reset to its start and the grid is searched
-    again without it, so it cannot drag the others along a valley.
-    """
-    measured_ln = [(np.log([p.frequency_hz for p in pk]), np.array([p.prominence for p in pk]))
-                   if pk else (np.empty(0), np.empty(0)) for pk in peaks]
-    k_all = [n for n in problem.names if "stiffness" in n]
-    values, mismatch, edges = _coarse_match(problem, dict(problem.start), measured_ln, k_all)
-    uses, flags = _assign(problem, values, peaks)
-    informed = [n for n in k_all if any(u.parameter == n for u in uses)]
-    if informed != k_all:
-        values = {**values, **{n: problem.start[n] for n in k_all if n not in informed}}
-        if informed:
-            values, mismatch, edges = _coarse_match(problem, values, measured_ln, informed)
-        uses, flags = _assign(problem, values, peaks)
-    for n in informed:
-        if n in edges:
-            raise _NotIdentifiable(edges[n])
-    if informed and mismatch > _MAX_PEAK_MISMATCH:
-        raise _NotIdentifiable(
-            f"the model's resonance peaks cannot be matched to the measured ones within the search range "
-            f"(mean mismatch {100 * mismatch:.1f} % in frequency at best)")
-    return values, uses, flags
-
-
-# ---------------------------------------------------------------------------- stage 2
-
-
-def _assign(problem: _Problem, values: dict[str, float], peaks: list[list[MeasuredPeak]]
-            ) -> tuple[list[_Use], list[dict[str, str]]]:
-    """Stage 2: each parameter's most informative measured mode(s), from an effect analysis."""
-    rotational = [f"{j}.rotational_stiffness_nm_rad" for j in ("spindle_holder", "holder_tool")]
-    uses: list[_Use] = []
-    best_rot: dict[str, float] = {}
-    for m, meas in enumerate(problem.req.measurements):
-        spec = problem.spec(m, values)
-        extra = [r for r in rotational if (get_parameter(spec, r) or 0) > 0]
-        report = effect_analysis(spec, parameters=[*problem.names, *extra],
-                                 band_hz=(float(meas.frequency_hz[0]), float(meas.frequency_hz[-1])))
-        modes = report.modes
-        seen = np.flatnonzero(np.isfinite(modes.peak_frequency_hz))
-        model_pk = modes.peak_frequency_hz[seen]
-        # search windows between the model's *visible* peaks (hidden modes make no peak)
-        windows = dict(zip(seen.tolist(), _windows(model_pk, model_pk), strict=True)) if seen.size else {}
-        measured_hz = np.array([p.frequency_hz for p in peaks[m]])
-        match = {}
-        if seen.size and measured_hz.size:
-            d = np.abs(np.log(measured_hz)[:, None] - np.log(model_pk)[None, :])
-            for j, k in enumerate(np.argmin(d, axis=1)):  # mutual nearest, within the window
-                if np.argmin(d[:, k]) == j and d[j, k] < math.log1p(0.5 * min(windows[int(seen[k])])) + 0.02:
-                    match[j] = int(seen[k])
-        candidates = {i: j for j, i in match.items()}
-        for r in extra:
-            s = max((abs(report.column(r)[i]) for i in candidates), default=0.0)
-            best_rot[r] = max(best_rot.get(r, 0.0), s)
-        for kind, feature, threshold in (("stiffness", "frequency_hz", _MIN_S_STIFFNESS),
-                                         ("damping", "peak_magnitude_m_n", _MIN_S_DAMPING)):
-            names = [n for n in problem.names if (kind == "damping") == ("damping" in n)]
-            table = {n: {i: abs(float(report.column(n, feature)[i])) for i in candidates} for n in names}
-            taken: set[int] = set()
-            for n in sorted(names, key=lambda n: -max(table[n].values(), default=0.0)):
-                options = [(s, i) for i, s in table[n].items() if i not in taken and s >= threshold]
-                if not options:
-                    continue
-                s, i = max(options)
-                taken.add(i)
-                uses.append(_Use(m, n, float(modes.frequency_hz[i]), float(modes.peak_frequency_hz[i]),
-                                 peaks[m][candidates[i]], (float(windows[i][0]), float(windows[i][1])),
-                                 float(report.column(n, feature)[i])))
-    used = {u.parameter for u in uses}
-    flags: list[dict[str, str]] = []
-    for n in problem.names:
-        if n not in used:
-            what = "natural frequency" if "stiffness" in n else "peak height"
-            flags.append({"parameter": n, "reason": (
-                f"not informed by the data: no resonance peak in the measured band(s) has a {what} "
-                f"sensitive to it (|d ln / d ln p| below "
-                f"{_MIN_S_STIFFNESS if 'stiffness' in n else _MIN_S_DAMPING}); returned unchanged")})
-    for r, s in best_rot.items():
-        flags.append({"parameter": r, "reason": (
-            f"held at the given value (as the seed paper does); its largest |d ln f / d ln k_r| on a measured "
-            f"peak is {s:.3g}")})
-    return uses, flags
-
-
 # ---------------------------------------------------------------------------- stages 3–5
 
 
@@ -369,7 +142,7 @@ def _vector(names: list[str], values: Mapping[str, float]) -> np.ndarray:
     return np.log([values[n] for n in names])
 
 
-def _fit(fun: Any, names: list[str], values: dict[str, float], problem: _Problem
+def _fit(fun: Any, names: list[str], values: dict[str, float], problem: Problem
          ) -> tuple[dict[str, float], Any]:
     """Least squares in θ = ln(p/p₀) within the bounds (p₀: the values on entry).
 
@@ -387,14 +160,14 @@ def _fit(fun: Any, names: list[str], values: dict[str, float], problem: _Problem
                         x_scale=_X_SCALE, max_nfev=100 * len(names))
     for n, x, a, b in zip(names, res.x, lo, hi, strict=True):
         if x - a < _AT_BOUND or b - x < _AT_BOUND:
-            raise _NotIdentifiable(
+            raise NotIdentifiable(
                 f"{n}: the fit ended at a bound of its search range [{problem.req.bounds[n][0]:.4g}, "
                 f"{problem.req.bounds[n][1]:.4g}]; the data do not support a value inside it (bad start or "
                 "bounds, or a model that cannot follow the data)")
     return at(res.x), res
 
 
-def _peak_residual(problem: _Problem, uses: list[_Use], magnitude: bool) -> Any:
+def _peak_residual(problem: Problem, uses: list[Use], magnitude: bool) -> Any:
     """ln(model/measured) of the peak frequency (or height) of each used mode."""
     windows = []
     for u in uses:  # the model's peak at the location stage and the measured one: both inside
@@ -420,7 +193,7 @@ def _peak_residual(problem: _Problem, uses: list[_Use], magnitude: bool) -> Any:
                                        np.array([windows[k][1] for k in idx]), points=81)
             if not found.all():
                 k = idx[int(np.flatnonzero(~found)[0])]
-                raise _NotIdentifiable(f"the model has no peak near {uses[k].peak.frequency_hz:.1f} Hz "
+                raise NotIdentifiable(f"the model has no peak near {uses[k].peak.frequency_hz:.1f} Hz "
                                        f"(measurement {m}) after fitting {uses[k].parameter}: the data do not "
                                        "follow the model there")
 
@@ -428,7 +201,7 @@ def _peak_residual(problem: _Problem, uses: list[_Use], magnitude: bool) -> Any:
     return fun
 
 
-def _window_lines(problem: _Problem, uses: list[_Use]) -> list[np.ndarray]:
+def _window_lines(problem: Problem, uses: list[Use]) -> list[np.ndarray]:
     """Indices of the measured lines near each used peak, per measurement."""
     out = []
     for m, meas in enumerate(problem.req.measurements):
@@ -443,7 +216,7 @@ def _window_lines(problem: _Problem, uses: list[_Use]) -> list[np.ndarray]:
     return out
 
 
-def _frf_residual(problem: _Problem, lines: list[np.ndarray], weighted: bool = True) -> Any:
+def _frf_residual(problem: Problem, lines: list[np.ndarray], weighted: bool = True) -> Any:
     """Complex log residual ``w·ln(h_model/h_measured)`` on the window lines, as reals."""
     data = [(m, problem.req.measurements[m], idx) for m, idx in enumerate(lines) if idx.size]
     weights = [coherence_weights(None if meas.coherence is None else meas.coherence[idx], idx.size)
@@ -460,7 +233,7 @@ def _frf_residual(problem: _Problem, lines: list[np.ndarray], weighted: bool = T
     return fun
 
 
-def _windows_hz(problem: _Problem, lines: list[np.ndarray]) -> list[list[list[float]]]:
+def _windows_hz(problem: Problem, lines: list[np.ndarray]) -> list[list[list[float]]]:
     out = []
     for meas, idx in zip(problem.req.measurements, lines, strict=True):
         runs = np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1) if idx.size else []
@@ -497,7 +270,7 @@ def identify_joints(req: IdentificationRequest) -> Identification:
     Identification
     """
     t0 = time.perf_counter()
-    problem = _Problem(req)
+    problem = Problem(req)
     start = _all_joint_values(req.base)
     band = (min(float(m.frequency_hz[0]) for m in req.measurements),
             max(float(m.frequency_hz[-1]) for m in req.measurements))
@@ -507,13 +280,13 @@ def identify_joints(req: IdentificationRequest) -> Identification:
     try:
         peaks = [measured_peaks(m.frequency_hz, m.h, s) for m, s in zip(req.measurements, noise, strict=True)]
         if not any(p.prominence >= PEAK_PROMINENCE for pk in peaks for p in pk):
-            raise _NotIdentifiable(f"no resonance peak stands out of the noise in the measured band "
+            raise NotIdentifiable(f"no resonance peak stands out of the noise in the measured band "
                                    f"{band[0]:g}–{band[1]:g} Hz, so no mode controlled by a joint is seen")
-        values, uses, flags = _locate(problem, peaks)
+        values, uses, flags = locate(problem, peaks)
         if not uses:
-            raise _NotIdentifiable(
+            raise NotIdentifiable(
                 f"the measured band {band[0]:g}–{band[1]:g} Hz holds no peak of a mode controlled by a joint "
-                f"parameter; measure across the joints' controlling modes ({_where_modes(problem, values)})")
+                f"parameter; measure across the joints' controlling modes ({where_modes(problem, values)})")
         k_uses = [u for u in uses if "stiffness" in u.parameter]
         c_uses = [u for u in uses if "damping" in u.parameter]
         k_names = list(dict.fromkeys(u.parameter for u in k_uses))
@@ -542,14 +315,14 @@ def identify_joints(req: IdentificationRequest) -> Identification:
         d = np.sqrt(np.diag(cov))
         result.correlation = (cov / np.outer(d, d)).tolist() if np.all(d > 0) else None
         if rms > req.max_residual_to_noise * noise_rel:
-            raise _NotIdentifiable(
+            raise NotIdentifiable(
                 f"the fitted model leaves an RMS residual of {100 * rms:.2g} % around the used peaks, "
                 f"{rms / noise_rel:.1f}× the measurement noise ({100 * noise_rel:.2g} %): the model cannot "
                 "reproduce the measurement there (bad start, or a model-form error the joints cannot absorb)")
         result.status = "identified"
         result.values = {**start, **{n: values[n] for n in names}}
         result.uncertainty = {n: float(values[n] * s) for n, s in zip(names, sigma, strict=True)}
-    except _NotIdentifiable as exc:
+    except NotIdentifiable as exc:
         result.status, result.detail = "not_identifiable", str(exc)
         result.values, result.uncertainty = dict(start), {}
     result.flags = flags
@@ -566,19 +339,6 @@ def _db(raw: np.ndarray, lines: list[np.ndarray]) -> float:
             k += 2 * idx.size
     db = 20.0 / math.log(10.0) * np.concatenate(real_parts)
     return float(np.sqrt(np.mean(db**2)))
-
-
-def _where_modes(problem: _Problem, values: dict[str, float]) -> str:
-    """Where the joint-controlled modes of the first configuration lie (for a detail message)."""
-    spec = problem.spec(0, values)
-    report = effect_analysis(spec, parameters=[n for n in problem.names if "stiffness" in n],
-                             band_hz=(float(spec.frequency_hz[0]) / 3, float(spec.frequency_hz[-1]) * 3))
-    parts = []
-    for n in report.parameters:
-        i = report.controlled_mode(n, min_participation=0.02)
-        if i is not None:
-            parts.append(f"{n}: {report.frequency_hz[i]:.0f} Hz")
-    return "; ".join(parts) or "none found within a factor 3 of the band"
 
 
 def identify(request: Mapping[str, Any]) -> dict[str, Any]:

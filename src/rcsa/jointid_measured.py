@@ -15,10 +15,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.signal import find_peaks
 
+from .effects import single_mode_fit
+
 __all__ = ["LENIENT_PROMINENCE", "PEAK_PROMINENCE", "MeasuredPeak", "coherence_weights", "measured_peaks",
            "peaks_ln_hz", "relative_noise"]
-
-_TWO_PI = 2.0 * np.pi
 
 #: A peak is prominent when it rises by this fraction of the largest |h| above its
 #: surroundings; peaks down to LENIENT_PROMINENCE are still listed, so that a borderline
@@ -98,22 +98,6 @@ def coherence_weights(coherence: np.ndarray | None, n: int) -> np.ndarray:
     return w / med if med > 0 else np.ones(n)
 
 
-def _levy(f: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, float] | None:
-    """Coefficients ``(a0, a1, c0, c1, c2)`` of ``(c0 + c1 s + c2 s²)/(s² + a1 s + a0)`` (s scaled)."""
-    s = 2j * np.pi * f
-    scale = float(np.abs(s).max())
-    sn = s / scale
-    cols = np.stack([h, h * sn, -np.ones_like(sn), -sn, -(sn**2)], axis=1)
-    rhs = -h * sn**2
-    a = np.concatenate([cols.real, cols.imag])
-    b = np.concatenate([rhs.real, rhs.imag])
-    col_scale = np.linalg.norm(a, axis=0)
-    x = np.linalg.lstsq(a / col_scale, b, rcond=None)[0] / col_scale
-    if x[0] <= 0 or x[1] <= 0:
-        return None
-    return x, scale
-
-
 def _fitted_peak(f: np.ndarray, h: np.ndarray, i: int, half_width_rel: float,
                  prominence: float = 1.0) -> MeasuredPeak | None:
     lo = int(np.searchsorted(f, f[i] * (1 - half_width_rel)))
@@ -121,7 +105,7 @@ def _fitted_peak(f: np.ndarray, h: np.ndarray, i: int, half_width_rel: float,
     lo, hi = min(lo, max(i - 5, 0)), max(hi, min(i + 6, f.size))
     if hi - lo < 7:
         return None
-    fit = _levy(f[lo:hi], h[lo:hi])
+    fit = single_mode_fit(f[lo:hi], h[lo:hi])
     if fit is None:
         return None
     x, scale = fit
