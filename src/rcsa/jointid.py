@@ -62,6 +62,8 @@ from .spec import AssemblySpec
 
 __all__ = ["Identification", "identify", "identify_joints"]
 
+#: Correlation of two fitted parameters above which both are reported as confounded.
+_MAX_CORRELATION = 0.98
 #: Half-width of the polishing window around a peak: 2 ζ, at least 0.5 %.
 _WINDOW_ZETAS = 2.0
 _MIN_WINDOW = 0.005
@@ -100,7 +102,7 @@ class Identification:
     noise_rel: float | None = None
     band_hz: tuple[float, float] = (math.nan, math.nan)
     windows_hz: list[list[list[float]]] = field(default_factory=list)
-    correlation: list[list[float]] | None = None
+    correlation: dict[str, Any] | None = None
     runtime_s: float = 0.0
 
     def to_dict(self) -> dict[str, Any]:
@@ -305,15 +307,23 @@ def identify_joints(req: IdentificationRequest) -> Identification:
         cov = s2 * np.linalg.pinv(res.jac.T @ res.jac)
         sigma = np.sqrt(np.clip(np.diag(cov), 0.0, None))
         rms = math.sqrt(2.0 * float(raw @ raw) / raw.size)  # per complex line
-        noise_lines = [relative_noise(m.h[idx]) if idx.size >= 12 else s
-                       for m, idx, s in zip(req.measurements, lines, noise, strict=True)]
+        # the noise where the fit is judged (the windows), else over the whole measurement
+        local = [relative_noise(m.h, idx) for m, idx in zip(req.measurements, lines, strict=True)]
+        noise_lines = [a if math.isfinite(a) and idx.size >= 12 else b
+                       for a, b, idx in zip(local, noise, lines, strict=True)]
         noise_rel = float(np.sqrt(np.nanmean(np.square(noise_lines))))
         result.residual_rel, result.noise_rel = rms, noise_rel
         result.residual_db = _db(raw, lines)
         result.windows_hz = _windows_hz(problem, lines)
         result.uses = uses
-        d = np.sqrt(np.diag(cov))
-        result.correlation = (cov / np.outer(d, d)).tolist() if np.all(d > 0) else None
+        if np.all(sigma > 0):
+            corr = cov / np.outer(sigma, sigma)
+            result.correlation = {"parameters": names, "matrix": corr.tolist()}
+            for i, j in zip(*np.triu_indices(len(names), 1), strict=True):
+                if abs(corr[i, j]) > _MAX_CORRELATION:
+                    flags.append({"parameter": names[i], "reason": (
+                        f"strongly correlated with {names[j]} (rho = {corr[i, j]:.3f}): the data constrain "
+                        "their combination better than each alone")})
         if rms > req.max_residual_to_noise * noise_rel:
             raise NotIdentifiable(
                 f"the fitted model leaves an RMS residual of {100 * rms:.2g} % around the used peaks, "

@@ -53,7 +53,7 @@ class MeasuredPeak:
     prominence: float = 1.0
 
 
-def relative_noise(h: np.ndarray) -> float:
+def relative_noise(h: np.ndarray, lines: np.ndarray | None = None) -> float:
     """Standard deviation of the relative complex noise of an FRF, from third differences.
 
     For ``h_k = s_k (1 + n_k)`` with white complex noise ``E|n|² = σ²`` and a smooth ``s``
@@ -64,19 +64,23 @@ def relative_noise(h: np.ndarray) -> float:
     Parameters
     ----------
     h : numpy.ndarray, shape (nfreq,), complex
-        Measured receptance on consecutive lines (nfreq ≥ 4).
+        Measured receptance on consecutive lines.
+    lines : numpy.ndarray of int, optional
+        Use only these (ascending) lines; differences are taken within each run of
+        consecutive lines, never across a gap.
 
     Returns
     -------
     float
-        σ (relative), e.g. 0.01 for 1 % noise.
+        σ (relative), e.g. 0.01 for 1 % noise; NaN without 4 consecutive lines.
     """
     h = np.asarray(h, dtype=complex)
-    if h.size < 4:
+    idx = np.arange(h.size) if lines is None else np.asarray(lines, dtype=int)
+    runs = np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1) if idx.size else []
+    ratios = [np.abs(np.diff(h[r], 3)) ** 2 / np.abs(h[r][1:-2]) ** 2 for r in runs if r.size >= 4]
+    if not ratios:
         return math.nan
-    d3 = np.diff(h, 3)
-    ratio = np.abs(d3) ** 2 / (np.abs(h[1:-2]) ** 2)
-    return float(np.sqrt(np.median(ratio) / (20.0 * math.log(2.0))))
+    return float(np.sqrt(np.median(np.concatenate(ratios)) / (20.0 * math.log(2.0))))
 
 
 def coherence_weights(coherence: np.ndarray | None, n: int) -> np.ndarray:
