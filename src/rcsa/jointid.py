@@ -9,16 +9,20 @@ paper does (Ertürk, Özgüven & Budak, IJMTM 47 (2007) 23–32), and flagged.
 
 Procedure (θ = ln of the parameters, so every step is scale-free):
 
-1. **Coarse match of the stiffnesses.** The prominent peaks of the model FRF are matched
-   to the measured ones (symmetric mean distance in ln f) on a geometric grid of the
-   joint stiffnesses, ±1 decade around the start (9 points each), then ±1/8 decade
-   (5 points each). A best point at the edge of the range means the start is too far off.
+1. **Coarse match of the stiffnesses.** The peaks of the model FRF are matched to the
+   measured ones (symmetric mean nearest distance in ln f; a side's prominent peaks, ≥ 3 %
+   of max |h|, look for any listed peak, ≥ 1 %, on the other) on a geometric grid of the
+   joint stiffnesses, ±1 decade around the start (9 points each, a weak pull toward the
+   start deciding along valleys), then ±1/8 decade (5 points each). A stiffness the peaks
+   do not see is held at its start; a best point at the edge of the range means the start
+   is too far off.
 2. **Which mode informs which parameter.** An effect analysis (:mod:`rcsa.effects`) at
    that point gives ``d ln f / d ln k`` and ``d ln|h|_peak / d ln c`` for every mode in the
    measured band; each parameter takes its most sensitive mode among those seen as peaks
    in the measurement (greedily, one mode per parameter, stiffnesses and dampings
    separately). A parameter whose best ``|S|`` is below 0.05 (stiffness) or 0.1 (damping)
-   is not informed by the data: it is returned unchanged and flagged.
+   is not informed by the data: it is returned unchanged and flagged, and the grid is
+   searched again without it. Stages 1–2 live in :mod:`rcsa.jointid_locate`.
 3. **Stiffness from the frequencies.** Levenberg–Marquardt (``scipy.optimize.least_squares``,
    trust-region reflective within the bounds) on ``ln f_peak,model − ln f_peak,measured`` of
    the stiffness modes.
@@ -36,6 +40,24 @@ band, no parameter informed, a best coarse match at the edge of the search range
 bound, a fitted parameter ending at a bound, a peak the model cannot follow, and an RMS fit
 residual more than ``max_residual_to_noise`` (default 4) times the noise, which is
 estimated from the measurement itself (:func:`rcsa.jointid_measured.relative_noise`).
+Then the joints are returned as given (never invented) and the uncertainties are null.
+
+On RA-1 with 1 % complex noise and a start 3× off (``tests/test_jointid.py``) the errors
+are ~1e-4 (stiffness) and ~1e-3 (damping), consistent with the stated uncertainties, in
+about 1 s for 4951 lines (``benchmarks/bench_jointid.py``).
+
+Examples
+--------
+>>> from rcsa.api import predict
+>>> from rcsa.reference import ra1
+>>> p = predict(ra1({"start_hz": 300.0, "stop_hz": 4500.0, "step_hz": 2.0}))
+>>> measurement = {"frequency_hz": p.frequency_hz.tolist(),
+...                "h": {"real": p.tool_point.h.real.tolist(), "imag": p.tool_point.h.imag.tolist()}}
+>>> start = ra1()
+>>> start["joints"]["holder_tool"].update(stiffness_n_m=3.0e7, damping_ns_m=90.0)
+>>> out = identify({"assembly": start, "measurements": [measurement]})
+>>> out["status"], round(out["joints"]["holder_tool"]["stiffness_n_m"] / 1.14e7, 4)
+('identified', 1.0)
 """
 
 from __future__ import annotations
