@@ -208,6 +208,15 @@ def test_figure_is_a_png(report):
     assert png[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+def test_band_without_modes_gives_an_empty_report_and_no_figure():
+    report = effect_analysis(ra1({"start_hz": 10.0, "stop_hz": 100.0, "step_hz": 1.0}))
+    assert report.frequency_hz.size == 0 and "no natural frequency" in report.notes[0]
+    assert report.to_dict()["modes"] == []
+    assert report.controls("holder_tool.stiffness_n_m") is None
+    with pytest.raises(InputError, match="no mode"):
+        effects_figure(report)
+
+
 def _app() -> typer.Typer:
     app = typer.Typer()
     effects_cmd.register(app)

@@ -684,6 +684,8 @@ def effect_analysis(assembly: Mapping[str, Any] | AssemblySpec, *, parameters: S
         for q in FEATURES:
             with np.errstate(invalid="ignore", divide="ignore"):
                 sens[q][:, j] = (np.log(runs[0].feature(q)) - np.log(runs[1].feature(q))) / (2 * relative_step)
+    if nm == 0:
+        notes.append(f"no natural frequency lies in the band {band[0]:g}–{band[1]:g} Hz: nothing to analyse")
     hidden = [f"{f:.1f}" for f, p in zip(base.frequency_hz, base.peak_magnitude_m_n, strict=True)
               if not math.isfinite(p)]
     if hidden:
@@ -770,6 +772,11 @@ def effects_figure(report: EffectReport, features: Sequence[str] = ("frequency_h
     -------
     matplotlib.figure.Figure
         Save it with :func:`rcsa.plots.save_figure`.
+
+    Raises
+    ------
+    InputError
+        When the report holds no mode or no parameter.
     """
     import matplotlib
     from matplotlib.colors import TwoSlopeNorm
@@ -777,6 +784,8 @@ def effects_figure(report: EffectReport, features: Sequence[str] = ("frequency_h
     from .plots import _freeze_layout, _new_figure
 
     nm, npar = report.frequency_hz.size, len(report.parameters)
+    if nm == 0 or npar == 0:
+        raise InputError("band_hz", "the report has no mode (or no parameter) to draw")
     fig = _new_figure(max(6.0, 0.5 * npar + 2.5), 2.2 + len(features) * max(1.6, 0.3 * nm + 0.8))
     axes = fig.subplots(len(features), 1, squeeze=False, sharex=True)[:, 0]
     part = report.tip_participation
