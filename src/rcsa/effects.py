@@ -68,6 +68,7 @@ __all__ = [
     "effects_report",
     "get_parameter",
     "mode_features",
+    "nominal_features",
     "parameter_names",
     "set_parameter",
     "single_mode_fit",
