@@ -28,7 +28,15 @@ from .spec import (
     parse_common,
 )
 
-__all__ = ["MAX_BATCH_COMBINATIONS", "predict", "predict_batch", "stability_lobes", "stability_lobes_result"]
+__all__ = [
+    "MAX_BATCH_COMBINATIONS",
+    "effects",
+    "identify",
+    "predict",
+    "predict_batch",
+    "stability_lobes",
+    "stability_lobes_result",
+]
 
 MAX_BATCH_COMBINATIONS = 10_000
 
@@ -239,3 +247,24 @@ def stability_lobes(request: Mapping[str, Any], *, store: Any = None,
         the extras of :class:`rcsa.lobes.LobeResult` (``frf_y_source``, minimum depth, …).
     """
     return stability_lobes_result(request, store=store, max_lines=max_lines).to_dict()
+
+
+def effects(request: Mapping[str, Any]) -> dict[str, Any]:
+    """Effect analysis: sensitivity of each mode to every bearing and joint parameter.
+
+    See :func:`rcsa.effects.effects` (request: an assembly, or ``{"assembly", "parameters",
+    "relative_step", "band_hz"}``).
+    """
+    from .effects import effects as _effects
+
+    return _effects(request)
+
+
+def identify(request: Mapping[str, Any]) -> dict[str, Any]:
+    """Joint identification from measured tool-point FRFs (``contract.md`` "Joint identification").
+
+    See :func:`rcsa.jointid.identify`.
+    """
+    from .jointid import identify as _identify
+
+    return _identify(request)
