@@ -7,13 +7,11 @@ unless ``--json``); a failure prints one line ``error: ...`` on stderr and exits
 
 from __future__ import annotations
 
-import json
 import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated, Any, TypeVar
 
-import numpy as np
 import typer
 
 from ..errors import InputError, RcsaError
@@ -36,15 +34,6 @@ StoreOpt = Annotated[
         "--store", help="Store directory (default: $RCSA_STORE, else ~/.local/share/rcsa/store)."
     ),
 ]
-_FORMATS = ("uff", "csv", "frf", "json", "tap")
-_BY_SUFFIX = {
-    ".uff": "uff",
-    ".unv": "uff",
-    ".csv": "csv",
-    ".tsv": "csv",
-    ".frf": "frf",
-    ".json": "json",
-}
 
 
 def _guard(fn: Callable[[], T]) -> T:
@@ -69,57 +58,23 @@ def _open_store(path: Path | None):
     return MeasurementStore(path)
 
 
-def _parse_roles(text: str | None) -> dict[str, tuple[int, int]] | None:
-    if not text:
-        return None
-    roles = {}
-    for item in text.split(","):
-        name, sep, nodes = item.partition("=")
-        rsp, sep2, ref = nodes.partition(":")
-        try:
-            if not (sep and sep2):
-                raise ValueError
-            roles[name.strip()] = (int(rsp), int(ref))
-        except ValueError:
-            raise InputError(
-                "roles", f"{item!r}: write NAME=RESPONSE_NODE:REFERENCE_NODE, e.g. h21=2:1"
-            ) from None
-    return roles
-
-
-def _parse_points(text: str | None) -> tuple[float, ...] | None:
-    if not text:
-        return None
+def _read_bytes(path: Path) -> bytes:
     try:
-        return tuple(float(x) for x in text.split(","))
-    except ValueError:
-        raise InputError(
-            "points_m", f"{text!r}: write comma-separated metres, e.g. 0,0.025"
-        ) from None
+        return path.read_bytes()
+    except FileNotFoundError:
+        raise InputError("file", f"{path}: no such file") from None
+    except OSError as e:
+        raise InputError("file", f"cannot read {path}: {e.strerror or e}") from None
 
 
-def _parse_artifact(text: str | None) -> Any:
-    if not text:
-        return None
+def _artifact_text(text: str | None) -> str | None:
+    """``--artifact``: JSON text, or ``@FILE.json`` whose content is the JSON."""
+    if not text or not text.startswith("@"):
+        return text
     try:
-        raw = Path(text[1:]).read_text(encoding="utf-8") if text.startswith("@") else text
-        return json.loads(raw)
-    except (OSError, ValueError) as e:
+        return Path(text[1:]).read_text(encoding="utf-8")
+    except OSError as e:
         raise InputError("artifact", f"give a JSON object or @FILE.json ({e})") from None
-
-
-def _summary(m: Any) -> dict[str, Any]:
-    from ..store.schema import frf_unit
-
-    out = {}
-    for name, v in m.frfs.items():
-        i = int(np.argmax(np.abs(v)))
-        out[name] = {
-            "units": frf_unit(name),
-            "max_magnitude": float(np.abs(v[i])),
-            "frequency_at_max_hz": float(m.frequency_hz[i]),
-        }
-    return out
 
 
 @store_app.command("import")
@@ -201,53 +156,31 @@ def import_(
     """Import a measurement file and print the new measurement's metadata JSON (with its id)."""
 
     def run() -> dict[str, Any]:
-        from ..importers import read_contract_json, read_csv, read_cutpro, read_tap, read_uff
-        from ..store import MeasurementMeta
+        from .. import measurement_api as M
 
-        form = (fmt or _BY_SUFFIX.get(file.suffix.lower(), "")).lower()
-        if form not in _FORMATS:
-            raise InputError(
-                "format", f"say which format {file.name} is: --format {'|'.join(_FORMATS)}"
-            )
-        common = {"drop_nonpositive": drop_nonpositive, "sensor_mass_kg": sensor_mass_kg}
-        given = {
-            "spindle_id": spindle_id, "direction": direction, "plane": plane, "kind": kind, "machine": machine,
-            "notes": notes, "points_m": _parse_points(points_m), "artifact": _parse_artifact(artifact),
-        }  # fmt: skip
-        if form == "json":
-            overrides = {k: (list(v) if isinstance(v, tuple) else v) for k, v in given.items()}
-            m = read_contract_json(file, overrides=overrides, **common)
-        else:
-            for key, flag in (
-                ("spindle_id", "--spindle-id"),
-                ("direction", "--direction"),
-                ("plane", "--plane"),
-            ):
-                if given[key] is None:
+        metadata = {"spindle_id": spindle_id, "direction": direction, "plane": plane, "kind": kind,
+                    "machine": machine, "notes": notes, "points_m": points_m,
+                    "artifact": _artifact_text(artifact)}
+        options = {"units": units, "columns": columns, "phase_unit": phase_unit, "roles": roles,
+                   "sensor_mass_kg": sensor_mass_kg, "force_unit": force_unit,
+                   "response_unit": response_unit, "sample_rate_hz": sample_rate_hz,
+                   "force_window_s": force_window_s, "exponential_tau_s": exponential_tau_s,
+                   "max_frequency_hz": max_frequency_hz}
+        form = M.format_from_name(file.name, fmt)
+        if form != "json":
+            for key in ("spindle_id", "direction", "plane"):
+                if metadata[key] is None:
+                    flag = "--" + key.replace("_", "-")
                     raise InputError(key, f"{flag} is required for --format {form}")
-            given["kind"] = given["kind"] or "direct_frf"
-            meta = MeasurementMeta(**{k: v for k, v in given.items() if v is not None})
-            if form == "csv":
-                m = read_csv(file, meta, units=units, columns=columns or "f,re,im", frequency_unit=frequency_unit,
-                             phase_unit=phase_unit, **common)  # fmt: skip
-            elif form == "frf":
-                m = read_cutpro(file, meta, units=units, **common)
-            elif form == "uff":
-                m = read_uff(file, meta, roles=_parse_roles(roles), units=units, **common)
-            else:
-                if drop_nonpositive:
-                    raise InputError(
-                        "drop_nonpositive",
-                        "a tap FFT always drops its 0 Hz bin; leave the flag out",
-                    )
-                m = read_tap(
-                    [file, *(tap or [])], meta, force_unit=force_unit, response_unit=response_unit,
-                    columns=columns or "t,force,response", sample_rate_hz=sample_rate_hz,
-                    force_window_s=force_window_s, exponential_tau_s=exponential_tau_s,
-                    max_frequency_hz=max_frequency_hz, sensor_mass_kg=sensor_mass_kg,
-                )  # fmt: skip
-        st = _open_store(store)
-        return st.info(st.put(m)).to_dict()
+        if drop_nonpositive:
+            options["drop_nonpositive"] = True
+        if form == "csv":
+            options["frequency_unit"] = frequency_unit
+        m = M.import_measurement(
+            _read_bytes(file), file_name=file.name, fmt=form, metadata=metadata, options=options,
+            extra_taps=[_read_bytes(t) for t in tap or ()],
+        )
+        return M.store_measurement(_open_store(store), m)
 
     write_json(_guard(run), None)
 
@@ -312,12 +245,9 @@ def show(
     """Print a measurement's metadata and a summary (peak of each FRF) as JSON."""
 
     def run() -> dict[str, Any]:
-        from ..importers import measurement_to_contract
+        from ..measurement_api import measurement_document
 
-        m = _open_store(store).get(measurement_id)
-        out = measurement_to_contract(m, include_data=data)
-        out["summary"] = _summary(m)
-        return out
+        return measurement_document(_open_store(store), measurement_id, include_data=data)
 
     write_json(_guard(run), None)
 
@@ -328,5 +258,6 @@ def delete(
     store: StoreOpt = None,
 ) -> None:
     """Delete a measurement (its id is never reused)."""
-    _guard(lambda: _open_store(store).delete(measurement_id))
-    write_json({"deleted": measurement_id}, None)
+    from ..measurement_api import delete_measurement
+
+    write_json(_guard(lambda: delete_measurement(_open_store(store), measurement_id)), None)

@@ -1,0 +1,91 @@
+"""Reading request bodies that may be JSON or a multipart form (uploads).
+
+Such routes read the body themselves (after authentication, so a refused write never
+touches it) and validate the JSON variant with the same pydantic models and the same 422
+problems as ordinary routes.
+"""
+
+from __future__ import annotations
+
+from typing import Any, TypeVar
+
+import orjson
+from fastapi import Request
+from fastapi.exceptions import RequestValidationError
+from pydantic import BaseModel, ValidationError
+from starlette.datastructures import FormData, UploadFile
+
+from rcsa.errors import InputError
+
+from .errors import ProblemError
+
+__all__ = ["form_text", "read_body", "read_upload", "require_json", "validate_json"]
+
+M = TypeVar("M", bound=BaseModel)
+
+_MAX_FORM_FIELDS = 200
+_MAX_FORM_FILES = 64
+
+
+async def read_body(request: Request) -> tuple[str, Any]:
+    """``("json", bytes)`` or ``("form", FormData)`` by Content-Type; 415 otherwise."""
+    ctype = request.headers.get("content-type", "")
+    media = ctype.split(";")[0].strip().lower()
+    if _is_json(media):
+        return "json", await request.body()
+    if media == "multipart/form-data":
+        form = await request.form(max_files=_MAX_FORM_FILES, max_fields=_MAX_FORM_FIELDS)
+        return "form", form
+    raise ProblemError(415, f"Content-Type {media or '(none)'} is not accepted here: send application/json, or "
+                            "multipart/form-data with the file and the metadata as form fields")
+
+
+def validate_json(model: type[M], data: bytes) -> M:
+    """Parse and validate a JSON body; errors become the usual 422 problem."""
+    try:
+        doc = orjson.loads(data)
+    except orjson.JSONDecodeError as exc:
+        raise RequestValidationError([{"type": "json_invalid", "loc": ("body", exc.pos), "msg": "JSON decode error",
+                                       "input": {}, "ctx": {"error": exc.msg}}]) from None
+    try:
+        return model.model_validate(doc)
+    except ValidationError as exc:
+        raise RequestValidationError([{**e, "loc": ("body", *e["loc"])} for e in exc.errors()]) from None
+
+
+async def read_upload(item: Any, field: str, limit_bytes: int) -> tuple[bytes, str]:
+    """The bytes and file name of an uploaded file field (413 above ``limit_bytes``)."""
+    if not isinstance(item, UploadFile):
+        raise InputError(field, "must be a file (multipart part with a filename)")
+    data = await item.read(limit_bytes + 1)
+    if len(data) > limit_bytes:
+        raise ProblemError(413, f"{field}: the file {item.filename!r} exceeds the upload limit of {limit_bytes} "
+                                "bytes (RCSA_MAX_UPLOAD_BYTES)", errors=[{"field": field, "detail": "too large"}])
+    return data, item.filename or ""
+
+
+def form_text(form: FormData, name: str) -> str | None:
+    """A text form field (None when absent); a file where text belongs is a 422."""
+    values = form.getlist(name)
+    if not values:
+        return None
+    if len(values) > 1:
+        raise InputError(name, "is given more than once")
+    if not isinstance(values[0], str):
+        raise InputError(name, "must be a text field, not a file")
+    return values[0]
+
+
+def _is_json(media: str) -> bool:
+    return media == "application/json" or (media.startswith("application/") and media.endswith("+json"))
+
+
+def require_json(request: Request) -> None:
+    """Dependency of JSON-body routes: any other Content-Type is a 415 problem."""
+    media = request.headers.get("content-type", "").split(";")[0].strip().lower()
+    if _is_json(media):
+        return
+    if not media and request.headers.get("content-length", "0") == "0" and "transfer-encoding" not in request.headers:
+        return  # no body at all: validation says what is required
+    raise ProblemError(415, f"Content-Type {media or '(none)'} is not accepted here: send the body as "
+                            "application/json")

@@ -1,0 +1,255 @@
+"""RFC 9457 problem details: every error of the service as ``application/problem+json``.
+
+A problem has ``type`` (a URN naming the kind of problem), ``title``, ``status``,
+``detail`` (what went wrong and what to do, for a person), ``instance`` (the request path),
+``request_id`` (the ``X-Request-ID`` of the request, to find its log lines) and, for invalid
+input, ``errors``: ``[{"field": "holder.segments[2].length_m", "detail": "..."}]`` with the
+offending field as a dotted path into the request (form fields and query parameters by
+name).
+
+Mapping: pydantic's ``RequestValidationError`` and :class:`rcsa.errors.InputError` → 422;
+:class:`rcsa.errors.NotFoundError` → 404; :class:`rcsa.errors.StoreError` → 503; HTTP
+errors keep their status; anything else is a bug → 500 with a generic detail, its traceback
+logged with the request id (see :mod:`service.middleware`).
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import orjson
+from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
+from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.responses import Response
+
+from rcsa.errors import InputError, NotFoundError, StoreError
+
+__all__ = [
+    "PROBLEM_MEDIA_TYPE",
+    "BodyTooLarge",
+    "ProblemError",
+    "install_error_handlers",
+    "problem_body",
+    "problem_response",
+]
+
+log = logging.getLogger("service.errors")
+
+PROBLEM_MEDIA_TYPE = "application/problem+json"
+TYPE_PREFIX = "urn:rcsa:problem:"
+
+_BY_STATUS = {
+    400: ("bad-request", "Bad request"),
+    401: ("unauthorized", "API key required"),
+    403: ("forbidden", "Not allowed with this API key"),
+    404: ("not-found", "Not found"),
+    405: ("method-not-allowed", "Method not allowed"),
+    406: ("not-acceptable", "Not acceptable"),
+    409: ("conflict", "Conflict"),
+    413: ("content-too-large", "Request too large"),
+    415: ("unsupported-media-type", "Unsupported media type"),
+    422: ("invalid-input", "Invalid input"),
+    500: ("internal-error", "Internal server error"),
+    501: ("not-implemented", "Not implemented"),
+    503: ("unavailable", "Service unavailable"),
+}
+
+
+class ProblemError(Exception):
+    """Raise to answer with a problem document.
+
+    Parameters
+    ----------
+    status : int
+        HTTP status.
+    detail : str
+        What went wrong and what to do about it.
+    slug : str, optional
+        Kind of problem (``type`` is ``urn:rcsa:problem:<slug>``); default from the status.
+    title : str, optional
+    errors : sequence of dict, optional
+        ``{"field", "detail"}`` per offending field.
+    headers : mapping, optional
+        Extra response headers (``WWW-Authenticate``, ``Retry-After``, ``Location``).
+    extra : mapping, optional
+        Extension members.
+    """
+
+    def __init__(self, status: int, detail: str, *, slug: str | None = None, title: str | None = None,
+                 errors: Sequence[Mapping[str, Any]] | None = None, headers: Mapping[str, str] | None = None,
+                 extra: Mapping[str, Any] | None = None) -> None:
+        super().__init__(detail)
+        default_slug, default_title = _BY_STATUS.get(status, ("http-error", "Error"))
+        self.status = status
+        self.detail = detail
+        self.slug = slug or default_slug
+        self.title = title or default_title
+        self.errors = list(errors) if errors else None
+        self.headers = dict(headers or {})
+        self.extra = dict(extra or {})
+
+
+class BodyTooLarge(StarletteHTTPException):
+    """The request body exceeds the configured limit (raised while it is being read)."""
+
+    def __init__(self, limit_bytes: int) -> None:
+        super().__init__(413, f"the request body exceeds the limit of {limit_bytes} bytes "
+                              f"({limit_bytes / 2**20:g} MiB); send less (e.g. split a batch) or ask "
+                              "the operator to raise RCSA_MAX_BODY_BYTES")
+        self.limit_bytes = limit_bytes
+
+
+def problem_body(status: int, detail: str, *, slug: str | None = None, title: str | None = None,
+                 instance: str | None = None, request_id: str | None = None,
+                 errors: Sequence[Mapping[str, Any]] | None = None,
+                 extra: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """The problem document (a dict) for these members."""
+    default_slug, default_title = _BY_STATUS.get(status, ("http-error", "Error"))
+    body: dict[str, Any] = {"type": TYPE_PREFIX + (slug or default_slug), "title": title or default_title,
+                            "status": status, "detail": detail}
+    if instance is not None:
+        body["instance"] = instance
+    if request_id is not None:
+        body["request_id"] = request_id
+    if errors:
+        body["errors"] = [dict(e) for e in errors]
+    if extra:
+        body.update({k: v for k, v in extra.items() if k not in body})
+    return body
+
+
+def problem_response(request: Request | None, status: int, detail: str, *,
+                     headers: Mapping[str, str] | None = None, **members: Any) -> Response:
+    """A ``Response`` carrying a problem document for ``request``."""
+    instance = request_id = None
+    if request is not None:
+        instance = request.url.path
+        request_id = request.scope.get("state", {}).get("request_id")
+    body = problem_body(status, detail, instance=instance, request_id=request_id, **members)
+    return Response(orjson.dumps(body), status_code=status, media_type=PROBLEM_MEDIA_TYPE,
+                    headers=dict(headers or {}))
+
+
+# --------------------------------------------------------------------------- field paths
+
+#: What pydantic puts in error locations for the members of a union (not field names).
+_PYDANTIC_TAGS = ("literal[", "function-", "json-or-python[", "lax-or-strict[", "constrained-", "list[", "dict[",
+                  "tagged-union[", "nullable[", "union[", "model-fields[")
+_PYDANTIC_TYPES = frozenset({"float", "int", "str", "bool", "none", "bytes", "list", "dict"})
+
+
+def field_path(loc: Sequence[Any]) -> str:
+    """Dotted path of a pydantic error location, without the ``body``/``query`` prefix and
+    without the names pydantic gives union members."""
+    from .schemas import UNION_TAGS
+
+    parts: list[str] = []
+    for i, item in enumerate(loc):
+        if i == 0 and item in ("body", "query", "path", "header", "cookie", "form"):
+            continue
+        if isinstance(item, int):
+            if parts:
+                parts[-1] += f"[{item}]"
+            else:
+                parts.append(f"[{item}]")
+            continue
+        text = str(item)
+        if text in UNION_TAGS or text.startswith(_PYDANTIC_TAGS) or text in _PYDANTIC_TYPES:
+            continue
+        parts.append(text)
+    return ".".join(parts)
+
+
+def _validation_errors(exc: RequestValidationError) -> list[dict[str, str]]:
+    out: list[dict[str, str]] = []
+    seen: set[tuple[str, str]] = set()
+    for err in exc.errors():
+        loc = tuple(err.get("loc", ()))
+        kind = err.get("type", "")
+        if kind == "json_invalid":
+            pos = loc[1] if len(loc) > 1 else "?"
+            item = ("", f"the body is not valid JSON: {err.get('ctx', {}).get('error', 'decode error')} "
+                        f"at character {pos}")
+        else:
+            field = field_path(loc)
+            if kind == "unknown_field":
+                field = ".".join(p for p in (field, str(err.get("ctx", {}).get("field", ""))) if p)
+            msg = str(err.get("msg", "invalid"))
+            if kind == "extra_forbidden":
+                msg = "unknown field; check its spelling against the schema at /docs"
+            elif kind == "missing":
+                msg = "is required"
+            item = (field, msg)
+        if item not in seen:
+            seen.add(item)
+            out.append({"field": item[0], "detail": item[1]})
+    return out
+
+
+# --------------------------------------------------------------------------- handlers
+
+def _detail_of(errors: Sequence[Mapping[str, str]]) -> str:
+    first = errors[0]
+    text = f"{first['field']}: {first['detail']}" if first["field"] else first["detail"]
+    if len(errors) > 1:
+        text += f" (and {len(errors) - 1} more problem{'s' if len(errors) > 2 else ''}, listed in errors)"
+    return text
+
+
+async def _on_validation(request: Request, exc: RequestValidationError) -> Response:
+    errors = _validation_errors(exc) or [{"field": "", "detail": "invalid request"}]
+    return problem_response(request, 422, _detail_of(errors), errors=errors)
+
+
+async def _on_input(request: Request, exc: InputError) -> Response:
+    errors = [{"field": exc.field, "detail": exc.rule}]
+    return problem_response(request, 422, _detail_of(errors), errors=errors)
+
+
+_NOT_FOUND_HINTS = {
+    "measurement": "list the stored measurements with GET /v1/measurements",
+    "job": "job ids come from a 202 answer's Location header; finished jobs are purged after a while",
+    "result of job": "the job has not succeeded; GET /v1/jobs/{id} shows its status",
+}
+
+
+async def _on_not_found(request: Request, exc: NotFoundError) -> Response:
+    hint = _NOT_FOUND_HINTS.get(exc.what, "check the id")
+    return problem_response(request, 404, f"{exc}; {hint}", extra={"resource": exc.what, "id": exc.ident})
+
+
+async def _on_store(request: Request, exc: StoreError) -> Response:
+    log.error("store error: %s", exc)
+    return problem_response(request, 503, f"the measurement store is unavailable: {exc}",
+                            slug="store-unavailable", headers={"Retry-After": "5"})
+
+
+async def _on_problem(request: Request, exc: ProblemError) -> Response:
+    return problem_response(request, exc.status, exc.detail, slug=exc.slug, title=exc.title,
+                            errors=exc.errors, extra=exc.extra, headers=exc.headers)
+
+
+_HTTP_DETAILS = {
+    404: "no such endpoint; the API is described at /docs and /openapi.json",
+    405: "this endpoint does not accept that method; see /docs",
+}
+
+
+async def _on_http(request: Request, exc: StarletteHTTPException) -> Response:
+    detail = exc.detail if isinstance(exc.detail, str) else str(exc.detail)
+    if exc.status_code in _HTTP_DETAILS and detail in ("Not Found", "Method Not Allowed"):
+        detail = _HTTP_DETAILS[exc.status_code]
+    return problem_response(request, exc.status_code, detail, headers=getattr(exc, "headers", None))
+
+
+def install_error_handlers(app: FastAPI) -> None:
+    """Register the problem handlers on ``app`` (the 500 one lives in the middleware)."""
+    app.add_exception_handler(RequestValidationError, _on_validation)
+    app.add_exception_handler(InputError, _on_input)
+    app.add_exception_handler(NotFoundError, _on_not_found)
+    app.add_exception_handler(StoreError, _on_store)
+    app.add_exception_handler(ProblemError, _on_problem)
+    app.add_exception_handler(StarletteHTTPException, _on_http)

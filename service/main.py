@@ -1,0 +1,148 @@
+"""The REST service: ``create_app(settings=None)`` builds the FastAPI application.
+
+Run it with ``rcsa serve`` (uvicorn, ``service.main:create_app --factory``), or
+``uvicorn --factory service.main:create_app --workers 2``: every process opens the same
+store safely (immutable measurement files under a write lock, SQLite in WAL mode for the
+catalogue and the jobs), seeds a fresh store once with the demo measurement, and runs a
+job-runner thread that claims queued jobs atomically.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+from pathlib import Path
+from typing import Any
+
+from fastapi import FastAPI
+from fastapi.concurrency import run_in_threadpool
+from fastapi.openapi.utils import get_openapi
+from pydantic.json_schema import models_json_schema
+from starlette.middleware.gzip import GZipMiddleware
+
+from rcsa import __version__
+from rcsa.errors import RcsaError
+from rcsa.jobs import Job, JobRunner, JobStore
+from rcsa.keys import KeyFile, KeyRing, parse_key_list
+from rcsa.measurement_api import seed_demo
+from rcsa.store import MeasurementStore
+
+from . import schemas
+from .config import Settings
+from .errors import install_error_handlers
+from .jobs import handlers
+from .metrics import Metrics
+from .middleware import RequestContextMiddleware, configure_logging
+from .routes import ROUTERS
+from .state import AppState, CachedMeasurements
+
+__all__ = ["create_app"]
+
+log = logging.getLogger("service")
+
+DESCRIPTION = """\
+Tool-point FRFs of machine-tool spindle–holder–tool assemblies by exact Timoshenko receptance
+coupling, on modelled or measured (hybrid) spindles; batches, Fusion tool libraries, stored
+measurements and stability lobes.
+
+* SI units on the wire; every numeric field name ends in its unit (`_m`, `_hz`, `_n_m`, ...).
+  Complex arrays are `{"real": [...], "imag": [...]}`.
+* Errors are `application/problem+json` (RFC 9457) with a `detail` to act on and `errors[]`
+  naming each offending field.
+* Auth: header `X-API-Key`. Writes (measurement upload and delete) need a key with scope
+  `write` (created on the server with `rcsa keys create --scope write`); reads and
+  computations are anonymous unless `RCSA_ANONYMOUS_READ=false`.
+* Large batches and libraries answer `202 Accepted` with `Location: /v1/jobs/{id}`; poll it,
+  then GET its `result_url`. `Prefer: respond-async` always makes a job.
+* Every response carries `X-Request-ID` (yours if you sent one).
+"""
+
+#: Models used by routes that read their body themselves (documented via openapi_extra).
+_EXTRA_MODELS = (schemas.Problem, schemas.MeasurementUpload, schemas.LibraryPredictionRequest,
+                 schemas.BatchResult, schemas.LibraryResult)
+
+
+def _startup(settings: Settings, metrics: Metrics) -> AppState:
+    """Open the store (creating it), seed it once, and start the job runners."""
+    store = MeasurementStore(settings.store)
+    if settings.seed_demo:
+        try:
+            seeded = seed_demo(store)
+            if seeded:
+                log.info("seeded the empty store %s with the demo measurement %s (spindle demo-ra1)",
+                         store.path, seeded)
+        except (RcsaError, OSError) as exc:
+            log.warning("could not seed the store with the demo measurement: %s", exc)
+    keys = KeyRing(parse_key_list(settings.api_keys.get_secret_value()), KeyFile.in_store(store.path))
+    jobs = JobStore(Path(store.path) / "jobs", stale_after_s=settings.job_stale_s,
+                    max_attempts=settings.job_max_attempts)
+    purged = jobs.purge(settings.job_retention_s)
+    if purged:
+        log.info("purged %d finished jobs older than %g s", purged, settings.job_retention_s)
+    state = AppState(settings=settings, store=store, reader=CachedMeasurements(store, settings.measurement_cache),
+                     keys=keys, jobs=jobs, metrics=metrics, runners=[])
+
+    def finished(job: Job, seconds: float) -> None:
+        metrics.jobs.labels(job.kind, job.status).inc()
+
+    table = handlers(state)
+    for _ in range(settings.job_workers):
+        runner = JobRunner(jobs, table, poll_s=settings.job_poll_s, heartbeat_s=settings.job_heartbeat_s,
+                           on_finish=finished)
+        runner.start()
+        state.runners.append(runner)
+    if not keys.configured:
+        log.info("no API keys configured: writes are refused until one is created (rcsa keys create --scope write)")
+    return state
+
+
+def create_app(settings: Settings | None = None) -> FastAPI:
+    """Build the service.
+
+    Parameters
+    ----------
+    settings : Settings, optional
+        Default: read from ``RCSA_*`` environment variables.
+
+    Returns
+    -------
+    fastapi.FastAPI
+    """
+    settings = settings if settings is not None else Settings()
+    metrics = Metrics()
+    configure_logging(settings.access_log)
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        state = await run_in_threadpool(_startup, settings, metrics)
+        app.state.rcsa = state
+        try:
+            yield
+        finally:
+            for runner in state.runners:
+                await run_in_threadpool(runner.stop, 30.0)
+
+    app = FastAPI(title="rcsa — tool-point FRF service", version=__version__, description=DESCRIPTION,
+                  lifespan=lifespan, separate_input_output_schemas=False)
+    install_error_handlers(app)
+    for router in ROUTERS:
+        app.include_router(router)
+    app.add_middleware(GZipMiddleware, minimum_size=settings.gzip_min_bytes, compresslevel=settings.gzip_level)
+    app.add_middleware(RequestContextMiddleware, metrics=metrics, max_body_bytes=settings.max_body_bytes,
+                       access=settings.access_log)
+
+    def openapi() -> dict[str, Any]:
+        if app.openapi_schema is None:
+            doc = get_openapi(title=app.title, version=app.version, description=app.description, routes=app.routes,
+                              separate_input_output_schemas=False)
+            _, defs = models_json_schema([(m, "validation") for m in _EXTRA_MODELS],
+                                         ref_template="#/components/schemas/{model}")
+            components = doc.setdefault("components", {}).setdefault("schemas", {})
+            for name, schema in defs.get("$defs", {}).items():
+                components.setdefault(name, schema)
+            app.openapi_schema = doc
+        return app.openapi_schema
+
+    app.openapi = openapi  # type: ignore[method-assign]
+    return app

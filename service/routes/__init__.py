@@ -1,0 +1,14 @@
+"""HTTP routes: each validates, converts, calls one :mod:`rcsa` function and answers.
+
+Every router carries its full path prefix (``/v1/...``) so that a route's path is its
+template in metrics and logs.
+"""
+
+from __future__ import annotations
+
+from . import analyses, batches, health, libraries, lobes, measurements, predictions
+
+__all__ = ["ROUTERS"]
+
+ROUTERS = (health.router, predictions.router, batches.router, measurements.router, libraries.router,
+           lobes.router, analyses.router)

@@ -1,0 +1,61 @@
+"""Diagnoses, joint identifications and effect analyses: thin doors onto ``rcsa.api``.
+
+Each route passes the JSON body to ``rcsa.api.diagnose`` / ``identify`` / ``effects``. When
+the installed rcsa does not provide the function yet the route answers ``501``.
+"""
+
+from __future__ import annotations
+
+import inspect
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Body, Depends
+from starlette.responses import Response
+
+from rcsa import api
+
+from ..bodies import require_json
+from ..deps import StateDep
+from ..errors import ProblemError
+from ..responses import json_response, problems
+from ..security import ReadAccess
+
+router = APIRouter(prefix="/v1", tags=["analyses"])
+
+_OPERATIONS = {
+    "diagnose": ("/diagnoses", "Sim-to-real gap diagnosis (contract \"Diagnosis\")"),
+    "identify": ("/identifications", "Joint identification (contract \"Joint identification\")"),
+    "effects": ("/effects", "Sensitivities of each mode to the model's parameters"),
+}
+_Request = Annotated[dict[str, Any], Body(description="The request document (see the contract).")]
+
+
+def _call(name: str, body: dict[str, Any], state: Any) -> Any:
+    fn = getattr(api, name, None)
+    if fn is None:
+        raise ProblemError(501, f"this version of rcsa has no rcsa.api.{name}; upgrade the service")
+    kwargs: dict[str, Any] = {}
+    params = inspect.signature(fn).parameters
+    if "store" in params:
+        kwargs["store"] = state.reader
+    if "max_lines" in params:
+        kwargs["max_lines"] = state.settings.max_frequency_lines
+    with state.metrics.timed(name):
+        result = fn(body, **kwargs)
+    return result.to_dict() if hasattr(result, "to_dict") else result
+
+
+def _route(name: str, path: str, summary: str) -> None:
+    def endpoint(state: StateDep, _: ReadAccess,
+                 body: _Request) -> Response:
+        return json_response(_call(name, body, state))
+
+    endpoint.__name__ = f"post_{name}"
+    endpoint.__doc__ = f"{summary}: the body goes to ``rcsa.api.{name}``; 501 while it is not available."
+    router.add_api_route(path, endpoint, methods=["POST"], summary=summary, dependencies=[Depends(require_json)],
+                         responses={200: {"description": "The analysis result (see the contract)."},
+                                    **problems(401, 413, 415, 422, 501)})
+
+
+for _name, (_path, _summary) in _OPERATIONS.items():
+    _route(_name, _path, _summary)

@@ -1,0 +1,83 @@
+"""Batches of combinations on one spindle, and the jobs that run the large ones.
+
+``POST /v1/tool-point-frf/batch`` answers ``200`` with every result when the batch is small,
+or ``202 Accepted`` (``Location: /v1/jobs/{id}``, ``Retry-After``) when it has more than
+``RCSA_ASYNC_BATCH_THRESHOLD`` combinations or the request says ``Prefer: respond-async``.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import APIRouter, Depends, Header, Path
+from starlette.responses import FileResponse, Response
+
+from rcsa import api, library_api
+
+from ..bodies import require_json
+from ..deps import StateDep
+from ..errors import ProblemError
+from ..jobs import accepted, job_document, wants_async
+from ..responses import json_response, problems
+from ..schemas import BatchRequest, BatchResult, JobStatus
+from ..security import ReadAccess
+
+router = APIRouter(prefix="/v1", tags=["batches and jobs"])
+
+JobId = Annotated[str, Path(description="Job id from the Location header of a 202 answer.",
+                            examples=["j-0123456789abcdef0123456789abcdef"])]
+PreferHeader = Annotated[str | None, Header(description="respond-async: always answer 202 with a job.")]
+
+
+@router.post("/tool-point-frf/batch", dependencies=[Depends(require_json)], response_model=BatchResult, responses={
+    202: {"model": JobStatus, "description": "Queued as a job; poll Location."}, **problems(401, 413, 415, 422)},
+    summary="Tool-point FRFs of many combinations")
+def predict_batch(body: BatchRequest, state: StateDep, _: ReadAccess, prefer: PreferHeader = None) -> Response:
+    """One result per combination, in input order, each with its own ``status``.
+
+    The spindle (and each distinct spindle + holder) is condensed once and reused. A bad
+    combination gets ``status: error`` with the offending field and never fails the others.
+    """
+    s = state.settings
+    request = body.to_request()
+    n = len(request["combinations"])
+    if n > s.max_batch_combinations:
+        raise ProblemError(422, f"combinations: at most {s.max_batch_combinations} per request, got {n}; split "
+                                "the batch", errors=[{"field": "combinations", "detail": f"at most "
+                                                     f"{s.max_batch_combinations} combinations"}])
+    asked = wants_async(prefer)
+    if asked or n > s.async_batch_threshold:
+        library_api.check_common(request, store=state.reader, max_lines=s.max_frequency_lines)
+        return accepted(state, state.jobs.submit("batch", request), preference_applied=asked)
+    with state.metrics.timed("batch"):
+        out = api.predict_batch(request, store=state.reader, max_lines=s.max_frequency_lines,
+                                max_combinations=s.max_batch_combinations, arrays="numpy")
+    state.metrics.frfs.labels("batch").inc(out["summary"]["ok"])
+    return json_response(out)
+
+
+@router.get("/jobs/{job_id}", response_model=JobStatus, responses=problems(401, 404), summary="Job status")
+def get_job(job_id: JobId, state: StateDep, _: ReadAccess) -> Response:
+    """Status and progress of a job; ``result_url`` once it has succeeded."""
+    job = state.jobs.get(job_id)
+    headers = {} if job.finished else {"Retry-After": str(state.settings.retry_after_s)}
+    return json_response(job_document(job), headers=headers)
+
+
+@router.get("/jobs/{job_id}/result", response_class=FileResponse, responses={
+    200: {"description": "The job's result: a batch result (BatchResult) or a library result (LibraryResult).",
+          "content": {"application/json": {"schema": {"oneOf": [{"$ref": "#/components/schemas/BatchResult"},
+                                                                {"$ref": "#/components/schemas/LibraryResult"}]}}}},
+    **problems(401, 404, 409)}, summary="Result of a finished job")
+def get_job_result(job_id: JobId, state: StateDep, _: ReadAccess) -> Response:
+    """The result document of a succeeded job (``409`` while it runs or when it failed)."""
+    job = state.jobs.get(job_id)
+    if job.status == "succeeded":
+        return FileResponse(state.jobs.result_path(job_id), media_type="application/json")
+    if job.status == "failed":
+        error = job.error or {}
+        raise ProblemError(409, f"job {job_id} failed: {error.get('detail', 'see its status')}", slug="job-failed",
+                           title="Job failed", errors=error.get("errors"), extra={"job": job_document(job)})
+    raise ProblemError(409, f"job {job_id} is {job.status} ({job.progress:.0%} done); poll /v1/jobs/{job_id}",
+                       slug="job-not-finished", title="Job not finished",
+                       headers={"Retry-After": str(state.settings.retry_after_s), "Location": f"/v1/jobs/{job_id}"})

@@ -1,0 +1,27 @@
+"""``POST /v1/stability-lobes``: stability lobes from inline FRFs or an assembly."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter, Depends
+from starlette.responses import Response
+
+from rcsa import api
+
+from ..bodies import require_json
+from ..deps import StateDep
+from ..responses import json_response, problems
+from ..schemas import LobesRequest, LobesResult
+from ..security import ReadAccess
+
+router = APIRouter(prefix="/v1", tags=["stability lobes"])
+
+
+@router.post("/stability-lobes", dependencies=[Depends(require_json)], response_model=LobesResult, responses=problems(401, 413, 415, 422),
+             summary="Stability lobes (zero-order Altintas–Budak)")
+def stability_lobes(body: LobesRequest, state: StateDep, _: ReadAccess) -> Response:
+    """Axial depth limit (m) versus spindle speed (rpm), its chatter frequency (Hz) and every
+    lobe, from inline tool-point FRFs (``frf_x``, optional ``frf_y``) or an ``assembly``."""
+    with state.metrics.timed("lobes"):
+        result = api.stability_lobes(body.model_dump(exclude_unset=True), store=state.reader,
+                                     max_lines=state.settings.max_frequency_lines)
+    return json_response(result)

@@ -1,0 +1,32 @@
+"""``POST /v1/tool-point-frf``: one assembly → its tool-point FRF."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter, Depends
+from starlette.responses import Response
+
+from rcsa import api
+
+from ..bodies import require_json
+from ..deps import StateDep
+from ..responses import json_response, problems
+from ..schemas import Assembly, PredictionResult
+from ..security import ReadAccess
+
+router = APIRouter(prefix="/v1", tags=["predictions"])
+
+
+@router.post("/tool-point-frf", dependencies=[Depends(require_json)], response_model=PredictionResult, responses=problems(401, 413, 415, 422),
+             summary="Tool-point FRF of one assembly")
+def predict_tool_point_frf(body: Assembly, state: StateDep, _: ReadAccess) -> Response:
+    """Predict the tool-point receptance of a spindle–holder–tool assembly (contract "Assembly").
+
+    The spindle is modelled (segments + bearings) or a stored measurement
+    (``{"measurement_id": ...}``, hybrid). Lengths in m, frequencies in Hz; the result gives
+    ``h, l, n, p`` in m/N, 1/N, rad/N, rad/(N·m).
+    """
+    with state.metrics.timed("predict"):
+        result = api.predict(body.model_dump(exclude_unset=True), store=state.reader,
+                             max_lines=state.settings.max_frequency_lines)
+    state.metrics.frfs.labels("predict").inc()
+    return json_response(result.to_dict(arrays="numpy"))

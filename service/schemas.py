@@ -1,0 +1,627 @@
+"""Request and response models of the REST API (pydantic), field names as in ``contract.md``.
+
+SI units everywhere; every numeric field name ends in its unit and every description says
+it. Request models forbid unknown fields and refuse strings where numbers belong (strict
+mode). They check types and simple bounds; every physical rule (stickout within the
+overall length, the shank fits the bore, ...) is checked by :mod:`rcsa`, which names the
+field in the same way. Response models allow extra fields (the contract lets results grow).
+
+A batch's combinations are validated one by one by :mod:`rcsa` (so that one bad
+combination never fails the others): their schema is documented here, but an item that does
+not fit it is passed on as it came and reported in its own result.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal
+
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Discriminator,
+    Field,
+    Tag,
+    ValidationError,
+    ValidatorFunctionWrapHandler,
+    WrapValidator,
+    model_validator,
+)
+
+from rcsa.reference import ra1
+
+__all__ = [
+    "Assembly",
+    "BatchRequest",
+    "BatchResult",
+    "JobStatus",
+    "LibraryPredictionRequest",
+    "LibraryResult",
+    "LobesRequest",
+    "LobesResult",
+    "MeasurementDocument",
+    "MeasurementInfo",
+    "MeasurementPage",
+    "MeasurementUpload",
+    "PredictionResult",
+    "Problem",
+]
+
+#: Names pydantic puts in error locations for the members of the unions below.
+UNION_TAGS = frozenset({"frequency-range", "frequency-values", "spindle-analytical", "spindle-measured"})
+
+_EXAMPLE_GRID = {"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 5.0}
+_RA1 = ra1(_EXAMPLE_GRID)
+
+
+class _Request(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
+
+
+class _Response(BaseModel):
+    model_config = ConfigDict(extra="allow")
+
+
+# --------------------------------------------------------------------------- assembly
+
+class FrequencyRange(_Request):
+    """Evenly spaced lines from ``start_hz`` to ``stop_hz`` (included)."""
+
+    start_hz: float = Field(gt=0, description="First frequency line, Hz (> 0: 0 Hz is singular).")
+    stop_hz: float = Field(gt=0, description="Last frequency line (included), Hz; >= start_hz.")
+    step_hz: float = Field(gt=0, description="Spacing of the lines, Hz.")
+
+
+class FrequencyValues(_Request):
+    """Explicit frequency lines."""
+
+    values_hz: list[float] = Field(min_length=1, description="Frequency lines, Hz: strictly increasing, > 0.")
+
+
+def _frequency_tag(value: Any) -> str | None:
+    if isinstance(value, dict):
+        return "frequency-values" if "values_hz" in value else "frequency-range"
+    if isinstance(value, FrequencyValues):
+        return "frequency-values"
+    return "frequency-range" if isinstance(value, FrequencyRange) else None
+
+
+Frequency = Annotated[
+    Annotated[FrequencyRange, Tag("frequency-range")] | Annotated[FrequencyValues, Tag("frequency-values")],
+    Discriminator(_frequency_tag, custom_error_type="frequency",
+                  custom_error_message="must be an object {start_hz, stop_hz, step_hz} or {values_hz}"),
+    Field(description="Frequency grid (Hz): {start_hz, stop_hz, step_hz} (stop included) or {values_hz}. "
+                      "The number of lines is limited (RCSA_MAX_FREQUENCY_LINES).",
+          examples=[_EXAMPLE_GRID]),
+]
+
+
+class Material(_Request):
+    """Material properties; a built-in (steel, carbide) may be overridden field by field."""
+
+    youngs_modulus_pa: float | None = Field(None, gt=0, description="Young's modulus E, Pa.")
+    poisson_ratio: float | None = Field(None, gt=-1, lt=0.5, description="Poisson's ratio ν (dimensionless).")
+    density_kg_m3: float | None = Field(None, gt=0, description="Density ρ, kg/m³.")
+    loss_factor: float | None = Field(None, ge=0, lt=1, description="Loss factor η (E and G become E(1+iη)).")
+
+
+class Segment(_Request):
+    """A uniform (hollow) circular beam segment."""
+
+    length_m: float = Field(gt=0, description="Segment length, m.")
+    outer_diameter_m: float = Field(gt=0, description="Outer diameter, m.")
+    inner_diameter_m: float = Field(0.0, ge=0, description="Bore diameter, m (0: solid); < outer_diameter_m.")
+    material: str = Field("steel", min_length=1, description="Material name: steel, carbide, or one of `materials`.")
+
+
+class Bearing(_Request):
+    """A spring/damper to rigid ground on the spindle."""
+
+    position_m: float = Field(ge=0, description="Position from the spindle nose (gauge line), m.")
+    stiffness_n_m: float = Field(ge=0, description="Radial stiffness, N/m.")
+    damping_ns_m: float = Field(0.0, ge=0, description="Radial viscous damping, N·s/m.")
+    rotational_stiffness_nm_rad: float = Field(0.0, ge=0, description="Tilting stiffness, N·m/rad.")
+    rotational_damping_nms_rad: float = Field(0.0, ge=0, description="Tilting damping, N·m·s/rad.")
+
+
+class AnalyticalSpindle(_Request):
+    """A modelled spindle: segments from the nose toward the rear, and bearings."""
+
+    segments: list[Segment] = Field(min_length=1, description="Shaft segments, nose → rear.")
+    bearings: list[Bearing] = Field(default_factory=list, description="Bearings (positions from the nose).")
+
+
+class MeasuredSpindle(_Request):
+    """A stored measured spindle (hybrid prediction)."""
+
+    measurement_id: str = Field(min_length=1, description="Id of a stored measurement (GET /v1/measurements).",
+                                examples=["m-0123456789ab"])
+    artifact_method: Literal["exact", "finite_difference"] = Field(
+        "exact", description="How an artifact_frfs measurement is identified: the exact three-FRF method, or "
+                             "the labelled finite-difference fallback.")
+    effective_length_m: float = Field(0.2, gt=0, description="Equivalent-cantilever length used to estimate the "
+                                                             "rotations of a direct_frf measurement, m.")
+
+
+def _spindle_tag(value: Any) -> str | None:
+    if isinstance(value, dict):
+        return "spindle-measured" if "measurement_id" in value else "spindle-analytical"
+    if isinstance(value, MeasuredSpindle):
+        return "spindle-measured"
+    return "spindle-analytical" if isinstance(value, AnalyticalSpindle) else None
+
+
+Spindle = Annotated[
+    Annotated[AnalyticalSpindle, Tag("spindle-analytical")] | Annotated[MeasuredSpindle, Tag("spindle-measured")],
+    Discriminator(_spindle_tag, custom_error_type="spindle",
+                  custom_error_message="must be an object {segments, bearings} or {measurement_id}"),
+    Field(description="The spindle: modelled (segments + bearings) or a stored measurement (hybrid)."),
+]
+
+
+class Holder(_Request):
+    """Tool holder: segments from the gauge line toward the tool end."""
+
+    segments: list[Segment] = Field(min_length=1, description="Holder segments, gauge line → tool end; "
+                                                              "inner_diameter_m is the bore.")
+
+
+class Tool(_Request):
+    """Parametric cutting tool (ISO 13399 / Fusion meaning)."""
+
+    material: str = Field("carbide", min_length=1, description="Tool material name.")
+    diameter_m: float = Field(gt=0, description="Cutting diameter DC, m.")
+    shank_diameter_m: float | None = Field(None, gt=0, description="Shank diameter SFDM, m (default: diameter_m).")
+    overall_length_m: float = Field(gt=0, description="Overall length OAL, m.")
+    flute_length_m: float = Field(gt=0, description="Flute length LCF, m; <= stickout_m.")
+    stickout_m: float = Field(gt=0, description="Length from the holder's tool-end face to the tip (Fusion LB), m.")
+    fluted_diameter_ratio: float = Field(0.8, gt=0, le=1, description="Equivalent fluted diameter / DC "
+                                                                      "(dimensionless).")
+    fluted_mass_diameter_ratio: float | None = Field(None, gt=0, le=1, description="Separate equivalent diameter "
+                                                     "ratio for the flutes' mass (default: fluted_diameter_ratio).")
+    shoulder_length_m: float | None = Field(None, gt=0, description="Reduced neck: from the tip to the neck's end, "
+                                            "m (with shoulder_diameter_m).")
+    shoulder_diameter_m: float | None = Field(None, gt=0, description="Reduced neck diameter, m.")
+
+
+class Joint(_Request):
+    """Elastic joint diag(k_t + iωc_t, k_r + iωc_r); a rotational stiffness left out is rigid."""
+
+    stiffness_n_m: float = Field(gt=0, description="Translational stiffness k_t, N/m.")
+    damping_ns_m: float = Field(0.0, ge=0, description="Translational damping c_t, N·s/m.")
+    rotational_stiffness_nm_rad: float | None = Field(None, gt=0, description="Rotational stiffness k_r, N·m/rad.")
+    rotational_damping_nms_rad: float = Field(0.0, ge=0, description="Rotational damping c_r, N·m·s/rad.")
+
+
+class Joints(_Request):
+    """The two joints; one left out is rigid."""
+
+    spindle_holder: Joint | None = Field(None, description="Spindle nose ↔ holder base (gauge line).")
+    holder_tool: Joint | None = Field(None, description="Holder tip ↔ tool base (holder face).")
+
+
+BeamTheory = Literal["timoshenko", "euler_bernoulli"]
+ShearCoefficient = Literal["hutchinson", "cowper"] | Annotated[float, Field(gt=0, le=1.5)]
+
+
+class Assembly(_Request):
+    """A spindle–holder–tool assembly (contract "Assembly"); body of POST /v1/tool-point-frf."""
+
+    model_config = ConfigDict(json_schema_extra={"examples": [_RA1]})
+
+    frequency: Frequency
+    beam_theory: BeamTheory = Field("timoshenko", description="Beam theory of every segment.")
+    shear_coefficient: ShearCoefficient = Field("hutchinson", description="Shear coefficient model, or a "
+                                                "number (dimensionless).")
+    materials: dict[str, Material] | None = Field(None, description="Materials added to or overriding the "
+                                                  "built-ins (steel, carbide), by name.")
+    spindle: Spindle
+    holder: Holder | None = Field(None, description="The holder (leave out only on a holder_tip measurement).")
+    tool: Tool
+    joints: Joints | None = Field(None, description="Elastic joints; left out = rigid.")
+    name: str | None = Field(None, max_length=200, description="Free label, echoed nowhere.")
+    description: str | None = Field(None, max_length=10_000, description="Free text.")
+
+
+# --------------------------------------------------------------------------- batch
+
+class Combination(_Request):
+    """One tool–holder combination of a batch."""
+
+    id: str = Field(min_length=1, max_length=200, description="Caller's id, echoed in the result "
+                    "(e.g. a Fusion guid or T number).", examples=["T12-BT40-A"])
+    holder: Holder | None = None
+    tool: Tool
+    joints: Joints | None = None
+
+
+def _keep_invalid(value: Any, handler: ValidatorFunctionWrapHandler) -> Any:
+    """Validate a combination; if it does not fit, keep it as sent for rcsa to report it."""
+    try:
+        return handler(value)
+    except ValidationError:
+        return value
+
+
+class BatchRequest(_Request):
+    """Many tool–holder combinations on one spindle (POST /v1/tool-point-frf/batch)."""
+
+    model_config = ConfigDict(json_schema_extra={"examples": [{
+        "frequency": _EXAMPLE_GRID, "spindle": _RA1["spindle"],
+        "combinations": [{"id": "T1", "holder": _RA1["holder"], "tool": _RA1["tool"], "joints": _RA1["joints"]},
+                         {"id": "T2", "holder": _RA1["holder"], "tool": {**_RA1["tool"], "stickout_m": 0.05},
+                          "joints": _RA1["joints"]}]}]})
+
+    frequency: Frequency
+    beam_theory: BeamTheory = "timoshenko"
+    shear_coefficient: ShearCoefficient = "hutchinson"
+    materials: dict[str, Material] | None = None
+    spindle: Spindle
+    natural_frequencies: bool = Field(True, description="Compute the exact natural frequencies of every "
+                                      "combination (analytical spindles; costs time on big batches).")
+    combinations: list[Annotated[Combination, WrapValidator(_keep_invalid)]] = Field(
+        min_length=1, description="Combinations (at most RCSA_MAX_BATCH_COMBINATIONS). Each is checked on "
+                                  "its own: one that is invalid gets status error in its result.")
+
+    def to_request(self) -> dict[str, Any]:
+        """The plain batch document for :func:`rcsa.api.predict_batch`."""
+        doc = self.model_dump(exclude_unset=True, exclude={"combinations"})
+        doc["combinations"] = [c.model_dump(exclude_unset=True) if isinstance(c, BaseModel) else c
+                               for c in self.combinations]
+        return doc
+
+
+# --------------------------------------------------------------------------- results
+
+class ComplexArray(_Response):
+    """A complex array as two real arrays."""
+
+    real: list[float] = Field(description="Real parts.")
+    imag: list[float] = Field(description="Imaginary parts.")
+
+
+class ToolPoint(_Response):
+    """Tool-point receptance [[h, l], [n, p]]."""
+
+    h: ComplexArray = Field(description="Displacement / force, m/N.")
+    l: ComplexArray = Field(description="Displacement / moment, m/(N·m) = 1/N.")  # noqa: E741
+    n: ComplexArray = Field(description="Rotation / force, rad/N.")
+    p: ComplexArray = Field(description="Rotation / moment, rad/(N·m).")
+
+
+class Peak(_Response):
+    """A local maximum of |h|."""
+
+    frequency_hz: float = Field(description="Frequency of the peak, Hz.")
+    magnitude_m_n: float = Field(description="|h| at the peak, m/N.")
+
+
+class PredictionResult(_Response):
+    """Tool-point prediction (contract "Prediction result")."""
+
+    frequency_hz: list[float] = Field(description="Frequency lines, Hz.")
+    tool_point: ToolPoint
+    natural_frequencies_hz: list[float] = Field(description="Undamped natural frequencies in the band, Hz "
+                                                "(exact for a modelled spindle; modal-fit estimates for a "
+                                                "hybrid one, see natural_frequencies_method).")
+    natural_frequencies_method: str = Field(description="wittrick_williams (exact) or modal_fit.")
+    peaks: list[Peak] = Field(description="Peaks of |h|.")
+    static_stiffness_n_m: float | None = Field(description="Static stiffness 1/h(0), N/m; null when it cannot "
+                                               "be given (hybrid, ungrounded).")
+    min_real_m_n: float = Field(description="Most negative real part of h, m/N.")
+    min_real_frequency_hz: float = Field(description="Where it occurs, Hz.")
+    notes: list[str] = Field(description="What the numbers mean where it is not obvious.")
+
+
+class ItemError(_Response):
+    """Why one combination failed."""
+
+    field: str = Field(description="Offending field, dotted path inside the request.")
+    detail: str | None = Field(description="The rule it broke.")
+
+
+class BatchResultItem(_Response):
+    """The result of one combination: the prediction fields (status ok) or an error."""
+
+    id: str | None = Field(description="The combination's id as sent.")
+    status: Literal["ok", "error"]
+    error: ItemError | None = None
+    frequency_hz: list[float] | None = Field(None, description="Frequency lines, Hz (status ok).")
+    tool_point: ToolPoint | None = None
+    natural_frequencies_hz: list[float] | None = Field(None, description="Natural frequencies, Hz.")
+    peaks: list[Peak] | None = None
+    static_stiffness_n_m: float | None = Field(None, description="Static stiffness, N/m.")
+    min_real_m_n: float | None = Field(None, description="Most negative real part of h, m/N.")
+
+
+class BatchSummary(_Response):
+    ok: int = Field(description="Combinations computed.")
+    error: int = Field(description="Combinations refused.")
+
+
+class BatchResult(_Response):
+    """One result per combination, in input order."""
+
+    results: list[BatchResultItem]
+    summary: BatchSummary
+
+
+class JobStatus(_Response):
+    """State of a background job (202 answers and GET /v1/jobs/{id})."""
+
+    id: str = Field(description="Job id.", examples=["j-0123456789abcdef0123456789abcdef"])
+    kind: str = Field(description="batch or library.")
+    status: Literal["queued", "running", "succeeded", "failed"]
+    progress: float = Field(ge=0, le=1, description="Fraction done (0…1).")
+    created_utc: str
+    started_utc: str | None
+    finished_utc: str | None
+    attempts: int = Field(description="Runs started (a run interrupted by a restart is resumed).")
+    error: dict[str, Any] | None = Field(description="Problem document when failed.")
+    summary: dict[str, Any] | None = Field(description="Counts by status when succeeded.")
+    status_url: str = Field(description="Poll here.")
+    result_url: str | None = Field(description="The result, once succeeded.")
+
+
+# --------------------------------------------------------------------------- libraries
+
+class LibraryOptions(_Request):
+    """How a Fusion library is mapped to combinations."""
+
+    holder_material: str | None = Field(None, description="Material of every holder segment (default steel).")
+    tool_material_default: str | None = Field(None, description="Tool material when BMC is missing (default "
+                                              "carbide).")
+    holder_segments_per_cone: int | None = Field(None, ge=1, le=50, description="Cylinders per conical holder "
+                                                 "segment (default 4).")
+    fluted_diameter_ratio: float | None = Field(None, gt=0, le=1, description="Equivalent fluted diameter / DC.")
+    shaft_origin: Literal["shoulder", "flute_end"] | None = Field(None, description="Where shaft.segments start.")
+    default_holder: str | dict[str, Any] | None = Field(None, description="Holder for tools without one: the guid "
+                                                        "of a standalone holder in the library, or a Fusion "
+                                                        "holder object.")
+
+
+class LibraryPredictionRequest(_Request):
+    """JSON form of POST /v1/tool-libraries:predict (the multipart form carries the same fields)."""
+
+    library: dict[str, Any] = Field(description='The Fusion tool library document {"data": [...], "version": n}.')
+    spindle: Spindle
+    frequency: Frequency
+    joints: Joints | None = Field(None, description="Joints applied to every tool (the library has none); "
+                                  "rigid when left out.")
+    materials: dict[str, Material] | None = None
+    beam_theory: BeamTheory | None = None
+    shear_coefficient: ShearCoefficient | None = None
+    natural_frequencies: bool | None = Field(None, description="Compute exact natural frequencies (default true).")
+    options: LibraryOptions | None = None
+
+
+class LibraryResultItem(_Response):
+    """One library item: its prediction (ok), why it was skipped, or its error."""
+
+    id: str = Field(description="Fusion guid, else T<number>, else a content hash.")
+    index: int = Field(description="Position in the library's data list.")
+    description: str | None = None
+    number: int | None = Field(None, description="Fusion T number.")
+    teeth: int | None = Field(None, description="Number of flutes NOF.")
+    tool_type: str | None = None
+    warnings: list[str] = Field(default_factory=list)
+    status: Literal["ok", "skipped", "error"]
+    reason: str | None = Field(None, description="Why it was skipped.")
+    error: ItemError | None = None
+
+
+class LibraryResult(_Response):
+    """One result per library item, in library order."""
+
+    library: dict[str, Any] = Field(description="source, library_sha256, import summary.")
+    results: list[LibraryResultItem]
+    summary: dict[str, int] = Field(description="Counts of ok, skipped, error.")
+
+
+# --------------------------------------------------------------------------- measurements
+
+class ComplexArrayIn(_Request):
+    """A complex array as two real arrays of equal length."""
+
+    real: list[float]
+    imag: list[float]
+
+
+_OUTPUT_ONLY = ("id", "created_utc", "software_version", "source", "frfs", "n_frequencies",
+                "frequency_min_hz", "frequency_max_hz", "units", "convention", "summary")
+
+
+class MeasurementUpload(_Request):
+    """A measurement in the contract's JSON form (body of POST /v1/measurements, JSON)."""
+
+    model_config = ConfigDict(extra="allow", json_schema_extra={
+        "examples": [{"spindle_id": "mc1-hsk63", "direction": "x", "plane": "spindle_nose", "kind": "direct_frf",
+                      "frequency_hz": [100.0, 200.0, 300.0],
+                      "h": {"real": [1.0e-7, 1.1e-7, 1.3e-7], "imag": [-1.0e-9, -2.0e-9, -4.0e-9]}}],
+        "patternProperties": {"^h[1-9][1-9]$": {"$ref": "#/components/schemas/ComplexArrayIn"}}})
+    __pydantic_extra__: dict[str, ComplexArrayIn]
+
+    spindle_id: str = Field(min_length=1, max_length=128, description="Spindle (or spindle + holder) id.")
+    direction: Literal["x", "y"] = Field(description="Machine direction of this measurement.")
+    plane: Literal["spindle_nose", "holder_tip"] = Field(description="Coupling plane of the receptances.")
+    kind: Literal["point_receptance", "artifact_frfs", "direct_frf"]
+    machine: str | None = Field(None, max_length=128, description="Machine tool name.")
+    notes: str | None = Field(None, max_length=10_000)
+    frequency_hz: list[float] = Field(min_length=1, description="Frequency lines, Hz, strictly increasing, > 0.")
+    h: ComplexArrayIn | None = Field(None, description="Receptance h, m/N (point_receptance, direct_frf).")
+    l: ComplexArrayIn | None = Field(None, description="Receptance l, m/(N·m) (point_receptance).")  # noqa: E741
+    n: ComplexArrayIn | None = Field(None, description="Receptance n, rad/N (point_receptance).")
+    p: ComplexArrayIn | None = Field(None, description="Receptance p, rad/(N·m) (point_receptance).")
+    points_m: list[float] | None = Field(None, description="artifact_frfs: positions of points 1, 2, ... from "
+                                         "the artifact tip toward the spindle, m. The FRFs themselves are h11, "
+                                         "h21, h22, ... (m/N), named h<response><excitation>.")
+    artifact: dict[str, Any] | None = Field(None, description="artifact_frfs: diameter_m, stickout_m, and where "
+                                            "known length_m, inner_diameter_m, material, holder.")
+    coherence: list[float] | dict[str, list[float]] | None = Field(None, description="Coherence (0…1): a list "
+                                                                   "for h alone, or lists by FRF name.")
+    # accepted back from GET /v1/measurements/{id}, so an export can be uploaded again (new id)
+    id: str | None = Field(None, description="Ignored (an upload gets a new id).")
+    created_utc: str | None = Field(None, description="Ignored.")
+    software_version: str | None = Field(None, description="Ignored.")
+    source: dict[str, Any] | None = Field(None, description="Provenance of an exported measurement (kept).")
+    frfs: list[str] | None = Field(None, description="Ignored.")
+    n_frequencies: int | None = Field(None, description="Ignored.")
+    frequency_min_hz: float | None = Field(None, description="Ignored.")
+    frequency_max_hz: float | None = Field(None, description="Ignored.")
+    units: dict[str, str] | None = Field(None, description="Ignored (uploads are SI).")
+    convention: str | None = Field(None, description="Ignored (the contract's convention).")
+    summary: dict[str, Any] | None = Field(None, description="Ignored.")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _only_artifact_frf_names(cls, data: Any) -> Any:
+        if isinstance(data, dict):
+            import re
+
+            for key in data:
+                if key not in cls.model_fields and not re.fullmatch(r"h[1-9][1-9]", str(key)):
+                    from pydantic_core import PydanticCustomError
+
+                    raise PydanticCustomError(
+                        "unknown_field", "unknown field; artifact FRFs are named h<response><excitation>, "
+                        "e.g. h21, and the other fields are listed in the schema at /docs", {"field": str(key)})
+        return data
+
+    def to_document(self) -> dict[str, Any]:
+        """The contract JSON document for :func:`rcsa.importers.measurement_from_contract`."""
+        doc = self.model_dump(exclude_none=True)
+        for key in ("id", "created_utc", "software_version", "frfs", "n_frequencies", "frequency_min_hz",
+                    "frequency_max_hz", "units", "convention", "summary"):
+            doc.pop(key, None)
+        return doc
+
+
+class MeasurementSource(_Response):
+    """Provenance of a measurement."""
+
+    format: str = Field(description="uff58, csv, cutpro_frf, contract_json, tap or api.")
+    file: str = Field(description="Uploaded file name.")
+    sha256: str = Field(description="SHA-256 of the uploaded file.")
+    original_quantity: str = Field(description="receptance, mobility or accelerance.")
+    original_units: str = Field(description="Units the file carried, e.g. um/N.")
+    conversions: list[str] = Field(description="Steps applied on import.")
+    sensor_mass_kg: float | None = Field(description="Accelerometer mass removed, kg.")
+
+
+class MeasurementInfo(_Response):
+    """A stored measurement's metadata."""
+
+    id: str = Field(examples=["m-0123456789ab"])
+    spindle_id: str
+    machine: str
+    direction: Literal["x", "y"]
+    plane: Literal["spindle_nose", "holder_tip"]
+    kind: Literal["point_receptance", "artifact_frfs", "direct_frf"]
+    frfs: list[str] = Field(description="Names of the stored receptances.")
+    n_frequencies: int = Field(description="Number of frequency lines.")
+    frequency_min_hz: float = Field(description="First frequency, Hz.")
+    frequency_max_hz: float = Field(description="Last frequency, Hz.")
+    points_m: list[float] | None = Field(description="artifact_frfs point positions, m.")
+    artifact: dict[str, Any] | None
+    notes: str
+    created_utc: str | None
+    software_version: str | None
+    source: MeasurementSource
+
+
+class MeasurementPage(_Response):
+    """One page of the store listing, oldest first."""
+
+    items: list[MeasurementInfo]
+    next_cursor: str | None = Field(description="Pass as ?cursor= for the next page; null on the last page.")
+
+
+class MeasurementDocument(MeasurementInfo):
+    """Metadata and data in the contract JSON form (receptances as h, l, n, p or hij: {real, imag})."""
+
+    units: dict[str, str] = Field(description="Unit of every array.")
+    convention: str = Field(description="Sign and axis conventions of the receptances.")
+    summary: dict[str, Any] = Field(description="Peak magnitude and frequency of every FRF.")
+    frequency_hz: list[float] | None = Field(None, description="Frequency lines, Hz (absent with data=false).")
+
+
+class Deleted(_Response):
+    deleted: str = Field(description="Id of the deleted measurement.")
+
+
+# --------------------------------------------------------------------------- stability lobes
+
+class FrfIn(_Request):
+    """An inline tool-point FRF."""
+
+    frequency_hz: list[float] = Field(min_length=1, description="Frequency lines, Hz.")
+    h: ComplexArrayIn = Field(description="Tool-point receptance, m/N.")
+
+
+class SpeedRange(_Request):
+    """Spindle-speed grid: count values from start to stop."""
+
+    start: float = Field(gt=0, description="Lowest spindle speed, rpm.")
+    stop: float = Field(gt=0, description="Highest spindle speed, rpm.")
+    count: int = Field(ge=2, description="Number of speeds.")
+
+
+class LobesRequest(_Request):
+    """Stability-lobes request (contract "Stability lobes"): inline FRFs or an assembly."""
+
+    model_config = ConfigDict(json_schema_extra={"examples": [{
+        "assembly": _RA1, "teeth": 4, "tangential_coefficient_n_m2": 6.0e8, "radial_ratio": 0.3,
+        "radial_immersion": 0.5, "milling": "down", "spindle_speed_rpm": {"start": 2000, "stop": 30000,
+                                                                          "count": 2000}}]})
+
+    frf_x: FrfIn | None = Field(None, description="Tool-point FRF in x (or give assembly).")
+    frf_y: FrfIn | None = Field(None, description="FRF in y on the same grid; null: same as x.")
+    assembly: Assembly | None = Field(None, description="Predict the FRF of this assembly instead.")
+    teeth: int = Field(ge=1, description="Number of teeth (flutes).")
+    tangential_coefficient_n_m2: float = Field(gt=0, description="Tangential cutting coefficient Kt, N/m².")
+    radial_ratio: float = Field(ge=0, description="Radial to tangential coefficient ratio Kr (dimensionless).")
+    radial_immersion: float = Field(gt=0, le=1, description="Radial immersion ae/D (dimensionless).")
+    milling: Literal["up", "down"]
+    spindle_speed_rpm: SpeedRange
+
+
+class Lobe(_Response):
+    index: int = Field(description="Lobe number k.")
+    spindle_speed_rpm: list[float | None] = Field(description="Spindle speeds, rpm.")
+    depth_limit_m: list[float | None] = Field(description="Depth limit of this lobe, m (null: none).")
+
+
+class LobesResult(_Response):
+    """Stability lobes: the lower envelope and every lobe."""
+
+    spindle_speed_rpm: list[float | None] = Field(description="Spindle speeds, rpm.")
+    depth_limit_m: list[float | None] = Field(description="Axial depth limit (lower envelope), m.")
+    chatter_frequency_hz: list[float | None] = Field(description="Chatter frequency at the limit, Hz.")
+    lobes: list[Lobe]
+
+
+# --------------------------------------------------------------------------- problems, health
+
+class FieldProblem(_Response):
+    field: str = Field(description="Offending field, dotted path ('' for the whole request).")
+    detail: str = Field(description="What it must satisfy.")
+
+
+class Problem(_Response):
+    """RFC 9457 problem details (application/problem+json)."""
+
+    type: str = Field(description="Kind of problem (a URN).", examples=["urn:rcsa:problem:invalid-input"])
+    title: str
+    status: int
+    detail: str = Field(description="What went wrong and what to do.")
+    instance: str | None = Field(None, description="The request path.")
+    request_id: str | None = Field(None, description="X-Request-ID of the request (find it in the logs).")
+    errors: list[FieldProblem] | None = None
+
+
+class Health(_Response):
+    status: Literal["ok"]
+
+
+class Ready(_Response):
+    status: Literal["ready", "not ready"]
+    checks: dict[str, str] = Field(description="Outcome of each readiness check.")
