@@ -55,6 +55,16 @@ def configure_logging(access: bool) -> None:
     replaces uvicorn's.
     """
     flt = RequestIdFilter()
+    factory = logging.getLogRecordFactory()
+    if not getattr(factory, "_rcsa", False):  # every record of the process gets request_id
+
+        def record_factory(*args, **kwargs):  # type: ignore[no-untyped-def]
+            record = factory(*args, **kwargs)
+            record.request_id = request_id_var.get()
+            return record
+
+        record_factory._rcsa = True  # type: ignore[attr-defined]
+        logging.setLogRecordFactory(record_factory)
     for name in ("service", "rcsa"):
         logger = logging.getLogger(name)
         if logger.level == logging.NOTSET:
@@ -158,7 +168,6 @@ class RequestContextMiddleware:
             self.metrics.requests.labels(method, template, str(status)).inc()
             self.metrics.latency.labels(method, template).observe(elapsed)
             if self.access:
-                access_log.info('%s %s "%s %s" %d %.1f ms', (scope.get("client") or ("-",))[0], rid, method,
-                                scope.get("path"), status, elapsed * 1e3,
-                                extra={"request_id": rid})
+                access_log.info('%s "%s %s" %d %.1f ms', (scope.get("client") or ("-",))[0], method,
+                                scope.get("path"), status, elapsed * 1e3)
             request_id_var.reset(token)

@@ -1,7 +1,8 @@
 """Diagnoses, joint identifications and effect analyses: thin doors onto ``rcsa.api``.
 
-Each route passes the JSON body to ``rcsa.api.diagnose`` / ``identify`` / ``effects``. When
-the installed rcsa does not provide the function yet the route answers ``501``.
+Each route passes the JSON body to ``rcsa.api.diagnose`` / ``identify`` / ``effects`` (or
+the same name at the top of :mod:`rcsa`). When the installed rcsa does not provide the
+function the route answers ``501``.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Body, Depends
 from starlette.responses import Response
 
+import rcsa
 from rcsa import api
 
 from ..bodies import require_json
@@ -31,7 +33,7 @@ _Request = Annotated[dict[str, Any], Body(description="The request document (see
 
 
 def _call(name: str, body: dict[str, Any], state: Any) -> Any:
-    fn = getattr(api, name, None)
+    fn = getattr(api, name, None) or getattr(rcsa, name, None)
     if fn is None:
         raise ProblemError(501, f"this version of rcsa has no rcsa.api.{name}; upgrade the service")
     kwargs: dict[str, Any] = {}

@@ -1,0 +1,118 @@
+"""POST /v1/tool-libraries:predict with the sample Fusion libraries, and `rcsa library predict`."""
+
+from __future__ import annotations
+
+import json
+import time
+
+import pytest
+import typer
+from typer.testing import CliRunner
+
+from rcsa import library_api
+from rcsa.cli.library_cmd import register
+from rcsa.reference import ra1
+from tests.helpers import REPO
+
+from .conftest import GRID, assert_problem
+
+LIBS = REPO / "tests" / "data" / "tool-libraries" / "fusion-synthetic"
+RA1 = ra1(GRID)
+FORM = {"spindle": json.dumps(RA1["spindle"]), "frequency": json.dumps(GRID), "joints": json.dumps(RA1["joints"])}
+
+
+@pytest.mark.parametrize("name", ["synthetic_library.json", "synthetic_library.tools"])
+def test_fusion_library_upload(client, name):
+    r = client.post("/v1/tool-libraries:predict", files={"library": (name, (LIBS / name).read_bytes())}, data=FORM)
+    assert r.status_code == 200, r.text
+    out = r.json()
+    assert out["summary"] == {"ok": 2, "skipped": 2, "error": 0}
+    statuses = [(x["status"], x.get("reason")) for x in out["results"]]
+    assert statuses == [("ok", None), ("ok", None), ("skipped", "no holder"),
+                        ("skipped", "standalone holder (type: holder), not a tool")]
+    assert [x["index"] for x in out["results"]] == [0, 1, 2, 3]
+    ok = out["results"][0]
+    assert len(ok["frequency_hz"]) == 1000 and ok["natural_frequencies_hz"] and ok["teeth"] == 4
+    expected = library_api.predict_library(LIBS / name, spindle=RA1["spindle"], frequency=GRID, joints=RA1["joints"])
+    assert out["results"][1]["tool_point"]["h"] == expected["results"][1]["tool_point"]["h"]
+
+
+def test_library_as_json_body_and_as_a_job(make_client):
+    doc = json.loads((LIBS / "synthetic_library.json").read_text())
+    with make_client(async_batch_threshold=1) as client:
+        body = {"library": doc, "spindle": RA1["spindle"], "frequency": GRID, "options": {"holder_segments_per_cone": 2}}
+        r = client.post("/v1/tool-libraries:predict", json=body)
+        assert r.status_code == 202, r.text
+        location = r.headers["location"]
+        for _ in range(400):
+            job = client.get(location).json()
+            if job["status"] in ("succeeded", "failed"):
+                break
+            time.sleep(0.05)
+        assert job["status"] == "succeeded" and job["kind"] == "library"
+        result = client.get(job["result_url"]).json()
+        assert result["summary"] == {"ok": 2, "skipped": 2, "error": 0}
+
+
+def test_library_errors(client):
+    raw = (LIBS / "synthetic_library.json").read_bytes()
+    r = client.post("/v1/tool-libraries:predict", files={"library": ("lib.json", b"{nope")}, data=FORM)
+    assert_problem(r, 422, "")
+    r = client.post("/v1/tool-libraries:predict", files={"library": ("lib.json", raw)},
+                    data={**FORM, "frequency": json.dumps({"start_hz": 0.0, "stop_hz": 1.0, "step_hz": 1.0})})
+    assert_problem(r, 422, "frequency.start_hz")
+    r = client.post("/v1/tool-libraries:predict", files={"library": ("lib.json", raw)},
+                    data={"frequency": FORM["frequency"]})
+    assert_problem(r, 422, "spindle")
+    r = client.post("/v1/tool-libraries:predict", files={"library": ("lib.json", raw)},
+                    data={**FORM, "measurement_id": "m-000000000000"})
+    assert_problem(r, 422, "measurement_id")
+    r = client.post("/v1/tool-libraries:predict", files={"library": ("lib.json", raw)},
+                    data={"frequency": FORM["frequency"], "measurement_id": "m-000000000000"})
+    assert_problem(r, 422, "spindle.measurement_id")
+    r = client.post("/v1/tool-libraries:predict", files={"library": ("lib.json", raw)},
+                    data={**FORM, "options": json.dumps({"holder_segments_per_cone": 0})})
+    assert_problem(r, 422, "holder_segments_per_cone")
+    r = client.post("/v1/tool-libraries:predict", files={"library": ("lib.json", raw)}, data={**FORM, "spindle": "{"})
+    assert_problem(r, 422, "spindle")
+    r = client.post("/v1/tool-libraries:predict", json={"library": {"data": []}, "frequency": GRID})
+    assert_problem(r, 422, "spindle")
+    assert_problem(client.post("/v1/tool-libraries:predict", content=b"x", headers={"content-type": "text/plain"}), 415)
+
+
+def _cli():
+    app = typer.Typer()
+
+    @app.callback()
+    def main() -> None:
+        """Test root."""
+
+    register(app)
+    return app
+
+
+def test_cli_library_predict(tmp_path, monkeypatch):
+    monkeypatch.setenv("RCSA_STORE", str(tmp_path / "store"))
+    spindle = tmp_path / "ra1.json"
+    spindle.write_text(json.dumps(RA1))
+    out = tmp_path / "out.json"
+    runner = CliRunner()
+    r = runner.invoke(_cli(), ["library", "predict", str(LIBS / "synthetic_library.tools"), "--spindle", str(spindle),
+                               "--frequency", "5:5000:5", "-o", str(out)])
+    assert r.exit_code == 0, r.stderr
+    result = json.loads(out.read_text())
+    assert result["summary"] == {"ok": 2, "skipped": 2, "error": 0}
+    assert "2 ok, 2 skipped, 0 error" in r.stderr
+    bad = tmp_path / "bad.json"
+    doc = json.loads((LIBS / "synthetic_library.json").read_text())
+    doc["data"][0]["geometry"]["LB"] = -1.0  # a tool that cannot be mapped → status error, exit 1
+    bad.write_text(json.dumps(doc))
+    r = runner.invoke(_cli(), ["library", "predict", str(bad), "--spindle", str(spindle), "--frequency", "5:5000:5",
+                               "-q"])
+    assert r.exit_code == 1
+    assert json.loads(r.stdout)["summary"]["error"] == 1 and "error: " in r.stderr
+    r = runner.invoke(_cli(), ["library", "predict", str(bad), "--frequency", "5:5000:5"])
+    assert r.exit_code == 1 and "--spindle" in r.stderr
+    r = runner.invoke(_cli(), ["library", "predict", str(LIBS / "synthetic_library.json"), "--spindle", str(spindle),
+                               "--frequency", "5-5000"])
+    assert r.exit_code == 1 and r.stderr.startswith("error: frequency")
