@@ -142,8 +142,7 @@ class Analysis:
             n = 0
             for i in test:
                 c = p.configs[i]
-                eb = 20 * np.log10(np.abs(c.h_meas / c.h_base))
-                ea = 20 * np.log10(np.abs(c.h_meas / h_after[i]))
+                eb, ea = c.db_error(c.h_base), c.db_error(h_after[i])
                 sb, sa, n = sb + float(eb @ eb), sa + float(ea @ ea), n + eb.size
             return sb, sa, n
 

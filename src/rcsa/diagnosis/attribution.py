@@ -96,8 +96,8 @@ class Fit:
 
 
 def _hessian(f: Callable[[np.ndarray], np.ndarray], x: np.ndarray, step: np.ndarray, lo: np.ndarray,
-             hi: np.ndarray) -> np.ndarray:
-    """Finite-difference Hessian of ``f`` (batched) at ``x``; the stencil is shifted inside the box."""
+             hi: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Finite-difference gradient and Hessian of ``f`` (batched) at ``c`` (``x`` moved inside the box)."""
     d = x.size
     c = np.clip(x, lo + step, hi - step)
     e = np.diag(step)
@@ -112,7 +112,8 @@ def _hessian(f: Callable[[np.ndarray], np.ndarray], x: np.ndarray, step: np.ndar
     for k, (i, j) in enumerate(pairs):
         a, b, c_, d_ = v[1 + 2 * d + 4 * k: 5 + 2 * d + 4 * k]
         h[i, j] = h[j, i] = (a - b - c_ + d_) / (4 * step[i] * step[j])
-    return h
+    grad = (v[1:1 + d] - v[1 + d:1 + 2 * d]) / (2 * step)
+    return grad, h, c
 
 
 def _parabola_sd(x: np.ndarray, ll: np.ndarray, i: int) -> tuple[float, float]:
@@ -204,11 +205,16 @@ def evidence(loglik: Callable[[np.ndarray], np.ndarray], lo: np.ndarray, hi: np.
     h = step / 4
     cov = None
     for _ in range(3):  # shrink the stencil until it is below half a posterior sd
-        prec = -_hessian(loglik, x_map, h, lo, hi)
+        grad, hess, centre = _hessian(loglik, x_map, h, lo, hi)
+        prec = -hess
         if not np.all(np.linalg.eigvalsh(prec) > 0):
             cov = None
             break
         cov = np.linalg.inv(prec)
+        newton = np.clip(centre + cov @ grad, lo, hi)  # one Newton step polishes the simplex's MAP
+        ll_newton = float(loglik(newton[None, :])[0])
+        if ll_newton > ll_map:
+            x_map, ll_map = newton, ll_newton
         sd = np.sqrt(np.diag(cov))
         if np.all(h <= sd / 2):
             break

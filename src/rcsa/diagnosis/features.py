@@ -206,14 +206,15 @@ def extract(frequency_hz: np.ndarray, h: np.ndarray, w: Windows) -> np.ndarray:
     return feats[0] if single else feats
 
 
-def band_rms_db(h_a: np.ndarray, h_b: np.ndarray, bands: list[slice]) -> np.ndarray:
+def band_rms_db(h_a: np.ndarray, h_b: np.ndarray, bands: list[np.ndarray]) -> np.ndarray:
     """RMS over each band of ``20 log10 |h_a / h_b|``, dB.
 
     Parameters
     ----------
     h_a : numpy.ndarray, shape (..., nlines), complex
     h_b : numpy.ndarray, shape (nlines,) or (..., nlines), complex
-    bands : list of slice
+    bands : list of numpy.ndarray of int
+        Lines of each band.
 
     Returns
     -------

@@ -64,7 +64,12 @@ class Config:
     noise_rel: np.ndarray
     h_base: np.ndarray
     windows: Windows
-    bands: list[slice]
+    bands: list[np.ndarray]  # per window, its lines with coherence >= VALID_COHERENCE
+    good: np.ndarray         # lines with coherence >= VALID_COHERENCE (dB gaps are taken there)
+
+    def db_error(self, h_model: np.ndarray) -> np.ndarray:
+        """20 log10 |h_meas / h_model| on the good lines, dB."""
+        return 20.0 * np.log10(np.abs(self.h_meas[self.good] / h_model[self.good]))
 
 
 class Problem:
@@ -108,9 +113,14 @@ class Problem:
                 raise InputError(f"measurements[{i}].frequency_hz",
                                  "the base model has no resonance inside the valid band of this measurement; "
                                  "measure over a band that contains at least one mode") from None
+            good = (m.coherence[p] >= VALID_COHERENCE) if m.coherence is not None else np.ones(p.size, bool)
+            good_idx = np.flatnonzero(good)
             edges = windows.edges
-            bands_i = [slice(int(edges[j]), int(edges[j + 1])) for j in range(edges.size - 1)]
-            self.configs.append(Config(i, p, grid_lines, f, m.h[p], noise, h_base, windows, bands_i))
+            bands_i = []
+            for j in range(edges.size - 1):
+                band = good_idx[(good_idx >= edges[j]) & (good_idx < edges[j + 1])]
+                bands_i.append(band if band.size else np.arange(edges[j], edges[j + 1]))
+            self.configs.append(Config(i, p, grid_lines, f, m.h[p], noise, h_base, windows, bands_i, good_idx))
         self.offsets = np.cumsum([0] + [c.windows.size for c in self.configs])
         self.base_features = self.features([c.h_base for c in self.configs])
         self.measured_features = self.features([c.h_meas for c in self.configs])

@@ -39,7 +39,7 @@ P_GAP = 0.05
 
 def _db_rms(a: Analysis, hs: Sequence[np.ndarray], configs: Sequence[int] | None = None) -> float:
     cs = a.problem.configs if configs is None else [a.problem.configs[i] for i in configs]
-    err = np.concatenate([20 * np.log10(np.abs(c.h_meas / hs[c.index])) for c in cs])
+    err = np.concatenate([c.db_error(hs[c.index]) for c in cs])
     return float(np.sqrt(np.mean(err**2)))
 
 
@@ -87,7 +87,7 @@ def gap_map(a: Analysis, model_features: np.ndarray, model_h: Sequence[np.ndarra
     k = 0
     for c in p.configs:
         for j, b in enumerate(c.bands):
-            f = c.frequency_hz[b]
+            f = c.frequency_hz[b[[0, -1]]]
             zb = float((band_meas[k] - mc_mean[k]) / max(mc_sd[k], 1e-9))
             bands.append({"measurement": c.index, "label": a.request.measurements[c.index].label, "band": j,
                           "start_hz": float(f[0]), "stop_hz": float(f[-1]), "rms_db": float(band_meas[k]),

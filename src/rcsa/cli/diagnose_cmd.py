@@ -1,0 +1,38 @@
+"""``rcsa diagnose REQUEST.json [-o OUT.json] [--plot PNG]``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ._common import fail, read_json, run_guarded, write_json
+
+
+def register(app: typer.Typer) -> None:
+    """Add the ``diagnose`` command to ``app``."""
+
+    @app.command()
+    def diagnose(
+        request: Annotated[Path, typer.Argument(help="Diagnosis request JSON (contract format, SI units); '-' for stdin.")],
+        out: Annotated[Path | None, typer.Option("-o", "--out", help="Write the result here instead of stdout.")] = None,
+        plot: Annotated[Path | None, typer.Option("--plot", help="Also draw measured/base/corrected FRFs and the "
+                                                                  "gap map to this .png or .svg file.")] = None,
+    ) -> None:
+        """Where model and measurement part, which unmodelled effect explains it, and how far the gap shrinks."""
+        from ..diagnosis.api import analyse
+        from ..diagnosis.report import build_response, diagnosis_figure
+        from ..plots import save_figure
+
+        if plot is not None and plot.suffix.lower() not in (".png", ".svg"):
+            raise fail(f"--plot: the file must end in .png or .svg, got {plot.name!r}")
+        doc = read_json(request)
+        analysis = run_guarded(lambda: analyse(doc))
+        response = build_response(analysis)
+        if plot is not None:
+            try:
+                save_figure(diagnosis_figure(analysis, response), plot)
+            except OSError as exc:
+                raise fail(f"cannot write {plot}: {exc.strerror or exc}") from None
+        write_json(response, out)
