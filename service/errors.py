@@ -34,6 +34,7 @@ __all__ = [
     "install_error_handlers",
     "problem_body",
     "problem_response",
+    "pydantic_errors",
 ]
 
 log = logging.getLogger("service.errors")
@@ -164,9 +165,14 @@ def field_path(loc: Sequence[Any]) -> str:
 
 
 def _validation_errors(exc: RequestValidationError) -> list[dict[str, str]]:
+    return pydantic_errors(exc.errors())
+
+
+def pydantic_errors(errors: Sequence[Mapping[str, Any]], prefix: str = "") -> list[dict[str, str]]:
+    """``[{"field", "detail"}]`` of pydantic errors (fields prefixed with ``prefix``)."""
     out: list[dict[str, str]] = []
     seen: set[tuple[str, str]] = set()
-    for err in exc.errors():
+    for err in errors:
         loc = tuple(err.get("loc", ()))
         kind = err.get("type", "")
         if kind == "json_invalid":
@@ -177,6 +183,8 @@ def _validation_errors(exc: RequestValidationError) -> list[dict[str, str]]:
             field = field_path(loc)
             if kind == "unknown_field":
                 field = ".".join(p for p in (field, str(err.get("ctx", {}).get("field", ""))) if p)
+            if prefix:
+                field = prefix + ("." + field if field and not field.startswith("[") else field)
             msg = str(err.get("msg", "invalid"))
             if kind == "extra_forbidden":
                 msg = "unknown field; check its spelling against the schema at /docs"
@@ -233,6 +241,8 @@ async def _on_problem(request: Request, exc: ProblemError) -> Response:
 
 
 _HTTP_DETAILS = {
+    400: "the body could not be parsed: send UTF-8 JSON (Content-Type application/json) or a well-formed "
+         "multipart/form-data upload",
     404: "no such endpoint; the API is described at /docs and /openapi.json",
     405: "this endpoint does not accept that method; see /docs",
 }
@@ -240,7 +250,8 @@ _HTTP_DETAILS = {
 
 async def _on_http(request: Request, exc: StarletteHTTPException) -> Response:
     detail = exc.detail if isinstance(exc.detail, str) else str(exc.detail)
-    if exc.status_code in _HTTP_DETAILS and detail in ("Not Found", "Method Not Allowed"):
+    if exc.status_code in _HTTP_DETAILS and detail in ("Not Found", "Method Not Allowed",
+                                                       "There was an error parsing the body"):
         detail = _HTTP_DETAILS[exc.status_code]
     return problem_response(request, exc.status_code, detail, headers=getattr(exc, "headers", None))
 

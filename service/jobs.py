@@ -12,7 +12,7 @@ from typing import Any
 
 from starlette.responses import Response
 
-from rcsa import api, library_api
+from rcsa import library_api
 from rcsa.jobs import Handler, Job
 
 from .responses import json_response
@@ -27,8 +27,9 @@ def handlers(state: AppState) -> dict[str, Handler]:
 
     def batch(request: dict[str, Any], progress: Any) -> tuple[Any, dict[str, Any]]:
         with m.timed("batch"):
-            out = api.predict_batch(request, store=state.reader, max_lines=s.max_frequency_lines,
-                                    max_combinations=s.max_batch_combinations, progress=progress, arrays="numpy")
+            out = library_api.run_entries(request, store=state.reader, max_lines=s.max_frequency_lines,
+                                          max_combinations=s.max_batch_combinations, progress=progress,
+                                          arrays="numpy")
         m.frfs.labels("batch").inc(out["summary"]["ok"])
         return out, out["summary"]
 

@@ -39,4 +39,4 @@ def problems(*codes: int) -> dict[int | str, dict[str, Any]]:
     """OpenAPI ``responses`` entries for problem documents with these status codes."""
     return {code: {"description": _DESCRIPTIONS.get(code, "Problem."),
                    "content": {PROBLEM_MEDIA_TYPE: {"schema": {"$ref": "#/components/schemas/Problem"}}}}
-            for code in (*codes, 503)}
+            for code in sorted({400, 422, *codes, 503})}

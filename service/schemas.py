@@ -13,6 +13,8 @@ not fit it is passed on as it came and reported in its own result.
 
 from __future__ import annotations
 
+import math
+import re
 from typing import Annotated, Any, Literal
 
 from pydantic import (
@@ -26,6 +28,7 @@ from pydantic import (
     WrapValidator,
     model_validator,
 )
+from pydantic_core import PydanticCustomError
 
 from rcsa.reference import ra1
 
@@ -46,6 +49,21 @@ __all__ = [
     "Problem",
 ]
 
+#: Sanity bounds of the API (far beyond any machine tool; they keep arithmetic finite).
+MIN_FREQUENCY_HZ = 1.0e-3
+MAX_FREQUENCY_HZ = 1.0e7
+MIN_LENGTH_M = 1.0e-6
+MIN_STIFFNESS = 1.0e-3
+MIN_MODULUS_PA = 1.0
+MIN_DENSITY_KG_M3 = 1.0e-3
+MAX_LENGTH_M = 100.0
+MAX_MODULUS_PA = 1.0e15
+MAX_DENSITY_KG_M3 = 1.0e6
+MAX_STIFFNESS = 1.0e15
+MAX_DAMPING = 1.0e12
+MAX_FRF_VALUE = 1.0e6
+MAX_SPEED_RPM = 1.0e6
+
 #: Names pydantic puts in error locations for the members of the unions below.
 UNION_TAGS = frozenset({"frequency-range", "frequency-values", "spindle-analytical", "spindle-measured"})
 
@@ -63,18 +81,32 @@ class _Response(BaseModel):
 
 # --------------------------------------------------------------------------- assembly
 
+FrequencyValue = Annotated[float, Field(le=MAX_FREQUENCY_HZ)]  # > 0 and increasing: checked by rcsa
+FrfValue = Annotated[float, Field(ge=-MAX_FRF_VALUE, le=MAX_FRF_VALUE)]
+Coherence = Annotated[float, Field(ge=0, le=1.0 + 1e-9)]
+
+
 class FrequencyRange(_Request):
     """Evenly spaced lines from ``start_hz`` to ``stop_hz`` (included)."""
 
-    start_hz: float = Field(gt=0, description="First frequency line, Hz (> 0: 0 Hz is singular).")
-    stop_hz: float = Field(gt=0, description="Last frequency line (included), Hz; >= start_hz.")
-    step_hz: float = Field(gt=0, description="Spacing of the lines, Hz.")
+    start_hz: float = Field(ge=MIN_FREQUENCY_HZ, le=MAX_FREQUENCY_HZ, description="First frequency line, Hz (0 Hz is singular: >= 1 mHz; <= 10 MHz).")
+    stop_hz: float = Field(ge=MIN_FREQUENCY_HZ, le=MAX_FREQUENCY_HZ, description="Last frequency line (included), Hz; >= start_hz.")
+    step_hz: float = Field(gt=0, le=MAX_FREQUENCY_HZ, description="Spacing of the lines, Hz.")
+
+    @model_validator(mode="after")
+    def _finite_line_count(self) -> FrequencyRange:
+        # rcsa.spec.parse_frequency counts the lines with math.floor, which overflows (a 500)
+        # when (stop - start) / step is infinite; refuse such a grid here with the same field.
+        if not math.isfinite((self.stop_hz - self.start_hz) / self.step_hz):
+            raise PydanticCustomError("frequency_lines", "step_hz is too small for this band: the grid would "
+                                                         "have an unbounded number of lines")
+        return self
 
 
 class FrequencyValues(_Request):
     """Explicit frequency lines."""
 
-    values_hz: list[float] = Field(min_length=1, description="Frequency lines, Hz: strictly increasing, > 0.")
+    values_hz: list[FrequencyValue] = Field(min_length=1, description="Frequency lines, Hz: strictly increasing, > 0.")
 
 
 def _frequency_tag(value: Any) -> str | None:
@@ -98,29 +130,29 @@ Frequency = Annotated[
 class Material(_Request):
     """Material properties; a built-in (steel, carbide) may be overridden field by field."""
 
-    youngs_modulus_pa: float | None = Field(None, gt=0, description="Young's modulus E, Pa.")
+    youngs_modulus_pa: float | None = Field(None, ge=MIN_MODULUS_PA, le=MAX_MODULUS_PA, description="Young's modulus E, Pa.")
     poisson_ratio: float | None = Field(None, gt=-1, lt=0.5, description="Poisson's ratio ν (dimensionless).")
-    density_kg_m3: float | None = Field(None, gt=0, description="Density ρ, kg/m³.")
+    density_kg_m3: float | None = Field(None, ge=MIN_DENSITY_KG_M3, le=MAX_DENSITY_KG_M3, description="Density ρ, kg/m³.")
     loss_factor: float | None = Field(None, ge=0, lt=1, description="Loss factor η (E and G become E(1+iη)).")
 
 
 class Segment(_Request):
     """A uniform (hollow) circular beam segment."""
 
-    length_m: float = Field(gt=0, description="Segment length, m.")
-    outer_diameter_m: float = Field(gt=0, description="Outer diameter, m.")
-    inner_diameter_m: float = Field(0.0, ge=0, description="Bore diameter, m (0: solid); < outer_diameter_m.")
+    length_m: float = Field(ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Segment length, m.")
+    outer_diameter_m: float = Field(ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Outer diameter, m.")
+    inner_diameter_m: float = Field(0.0, ge=0, le=MAX_LENGTH_M, description="Bore diameter, m (0: solid); < outer_diameter_m.")
     material: str = Field("steel", min_length=1, description="Material name: steel, carbide, or one of `materials`.")
 
 
 class Bearing(_Request):
     """A spring/damper to rigid ground on the spindle."""
 
-    position_m: float = Field(ge=0, description="Position from the spindle nose (gauge line), m.")
-    stiffness_n_m: float = Field(ge=0, description="Radial stiffness, N/m.")
-    damping_ns_m: float = Field(0.0, ge=0, description="Radial viscous damping, N·s/m.")
-    rotational_stiffness_nm_rad: float = Field(0.0, ge=0, description="Tilting stiffness, N·m/rad.")
-    rotational_damping_nms_rad: float = Field(0.0, ge=0, description="Tilting damping, N·m·s/rad.")
+    position_m: float = Field(ge=0, le=MAX_LENGTH_M, description="Position from the spindle nose (gauge line), m.")
+    stiffness_n_m: float = Field(ge=0, le=MAX_STIFFNESS, description="Radial stiffness, N/m.")
+    damping_ns_m: float = Field(0.0, ge=0, le=MAX_DAMPING, description="Radial viscous damping, N·s/m.")
+    rotational_stiffness_nm_rad: float = Field(0.0, ge=0, le=MAX_STIFFNESS, description="Tilting stiffness, N·m/rad.")
+    rotational_damping_nms_rad: float = Field(0.0, ge=0, le=MAX_DAMPING, description="Tilting damping, N·m·s/rad.")
 
 
 class AnalyticalSpindle(_Request):
@@ -138,7 +170,7 @@ class MeasuredSpindle(_Request):
     artifact_method: Literal["exact", "finite_difference"] = Field(
         "exact", description="How an artifact_frfs measurement is identified: the exact three-FRF method, or "
                              "the labelled finite-difference fallback.")
-    effective_length_m: float = Field(0.2, gt=0, description="Equivalent-cantilever length used to estimate the "
+    effective_length_m: float = Field(0.2, ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Equivalent-cantilever length used to estimate the "
                                                              "rotations of a direct_frf measurement, m.")
 
 
@@ -169,27 +201,27 @@ class Tool(_Request):
     """Parametric cutting tool (ISO 13399 / Fusion meaning)."""
 
     material: str = Field("carbide", min_length=1, description="Tool material name.")
-    diameter_m: float = Field(gt=0, description="Cutting diameter DC, m.")
-    shank_diameter_m: float | None = Field(None, gt=0, description="Shank diameter SFDM, m (default: diameter_m).")
-    overall_length_m: float = Field(gt=0, description="Overall length OAL, m.")
-    flute_length_m: float = Field(gt=0, description="Flute length LCF, m; <= stickout_m.")
-    stickout_m: float = Field(gt=0, description="Length from the holder's tool-end face to the tip (Fusion LB), m.")
-    fluted_diameter_ratio: float = Field(0.8, gt=0, le=1, description="Equivalent fluted diameter / DC "
+    diameter_m: float = Field(ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Cutting diameter DC, m.")
+    shank_diameter_m: float | None = Field(None, ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Shank diameter SFDM, m (default: diameter_m).")
+    overall_length_m: float = Field(ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Overall length OAL, m.")
+    flute_length_m: float = Field(ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Flute length LCF, m; <= stickout_m.")
+    stickout_m: float = Field(ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Length from the holder's tool-end face to the tip (Fusion LB), m.")
+    fluted_diameter_ratio: float = Field(0.8, ge=0.01, le=1, description="Equivalent fluted diameter / DC "
                                                                       "(dimensionless).")
-    fluted_mass_diameter_ratio: float | None = Field(None, gt=0, le=1, description="Separate equivalent diameter "
+    fluted_mass_diameter_ratio: float | None = Field(None, ge=0.01, le=1, description="Separate equivalent diameter "
                                                      "ratio for the flutes' mass (default: fluted_diameter_ratio).")
-    shoulder_length_m: float | None = Field(None, gt=0, description="Reduced neck: from the tip to the neck's end, "
+    shoulder_length_m: float | None = Field(None, ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Reduced neck: from the tip to the neck's end, "
                                             "m (with shoulder_diameter_m).")
-    shoulder_diameter_m: float | None = Field(None, gt=0, description="Reduced neck diameter, m.")
+    shoulder_diameter_m: float | None = Field(None, ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Reduced neck diameter, m.")
 
 
 class Joint(_Request):
     """Elastic joint diag(k_t + iωc_t, k_r + iωc_r); a rotational stiffness left out is rigid."""
 
-    stiffness_n_m: float = Field(gt=0, description="Translational stiffness k_t, N/m.")
-    damping_ns_m: float = Field(0.0, ge=0, description="Translational damping c_t, N·s/m.")
-    rotational_stiffness_nm_rad: float | None = Field(None, gt=0, description="Rotational stiffness k_r, N·m/rad.")
-    rotational_damping_nms_rad: float = Field(0.0, ge=0, description="Rotational damping c_r, N·m·s/rad.")
+    stiffness_n_m: float = Field(ge=MIN_STIFFNESS, le=MAX_STIFFNESS, description="Translational stiffness k_t, N/m.")
+    damping_ns_m: float = Field(0.0, ge=0, le=MAX_DAMPING, description="Translational damping c_t, N·s/m.")
+    rotational_stiffness_nm_rad: float | None = Field(None, ge=MIN_STIFFNESS, le=MAX_STIFFNESS, description="Rotational stiffness k_r, N·m/rad.")
+    rotational_damping_nms_rad: float = Field(0.0, ge=0, le=MAX_DAMPING, description="Rotational damping c_r, N·m·s/rad.")
 
 
 class Joints(_Request):
@@ -200,7 +232,7 @@ class Joints(_Request):
 
 
 BeamTheory = Literal["timoshenko", "euler_bernoulli"]
-ShearCoefficient = Literal["hutchinson", "cowper"] | Annotated[float, Field(gt=0, le=1.5)]
+ShearCoefficient = Literal["hutchinson", "cowper"] | Annotated[float, Field(ge=0.01, le=1.5)]
 
 
 class Assembly(_Request):
@@ -234,12 +266,20 @@ class Combination(_Request):
     joints: Joints | None = None
 
 
+class RefusedCombination:
+    """A combination that does not fit the schema: kept as sent, with what is wrong."""
+
+    def __init__(self, raw: Any, errors: list[dict[str, Any]]) -> None:
+        self.raw = raw
+        self.errors = errors
+
+
 def _keep_invalid(value: Any, handler: ValidatorFunctionWrapHandler) -> Any:
-    """Validate a combination; if it does not fit, keep it as sent for rcsa to report it."""
+    """Validate a combination; if it does not fit, keep it (refused) so that only it fails."""
     try:
         return handler(value)
-    except ValidationError:
-        return value
+    except ValidationError as exc:
+        return RefusedCombination(value, exc.errors(include_url=False, include_context=True, include_input=False))
 
 
 class BatchRequest(_Request):
@@ -262,12 +302,21 @@ class BatchRequest(_Request):
         min_length=1, description="Combinations (at most RCSA_MAX_BATCH_COMBINATIONS). Each is checked on "
                                   "its own: one that is invalid gets status error in its result.")
 
-    def to_request(self) -> dict[str, Any]:
-        """The plain batch document for :func:`rcsa.api.predict_batch`."""
+    def to_request(self) -> tuple[dict[str, Any], dict[int, dict[str, str]]]:
+        """The batch document (combinations as sent) and the refused ones: index → {field, detail}."""
+        from .errors import pydantic_errors
+
         doc = self.model_dump(exclude_unset=True, exclude={"combinations"})
-        doc["combinations"] = [c.model_dump(exclude_unset=True) if isinstance(c, BaseModel) else c
-                               for c in self.combinations]
-        return doc
+        combos: list[Any] = []
+        refused: dict[int, dict[str, str]] = {}
+        for i, c in enumerate(self.combinations):
+            if isinstance(c, RefusedCombination):
+                combos.append(c.raw)
+                refused[i] = pydantic_errors(c.errors, prefix=f"combinations[{i}]")[0]
+            else:
+                combos.append(c.model_dump(exclude_unset=True))
+        doc["combinations"] = combos
+        return doc, refused
 
 
 # --------------------------------------------------------------------------- results
@@ -372,7 +421,7 @@ class LibraryOptions(_Request):
                                               "carbide).")
     holder_segments_per_cone: int | None = Field(None, ge=1, le=50, description="Cylinders per conical holder "
                                                  "segment (default 4).")
-    fluted_diameter_ratio: float | None = Field(None, gt=0, le=1, description="Equivalent fluted diameter / DC.")
+    fluted_diameter_ratio: float | None = Field(None, ge=0.01, le=1, description="Equivalent fluted diameter / DC.")
     shaft_origin: Literal["shoulder", "flute_end"] | None = Field(None, description="Where shaft.segments start.")
     default_holder: str | dict[str, Any] | None = Field(None, description="Holder for tools without one: the guid "
                                                         "of a standalone holder in the library, or a Fusion "
@@ -422,8 +471,8 @@ class LibraryResult(_Response):
 class ComplexArrayIn(_Request):
     """A complex array as two real arrays of equal length."""
 
-    real: list[float]
-    imag: list[float]
+    real: list[FrfValue] = Field(description="Real parts.")
+    imag: list[FrfValue] = Field(description="Imaginary parts.")
 
 
 _OUTPUT_ONLY = ("id", "created_utc", "software_version", "source", "frfs", "n_frequencies",
@@ -446,17 +495,17 @@ class MeasurementUpload(_Request):
     kind: Literal["point_receptance", "artifact_frfs", "direct_frf"]
     machine: str | None = Field(None, max_length=128, description="Machine tool name.")
     notes: str | None = Field(None, max_length=10_000)
-    frequency_hz: list[float] = Field(min_length=1, description="Frequency lines, Hz, strictly increasing, > 0.")
+    frequency_hz: list[FrequencyValue] = Field(min_length=1, description="Frequency lines, Hz, strictly increasing, > 0.")
     h: ComplexArrayIn | None = Field(None, description="Receptance h, m/N (point_receptance, direct_frf).")
     l: ComplexArrayIn | None = Field(None, description="Receptance l, m/(N·m) (point_receptance).")  # noqa: E741
     n: ComplexArrayIn | None = Field(None, description="Receptance n, rad/N (point_receptance).")
     p: ComplexArrayIn | None = Field(None, description="Receptance p, rad/(N·m) (point_receptance).")
-    points_m: list[float] | None = Field(None, description="artifact_frfs: positions of points 1, 2, ... from "
+    points_m: list[Annotated[float, Field(le=MAX_LENGTH_M)]] | None = Field(None, description="artifact_frfs: positions of points 1, 2, ... from "
                                          "the artifact tip toward the spindle, m. The FRFs themselves are h11, "
                                          "h21, h22, ... (m/N), named h<response><excitation>.")
     artifact: dict[str, Any] | None = Field(None, description="artifact_frfs: diameter_m, stickout_m, and where "
                                             "known length_m, inner_diameter_m, material, holder.")
-    coherence: list[float] | dict[str, list[float]] | None = Field(None, description="Coherence (0…1): a list "
+    coherence: list[Coherence] | dict[str, list[Coherence]] | None = Field(None, description="Coherence (0…1): a list "
                                                                    "for h alone, or lists by FRF name.")
     # accepted back from GET /v1/measurements/{id}, so an export can be uploaded again (new id)
     id: str | None = Field(None, description="Ignored (an upload gets a new id).")
@@ -475,12 +524,8 @@ class MeasurementUpload(_Request):
     @classmethod
     def _only_artifact_frf_names(cls, data: Any) -> Any:
         if isinstance(data, dict):
-            import re
-
             for key in data:
                 if key not in cls.model_fields and not re.fullmatch(r"h[1-9][1-9]", str(key)):
-                    from pydantic_core import PydanticCustomError
-
                     raise PydanticCustomError(
                         "unknown_field", "unknown field; artifact FRFs are named h<response><excitation>, "
                         "e.g. h21, and the other fields are listed in the schema at /docs", {"field": str(key)})
@@ -553,15 +598,15 @@ class Deleted(_Response):
 class FrfIn(_Request):
     """An inline tool-point FRF."""
 
-    frequency_hz: list[float] = Field(min_length=1, description="Frequency lines, Hz.")
+    frequency_hz: list[FrequencyValue] = Field(min_length=1, description="Frequency lines, Hz.")
     h: ComplexArrayIn = Field(description="Tool-point receptance, m/N.")
 
 
 class SpeedRange(_Request):
     """Spindle-speed grid: count values from start to stop."""
 
-    start: float = Field(gt=0, description="Lowest spindle speed, rpm.")
-    stop: float = Field(gt=0, description="Highest spindle speed, rpm.")
+    start: float = Field(ge=MIN_FREQUENCY_HZ, le=MAX_SPEED_RPM, description="Lowest spindle speed, rpm.")
+    stop: float = Field(ge=MIN_FREQUENCY_HZ, le=MAX_SPEED_RPM, description="Highest spindle speed, rpm.")
     count: int = Field(ge=2, description="Number of speeds.")
 
 
@@ -576,10 +621,10 @@ class LobesRequest(_Request):
     frf_x: FrfIn | None = Field(None, description="Tool-point FRF in x (or give assembly).")
     frf_y: FrfIn | None = Field(None, description="FRF in y on the same grid; null: same as x.")
     assembly: Assembly | None = Field(None, description="Predict the FRF of this assembly instead.")
-    teeth: int = Field(ge=1, description="Number of teeth (flutes).")
-    tangential_coefficient_n_m2: float = Field(gt=0, description="Tangential cutting coefficient Kt, N/m².")
-    radial_ratio: float = Field(ge=0, description="Radial to tangential coefficient ratio Kr (dimensionless).")
-    radial_immersion: float = Field(gt=0, le=1, description="Radial immersion ae/D (dimensionless).")
+    teeth: int = Field(ge=1, le=1000, description="Number of teeth (flutes).")
+    tangential_coefficient_n_m2: float = Field(ge=MIN_MODULUS_PA, le=MAX_MODULUS_PA, description="Tangential cutting coefficient Kt, N/m².")
+    radial_ratio: float = Field(ge=0, le=1000, description="Radial to tangential coefficient ratio Kr (dimensionless).")
+    radial_immersion: float = Field(ge=1e-4, le=1, description="Radial immersion ae/D (dimensionless).")
     milling: Literal["up", "down"]
     spindle_speed_rpm: SpeedRange
 

@@ -12,7 +12,7 @@ from typing import Annotated
 from fastapi import APIRouter, Depends, Header, Path
 from starlette.responses import FileResponse, Response
 
-from rcsa import api, library_api
+from rcsa import library_api
 
 from ..bodies import require_json
 from ..deps import StateDep
@@ -39,19 +39,20 @@ def predict_batch(body: BatchRequest, state: StateDep, _: ReadAccess, prefer: Pr
     combination gets ``status: error`` with the offending field and never fails the others.
     """
     s = state.settings
-    request = body.to_request()
+    request, refused = body.to_request()
     n = len(request["combinations"])
     if n > s.max_batch_combinations:
         raise ProblemError(422, f"combinations: at most {s.max_batch_combinations} per request, got {n}; split "
                                 "the batch", errors=[{"field": "combinations", "detail": f"at most "
                                                      f"{s.max_batch_combinations} combinations"}])
+    checked = library_api.checked_batch(request, refused)
     asked = wants_async(prefer)
     if asked or n > s.async_batch_threshold:
         library_api.check_common(request, store=state.reader, max_lines=s.max_frequency_lines)
-        return accepted(state, state.jobs.submit("batch", request), preference_applied=asked)
+        return accepted(state, state.jobs.submit("batch", checked), preference_applied=asked)
     with state.metrics.timed("batch"):
-        out = api.predict_batch(request, store=state.reader, max_lines=s.max_frequency_lines,
-                                max_combinations=s.max_batch_combinations, arrays="numpy")
+        out = library_api.run_entries(checked, store=state.reader, max_lines=s.max_frequency_lines,
+                                      max_combinations=s.max_batch_combinations, arrays="numpy")
     state.metrics.frfs.labels("batch").inc(out["summary"]["ok"])
     return json_response(out)
 

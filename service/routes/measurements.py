@@ -131,7 +131,7 @@ def list_measurements(
 @router.get("/{measurement_id}", response_model=MeasurementDocument, responses={
     200: {"content": {HDF5: {"schema": {"type": "string", "format": "binary"}}},
           "description": "The measurement in the contract's JSON form, or its HDF5 file (Accept: application/x-hdf5)."},
-    **problems(401, 404, 406)}, summary="Get a measurement (JSON or HDF5)")
+    **problems(401, 404)}, summary="Get a measurement (JSON or HDF5)")
 def get_measurement(
     measurement_id: MeasurementId, state: StateDep, _: ReadAccess,
     data: Annotated[bool, Query(description="Include the arrays (false: metadata and summary only).")] = True,

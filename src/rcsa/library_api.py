@@ -1,4 +1,4 @@
-"""Tool-point FRFs of a whole CAM tool library on one spindle (REST and CLI).
+"""Tool-point FRFs of a whole CAM tool library, or a checked batch, on one spindle (REST and CLI).
 
 A Fusion library (``.json`` or ``.tools``) becomes a *library request*: the import report of
 every item (``ok`` / ``skipped`` with a reason / ``error``) and one batch request holding
@@ -23,6 +23,8 @@ __all__ = [
     "check_common",
     "library_request",
     "predict_library",
+    "checked_batch",
+    "run_entries",
     "run_library_request",
 ]
 
@@ -111,6 +113,9 @@ def library_request(
     entries, combos = [], []
     for c in imported:
         entry = {k: v for k, v in c.to_dict().items() if k in (*_ENTRY_FIELDS, "status", "reason")}
+        if c.status == "error":
+            field, sep, detail = (c.reason or "").partition(": ")
+            entry["error"] = {"field": field, "detail": detail} if sep else {"field": "", "detail": c.reason}
         entries.append(entry)
         if c.status == "ok":
             item = c.batch_item()
@@ -127,7 +132,37 @@ def library_request(
             "entries": entries, "batch": batch}
 
 
-def run_library_request(
+def checked_batch(request: Mapping[str, Any], refused: Mapping[int, Mapping[str, str]]) -> dict[str, Any]:
+    """A batch request some of whose combinations were refused before computing.
+
+    The REST layer checks every combination against its schema (types, bounds); the
+    refused ones must still get a result in their place. This returns an *entries request*
+    for :func:`run_entries`: the refused combinations as ``error`` entries, the others
+    passed on to :func:`rcsa.api.predict_batch`.
+
+    Parameters
+    ----------
+    request : mapping
+        The batch request (``combinations`` as sent).
+    refused : mapping of int to dict
+        Index of a refused combination → ``{"field", "detail"}`` (field paths from the
+        request root, e.g. ``"combinations[3].tool.stickout_m"``).
+    """
+    if not isinstance(request, Mapping) or not isinstance(request.get("combinations"), list):
+        raise InputError("combinations", "must be a non-empty list")
+    entries, kept = [], []
+    for i, combo in enumerate(request["combinations"]):
+        ident = combo.get("id") if isinstance(combo, Mapping) else None
+        ident = ident if isinstance(ident, str) else None
+        if i in refused:
+            entries.append({"id": ident, "status": "error", "error": dict(refused[i])})
+        else:
+            entries.append({"id": ident, "status": "ok", "path": f"combinations[{i}]"})
+            kept.append(combo)
+    return {"entries": entries, "batch": {**request, "combinations": kept}}
+
+
+def run_entries(
     request: Mapping[str, Any],
     *,
     store: Any = None,
@@ -136,41 +171,64 @@ def run_library_request(
     progress: Callable[[int, int], None] | None = None,
     arrays: str = "list",
 ) -> dict[str, Any]:
-    """Predict every ``ok`` tool of a library request; merge with the skipped and failed ones.
+    """Run an entries request (:func:`library_request` or :func:`checked_batch`).
+
+    The ``ok`` entries are computed together by :func:`rcsa.api.predict_batch` (spindle and
+    holders condensed once); every entry gets one result in its place.
 
     Returns
     -------
     dict
-        ``{"library": {...}, "results": [...], "summary": {"ok", "skipped", "error"}}``:
-        one result per library item in library order, with its ``id``, ``index``,
-        ``description``, ``number`` (T number), ``teeth``, ``tool_type``, ``warnings`` and
-        ``status``: ``ok`` (the prediction fields), ``skipped`` (``reason``) or ``error``
-        (``error: {"field", "detail"}``).
+        ``{"results": [...], "summary": {...}}`` (and ``"library"`` for a library request).
+        A library request's results carry the item's ``id``, ``index``, ``description``,
+        ``number`` (T number), ``teeth``, ``tool_type``, ``warnings`` and ``status``: ``ok``
+        (the prediction fields), ``skipped`` (``reason``) or ``error`` (``error: {"field",
+        "detail"}``, the field relative to the tool).
     """
-    if not isinstance(request, Mapping) or not {"entries", "batch", "library"} <= set(request):
-        raise InputError("", "not a library request (see rcsa.library_api.library_request)")
+    if not isinstance(request, Mapping) or not {"entries", "batch"} <= set(request):
+        raise InputError("", "not an entries request (see rcsa.library_api.library_request)")
     batch = request["batch"]
-    predicted: dict[str, dict[str, Any]] = {}
+    computed: list[dict[str, Any]] = []
     if batch.get("combinations"):
-        out = api.predict_batch(batch, store=store, max_lines=max_lines, max_combinations=max_combinations,
-                                progress=progress, arrays=arrays)
-        predicted = {r["id"]: r for r in out["results"]}
-    elif progress is not None:
-        progress(0, 0)
-    results = []
+        computed = api.predict_batch(batch, store=store, max_lines=max_lines, max_combinations=max_combinations,
+                                     progress=progress, arrays=arrays)["results"]
+    else:
+        check_common(batch, store=store, max_lines=max_lines)
+        if progress is not None:
+            progress(0, 0)
+    results, position = [], 0
     for entry in request["entries"]:
-        head = {k: entry.get(k) for k in _ENTRY_FIELDS}
+        head = {k: entry[k] for k in _ENTRY_FIELDS if k in entry}
         if entry["status"] == "ok":
-            r = predicted[entry["id"]]
-            results.append({**head, **{k: v for k, v in r.items() if k != "id"}})
+            r = computed[position]
+            if r["status"] == "error":
+                r = {**r, "error": _rebase(r["error"], position, entry.get("path", ""))}
+            position += 1
+            results.append({**head, **r})
         elif entry["status"] == "skipped":
             results.append({**head, "status": "skipped", "reason": entry.get("reason")})
         else:
-            field, sep, detail = (entry.get("reason") or "").partition(": ")
-            error = {"field": field, "detail": detail} if sep else {"field": "", "detail": entry.get("reason")}
-            results.append({**head, "status": "error", "error": error})
-    summary = {s: sum(r["status"] == s for r in results) for s in ("ok", "skipped", "error")}
-    return {"library": dict(request["library"]), "results": results, "summary": summary}
+            results.append({**head, "status": "error", "error": dict(entry["error"])})
+    statuses = ("ok", "skipped", "error") if "library" in request else ("ok", "error")
+    out: dict[str, Any] = {"results": results, "summary": {s: sum(r["status"] == s for r in results)
+                                                           for s in statuses}}
+    if "library" in request:
+        out = {"library": dict(request["library"]), **out}
+    return out
+
+
+def _rebase(error: Mapping[str, Any], position: int, path: str) -> dict[str, Any]:
+    """Point a batch error's field at the entry's own place (``path``) instead of its position."""
+    field = str(error.get("field", ""))
+    prefix = f"combinations[{position}]"
+    if field.startswith(prefix):
+        rest = field[len(prefix):]
+        field = (path + rest) if path else rest.lstrip(".")
+    return {**error, "field": field}
+
+
+#: Alias: a library request is an entries request.
+run_library_request = run_entries
 
 
 def predict_library(library: str | os.PathLike[str] | bytes | Mapping[str, Any], *, store: Any = None,
@@ -180,5 +238,5 @@ def predict_library(library: str | os.PathLike[str] | bytes | Mapping[str, Any],
                     **kwargs: Any) -> dict[str, Any]:
     """:func:`library_request` then :func:`run_library_request` (``kwargs`` go to the first)."""
     request = library_request(library, **kwargs)
-    return run_library_request(request, store=store, max_lines=max_lines, max_combinations=max_combinations,
+    return run_entries(request, store=store, max_lines=max_lines, max_combinations=max_combinations,
                                progress=progress, arrays=arrays)

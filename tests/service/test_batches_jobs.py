@@ -8,7 +8,7 @@ import time
 import numpy as np
 import pytest
 
-from rcsa import api
+from rcsa import api, library_api
 from rcsa.jobs import JobRunner, JobStore
 
 from .conftest import GRID, assert_problem
@@ -22,6 +22,8 @@ def _batch(assembly, n_good=2, bad=True):
                           "tool": {**assembly["tool"], "stickout_m": -0.01}})
         combos.append({"id": "bad-type", "holder": assembly["holder"], "tool": "not a tool"})
         combos.append({"holder": assembly["holder"], "tool": assembly["tool"]})
+        combos.append({"id": "too-long", "holder": assembly["holder"],  # only rcsa knows this rule
+                       "tool": {**assembly["tool"], "stickout_m": 0.5}})
     return {"frequency": GRID, "spindle": assembly["spindle"], "combinations": combos}
 
 
@@ -44,12 +46,15 @@ def test_batch_with_bad_combinations_among_good_ones(client, assembly):
     r = client.post("/v1/tool-point-frf/batch", json=request)
     assert r.status_code == 200, r.text
     out = r.json()
-    assert [x["id"] for x in out["results"]] == ["T0", "bad-stickout", "T1", "bad-type", None]
-    assert [x["status"] for x in out["results"]] == ["ok", "error", "ok", "error", "error"]
-    assert out["results"][1]["error"] == {"field": "combinations[1].tool.stickout_m", "detail": "must be > 0, got -0.01"}
+    assert [x["id"] for x in out["results"]] == ["T0", "bad-stickout", "T1", "bad-type", None, "too-long"]
+    assert [x["status"] for x in out["results"]] == ["ok", "error", "ok", "error", "error", "error"]
+    assert out["results"][1]["error"] == {"field": "combinations[1].tool.stickout_m",
+                                          "detail": "Input should be greater than or equal to 0.000001"}
     assert out["results"][3]["error"]["field"] == "combinations[3].tool"
-    assert out["results"][4]["error"]["field"] == "combinations[4].id"
-    assert out["summary"] == {"ok": 2, "error": 3}
+    assert out["results"][4]["error"] == {"field": "combinations[4].id", "detail": "is required"}
+    assert out["results"][5]["error"]["field"] == "combinations[5].tool.stickout_m"
+    assert "overall_length_m" in out["results"][5]["error"]["detail"]
+    assert out["summary"] == {"ok": 2, "error": 4}
     expected = api.predict({**assembly, "tool": request["combinations"][2]["tool"]}).to_dict()
     np.testing.assert_allclose(out["results"][2]["tool_point"]["h"]["imag"], expected["tool_point"]["h"]["imag"],
                                rtol=1e-12)
@@ -79,7 +84,7 @@ def test_async_job_path_202_poll_result(make_client, assembly):
         assert location == f"/v1/jobs/{r.json()['id']}" and r.headers["retry-after"] == "1"
         assert r.json()["status"] in ("queued", "running", "succeeded")
         job = _wait(client, location)
-        assert job["status"] == "succeeded" and job["progress"] == 1.0 and job["summary"] == {"ok": 4, "error": 3}
+        assert job["status"] == "succeeded" and job["progress"] == 1.0 and job["summary"] == {"ok": 4, "error": 4}
         result = client.get(job["result_url"])
         assert result.status_code == 200 and result.headers["content-type"].startswith("application/json")
         sync = client.post("/v1/tool-point-frf/batch", json=request, headers={"Prefer": "respond-sync"})
@@ -110,7 +115,7 @@ def test_result_of_an_unfinished_job_is_409_and_restart_finishes_it(make_client,
         job = _wait(client, location)
         assert job["status"] == "succeeded" and job["attempts"] == 1
         assert [x["status"] for x in client.get(job["result_url"]).json()["results"]] == \
-            ["ok", "error", "ok", "ok", "error", "error"]
+            ["ok", "error", "ok", "ok", "error", "error", "error"]
 
 
 def test_a_job_whose_runner_died_is_resumed(make_client, store_path, assembly):
@@ -140,7 +145,8 @@ def test_failed_job_reports_a_problem(make_client, store_path, assembly):
     with make_client(job_workers=0):
         pass
     jobs = JobStore(jobs_dir)
-    job = jobs.submit("batch", {"frequency": {"start_hz": 0.0}, "spindle": {}, "combinations": [{}]})
+    bad = {"frequency": {"start_hz": 0.0}, "spindle": {}, "combinations": [{}]}
+    job = jobs.submit("batch", library_api.checked_batch(bad, {}))
     with make_client() as client:
         status = _wait(client, f"/v1/jobs/{job.id}")
         assert status["status"] == "failed" and status["error"]["status"] == 422
