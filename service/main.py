@@ -77,7 +77,7 @@ def _startup(settings: Settings, metrics: Metrics) -> AppState:
     keys = KeyRing(parse_key_list(settings.api_keys.get_secret_value()), KeyFile.in_store(store.path))
     jobs = JobStore(Path(store.path) / "jobs", stale_after_s=settings.job_stale_s,
                     max_attempts=settings.job_max_attempts)
-    purged = jobs.purge(settings.job_retention_s)
+    purged = jobs.purge(settings.job_retention_s)  # and hourly by the runners
     if purged:
         log.info("purged %d finished jobs older than %g s", purged, settings.job_retention_s)
     state = AppState(settings=settings, store=store, reader=CachedMeasurements(store, settings.measurement_cache),
@@ -89,7 +89,7 @@ def _startup(settings: Settings, metrics: Metrics) -> AppState:
     table = handlers(state)
     for _ in range(settings.job_workers):
         runner = JobRunner(jobs, table, poll_s=settings.job_poll_s, heartbeat_s=settings.job_heartbeat_s,
-                           on_finish=finished)
+                           on_finish=finished, retention_s=settings.job_retention_s)
         runner.start()
         state.runners.append(runner)
     if not keys.configured:

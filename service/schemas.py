@@ -332,9 +332,10 @@ class ToolPoint(_Response):
     """Tool-point receptance [[h, l], [n, p]]."""
 
     h: ComplexArray = Field(description="Displacement / force, m/N.")
-    l: ComplexArray = Field(description="Displacement / moment, m/(N·m) = 1/N.")  # noqa: E741
-    n: ComplexArray = Field(description="Rotation / force, rad/N.")
-    p: ComplexArray = Field(description="Rotation / moment, rad/(N·m).")
+    l: ComplexArray | None = Field(None, description="Displacement / moment, m/(N·m) = 1/N (absent when "  # noqa: E741
+                                   "?tool_point= leaves it out).")
+    n: ComplexArray | None = Field(None, description="Rotation / force, rad/N (absent likewise).")
+    p: ComplexArray | None = Field(None, description="Rotation / moment, rad/(N·m) (absent likewise).")
 
 
 class Peak(_Response):

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import APIRouter, Depends, Header, Path
+from fastapi import APIRouter, Depends, Header, Path, Query
 from starlette.responses import FileResponse, Response
 
 from rcsa import library_api
@@ -27,12 +27,15 @@ router = APIRouter(prefix="/v1", tags=["batches and jobs"])
 JobId = Annotated[str, Path(description="Job id from the Location header of a 202 answer.",
                             examples=["j-0123456789abcdef0123456789abcdef"])]
 PreferHeader = Annotated[str | None, Header(description="respond-async: always answer 202 with a job.")]
+ToolPointQuery = Annotated[str | None, Query(pattern=r"^[hlnp](,[hlnp]){0,3}$", description=(
+    "Receptances to return in each result's tool_point, e.g. h (a third of the size); default h,l,n,p."))]
 
 
 @router.post("/tool-point-frf/batch", dependencies=[Depends(require_json)], response_model=BatchResult, responses={
     202: {"model": JobStatus, "description": "Queued as a job; poll Location."}, **problems(401, 413, 415, 422)},
     summary="Tool-point FRFs of many combinations")
-def predict_batch(body: BatchRequest, state: StateDep, _: ReadAccess, prefer: PreferHeader = None) -> Response:
+def predict_batch(body: BatchRequest, state: StateDep, _: ReadAccess, prefer: PreferHeader = None,
+                  tool_point: ToolPointQuery = None) -> Response:
     """One result per combination, in input order, each with its own ``status``.
 
     The spindle (and each distinct spindle + holder) is condensed once and reused. A bad
@@ -45,7 +48,7 @@ def predict_batch(body: BatchRequest, state: StateDep, _: ReadAccess, prefer: Pr
         raise ProblemError(422, f"combinations: at most {s.max_batch_combinations} per request, got {n}; split "
                                 "the batch", errors=[{"field": "combinations", "detail": f"at most "
                                                      f"{s.max_batch_combinations} combinations"}])
-    checked = library_api.checked_batch(request, refused)
+    checked = library_api.checked_batch(request, refused, tool_point.split(",") if tool_point else None)
     asked = wants_async(prefer)
     if asked or n > s.async_batch_threshold:
         library_api.check_common(request, store=state.reader, max_lines=s.max_frequency_lines)

@@ -5,20 +5,22 @@ from __future__ import annotations
 from fastapi import APIRouter, Depends
 from starlette.responses import Response
 
-from rcsa import api
+from rcsa import api, library_api
 
 from ..bodies import require_json
 from ..deps import StateDep
 from ..responses import json_response, problems
 from ..schemas import Assembly, PredictionResult
 from ..security import ReadAccess
+from .batches import ToolPointQuery
 
 router = APIRouter(prefix="/v1", tags=["predictions"])
 
 
 @router.post("/tool-point-frf", dependencies=[Depends(require_json)], response_model=PredictionResult, responses=problems(401, 413, 415, 422),
              summary="Tool-point FRF of one assembly")
-def predict_tool_point_frf(body: Assembly, state: StateDep, _: ReadAccess) -> Response:
+def predict_tool_point_frf(body: Assembly, state: StateDep, _: ReadAccess,
+                           tool_point: ToolPointQuery = None) -> Response:
     """Predict the tool-point receptance of a spindle–holder–tool assembly (contract "Assembly").
 
     The spindle is modelled (segments + bearings) or a stored measurement
@@ -29,4 +31,5 @@ def predict_tool_point_frf(body: Assembly, state: StateDep, _: ReadAccess) -> Re
         result = api.predict(body.model_dump(exclude_unset=True), store=state.reader,
                              max_lines=state.settings.max_frequency_lines)
     state.metrics.frfs.labels("predict").inc()
-    return json_response(result.to_dict(arrays="numpy"))
+    out = result.to_dict(arrays="numpy")
+    return json_response(library_api.select_tool_point(out, tool_point.split(",")) if tool_point else out)

@@ -16,7 +16,9 @@ progress; at the end it writes the result file and marks the job ``succeeded`` (
 
 Restarts: a job whose runner died (process killed, machine rebooted) keeps ``running`` with
 a heartbeat that stops moving; once it is older than ``stale_after_s`` any runner may claim
-it again (``attempts`` counts the tries). After ``max_attempts`` interrupted tries the job is
+it again (``attempts`` counts the tries). A runner on the same host whose process no longer
+exists (runner ids are ``host:pid:token``) is recognised at once, so a restarted service
+resumes its own interrupted jobs without waiting for the heartbeat to go stale. After ``max_attempts`` interrupted tries the job is
 failed instead of being retried for ever (a request that kills its worker, e.g. by memory).
 
 Idempotency (hook for ``Idempotency-Key``): rows carry ``idempotency_key``, ``owner``
@@ -90,6 +92,24 @@ CREATE UNIQUE INDEX IF NOT EXISTS jobs_idempotency ON jobs (owner, idempotency_k
 _COLUMNS = ("id, kind, status, progress, created_utc, started_utc, finished_utc, attempts, "
             "error, summary, idempotency_key, request_sha256, heartbeat_unix")
 _BUSY_TIMEOUT_S = 30.0
+_PURGE_EVERY_S = 3600.0
+
+
+_HOST = socket.gethostname()
+
+
+def _runner_is_dead(runner: str | None) -> bool:
+    """Whether a runner id ``host:pid:token`` of this host names a process that no longer exists."""
+    try:
+        host, pid, _ = str(runner).split(":")
+        if host != _HOST or int(pid) == os.getpid():
+            return False
+        os.kill(int(pid), 0)
+    except ProcessLookupError:
+        return True
+    except (ValueError, PermissionError, OSError):
+        return False
+    return False
 
 
 def is_job_id(text: object) -> bool:
@@ -304,6 +324,11 @@ class JobStore:
         with closing(self._connect()) as con:
             con.execute("BEGIN IMMEDIATE")
             try:
+                dead = [(job_id,) for job_id, owner in con.execute(
+                    "SELECT id, runner FROM jobs WHERE status = 'running' AND runner LIKE ?", (_HOST + ":%",))
+                    if _runner_is_dead(owner)]
+                if dead:  # its process is gone from this machine: no need to wait for the heartbeat
+                    con.executemany("UPDATE jobs SET heartbeat_unix = NULL WHERE id = ?", dead)
                 while True:
                     row = con.execute(
                         "SELECT id, attempts FROM jobs WHERE status = 'queued' OR "
@@ -425,16 +450,21 @@ class JobRunner:
         How often a busy runner refreshes its heartbeat and progress, s.
     on_finish : callable, optional
         ``on_finish(job, seconds)`` after each job (for metrics).
+    retention_s : float, optional
+        Purge finished jobs older than this, hourly (:meth:`JobStore.purge`); None keeps them.
     """
 
     def __init__(self, jobs: JobStore, handlers: Mapping[str, Handler], *, poll_s: float = 1.0,
-                 heartbeat_s: float = 2.0, on_finish: Callable[[Job, float], None] | None = None) -> None:
+                 heartbeat_s: float = 2.0, on_finish: Callable[[Job, float], None] | None = None,
+                 retention_s: float | None = None) -> None:
         self.jobs = jobs
         self.handlers = dict(handlers)
         self.poll_s = float(poll_s)
         self.heartbeat_s = float(heartbeat_s)
         self.on_finish = on_finish
-        self.runner_id = f"{socket.gethostname()}:{os.getpid()}:{secrets.token_hex(4)}"
+        self.retention_s = retention_s
+        self._next_purge = time.monotonic() + _PURGE_EVERY_S
+        self.runner_id = f"{_HOST}:{os.getpid()}:{secrets.token_hex(4)}"
         self._stop = threading.Event()
         self._wake = threading.Event()
         self._thread: threading.Thread | None = None
@@ -473,6 +503,12 @@ class JobRunner:
             except Exception:  # the database itself failed: log, wait, try again
                 log.exception("job runner: could not claim or record a job")
                 worked = False
+            if self.retention_s is not None and time.monotonic() > self._next_purge:
+                self._next_purge = time.monotonic() + _PURGE_EVERY_S
+                try:
+                    self.jobs.purge(self.retention_s)
+                except Exception:
+                    log.exception("job runner: could not purge old jobs")
             if not worked:
                 self._wake.wait(self.poll_s)
                 self._wake.clear()

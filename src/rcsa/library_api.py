@@ -26,6 +26,7 @@ __all__ = [
     "checked_batch",
     "run_entries",
     "run_library_request",
+    "select_tool_point",
 ]
 
 #: Options of :func:`rcsa.libraries.library_combinations` a caller may set.
@@ -132,7 +133,8 @@ def library_request(
             "entries": entries, "batch": batch}
 
 
-def checked_batch(request: Mapping[str, Any], refused: Mapping[int, Mapping[str, str]]) -> dict[str, Any]:
+def checked_batch(request: Mapping[str, Any], refused: Mapping[int, Mapping[str, str]],
+                  tool_point: list[str] | None = None) -> dict[str, Any]:
     """A batch request some of whose combinations were refused before computing.
 
     The REST layer checks every combination against its schema (types, bounds); the
@@ -147,6 +149,8 @@ def checked_batch(request: Mapping[str, Any], refused: Mapping[int, Mapping[str,
     refused : mapping of int to dict
         Index of a refused combination → ``{"field", "detail"}`` (field paths from the
         request root, e.g. ``"combinations[3].tool.stickout_m"``).
+    tool_point : list of str, optional
+        Keep only these receptances of each result (:func:`select_tool_point`).
     """
     if not isinstance(request, Mapping) or not isinstance(request.get("combinations"), list):
         raise InputError("combinations", "must be a non-empty list")
@@ -159,7 +163,10 @@ def checked_batch(request: Mapping[str, Any], refused: Mapping[int, Mapping[str,
         else:
             entries.append({"id": ident, "status": "ok", "path": f"combinations[{i}]"})
             kept.append(combo)
-    return {"entries": entries, "batch": {**request, "combinations": kept}}
+    out: dict[str, Any] = {"entries": entries, "batch": {**request, "combinations": kept}}
+    if tool_point is not None:
+        out["tool_point"] = list(tool_point)
+    return out
 
 
 def run_entries(
@@ -196,11 +203,12 @@ def run_entries(
         check_common(batch, store=store, max_lines=max_lines)
         if progress is not None:
             progress(0, 0)
+    keep = request.get("tool_point")
     results, position = [], 0
     for entry in request["entries"]:
         head = {k: entry[k] for k in _ENTRY_FIELDS if k in entry}
         if entry["status"] == "ok":
-            r = computed[position]
+            r = computed[position] if keep is None else select_tool_point(computed[position], keep)
             if r["status"] == "error":
                 r = {**r, "error": _rebase(r["error"], position, entry.get("path", ""))}
             position += 1
@@ -215,6 +223,19 @@ def run_entries(
     if "library" in request:
         out = {"library": dict(request["library"]), **out}
     return out
+
+
+def select_tool_point(result: Mapping[str, Any], keep: Any) -> dict[str, Any]:
+    """A prediction result with only some of ``tool_point``'s receptances (e.g. ``["h"]``).
+
+    Big batches are mostly ``h``, ``l``, ``n``, ``p`` arrays; a caller that needs only the
+    translational ``h`` (stability lobes, most plots) can cut the result to a third.
+    """
+    if not isinstance(keep, list | tuple) or not keep or any(k not in ("h", "l", "n", "p") for k in keep):
+        raise InputError("tool_point", "must list some of h, l, n, p")
+    if "tool_point" not in result:
+        return dict(result)
+    return {**result, "tool_point": {k: v for k, v in result["tool_point"].items() if k in keep}}
 
 
 def _rebase(error: Mapping[str, Any], position: int, path: str) -> dict[str, Any]:

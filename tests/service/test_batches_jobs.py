@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import multiprocessing
+import os
+import socket
 import time
 
 import numpy as np
@@ -93,9 +95,14 @@ def test_async_job_path_202_poll_result(make_client, assembly):
         direct = client.post("/v1/tool-point-frf/batch", json=small).json()
         assert result.json()["results"][:2] == direct["results"]
 
-        r = client.post("/v1/tool-point-frf/batch", json=small, headers={"Prefer": "respond-async, wait=5"})
+        r = client.post("/v1/tool-point-frf/batch", json=small, headers={"Prefer": "respond-async, wait=5"},
+                        params={"tool_point": "h,p"})
         assert r.status_code == 202 and r.headers["preference-applied"] == "respond-async"
-        assert _wait(client, r.headers["location"])["summary"] == {"ok": 1, "error": 1}
+        job = _wait(client, r.headers["location"])
+        assert job["summary"] == {"ok": 1, "error": 1}
+        trimmed = client.get(job["result_url"]).json()["results"]
+        assert set(trimmed[0]["tool_point"]) == {"h", "p"} and trimmed[1]["status"] == "error"
+        assert trimmed[0]["tool_point"]["p"] == direct["results"][0]["tool_point"]["p"]
 
         assert_problem(client.get("/v1/jobs/j-00000000000000000000000000000000"), 404)
         assert_problem(client.get("/v1/jobs/nonsense/result"), 404)
@@ -188,3 +195,15 @@ def test_runner_takes_over_only_what_it_owns(store_path):
     assert jobs.result_path(job.id).read_bytes() == b'{"ok":true}'
     with pytest.raises(Exception, match="not found"):
         jobs.result_path("j-" + "0" * 32)
+
+
+def test_a_job_of_a_dead_local_process_is_resumed_at_once(store_path):
+    proc = multiprocessing.get_context("spawn").Process(target=time.sleep, args=(0,))
+    proc.start()
+    proc.join()
+    jobs = JobStore(store_path / "jobs", stale_after_s=3600)
+    job = jobs.submit("batch", {"x": 1})
+    assert jobs.claim(f"{socket.gethostname()}:{proc.pid}:dead") is not None
+    assert jobs.claim(f"{socket.gethostname()}:{os.getpid()}:alive") is not None  # the dead one's job
+    assert jobs.get(job.id).attempts == 2
+    assert jobs.claim("elsewhere:1:x") is None  # a live claim (another host) is left alone

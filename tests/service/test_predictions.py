@@ -146,3 +146,11 @@ def test_stability_lobes_from_an_assembly_and_inline(client, assembly):
     assert_problem(client.post("/v1/stability-lobes", json={**base, "frf_x": frf, "assembly": assembly}), 422,
                    "frf_x")
     assert_problem(client.post("/v1/stability-lobes", json={**base, "frf_x": frf, "teeth": 0}), 422, "teeth")
+
+
+def test_tool_point_selection_trims_the_result(client, assembly):
+    full = client.post("/v1/tool-point-frf", json=assembly).json()
+    only_h = client.post("/v1/tool-point-frf", json=assembly, params={"tool_point": "h"}).json()
+    assert set(only_h["tool_point"]) == {"h"} and only_h["tool_point"]["h"] == full["tool_point"]["h"]
+    assert only_h["peaks"] == full["peaks"]
+    assert_problem(client.post("/v1/tool-point-frf", json=assembly, params={"tool_point": "x"}), 422, "tool_point")

@@ -1,0 +1,216 @@
+"""Service load test (issue 4): a real ``uvicorn --workers 2`` on loopback.
+
+Run: ``.venv/bin/python benchmarks/bench_service.py``. It starts the service on a free port
+with a temporary store and a write key, uploads RA-1's analytical spindle-nose receptance as
+a ``point_receptance`` measurement (5 000 lines, 1–5 000 Hz), then measures
+
+* single hybrid predictions of RA-1's holder and tool on that stored spindle at 5 000 lines:
+  p50 and p99 latency and requests per second, from 1, 2 and 4 concurrent client threads
+  (targets: p50 <= 30 ms, >= 50 requests/s), without and with gzip;
+* a 1 000-combination batch on the same spindle at 1 000 lines (a job: 202, poll, GET
+  result), wall time from the POST to the last byte of the result (target <= 5 s), with the
+  full tool_point (h, l, n, p) and with ``?tool_point=h``.
+
+Results are printed and written to ``benchmarks/results/service.json``. The numbers depend
+on the machine and on whatever else runs on it; the client threads share its cores.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import signal
+import socket
+import statistics
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+import httpx
+import orjson
+
+from rcsa.importers import measurement_to_contract
+from rcsa.measurement_api import demo_measurement
+from rcsa.reference import ra1
+
+REPO = Path(__file__).resolve().parents[1]
+KEY = "bench-write-key-0123456789abcdef"
+GRID_5000 = {"start_hz": 1.0, "stop_hz": 5000.0, "step_hz": 1.0}
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _start(store: Path, workers: int) -> tuple[subprocess.Popen, str]:
+    port = _free_port()
+    prom = Path(tempfile.mkdtemp(prefix="rcsa-prom-"))
+    env = {**os.environ, "RCSA_STORE": str(store), "RCSA_API_KEYS": f"{KEY}:write", "RCSA_SEED_DEMO": "false",
+           "RCSA_ACCESS_LOG": "false", "PROMETHEUS_MULTIPROC_DIR": str(prom), "RCSA_JOB_POLL_S": "0.05"}
+    proc = subprocess.Popen([sys.executable, "-m", "uvicorn", "service.main:create_app", "--factory", "--workers",
+                             str(workers), "--host", "127.0.0.1", "--port", str(port), "--log-level", "warning"],
+                            cwd=REPO, env=env)
+    base = f"http://127.0.0.1:{port}"
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:
+        try:
+            if httpx.get(base + "/readyz", timeout=5).status_code == 200:
+                time.sleep(1.0)
+                return proc, base
+        except httpx.TransportError:
+            time.sleep(0.2)
+    proc.kill()
+    raise RuntimeError("the service did not start")
+
+
+def _percentile(values: list[float], q: float) -> float:
+    values = sorted(values)
+    k = max(0, min(len(values) - 1, round(q / 100 * (len(values) - 1))))
+    return values[k]
+
+
+def load(base: str, body: bytes, *, threads: int, requests: int, headers: dict[str, str]) -> dict[str, float]:
+    """``requests`` POSTs of ``body`` from ``threads`` client threads; latencies in ms."""
+    latencies: list[float] = []
+    lock = threading.Lock()
+    todo = iter(range(requests))
+    errors = []
+
+    def worker() -> None:
+        with httpx.Client(base_url=base, timeout=60, headers=headers) as client:
+            while True:
+                with lock:
+                    if next(todo, None) is None:
+                        return
+                t0 = time.perf_counter()
+                r = client.post("/v1/tool-point-frf", content=body, headers={"content-type": "application/json"})
+                r.read()
+                dt = (time.perf_counter() - t0) * 1e3
+                if r.status_code != 200:
+                    errors.append(r.status_code)
+                with lock:
+                    latencies.append(dt)
+
+    t0 = time.perf_counter()
+    pool = [threading.Thread(target=worker) for _ in range(threads)]
+    for t in pool:
+        t.start()
+    for t in pool:
+        t.join()
+    wall = time.perf_counter() - t0
+    if errors:
+        raise RuntimeError(f"{len(errors)} failed requests: {errors[:5]}")
+    return {"requests": len(latencies), "threads": threads, "p50_ms": statistics.median(latencies),
+            "p99_ms": _percentile(latencies, 99), "mean_ms": statistics.fmean(latencies),
+            "requests_per_s": len(latencies) / wall}
+
+
+def batch(base: str, mid: str, n: int, grid: dict[str, float], *, tool_point: str | None,
+          accept_encoding: str) -> dict[str, float]:
+    doc = ra1(grid)
+    combos = [{"id": f"T{i:04d}", "holder": doc["holder"], "joints": doc["joints"],
+               "tool": {**doc["tool"], "stickout_m": 0.040 + 0.05 * i / n}} for i in range(n)]
+    request = {"frequency": grid, "spindle": {"measurement_id": mid}, "combinations": combos}
+    params = {"tool_point": tool_point} if tool_point else {}
+    with httpx.Client(base_url=base, timeout=300, headers={"Accept-Encoding": accept_encoding}) as client:
+        t0 = time.perf_counter()
+        r = client.post("/v1/tool-point-frf/batch", json=request, params=params)
+        assert r.status_code == 202, r.text
+        location = r.headers["location"]
+        while (job := client.get(location).json())["status"] not in ("succeeded", "failed"):
+            time.sleep(0.05)
+        assert job["status"] == "succeeded", job
+        t_done = time.perf_counter()
+        result = client.get(job["result_url"])
+        raw = result.content
+        t_bytes = time.perf_counter()
+        summary = orjson.loads(raw)["summary"]
+        t_parsed = time.perf_counter()
+    assert summary == {"ok": n, "error": 0}, summary
+    return {"combinations": n, "lines": _lines(grid), "tool_point": tool_point or "h,l,n,p",
+            "accept_encoding": accept_encoding, "job_done_s": t_done - t0, "result_received_s": t_bytes - t0,
+            "result_parsed_s": t_parsed - t0, "result_mb": len(raw) / 1e6}
+
+
+def _server_side(base: str) -> dict[str, float]:
+    """Mean request latency and compute time of /v1/tool-point-frf from the service's own metrics."""
+    text = httpx.get(base + "/metrics", timeout=30).text
+    values: dict[str, float] = {}
+    for line in text.splitlines():
+        if line.startswith(("rcsa_http_request_duration_seconds_sum", "rcsa_http_request_duration_seconds_count",
+                            "rcsa_compute_seconds_sum", "rcsa_compute_seconds_count")) and \
+                ('route="/v1/tool-point-frf"' in line or 'operation="predict"' in line):
+            name, value = line.rsplit(" ", 1)
+            values[name.split("{")[0]] = float(value)
+    return {"mean_request_ms": 1e3 * values["rcsa_http_request_duration_seconds_sum"]
+            / values["rcsa_http_request_duration_seconds_count"],
+            "mean_predict_ms": 1e3 * values["rcsa_compute_seconds_sum"] / values["rcsa_compute_seconds_count"]}
+
+
+def _lines(grid: dict[str, float]) -> int:
+    return int(round((grid["stop_hz"] - grid["start_hz"]) / grid["step_hz"])) + 1
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--threads", type=int, nargs="+", default=[1, 2, 4])
+    parser.add_argument("--requests", type=int, default=400)
+    parser.add_argument("--batch", type=int, default=1000)
+    parser.add_argument("--out", type=Path, default=REPO / "benchmarks" / "results" / "service.json")
+    args = parser.parse_args()
+
+    store = Path(tempfile.mkdtemp(prefix="rcsa-bench-")) / "store"
+    proc, base = _start(store, args.workers)
+    results: dict[str, object] = {"machine": {"cpus": os.cpu_count(), "python": platform.python_version(),
+                                              "platform": platform.platform()},
+                                  "uvicorn_workers": args.workers}
+    try:
+        spindle = measurement_to_contract(demo_measurement(GRID_5000))
+        spindle = {k: v for k, v in spindle.items() if k not in ("id", "source", "created_utc")}
+        r = httpx.post(base + "/v1/measurements", json=spindle, headers={"X-API-Key": KEY}, timeout=60)
+        assert r.status_code == 201, r.text
+        mid = r.json()["id"]
+        body = json.dumps({**ra1(GRID_5000), "spindle": {"measurement_id": mid}}).encode()
+        load(base, body, threads=2, requests=8 * args.workers, headers={})  # warm-up: caches of both workers
+        single = {f"{n}_threads": load(base, body, threads=n, requests=args.requests,
+                                       headers={"Accept-Encoding": "identity"}) for n in args.threads}
+        single["2_threads_gzip"] = load(base, body, threads=2, requests=max(40, args.requests // 4),
+                                        headers={"Accept-Encoding": "gzip"})
+        results["single_prediction_5000_lines"] = single
+        results["server_side"] = _server_side(base)
+        grid_1000 = {"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 5.0}
+        results["batch"] = [
+            batch(base, mid, args.batch, grid_1000, tool_point=None, accept_encoding="identity"),
+            batch(base, mid, args.batch, grid_1000, tool_point="h", accept_encoding="identity"),
+            batch(base, mid, args.batch, grid_1000, tool_point="h", accept_encoding="gzip"),
+        ]
+    finally:
+        proc.send_signal(signal.SIGINT)
+        proc.wait(timeout=60)
+
+    print(f"single hybrid prediction (RA-1 holder + tool on a stored spindle), 5 000 lines, {args.workers} workers:")
+    for name, row in results["single_prediction_5000_lines"].items():
+        print(f"  {name:15s} p50 {row['p50_ms']:6.1f} ms   p99 {row['p99_ms']:6.1f} ms   "
+              f"{row['requests_per_s']:6.1f} requests/s   ({row['requests']} requests)")
+    srv = results["server_side"]
+    print(f"  server side: mean request {srv['mean_request_ms']:.1f} ms, of which rcsa.api.predict "
+          f"{srv['mean_predict_ms']:.1f} ms")
+    for b in results["batch"]:
+        print(f"batch of {b['combinations']} at {b['lines']} lines, tool_point={b['tool_point']}, "
+              f"Accept-Encoding {b['accept_encoding']}: job done {b['job_done_s']:.2f} s, result received "
+              f"{b['result_received_s']:.2f} s ({b['result_mb']:.0f} MB), parsed {b['result_parsed_s']:.2f} s")
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(results, indent=1) + "\n")
+    print(f"written to {args.out}")
+
+
+if __name__ == "__main__":
+    main()
