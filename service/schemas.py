@@ -331,9 +331,9 @@ class ComplexArray(_Response):
 class ToolPoint(_Response):
     """Tool-point receptance [[h, l], [n, p]]."""
 
-    h: ComplexArray = Field(description="Displacement / force, m/N.")
-    l: ComplexArray | None = Field(None, description="Displacement / moment, m/(N·m) = 1/N (absent when "  # noqa: E741
+    h: ComplexArray | None = Field(None, description="Displacement / force, m/N (always present unless "
                                    "?tool_point= leaves it out).")
+    l: ComplexArray | None = Field(None, description="Displacement / moment, m/(N·m) = 1/N (absent likewise).")  # noqa: E741
     n: ComplexArray | None = Field(None, description="Rotation / force, rad/N (absent likewise).")
     p: ComplexArray | None = Field(None, description="Rotation / moment, rad/(N·m) (absent likewise).")
 

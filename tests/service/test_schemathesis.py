@@ -40,7 +40,8 @@ def _fuzz(operation, mode: GenerationMode, failures: list[str]) -> Callable[[], 
         try:
             case.validate_response(response, checks=CHECKS)
         except (AssertionError, FailureGroup) as exc:
-            failures.append(f"{label}: {str(exc)[:1000]}")
+            text = str(exc)
+            failures.append(f"{label}: {text[:600]}\n... {text[-600:]}")
 
     return run
 
