@@ -46,6 +46,15 @@ __all__ = [
 
 MAX_FREQUENCY_LINES = 200_000
 
+# Sanity bounds far outside any machine tool, so that no value can overflow the arithmetic
+# (2πf, d⁴, k/ω …): frequencies up to 10 MHz, lengths from 1 µm to 100 m, moduli to 10 TPa.
+MAX_FREQUENCY_HZ = 1.0e7
+MIN_LENGTH_M, MAX_LENGTH_M = 1.0e-6, 100.0
+MAX_MODULUS_PA = 1.0e13
+MAX_DENSITY_KG_M3 = 1.0e5
+MAX_STIFFNESS = 1.0e15
+MAX_DAMPING = 1.0e12
+
 
 class _Obj:
     """Reads one JSON object: typed getters that name the path, and an unknown-key check."""
@@ -237,14 +246,20 @@ def parse_frequency(value: object, path: str = "frequency", max_lines: int = MAX
             raise InputError(o.at("values_hz"), f"at most {max_lines} frequency lines, got {len(values)}")
         if any(isinstance(v, bool) or not isinstance(v, int | float) for v in values):
             raise InputError(o.at("values_hz"), "must be a list of numbers")
-        return check_frequency_hz(values, o.at("values_hz"))
+        f = check_frequency_hz(values, o.at("values_hz"))
+        if f[-1] > MAX_FREQUENCY_HZ:
+            raise InputError(o.at("values_hz"), f"frequencies must be <= {MAX_FREQUENCY_HZ:g} Hz")
+        return f
     o.only("start_hz", "stop_hz", "step_hz")
-    start = o.number("start_hz", gt=0.0)
-    stop = o.number("stop_hz", gt=0.0)
+    start = o.number("start_hz", gt=0.0, le=MAX_FREQUENCY_HZ)
+    stop = o.number("stop_hz", gt=0.0, le=MAX_FREQUENCY_HZ)
     step = o.number("step_hz", gt=0.0)
     if stop < start:
         raise InputError(o.at("stop_hz"), f"must be >= start_hz ({start:g}), got {stop:g}")
-    n = math.floor((stop - start) / step * (1 + 1e-12) + 1e-9) + 1
+    span = (stop - start) / step
+    if not span < max_lines:
+        raise InputError(path, f"at most {max_lines} frequency lines, this grid has {span + 1:.6g}")
+    n = math.floor(span * (1 + 1e-12) + 1e-9) + 1
     if n > max_lines:
         raise InputError(path, f"at most {max_lines} frequency lines, this grid has {n}")
     return check_frequency_hz(start + step * np.arange(n), path)
@@ -267,9 +282,11 @@ def parse_materials(value: object, path: str = "materials") -> Mapping[str, Mate
         m.only(*_MATERIAL_FIELDS)
         base = BUILTIN_MATERIALS.get(name)
         out[name] = Material(
-            youngs_modulus_pa=m.number("youngs_modulus_pa", gt=0.0, default=base.youngs_modulus_pa if base else None),
+            youngs_modulus_pa=m.number("youngs_modulus_pa", gt=0.0, le=MAX_MODULUS_PA,
+                                       default=base.youngs_modulus_pa if base else None),
             poisson_ratio=m.number("poisson_ratio", gt=-1.0, lt=0.5, default=base.poisson_ratio if base else None),
-            density_kg_m3=m.number("density_kg_m3", gt=0.0, default=base.density_kg_m3 if base else None),
+            density_kg_m3=m.number("density_kg_m3", gt=0.0, le=MAX_DENSITY_KG_M3,
+                                   default=base.density_kg_m3 if base else None),
             loss_factor=m.number("loss_factor", ge=0.0, lt=1.0, default=base.loss_factor if base else 0.0),
         )
     return MappingProxyType(out)
@@ -289,8 +306,8 @@ def _segments(value: object, path: str, materials: Mapping[str, Material]) -> tu
     for i, raw in enumerate(value):
         o = _Obj(raw, f"{path}[{i}]")
         o.only("length_m", "outer_diameter_m", "inner_diameter_m", "material")
-        length = o.number("length_m", gt=0.0)
-        outer = o.number("outer_diameter_m", gt=0.0)
+        length = o.number("length_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
+        outer = o.number("outer_diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
         inner = o.number("inner_diameter_m", ge=0.0, default=0.0)
         if inner >= outer:
             raise InputError(o.at("inner_diameter_m"),
@@ -324,9 +341,10 @@ def parse_spindle(value: object, materials: Mapping[str, Material], path: str = 
             raise InputError(b.at("position_m"),
                              f"bearing lies outside the spindle: must be <= its length {total:g} m, got {pos:g}")
         bearings.append(BearingSpec(
-            min(pos, total), b.number("stiffness_n_m", ge=0.0), b.number("damping_ns_m", ge=0.0, default=0.0),
-            b.number("rotational_stiffness_nm_rad", ge=0.0, default=0.0),
-            b.number("rotational_damping_nms_rad", ge=0.0, default=0.0)))
+            min(pos, total), b.number("stiffness_n_m", ge=0.0, le=MAX_STIFFNESS),
+            b.number("damping_ns_m", ge=0.0, le=MAX_DAMPING, default=0.0),
+            b.number("rotational_stiffness_nm_rad", ge=0.0, le=MAX_STIFFNESS, default=0.0),
+            b.number("rotational_damping_nms_rad", ge=0.0, le=MAX_DAMPING, default=0.0)))
     return SpindleSpec(segments, tuple(bearings))
 
 
@@ -346,19 +364,19 @@ def parse_tool(value: object, materials: Mapping[str, Material], path: str = "to
     """The parametric tool, with the geometric rules of the contract checked."""
     o = _Obj(value, path)
     o.only(*_TOOL_FIELDS)
-    diameter = o.number("diameter_m", gt=0.0)
-    shank = o.number("shank_diameter_m", gt=0.0, default=diameter)
-    overall = o.number("overall_length_m", gt=0.0)
-    stickout = o.number("stickout_m", gt=0.0)
+    diameter = o.number("diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
+    shank = o.number("shank_diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M, default=diameter)
+    overall = o.number("overall_length_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
+    stickout = o.number("stickout_m", gt=0.0, ge=MIN_LENGTH_M)
     if stickout > overall:
         raise InputError(o.at("stickout_m"), f"must be <= overall_length_m ({overall:g}), got {stickout:g}")
-    flute = o.number("flute_length_m", gt=0.0)
+    flute = o.number("flute_length_m", gt=0.0, ge=MIN_LENGTH_M)
     if flute > stickout:
         raise InputError(o.at("flute_length_m"), f"must be <= stickout_m ({stickout:g}), got {flute:g}")
     ratio = o.number("fluted_diameter_ratio", gt=0.0, le=1.0, default=0.8)
     mass_ratio = o.number("fluted_mass_diameter_ratio", gt=0.0, le=1.0, required=False)
-    shoulder_length = o.number("shoulder_length_m", gt=0.0, required=False)
-    shoulder_diameter = o.number("shoulder_diameter_m", gt=0.0, required=False)
+    shoulder_length = o.number("shoulder_length_m", gt=0.0, ge=MIN_LENGTH_M, required=False)
+    shoulder_diameter = o.number("shoulder_diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M, required=False)
     if (shoulder_length is None) != (shoulder_diameter is None):
         raise InputError(o.at("shoulder_length_m"), "shoulder_length_m and shoulder_diameter_m go together")
     if shoulder_length is not None and not flute <= shoulder_length <= stickout:
@@ -374,9 +392,10 @@ def parse_joint(value: object, path: str) -> JointSpec | None:
         return None
     o = _Obj(value, path)
     o.only("stiffness_n_m", "damping_ns_m", "rotational_stiffness_nm_rad", "rotational_damping_nms_rad")
-    return JointSpec(o.number("stiffness_n_m", gt=0.0), o.number("damping_ns_m", ge=0.0, default=0.0),
-                     o.number("rotational_stiffness_nm_rad", gt=0.0, required=False),
-                     o.number("rotational_damping_nms_rad", ge=0.0, default=0.0))
+    return JointSpec(o.number("stiffness_n_m", gt=0.0, le=MAX_STIFFNESS),
+                     o.number("damping_ns_m", ge=0.0, le=MAX_DAMPING, default=0.0),
+                     o.number("rotational_stiffness_nm_rad", gt=0.0, le=MAX_STIFFNESS, required=False),
+                     o.number("rotational_damping_nms_rad", ge=0.0, le=MAX_DAMPING, default=0.0))
 
 
 @dataclass(frozen=True, slots=True)

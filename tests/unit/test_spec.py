@@ -99,3 +99,18 @@ def test_valid_input_is_not_modified_and_gives_finite_results():
     result = api.predict(doc)
     assert doc == before
     assert np.all(np.isfinite(result.tool_point.values))
+
+
+@pytest.mark.parametrize("path, value, field", [
+    ("frequency", {"start_hz": 1.0, "stop_hz": 1e7, "step_hz": 1e-300}, "frequency"),
+    ("frequency", {"start_hz": 1.0, "stop_hz": 1e9, "step_hz": 1.0}, "frequency.stop_hz"),
+    ("frequency", {"values_hz": [1.0, 1e12]}, "frequency.values_hz"),
+    ("holder.segments[0].outer_diameter_m", 5e-324, "holder.segments[0].outer_diameter_m"),
+    ("tool.diameter_m", 1e200, "tool.diameter_m"),
+    ("materials", {"steel": {"youngs_modulus_pa": 1e300}}, "materials.steel.youngs_modulus_pa"),
+    ("joints.holder_tool.stiffness_n_m", 1e300, "joints.holder_tool.stiffness_n_m"),
+])
+def test_absurd_magnitudes_are_refused_before_they_overflow(path, value, field):
+    with pytest.raises(InputError) as info:
+        api.predict(edited(path, value))
+    assert info.value.field == field

@@ -8,7 +8,16 @@ from __future__ import annotations
 
 import typer
 
-from . import effects_cmd, identify_cmd, lobes_cmd, plot_cmd, predict_cmd, serve_cmd
+from . import (
+    effects_cmd,
+    identify_cmd,
+    keys_cmd,
+    library_cmd,
+    lobes_cmd,
+    plot_cmd,
+    predict_cmd,
+    serve_cmd,
+)
 from ._common import run_guarded
 from .store_cmd import store_app
 
@@ -21,7 +30,7 @@ app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
 )
-for _module in (predict_cmd, effects_cmd, identify_cmd, lobes_cmd, plot_cmd, serve_cmd):
+for _module in (predict_cmd, library_cmd, lobes_cmd, plot_cmd, effects_cmd, identify_cmd, serve_cmd, keys_cmd):
     _module.register(app)
 app.add_typer(store_app, name="store", help="Import, list, show and delete measured spindle FRFs.")
 

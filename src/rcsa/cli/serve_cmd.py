@@ -17,7 +17,14 @@ def register(app: typer.Typer) -> None:
         workers: Annotated[int, typer.Option(help="Worker processes (all share one store safely).")] = 1,
     ) -> None:
         """Run the REST service (uvicorn) with the store from RCSA_STORE or the default location."""
+        import os
+        import tempfile
+
         import uvicorn
+
+        if workers > 1 and not os.environ.get("PROMETHEUS_MULTIPROC_DIR"):
+            # one /metrics over all worker processes (prometheus-client multi-process mode)
+            os.environ["PROMETHEUS_MULTIPROC_DIR"] = tempfile.mkdtemp(prefix="rcsa-metrics-")
 
         uvicorn.run("service.main:create_app", factory=True, host=host, port=port, workers=workers,
                     log_level="info")

@@ -33,6 +33,9 @@ INDEX = "index.sqlite"
 MEASUREMENTS = "measurements"
 DELETED = "deleted"
 TMP = "tmp"
+#: Neighbours kept in the store directory by the service: the job store and the API-key hashes.
+JOBS = "jobs"
+KEYS = "api-keys.json"
 #: Names a store root may contain (anything else means the directory is not ours).
 OWN_NAMES = frozenset(
     {
@@ -45,6 +48,8 @@ OWN_NAMES = frozenset(
         MEASUREMENTS,
         DELETED,
         TMP,
+        JOBS,
+        KEYS,
     }
 )
 
