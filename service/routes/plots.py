@@ -1,0 +1,242 @@
+"""Figures and CSV files: what a person downloads next to the JSON.
+
+* ``POST /v1/plots/frf`` — the tool-point FRF as PNG or SVG (:func:`rcsa.plots.frf_figure`:
+  real and imaginary parts, magnitude and phase, in µm/N), from an inline FRF (``frf``, as
+  in the stability-lobes request) or from an ``assembly`` predicted first.
+* ``POST /v1/plots/lobes`` — the stability lobe diagram (axial depth mm vs spindle speed
+  rpm, :func:`rcsa.plots.lobes_figure`); the body is a stability-lobes request plus
+  optional drawing options (operating point, y limit, title).
+* ``POST /v1/exports/frf.csv`` — an assembly's prediction as CSV: frequency and the real
+  and imaginary parts of ``h, l, n, p`` in SI units (the header names every unit).
+* ``POST /v1/exports/lobes.csv`` — the lobe envelope as CSV: speed, depth limit, chatter
+  frequency and governing lobe.
+
+Images are PNG unless ``?format=svg`` (or an ``Accept`` that names ``image/svg+xml`` and not
+``image/png``). Numbers in CSV files are written with Python's shortest round-trip repr, so
+they equal the JSON results exactly; a missing value (no lobe reaches that speed) is an empty
+cell.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import threading
+from collections.abc import Sequence
+from typing import Annotated, Any, Literal
+
+from fastapi import APIRouter, Depends, Header, Query
+from pydantic import BaseModel, ConfigDict, Field
+from starlette.responses import Response
+
+from rcsa import api
+from rcsa.errors import InputError
+from rcsa.plots import frf_figure, lobes_figure, save_figure
+from rcsa.reference import ra1
+
+from ..bodies import require_json
+from ..deps import StateDep
+from ..responses import problems
+from ..schemas import MAX_LENGTH_M, MAX_SPEED_RPM, MIN_FREQUENCY_HZ, Assembly, FrfIn, LobesRequest
+from ..security import ReadAccess
+
+router = APIRouter(prefix="/v1", tags=["plots and exports"])
+
+PNG = "image/png"
+SVG = "image/svg+xml"
+CSV_MEDIA = "text/csv"
+
+#: Columns of the FRF export: (receptance, SI unit suffix of its column names).
+FRF_COLUMNS = (("h", "m_n"), ("l", "1_n"), ("n", "rad_n"), ("p", "rad_n_m"))
+LOBES_COLUMNS = ("spindle_speed_rpm", "depth_limit_m", "chatter_frequency_hz", "governing_lobe")
+
+# matplotlib keeps caches (fonts, text layout) shared by all figures; draw one at a time.
+_RENDER_LOCK = threading.Lock()
+
+FormatQuery = Annotated[Literal["png", "svg"] | None, Query(
+    description="Image format: png or svg. Default: svg when Accept names image/svg+xml and not image/png, "
+                "else png.")]
+AcceptHeader = Annotated[str | None, Header(description="image/png or image/svg+xml (the format query wins).")]
+
+_IMAGE = {200: {"description": "The figure (PNG, 150 dpi, or SVG with text as paths).",
+                "content": {PNG: {"schema": {"type": "string", "format": "binary"}},
+                            SVG: {"schema": {"type": "string"}}}}}
+
+
+def _csv_response(description: str) -> dict[int | str, dict[str, Any]]:
+    return {200: {"description": description, "content": {CSV_MEDIA: {"schema": {"type": "string"}}}}}
+
+
+_GRID = {"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 5.0}
+_RA1 = ra1(_GRID)
+_STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
+
+
+class FrfPlotRequest(BaseModel):
+    """Body of POST /v1/plots/frf: an inline FRF or an assembly, and how to draw it."""
+
+    model_config = ConfigDict(**_STRICT, json_schema_extra={"examples": [
+        {"assembly": _RA1, "layout": "full", "title": "RA-1"},
+        {"frf": {"frequency_hz": [100.0, 200.0, 300.0],
+                 "h": {"real": [1.0e-7, 1.2e-7, -3.0e-7], "imag": [-1.0e-9, -5.0e-9, -2.0e-7]}}}]})
+
+    frf: FrfIn | None = Field(None, description="Inline tool-point FRF (frequency_hz in Hz, h in m/N); "
+                                                "give frf or assembly.")
+    assembly: Assembly | None = Field(None, description="Predict this assembly's tool-point h and draw it.")
+    layout: Literal["full", "real_imag", "bode"] = Field(
+        "full", description="full: real, imaginary, magnitude (log) and phase; real_imag; bode: magnitude and "
+                            "phase. Receptance shown in µm/N, phase in degrees, frequency in Hz.")
+    title: str | None = Field(None, max_length=200, description="Figure title.")
+
+
+class OperatingPoint(BaseModel):
+    """The current cutting condition, drawn as a marker (green below the limit, red above)."""
+
+    model_config = _STRICT
+
+    spindle_speed_rpm: float = Field(ge=MIN_FREQUENCY_HZ, le=MAX_SPEED_RPM, description="Spindle speed, rpm.")
+    depth_m: float = Field(gt=0, le=MAX_LENGTH_M, description="Axial depth of cut, m.")
+
+
+class LobesPlotRequest(LobesRequest):
+    """Body of POST /v1/plots/lobes: a stability-lobes request and drawing options."""
+
+    show_lobes: bool = Field(True, description="Draw every lobe as a thin line under the envelope.")
+    operating_point: OperatingPoint | None = Field(None, description="Marker for the current (n, ap).")
+    depth_max_mm: float | None = Field(None, gt=0, le=1.0e6, description="Upper y limit, mm (default: from the "
+                                                                         "envelope, at most 8 × the absolute limit).")
+    title: str | None = Field(None, max_length=200, description="Figure title.")
+
+
+@router.post("/plots/frf", dependencies=[Depends(require_json)], response_class=Response,
+             responses={**_IMAGE, **problems(401, 413, 415, 422)}, summary="Figure of a tool-point FRF (PNG/SVG)")
+def plot_frf(body: FrfPlotRequest, state: StateDep, _: ReadAccess, format: FormatQuery = None,  # noqa: A002
+             accept: AcceptHeader = None) -> Response:
+    """Draw a tool-point receptance h: real and imaginary parts, magnitude (log scale) and
+    phase, in µm/N and degrees against frequency in Hz.
+
+    Give ``frf`` (``frequency_hz`` in Hz and ``h`` in m/N, e.g. from a prediction result) or
+    an ``assembly``, which is predicted first (as ``POST /v1/tool-point-frf``).
+    """
+    if (body.frf is None) == (body.assembly is None):
+        raise InputError("frf", "give either frf (an inline FRF) or assembly, exactly one of them")
+    if body.frf is not None:
+        frequency_hz, h_m_n = _inline_frf(body.frf)
+        where = "frf"
+    else:
+        with state.metrics.timed("predict"):
+            result = api.predict(body.assembly.model_dump(exclude_unset=True), store=state.reader,
+                                 max_lines=state.settings.max_frequency_lines)
+        frequency_hz, h_m_n, where = result.frequency_hz, result.tool_point.h, "assembly"
+    _check_drawable(frequency_hz, h_m_n, where, log_scale=body.layout != "real_imag")
+    fmt = _image_format(format, accept)
+    with state.metrics.timed("plot"), _RENDER_LOCK:
+        image = save_figure(frf_figure(frequency_hz, h_m_n, layout=body.layout, title=body.title), fmt)
+    return _image(image, fmt, "tool-point-frf")
+
+
+@router.post("/plots/lobes", dependencies=[Depends(require_json)], response_class=Response,
+             responses={**_IMAGE, **problems(401, 413, 415, 422)},
+             summary="Stability lobe diagram (PNG/SVG)")
+def plot_lobes(body: LobesPlotRequest, state: StateDep, _: ReadAccess, format: FormatQuery = None,  # noqa: A002
+               accept: AcceptHeader = None) -> Response:
+    """Axial depth-of-cut limit (mm) against spindle speed (rpm): the lower envelope, every
+    lobe, the stable region shaded, the absolute limit dashed and, when given, the operating
+    point. The body is a ``POST /v1/stability-lobes`` request plus the drawing options."""
+    request = body.model_dump(exclude_unset=True,
+                              exclude={"show_lobes", "operating_point", "depth_max_mm", "title"})
+    with state.metrics.timed("lobes"):
+        result = api.stability_lobes_result(request, store=state.reader,
+                                            max_lines=state.settings.max_frequency_lines)
+    point = body.operating_point
+    fmt = _image_format(format, accept)
+    with state.metrics.timed("plot"), _RENDER_LOCK:
+        figure = lobes_figure(result, show_lobes=body.show_lobes, depth_max_mm=body.depth_max_mm, title=body.title,
+                              operating_point=None if point is None else (point.spindle_speed_rpm, point.depth_m))
+        image = save_figure(figure, fmt)
+    return _image(image, fmt, "stability-lobes")
+
+
+@router.post("/exports/frf.csv", dependencies=[Depends(require_json)], response_class=Response,
+             responses={**_csv_response(
+                 "Header row frequency_hz, h_real_m_n, h_imag_m_n, l_real_1_n, l_imag_1_n, n_real_rad_n, "
+                 "n_imag_rad_n, p_real_rad_n_m, p_imag_rad_n_m; one row per frequency line."),
+                 **problems(401, 413, 415, 422)},
+             summary="Tool-point FRF of one assembly as CSV")
+def export_frf_csv(body: Assembly, state: StateDep, _: ReadAccess) -> Response:
+    """Predict the assembly (exactly as ``POST /v1/tool-point-frf``) and answer its tool-point
+    receptances as CSV: frequency in Hz, then real and imaginary parts of h (m/N), l (1/N),
+    n (rad/N) and p (rad/(N·m)). The numbers equal the JSON result's."""
+    with state.metrics.timed("predict"):
+        result = api.predict(body.model_dump(exclude_unset=True), store=state.reader,
+                             max_lines=state.settings.max_frequency_lines)
+    state.metrics.frfs.labels("predict").inc()
+    doc = result.to_dict()
+    header = ["frequency_hz"]
+    columns: list[Sequence[float | None]] = [doc["frequency_hz"]]
+    for name, unit in FRF_COLUMNS:
+        header += [f"{name}_real_{unit}", f"{name}_imag_{unit}"]
+        columns += [doc["tool_point"][name]["real"], doc["tool_point"][name]["imag"]]
+    return _csv(header, columns, "tool-point-frf")
+
+
+@router.post("/exports/lobes.csv", dependencies=[Depends(require_json)], response_class=Response,
+             responses={**_csv_response(
+                 "Header row spindle_speed_rpm, depth_limit_m, chatter_frequency_hz, governing_lobe; one row per "
+                 "speed; empty cells where no lobe reaches the speed (governing_lobe -1)."),
+                 **problems(401, 413, 415, 422)},
+             summary="Stability lobes (lower envelope) as CSV")
+def export_lobes_csv(body: LobesRequest, state: StateDep, _: ReadAccess) -> Response:
+    """Compute the lobes (exactly as ``POST /v1/stability-lobes``) and answer the lower
+    envelope as CSV: spindle speed in rpm, depth limit in m, chatter frequency in Hz and the
+    index k of the governing lobe."""
+    with state.metrics.timed("lobes"):
+        doc = api.stability_lobes(body.model_dump(exclude_unset=True), store=state.reader,
+                                  max_lines=state.settings.max_frequency_lines)
+    return _csv(list(LOBES_COLUMNS), [doc[name] for name in LOBES_COLUMNS], "stability-lobes")
+
+
+# --------------------------------------------------------------------------- helpers
+
+def _inline_frf(frf: FrfIn) -> tuple[list[float], list[complex]]:
+    """Frequencies (Hz) and complex h (m/N) of an inline FRF; lengths checked."""
+    n = len(frf.frequency_hz)
+    for part in ("real", "imag"):
+        got = len(getattr(frf.h, part))
+        if got != n:
+            raise InputError(f"frf.h.{part}", f"has {got} values; it needs one per frequency line ({n})")
+    return frf.frequency_hz, [complex(re, im) for re, im in zip(frf.h.real, frf.h.imag, strict=True)]
+
+
+def _check_drawable(frequency_hz: Sequence[float], h_m_n: Sequence[complex], where: str, *, log_scale: bool) -> None:
+    """A figure needs two frequency lines, and a log-scaled magnitude a nonzero value."""
+    if len(frequency_hz) < 2:
+        field = f"{where}.frequency_hz" if where == "frf" else f"{where}.frequency"
+        raise InputError(field, "a figure needs at least 2 frequency lines")
+    if log_scale and not any(abs(v) > 0 for v in h_m_n):
+        raise InputError(f"{where}.h" if where == "frf" else where,
+                         "h is zero at every line, so its magnitude cannot be drawn on a log scale; "
+                         "use layout real_imag")
+
+
+def _image_format(format: str | None, accept: str | None) -> str:  # noqa: A002
+    if format is not None:
+        return format
+    media = {part.split(";")[0].strip().lower() for part in (accept or "").split(",")}
+    return "svg" if SVG in media and PNG not in media else "png"
+
+
+def _image(data: bytes, fmt: str, stem: str) -> Response:
+    return Response(data, media_type=PNG if fmt == "png" else SVG,
+                    headers={"Content-Disposition": f'inline; filename="{stem}.{fmt}"'})
+
+
+def _csv(header: list[str], columns: Sequence[Sequence[float | None]], stem: str) -> Response:
+    """CSV (RFC 4180, CRLF) of equal-length columns; None is an empty cell."""
+    buf = io.StringIO()
+    writer = csv.writer(buf)
+    writer.writerow(header)
+    for row in zip(*columns, strict=True):
+        writer.writerow(["" if v is None else repr(v) for v in row])
+    return Response(buf.getvalue().encode(), media_type=f"{CSV_MEDIA}; charset=utf-8",
+                    headers={"Content-Disposition": f'attachment; filename="{stem}.csv"'})

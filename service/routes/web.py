@@ -1,0 +1,186 @@
+"""The web view for the shop floor, and the small endpoints it needs.
+
+* ``GET /`` redirects to ``GET /ui/``: one static page (``service/web/index.html`` with
+  ``app.js`` and ``app.css``, plain HTML and JavaScript, nothing fetched from elsewhere, so
+  it works on a network without internet). It calls the ``/v1`` API like any client: pick a
+  stored spindle or RA-1's modelled one, a tool from an uploaded Fusion library or RA-1's,
+  predict, read the tool-point FRF and its key numbers, compute stability lobes, download
+  CSV and PNG/SVG.
+* ``GET /v1/examples/ra1`` — the reference assembly RA-1 (the page's defaults).
+* ``POST /v1/tool-libraries:entries`` — the entries of a Fusion tool library (``.json`` or
+  ``.tools``) mapped to holders and tools, without computing anything.
+
+The page is served with a Content-Security-Policy that allows only this origin.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from fastapi import APIRouter, Request
+from fastapi.concurrency import run_in_threadpool
+from fastapi.exceptions import RequestValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from starlette.responses import FileResponse, RedirectResponse, Response
+
+from rcsa.errors import InputError
+from rcsa.libraries import library_combinations
+from rcsa.reference import ra1
+
+from ..bodies import form_text, read_body, read_upload, validate_json
+from ..deps import StateDep
+from ..errors import ProblemError
+from ..responses import json_response, problems
+from ..schemas import Assembly, LibraryOptions
+from ..security import ReadAccess
+
+router = APIRouter()
+
+WEB_DIR = Path(__file__).resolve().parent.parent / "web"
+#: The page's files and their media types (nothing else under /ui/ is served).
+ASSETS = {"index.html": "text/html; charset=utf-8", "app.js": "text/javascript; charset=utf-8",
+          "app.css": "text/css; charset=utf-8"}
+CSP = ("default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self' data: blob:; "
+       "connect-src 'self'; base-uri 'none'; form-action 'none'; frame-ancestors 'none'")
+_PAGE_HEADERS = {"Cache-Control": "no-cache", "Content-Security-Policy": CSP, "X-Content-Type-Options": "nosniff",
+                 "Referrer-Policy": "no-referrer"}
+
+
+@router.get("/", include_in_schema=False)
+def root() -> Response:
+    """The web view lives at /ui/."""
+    return RedirectResponse("ui/", status_code=307)
+
+
+@router.get("/ui/", include_in_schema=False)
+def page() -> Response:
+    """The web view (static HTML)."""
+    return _asset("index.html")
+
+
+@router.get("/ui/{name}", include_in_schema=False)
+def asset(name: str) -> Response:
+    """The page's script and style sheet."""
+    if name not in ASSETS:
+        raise ProblemError(404, f"no file {name!r} in the web view; open /ui/")
+    return _asset(name)
+
+
+def _asset(name: str) -> Response:
+    return FileResponse(WEB_DIR / name, media_type=ASSETS[name], headers=_PAGE_HEADERS)
+
+
+# --------------------------------------------------------------------------- examples
+
+@router.get("/v1/examples/ra1", tags=["examples"], response_model=Assembly, responses=problems(401),
+            summary="The reference assembly RA-1")
+def example_ra1(_: ReadAccess) -> Response:
+    """RA-1 (a BT40-class spindle on four bearings, a shrink-fit holder, a Ø12.7 mm carbide end
+    mill at 74 mm stickout, the seed paper's joints) as an assembly document, SI units, grid
+    5–10 000 Hz by 1 Hz. Its first natural frequency is 599.85 Hz."""
+    return json_response(ra1())
+
+
+# --------------------------------------------------------------------------- library entries
+
+class LibraryEntriesRequest(BaseModel):
+    """JSON form of POST /v1/tool-libraries:entries (the multipart form has the same fields)."""
+
+    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
+
+    library: dict[str, Any] = Field(description='The Fusion tool library document {"data": [...], "version": n}.')
+    options: LibraryOptions | None = Field(None, description="How items are mapped (holder material, cones, "
+                                                             "fluted diameter ratio, default holder, ...).")
+
+
+class LibraryEntry(BaseModel):
+    """One library item: a holder and tool ready for an assembly (status ok), or why not."""
+
+    model_config = ConfigDict(extra="allow")
+
+    id: str = Field(description="Fusion guid, else T<number>, else a content hash.")
+    index: int = Field(description="Position in the library's data list.")
+    status: str = Field(description="ok, skipped or error.")
+    description: str = Field(description="The item's description.")
+    number: int | None = Field(None, description="Fusion T number.")
+    teeth: int | None = Field(None, description="Number of flutes NOF (teeth for stability lobes).")
+    tool_type: str | None = Field(None, description="Fusion type, e.g. flat end mill.")
+    reason: str | None = Field(None, description="Why it was skipped, or field: rule of its error.")
+    warnings: list[str] = Field(default_factory=list, description="Approximations noticed on the way.")
+    holder: dict[str, Any] | None = Field(None, description="An assembly's holder (segments, m), status ok.")
+    tool: dict[str, Any] | None = Field(None, description="An assembly's tool (lengths m), status ok.")
+
+
+class LibraryEntries(BaseModel):
+    """Every item of a library, in library order."""
+
+    model_config = ConfigDict(extra="allow")
+
+    library: dict[str, Any] = Field(description="source, file_name, library_sha256 and summary (counts of ok, "
+                                                "skipped, error).")
+    entries: list[LibraryEntry]
+
+
+_ENTRIES_FIELDS = {"library": "The Fusion tool library: .json, or .tools (zip holding tools.json).",
+                   "options": "JSON: holder_material, tool_material_default, holder_segments_per_cone, "
+                              "fluted_diameter_ratio, shaft_origin, default_holder."}
+_ENTRIES_BODY = {"requestBody": {"required": True, "content": {
+    "multipart/form-data": {"schema": {
+        "type": "object", "required": ["library"],
+        "properties": {"library": {"type": "string", "format": "binary", "description": _ENTRIES_FIELDS["library"]},
+                       "options": {"type": "string", "description": _ENTRIES_FIELDS["options"]}},
+        "additionalProperties": False}},
+    "application/json": {"schema": {
+        "type": "object", "required": ["library"], "additionalProperties": False,
+        "properties": {"library": {"type": "object", "description": "The Fusion tool library document."},
+                       "options": LibraryOptions.model_json_schema()}}}}}}
+
+
+@router.post("/v1/tool-libraries:entries", tags=["tool libraries"], response_model=LibraryEntries,
+             openapi_extra=_ENTRIES_BODY, responses=problems(400, 401, 413, 415, 422),
+             summary="List a Fusion tool library's entries (no computation)")
+async def library_entries(request: Request, state: StateDep, _: ReadAccess) -> Response:
+    """Read a Fusion tool library and list every item: its id, description, status (ok,
+    skipped with the reason, or error naming the field), T number, teeth (NOF), and for ok
+    items the holder and tool in the assembly format (SI metres), ready for
+    ``POST /v1/tool-point-frf``. Nothing is computed and nothing is stored."""
+    kind, body = await read_body(request)
+    file_name = None
+    try:
+        if kind == "json":
+            doc = validate_json(LibraryEntriesRequest, body)
+            library: Any = doc.library
+            options = doc.options
+        else:
+            library, file_name, options = await _entries_form(body, state.settings.max_upload_bytes)
+    finally:
+        if kind == "form":
+            await body.close()
+    opts = options.model_dump(exclude_none=True) if options is not None else {}
+    imported = await run_in_threadpool(library_combinations, library, **opts)
+    out = imported.to_dict()
+    return json_response({"library": {"source": out["source"], "file_name": file_name,
+                                      "library_sha256": out["library_sha256"], "summary": out["summary"]},
+                          "entries": out["combinations"]})
+
+
+async def _entries_form(form: Any, limit_bytes: int) -> tuple[bytes, str, LibraryOptions | None]:
+    unknown = sorted(set(form.keys()) - set(_ENTRIES_FIELDS))
+    if unknown:
+        raise InputError(unknown[0], f"unknown form field (allowed: {', '.join(_ENTRIES_FIELDS)})")
+    files = form.getlist("library")
+    if len(files) != 1:
+        raise InputError("library", "send exactly one library file (.json or .tools)")
+    data, name = await read_upload(files[0], "library", limit_bytes)
+    text = form_text(form, "options")
+    if not text:
+        return data, name, None
+    try:
+        return data, name, LibraryOptions.model_validate(json.loads(text))
+    except ValueError as exc:
+        if isinstance(exc, ValidationError):
+            raise RequestValidationError([{**e, "loc": ("body", "options", *e["loc"])}
+                                          for e in exc.errors()]) from None
+        raise InputError("options", f"must be a JSON object ({exc})") from None
