@@ -60,8 +60,9 @@ def test_corrected_h_is_the_base_model_plus_the_effect(mass_analysis, mass_respo
     from rcsa.diagnosis.model import Knobs, Solver, config_parts
     a = mass_analysis
     m0 = a.request.measurements[0]
-    mass = mass_response["effects"][0]["parameters"]["tip_mass_kg"]["value"]
-    h = Solver(m0.frequency_hz).tip_h(config_parts(a.problem.spec, m0.tool, Knobs(tip_mass_kg=mass)))
+    prm = mass_response["effects"][0]["parameters"]
+    knobs = Knobs(tip_mass_kg=prm["tip_mass_kg"]["value"], tip_mass_distance_m=prm["distance_from_tip_m"]["value"])
+    h = Solver(m0.frequency_hz).tip_h(config_parts(a.problem.spec, m0.tool, knobs))
     got = mass_response["effects"][0]["corrected_h"][0]
     np.testing.assert_allclose(np.asarray(got["real"]) + 1j * np.asarray(got["imag"]), h, rtol=1e-9)
 

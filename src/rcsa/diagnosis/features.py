@@ -12,6 +12,9 @@ so extractor bias cancels. Per window j:
 * ``antiresonance.frequency`` — ln f of the minimum of ln|h| between peaks j and j+1 of the
   analysed FRF itself (a driving-point antiresonance is the natural frequency with the tip
   pinned, so it is blind to a tip mass);
+* ``band.level`` — the mean ln|h| over the whole window (the FRF's level between the
+  peaks: weak modes that get no window of their own still move it; smooth in the
+  parameters, no window switching);
 * ``static`` — the mean ln|h| over the quasi-static band (compliance, blind to mass).
 
 Logarithms make every feature a relative quantity: a difference of 0.01 is a 1 % shift in
@@ -109,7 +112,7 @@ def design_windows(frequency_hz: np.ndarray, h_base: np.ndarray, max_modes: int 
     static = slice(0, n_static) if n_static >= 3 and static_hi > 1.2 * f[0] else slice(0, 0)
     names: list[str] = ["static"] if static.stop > 0 else []
     for j in range(peaks.size):
-        names += [f"peak{j}.frequency", f"peak{j}.amplitude"]
+        names += [f"peak{j}.frequency", f"peak{j}.amplitude", f"band{j}.level"]
         if j + 1 < peaks.size:
             names.append(f"antiresonance{j}.frequency")
     return Windows(fp, edges, static, tuple(names))
@@ -191,7 +194,7 @@ def extract(frequency_hz: np.ndarray, h: np.ndarray, w: Windows) -> np.ndarray:
     for j in range(k):
         lo, hi = int(w.edges[j]), int(w.edges[j + 1])
         xf, yf = _vertex(x, y, peak_i[j], np.full(m, lo), np.full(m, hi), +1.0)
-        out += [xf, yf]
+        out += [xf, yf, y[:, lo:hi].mean(axis=1)]
         if j + 1 < k:
             a, b = peak_i[j], peak_i[j + 1]
             cols = np.arange(y.shape[1])

@@ -18,13 +18,16 @@ different, physical realisations, see ``benchmarks/truth.py``):
   Timoshenko section (0 = Euler–Bernoulli, 1 = Timoshenko with the assembly's κ).
 * ``fluted_stiffness_ratio`` / ``fluted_mass_ratio`` are the fluted section's equivalent
   diameters over DC for EI (and ρI) and for ρA (``domain.md`` §5.1).
-* ``tip_mass_kg`` is a point mass on the tool tip (no rotary inertia).
+* ``tip_mass_kg`` is a point mass (no rotary inertia) on the tool, ``tip_mass_distance_m``
+  behind the tip (the last beam is split there).
 * ``insertion_offset_m`` moves the clamping point that far into the holder: the holder's last
   δ of length is cut off the chain, its annulus is lumped as a mass and rotary inertia on the
   new holder end (the w–ψ coupling of the offset centre is neglected), and the tool's free
   length grows by δ (its overall length is unchanged).
-* ``nose_rotational_compliance_rad_nm`` is a rotational spring (translation rigid) between the
-  spindle nose and the spindle–holder joint.
+* ``nose_cross_compliance_rad_n`` / ``nose_rotational_residual_rad_nm`` add a residual
+  compliance ``[[0, c_wψ], [c_wψ, c_ψψ]]`` to the spindle's receptance at its nose (before the
+  spindle–holder joint): the spindle's rotational receptances l = n and p are off by a
+  frequency-independent amount (the residual-compensation form of Duarte & Ewins 2000).
 """
 
 from __future__ import annotations
@@ -79,8 +82,22 @@ class Knobs:
     fluted_stiffness_ratio: float | None = None
     fluted_mass_ratio: float | None = None
     tip_mass_kg: float = 0.0
+    tip_mass_distance_m: float = 0.0
     insertion_offset_m: float = 0.0
-    nose_rotational_compliance_rad_nm: float = 0.0
+    nose_cross_compliance_rad_n: float = 0.0
+    nose_rotational_residual_rad_nm: float = 0.0
+
+
+@dataclass(frozen=True, slots=True)
+class AddedCompliance:
+    """A residual compliance added to the receptance at this node: R → R + [[0, c_wψ], [c_wψ, c_ψψ]].
+
+    ``c_wψ`` in rad/N (= m/(N·m)), ``c_ψψ`` in rad/(N·m). A correction term of the kind used to
+    compensate truncated or estimated rotational receptances (Duarte & Ewins 2000), not a spring.
+    """
+
+    cross_rad_n: float
+    rotational_rad_nm: float
 
 
 @dataclass(frozen=True, slots=True)
@@ -181,6 +198,22 @@ def _tool_chain(tool: ToolSpec, mats: tuple, shear: object, theory: str) -> Chai
     return tool_chain(tool, dict(mats), shear, theory)  # type: ignore[arg-type]
 
 
+def _with_mass(chain: list[Beam | Spring | Ground], mass_kg: float, distance_m: float) -> list[Beam | Spring | Ground]:
+    """A point mass ``distance_m`` behind the chain's end (splits the beam it falls on)."""
+    if distance_m <= 0.0:
+        return [*chain, Ground(mass_kg=mass_kg)]
+    out = list(chain)
+    left = distance_m
+    for i in range(len(out) - 1, -1, -1):
+        item = out[i]
+        if isinstance(item, Beam):
+            if left < item.length_m:
+                return [*out[:i], Beam(item.section, item.length_m - left), Ground(mass_kg=mass_kg),
+                        Beam(item.section, left), *out[i + 1:]]
+            left -= item.length_m
+    raise ValueError("tip mass lies beyond the tool")
+
+
 def config_parts(spec: AssemblySpec, tool: ToolSpec, k: Knobs) -> Parts:
     """Sub-chains of the base assembly with ``tool`` and the knobs applied.
 
@@ -215,9 +248,9 @@ def config_parts(spec: AssemblySpec, tool: ToolSpec, k: Knobs) -> Parts:
 
     items = tuple(sorted(mats.items()))
     spindle = _spindle_chain(_spindle(spec.spindle, k), items, shear, theory)
-    middle: list[Beam | Spring | Ground] = []
-    if k.nose_rotational_compliance_rad_nm > 0.0:
-        middle.append(Spring(None, 0.0, 1.0 / k.nose_rotational_compliance_rad_nm, 0.0))
+    middle: list[Beam | Spring | Ground | AddedCompliance] = []
+    if k.nose_cross_compliance_rad_n != 0.0 or k.nose_rotational_residual_rad_nm != 0.0:
+        middle.append(AddedCompliance(k.nose_cross_compliance_rad_n, k.nose_rotational_residual_rad_nm))
     sh = joint_spring(_joint(spec.spindle_holder, k.sh_translational_scale, k.sh_rotational_scale,
                              k.sh_damping_scale))
     if sh is not None:
@@ -232,7 +265,7 @@ def config_parts(spec: AssemblySpec, tool: ToolSpec, k: Knobs) -> Parts:
         tail.append(ht)
     tail.extend(_tool_chain(t, items, shear, theory))
     if k.tip_mass_kg > 0.0:
-        tail.append(Ground(mass_kg=k.tip_mass_kg))
+        tail = _with_mass(tail, k.tip_mass_kg, k.tip_mass_distance_m)
     parts = Parts(spindle, tuple(middle), tuple(tail))
     if scale != 1.0:
         parts = Parts(*(_scale_shear(p, scale) for p in (parts.spindle, parts.middle, parts.tool)))
@@ -315,6 +348,11 @@ class Solver:
                 elif kr is not None:  # translation rigid
                     p = k22 + kr
                     k11, k12, k22 = k11 - k12 * k12 / p, kr * k12 / p, kr * k22 / p
+            elif isinstance(item, AddedCompliance):
+                det = k11 * k22 - k12 * k12
+                r11, r12, r22 = k22 / det, -k12 / det + item.cross_rad_n, k11 / det + item.rotational_rad_nm
+                det_r = r11 * r22 - r12 * r12
+                k11, k12, k22 = r22 / det_r, -r12 / det_r, r11 / det_r
             else:
                 g = item.stiffness(w)
                 k11, k22 = k11 + g[:, 0, 0], k22 + g[:, 1, 1]

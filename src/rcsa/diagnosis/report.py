@@ -69,15 +69,17 @@ def gap_map(a: Analysis, model_features: np.ndarray, model_h: Sequence[np.ndarra
                              compliance_ratio=float(np.exp(p.measured_features[i] - model_features[i])), z=float(z[i]))
             else:
                 what, quantity = name.split(".")
-                kind = "peak" if what.startswith("peak") else "antiresonance"
-                mode = int(what.removeprefix("peak").removeprefix("antiresonance"))
-                entry.update(kind=kind, mode=mode, feature=quantity, z=float(z[i]))
+                kind = what.rstrip("0123456789")
+                entry.update(kind=kind, mode=int(what[len(kind):]), feature=quantity, z=float(z[i]))
+                ratio = float(np.exp(p.measured_features[i] - model_features[i]))
                 if quantity == "frequency":
                     entry.update(model_frequency_hz=float(np.exp(model_features[i])),
                                  measured_frequency_hz=float(np.exp(p.measured_features[i])),
-                                 shift_pct=float(100 * (np.exp(r[i] + disc.mu[i]) - 1)))
+                                 shift_pct=float(100 * (ratio - 1)))
+                elif quantity == "amplitude":
+                    entry.update(peak_ratio=ratio)
                 else:
-                    entry.update(peak_ratio=float(np.exp(p.measured_features[i] - model_features[i])))
+                    entry.update(level_ratio=ratio)
             entry["flagged"] = bool(abs(entry["z"]) > Z_FLAG)
             modes.append(entry)
         offset += c.windows.size
@@ -305,7 +307,7 @@ def diagnosis_figure(a: Analysis, response: dict[str, Any] | None = None) -> Fig
         ax = fig.add_subplot(sub[0, k])
         im = ax.imshow(np.clip(zz, -lim, lim), cmap="RdBu_r", norm=TwoSlopeNorm(0.0, -lim, lim), aspect="auto")
         ax.set_xticks(range(len(names)), [s.replace(".frequency", " f").replace(".amplitude", " A")
-                                          .replace("antiresonance", "ar").replace("peak", "pk") for s in names],
+                                          .replace("antiresonance", "ar").replace("peak", "pk").replace(".level", " L").replace("band", "bd") for s in names],
                       rotation=60, fontsize=6)
         ax.set_yticks(range(n), [a.request.measurements[c.index].label for c in p.configs], fontsize=7)
         ax.set_title(f"{title} (z, |z| > {Z_FLAG:g} flagged)", fontsize=8)

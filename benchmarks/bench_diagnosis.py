@@ -1,0 +1,331 @@
+"""Withheld-effect benchmark of the sim-to-real diagnosis (issue 6, ``diagnosis.md`` §5).
+
+Each trial draws a hidden effect (or none), realises it physically in the independent FE
+truth (``tests/diagnosis/truth.py``) with in-tolerance scatter of the nominal parameters and
+1 % noise, measures five stickouts (50–82 mm, 50–8000 Hz, 2 Hz lines) and asks
+``rcsa.diagnosis`` for a verdict against the RA-1 base model. Scores (``diagnosis.md`` §5.2):
+
+* top-1 attribution: ``status == identified`` and the named effect is the hidden one
+  (an ``ambiguous`` verdict never counts as a top-1 hit); also the best-ranked effect, set
+  accuracy (hidden ∈ {effect} ∪ ambiguous_with) and equivalence-class accuracy with the
+  physically collinear pairs {holder_tool_joint, insertion_depth} and
+  {spindle_holder_joint, spindle_rotational_receptance};
+* all of them overall and where the effect's SNR ≥ 10 (SNR: whitened norm of the
+  noise-free effect-only feature shift, i.e. truth with minus truth without the effect under
+  the same nuisance draw, in the diagnoser's Σ), and per SNR bin;
+* the confusion matrix (rows hidden, columns the verdict's effect; ``ambiguous`` verdicts in
+  their own column), false claims on no-effect trials;
+* held-out gap ratio √(χ²_after/χ²_before) on the held-out stickouts (58, 74 mm) and the
+  held-out dB-RMS ratio, median over correct attributions;
+* runtime per diagnosis (median, max; the first diagnosis of a worker includes the
+  Monte-Carlo Σ, later ones reuse it).
+
+Run::
+
+    .venv/bin/python benchmarks/bench_diagnosis.py --trials 250 --seed 1 --workers 2
+    .venv/bin/python benchmarks/bench_diagnosis.py --check-mesh
+    .venv/bin/python benchmarks/bench_diagnosis.py --calibrate holder_tool
+
+The summary goes to stdout and, with every trial's record, to ``--out``
+(default ``benchmarks/results/diagnosis.json``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from collections import Counter
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+if str(REPO) not in sys.path:
+    sys.path.insert(0, str(REPO))
+
+from tests.diagnosis import truth  # noqa: E402
+
+from rcsa.diagnosis.api import analyse  # noqa: E402
+from rcsa.diagnosis.report import build_response  # noqa: E402
+
+EQUIVALENT = ({"holder_tool_joint", "insertion_depth"}, {"spindle_holder_joint", "spindle_rotational_receptance"})
+SNR_BINS = ((0.0, 5.0), (5.0, 10.0), (10.0, 20.0), (20.0, float("inf")))
+
+
+def _equivalent(a: str, b: str) -> bool:
+    return a == b or any(a in s and b in s for s in EQUIVALENT)
+
+
+def run_trial(index: int, effect: str, seed: int, tolerance_scale: float = 1.0) -> dict:
+    """One trial: truth, diagnosis, scores (runs in a worker process)."""
+    rng = np.random.default_rng([seed, index])
+    t0 = time.perf_counter()
+    trial = truth.make_trial(rng, effect, tolerance_scale=tolerance_scale)
+    t_truth = time.perf_counter() - t0
+    t1 = time.perf_counter()
+    a = analyse(trial.request)
+    r = build_response(a)
+    t_diag = time.perf_counter() - t1
+    p = a.problem
+    snr = 0.0
+    if effect != "none":
+        def feats(hs: list[np.ndarray]) -> np.ndarray:
+            return p.features([hs[c.index][c.lines] for c in p.configs])
+        snr = float(np.linalg.norm(a.like.w @ (feats(trial.clean) - feats(trial.clean_null))))
+    v = r["verdict"]
+    first = r["effects"][0] if r["effects"] else None
+    ranked = [e["effect"] for e in r["ranking"]]
+    correct = v["status"] == "identified" and v["effect"] == effect
+    out = {
+        "index": index, "effect": effect, "params": {k: float(x) for k, x in trial.params.items()},
+        "status": v["status"], "verdict": v["effect"], "ambiguous_with": v["ambiguous_with"],
+        "log_bayes_factor": v["log_bayes_factor"], "snr_true": snr, "snr_fitted": v["snr"],
+        "top1": correct, "best_ranked": ranked[0] if ranked else "none",
+        "in_set": effect in [v["effect"], *v["ambiguous_with"]],
+        "equivalent": (v["status"] == "identified" and _equivalent(v["effect"], effect)) or (
+            v["status"] == "ambiguous" and all(_equivalent(x, effect) for x in [v["effect"], *v["ambiguous_with"]])),
+        "confirmed": v["confirmed_on_held_out"],
+        "held_out_gap_ratio": first["held_out_gap_ratio"] if first else None,
+        "held_out_db_before": first["held_out_gap_before_db"] if first else None,
+        "held_out_db_after": first["held_out_gap_after_db"] if first else None,
+        "gap_p_value": r["gap"]["p_value"],
+        "second_effect": r["effects"][-1]["effect"] if r["effects"] and "given" in r["effects"][-1] else None,
+        "runtime_s": t_diag, "truth_s": t_truth,
+        "ranking": [(e["effect"], round(e["log_bayes_factor"], 2)) for e in r["ranking"]],
+    }
+    if first is not None and effect != "none":
+        out["parameters"] = {k: (p_["value"], p_["sd"]) for k, p_ in first["parameters"].items()}
+    return out
+
+
+def summarise(records: list[dict]) -> dict:
+    """Scores of ``diagnosis.md`` §5.2 from the trial records."""
+    eff = [r for r in records if r["effect"] != "none"]
+    null = [r for r in records if r["effect"] == "none"]
+    strong = [r for r in eff if r["snr_true"] >= 10]
+
+    def rate(rs: list[dict], key: str) -> float | None:
+        return float(np.mean([bool(r[key]) for r in rs])) if rs else None
+
+    bins = {}
+    for lo, hi in SNR_BINS:
+        rs = [r for r in eff if lo <= r["snr_true"] < hi]
+        bins[f"{lo:g}-{hi:g}"] = {"n": len(rs), "top1": rate(rs, "top1"), "equivalence": rate(rs, "equivalent"),
+                                  "miss": float(np.mean([r["status"] == "none" for r in rs])) if rs else None}
+    classes = list(truth.EFFECTS)
+    columns = [*classes, "ambiguous"]
+    confusion = {h: dict.fromkeys(columns, 0) for h in classes}
+    for r in records:
+        col = "ambiguous" if r["status"] == "ambiguous" else r["verdict"]
+        confusion[r["effect"]][col] += 1
+    per_class = {}
+    for c in classes:
+        rs = [r for r in records if r["effect"] == c]
+        if rs:
+            per_class[c] = {"n": len(rs), "top1": rate(rs, "top1") if c != "none" else None,
+                            "identified_or_set": rate(rs, "in_set") if c != "none" else None,
+                            "median_snr": float(np.median([r["snr_true"] for r in rs])),
+                            "ambiguous": int(sum(r["status"] == "ambiguous" for r in rs)),
+                            "ambiguous_with": dict(Counter(x for r in rs for x in r["ambiguous_with"]))}
+    good = [r for r in eff if r["top1"] and r["held_out_gap_ratio"] is not None]
+    claims = [r for r in eff if r["status"] != "none" and r["held_out_gap_ratio"] is not None]
+    db_ratio = [r["held_out_db_after"] / r["held_out_db_before"] for r in good if r["held_out_db_before"]]
+    runtimes = [r["runtime_s"] for r in records]
+    return {
+        "trials": len(records), "effect_trials": len(eff), "null_trials": len(null),
+        "top1_all": rate(eff, "top1"), "top1_snr_ge_10": rate(strong, "top1"), "n_snr_ge_10": len(strong),
+        "equivalence_all": rate(eff, "equivalent"), "equivalence_snr_ge_10": rate(strong, "equivalent"),
+        "set_accuracy_all": rate(eff, "in_set"), "set_accuracy_snr_ge_10": rate(strong, "in_set"),
+        "best_ranked_snr_ge_10": float(np.mean([r["best_ranked"] == r["effect"] for r in strong])) if strong else None,
+        "false_claims_on_null": float(np.mean([r["status"] != "none" for r in null])) if null else None,
+        "false_claims_count": f"{sum(r['status'] != 'none' for r in null)}/{len(null)}",
+        "miss_rate": float(np.mean([r["status"] == "none" for r in eff])) if eff else None,
+        "by_snr": bins,
+        "median_held_out_gap_ratio_correct": float(np.median([r["held_out_gap_ratio"] for r in good])) if good else None,
+        "median_held_out_gap_ratio_all_claims": (float(np.median([r["held_out_gap_ratio"] for r in claims]))
+                                                 if claims else None),
+        "median_held_out_db_ratio_correct": float(np.median(db_ratio)) if db_ratio else None,
+        "median_held_out_db_before_after_correct": ([float(np.median([r["held_out_db_before"] for r in good])),
+                                                     float(np.median([r["held_out_db_after"] for r in good]))]
+                                                    if good else None),
+        "confirmation_rate": rate([r for r in eff if r["status"] != "none" and r["confirmed"] is not None],
+                                  "confirmed"),
+        "spurious_second_effect": float(np.mean([r["second_effect"] is not None for r in eff])) if eff else None,
+        "runtime_s": {"median": float(np.median(runtimes)), "max": float(np.max(runtimes)),
+                      "first_of_worker_max": None},
+        "confusion": confusion, "per_class": per_class,
+    }
+
+
+def print_summary(s: dict) -> None:
+    """Human-readable summary."""
+    def pct(x: float | None) -> str:
+        return "n/a" if x is None else f"{x:.3f}"
+    print(f"trials {s['trials']} ({s['effect_trials']} with an effect, {s['null_trials']} without)")
+    print(f"top-1 (identified and correct): all {pct(s['top1_all'])}, SNR>=10 {pct(s['top1_snr_ge_10'])} "
+          f"(n={s['n_snr_ge_10']})")
+    print(f"equivalence-class: all {pct(s['equivalence_all'])}, SNR>=10 {pct(s['equivalence_snr_ge_10'])}; "
+          f"set accuracy SNR>=10 {pct(s['set_accuracy_snr_ge_10'])}; best-ranked SNR>=10 "
+          f"{pct(s['best_ranked_snr_ge_10'])}")
+    print(f"false claims on no-effect data: {s['false_claims_count']} ({pct(s['false_claims_on_null'])}); "
+          f"miss rate {pct(s['miss_rate'])}")
+    for k, b in s["by_snr"].items():
+        print(f"  SNR {k:>8s}: n={b['n']:3d} top1={pct(b['top1'])} equiv={pct(b['equivalence'])} miss={pct(b['miss'])}")
+    print(f"held-out gap ratio (median, correct): {pct(s['median_held_out_gap_ratio_correct'])}; all claims "
+          f"{pct(s['median_held_out_gap_ratio_all_claims'])}; dB ratio {pct(s['median_held_out_db_ratio_correct'])} "
+          f"(median dB {s['median_held_out_db_before_after_correct']})")
+    print(f"confirmation rate {pct(s['confirmation_rate'])}; spurious second effect {pct(s['spurious_second_effect'])}")
+    print(f"runtime per diagnosis: median {s['runtime_s']['median']:.2f} s, max {s['runtime_s']['max']:.2f} s")
+    cols = list(next(iter(s["confusion"].values())))
+    short = {c: c[:6] for c in cols}
+    print("confusion (rows hidden, columns verdict):")
+    print(" " * 31 + " ".join(f"{short[c]:>6s}" for c in cols))
+    for h, row in s["confusion"].items():
+        print(f"  {h:29s}" + " ".join(f"{row[c]:6d}" for c in cols))
+    print("per class:")
+    for c, v in s["per_class"].items():
+        print(f"  {c:29s} n={v['n']:3d} top1={pct(v['top1'])} median SNR={v['median_snr']:.1f} "
+              f"ambiguous={v['ambiguous']} {v['ambiguous_with'] or ''}")
+
+
+def check_mesh() -> None:
+    """FE discretisation error of the truth against the exact RA-1 model, relative to |H|."""
+    from tests.oracles.fe_assembly import tool_point_receptance
+
+    from rcsa.assembly import build_model
+    from rcsa.dsm import tip_receptance
+    from rcsa.spec import parse_assembly
+
+    f = truth.FREQUENCY_HZ
+    for stickout in truth.STICKOUTS_M:
+        doc = {**truth.base_document(), "frequency": {"values_hz": f.tolist()}}
+        doc["tool"]["stickout_m"] = stickout
+        exact = tip_receptance(build_model(parse_assembly(doc)).chain(), 2 * np.pi * f)[:, 0, 0]
+        fe = tool_point_receptance(doc, f, max_element_length_m=truth.MESH_M)[:, 0, 0]
+        rel = np.abs(fe - exact) / np.abs(exact)
+        print(f"stickout {stickout * 1e3:.0f} mm: max |FE-exact|/|H| = {rel.max():.2e}, median {np.median(rel):.2e}")
+
+
+def calibrate(kind: str, evaluations: int = 400) -> dict[str, float]:
+    """Distributed contact closest to RA-1's lumped joint (``truth.HT_DISTRIBUTED``/``SH_DISTRIBUTED``).
+
+    Least squares (Nelder-Mead on log10 of the four per-length values, started from the stored
+    ones) of the features of the nominal FE truth with the distributed contact against those
+    with the point joint, at the five stickouts; frequencies weighted by 1/0.3 %, amplitudes
+    and compliance by 1/3 %.
+    """
+    from scipy.optimize import minimize
+
+    from rcsa.diagnosis.features import design_windows, extract
+
+    f = np.geomspace(50.0, 8000.0, 1000)
+    ones = dict.fromkeys(["tool_e", "tool_rho", "steel_e", "steel_rho", "loss", "bearing_k", "bearing_c",
+                          "sh_kt", "sh_kr", "sh_c"], 1.0)
+    nz = truth.Nuisance(ones, [{"ht_kt": 1.0, "ht_kr": 1.0, "ht_c": 1.0, "stickout_dm": 0.0}
+                               for _ in truth.STICKOUTS_M])
+    docs = truth.config_documents(truth.base_document(), nz, truth.STICKOUTS_M)
+    targets = []
+    for d in docs:
+        h = truth.effect_frf("none", {}, d, f)
+        w = design_windows(f, h)
+        targets.append((w, extract(f, h, w)))
+    start = truth.HT_DISTRIBUTED if kind == "holder_tool" else truth.SH_DISTRIBUTED
+    keys = list(start)
+
+    def cost(x: np.ndarray) -> float:
+        c = 0.0
+        for d, (w, f0) in zip(docs, targets, strict=True):
+            spec = {k: start[k] * 10**xi for k, xi in zip(keys, x, strict=True)}
+            if kind == "holder_tool":
+                h = truth._solve(d, f, {"holder_tool_distributed": spec})
+            else:
+                spec.update(shank_segments=truth.TAPER_SHANK,
+                            contact_length_m=sum(p["length_m"] for p in truth.TAPER_SHANK))
+                h = truth._solve(truth._taper_spindle(d), f, {"spindle_holder_distributed": spec})
+            weight = np.where([n.endswith("frequency") for n in w.names], 1 / 0.003, 1 / 0.03)
+            c += float(np.sum(((extract(f, h, w) - f0) * weight) ** 2))
+        return c
+
+    res = minimize(cost, np.zeros(len(keys)), method="Nelder-Mead",
+                   options={"maxfev": evaluations, "xatol": 1e-3, "fatol": 1e-3,
+                            "initial_simplex": np.vstack([np.zeros(len(keys)), 0.3 * np.eye(len(keys))])})
+    out = {k: float(start[k] * 10**xi) for k, xi in zip(keys, res.x, strict=True)}
+    print(f"{kind}: cost {cost(np.zeros(len(keys))):.4g} -> {res.fun:.4g}: {out}")
+    return out
+
+
+def example(request_path: Path, png_path: Path, effect: str = "holder_tool_joint", seed: int = 3) -> None:
+    """The README's worked example: one trial's request, its diagnosis and the figure."""
+    from rcsa.diagnosis.report import diagnosis_figure
+    from rcsa.plots import save_figure
+
+    trial = truth.make_trial(np.random.default_rng([seed, 0]), effect, with_null=False)
+    request_path.parent.mkdir(parents=True, exist_ok=True)
+    request_path.write_text(json.dumps(trial.request))
+    a = analyse(trial.request)
+    r = build_response(a)
+    png_path.parent.mkdir(parents=True, exist_ok=True)
+    save_figure(diagnosis_figure(a, r), png_path)
+    print(f"hidden {effect} {trial.params}")
+    print(json.dumps({"verdict": r["verdict"], "gap_summary": r["gap"]["summary"],
+                      "effects": [{k: v for k, v in e.items() if k != "corrected_h"} for e in r["effects"]],
+                      "ranking": [(e["effect"], round(e["log_bayes_factor"], 1)) for e in r["ranking"]],
+                      "runtime_s": r["runtime_s"]}, indent=1))
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--trials", type=int, default=250, help="number of trials (balanced over the 10 classes)")
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1))
+    ap.add_argument("--classes", nargs="*", default=list(truth.EFFECTS), choices=truth.EFFECTS)
+    ap.add_argument("--tolerance-scale", type=float, default=1.0,
+                    help="true tolerances relative to those the diagnoser assumes (misspecification run)")
+    ap.add_argument("--out", type=Path, default=REPO / "benchmarks" / "results" / "diagnosis.json")
+    ap.add_argument("--check-mesh", action="store_true", help="only print the FE truth's discretisation error")
+    ap.add_argument("--calibrate", choices=["holder_tool", "spindle_holder"],
+                    help="only refit the distributed contact closest to the base joint")
+    ap.add_argument("--example", nargs=2, type=Path, metavar=("REQUEST_JSON", "PNG"),
+                    help="only write the README example's request and figure")
+    ap.add_argument("--example-effect", default="holder_tool_joint", choices=truth.EFFECTS)
+    args = ap.parse_args()
+    if args.example:
+        example(*args.example, effect=args.example_effect, seed=args.seed)
+        return
+    if args.check_mesh:
+        check_mesh()
+        return
+    if args.calibrate:
+        calibrate(args.calibrate)
+        return
+    plan_rng = np.random.default_rng(args.seed)
+    plan = [args.classes[i % len(args.classes)] for i in range(args.trials)]
+    plan = [plan[i] for i in plan_rng.permutation(len(plan))]
+    t0 = time.perf_counter()
+    records: list[dict] = []
+    with ProcessPoolExecutor(max_workers=args.workers) as pool:
+        futures = [pool.submit(run_trial, i, e, args.seed, args.tolerance_scale) for i, e in enumerate(plan)]
+        for k, fut in enumerate(futures):
+            rec = fut.result()
+            records.append(rec)
+            print(f"[{k + 1}/{len(plan)}] {rec['effect']:29s} -> {rec['status']:10s} {rec['verdict']:29s} "
+                  f"SNR {rec['snr_true']:5.1f} lnBF {rec['log_bayes_factor'] or 0:7.1f} {rec['runtime_s']:.1f} s",
+                  flush=True)
+    summary = summarise(records)
+    summary["wall_time_s"] = time.perf_counter() - t0
+    summary["command"] = " ".join(["benchmarks/bench_diagnosis.py", *sys.argv[1:]])
+    summary["settings"] = {"stickouts_m": list(truth.STICKOUTS_M), "band_hz": [50.0, 8000.0], "line_step_hz": 2.0,
+                           "noise": "1 % + floor -50 dB of peak, 5 averages", "seed": args.seed,
+                           "tolerance_scale": args.tolerance_scale, "workers": args.workers}
+    print_summary(summary)
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps({"summary": summary, "trials": records}, indent=1))
+    print(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()
