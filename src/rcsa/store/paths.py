@@ -50,6 +50,7 @@ OWN_NAMES = frozenset(
         TMP,
         JOBS,
         KEYS,
+        "libraries", "idempotency",  # rcsa.library_sync.DIRECTORY, service.idempotency (issue 8)
     }
 )
 
