@@ -1,0 +1,233 @@
+"""The web view in a real headless Chromium (selenium) against a real uvicorn on loopback.
+
+Skipped, with the reason, when selenium, ``chromium`` or ``chromedriver`` is missing (CI
+installs the Debian packages in ``.ci/run``). The server gets a temporary store seeded with
+the demo measurement; server and browser are always shut down.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import httpx
+import pytest
+
+from tests.helpers import REPO
+
+webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed (pip install -e '.[test]')")
+from selenium.common.exceptions import TimeoutException  # noqa: E402
+from selenium.webdriver.chrome.service import Service  # noqa: E402
+from selenium.webdriver.common.by import By  # noqa: E402
+from selenium.webdriver.support.ui import Select, WebDriverWait  # noqa: E402
+
+LIBRARY = REPO / "tests" / "data" / "tool-libraries" / "fusion-synthetic" / "synthetic_library.tools"
+WAIT_S = 30.0
+
+
+def _executable(default: str, name: str) -> str | None:
+    if Path(default).is_file() and os.access(default, os.X_OK):
+        return default
+    return shutil.which(name)
+
+
+CHROMIUM = _executable("/usr/bin/chromium", "chromium")
+CHROMEDRIVER = _executable("/usr/bin/chromedriver", "chromedriver")
+
+pytestmark = [
+    pytest.mark.slow,
+    pytest.mark.skipif(CHROMIUM is None, reason="no chromium browser (Debian: apt-get install chromium)"),
+    pytest.mark.skipif(CHROMEDRIVER is None, reason="no chromedriver (Debian: apt-get install chromium-driver)"),
+]
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory) -> Iterator[str]:
+    """Base URL of ``uvicorn service.main:create_app`` on a free loopback port (demo store)."""
+    tmp = tmp_path_factory.mktemp("web-server")
+    port = _free_port()
+    env = {**os.environ, "RCSA_STORE": str(tmp / "store"), "RCSA_SEED_DEMO": "true", "RCSA_ANONYMOUS_READ": "true",
+           "RCSA_JOB_POLL_S": "0.2", "MPLCONFIGDIR": str(tmp / "mpl")}
+    env.pop("PROMETHEUS_MULTIPROC_DIR", None)
+    log_path = tmp / "uvicorn.log"
+    with log_path.open("w") as log:
+        proc = subprocess.Popen([sys.executable, "-m", "uvicorn", "service.main:create_app", "--factory",
+                                 "--host", "127.0.0.1", "--port", str(port)], cwd=REPO, env=env, stdout=log,
+                                stderr=subprocess.STDOUT)
+    base = f"http://127.0.0.1:{port}"
+    try:
+        deadline = time.monotonic() + 60
+        with httpx.Client(base_url=base, timeout=10) as client:
+            while True:
+                try:
+                    if client.get("/readyz").status_code == 200:
+                        break
+                except httpx.TransportError:
+                    pass
+                assert proc.poll() is None, log_path.read_text()
+                assert time.monotonic() < deadline, "uvicorn did not become ready:\n" + log_path.read_text()
+                time.sleep(0.2)
+        yield base
+    finally:
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(timeout=10)
+
+
+@pytest.fixture(scope="module")
+def downloads(tmp_path_factory) -> Path:
+    """Where the browser saves downloads."""
+    return tmp_path_factory.mktemp("web-downloads")
+
+
+@pytest.fixture(scope="module")
+def browser(tmp_path_factory, downloads) -> Iterator[webdriver.Chrome]:
+    """Headless Chromium with a fresh profile."""
+    options = webdriver.ChromeOptions()
+    options.binary_location = CHROMIUM
+    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
+                "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                "--no-first-run", "--window-size=1280,1800",
+                f"--user-data-dir={tmp_path_factory.mktemp('chromium-profile')}"):
+        options.add_argument(arg)
+    options.add_experimental_option("prefs", {"download.default_directory": str(downloads),
+                                              "download.prompt_for_download": False})
+    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    driver = webdriver.Chrome(options=options, service=Service(CHROMEDRIVER))
+    try:
+        driver.set_page_load_timeout(WAIT_S)
+        driver.set_script_timeout(WAIT_S)
+        yield driver
+    finally:
+        driver.quit()
+
+
+# --------------------------------------------------------------------------- helpers
+
+def _wait_state(driver, key: str, want: str = "drawn") -> None:
+    """Wait until ``document.body.dataset[key]`` is ``want`` (fail at once on "error")."""
+    def done(d):
+        value = d.execute_script(f"return document.body.dataset.{key} || ''")
+        return value if value in (want, "error") else False
+
+    try:
+        value = WebDriverWait(driver, WAIT_S, poll_frequency=0.1).until(done)
+    except TimeoutException:
+        pytest.fail(f"{key} did not become {want}; page says: {_page_error(driver)!r}")
+    assert value == want, f"{key} failed in the page: {_page_error(driver)!r}"
+
+
+def _page_error(driver) -> str:
+    box = driver.find_element(By.ID, "error")
+    return box.text if box.is_displayed() else ""
+
+
+def _points(driver, path_id: str) -> int:
+    """Vertices of an SVG path drawn by the page (M and L commands in its d attribute)."""
+    d = driver.find_element(By.ID, path_id).get_attribute("d") or ""
+    return d.count("L") + d.count("M")
+
+
+def _severe_console(driver) -> list[str]:
+    return [e["message"] for e in driver.get_log("browser") if e["level"] == "SEVERE"]
+
+
+def _wait_download(folder: Path, suffix: str) -> Path:
+    deadline = time.monotonic() + WAIT_S
+    while time.monotonic() < deadline:
+        done = [p for p in folder.iterdir() if p.suffix == suffix]
+        if done:
+            return done[0]
+        time.sleep(0.1)
+    pytest.fail(f"no {suffix} file was downloaded into {folder}: {[p.name for p in folder.iterdir()]}")
+
+
+def _open(driver, base: str) -> None:
+    driver.get(base + "/")
+    WebDriverWait(driver, WAIT_S).until(
+        lambda d: d.execute_script("return document.body.dataset.ready === 'true'"))
+    assert driver.current_url == base + "/ui/"
+
+
+# --------------------------------------------------------------------------- tests
+
+def test_predict_ra1_draw_frf_and_lobes_and_download(server, browser, downloads):
+    _open(browser, server)
+    spindles = [o.text for o in Select(browser.find_element(By.ID, "spindle")).options]
+    assert spindles[0].startswith("RA-1") and any("demo-ra1" in s for s in spindles), spindles
+
+    browser.find_element(By.ID, "predict").click()
+    _wait_state(browser, "frf")
+    for path in ("frf-real-path", "frf-imag-path", "frf-mag-path", "frf-phase-path"):
+        assert _points(browser, path) > 4000, path  # 5–5000 Hz by 1 Hz: 4996 lines
+    assert "599.85 Hz" in browser.find_element(By.ID, "nat-freqs").text
+    assert "N/µm" in browser.find_element(By.ID, "static-stiffness").text
+    assert "µm/N at" in browser.find_element(By.ID, "min-real").text
+    assert not browser.find_element(By.ID, "lobes").get_attribute("disabled")
+
+    browser.find_element(By.ID, "op-speed").send_keys("12000")
+    browser.find_element(By.ID, "op-depth").send_keys("0.2")
+    browser.find_element(By.ID, "lobes").click()
+    _wait_state(browser, "lobes")
+    assert _points(browser, "lobes-envelope-path") > 500  # 1000 speeds
+    assert browser.find_elements(By.CSS_SELECTOR, "#lobes-plot polygon.stable")
+    assert browser.find_elements(By.ID, "operating-point")
+    assert " mm (chatter at " in browser.find_element(By.ID, "lobes-min-depth").text
+    assert " rpm" in browser.find_element(By.ID, "lobes-pockets").text
+
+    browser.find_element(By.ID, "download-lobes-png").click()
+    png = _wait_download(downloads, ".png")
+    WebDriverWait(browser, WAIT_S).until(lambda d: png.stat().st_size > 1000)
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    browser.find_element(By.ID, "download-frf-csv").click()
+    csv_file = _wait_download(downloads, ".csv")
+    WebDriverWait(browser, WAIT_S).until(lambda d: csv_file.read_text().count("\n") > 4996)
+    assert csv_file.read_text().startswith("frequency_hz,h_real_m_n,h_imag_m_n,")
+    assert _severe_console(browser) == []
+
+
+def test_library_entry_on_measured_spindle_and_errors_shown(server, browser):
+    _open(browser, server)
+    browser.find_element(By.ID, "library-file").send_keys(str(LIBRARY))
+    WebDriverWait(browser, WAIT_S).until(
+        lambda d: "2 usable, 2 skipped" in d.find_element(By.ID, "library-status").text)
+    entry = Select(browser.find_element(By.ID, "entry"))
+    disabled = [o.text for o in entry.options if not o.is_enabled()]
+    assert any("no holder" in t for t in disabled), disabled
+    entry.select_by_value("00000000-0000-4000-8000-000000000102")  # T2, 2 flutes, inch units
+    assert browser.find_element(By.ID, "teeth").get_attribute("value") == "2"
+    spindle = Select(browser.find_element(By.ID, "spindle"))
+    demo = next(o for o in spindle.options if "demo-ra1" in o.text)
+    spindle.select_by_value(demo.get_attribute("value"))
+
+    browser.find_element(By.ID, "predict").click()
+    _wait_state(browser, "frf")
+    assert _points(browser, "frf-real-path") > 4000
+    assert "T2" in browser.find_element(By.ID, "predict-status").text
+    assert "Hz" in browser.find_element(By.ID, "nat-freqs").text
+    assert _severe_console(browser) == []
+
+    step = browser.find_element(By.ID, "freq-step")
+    step.clear()
+    step.send_keys("-1")
+    browser.find_element(By.ID, "predict").click()
+    _wait_state(browser, "frf", want="error")
+    WebDriverWait(browser, WAIT_S).until(lambda d: d.find_element(By.ID, "error").is_displayed())
+    text = browser.find_element(By.ID, "error").text
+    assert "Prediction failed" in text and "frequency.step_hz" in text, text
