@@ -35,6 +35,7 @@ from .jobs import handlers
 from .metrics import Metrics
 from .middleware import RequestContextMiddleware, configure_logging
 from .routes import ROUTERS
+from .routes.libraries import job_handlers as library_job_handlers
 from .state import AppState, CachedMeasurements
 
 __all__ = ["create_app"]
@@ -55,6 +56,13 @@ measurements and stability lobes.
   computations are anonymous unless `RCSA_ANONYMOUS_READ=false`.
 * Large batches and libraries answer `202 Accepted` with `Location: /v1/jobs/{id}`; poll it,
   then GET its `result_url`. `Prefer: respond-async` always makes a job.
+* POSTs that store or start something (measurement uploads, batches, libraries) accept an
+  `Idempotency-Key`: a retry with the same key and request gets the first answer again
+  (same status and body); the same key with another request is a 422; a retry while the
+  first is still running (or its job is) is a 409 with `Retry-After`.
+* Stored libraries: `POST /v1/libraries/{id}:sync` computes only new or changed tools and
+  reports `added`, `changed`, `unchanged`, `removed` tool ids; `GET /v1/libraries/{id}/results`
+  gives the results again as JSON, HDF5 or a zip of UFF 58 files.
 * Every response carries `X-Request-ID` (yours if you sent one).
 """
 
@@ -86,7 +94,7 @@ def _startup(settings: Settings, metrics: Metrics) -> AppState:
     def finished(job: Job, seconds: float) -> None:
         metrics.jobs.labels(job.kind, job.status).inc()
 
-    table = handlers(state)
+    table = {**handlers(state), **library_job_handlers(state)}
     for _ in range(settings.job_workers):
         runner = JobRunner(jobs, table, poll_s=settings.job_poll_s, heartbeat_s=settings.job_heartbeat_s,
                            on_finish=finished, retention_s=settings.job_retention_s)

@@ -671,3 +671,66 @@ class Health(_Response):
 class Ready(_Response):
     status: Literal["ready", "not ready"]
     checks: dict[str, str] = Field(description="Outcome of each readiness check.")
+
+
+# --------------------------------------------------------------------------- stored libraries (issue 8)
+
+class SyncReport(_Response):
+    """What a library sync did, per tool id (Fusion guid when present)."""
+
+    library_id: str = Field(description="The library synced.")
+    revision: int = Field(description="The library's revision after this sync (1 for the first).")
+    synced_utc: str
+    added: list[str] = Field(description="Tool ids new in this sync.")
+    changed: list[str] = Field(description="Tool ids whose result inputs (or skip/error reason) changed.")
+    unchanged: list[str] = Field(description="Tool ids whose result inputs are as in the previous sync.")
+    removed: list[str] = Field(description="Tool ids of the previous sync that are gone.")
+    counts: dict[str, int] = Field(description="Number of added, changed, unchanged, removed tools.")
+    computed: int = Field(description="Results computed by this sync (the others came from the result cache).")
+    from_cache: int = Field(description="Tools whose result was already computed.")
+    summary: dict[str, int] = Field(description="Tools by status: ok, skipped, error.")
+    failed: list[dict[str, Any]] = Field(description="{id, error: {field, detail}} of every tool in error.")
+    library_url: str | None = Field(None, description="GET the library here.")
+    results_url: str | None = Field(None, description="GET its results here (JSON, HDF5 or zip of UFF 58).")
+
+
+class LibraryTool(_Response):
+    """One item of a stored library: its status and the key of its stored result."""
+
+    id: str = Field(description="Fusion guid, else T<number>, else a content hash.")
+    index: int = Field(description="Position in the library's data list.")
+    description: str | None = None
+    number: int | None = Field(None, description="Fusion T number.")
+    teeth: int | None = Field(None, description="Number of flutes NOF.")
+    tool_type: str | None = None
+    warnings: list[str] = Field(default_factory=list)
+    status: Literal["ok", "skipped", "error"]
+    reason: str | None = Field(None, description="Why it was skipped.")
+    error: ItemError | None = None
+    result_sha256: str | None = Field(None, description="Content hash its result is filed under.")
+    revision: int = Field(description="Library revision in which this tool last changed.")
+
+
+class LibrarySummary(_Response):
+    """A stored library: settings, frequency grid, counts, last sync and (GET by id) its tools."""
+
+    id: str
+    revision: int
+    created_utc: str
+    synced_utc: str
+    source: str = Field(description="File name (or <mapping>) of the last synced export.")
+    library_sha256: str = Field(description="SHA-256 of the last synced library's canonical JSON.")
+    settings: dict[str, Any] = Field(description="Spindle, frequency, materials, joints, options of the last sync.")
+    measurement_sha256: str | None = Field(description="Content hash of the spindle measurement (hybrid).")
+    frequency: dict[str, Any] = Field(description="n_lines, min_hz, max_hz, sha256 of the grid.")
+    model_version: int
+    software_version: str
+    summary: dict[str, int] = Field(description="Tools by status: ok, skipped, error.")
+    last_sync: SyncReport
+    tools: list[LibraryTool] | None = Field(None, description="Every tool, in library order (GET by id only).")
+
+
+class LibraryList(_Response):
+    """Every stored library (without the per-tool lists)."""
+
+    libraries: list[LibrarySummary]

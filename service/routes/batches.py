@@ -17,12 +17,13 @@ from rcsa import library_api
 from ..bodies import require_json
 from ..deps import StateDep
 from ..errors import ProblemError
+from ..idempotency import IDEMPOTENCY_PROBLEMS, IdempotencyKeyHeader, IdempotentRoute, parse_key
 from ..jobs import accepted, job_document, wants_async
 from ..responses import json_response, problems
 from ..schemas import BatchRequest, BatchResult, JobStatus
 from ..security import ReadAccess
 
-router = APIRouter(prefix="/v1", tags=["batches and jobs"])
+router = APIRouter(prefix="/v1", tags=["batches and jobs"], route_class=IdempotentRoute)
 
 JobId = Annotated[str, Path(description="Job id from the Location header of a 202 answer.",
                             examples=["j-0123456789abcdef0123456789abcdef"])]
@@ -32,14 +33,15 @@ ToolPointQuery = Annotated[str | None, Query(pattern=r"^[hlnp](,[hlnp]){0,3}$", 
 
 
 @router.post("/tool-point-frf/batch", dependencies=[Depends(require_json)], response_model=BatchResult, responses={
-    202: {"model": JobStatus, "description": "Queued as a job; poll Location."}, **problems(401, 413, 415, 422)},
-    summary="Tool-point FRFs of many combinations")
-def predict_batch(body: BatchRequest, state: StateDep, _: ReadAccess, prefer: PreferHeader = None,
-                  tool_point: ToolPointQuery = None) -> Response:
+    202: {"model": JobStatus, "description": "Queued as a job; poll Location."}, **problems(401, 413, 415, 422),
+    **IDEMPOTENCY_PROBLEMS}, summary="Tool-point FRFs of many combinations")
+def predict_batch(body: BatchRequest, state: StateDep, who: ReadAccess, prefer: PreferHeader = None,
+                  tool_point: ToolPointQuery = None, idempotency_key: IdempotencyKeyHeader = None) -> Response:
     """One result per combination, in input order, each with its own ``status``.
 
     The spindle (and each distinct spindle + holder) is condensed once and reused. A bad
     combination gets ``status: error`` with the offending field and never fails the others.
+    With ``Idempotency-Key``, a retry gets the first answer (the same job, for a large batch).
     """
     s = state.settings
     request, refused = body.to_request()
@@ -52,7 +54,9 @@ def predict_batch(body: BatchRequest, state: StateDep, _: ReadAccess, prefer: Pr
     asked = wants_async(prefer)
     if asked or n > s.async_batch_threshold:
         library_api.check_common(request, store=state.reader, max_lines=s.max_frequency_lines)
-        return accepted(state, state.jobs.submit("batch", checked), preference_applied=asked)
+        key = parse_key(idempotency_key) if idempotency_key is not None else None
+        return accepted(state, state.jobs.submit("batch", checked, idempotency_key=key, owner=who.key_id),
+                        preference_applied=asked)
     with state.metrics.timed("batch"):
         out = library_api.run_entries(checked, store=state.reader, max_lines=s.max_frequency_lines,
                                       max_combinations=s.max_batch_combinations, arrays="numpy")

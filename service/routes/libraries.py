@@ -1,32 +1,63 @@
-"""``POST /v1/tool-libraries:predict``: a whole Fusion tool library on one spindle.
+"""Whole Fusion tool libraries on one spindle: predicted once, or kept and synced.
 
-Upload the library (``.json`` or ``.tools``) as multipart with the spindle and the
-frequency grid as form fields (JSON text), or send everything as one JSON document. Every
-library item gets one result in library order: ``ok`` (its tool-point FRF), ``skipped``
-(e.g. no holder, a probe) with the reason, or ``error`` naming the field. Libraries with
-more tools than ``RCSA_ASYNC_BATCH_THRESHOLD`` (or ``Prefer: respond-async``) run as a job.
+``POST /v1/tool-libraries:predict``: upload the library (``.json`` or ``.tools``) as
+multipart with the spindle and the frequency grid as form fields (JSON text), or send
+everything as one JSON document. Every library item gets one result in library order:
+``ok`` (its tool-point FRF), ``skipped`` (e.g. no holder, a probe) with the reason, or
+``error`` naming the field. Libraries with more tools than ``RCSA_ASYNC_BATCH_THRESHOLD`` (or
+``Prefer: respond-async``) run as a job.
+
+Stored libraries (:mod:`rcsa.library_sync`; writes need a write key, reads follow the read
+policy):
+
+* ``POST /v1/libraries/{library_id}:sync`` — the same body as ``:predict``. Computes only
+  the tools whose result is not stored yet (content hash of the combination, the spindle
+  measurement's content, the grid and the model version) and answers the sync report
+  (``added``, ``changed``, ``unchanged``, ``removed`` tool ids against the previous sync).
+  More tools to compute than ``RCSA_ASYNC_BATCH_THRESHOLD`` (or ``Prefer: respond-async``):
+  a ``library-sync`` job (``202``), whose result is the report. ``Idempotency-Key`` makes
+  retries safe; a job interrupted by a dead worker is resumed and takes the tools computed
+  before the interruption from the cache.
+* ``GET /v1/libraries`` · ``GET /v1/libraries/{library_id}`` (summary, per-tool status) ·
+  ``GET /v1/libraries/{library_id}/results`` (``Accept: application/json`` — the shape of a
+  library prediction —, ``application/x-hdf5`` or ``application/zip`` — one UFF 58 file per
+  tool) · ``DELETE /v1/libraries/{library_id}``.
 """
 
 from __future__ import annotations
 
 import json
-from typing import Annotated, Any
+import threading
+from pathlib import Path as FilePath
+from typing import Annotated, Any, Literal
 
-from fastapi import APIRouter, Header, Request
+from fastapi import APIRouter, Header, Path, Query, Request
 from fastapi.concurrency import run_in_threadpool
 from starlette.responses import Response
 
-from rcsa import library_api
+from rcsa import exports, library_api, library_sync
 from rcsa.errors import InputError
+from rcsa.jobs import Handler
 
 from ..bodies import form_text, read_body, read_upload, validate_json
 from ..deps import StateDep
+from ..errors import ProblemError
+from ..idempotency import IDEMPOTENCY_PROBLEMS, IdempotencyKeyHeader, IdempotentRoute, parse_key
 from ..jobs import accepted, wants_async
 from ..responses import json_response, problems
-from ..schemas import JobStatus, LibraryPredictionRequest, LibraryResult
-from ..security import ReadAccess
+from ..schemas import (
+    Deleted,
+    JobStatus,
+    LibraryList,
+    LibraryPredictionRequest,
+    LibraryResult,
+    LibrarySummary,
+    SyncReport,
+)
+from ..security import ReadAccess, WriteAccess
+from ..state import AppState
 
-router = APIRouter(prefix="/v1", tags=["tool libraries"])
+router = APIRouter(prefix="/v1", tags=["tool libraries"], route_class=IdempotentRoute)
 
 _JSON_FIELDS = ("spindle", "frequency", "joints", "materials", "options", "shear_coefficient")
 _FORM_FIELDS = {
@@ -51,23 +82,29 @@ _BODY = {"requestBody": {"required": True, "content": {
     "application/json": {"schema": {"$ref": "#/components/schemas/LibraryPredictionRequest"}}}}}
 
 
-@router.post("/tool-libraries:predict", response_model=LibraryResult, openapi_extra=_BODY, responses={
-    202: {"model": JobStatus, "description": "Queued as a job; poll Location."},
-    **problems(400, 401, 413, 415, 422)}, summary="Tool-point FRFs of a Fusion tool library")
-async def predict_library(request: Request, state: StateDep, _: ReadAccess,
-                          prefer: Annotated[str | None, Header(description="respond-async: always a job.")] = None,
-                          ) -> Response:
-    """One tool-point FRF per library tool that has a holder; the others skipped with a reason."""
+PreferHeader = Annotated[str | None, Header(description="respond-async: always a job.")]
+
+
+async def _library_inputs(request: Request, state: AppState) -> tuple[Any, dict[str, Any]]:
+    """The library (bytes or document) and the other fields of a multipart or JSON body."""
     kind, body = await read_body(request)
     try:
         if kind == "json":
             doc = validate_json(LibraryPredictionRequest, body).model_dump(exclude_unset=True)
-            library = doc.pop("library")
-        else:
-            library, doc = await _from_form(body, state.settings.max_upload_bytes)
+            return doc.pop("library"), doc
+        return await _from_form(body, state.settings.max_upload_bytes)
     finally:
         if kind == "form":
             await body.close()
+
+
+@router.post("/tool-libraries:predict", response_model=LibraryResult, openapi_extra=_BODY, responses={
+    202: {"model": JobStatus, "description": "Queued as a job; poll Location."},
+    **problems(400, 401, 413, 415, 422), **IDEMPOTENCY_PROBLEMS}, summary="Tool-point FRFs of a Fusion tool library")
+async def predict_library(request: Request, state: StateDep, who: ReadAccess, prefer: PreferHeader = None,
+                          idempotency_key: IdempotencyKeyHeader = None) -> Response:
+    """One tool-point FRF per library tool that has a holder; the others skipped with a reason."""
+    library, doc = await _library_inputs(request, state)
     s = state.settings
     plan = await run_in_threadpool(lambda: library_api.library_request(library, **doc))
     n = len(plan["batch"]["combinations"])
@@ -77,7 +114,9 @@ async def predict_library(request: Request, state: StateDep, _: ReadAccess,
                                                              max_lines=s.max_frequency_lines))
     asked = wants_async(prefer)
     if n and (asked or n > s.async_batch_threshold):
-        return accepted(state, state.jobs.submit("library", plan), preference_applied=asked)
+        key = parse_key(idempotency_key) if idempotency_key is not None else None
+        return accepted(state, state.jobs.submit("library", plan, idempotency_key=key, owner=who.key_id),
+                        preference_applied=asked)
 
     def run() -> dict[str, Any]:
         with state.metrics.timed("library"):
@@ -125,3 +164,160 @@ async def _from_form(form: Any, limit_bytes: int) -> tuple[bytes, dict[str, Any]
         if required not in doc:
             raise InputError(required, "is required" + (" (or measurement_id)" if required == "spindle" else ""))
     return data, doc
+
+
+# --------------------------------------------------------------------------- stored libraries
+
+LibraryId = Annotated[str, Path(pattern=library_sync.LIBRARY_ID_PATTERN.pattern, description=(
+    "Your name for the library (1-128 letters, digits, '.', '_', '-'), e.g. the CAM library's name; each sync "
+    "is compared with the previous sync under the same id."), examples=["bt40-mills"])]
+HDF5, ZIP, JSON = "application/x-hdf5", "application/zip", "application/json"
+
+_STORES: dict[str, library_sync.LibraryStore] = {}
+_STORES_LOCK = threading.Lock()
+
+
+def library_store(state: AppState) -> library_sync.LibraryStore:
+    """The libraries of the service's store (one :class:`LibraryStore` per process)."""
+    directory = FilePath(state.store.path) / library_sync.DIRECTORY
+    with _STORES_LOCK:
+        found = _STORES.get(str(directory))
+        if found is None or not directory.is_dir():
+            found = _STORES[str(directory)] = library_sync.LibraryStore(directory)
+        return found
+
+
+def _report(report: library_sync.SyncReport) -> dict[str, Any]:
+    base = f"/v1/libraries/{report.library_id}"
+    return {**report.to_dict(), "library_url": base, "results_url": base + "/results"}
+
+
+def job_handlers(state: AppState) -> dict[str, Handler]:
+    """The ``library-sync`` job kind (registered by :func:`service.main.create_app`)."""
+    s, m = state.settings, state.metrics
+
+    def sync(request: dict[str, Any], progress: Any) -> tuple[Any, dict[str, Any]]:
+        with m.timed("library-sync"):
+            report = library_sync.run_sync(library_store(state), request, store=state.reader,
+                                           max_lines=s.max_frequency_lines, progress=progress)
+        m.frfs.labels("library-sync").inc(report.computed)
+        doc = _report(report)
+        return doc, {**doc["counts"], **report.summary, "computed": report.computed}
+
+    return {"library-sync": sync}
+
+
+@router.post("/libraries/{library_id}:sync", response_model=SyncReport, openapi_extra=_BODY, responses={
+    202: {"model": JobStatus, "description": "Queued as a library-sync job; poll Location (its result is the "
+                                             "sync report)."},
+    **problems(400, 401, 403, 413, 415, 422), **IDEMPOTENCY_PROBLEMS},
+    summary="Sync a stored library with a new export (write key)")
+async def sync_library(library_id: LibraryId, request: Request, state: StateDep, who: WriteAccess,
+                       prefer: PreferHeader = None, idempotency_key: IdempotencyKeyHeader = None) -> Response:
+    """Bring the stored library ``library_id`` up to date with this export of the tool library.
+
+    The body is that of ``POST /v1/tool-libraries:predict`` (multipart or JSON). Only tools
+    whose result is not stored yet are computed; the report lists the tool ids ``added``,
+    ``changed``, ``unchanged`` and ``removed`` since the previous sync of this id. Send an
+    ``Idempotency-Key`` from automated (retrying) callers.
+    """
+    library, doc = await _library_inputs(request, state)
+    s, libs = state.settings, await run_in_threadpool(library_store, state)
+    sync = await run_in_threadpool(lambda: library_sync.sync_request(library_id, library, **doc))
+    n = len(sync["batch"]["combinations"])
+    if n > s.max_batch_combinations:
+        raise InputError("library", f"has {n} tools to predict; at most {s.max_batch_combinations} per request")
+    plan = await run_in_threadpool(lambda: library_sync.plan_sync(libs, sync, store=state.reader,
+                                                                  max_lines=s.max_frequency_lines))
+    if plan.pending:
+        await run_in_threadpool(lambda: library_api.check_common(sync["batch"], store=state.reader,
+                                                                 max_lines=s.max_frequency_lines))
+    asked = wants_async(prefer)
+    if asked or len(plan.pending) > s.async_batch_threshold:
+        key = parse_key(idempotency_key) if idempotency_key is not None else None
+        job = state.jobs.submit("library-sync", sync, idempotency_key=key, owner=who.key_id)
+        return accepted(state, job, preference_applied=asked)
+
+    def run() -> library_sync.SyncReport:
+        with state.metrics.timed("library-sync"):
+            return library_sync.run_sync(libs, sync, store=state.reader, max_lines=s.max_frequency_lines, plan=plan)
+
+    report = await run_in_threadpool(run)
+    state.metrics.frfs.labels("library-sync").inc(report.computed)
+    return json_response(_report(report), headers={"Location": f"/v1/libraries/{library_id}"})
+
+
+@router.get("/libraries", response_model=LibraryList, responses=problems(401), summary="List stored libraries")
+def list_libraries(state: StateDep, _: ReadAccess) -> Response:
+    """Every stored library: settings, grid, counts and last sync report (no per-tool list)."""
+    return json_response({"libraries": library_store(state).list()})
+
+
+@router.get("/libraries/{library_id}", response_model=LibrarySummary, responses=problems(401, 404),
+            summary="A stored library and the status of each tool")
+def get_library(library_id: LibraryId, state: StateDep, _: ReadAccess) -> Response:
+    """Summary of a stored library with every tool's status and result key (no arrays)."""
+    return json_response(library_store(state).get(library_id))
+
+
+@router.get("/libraries/{library_id}/results", response_model=LibraryResult, responses={
+    200: {"description": "application/json: the shape of a library prediction (one result per item, in library "
+                         "order). application/x-hdf5: frequency_hz and each ok tool's complex h, l, n, p (schema "
+                         "rcsa.library-results). application/zip: index.json and one UFF 58 file (with a dataset "
+                         "164, SI) of the tool-point h per ok tool.",
+          "content": {HDF5: {"schema": {"type": "string", "format": "binary"}},
+                      ZIP: {"schema": {"type": "string", "format": "binary"}}}},
+    **problems(401, 404, 406)}, summary="Results of a stored library (JSON, HDF5 or zip of UFF 58)")
+def get_library_results(
+    library_id: LibraryId, state: StateDep, _: ReadAccess,
+    accept: Annotated[str | None, Header(description="application/json (default), application/x-hdf5 or "
+                                                     "application/zip.")] = None,
+    format: Annotated[Literal["json", "hdf5", "zip"] | None, Query(
+        description="Instead of Accept (e.g. for a browser link).")] = None,
+    tool_point: Annotated[str | None, Query(pattern=r"^[hlnp](,[hlnp]){0,3}$", description=(
+        "JSON only: receptances to return in each result's tool_point, e.g. h; default h,l,n,p."))] = None,
+) -> Response:
+    """Every tool's stored result, fetched again by library id."""
+    media = {"json": JSON, "hdf5": HDF5, "zip": ZIP}[format] if format else _negotiate(accept)
+    libs = library_store(state)
+    keep = tool_point.split(",") if tool_point and media == JSON else None
+    results = libs.results(library_id, keep)
+    if media == JSON:
+        return json_response(results)
+    name = f"{library_id}-r{results['library']['revision']}"
+    if media == HDF5:
+        data, filename = exports.library_hdf5(results), f"{name}.h5"
+    else:
+        data, filename = exports.library_uff_zip(results), f"{name}.zip"
+    return Response(data, media_type=media, headers={"Content-Disposition": f'attachment; filename="{filename}"'})
+
+
+@router.delete("/libraries/{library_id}", response_model=Deleted, responses=problems(401, 403, 404),
+               summary="Forget a stored library (write key)")
+def delete_library(library_id: LibraryId, state: StateDep, _: WriteAccess) -> Response:
+    """Forget a library and its per-tool status (the shared result cache keeps the results)."""
+    return json_response(library_store(state).delete(library_id))
+
+
+def _negotiate(accept: str | None) -> str:
+    """The best of JSON, HDF5 and zip for an Accept header (JSON when it says nothing)."""
+    if not accept or not accept.strip():
+        return JSON
+    q: dict[str, float] = {}
+    for part in accept.split(","):
+        media, *params = [p.strip().lower() for p in part.split(";")]
+        weight = 1.0
+        for p in params:
+            if p.startswith("q="):
+                try:
+                    weight = float(p[2:])
+                except ValueError:
+                    weight = 0.0
+        q[media] = max(q.get(media, 0.0), weight)
+    wildcard = max(q.get("*/*", 0.0), q.get("application/*", 0.0))
+    ranked = [(q.get(m, wildcard), -i, m) for i, m in enumerate((JSON, HDF5, ZIP))]
+    best = max(ranked)
+    if best[0] <= 0:
+        raise ProblemError(406, "results are available as application/json, application/x-hdf5 or application/zip; "
+                                f"the Accept header {accept!r} allows none of them")
+    return best[2]

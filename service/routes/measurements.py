@@ -14,6 +14,7 @@ from rcsa.errors import InputError
 from ..bodies import form_text, read_body, read_upload, validate_json
 from ..deps import StateDep
 from ..errors import ProblemError
+from ..idempotency import IDEMPOTENCY_PROBLEMS, IdempotencyKeyHeader, IdempotentRoute
 from ..responses import json_response, problems
 from ..schemas import (
     Deleted,
@@ -25,7 +26,7 @@ from ..schemas import (
 from ..security import ReadAccess, WriteAccess
 from ..state import AppState
 
-router = APIRouter(prefix="/v1/measurements", tags=["measurements"])
+router = APIRouter(prefix="/v1/measurements", tags=["measurements"], route_class=IdempotentRoute)
 
 MeasurementId = Annotated[str, Path(description="Measurement id.", examples=["m-0123456789ab"])]
 HDF5 = "application/x-hdf5"
@@ -65,9 +66,15 @@ _UPLOAD_BODY = {"requestBody": {"required": True, "content": {
 
 
 @router.post("", status_code=201, response_model=MeasurementInfo, openapi_extra=_UPLOAD_BODY,
-             responses=problems(400, 401, 403, 413, 415, 422), summary="Store a measurement (write key)")
-async def upload_measurement(request: Request, state: StateDep, _: WriteAccess) -> Response:
+             responses={**problems(400, 401, 403, 413, 415, 422), **IDEMPOTENCY_PROBLEMS},
+             summary="Store a measurement (write key)")
+async def upload_measurement(request: Request, state: StateDep, _: WriteAccess,
+                             idempotency_key: IdempotencyKeyHeader = None) -> Response:
     """Store a measured spindle FRF; answers its metadata with the new ``id`` (``201``).
+
+    With ``Idempotency-Key`` (recommended for automated uploads), a retry of the same upload
+    answers the first ``201`` again instead of storing a second copy (see
+    :mod:`service.idempotency`; the key itself is handled by the route class).
 
     Either the contract's measurement JSON (``application/json``: SI receptances) or a file
     upload (``multipart/form-data``): UFF 58, CSV/TSV, CutPro ``.frf``, contract JSON or a

@@ -21,11 +21,14 @@ exists (runner ids are ``host:pid:token``) is recognised at once, so a restarted
 resumes its own interrupted jobs without waiting for the heartbeat to go stale. After ``max_attempts`` interrupted tries the job is
 failed instead of being retried for ever (a request that kills its worker, e.g. by memory).
 
-Idempotency (hook for ``Idempotency-Key``): rows carry ``idempotency_key``, ``owner``
-and ``request_sha256`` with a unique index on ``(owner, idempotency_key)``;
-:meth:`JobStore.find_idempotent` looks a key up. A later change can make ``submit`` return
-the first job for a replay, refuse the same key with a different body (different
-``request_sha256``), and report a replay of a running job.
+Idempotency (``Idempotency-Key``, issue 8): rows carry ``idempotency_key``, ``owner``
+and ``request_sha256`` with a unique index on ``(owner, idempotency_key)``. ``submit`` with a
+key already used by that owner returns the first job when the request is the same (same
+``request_sha256``), so a retried submission never queues a duplicate; with a different
+request it raises :class:`IdempotencyConflict` while the first job is unfinished, and moves
+the key to the new job once the first has finished (the HTTP layer,
+:mod:`service.idempotency`, is the authority on reuse of keys; the job table only links a
+key to its job). :meth:`JobStore.find_idempotent` looks a key up.
 """
 
 from __future__ import annotations
@@ -53,11 +56,13 @@ from .errors import InputError, NotFoundError, RcsaError
 
 __all__ = [
     "JOB_STATUSES",
+    "IdempotencyConflict",
     "Job",
     "JobRunner",
     "JobStore",
     "LostClaim",
     "is_job_id",
+    "runner_is_dead",
 ]
 
 log = logging.getLogger("rcsa.jobs")
@@ -98,8 +103,11 @@ _PURGE_EVERY_S = 3600.0
 _HOST = socket.gethostname()
 
 
-def _runner_is_dead(runner: str | None) -> bool:
-    """Whether a runner id ``host:pid:token`` of this host names a process that no longer exists."""
+def runner_is_dead(runner: str | None) -> bool:
+    """Whether a runner id ``host:pid:token`` of this host names a process that no longer exists.
+
+    False for other hosts, for this process and whenever it cannot be told.
+    """
     try:
         host, pid, _ = str(runner).split(":")
         if host != _HOST or int(pid) == os.getpid():
@@ -126,6 +134,15 @@ def request_fingerprint(request: Mapping[str, Any]) -> tuple[bytes, str]:
     """Canonical JSON bytes of a request (sorted keys) and their SHA-256."""
     data = orjson.dumps(request, option=orjson.OPT_SORT_KEYS | orjson.OPT_SERIALIZE_NUMPY)
     return data, hashlib.sha256(data).hexdigest()
+
+
+class IdempotencyConflict(InputError):
+    """An owner's ``Idempotency-Key`` names an unfinished job submitted with another request."""
+
+    def __init__(self, job_id: str) -> None:
+        super().__init__("Idempotency-Key", f"is already used for another request (job {job_id}, still "
+                                            "unfinished); use a new key for a new request")
+        self.job_id = job_id
 
 
 class LostClaim(RcsaError):
@@ -240,18 +257,37 @@ class JobStore:
         request : mapping
             JSON-ready request document (kept until the job is purged).
         idempotency_key, owner : str, optional
-            Stored for the ``Idempotency-Key`` hook (see the module docstring).
+            The caller's ``Idempotency-Key`` and who sent it. A key the owner already used for
+            the same kind and request returns that job instead of queuing another.
+
+        Raises
+        ------
+        IdempotencyConflict
+            The key names an unfinished job of this owner with a different request.
         """
         data, sha = request_fingerprint(request)
         job_id = "j-" + secrets.token_hex(16)
         with closing(self._connect()) as con:
+            con.execute("BEGIN IMMEDIATE")
             try:
+                if idempotency_key is not None:
+                    row = con.execute("SELECT id, kind, request_sha256, status FROM jobs WHERE owner IS ? AND "
+                                      "idempotency_key = ?", (owner, idempotency_key)).fetchone()
+                    if row is not None and row[1] == kind and row[2] == sha:
+                        con.execute("COMMIT")
+                        return self.get(row[0])
+                    if row is not None and row[3] not in ("succeeded", "failed"):
+                        raise IdempotencyConflict(row[0])
+                    if row is not None:  # a finished job keeps its result, the key moves on
+                        con.execute("UPDATE jobs SET idempotency_key = NULL WHERE id = ?", (row[0],))
                 con.execute(
                     "INSERT INTO jobs (id, kind, status, request, request_sha256, idempotency_key, owner, "
                     "created_utc) VALUES (?, ?, 'queued', ?, ?, ?, ?, ?)",
                     (job_id, kind, data, sha, idempotency_key, owner, _utc_now()))
-            except sqlite3.IntegrityError:
-                raise InputError("Idempotency-Key", "this key was already used for another job") from None
+                con.execute("COMMIT")
+            except BaseException:
+                con.execute("ROLLBACK")
+                raise
         return self.get(job_id)
 
     def get(self, job_id: str) -> Job:
@@ -271,7 +307,7 @@ class JobStore:
         return Job._from_row(row)
 
     def find_idempotent(self, owner: str | None, idempotency_key: str) -> Job | None:
-        """The job submitted earlier by ``owner`` with ``idempotency_key``, if any (issue-8 hook)."""
+        """The job submitted earlier by ``owner`` with ``idempotency_key``, if any."""
         with closing(self._connect()) as con:
             row = con.execute(f"SELECT {_COLUMNS} FROM jobs WHERE owner IS ? AND idempotency_key = ?",
                               (owner, idempotency_key)).fetchone()
@@ -326,7 +362,7 @@ class JobStore:
             try:
                 dead = [(job_id,) for job_id, owner in con.execute(
                     "SELECT id, runner FROM jobs WHERE status = 'running' AND runner LIKE ?", (_HOST + ":%",))
-                    if _runner_is_dead(owner)]
+                    if runner_is_dead(owner)]
                 if dead:  # its process is gone from this machine: no need to wait for the heartbeat
                     con.executemany("UPDATE jobs SET heartbeat_unix = NULL WHERE id = ?", dead)
                 while True:

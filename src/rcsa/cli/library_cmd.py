@@ -1,9 +1,18 @@
-"""``rcsa library predict LIBRARY --spindle SPINDLE.json | --measurement ID``.
+"""``rcsa library predict|sync|show|export``: whole Autodesk Fusion tool libraries.
 
-Tool-point FRFs of every tool of an Autodesk Fusion tool library (``.json`` or ``.tools``)
-on one spindle, computed here (no service needed), with a progress bar on stderr. The result
-JSON (one entry per library item: ``ok``, ``skipped`` with a reason, or ``error``) goes to
-stdout or ``-o OUT.json``; the exit status is 1 when any tool errored.
+``rcsa library predict LIBRARY --spindle SPINDLE.json | --measurement ID``: tool-point FRFs
+of every tool of a Fusion tool library (``.json`` or ``.tools``) on one spindle, computed
+here (no service needed), with a progress bar on stderr. The result JSON (one entry per
+library item: ``ok``, ``skipped`` with a reason, or ``error``) goes to stdout or ``-o
+OUT.json``; the exit status is 1 when any tool errored.
+
+``rcsa library sync LIBRARY --spindle ID-or-SPINDLE.json [--library-id ID]``: keep the
+library in the store (:mod:`rcsa.library_sync`, the same code as ``POST
+/v1/libraries/{id}:sync``): only tools whose result is not stored yet are computed; the
+added / changed / unchanged / removed summary goes to stderr, the sync report (JSON) to
+stdout; exit status 1 when any tool failed. ``rcsa library show ID`` prints a stored
+library's summary and per-tool status; ``rcsa library export ID -o FILE.h5|.zip|.json``
+writes its results (HDF5, zip of UFF 58 files, or JSON).
 """
 
 from __future__ import annotations
@@ -55,6 +64,46 @@ def _spindle_document(path: Path) -> dict[str, Any]:
     return {"spindle": doc}
 
 
+def _options_json(options: str | None) -> dict[str, Any] | None:
+    if options is None:
+        return None
+    try:
+        return json.loads(options)
+    except ValueError as exc:
+        raise InputError("options", f"not valid JSON ({exc})") from None
+
+
+def _inputs(base: dict[str, Any], measurement: str | None, frequency: str | None, joints: Path | None,
+            store: Any) -> dict[str, Any]:
+    """Keyword arguments of :func:`rcsa.library_api.library_request` from the command's options."""
+    if frequency is not None:
+        grid = parse_frequency_option(frequency)
+    elif "frequency" in base:
+        grid = base["frequency"]
+    elif measurement is not None:
+        grid = {"values_hz": store.get(measurement).frequency_hz.tolist()}
+    else:
+        grid = dict(_DEFAULT_GRID)
+    return {"spindle": base["spindle"], "frequency": grid,
+            "joints": read_json(joints) if joints is not None else base.get("joints"),
+            "materials": base.get("materials"), "beam_theory": base.get("beam_theory"),
+            "shear_coefficient": base.get("shear_coefficient")}
+
+
+def _progress_bar(quiet: bool) -> Any:
+    from rich.console import Console
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeRemainingColumn,
+    )
+
+    return Progress(TextColumn("[progress.description]{task.description}"), BarColumn(), MofNCompleteColumn(),
+                    TimeRemainingColumn(), transient=True, disable=quiet, console=Console(stderr=True))
+
+
 @library_app.command("predict")
 def predict(
     library: Annotated[Path, typer.Argument(help="Fusion tool library: .json, or .tools (zip).")],
@@ -77,15 +126,6 @@ def predict(
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")] = False,
 ) -> None:
     """Predict the tool-point FRF of every tool in a Fusion library on one spindle."""
-    from rich.console import Console
-    from rich.progress import (
-        BarColumn,
-        MofNCompleteColumn,
-        Progress,
-        TextColumn,
-        TimeRemainingColumn,
-    )
-
     from .. import library_api
 
     if (spindle is None) == (measurement is None):
@@ -96,34 +136,14 @@ def predict(
         from ..store import MeasurementStore
 
         st = MeasurementStore(store) if (store is not None or measurement is not None) else None
-        if frequency is not None:
-            grid = parse_frequency_option(frequency)
-        elif "frequency" in base:
-            grid = base["frequency"]
-        elif measurement is not None:
-            grid = {"values_hz": st.get(measurement).frequency_hz.tolist()}
-        else:
-            grid = dict(_DEFAULT_GRID)
-        if options is not None:
-            try:
-                opts = json.loads(options)
-            except ValueError as exc:
-                raise InputError("options", f"not valid JSON ({exc})") from None
-        else:
-            opts = None
-        request = library_api.library_request(
-            library, spindle=base["spindle"], frequency=grid,
-            joints=read_json(joints) if joints is not None else base.get("joints"),
-            materials=base.get("materials"), beam_theory=base.get("beam_theory"),
-            shear_coefficient=base.get("shear_coefficient"), natural_frequencies=natural_frequencies,
-            options=opts)
+        request = library_api.library_request(library, **_inputs(base, measurement, frequency, joints, st),
+                                              natural_frequencies=natural_frequencies,
+                                              options=_options_json(options))
         library_api.check_common(request["batch"], store=st)
         return request, st
 
     request, st = run_guarded(build)
-    with Progress(TextColumn("[progress.description]{task.description}"), BarColumn(), MofNCompleteColumn(),
-                  TimeRemainingColumn(), transient=True, disable=quiet,
-                  console=Console(stderr=True)) as bar:
+    with _progress_bar(quiet) as bar:
         task = bar.add_task("tools", total=max(len(request["batch"]["combinations"]), 1))
 
         def progress(done: int, total: int) -> None:
@@ -139,6 +159,120 @@ def predict(
             if r["status"] == "error":
                 typer.echo(f"error: {r['id']}: {r['error']['field']}: {r['error']['detail']}", err=True)
         raise typer.Exit(1)
+
+
+StoreOption = Annotated[Path | None, typer.Option("--store", help="Store directory (default: RCSA_STORE or the "
+                                                                   "per-user store).")]
+
+
+def _library_store(store: Path | None) -> tuple[Any, Any]:
+    from ..library_sync import LibraryStore
+    from ..store import MeasurementStore
+
+    measurements = MeasurementStore(store)
+    return measurements, LibraryStore.in_store(measurements.path)
+
+
+@library_app.command("sync")
+def sync(
+    library: Annotated[Path, typer.Argument(help="Fusion tool library: .json, or .tools (zip).")],
+    spindle: Annotated[str, typer.Option(help="A stored measurement id (m-..., hybrid), or a spindle JSON "
+                                              "(segments + bearings) or assembly JSON whose spindle, frequency, "
+                                              "joints and materials are used.")],
+    library_id: Annotated[str | None, typer.Option("--library-id", help="Id of the stored library (default: the "
+                                                                        "file name without suffix).")] = None,
+    frequency: Annotated[str | None, typer.Option(help="START:STOP:STEP in Hz (stop included) or a JSON "
+                                                       "frequency object. Default: the assembly's, else the "
+                                                       "measurement's lines, else 5:5000:1.")] = None,
+    joints: Annotated[Path | None, typer.Option(help="Joints JSON {spindle_holder, holder_tool} for every "
+                                                     "tool (default: the assembly's, else rigid).")] = None,
+    options: Annotated[str | None, typer.Option(help="Import options as JSON, e.g. "
+                                                     '\'{"holder_segments_per_cone": 6}\'.')] = None,
+    natural_frequencies: Annotated[bool, typer.Option(help="Compute exact natural frequencies.")] = True,
+    out: Annotated[Path | None, typer.Option("-o", "--out", help="Write the sync report here instead of "
+                                                                 "stdout.")] = None,
+    store: StoreOption = None,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")] = False,
+) -> None:
+    """Keep a Fusion library's tool-point FRFs in the store, computing only new or changed tools."""
+    from .. import library_api, library_sync
+    from ..store import is_measurement_id
+
+    measurement = spindle if is_measurement_id(spindle) else None
+    base = {"spindle": {"measurement_id": measurement}} if measurement else _spindle_document(Path(spindle))
+    ident = library_id if library_id is not None else library_sync.library_id_from_name(library)
+
+    def build() -> tuple[Any, Any, Any]:
+        st, libs = _library_store(store)
+        request = library_sync.sync_request(ident, library, **_inputs(base, measurement, frequency, joints, st),
+                                            natural_frequencies=natural_frequencies, options=_options_json(options))
+        plan = library_sync.plan_sync(libs, request, store=st)
+        if plan.pending:
+            library_api.check_common(request["batch"], store=st)
+        return st, libs, plan
+
+    st, libs, plan = run_guarded(build)
+    with _progress_bar(quiet) as bar:
+        task = bar.add_task(f"{ident}: computing", total=max(len(plan.pending), 1))
+
+        def progress(done: int, total: int) -> None:
+            bar.update(task, completed=done, total=max(total, 1))
+
+        report = run_guarded(lambda: library_sync.run_sync(libs, plan.request, store=st, progress=progress,
+                                                           plan=plan))
+    write_json(report.to_dict(), out)
+    c, s = report.to_dict()["counts"], report.summary
+    typer.echo(f"{ident} revision {report.revision}: {c['added']} added, {c['changed']} changed, "
+               f"{c['unchanged']} unchanged, {c['removed']} removed ({report.computed} computed, "
+               f"{report.from_cache} from cache; {s['ok']} ok, {s['skipped']} skipped, {s['error']} error)", err=True)
+    if report.failed:
+        for f in report.failed:
+            error = f.get("error") or {}
+            typer.echo(f"error: {f['id']}: {error.get('field', '')}: {error.get('detail', '')}", err=True)
+        raise typer.Exit(1)
+
+
+@library_app.command("show")
+def show(
+    library_id: Annotated[str, typer.Argument(help="Id of a stored library.")],
+    store: StoreOption = None,
+    out: Annotated[Path | None, typer.Option("-o", "--out", help="Write here instead of stdout.")] = None,
+) -> None:
+    """Print a stored library's summary and every tool's status (JSON)."""
+    write_json(run_guarded(lambda: _library_store(store)[1].get(library_id)), out)
+
+
+@library_app.command("export")
+def export(
+    library_id: Annotated[str, typer.Argument(help="Id of a stored library.")],
+    out: Annotated[Path, typer.Option("-o", "--out", help="FILE.h5 (HDF5), FILE.zip (one UFF 58 file per tool) "
+                                                          "or FILE.json.")],
+    store: StoreOption = None,
+) -> None:
+    """Write a stored library's results to a file; the format follows its suffix."""
+    import os
+
+    from .. import exports
+
+    suffix = out.suffix.lower()
+    if suffix not in (".h5", ".hdf5", ".zip", ".json"):
+        raise fail(f"{out}: the file name must end in .h5, .hdf5, .zip or .json")
+    results = run_guarded(lambda: _library_store(store)[1].results(library_id))
+    if suffix == ".json":
+        import orjson
+
+        data = orjson.dumps(results, option=orjson.OPT_SERIALIZE_NUMPY)
+    else:
+        data = exports.library_uff_zip(results) if suffix == ".zip" else exports.library_hdf5(results)
+    tmp = out.with_name(f".{out.name}.tmp")
+    try:
+        tmp.write_bytes(data)
+        os.replace(tmp, out)
+    except OSError as exc:
+        raise fail(f"cannot write {out}: {exc.strerror or exc}") from None
+    ok = results["summary"]["ok"]
+    typer.echo(f"{out}: {ok} tool{'s' if ok != 1 else ''} of {library_id} revision {results['library']['revision']}",
+               err=True)
 
 
 def register(app: typer.Typer) -> None:

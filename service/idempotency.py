@@ -1,0 +1,414 @@
+"""``Idempotency-Key`` on the POSTs that store or start something.
+
+Follows draft-ietf-httpapi-idempotency-key-header (``ecosystem.md`` §4.2). Routes of a
+router built with ``route_class=IdempotentRoute`` honour the header on ``POST``:
+
+* **First request** with a key: it runs; a ``2xx`` answer is kept (status, body bytes and the
+  ``Content-Type``, ``Location``, ``Retry-After`` and ``Preference-Applied`` headers). Any
+  other answer (a 4xx, a 5xx, an exception) is not kept and frees the key, so a corrected
+  request may use it again.
+* **Replay** (same key, same request): the kept answer, byte for byte, with
+  ``Idempotent-Replayed: true`` — except while a job that the first answer started
+  (``202`` with ``Location: /v1/jobs/{id}``) is still queued or running: then ``409``
+  (``urn:rcsa:problem:idempotent-job-running``) with ``Location`` (the job) and
+  ``Retry-After``.
+* **Concurrent duplicate** (same key while the first request is still being answered):
+  ``409`` (``urn:rcsa:problem:idempotent-request-in-progress``) with ``Retry-After``.
+* **Same key, different request**: ``422`` naming the ``Idempotency-Key`` header
+  (``urn:rcsa:problem:idempotency-key-reused``).
+* A malformed key (empty, longer than 255 characters, not printable ASCII): ``400``. The key
+  may be sent bare or as a structured-field string (``"..."``).
+
+"Same request" means the same method, path, query, media type, ``Prefer`` header and body;
+JSON bodies are compared after parsing (key order and spacing do not matter), multipart bodies
+with the boundary taken out (a retry with a new boundary is the same request).
+
+Keys are scoped per API key (the owner is the key id; ``anonymous`` for callers without a
+key) and kept in ``<store>/idempotency/keys.sqlite`` (WAL; shared by every service process,
+kept across restarts) for ``RCSA_JOB_RETENTION_S`` (the same retention as finished jobs, 7
+days by default), purged at startup and hourly. A reservation whose process died (same
+host, pid gone) or that is older than 5 minutes is taken over by the next request.
+Answers above 32 MiB are not kept (only pure computations answer that much; a replay
+computes them again).
+
+Which POSTs honour it: measurement uploads, batches (small ones answered at once as well as
+jobs), library predictions and library syncs. ``POST /v1/tool-point-frf`` (one synchronous
+prediction, stores nothing) and the analysis POSTs ignore the header: repeating them is
+harmless.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import logging
+import os
+import re
+import secrets
+import socket
+import sqlite3
+import threading
+import time
+from collections.abc import Awaitable, Callable
+from contextlib import closing
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Annotated, Any
+
+import orjson
+from fastapi import Header, Request
+from fastapi.concurrency import run_in_threadpool
+from fastapi.routing import APIRoute
+from starlette.responses import Response
+
+from rcsa.errors import NotFoundError
+from rcsa.jobs import runner_is_dead
+
+from .errors import PROBLEM_MEDIA_TYPE, ProblemError
+
+__all__ = [
+    "IDEMPOTENCY_PROBLEMS",
+    "KEY_HEADER",
+    "IdempotencyKeyHeader",
+    "IdempotencyStore",
+    "IdempotentRoute",
+    "Stored",
+    "parse_key",
+    "request_fingerprint",
+    "store_for",
+]
+
+log = logging.getLogger("service.idempotency")
+
+KEY_HEADER = "Idempotency-Key"
+DIRECTORY = "idempotency"
+MAX_KEY_LENGTH = 255
+LEASE_S = 300.0
+MAX_STORED_BYTES = 32 * 1024 * 1024
+_PURGE_EVERY_S = 3600.0
+_KEPT_HEADERS = ("content-type", "location", "retry-after", "preference-applied")
+_JOB_LOCATION = re.compile(r"^/v1/jobs/(j-[0-9a-f]{32})$")
+_HOST = socket.gethostname()
+
+_SCHEMA = """
+CREATE TABLE IF NOT EXISTS idempotency (
+    owner          TEXT NOT NULL,
+    key            TEXT NOT NULL,
+    fingerprint    TEXT NOT NULL,
+    method         TEXT NOT NULL,
+    path           TEXT NOT NULL,
+    state          TEXT NOT NULL CHECK (state IN ('running', 'done')),
+    holder         TEXT,
+    created_unix   REAL NOT NULL,
+    completed_unix REAL,
+    status         INTEGER,
+    headers        TEXT,
+    body           BLOB,
+    PRIMARY KEY (owner, key)
+);
+CREATE INDEX IF NOT EXISTS idempotency_age ON idempotency (created_unix);
+"""
+
+IdempotencyKeyHeader = Annotated[str | None, Header(
+    alias=KEY_HEADER, description="Any unique string (≤ 255 printable ASCII characters, e.g. a UUID) for this "
+                                  "request: a retry with the same key and request gets the first answer again "
+                                  "instead of acting twice. Kept per API key for RCSA_JOB_RETENTION_S (7 days).",
+    examples=["8e03978e-40d5-43e8-bc93-6894a57f9324"])]
+
+#: OpenAPI ``responses`` entries of an idempotent route (merge after :func:`service.responses.problems`).
+IDEMPOTENCY_PROBLEMS: dict[int | str, dict[str, Any]] = {
+    400: {"description": "Malformed request, or a malformed Idempotency-Key.",
+          "content": {PROBLEM_MEDIA_TYPE: {"schema": {"$ref": "#/components/schemas/Problem"}}}},
+    409: {"description": "A request with this Idempotency-Key is still being answered, or the job it started "
+                         "is still queued or running (Location: the job); retry after Retry-After.",
+          "content": {PROBLEM_MEDIA_TYPE: {"schema": {"$ref": "#/components/schemas/Problem"}}}},
+    422: {"description": "Invalid input (errors[] names each offending field), or an Idempotency-Key already "
+                         "used for a different request.",
+          "content": {PROBLEM_MEDIA_TYPE: {"schema": {"$ref": "#/components/schemas/Problem"}}}},
+}
+
+
+def parse_key(raw: str) -> str:
+    """The key of an ``Idempotency-Key`` header value (bare or a quoted sf-string).
+
+    Raises
+    ------
+    ProblemError
+        400 when the key is empty, too long or not printable ASCII.
+    """
+    key = raw.strip()
+    if len(key) >= 2 and key[0] == key[-1] == '"':
+        key = key[1:-1].replace('\\"', '"').replace("\\\\", "\\")
+    if not key or len(key) > MAX_KEY_LENGTH or any(not (32 <= ord(c) < 127) for c in key):
+        raise ProblemError(400, f"the {KEY_HEADER} header must be 1 to {MAX_KEY_LENGTH} printable ASCII characters "
+                                "(e.g. a UUID)", slug="invalid-idempotency-key",
+                           errors=[{"field": KEY_HEADER, "detail": "1 to 255 printable ASCII characters"}])
+    return key
+
+
+def _boundary(content_type: str) -> bytes | None:
+    for param in content_type.split(";")[1:]:
+        name, _, value = param.strip().partition("=")
+        if name.strip().lower() == "boundary" and value:
+            return value.strip().strip('"').encode("latin-1")
+    return None
+
+
+async def request_fingerprint(request: Request) -> str:
+    """SHA-256 of what makes two requests "the same" (see the module docstring)."""
+    body = await request.body()
+    ctype = request.headers.get("content-type", "")
+    media = ctype.split(";")[0].strip().lower()
+    if media == "application/json" or (media.startswith("application/") and media.endswith("+json")):
+        with contextlib.suppress(orjson.JSONDecodeError):
+            body = b"json:" + orjson.dumps(orjson.loads(body), option=orjson.OPT_SORT_KEYS)
+    elif media == "multipart/form-data":
+        boundary = _boundary(ctype)
+        if boundary:
+            body = body.replace(b"--" + boundary, b"--")
+    digest = hashlib.sha256()
+    query = sorted((k, v) for k, v in request.query_params.multi_items())
+    for part in (request.method, request.url.path, orjson.dumps(query).decode(), media,
+                 request.headers.get("prefer", "")):
+        data = part.encode()
+        digest.update(len(data).to_bytes(8, "big") + data)
+    digest.update(body)
+    return digest.hexdigest()
+
+
+@dataclass(frozen=True, slots=True)
+class Stored:
+    """A kept answer.
+
+    Attributes
+    ----------
+    status : int
+    headers : dict of str to str
+        The kept headers (lower-case names).
+    body : bytes
+    """
+
+    status: int
+    headers: dict[str, str]
+    body: bytes
+
+
+class IdempotencyStore:
+    """Keys and kept answers in SQLite; safe across processes and restarts.
+
+    Parameters
+    ----------
+    directory : str or os.PathLike
+        Normally ``<store>/idempotency``; created on first use.
+    retention_s : float
+        Keys older than this are forgotten, s.
+    lease_s : float
+        A reservation older than this (its request never finished) may be taken over, s.
+    """
+
+    def __init__(self, directory: str | os.PathLike[str], *, retention_s: float, lease_s: float = LEASE_S) -> None:
+        self.directory = Path(directory)
+        self.retention_s = float(retention_s)
+        self.lease_s = float(lease_s)
+        self.directory.mkdir(parents=True, exist_ok=True)
+        with closing(self._connect()) as con:
+            con.executescript(_SCHEMA)
+        self._next_purge = 0.0
+        self._maybe_purge()
+
+    def _connect(self) -> sqlite3.Connection:
+        con = sqlite3.connect(self.directory / "keys.sqlite", timeout=30.0, isolation_level=None)
+        con.execute("PRAGMA journal_mode=WAL")
+        con.execute("PRAGMA synchronous=NORMAL")
+        return con
+
+    def _maybe_purge(self) -> None:
+        now = time.monotonic()
+        if now >= self._next_purge:
+            self._next_purge = now + _PURGE_EVERY_S
+            try:
+                n = self.purge()
+                if n:
+                    log.info("forgot %d idempotency keys older than %g s", n, self.retention_s)
+            except sqlite3.Error:
+                log.exception("could not purge old idempotency keys")
+
+    def purge(self) -> int:
+        """Forget keys older than the retention period; return how many."""
+        with closing(self._connect()) as con:
+            cur = con.execute("DELETE FROM idempotency WHERE created_unix < ?", (time.time() - self.retention_s,))
+        return cur.rowcount
+
+    def begin(self, owner: str, key: str, fingerprint: str, method: str, path: str
+              ) -> tuple[str, Stored | str | None]:
+        """Reserve a key for a request, or say why not.
+
+        Returns
+        -------
+        ("new", holder) : the caller answers the request, then :meth:`complete` or :meth:`release`
+        ("replay", Stored) : the kept answer
+        ("running", None) : the first request with this key is still being answered
+        ("mismatch", None) : the key was used for a different request
+        """
+        self._maybe_purge()
+        holder = f"{_HOST}:{os.getpid()}:{secrets.token_hex(4)}"
+        now = time.time()
+        with closing(self._connect()) as con:
+            con.execute("BEGIN IMMEDIATE")
+            try:
+                row = con.execute("SELECT fingerprint, state, holder, created_unix, status, headers, body FROM "
+                                  "idempotency WHERE owner = ? AND key = ?", (owner, key)).fetchone()
+                if row is not None and now - row[3] > self.retention_s:
+                    row = None  # expired but not purged yet: a fresh key
+                if row is None:
+                    con.execute("INSERT OR REPLACE INTO idempotency (owner, key, fingerprint, method, path, state, "
+                                "holder, created_unix) VALUES (?, ?, ?, ?, ?, 'running', ?, ?)",
+                                (owner, key, fingerprint, method, path, holder, now))
+                    outcome: tuple[str, Stored | str | None] = ("new", holder)
+                elif row[0] != fingerprint:
+                    outcome = ("mismatch", None)
+                elif row[1] == "done":
+                    outcome = ("replay", Stored(int(row[4]), orjson.loads(row[5]), bytes(row[6])))
+                elif now - row[3] > self.lease_s or runner_is_dead(row[2]):
+                    con.execute("UPDATE idempotency SET holder = ?, created_unix = ? WHERE owner = ? AND key = ?",
+                                (holder, now, owner, key))
+                    outcome = ("new", holder)
+                else:
+                    outcome = ("running", None)
+                con.execute("COMMIT")
+            except BaseException:
+                con.execute("ROLLBACK")
+                raise
+        return outcome
+
+    def complete(self, owner: str, key: str, holder: str, answer: Stored) -> bool:
+        """Keep the answer of a reserved key; False if the reservation was lost."""
+        with closing(self._connect()) as con:
+            cur = con.execute("UPDATE idempotency SET state = 'done', holder = NULL, completed_unix = ?, status = ?, "
+                              "headers = ?, body = ? WHERE owner = ? AND key = ? AND holder = ? AND state = 'running'",
+                              (time.time(), answer.status, orjson.dumps(answer.headers), answer.body, owner, key,
+                               holder))
+        return cur.rowcount == 1
+
+    def release(self, owner: str, key: str, holder: str) -> None:
+        """Free a reserved key (its request was not answered with a kept answer)."""
+        with closing(self._connect()) as con:
+            con.execute("DELETE FROM idempotency WHERE owner = ? AND key = ? AND holder = ? AND state = 'running'",
+                        (owner, key, holder))
+
+
+_STORES: dict[str, IdempotencyStore] = {}
+_STORES_LOCK = threading.Lock()
+
+
+def store_for(state: Any) -> IdempotencyStore:
+    """The key store of a service's store directory (one per process and directory)."""
+    directory = Path(state.store.path) / DIRECTORY
+    retention = float(getattr(state.settings, "idempotency_retention_s", None) or state.settings.job_retention_s)
+    with _STORES_LOCK:
+        found = _STORES.get(str(directory))
+        if found is None or found.retention_s != retention or not directory.is_dir():
+            found = _STORES[str(directory)] = IdempotencyStore(directory, retention_s=retention)
+        return found
+
+
+def _owner(request: Request, state: Any) -> str | None:
+    """The key id of the caller (``anonymous`` without a key); None for an invalid key."""
+    api_key = request.headers.get("x-api-key")
+    if not api_key:
+        return "anonymous"
+    who = state.keys.authenticate(api_key)
+    return None if who is None else who.key_id
+
+
+def _replayed(stored: Stored) -> Response:
+    headers = {k: v for k, v in stored.headers.items() if k != "content-type"}
+    headers["Idempotent-Replayed"] = "true"
+    return Response(stored.body, status_code=stored.status, media_type=stored.headers.get("content-type"),
+                    headers=headers)
+
+
+def _running_job(stored: Stored, state: Any) -> Any:
+    """The job a kept ``202`` answer started, if it is still queued or running."""
+    if stored.status != 202:
+        return None
+    match = _JOB_LOCATION.match(stored.headers.get("location", ""))
+    if match is None:
+        return None
+    try:
+        job = state.jobs.get(match.group(1))
+    except NotFoundError:
+        return None
+    return None if job.finished else job
+
+
+async def run_idempotent(request: Request, raw_key: str, handler: Callable[[Request], Awaitable[Response]]
+                         ) -> Response:
+    """Answer ``request`` under its ``Idempotency-Key`` (see the module docstring)."""
+    key = parse_key(raw_key)
+    state = request.app.state.rcsa
+    owner = _owner(request, state)
+    if owner is None:  # an unknown key: the route answers 401 and nothing is kept
+        return await handler(request)
+    fingerprint = await request_fingerprint(request)
+    store = await run_in_threadpool(store_for, state)
+    kind, found = await run_in_threadpool(store.begin, owner, key, fingerprint, request.method, request.url.path)
+    retry = str(state.settings.retry_after_s)
+    if kind == "mismatch":
+        raise ProblemError(422, f"this {KEY_HEADER} was already used for a different request (another body, path "
+                                "or query); send a new key for a new request", slug="idempotency-key-reused",
+                           title="Idempotency key reused",
+                           errors=[{"field": KEY_HEADER, "detail": "already used for a different request"}])
+    if kind == "running":
+        raise ProblemError(409, f"a request with this {KEY_HEADER} is still being answered; retry after "
+                                f"{retry} s to get its answer", slug="idempotent-request-in-progress",
+                           title="Request in progress", headers={"Retry-After": retry})
+    if kind == "replay":
+        assert isinstance(found, Stored)
+        job = await run_in_threadpool(_running_job, found, state)
+        if job is not None:
+            from .jobs import job_document
+
+            raise ProblemError(409, f"the job {job.id} started by the request with this {KEY_HEADER} is still "
+                                    f"{job.status} ({job.progress:.0%} done); poll /v1/jobs/{job.id}, or retry "
+                                    "after Retry-After to get the first answer", slug="idempotent-job-running",
+                               title="Job still running", headers={"Retry-After": retry,
+                                                                   "Location": f"/v1/jobs/{job.id}"},
+                               extra={"job": job_document(job)})
+        return _replayed(found)
+    holder = str(found)
+    try:
+        response = await handler(request)
+    except BaseException:
+        await run_in_threadpool(store.release, owner, key, holder)
+        raise
+    body = getattr(response, "body", None)
+    if 200 <= response.status_code < 300 and isinstance(body, bytes) and len(body) <= MAX_STORED_BYTES:
+        kept = Stored(response.status_code, {k: response.headers[k] for k in _KEPT_HEADERS if k in response.headers},
+                      body)
+        try:
+            if not await run_in_threadpool(store.complete, owner, key, holder, kept):
+                log.warning("the reservation of an idempotency key was taken over before its answer was kept")
+        except sqlite3.Error:
+            log.exception("could not keep the answer of an idempotent request")
+    else:
+        await run_in_threadpool(store.release, owner, key, holder)
+    return response
+
+
+class IdempotentRoute(APIRoute):
+    """A route that honours ``Idempotency-Key`` on ``POST`` (see the module docstring)."""
+
+    def get_route_handler(self) -> Callable[[Request], Awaitable[Response]]:
+        """The route's handler, wrapped for ``POST``."""
+        handler = super().get_route_handler()
+        if "POST" not in (self.methods or set()):
+            return handler
+
+        async def idempotent_handler(request: Request) -> Response:
+            raw = request.headers.get(KEY_HEADER)
+            if raw is None:
+                return await handler(request)
+            return await run_idempotent(request, raw, handler)
+
+        return idempotent_handler
