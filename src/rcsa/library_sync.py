@@ -401,7 +401,7 @@ class LibraryStore:
                 raise
         if cur.rowcount != 1:
             raise NotFoundError("library", library_id)
-        return {"id": library_id, "deleted": True}
+        return {"deleted": library_id}
 
     def commit(self, plan: SyncPlan, statuses: Mapping[str, Mapping[str, Any]], *, computed: int) -> SyncReport:
         """Record a sync whose results are all in the cache; compare with the previous one.
