@@ -94,6 +94,8 @@ def run_trial(index: int, effect: str, seed: int, tolerance_scale: float = 1.0) 
         "held_out_db_after": first["held_out_gap_after_db"] if first else None,
         "gap_p_value": r["gap"]["p_value"],
         "second_effect": r["effects"][-1]["effect"] if r["effects"] and "given" in r["effects"][-1] else None,
+        "residual_p_value": first["residual_p_value"] if first else None,
+        "collinear_rivals": [x["effect"] for x in v["collinear_rivals"]],
         "runtime_s": t_diag, "truth_s": t_truth,
         "ranking": [(e["effect"], round(e["log_bayes_factor"], 2)) for e in r["ranking"]],
     }

@@ -43,6 +43,8 @@ MAX_SIGNATURE_COSINE = 0.9
 # Held-out validation and parameter meanings are computed for the verdict's effects and for
 # this many best-ranked others (the rest is ranked by evidence only, to bound the runtime).
 RANKED_WITH_HELD_OUT = 3
+# A second effect is only looked for when the first leaves a significant remainder.
+RESIDUAL_P = 0.05
 
 
 class Analysis:
@@ -154,6 +156,8 @@ class Analysis:
         """Best second effect with the first fixed at its MAP; accepted only if it passes every test."""
         first = self.decision.ranking[0]
         f1 = self.features_at(first.candidate, first.map)
+        if self.residual_p_value(f1) >= RESIDUAL_P:
+            return None  # the first effect leaves nothing that tolerances and noise do not explain
         ll1 = float(self.like(f1))
         w = self.like.w
         s1 = w @ (f1 - self.problem.base_features)
@@ -177,6 +181,39 @@ class Analysis:
         return best
 
     # ------------------------------------------------------------------ reporting
+    def residual_p_value(self, model_features: np.ndarray) -> float:
+        """P(χ² ≥ χ²_observed) under the Monte-Carlo null of tolerances and noise (all measurements)."""
+        r = self.problem.measured_features - (model_features + self.disc.mu)
+        chi2 = float(np.sum((self.like.w @ r) ** 2))
+        null = np.sum((self.disc.samples @ self.like.w.T) ** 2, axis=1)
+        return float((np.sum(null >= chi2) + 1) / (null.size + 1))
+
+    def collinear_rivals(self) -> list[dict[str, float | str]]:
+        """Claimable rivals whose fitted feature shift points the same way as the verdict's.
+
+        Listed when the verdict's effect leaves a significant remainder (the truth is then
+        neither form exactly, so an evidence difference between two collinear forms says which
+        approximates better, not which mechanism acts; ``diagnosis.md`` §5.4).
+        """
+        d = self.decision
+        if d.status == "none":
+            return []
+        best = d.ranking[0]
+        f_best = self.features_at(best.candidate, best.map)
+        if self.residual_p_value(f_best) >= RESIDUAL_P:
+            return []
+        s_best = self.like.w @ (f_best - self.problem.base_features)
+        out = []
+        for f in d.ranking[1:]:
+            if f.log_bayes_factor <= self.request.options.claim_threshold or f.candidate.name in d.ambiguous_with:
+                continue
+            s = self.like.w @ (self.features_at(f.candidate, f.map) - self.problem.base_features)
+            cos = float(s_best @ s / max(np.linalg.norm(s_best) * np.linalg.norm(s), 1e-300))
+            if cos >= MAX_SIGNATURE_COSINE:
+                out.append({"effect": f.candidate.name, "log_bayes_factor": f.log_bayes_factor,
+                            "signature_cosine": cos})
+        return out
+
     def reported_names(self) -> list[str]:
         """Effects that appear in ``effects[]``: the verdict (and its rivals)."""
         d = self.decision

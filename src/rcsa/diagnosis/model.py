@@ -5,14 +5,15 @@ re-clamped joint, a sensor on the tip, an effective clamping point inside the ho
 field of one frozen :class:`Knobs` value. :func:`config_parts` turns (base assembly, one
 measurement's tool, knobs) into the three sub-chains that are solved one after the other::
 
-    spindle (rear → nose, bearings)  |  nose compliance, SH joint, holder  |  HT joint, tool, tip mass
+    spindle (rear → nose, bearings)  |  nose residual, SH joint, holder  |  HT joint, tool, tip mass
 
-and :class:`Solver` condenses them with :func:`rcsa.dsm.march`, caching each condensed
-stiffness under the sub-chain itself (chain items are frozen and hashable). A change of a
-tool-side knob then costs three beams per measurement, not the twenty of the whole chain.
+and :class:`Solver` condenses them as :func:`rcsa.dsm.march` does, caching each condensed
+stiffness under the sub-chain itself (chain items are frozen and hashable) and each beam's
+stiffness terms. A change of a tool-side knob then costs three beams per measurement, not
+the twenty of the whole chain.
 
 Modelling of the effect knobs (the candidates' own formulas; the benchmark's truth uses
-different, physical realisations, see ``benchmarks/truth.py``):
+different, physical realisations, see ``tests/diagnosis/truth.py``):
 
 * ``shear_scale`` multiplies the shear flexibility 1/(κGA) and the rotary inertia ρI of every
   Timoshenko section (0 = Euler–Bernoulli, 1 = Timoshenko with the assembly's κ).
@@ -33,7 +34,7 @@ different, physical realisations, see ``benchmarks/truth.py``):
 from __future__ import annotations
 
 from collections import OrderedDict
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from functools import lru_cache
 
@@ -381,8 +382,3 @@ class Solver:
         k11, k12, k22 = self._condensed((parts.spindle,))
         return np.stack([np.stack([k11, k12], -1), np.stack([k12, k22], -1)], -2)
 
-
-def evaluate(spec: AssemblySpec, tools: Sequence[ToolSpec], knobs: Sequence[Knobs], solver: Solver,
-             lines: Sequence[np.ndarray]) -> list[np.ndarray]:
-    """``h`` of every configuration (its own knobs) on its own lines of the solver grid."""
-    return [solver.tip_h(config_parts(spec, t, k), idx) for t, k, idx in zip(tools, knobs, lines, strict=True)]

@@ -97,8 +97,7 @@ def gap_map(a: Analysis, model_features: np.ndarray, model_h: Sequence[np.ndarra
             k += 1
     w = a.like.w
     chi2 = float(np.sum((w @ r) ** 2))
-    null = np.sum((disc.samples @ w.T) ** 2, axis=1)
-    p_value = float((np.sum(null >= chi2) + 1) / (null.size + 1))
+    p_value = a.residual_p_value(model_features)
     worst = int(np.argmax(np.abs(z)))
     return {"modes": modes, "bands": bands, "chi2": chi2, "n_features": int(z.size),
             "chi2_per_feature": chi2 / z.size, "p_value": p_value, "significant": bool(p_value < P_GAP),
@@ -137,6 +136,7 @@ def _effect(a: Analysis, fit: Fit, ho: HeldOut | None, probs: dict[str, float], 
         "held_out_chi2_after": None if ho is None else ho.chi2_after,
         "confirmed_on_held_out": None if ho is None else ho.confirmed,
         "evidence_method": fit.method,
+        "residual_p_value": a.residual_p_value(feats),
     }
     if first is not None:
         entry["given"] = first.candidate.name
@@ -198,6 +198,7 @@ def build_response(a: Analysis) -> dict[str, Any]:
         gap["summary"] = (f"The measurements agree with the base model within its tolerances and the measurement "
                           f"noise (chi2/n = {gap['chi2_per_feature']:.1f}, p = {gap['p_value']:.2f}).")
     first = effects[0] if effects else None
+    rivals = a.collinear_rivals()
     fold_kind = ("requested" if a.request.options.held_out is not None else
                  "alternate_stickouts" if len(p.configs) >= 4 else
                  "leave_one_out" if len(p.configs) >= 2 else "none")
@@ -213,7 +214,11 @@ def build_response(a: Analysis) -> dict[str, Any]:
                     (d.ranking[0].log_bayes_factor if d.ranking else None),
                     "snr": first["snr"] if first else None,
                     "confirmed_on_held_out": first["confirmed_on_held_out"] if first else None,
-                    "sentence": _sentence(a, effects)},
+                    "collinear_rivals": rivals,
+                    "sentence": _sentence(a, effects) + (
+                        f" {', '.join(r['effect'] for r in rivals)} move(s) the features the same way "
+                        f"(signature cosine > 0.9) and the best fit leaves a significant remainder: "
+                        f"treat the mechanism as uncertain between them." if rivals else "")},
         "effects": effects,
         "ranking": ranking,
         "not_observable_at_standstill": list(NOT_OBSERVABLE_AT_STANDSTILL),
