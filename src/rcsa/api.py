@@ -133,17 +133,27 @@ _BATCH_FIELDS = ("frequency", "beam_theory", "shear_coefficient", "materials", "
 
 
 def _fill_natural_frequencies(slots: list, frequency_hz: np.ndarray) -> None:
-    """Exact natural frequencies of every ok combination, tools sharing a holder solved together."""
+    """Exact natural frequencies of every ok combination, all tools on one spindle solved together.
+
+    The spindle (with its joint to the holder) is the shared prefix; holders and tools are
+    the stacked tails, so tools in different holders or with different shanks still share
+    one lockstep bisection (:func:`rcsa.modes.natural_frequencies_batch`).
+    """
     groups: dict[Any, list[int]] = {}
     for i, slot in enumerate(slots):
         if not isinstance(slot, dict):
-            groups.setdefault(slot[1].to_holder_tip(), []).append(i)
+            model = slot[1]
+            groups.setdefault(model.spindle + _opt(model.spindle_holder), []).append(i)
     for prefix, members in groups.items():
-        tails = [_tail(slots[i][1]) for i in members]
+        tails = [slots[i][1].holder + _tail(slots[i][1]) for i in members]
         found = natural_frequencies_batch(prefix, tails, float(frequency_hz[0]), float(frequency_hz[-1]))
         for i, nat in zip(members, found, strict=True):
             ident, model, prediction = slots[i]
             slots[i] = (ident, model, replace(prediction, natural_frequencies_hz=nat))
+
+
+def _opt(spring: Any) -> tuple:
+    return () if spring is None else (spring,)
 
 
 def _tail(model: AssemblyModel) -> tuple:
