@@ -36,6 +36,7 @@ from typing import Any
 
 import filelock
 
+from .atomic import atomic_write_bytes
 from .errors import InputError, NotFoundError, StoreError
 
 __all__ = [
@@ -167,17 +168,9 @@ class KeyFile:
 
     def _write(self, records: Iterable[KeyRecord]) -> None:
         doc = {"schema": _SCHEMA, "schema_version": 1, "keys": [r.to_dict() for r in records]}
-        tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}.tmp")
         try:
-            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
-            with os.fdopen(fd, "w", encoding="utf-8") as fh:
-                fh.write(json.dumps(doc, indent=1) + "\n")
-                fh.flush()
-                os.fsync(fh.fileno())
-            os.replace(tmp, self.path)
+            atomic_write_bytes(self.path, (json.dumps(doc, indent=1) + "\n").encode(), mode=0o600)
         except OSError as e:
-            with contextlib.suppress(OSError):
-                tmp.unlink()
             raise StoreError(f"cannot write the key file {self.path}: {e.strerror or e}") from None
 
     @contextlib.contextmanager

@@ -11,15 +11,14 @@ from __future__ import annotations
 
 import base64
 import binascii
-import contextlib
 import json
-import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from .atomic import atomic_write_bytes
 from .errors import InputError, NotFoundError, StoreError
 
 __all__ = [
@@ -414,12 +413,7 @@ def seed_demo(store: Any) -> str | None:
             mid = None
             if not store.list():
                 mid = store.put(demo_measurement())
-            tmp = root / (_DEMO_MARKER + ".tmp")
-            tmp.write_text((mid or "store was not empty") + "\n", encoding="utf-8")
-            os.replace(tmp, marker)
+            atomic_write_bytes(marker, ((mid or "store was not empty") + "\n").encode())
             return mid
     except filelock.Timeout:
         raise StoreError(f"another process holds the demo-seeding lock of {root}") from None
-    finally:
-        with contextlib.suppress(OSError):
-            (root / (_DEMO_MARKER + ".tmp")).unlink()

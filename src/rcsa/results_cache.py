@@ -29,7 +29,6 @@ second rename just replaces the first. Files are never modified afterwards.
 from __future__ import annotations
 
 import contextlib
-import errno
 import hashlib
 import json
 import math
@@ -44,6 +43,7 @@ import numpy as np
 import orjson
 
 from . import __version__
+from .atomic import fsync_dir
 from .errors import StoreError
 
 __all__ = [
@@ -178,20 +178,6 @@ def result_key(combination: Mapping[str, Any], shared: Mapping[str, Any], freque
     return hashlib.sha256(canonical_json(doc)).hexdigest()
 
 
-def _fsync_dir(path: Path) -> None:
-    try:
-        fd = os.open(path, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError as e:
-        if e.errno not in (errno.EINVAL, errno.ENOTSUP, errno.EBADF):
-            raise
-    finally:
-        os.close(fd)
-
-
 class ResultCache:
     """Computed results filed by :func:`result_key`; safe for several processes and crashes.
 
@@ -282,7 +268,7 @@ class ResultCache:
             dirs.add(final.parent)
             n += 1
         for d in dirs:
-            _fsync_dir(d)
+            fsync_dir(d)
         return n
 
     def clean_tmp(self, older_than_s: float = _TMP_MAX_AGE_S) -> int:

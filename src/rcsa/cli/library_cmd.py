@@ -23,6 +23,7 @@ from typing import Annotated, Any
 
 import typer
 
+from ..atomic import atomic_write_bytes
 from ..errors import InputError
 from ._common import fail, read_json, run_guarded, write_json
 
@@ -250,7 +251,6 @@ def export(
     store: StoreOption = None,
 ) -> None:
     """Write a stored library's results to a file; the format follows its suffix."""
-    import os
 
     from .. import exports
 
@@ -264,10 +264,8 @@ def export(
         data = orjson.dumps(results, option=orjson.OPT_SERIALIZE_NUMPY)
     else:
         data = exports.library_uff_zip(results) if suffix == ".zip" else exports.library_hdf5(results)
-    tmp = out.with_name(f".{out.name}.tmp")
     try:
-        tmp.write_bytes(data)
-        os.replace(tmp, out)
+        atomic_write_bytes(out, data)
     except OSError as exc:
         raise fail(f"cannot write {out}: {exc.strerror or exc}") from None
     ok = results["summary"]["ok"]

@@ -22,13 +22,13 @@ a flipped bit on disk is reported rather than returned. Values round-trip bit-ex
 from __future__ import annotations
 
 import json
-import os
 from pathlib import Path
 from typing import Any
 
 import h5py
 import numpy as np
 
+from ..atomic import fsync_file
 from ..errors import InputError, StoreError
 from . import schema as S
 from .measurement import (
@@ -40,7 +40,7 @@ from .measurement import (
     thaw_json,
 )
 
-__all__ = ["fsync_file", "read_info_file", "read_measurement_file", "write_measurement_file"]
+__all__ = ["read_info_file", "read_measurement_file", "write_measurement_file"]
 
 _DATASET_OPTS: dict[str, Any] = {
     "chunks": True,
@@ -53,15 +53,6 @@ _DATASET_OPTS: dict[str, Any] = {
 def _tag(obj: h5py.HLObject, schema: str) -> None:
     obj.attrs["schema"] = schema
     obj.attrs["schema_version"] = S.SCHEMA_VERSION
-
-
-def fsync_file(path: Path) -> None:
-    """Flush a closed file's data to stable storage (``os.fsync``)."""
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
 
 
 def write_measurement_file(path: Path, m: Measurement) -> None:

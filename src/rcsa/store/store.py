@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import builtins
 import contextlib
-import errno
 import json
 import os
 import sqlite3
@@ -32,10 +31,12 @@ from pathlib import Path
 import filelock
 
 from .. import __version__
+from ..atomic import fsync_dir as _fsync_dir
+from ..atomic import fsync_file
 from ..errors import NotFoundError, StoreError
 from . import paths as P
 from .catalogue import Catalogue
-from .hdf5io import fsync_file, read_info_file, read_measurement_file, write_measurement_file
+from .hdf5io import read_info_file, read_measurement_file, write_measurement_file
 from .measurement import Measurement, MeasurementInfo
 from .schema import SCHEMA_VERSION, STORE_SCHEMA, SUPPORTED_VERSIONS
 
@@ -43,21 +44,6 @@ __all__ = ["MeasurementStore"]
 
 #: Attempts at drawing a fresh id; 48 random bits make even a second attempt unlikely.
 _ID_ATTEMPTS = 100
-
-
-def _fsync_dir(path: Path) -> None:
-    """Make a rename in ``path`` durable; a no-op where directories cannot be fsynced."""
-    try:
-        fd = os.open(path, os.O_RDONLY)
-    except OSError:  # e.g. Windows: directories cannot be opened
-        return
-    try:
-        os.fsync(fd)
-    except OSError as e:
-        if e.errno not in (errno.EINVAL, errno.ENOTSUP, errno.EBADF):
-            raise
-    finally:
-        os.close(fd)
 
 
 def _utc_now() -> str:
