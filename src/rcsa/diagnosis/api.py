@@ -130,16 +130,24 @@ class Analysis:
         return self.features_many([cand], [], v) if v.ndim == 2 else self.features_many([cand], [], v[None, :])[0]
 
     # ------------------------------------------------------------------ validation
-    def _held_out(self, cands: list[Candidate], values: list[np.ndarray]) -> HeldOut | None:
-        """Refit the last candidate per fold (the others fixed) and score the held-out data."""
+    def _held_out(self, cands: list[Candidate], values: list[np.ndarray],
+                  fixed_per_fold: list[list[np.ndarray]] | None = None) -> HeldOut | None:
+        """Refit the last candidate per fold and score the held-out data against the base model.
+
+        Candidates before the last are fixed: at ``fixed_per_fold[k]`` in fold k (their own
+        training-only fits, so no held-out data leak in), else at ``values``.
+        """
         p = self.problem
-        fixed_c, fixed_v, last = cands[:-1], values[:-1], cands[-1]
+        fixed_c, last = cands[:-1], cands[-1]
 
-        def feats(x: np.ndarray) -> np.ndarray:
-            return self.features_of([*fixed_c, last], [*fixed_v, x])
+        def fixed(k: int) -> list[np.ndarray]:
+            return list(values[:-1]) if fixed_per_fold is None else list(fixed_per_fold[k])
 
-        def db_of(x: np.ndarray, test: Sequence[int]) -> tuple[float, float, int]:
-            h_after = p.h(self.knobs_of([*fixed_c, last], [*fixed_v, x]))
+        def feats(k: int, x: np.ndarray) -> np.ndarray:
+            return self.features_of([*fixed_c, last], [*fixed(k), x])
+
+        def db_of(k: int, x: np.ndarray, test: Sequence[int]) -> tuple[float, float, int]:
+            h_after = p.h(self.knobs_of([*fixed_c, last], [*fixed(k), x]))
             sb = sa = 0.0
             n = 0
             for i in test:
@@ -148,9 +156,8 @@ class Analysis:
                 sb, sa, n = sb + float(eb @ eb), sa + float(ea @ ea), n + eb.size
             return sb, sa, n
 
-        base = self.features_of(fixed_c, fixed_v) if fixed_c else p.base_features
         return held_out(self.folds, p.rows, p.measured_features, self.disc, self.request.options.likelihood,
-                        base, feats, values[-1], last.lo, last.hi, db_of)
+                        p.base_features, feats, values[-1], last.lo, last.hi, db_of)
 
     def _greedy_second(self) -> tuple[Fit, HeldOut | None, float] | None:
         """Best second effect with the first fixed at its MAP; accepted only if it passes every test."""
@@ -172,8 +179,9 @@ class Analysis:
             cos = float(s1 @ s2 / max(np.linalg.norm(s1) * np.linalg.norm(s2), 1e-300))
             if abs(cos) >= MAX_SIGNATURE_COSINE:
                 continue
-            ho = self._held_out([first.candidate, c2], [first.map, fit.map])
             ho1 = self.held.get(first.candidate.name)
+            ho = self._held_out([first.candidate, c2], [first.map, fit.map],
+                                None if ho1 is None else [[m] for m in ho1.maps])
             if ho is not None and ho1 is not None and ho.chi2_after >= ho1.chi2_after:
                 continue
             if best is None or fit.log_bayes_factor > best[0].log_bayes_factor:

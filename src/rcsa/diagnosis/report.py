@@ -121,7 +121,7 @@ def _effect(a: Analysis, fit: Fit, ho: HeldOut | None, probs: dict[str, float], 
     entry: dict[str, Any] = {
         "effect": fit.candidate.name,
         "log_bayes_factor": fit.log_bayes_factor,
-        "posterior_probability": probs.get(fit.candidate.name),
+        "posterior_probability": None if first is not None else probs.get(fit.candidate.name),
         "parameters": _params(fit),
         "physical": {k: float(v) for k, v in fit.candidate.meaning(fit.map).items()},
         "snr": a.snr(cands, values),
@@ -138,7 +138,7 @@ def _effect(a: Analysis, fit: Fit, ho: HeldOut | None, probs: dict[str, float], 
         "evidence_method": fit.method,
         "residual_p_value": a.residual_p_value(feats),
     }
-    if first is not None:
+    if first is not None:  # a second effect: its ln BF is conditional on the first at its MAP
         entry["given"] = first.candidate.name
     if with_h:
         entry["corrected_h"] = [complex_to_json(h) for h in a.full_h(cands, values)]
@@ -166,6 +166,9 @@ def _sentence(a: Analysis, effects: list[dict[str, Any]]) -> str:
                 f"named alone{held}.")
     bound = [n for n, v in e["parameters"].items() if v["at_bound"]]
     flag = f" Parameter(s) {', '.join(bound)} sit at a prior bound." if bound else ""
+    if e["residual_p_value"] < 0.05:
+        flag += (f" It does not explain everything: the remainder is still beyond tolerances and noise "
+                 f"(p = {e['residual_p_value']:.3f}).")
     return (f"{d.effect} explains the gap (ln BF = {e['log_bayes_factor']:.1f} against the base model, "
             f"SNR {e['snr']:.1f}){held}.{flag}")
 
@@ -215,6 +218,7 @@ def build_response(a: Analysis) -> dict[str, Any]:
                     "snr": first["snr"] if first else None,
                     "confirmed_on_held_out": first["confirmed_on_held_out"] if first else None,
                     "collinear_rivals": rivals,
+                    "residual_p_value": first["residual_p_value"] if first else gap["p_value"],
                     "sentence": _sentence(a, effects) + (
                         f" {', '.join(r['effect'] for r in rivals)} move(s) the features the same way "
                         f"(signature cosine > 0.9) and the best fit leaves a significant remainder: "
@@ -293,7 +297,7 @@ def diagnosis_figure(a: Analysis, response: dict[str, Any] | None = None) -> Fig
         if corrected is not None:
             ax.loglog(m.frequency_hz, np.abs(corrected[i]) * 1e6, color="tab:red", lw=1.0,
                       label=f"+ {effects[0]['effect']}")
-        ax.set_title(f"{m.label}: stickout {m.tool.stickout_m * 1e3:.1f} mm", fontsize=9)
+        ax.set_title(f"measurement {m.label} (stickout {m.tool.stickout_m * 1e3:.1f} mm)", fontsize=9)
         ax.set_ylabel("|h| [µm/N]", fontsize=8)
         ax.tick_params(labelsize=7)
         if i == 0:

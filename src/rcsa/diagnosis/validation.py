@@ -75,8 +75,9 @@ class HeldOut:
 
 def held_out(fold_list: Sequence[tuple[list[int], list[int]]], rows_of: Callable[[Sequence[int]], np.ndarray],
              measured: np.ndarray, disc: Discrepancy, kind: str, base_features: np.ndarray,
-             features_at: Callable[[np.ndarray], np.ndarray], x_all: np.ndarray, lo: np.ndarray, hi: np.ndarray,
-             db_of: Callable[[np.ndarray, Sequence[int]], tuple[float, float, int]]) -> HeldOut | None:
+             features_at: Callable[[int, np.ndarray], np.ndarray], x_all: np.ndarray, lo: np.ndarray,
+             hi: np.ndarray, db_of: Callable[[int, np.ndarray, Sequence[int]], tuple[float, float, int]]
+             ) -> HeldOut | None:
     """Refit on each fold's training set and score its held-out measurements.
 
     Parameters
@@ -85,17 +86,19 @@ def held_out(fold_list: Sequence[tuple[list[int], list[int]]], rows_of: Callable
     rows_of : callable
         Measurement indices → feature indices.
     measured, base_features : numpy.ndarray, shape (nfeat,)
+        Measured features, and the base model's ("before").
     disc : Discrepancy
     kind : str
         Likelihood kind.
     features_at : callable
-        Parameter vector → model features (all measurements).
+        ``(fold, params)`` → model features (all measurements); the fold index lets effects
+        fixed before this one take their own training-only values.
     x_all : numpy.ndarray
         All-data MAP (start of each refit).
     lo, hi : numpy.ndarray
         Parameter bounds.
     db_of : callable
-        ``(params, test) → (sum of squared dB errors before, after, number of lines)``.
+        ``(fold, params, test) → (sum of squared dB errors before, after, number of lines)``.
 
     Returns
     -------
@@ -108,11 +111,12 @@ def held_out(fold_list: Sequence[tuple[list[int], list[int]]], rows_of: Callable
     sb = sa = 0.0
     nl = 0
     maps = []
-    for train, test in fold_list:
+    for k, (train, test) in enumerate(fold_list):
         like = Likelihood(measured, disc, rows_of(train), kind)
         x0 = np.clip(x_all, lo, hi)
         if x0.size:
-            res = minimize(lambda p, like=like: -float(like(features_at(np.clip(p, lo, hi)))), x0, method="Nelder-Mead",
+            res = minimize(lambda p, like=like, k=k: -float(like(features_at(k, np.clip(p, lo, hi)))), x0,
+                           method="Nelder-Mead",
                            bounds=list(zip(lo, hi, strict=True)),
                            options={"xatol": 1e-4 * float(np.min(hi - lo)), "fatol": 1e-3, "maxfev": 30 * x0.size})
             x = np.clip(res.x, lo, hi)
@@ -121,8 +125,8 @@ def held_out(fold_list: Sequence[tuple[list[int], list[int]]], rows_of: Callable
         maps.append(x)
         test_like = Likelihood(measured, disc, rows_of(test), kind)
         c2b += float(test_like.chi2(base_features))
-        c2a += float(test_like.chi2(features_at(x)))
+        c2a += float(test_like.chi2(features_at(k, x)))
         nf += test_like.rows.size
-        b, a, n = db_of(x, test)
+        b, a, n = db_of(k, x, test)
         sb, sa, nl = sb + b, sa + a, nl + n
     return HeldOut(c2b, c2a, nf, float(np.sqrt(sb / max(nl, 1))), float(np.sqrt(sa / max(nl, 1))), maps)
