@@ -12,16 +12,9 @@ import typer
 from typer.testing import CliRunner
 
 from rcsa.cli import effects_cmd
-from rcsa.effects import (
-    FEATURES,
-    effect_analysis,
-    effects,
-    effects_figure,
-    get_parameter,
-    parameter_names,
-    set_parameter,
-)
+from rcsa.effects import FEATURES, effect_analysis, effects, effects_figure
 from rcsa.errors import InputError
+from rcsa.parameters import get_parameter, parameter_names, set_parameter
 from rcsa.plots import save_figure
 from rcsa.reference import ra1
 from rcsa.spec import parse_assembly

@@ -44,36 +44,31 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from .assembly import build_model
-from .chain import Chain, undamped
-from .dsm import march
+from .chain import Chain
 from .errors import InputError
-from .linalg2 import inv2
+from .mode_features import (
+    ModeFeatures,
+    mode_features,
+)
 from .modes import natural_frequencies_hz
+from .parameters import get_parameter, is_damping, parameter_names, set_parameter
 from .spec import AssemblySpec, SpindleSpec, parse_assembly
 
 __all__ = [
     "FEATURES",
     "DEFAULT_RELATIVE_STEP",
     "EffectReport",
-    "ModeFeatures",
     "effect_analysis",
     "effects",
     "effects_figure",
     "effects_report",
-    "get_parameter",
-    "mode_features",
     "nominal_features",
-    "parameter_names",
-    "set_parameter",
-    "single_mode_fit",
-    "tip_residues_1_kg",
-    "window_peaks",
 ]
 
 _TWO_PI = 2.0 * np.pi
@@ -83,353 +78,6 @@ DEFAULT_RELATIVE_STEP = 0.001
 
 #: Mode features whose sensitivities are reported, in table order.
 FEATURES = ("frequency_hz", "peak_magnitude_m_n", "damping_ratio", "peak_frequency_hz")
-
-_JOINT_FIELDS = ("stiffness_n_m", "damping_ns_m", "rotational_stiffness_nm_rad", "rotational_damping_nms_rad")
-_BEARING_FIELDS = ("stiffness_n_m", "damping_ns_m")
-_TOOL_FIELDS = ("stickout_m", "fluted_diameter_ratio")
-
-# Dense local grid per mode used to find the damped peak, and its refinement passes.
-_PEAK_GRID_POINTS = 161
-_PEAK_REFINE_PASSES = 5
-# A mode's search window reaches at most this fraction of the (log) gap to each neighbour,
-# and never further than _MAX_WINDOW (relative) from its natural frequency.
-_WINDOW_GAP_FRACTION = 0.45
-_MAX_WINDOW = 0.10
-# Points of the single-mode fit, and its half-width in units of the damping ratio.
-_FIT_POINTS = 41
-_FIT_HALF_WIDTH_ZETAS = 3.0
-_FIT_MIN_HALF_WIDTH = 0.003
-# Relative offset used for the undamped tip residue (1/h is linear in ω² near a pole).
-_RESIDUE_OFFSET = 1e-6
-
-
-# ---------------------------------------------------------------------------- parameters
-
-
-def parameter_names(spec: AssemblySpec) -> tuple[str, ...]:
-    """Names of the parameters an effect analysis varies, in report order.
-
-    Each bearing's ``stiffness_n_m`` and ``damping_ns_m``, each elastic joint's four
-    values, then ``tool.stickout_m`` and ``tool.fluted_diameter_ratio``. Parameters that are
-    zero or rigid (``None``) are left out: their normalised sensitivity is not defined.
-
-    Parameters
-    ----------
-    spec : AssemblySpec
-        An assembly with an analytical spindle.
-
-    Returns
-    -------
-    tuple of str
-        E.g. ``("bearings[0].stiffness_n_m", ..., "holder_tool.rotational_damping_nms_rad",
-        "tool.stickout_m", "tool.fluted_diameter_ratio")``.
-    """
-    names: list[str] = []
-    if isinstance(spec.spindle, SpindleSpec):
-        for i, _ in enumerate(spec.spindle.bearings):
-            names.extend(f"bearings[{i}].{k}" for k in _BEARING_FIELDS)
-    for joint in ("spindle_holder", "holder_tool"):
-        names.extend(f"{joint}.{k}" for k in _JOINT_FIELDS)
-    names.extend(f"tool.{k}" for k in _TOOL_FIELDS)
-    return tuple(n for n in names if (v := get_parameter(spec, n)) is not None and v > 0)
-
-
-def _split(name: str) -> tuple[str, int | None, str]:
-    head, _, field = name.partition(".")
-    if head.startswith("bearings[") and head.endswith("]"):
-        index = head[len("bearings["):-1]
-        if not index.isdigit():
-            raise InputError("parameters", f"bad bearing index in {name!r}")
-        return "bearings", int(index), field
-    return head, None, field
-
-
-def get_parameter(spec: AssemblySpec, name: str) -> float | None:
-    """Value of a named parameter in SI units (``None`` when rigid or absent).
-
-    Raises
-    ------
-    InputError
-        For an unknown name.
-    """
-    group, index, field = _split(name)
-    if group == "bearings":
-        if field not in _BEARING_FIELDS or not isinstance(spec.spindle, SpindleSpec) \
-                or index is None or index >= len(spec.spindle.bearings):
-            raise InputError("parameters", f"unknown parameter {name!r}")
-        return float(getattr(spec.spindle.bearings[index], field))
-    if group in ("spindle_holder", "holder_tool") and field in _JOINT_FIELDS:
-        joint = getattr(spec, group)
-        value = None if joint is None else getattr(joint, field)
-        return None if value is None else float(value)
-    if group == "tool" and field in _TOOL_FIELDS:
-        return float(getattr(spec.tool, field))
-    raise InputError("parameters", f"unknown parameter {name!r}")
-
-
-def set_parameter(spec: AssemblySpec, name: str, value: float) -> AssemblySpec:
-    """A copy of ``spec`` with one named parameter replaced (no re-validation).
-
-    The value is set as given, so a derivative may be taken at a bound (e.g. a fluted
-    diameter ratio of exactly 1). A stickout change keeps the overall length: the inserted
-    length changes with it (``contract.md`` "Assembly").
-
-    Parameters
-    ----------
-    spec : AssemblySpec
-    name : str
-        As in :func:`parameter_names`.
-    value : float
-        New value, SI units.
-    """
-    group, index, field = _split(name)
-    if group == "bearings":
-        get_parameter(spec, name)  # validates
-        spindle = spec.spindle
-        assert isinstance(spindle, SpindleSpec) and index is not None
-        bearings = list(spindle.bearings)
-        bearings[index] = replace(bearings[index], **{field: float(value)})
-        return replace(spec, spindle=replace(spindle, bearings=tuple(bearings)))
-    if group in ("spindle_holder", "holder_tool") and field in _JOINT_FIELDS:
-        joint = getattr(spec, group)
-        if joint is None:
-            raise InputError("parameters", f"{name!r}: the joint {group} is rigid in this assembly")
-        return replace(spec, **{group: replace(joint, **{field: float(value)})})
-    if group == "tool" and field in _TOOL_FIELDS:
-        return replace(spec, tool=replace(spec.tool, **{field: float(value)}))
-    raise InputError("parameters", f"unknown parameter {name!r}")
-
-
-def _is_damping(name: str) -> bool:
-    return name.endswith(("damping_ns_m", "damping_nms_rad"))
-
-
-# ---------------------------------------------------------------------------- mode features
-
-
-@dataclass(frozen=True)
-class ModeFeatures:
-    """Features of the modes of one model, arrays of shape (nmodes,).
-
-    Attributes
-    ----------
-    frequency_hz : numpy.ndarray
-        Undamped natural frequencies, Hz (exact).
-    tip_residue_1_kg : numpy.ndarray
-        ``φ_tip²`` of the mass-normalised undamped mode, 1/kg: the residue of the undamped
-        tool-point h, ``h ≈ φ²/(ω_n² − ω²)`` (large = dominant at the tool point).
-    peak_frequency_hz, peak_magnitude_m_n : numpy.ndarray
-        The damped ``|h|`` maximum next to the mode; NaN when ``|h|`` has none in the
-        mode's window (a mode hidden at the tool point).
-    damping_ratio : numpy.ndarray
-        Single-mode fit of the damped h around the peak; NaN without a peak.
-    window_rel : numpy.ndarray, shape (nmodes, 2)
-        Relative half-widths (below, above) of each mode's search window.
-    """
-
-    frequency_hz: np.ndarray
-    tip_residue_1_kg: np.ndarray
-    peak_frequency_hz: np.ndarray
-    peak_magnitude_m_n: np.ndarray
-    damping_ratio: np.ndarray
-    window_rel: np.ndarray
-
-    def feature(self, name: str) -> np.ndarray:
-        """One of :data:`FEATURES` as an array, shape (nmodes,)."""
-        return np.asarray(getattr(self, name), dtype=float)
-
-
-def _windows(frequency_hz: np.ndarray, neighbours_hz: np.ndarray) -> np.ndarray:
-    """Relative search half-widths (below, above) of each mode, shape (nmodes, 2)."""
-    ln_f = np.log(frequency_hz)
-    ln_all = np.log(np.sort(neighbours_hz))
-    out = np.full((frequency_hz.size, 2), _MAX_WINDOW)
-    for i, x in enumerate(ln_f):
-        below = ln_all[ln_all < x * (1 - 1e-12)]
-        above = ln_all[ln_all > x * (1 + 1e-12)]
-        if below.size:
-            out[i, 0] = min(out[i, 0], -math.expm1(-_WINDOW_GAP_FRACTION * (x - below[-1])))
-        if above.size:
-            out[i, 1] = min(out[i, 1], math.expm1(_WINDOW_GAP_FRACTION * (above[0] - x)))
-    return out
-
-
-def _tip_h(chain: Chain, frequency_hz: np.ndarray, start: np.ndarray | None = None) -> np.ndarray:
-    """Tool-point h for any array of frequencies (same shape), m/N."""
-    f = np.asarray(frequency_hz, dtype=float)
-    g = inv2(march(chain, _TWO_PI * f.ravel(), start)[0])
-    return g[:, 0, 0].reshape(f.shape)
-
-
-def tip_residues_1_kg(chain: Chain, frequency_hz: np.ndarray) -> np.ndarray:
-    """Residue ``φ_tip²`` (1/kg) of the undamped tool-point h at each natural frequency.
-
-    ``1/h ≈ (ω_n² − ω²)/φ²`` next to a pole, so ``φ² = −Δ(ω²)/Δ(1/h)`` across
-    ``ω_n(1 ± 1e-6)``.
-
-    Parameters
-    ----------
-    chain : Chain
-        The whole assembly (damping is removed).
-    frequency_hz : numpy.ndarray, shape (nmodes,)
-        Exact undamped natural frequencies.
-    """
-    f = np.asarray(frequency_hz, dtype=float)
-    if f.size == 0:
-        return np.empty(0)
-    pair = np.stack([f * (1 - _RESIDUE_OFFSET), f * (1 + _RESIDUE_OFFSET)], axis=1)
-    inv_h = 1.0 / _tip_h(undamped(chain), pair).real
-    w2 = (_TWO_PI * pair) ** 2
-    return -(w2[:, 1] - w2[:, 0]) / (inv_h[:, 1] - inv_h[:, 0])
-
-
-def _refine_peaks(chain: Chain, f_hz: np.ndarray, step_rel: np.ndarray, lo: np.ndarray,
-                  hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Successive parabolic refinement of ``|h|`` maxima, all modes at once."""
-    f = f_hz.copy()
-    d = step_rel * f
-    for _ in range(_PEAK_REFINE_PASSES):
-        pts = np.stack([f - d, f, f + d], axis=1)
-        m = np.abs(_tip_h(chain, pts))
-        curv = m[:, 0] - 2 * m[:, 1] + m[:, 2]
-        shift = np.where(curv < 0, 0.5 * d * (m[:, 0] - m[:, 2]) / np.where(curv < 0, curv, -1.0), 0.0)
-        f = np.clip(f + np.clip(shift, -d, d), lo, hi)
-        d = d / 6.0
-    return f, np.abs(_tip_h(chain, f))
-
-
-def single_mode_fit(frequency_hz: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, float] | None:
-    """One mode with residual terms fitted by Levy's linearised least squares.
-
-    ``h ≈ (c₀ + c₁s + c₂s²)/(s² + a₁s + a₀)`` with the scaled ``s = iω/scale``.
-
-    Parameters
-    ----------
-    frequency_hz : numpy.ndarray, shape (n,)
-    h : numpy.ndarray, shape (n,), complex
-
-    Returns
-    -------
-    (numpy.ndarray, float) or None
-        ``([a0, a1, c0, c1, c2], scale)`` with scale in rad/s (natural frequency
-        ``√a0·scale``, damping ratio ``a1/(2√a0)``), or None when the fitted pole is not a
-        stable oscillator.
-    """
-    s = 2j * np.pi * np.asarray(frequency_hz, dtype=float)
-    scale = float(np.abs(s).max())
-    sn = s / scale
-    cols = np.stack([h, h * sn, -np.ones_like(sn), -sn, -(sn**2)], axis=1)
-    rhs = -h * sn**2
-    a = np.concatenate([cols.real, cols.imag])
-    b = np.concatenate([rhs.real, rhs.imag])
-    col_scale = np.linalg.norm(a, axis=0)
-    x = np.linalg.lstsq(a / col_scale, b, rcond=None)[0] / col_scale
-    if x[0] <= 0 or x[1] <= 0:
-        return None
-    return x, scale
-
-
-def _levy_fit(frequency_hz: np.ndarray, h: np.ndarray) -> tuple[float, float]:
-    """``(f_n_hz, ζ)`` of :func:`single_mode_fit` (NaN when not a stable oscillator)."""
-    fit = single_mode_fit(frequency_hz, h)
-    if fit is None:
-        return math.nan, math.nan
-    x, scale = fit
-    return math.sqrt(x[0]) * scale / _TWO_PI, x[1] / (2 * math.sqrt(x[0]))
-
-
-def _fit_damping(chain: Chain, peak_hz: float, window: tuple[float, float]) -> float:
-    """Damping ratio of the mode peaking at ``peak_hz``: a wide fit, then one on ±3ζ."""
-    lo, hi = 1 - min(window[0], 0.05), 1 + min(window[1], 0.05)
-    f = peak_hz * np.geomspace(lo, hi, _FIT_POINTS)
-    zeta = _levy_fit(f, _tip_h(chain, f))[1]
-    if not math.isfinite(zeta):
-        return math.nan
-    half = max(_FIT_HALF_WIDTH_ZETAS * zeta, _FIT_MIN_HALF_WIDTH)
-    f = peak_hz * np.geomspace(1 - min(half, window[0]), 1 + min(half, window[1]), _FIT_POINTS)
-    return _levy_fit(f, _tip_h(chain, f))[1]
-
-
-def window_peaks(chain: Chain, lo_hz: np.ndarray, hi_hz: np.ndarray, points: int = _PEAK_GRID_POINTS
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The largest interior maximum of the damped tool-point ``|h|`` in each window.
-
-    A dense geometric grid per window locates the maximum, then successive parabolic
-    passes refine it (all windows at once) to well below 1e-6 relative.
-
-    Parameters
-    ----------
-    chain : Chain
-        Whole assembly (damped).
-    lo_hz, hi_hz : numpy.ndarray, shape (nwin,)
-        Window edges, Hz.
-    points : int
-        Points of the dense grid per window.
-
-    Returns
-    -------
-    found : numpy.ndarray of bool, shape (nwin,)
-        False where ``|h|`` has no interior maximum in the window.
-    frequency_hz, magnitude_m_n : numpy.ndarray, shape (nwin,)
-        The refined maximum; where none is found, the largest ``|h|`` on the window's grid
-        (at one of its edges), so that a fit sees a bounded, continuous residual.
-    """
-    lo_hz, hi_hz = np.atleast_1d(np.asarray(lo_hz, dtype=float)), np.atleast_1d(np.asarray(hi_hz, dtype=float))
-    nw = lo_hz.size
-    found = np.zeros(nw, dtype=bool)
-    if nw == 0:
-        return found, np.empty(0), np.empty(0)
-    grid = np.geomspace(lo_hz, hi_hz, points, axis=1)
-    mag = np.abs(_tip_h(chain, grid))
-    interior = (mag[:, 1:-1] > mag[:, :-2]) & (mag[:, 1:-1] >= mag[:, 2:])
-    top = np.argmax(mag, axis=1)
-    peak_f, peak_m = grid[np.arange(nw), top], mag[np.arange(nw), top]
-    start = np.empty(nw)
-    for i in range(nw):  # one window at a time: pick its largest interior maximum
-        idx = np.flatnonzero(interior[i]) + 1
-        if idx.size:
-            found[i] = True
-            start[i] = grid[i, idx[np.argmax(mag[i, idx])]]
-    if np.any(found):
-        step = np.log(hi_hz / lo_hz)[found] / (points - 1)
-        peak_f[found], peak_m[found] = _refine_peaks(chain, start[found], step, grid[found, 0], grid[found, -1])
-    return found, peak_f, peak_m
-
-
-def mode_features(chain: Chain, frequency_hz: np.ndarray, window_rel: np.ndarray | None = None,
-                  neighbours_hz: np.ndarray | None = None) -> ModeFeatures:
-    """Tip residue, damped peak and damping ratio of given modes of a chain.
-
-    Parameters
-    ----------
-    chain : Chain
-        Whole assembly, spindle rear → tool tip (damped).
-    frequency_hz : numpy.ndarray, shape (nmodes,)
-        Its exact undamped natural frequencies (from :func:`rcsa.modes.natural_frequencies_hz`).
-    window_rel : numpy.ndarray, shape (nmodes, 2), optional
-        Relative search half-widths below/above each frequency. By default 45 % of the log
-        gap to the neighbouring mode, at most 10 %; pass the base run's windows when
-        differencing perturbed runs, so every run looks at the same relative band.
-    neighbours_hz : numpy.ndarray, optional
-        All natural frequencies (also just outside the band) used for the default windows.
-
-    Returns
-    -------
-    ModeFeatures
-    """
-    fn = np.asarray(frequency_hz, dtype=float)
-    nm = fn.size
-    if window_rel is None:
-        window_rel = _windows(fn, fn if neighbours_hz is None else np.asarray(neighbours_hz, dtype=float))
-    residue = tip_residues_1_kg(chain, fn)
-    zeta = np.full(nm, np.nan)
-    lo_hz, hi_hz = fn * (1 - window_rel[:, 0]), fn * (1 + window_rel[:, 1])
-    found, peak_f, peak_m = window_peaks(chain, lo_hz, hi_hz)
-    peak_f, peak_m = np.where(found, peak_f, np.nan), np.where(found, peak_m, np.nan)
-    for i in np.flatnonzero(found):  # the window, seen from the peak
-        below, above = 1 - lo_hz[i] / peak_f[i], hi_hz[i] / peak_f[i] - 1
-        zeta[i] = _fit_damping(chain, float(peak_f[i]), (max(below, 1e-4), max(above, 1e-4)))
-    return ModeFeatures(fn, residue, peak_f, peak_m, zeta, np.asarray(window_rel, dtype=float))
 
 
 # ---------------------------------------------------------------------------- effect analysis
@@ -499,7 +147,7 @@ class EffectReport:
         min_participation : float
             Consider only modes whose :attr:`tip_participation` reaches this.
         """
-        feature = feature or ("peak_magnitude_m_n" if _is_damping(parameter) else "frequency_hz")
+        feature = feature or ("peak_magnitude_m_n" if is_damping(parameter) else "frequency_hz")
         s = np.abs(self.column(parameter, feature))
         s = np.where(self.tip_participation >= min_participation, s, np.nan)
         if not np.any(np.isfinite(s)) or np.nanmax(s) == 0:
@@ -678,7 +326,7 @@ def effect_analysis(assembly: Mapping[str, Any] | AssemblySpec, *, parameters: S
         runs = []
         for sign in (+1.0, -1.0):
             perturbed = set_parameter(spec, name, values[j] * math.exp(sign * relative_step))
-            feats, ok = _features_at(perturbed, base, band, reuse_frequencies=_is_damping(name))
+            feats, ok = _features_at(perturbed, base, band, reuse_frequencies=is_damping(name))
             if not ok:
                 notes.append(f"{name}: some modes could not be tracked between the perturbed runs")
             runs.append(feats)

@@ -71,7 +71,6 @@ from typing import Any
 import numpy as np
 from scipy.optimize import least_squares
 
-from .effects import window_peaks
 from .jointid_locate import NotIdentifiable, Problem, Use, locate, where_modes
 from .jointid_measured import (
     PEAK_PROMINENCE,
@@ -80,6 +79,7 @@ from .jointid_measured import (
     relative_noise,
 )
 from .jointid_request import IdentificationRequest, parse_identification_request
+from .mode_features import window_peaks
 from .spec import AssemblySpec
 
 __all__ = ["Identification", "identify", "identify_joints"]

@@ -21,10 +21,12 @@ import numpy as np
 from .assembly import build_model
 from .chain import Chain
 from .dsm import march
-from .effects import _windows, effect_analysis, get_parameter, set_parameter
+from .effects import effect_analysis
 from .jointid_measured import PEAK_PROMINENCE, MeasuredPeak, peaks_ln_hz
 from .jointid_request import IdentificationRequest
 from .linalg2 import inv2
+from .mode_features import mode_windows
+from .parameters import get_parameter, set_parameter
 from .prediction import SubassemblyCache
 from .spec import AssemblySpec
 
@@ -256,7 +258,7 @@ def _assign(problem: Problem, values: dict[str, float], peaks: list[list[Measure
         seen = np.flatnonzero(np.isfinite(modes.peak_frequency_hz))
         model_pk = modes.peak_frequency_hz[seen]
         # search windows between the model's *visible* peaks (hidden modes make no peak)
-        windows = dict(zip(seen.tolist(), _windows(model_pk, model_pk), strict=True)) if seen.size else {}
+        windows = dict(zip(seen.tolist(), mode_windows(model_pk, model_pk), strict=True)) if seen.size else {}
         measured_hz = np.array([p.frequency_hz for p in peaks[m]])
         match = {}
         if seen.size and measured_hz.size:

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.signal import find_peaks
 
-from .effects import single_mode_fit
+from .modes import single_mode_fit
 
 __all__ = ["LENIENT_PROMINENCE", "PEAK_PROMINENCE", "MeasuredPeak", "coherence_weights", "measured_peaks",
            "peaks_ln_hz", "relative_noise"]

@@ -22,9 +22,9 @@ from typing import Any
 
 import numpy as np
 
-from .effects import get_parameter
 from .errors import InputError
 from .frf import check_frequency_hz
+from .parameters import get_parameter
 from .spec import MAX_FREQUENCY_LINES, AssemblySpec, SpindleSpec, parse_assembly
 
 __all__ = [

@@ -27,6 +27,7 @@ __all__ = [
     "modal_fit_peaks",
     "natural_frequencies_batch",
     "natural_frequencies_hz",
+    "single_mode_fit",
     "stack_chains",
     "take_rows",
 ]
@@ -204,20 +205,41 @@ def modal_fit_peaks(frequency_hz: np.ndarray, h: np.ndarray, *, rel_prominence: 
         lo, hi = max(0, i - half_width_lines), min(frequency_hz.size, i + half_width_lines + 1)
         if hi - lo < 5:
             continue
-        s = 2j * np.pi * frequency_hz[lo:hi]
-        hh = h[lo:hi]
-        scale = float(np.abs(s).max())
-        sn = s / scale
-        # unknowns: a0, a1, c0, c1, c2 (real), normalised frequency sn
-        cols = np.stack([hh, hh * sn, -np.ones_like(sn), -sn, -(sn**2)], axis=1)
-        rhs = -hh * sn**2
-        a = np.concatenate([cols.real, cols.imag])
-        b = np.concatenate([rhs.real, rhs.imag])
-        col_scale = np.linalg.norm(a, axis=0)
-        x = np.linalg.lstsq(a / col_scale, b, rcond=None)[0] / col_scale
-        a0, a1 = x[0], x[1]
-        if a0 <= 0 or a1 <= 0:
+        fit = single_mode_fit(frequency_hz[lo:hi], h[lo:hi])
+        if fit is None:
             continue
-        wn = np.sqrt(a0) * scale
-        out.append({"frequency_hz": float(wn / (2 * np.pi)), "damping_ratio": float(a1 / (2 * np.sqrt(a0)))})
+        (a0, a1, *_), scale = fit
+        out.append({"frequency_hz": float(np.sqrt(a0) * scale / _TWO_PI),
+                    "damping_ratio": float(a1 / (2 * np.sqrt(a0)))})
     return out
+
+
+def single_mode_fit(frequency_hz: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, float] | None:
+    """One mode with residual terms fitted by Levy's linearised least squares.
+
+    ``h ≈ (c₀ + c₁s + c₂s²)/(s² + a₁s + a₀)`` with the scaled ``s = iω/scale``.
+
+    Parameters
+    ----------
+    frequency_hz : numpy.ndarray, shape (n,)
+    h : numpy.ndarray, shape (n,), complex
+
+    Returns
+    -------
+    (numpy.ndarray, float) or None
+        ``([a0, a1, c0, c1, c2], scale)`` with scale in rad/s (natural frequency
+        ``√a0·scale``, damping ratio ``a1/(2√a0)``), or None when the fitted pole is not a
+        stable oscillator.
+    """
+    s = 2j * np.pi * np.asarray(frequency_hz, dtype=float)
+    scale = float(np.abs(s).max())
+    sn = s / scale
+    cols = np.stack([h, h * sn, -np.ones_like(sn), -sn, -(sn**2)], axis=1)
+    rhs = -h * sn**2
+    a = np.concatenate([cols.real, cols.imag])
+    b = np.concatenate([rhs.real, rhs.imag])
+    col_scale = np.linalg.norm(a, axis=0)
+    x = np.linalg.lstsq(a / col_scale, b, rcond=None)[0] / col_scale
+    if x[0] <= 0 or x[1] <= 0:
+        return None
+    return x, scale
