@@ -150,3 +150,24 @@ def test_cli_diagnose_writes_json_and_png(tmp_path, mass_request):
     bad.write_text(json.dumps({"assembly": mass_request["assembly"], "measurements": []}))
     result = CliRunner().invoke(app, ["diagnose", str(bad)])
     assert result.exit_code == 1 and "measurements" in result.output
+
+
+def test_one_measurement_and_different_grids_work():
+    from rcsa.diagnosis.model import Knobs
+    from tests.diagnosis.conftest import model_request
+    one = model_request(Knobs(tip_mass_kg=0.006), stickouts_m=(0.066,))
+    r = diagnose(one)
+    assert r["held_out"]["method"] == "none"
+    assert r["verdict"]["effect"] in ("sensor_mass", "none") or r["verdict"]["status"] == "ambiguous"
+    if r["effects"]:
+        assert r["effects"][0]["held_out_gap_before_db"] is None
+    assert any("nothing can be held out" in n for n in r["notes"])
+    two = model_request(Knobs(tip_mass_kg=0.006), stickouts_m=(0.055, 0.077))
+    coarse = model_request(Knobs(tip_mass_kg=0.006), stickouts_m=(0.066,), frequency_hz=np.arange(60.0, 6000.0, 5.0),
+                           seed=2)
+    two["measurements"].append(coarse["measurements"][0])
+    r = diagnose({**two, "options": {"effects": ["sensor_mass", "fluted_section", "holder_tool_joint"]}})
+    assert r["held_out"]["method"] == "leave_one_out"
+    assert {e["effect"] for e in r["ranking"]} == {"sensor_mass", "fluted_section", "holder_tool_joint"}
+    assert r["verdict"]["effect"] == "sensor_mass"
+    assert len(r["effects"][0]["corrected_h"][2]["real"]) == len(coarse["measurements"][0]["frequency_hz"])
