@@ -1,24 +1,19 @@
 """Diagnoses, joint identifications and effect analyses: thin doors onto ``rcsa.api``.
 
-Each route passes the JSON body to ``rcsa.api.diagnose`` / ``identify`` / ``effects`` (or
-the same name at the top of :mod:`rcsa`). When the installed rcsa does not provide the
-function the route answers ``501``.
+Each route passes the JSON body to ``rcsa.api.diagnose`` / ``identify`` / ``effects``.
 """
 
 from __future__ import annotations
 
-import inspect
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Body, Depends
 from starlette.responses import Response
 
-import rcsa
 from rcsa import api
 
 from ..bodies import require_json
 from ..deps import StateDep
-from ..errors import ProblemError
 from ..responses import json_response, problems
 from ..security import ReadAccess
 
@@ -33,18 +28,8 @@ _Request = Annotated[dict[str, Any], Body(description="The request document (see
 
 
 def _call(name: str, body: dict[str, Any], state: Any) -> Any:
-    fn = getattr(api, name, None) or getattr(rcsa, name, None)
-    if fn is None:
-        raise ProblemError(501, f"this version of rcsa has no rcsa.api.{name}; upgrade the service")
-    kwargs: dict[str, Any] = {}
-    params = inspect.signature(fn).parameters
-    if "store" in params:
-        kwargs["store"] = state.reader
-    if "max_lines" in params:
-        kwargs["max_lines"] = state.settings.max_frequency_lines
     with state.metrics.timed(name):
-        result = fn(body, **kwargs)
-    return result.to_dict() if hasattr(result, "to_dict") else result
+        return getattr(api, name)(body)
 
 
 def _route(name: str, path: str, summary: str) -> None:
@@ -53,10 +38,10 @@ def _route(name: str, path: str, summary: str) -> None:
         return json_response(_call(name, body, state))
 
     endpoint.__name__ = f"post_{name}"
-    endpoint.__doc__ = f"{summary}: the body goes to ``rcsa.api.{name}``; 501 while it is not available."
+    endpoint.__doc__ = f"{summary}: the body goes to ``rcsa.api.{name}``."
     router.add_api_route(path, endpoint, methods=["POST"], summary=summary, dependencies=[Depends(require_json)],
                          responses={200: {"description": "The analysis result (see the contract)."},
-                                    **problems(401, 413, 415, 422, 501)})
+                                    **problems(401, 413, 415, 422)})
 
 
 for _name, (_path, _summary) in _OPERATIONS.items():

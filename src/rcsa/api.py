@@ -30,6 +30,7 @@ from .spec import (
 
 __all__ = [
     "MAX_BATCH_COMBINATIONS",
+    "diagnose",
     "effects",
     "identify",
     "predict",
@@ -278,3 +279,13 @@ def identify(request: Mapping[str, Any]) -> dict[str, Any]:
     from .jointid import identify as _identify
 
     return _identify(request)
+
+
+def diagnose(request: Mapping[str, Any]) -> dict[str, Any]:
+    """Sim-to-real gap diagnosis (``contract.md`` "Diagnosis").
+
+    See :func:`rcsa.diagnosis.api.diagnose` (imported on first use: it draws with matplotlib).
+    """
+    from .diagnosis.api import diagnose as _diagnose
+
+    return _diagnose(request)

@@ -60,13 +60,36 @@ def test_docs_and_openapi_carry_units_and_examples(client):
 def test_analysis_routes_call_the_library(client, assembly):
     for path in ("/v1/diagnoses", "/v1/identifications", "/v1/effects"):
         r = client.post(path, json={})
-        assert r.status_code in (422, 501), (path, r.text)
+        assert r.status_code == 422, (path, r.text)
         assert r.headers["content-type"].startswith("application/problem+json")
     assert_problem(client.post("/v1/effects", json=[1, 2]), 422)
     r = client.post("/v1/effects", json={**assembly, "frequency": {"start_hz": 300.0, "stop_hz": 2000.0,
                                                                    "step_hz": 10.0}})
     assert r.status_code == 200, r.text
     assert "modes" in r.json()
+
+
+def test_diagnosis_over_rest_speaks_the_contract(client):
+    # A measurement that is the base model itself (plus nothing): the verdict must be "none".
+    from rcsa import api as rcsa_api
+    from rcsa.reference import ra1
+
+    doc = ra1({"start_hz": 100.0, "stop_hz": 5000.0, "step_hz": 10.0})
+    h = rcsa_api.predict(doc).tool_point.h
+    request = {"assembly": doc, "options": {"monte_carlo_draws": 50, "max_lines": 300},
+               "measurements": [{"tool": {"stickout_m": 0.074}, "frequency_hz": doc_frequencies(doc),
+                                 "h": {"real": h.real.tolist(), "imag": h.imag.tolist()}}]}
+    r = client.post("/v1/diagnoses", json=request)
+    assert r.status_code == 200, r.text
+    body = r.json()
+    assert set(body) >= {"gap", "verdict", "effects"}
+    assert body["verdict"]["status"] == "none" and body["verdict"]["effect"] == "none"
+
+
+def doc_frequencies(doc):
+    f = doc["frequency"]
+    n = round((f["stop_hz"] - f["start_hz"]) / f["step_hz"]) + 1
+    return [f["start_hz"] + i * f["step_hz"] for i in range(n)]
 
 
 def test_log_lines_carry_the_request_id(make_client, assembly, caplog):

@@ -9,6 +9,7 @@ from __future__ import annotations
 import typer
 
 from . import (
+    diagnose_cmd,
     effects_cmd,
     identify_cmd,
     keys_cmd,
@@ -30,7 +31,8 @@ app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
 )
-for _module in (predict_cmd, library_cmd, lobes_cmd, plot_cmd, effects_cmd, identify_cmd, serve_cmd, keys_cmd):
+for _module in (predict_cmd, library_cmd, lobes_cmd, plot_cmd, effects_cmd, identify_cmd, diagnose_cmd, serve_cmd,
+                keys_cmd):
     _module.register(app)
 app.add_typer(store_app, name="store", help="Import, list, show and delete measured spindle FRFs.")
 
