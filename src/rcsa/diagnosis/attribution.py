@@ -185,7 +185,7 @@ def evidence(loglik: Callable[[np.ndarray], np.ndarray], lo: np.ndarray, hi: np.
 
     >>> def ll(p):
     ...     return -0.5 * ((0.3 - p[:, 0]) / 0.1) ** 2 - np.log(np.sqrt(2 * np.pi) * 0.1)
-    >>> round(evidence(ll, np.array([-1.0]), np.array([1.0]))[0], 4)   # = ln(1/2)
+    >>> round(float(evidence(ll, np.array([-1.0]), np.array([1.0]))[0]), 4)   # = ln(1/2)
     -0.6931
     """
     if lo.size == 1:
