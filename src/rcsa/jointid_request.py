@@ -17,15 +17,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
 from .errors import InputError
-from .frf import check_frequency_hz
 from .parameters import get_parameter
-from .spec import MAX_FREQUENCY_LINES, AssemblySpec, SpindleSpec, parse_assembly
+from .spec import AssemblySpec, SpindleSpec, parse_assembly
+from .taptests import MAX_TAP_TESTS, parse_tap_tests
 
 __all__ = [
     "IDENTIFIABLE",
@@ -39,11 +39,7 @@ IDENTIFIABLE = ("spindle_holder.stiffness_n_m", "spindle_holder.damping_ns_m",
                 "holder_tool.stiffness_n_m", "holder_tool.damping_ns_m")
 
 _REQUEST_FIELDS = ("assembly", "measurements", "bounds", "max_residual_to_noise")
-_MEASUREMENT_FIELDS = ("tool", "frequency_hz", "h", "coherence", "id")
-_TOOL_OVERRIDES = ("material", "diameter_m", "shank_diameter_m", "overall_length_m", "flute_length_m",
-                   "stickout_m", "fluted_diameter_ratio", "fluted_mass_diameter_ratio",
-                   "shoulder_length_m", "shoulder_diameter_m")
-MAX_MEASUREMENTS = 20
+MAX_MEASUREMENTS = MAX_TAP_TESTS
 MIN_LINES = 16
 #: Default search range of each parameter around its starting value (factor either way).
 DEFAULT_BOUND_FACTOR = 100.0
@@ -96,71 +92,6 @@ class IdentificationRequest:
     parameters: tuple[str, ...]
     bounds: Mapping[str, tuple[float, float]]
     max_residual_to_noise: float
-
-
-def _numbers(value: object, field: str, n: int | None = None) -> np.ndarray:
-    if not isinstance(value, list) or not value:
-        raise InputError(field, "must be a non-empty list of numbers")
-    if any(isinstance(v, bool) or not isinstance(v, int | float) for v in value):
-        raise InputError(field, "must be a list of numbers")
-    x = np.array(value, dtype=float)
-    if not np.all(np.isfinite(x)):
-        raise InputError(field, "must contain only finite numbers")
-    if n is not None and x.size != n:
-        raise InputError(field, f"must have one value per frequency line ({n}), got {x.size}")
-    return x
-
-
-def _complex(value: object, field: str, n: int) -> np.ndarray:
-    if not isinstance(value, Mapping) or set(value) != {"real", "imag"}:
-        raise InputError(field, 'must be {"real": [...], "imag": [...]}')
-    return _numbers(value["real"], f"{field}.real", n) + 1j * _numbers(value["imag"], f"{field}.imag", n)
-
-
-def _measurement(raw: object, i: int, document: Mapping[str, Any]) -> MeasurementData:
-    path = f"measurements[{i}]"
-    if not isinstance(raw, Mapping):
-        raise InputError(path, "must be an object")
-    unknown = sorted(set(raw) - set(_MEASUREMENT_FIELDS))
-    if unknown:
-        raise InputError(f"{path}.{unknown[0]}", f"unknown field (allowed: {', '.join(_MEASUREMENT_FIELDS)})")
-    for key in ("frequency_hz", "h"):
-        if key not in raw:
-            raise InputError(f"{path}.{key}", "is required")
-    f_raw = raw["frequency_hz"]
-    if isinstance(f_raw, list) and len(f_raw) > MAX_FREQUENCY_LINES:
-        raise InputError(f"{path}.frequency_hz", f"at most {MAX_FREQUENCY_LINES} lines, got {len(f_raw)}")
-    f = np.array(check_frequency_hz(_numbers(f_raw, f"{path}.frequency_hz"), f"{path}.frequency_hz"))
-    if f.size < MIN_LINES:
-        raise InputError(f"{path}.frequency_hz", f"needs at least {MIN_LINES} lines, got {f.size}")
-    h = _complex(raw["h"], f"{path}.h", f.size)
-    if np.any(h == 0):
-        raise InputError(f"{path}.h", "must be non-zero on every line")
-    coherence = None
-    if raw.get("coherence") is not None:
-        coherence = _numbers(raw["coherence"], f"{path}.coherence", f.size)
-        if np.any((coherence < 0) | (coherence > 1)):
-            raise InputError(f"{path}.coherence", "must lie in [0, 1]")
-    tool = raw.get("tool") or {}
-    if not isinstance(tool, Mapping):
-        raise InputError(f"{path}.tool", "must be an object of tool fields to override")
-    unknown = sorted(set(tool) - set(_TOOL_OVERRIDES))
-    if unknown:
-        raise InputError(f"{path}.tool.{unknown[0]}", f"unknown tool field (allowed: {', '.join(_TOOL_OVERRIDES)})")
-    doc = dict(document)
-    doc["tool"] = {**(document.get("tool") or {}), **tool}
-    doc["frequency"] = {"values_hz": f.tolist()}
-    try:
-        spec = parse_assembly(doc)
-    except InputError as exc:
-        field = exc.field
-        field = f"{path}.{field}" if field.startswith("tool") else f"assembly.{field}".rstrip(".")
-        raise InputError(field, exc.rule) from None
-    f.flags.writeable = False
-    h.flags.writeable = False
-    if coherence is not None:
-        coherence.flags.writeable = False
-    return MeasurementData(spec, f, h, coherence, dict(tool))
 
 
 def _bounds(raw: object, base: AssemblySpec, names: tuple[str, ...]) -> dict[str, tuple[float, float]]:
@@ -235,12 +166,10 @@ def parse_identification_request(request: object) -> IdentificationRequest:
             joint, field = name.split(".")
             raise InputError(f"assembly.joints.{joint}.{field}", "must be > 0: it is the starting guess of "
                              "the identification")
-    raw = request.get("measurements")
-    if not isinstance(raw, list) or not raw:
-        raise InputError("measurements", "must be a non-empty list")
-    if len(raw) > MAX_MEASUREMENTS:
-        raise InputError("measurements", f"at most {MAX_MEASUREMENTS} measurements, got {len(raw)}")
-    measurements = tuple(_measurement(m, i, document) for i, m in enumerate(raw))
+    tests = parse_tap_tests(request.get("measurements"), document.get("tool") or {}, base.materials,
+                            extra_fields=("id",), min_lines=MIN_LINES, max_tests=MAX_MEASUREMENTS)
+    measurements = tuple(MeasurementData(replace(base, tool=t.tool, frequency_hz=t.frequency_hz), t.frequency_hz,
+                                         t.h, t.coherence, t.overrides) for t in tests)
     ratio = request.get("max_residual_to_noise", DEFAULT_MAX_RESIDUAL_TO_NOISE)
     if isinstance(ratio, bool) or not isinstance(ratio, int | float) or not ratio > 1:
         raise InputError("max_residual_to_noise", "must be a number > 1")

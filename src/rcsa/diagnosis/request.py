@@ -27,14 +27,14 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from ..frf import check_frequency_hz
-from ..spec import AssemblySpec, SpindleSpec, ToolSpec, parse_assembly, parse_tool
+from ..spec import AssemblySpec, SpindleSpec, ToolSpec, parse_assembly
+from ..taptests import MAX_TAP_TESTS, TapTest, parse_tap_tests
 from .discrepancy import DEFAULT_TOLERANCES
 from .effects import CANDIDATE_NAMES
 
 __all__ = ["MAX_MEASUREMENTS", "MIN_VALID_LINES", "Measurement", "Options", "Request", "parse_request"]
 
-MAX_MEASUREMENTS = 20
+MAX_MEASUREMENTS = MAX_TAP_TESTS
 MAX_LINES_PER_MEASUREMENT = 200_000
 # Below ~100 lines in the valid band a mode window holds only a handful of lines and the
 # five-line peak parabola has nothing to average over.
@@ -44,10 +44,6 @@ DEFAULT_N_AVERAGES = 5.0
 DEFAULT_NOISE_REL = 0.01
 
 _FIELDS = ("assembly", "measurements", "tolerances", "options")
-_MEAS_FIELDS = ("tool", "frequency_hz", "h", "coherence", "n_averages", "sensor_mass_kg", "label")
-_TOOL_FIELDS = ("material", "diameter_m", "shank_diameter_m", "overall_length_m", "flute_length_m",
-                "stickout_m", "fluted_diameter_ratio", "fluted_mass_diameter_ratio",
-                "shoulder_length_m", "shoulder_diameter_m")
 
 
 @dataclass(frozen=True)
@@ -113,49 +109,15 @@ def _number(value: object, path: str, lo: float | None = None, hi: float | None 
     return x
 
 
-def _floats(value: object, path: str, n: int | None) -> np.ndarray:
-    if not isinstance(value, list) or any(isinstance(v, bool) or not isinstance(v, int | float) for v in value):
-        raise InputError(path, "must be a list of numbers")
-    if n is not None and len(value) != n:
-        raise InputError(path, f"must have one value per frequency line ({n}), got {len(value)}")
-    a = np.asarray(value, dtype=float)
-    if not np.all(np.isfinite(a)):
-        raise InputError(path, "must contain only finite numbers")
-    return a
-
-
-def _measurement(raw: object, i: int, assembly: Mapping[str, Any], spec: AssemblySpec) -> Measurement:
-    path = f"measurements[{i}]"
-    o = _obj(raw, path)
-    _only(o, path, _MEAS_FIELDS)
-    overrides = _obj(o.get("tool", {}), f"{path}.tool")
-    _only(overrides, f"{path}.tool", _TOOL_FIELDS)
-    try:
-        tool = parse_tool({**assembly["tool"], **overrides}, spec.materials, f"{path}.tool")
-    except InputError as exc:
-        raise InputError(exc.field, exc.rule) from None
-    if "frequency_hz" not in o:
-        raise InputError(f"{path}.frequency_hz", "is required")
-    f_raw = o["frequency_hz"]
-    if not isinstance(f_raw, list) or len(f_raw) > MAX_LINES_PER_MEASUREMENT:
-        raise InputError(f"{path}.frequency_hz", f"must be a list of at most {MAX_LINES_PER_MEASUREMENT} numbers")
-    f = check_frequency_hz(_floats(f_raw, f"{path}.frequency_hz", None), f"{path}.frequency_hz")
-    h_raw = _obj(o.get("h"), f"{path}.h")
-    _only(h_raw, f"{path}.h", ("real", "imag"))
-    h = _floats(h_raw.get("real"), f"{path}.h.real", f.size) + 1j * _floats(h_raw.get("imag"), f"{path}.h.imag", f.size)
-    if np.any(h == 0):
-        raise InputError(f"{path}.h", "must not contain exact zeros (log-magnitude features)")
-    coherence = None
-    if o.get("coherence") is not None:
-        coherence = _floats(o["coherence"], f"{path}.coherence", f.size)
-        if np.any((coherence < 0) | (coherence > 1)):
-            raise InputError(f"{path}.coherence", "values must lie in [0, 1] (γ², not γ in %)")
-    n_avg = _number(o.get("n_averages", DEFAULT_N_AVERAGES), f"{path}.n_averages", 1.0)
-    mass = None if o.get("sensor_mass_kg") is None else _number(o["sensor_mass_kg"], f"{path}.sensor_mass_kg", 0.0, 1.0)
-    label = o.get("label", f"#{i}")
+def _measurement(tap: TapTest, i: int) -> Measurement:
+    path = tap.path
+    n_avg = _number(tap.extra.get("n_averages", DEFAULT_N_AVERAGES), f"{path}.n_averages", 1.0)
+    raw_mass = tap.extra.get("sensor_mass_kg")
+    mass = None if raw_mass is None else _number(raw_mass, f"{path}.sensor_mass_kg", 0.0, 1.0)
+    label = tap.extra.get("label", f"#{i}")
     if not isinstance(label, str):
         raise InputError(f"{path}.label", "must be a string")
-    return Measurement(tool, dict(overrides), f, h, coherence, n_avg, mass, label)
+    return Measurement(tap.tool, dict(tap.overrides), tap.frequency_hz, tap.h, tap.coherence, n_avg, mass, label)
 
 
 def _options(raw: object, n_meas: int) -> Options:
@@ -219,12 +181,10 @@ def parse_request(request: object) -> Request:
     if not isinstance(spec.spindle, SpindleSpec):
         raise InputError("assembly.spindle", "a diagnosis needs an analytical spindle (segments and bearings); "
                                              "measured spindles are not supported yet")
-    meas_raw = o.get("measurements")
-    if not isinstance(meas_raw, list) or not meas_raw:
-        raise InputError("measurements", "must be a non-empty list")
-    if len(meas_raw) > MAX_MEASUREMENTS:
-        raise InputError("measurements", f"at most {MAX_MEASUREMENTS} measurements, got {len(meas_raw)}")
-    measurements = tuple(_measurement(m, i, assembly, spec) for i, m in enumerate(meas_raw))
+    taps = parse_tap_tests(o.get("measurements"), _obj(assembly.get("tool") or {}, "assembly.tool"), spec.materials,
+                           extra_fields=("n_averages", "sensor_mass_kg", "label"), max_tests=MAX_MEASUREMENTS,
+                           max_lines=MAX_LINES_PER_MEASUREMENT)
+    measurements = tuple(_measurement(t, i) for i, t in enumerate(taps))
     tol_raw = _obj(o.get("tolerances") or {}, "tolerances")
     _only(tol_raw, "tolerances", tuple(DEFAULT_TOLERANCES))
     tolerances = dict(DEFAULT_TOLERANCES)
