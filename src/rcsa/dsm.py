@@ -30,7 +30,7 @@ from .chain import Beam, Chain, Ground, Spring
 from .linalg2 import inv2, negative_count_sym2
 from .sections import Section
 
-__all__ = ["march", "static_condense", "static_tip_receptance", "subdivide", "tip_receptance", "wittrick_williams_count"]
+__all__ = ["Sym", "beam_step", "march", "spring_step", "static_condense", "static_tip_receptance", "subdivide", "tip_receptance", "wittrick_williams_count"]
 
 
 _BLOCK = 4096
@@ -49,7 +49,7 @@ def _from_sym(k: Sym) -> np.ndarray:
     return out
 
 
-def _beam_step(k: Sym, terms: tuple[np.ndarray, ...]) -> tuple[Sym, Sym]:
+def beam_step(k: Sym, terms: tuple[np.ndarray, ...]) -> tuple[Sym, Sym]:
     """``P = K + D11``; ``K ← D22 − D21 P⁻¹ D12`` with the six-term segment stiffness."""
     a, b, c, e, f, g = terms
     p11, p12, p22 = k[0] + a, k[1] + b, k[2] + c
@@ -61,7 +61,7 @@ def _beam_step(k: Sym, terms: tuple[np.ndarray, ...]) -> tuple[Sym, Sym]:
     return (a - (e * x11 - f * x21), -b - (e * x12 - f * x22), c - (f * x12 + g * x22)), (p11, p12, p22)
 
 
-def _spring_step(k: Sym, spring: Spring, omega_rad_s: np.ndarray) -> tuple[Sym, Sym | np.ndarray | None]:
+def spring_step(k: Sym, spring: Spring, omega_rad_s: np.ndarray) -> tuple[Sym, Sym | np.ndarray | None]:
     """Condense across an elastic joint; rigid DOFs are shared by both nodes, not penalised.
 
     Returns the new ``K`` and the pivot (a symmetric 2×2, a scalar array when one DOF is
@@ -178,9 +178,9 @@ def march(chain: Chain, omega_rad_s: np.ndarray, start: np.ndarray | None = None
     for item in chain:
         pivot: Sym | np.ndarray | None = None
         if isinstance(item, Beam):
-            k, pivot = _beam_step(k, segment_terms(w, item.section, item.length_m, _waves(waves, w, item.section)))
+            k, pivot = beam_step(k, segment_terms(w, item.section, item.length_m, _waves(waves, w, item.section)))
         elif isinstance(item, Spring):
-            k, pivot = _spring_step(k, item, w)
+            k, pivot = spring_step(k, item, w)
         elif isinstance(item, Ground):
             g = item.stiffness(w)
             k = (k[0] + g[:, 0, 0], k[1], k[2] + g[:, 1, 1])
@@ -256,10 +256,10 @@ def static_condense(chain: Chain, start: np.ndarray | None = None) -> np.ndarray
         if isinstance(item, Beam):
             d = static_stiffness(item.section.undamped(), item.length_m)
             terms = tuple(np.array([d[i, j]]) for i, j in ((0, 0), (0, 1), (1, 1), (0, 2), (0, 3), (1, 3)))
-            k = _beam_step(k, terms)[0]  # P = K + D11 is positive definite: K >= 0, D11 > 0
+            k = beam_step(k, terms)[0]  # P = K + D11 is positive definite: K >= 0, D11 > 0
         elif isinstance(item, Spring):
             stiff = Spring(item.stiffness_n_m, 0.0, item.rotational_stiffness_nm_rad, 0.0)
-            k = _spring_step(k, stiff, np.zeros(1))[0]
+            k = spring_step(k, stiff, np.zeros(1))[0]
         else:
             k = (k[0] + item.stiffness_n_m, k[1], k[2] + item.rotational_stiffness_nm_rad)
     k11, k12, k22 = (float(x[0].real) for x in k)

@@ -43,6 +43,7 @@ import numpy as np
 from ..assembly import holder_chain, joint_spring, spindle_chain, tool_chain
 from ..beams import segment_terms
 from ..chain import Beam, Chain, Ground, Spring
+from ..dsm import Sym, beam_step, spring_step
 from ..materials import Material
 from ..sections import Section
 from ..spec import (
@@ -273,14 +274,13 @@ def config_parts(spec: AssemblySpec, tool: ToolSpec, k: Knobs) -> Parts:
     return parts
 
 
-Sym = tuple[np.ndarray, np.ndarray, np.ndarray]  # (k11, k12, k22) of a symmetric 2×2 stack
 
 
 class Solver:
     """Tool-point ``h`` of many configurations on one frequency grid, with caches.
 
-    The chain is condensed from the spindle rear to the tool tip as in :func:`rcsa.dsm.march`
-    (same elimination, written out below), with two caches: the condensed stiffness after
+    The chain is condensed from the spindle rear to the tool tip with the steps of
+    :func:`rcsa.dsm.march`, with two caches: the condensed stiffness after
     each sub-chain (keyed by the sub-chains themselves), and the six stiffness terms of each
     beam (keyed by section and length), so a changed bearing or joint re-uses every beam.
 
@@ -318,46 +318,26 @@ class Solver:
     def _march(self, chain: Chain, k: Sym) -> Sym:
         """Condense ``chain`` onto its last node, starting from ``k`` at its first node.
 
-        Beam (D = [[D11, D12], [D12ᵀ, D22]], six terms a, b, c, e, f, g)::
-
-            P = K + D11;  K ← D22 − D12ᵀ P⁻¹ D12
-        Joint K_j (rigid DOFs shared):  K ← (K⁻¹ + K_j⁻¹)⁻¹ = K_j (K + K_j)⁻¹ K;  ground Δ:  K ← K + Δ
+        Beams and joints use the engine's own steps (:func:`rcsa.dsm.beam_step`,
+        :func:`rcsa.dsm.spring_step`) with cached beam terms; an :class:`AddedCompliance` adds
+        a rotational compliance at the node: ``K ← (K⁻¹ + C)⁻¹``.
         """
         w = self.omega_rad_s
-        k11, k12, k22 = k
         for item in chain:
             if isinstance(item, Beam):
-                a, b, c, e, f, g = self._beam_terms(item)
-                p11, p12, p22 = k11 + a, k12 + b, k22 + c
-                inv_det = 1.0 / (p11 * p22 - p12 * p12)
-                x11 = (p22 * e + p12 * f) * inv_det
-                x12 = (p22 * f - p12 * g) * inv_det
-                x21 = -(p12 * e + p11 * f) * inv_det
-                x22 = (p11 * g - p12 * f) * inv_det
-                k11, k12, k22 = a - (e * x11 - f * x21), -b - (e * x12 - f * x22), c - (f * x12 + g * x22)
+                k = beam_step(k, self._beam_terms(item))[0]
             elif isinstance(item, Spring):
-                kt, kr = item.translational(w), item.rotational(w)
-                if kt is not None and kr is not None:
-                    p11, p22 = k11 + kt, k22 + kr
-                    inv_det = 1.0 / (p11 * p22 - k12 * k12)
-                    det_k = k11 * k22 - k12 * k12
-                    k11, k12, k22 = (kt * (det_k + kr * k11) * inv_det, kt * kr * k12 * inv_det,
-                                     kr * (det_k + kt * k22) * inv_det)
-                elif kt is not None:  # rotation rigid
-                    p = k11 + kt
-                    k11, k12, k22 = kt * k11 / p, kt * k12 / p, k22 - k12 * k12 / p
-                elif kr is not None:  # translation rigid
-                    p = k22 + kr
-                    k11, k12, k22 = k11 - k12 * k12 / p, kr * k12 / p, kr * k22 / p
+                k = spring_step(k, item, w)[0]
             elif isinstance(item, AddedCompliance):
+                k11, k12, k22 = k
                 det = k11 * k22 - k12 * k12
                 r11, r12, r22 = k22 / det, -k12 / det + item.cross_rad_n, k11 / det + item.rotational_rad_nm
                 det_r = r11 * r22 - r12 * r12
-                k11, k12, k22 = r22 / det_r, -r12 / det_r, r11 / det_r
+                k = (r22 / det_r, -r12 / det_r, r11 / det_r)
             else:
                 g = item.stiffness(w)
-                k11, k22 = k11 + g[:, 0, 0], k22 + g[:, 1, 1]
-        return k11, k12, k22
+                k = (k[0] + g[:, 0, 0], k[1], k[2] + g[:, 1, 1])
+        return k
 
     def _condensed(self, key: tuple[Chain, ...]) -> Sym:
         if not key:
