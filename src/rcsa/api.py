@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from .assembly import AssemblyModel, build_model
+from .assembly import AssemblyModel, build_model, spindle_chain
 from .errors import InputError
 from .modes import natural_frequencies_batch
 from .prediction import Prediction, SubassemblyCache, predict_model
@@ -22,6 +22,7 @@ from .spec import (
     AssemblySpec,
     CommonSpec,
     MeasuredSpindleSpec,
+    SpindleSpec,
     assemble,
     parse_assembly,
     parse_combination,
@@ -58,6 +59,8 @@ class _SpindleContext:
             self.base = measured_base(sp.measurement_id, common.frequency_hz, store,
                                       artifact_method=sp.artifact_method, effective_length_m=sp.effective_length_m)
         self.cache = SubassemblyCache(omega, None if self.base is None else self.base.receptance)
+        self.spindle = (spindle_chain(common.spindle, common.materials, common.shear_coefficient, common.beam_theory)
+                        if isinstance(common.spindle, SpindleSpec) else ())
         self.alt_caches = [] if self.base is None else [SubassemblyCache(omega, r) for r in self.base.alternatives]
 
     def predict(self, spec: AssemblySpec, natural_frequencies: bool = True) -> Prediction:
@@ -67,7 +70,7 @@ class _SpindleContext:
                            ) -> tuple[AssemblyModel, Prediction]:
         base = self.base
         if base is None:
-            model = build_model(spec)
+            model = build_model(spec, spindle=self.spindle)
             return model, predict_model(model, spec.frequency_hz, cache=self.cache,
                                         natural_frequencies=natural_frequencies)
         if base.plane == "holder_tip" and base.artifact_diameter_m is not None and \

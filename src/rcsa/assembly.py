@@ -167,7 +167,7 @@ def tool_chain(tool: ToolSpec, materials: Mapping[str, Material], shear: ShearMo
     return tuple(items)
 
 
-def build_model(spec: AssemblySpec, base_plane: str | None = None) -> AssemblyModel:
+def build_model(spec: AssemblySpec, base_plane: str | None = None, spindle: Chain | None = None) -> AssemblyModel:
     """The chain model of an assembly.
 
     Parameters
@@ -175,15 +175,16 @@ def build_model(spec: AssemblySpec, base_plane: str | None = None) -> AssemblyMo
     spec : AssemblySpec
     base_plane : {None, "spindle_nose", "holder_tip"}
         For a measured spindle, the plane of the measurement; ``None`` for an analytical one.
+    spindle : Chain, optional
+        The spindle chain of ``spec``, already built (a batch builds it once for all tools).
 
     Returns
     -------
     AssemblyModel
     """
     shear, theory, mats = spec.shear_coefficient, spec.beam_theory, spec.materials
-    spindle: Chain = ()
-    if isinstance(spec.spindle, SpindleSpec):
-        spindle = spindle_chain(spec.spindle, mats, shear, theory)
+    if spindle is None:
+        spindle = spindle_chain(spec.spindle, mats, shear, theory) if isinstance(spec.spindle, SpindleSpec) else ()
     holder: Chain = ()
     if base_plane != "holder_tip":
         if spec.holder is None:
