@@ -72,13 +72,13 @@ def _cos_sin(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return c, s
 
 
-def _c_and_s(s: np.ndarray, length_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``C = cos(√s L)``, ``S = sin(√s L)/√s`` and ``sS = √s sin(√s L)``.
+def _c_and_s(k: np.ndarray, length_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``C = cos(kL)``, ``S = sin(kL)/k`` and ``sS = k sin(kL)`` for ``k = √s``.
 
     ``sin(z)/k`` keeps full relative precision for small ``z = kL``; only ``k = 0`` exactly
-    (a segment at its shear cut-off) needs the limit ``S = L``.
+    (a segment at its shear cut-off) needs the limit ``S = L``. The functions are even in
+    ``k``, so either square root will do.
     """
-    k = np.sqrt(s.astype(complex, copy=False))
     cos_z, sin_z = _cos_sin(k * length_m)
     with np.errstate(invalid="ignore", divide="ignore"):
         s_fun = sin_z / k
@@ -110,8 +110,8 @@ def transfer_matrix(omega_rad_s: np.ndarray, section: Section, length_m: float) 
     s1, s2 = wavenumbers(omega_rad_s, section)
     q1 = s1 - ra * section.shear_flexibility
     q2 = s2 - ra * section.shear_flexibility
-    c1, sf1, ss1 = _c_and_s(s1, length_m)
-    c2, sf2, ss2 = _c_and_s(s2, length_m)
+    c1, sf1, ss1 = _c_and_s(np.sqrt(s1), length_m)
+    c2, sf2, ss2 = _c_and_s(np.sqrt(s2), length_m)
     d = s1 - s2
     qq = q1 * q2
     t = np.empty((w2.size, 4, 4), dtype=complex)
@@ -150,7 +150,7 @@ MAX_DECAY_PER_PIECE = 3.0
 class _Waves:
     """Wavenumber data of one section on one frequency grid (shared by equal sections)."""
 
-    __slots__ = ("d", "decay_per_m", "q1", "q2", "ra", "s1", "s2")
+    __slots__ = ("d", "decay_per_m", "k1", "k2", "q1", "q2", "ra", "s1", "s2")
 
     def __init__(self, omega_rad_s: np.ndarray, section: Section) -> None:
         self.ra = section.rho_a * np.asarray(omega_rad_s, dtype=float) ** 2
@@ -158,8 +158,8 @@ class _Waves:
         self.q1 = self.s1 - self.ra * section.shear_flexibility
         self.q2 = self.s2 - self.ra * section.shear_flexibility
         self.d = self.s1 - self.s2
-        self.decay_per_m = float(max(np.abs(np.sqrt(self.s1).imag).max(initial=0.0),
-                                     np.abs(np.sqrt(self.s2).imag).max(initial=0.0)))
+        self.k1, self.k2 = np.sqrt(self.s1), np.sqrt(self.s2)
+        self.decay_per_m = float(max(np.abs(self.k1.imag).max(initial=0.0), np.abs(self.k2.imag).max(initial=0.0)))
 
     def pieces(self, length_m: float | np.ndarray) -> int:
         """Number of equal pieces keeping each piece's decay exponent ≤ MAX_DECAY_PER_PIECE."""
@@ -188,8 +188,8 @@ def stiffness_terms(omega_rad_s: np.ndarray, section: Section, length_m: float,
     """
     wv = waves if waves is not None else _Waves(omega_rad_s, section)
     ei, ra, q1, q2 = section.ei, wv.ra, wv.q1, wv.q2
-    c1, sf1, ss1 = _c_and_s(wv.s1, length_m)
-    c2, sf2, ss2 = _c_and_s(wv.s2, length_m)
+    c1, sf1, ss1 = _c_and_s(wv.k1, length_m)
+    c2, sf2, ss2 = _c_and_s(wv.k2, length_m)
     dc = c2 - c1
     # transfer-matrix entries times (s1 - s2)
     t_ww = q1 * c2 - q2 * c1
@@ -266,7 +266,7 @@ def free_free_receptance(omega_rad_s: np.ndarray, section: Section, length_m: fl
     """
     w = np.asarray(omega_rad_s, dtype=float)
     wv = _Waves(w, section)
-    decay = np.maximum(np.abs(np.sqrt(wv.s1).imag), np.abs(np.sqrt(wv.s2).imag)) * length_m
+    decay = np.maximum(np.abs(wv.k1.imag), np.abs(wv.k2.imag)) * length_m
     long = decay > MAX_DECAY_PER_PIECE
     out = np.empty((w.size, 4, 4), dtype=complex)
     if long.any():
