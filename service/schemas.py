@@ -694,19 +694,9 @@ class SyncReport(_Response):
     results_url: str | None = Field(None, description="GET its results here (JSON, HDF5 or zip of UFF 58).")
 
 
-class LibraryTool(_Response):
+class LibraryTool(LibraryResultItem):
     """One item of a stored library: its status and the key of its stored result."""
 
-    id: str = Field(description="Fusion guid, else T<number>, else a content hash.")
-    index: int = Field(description="Position in the library's data list.")
-    description: str | None = None
-    number: int | None = Field(None, description="Fusion T number.")
-    teeth: int | None = Field(None, description="Number of flutes NOF.")
-    tool_type: str | None = None
-    warnings: list[str] = Field(default_factory=list)
-    status: Literal["ok", "skipped", "error"]
-    reason: str | None = Field(None, description="Why it was skipped.")
-    error: ItemError | None = None
     result_sha256: str | None = Field(None, description="Content hash its result is filed under.")
     revision: int = Field(description="Library revision in which this tool last changed.")
 
