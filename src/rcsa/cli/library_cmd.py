@@ -105,6 +105,17 @@ def _progress_bar(quiet: bool) -> Any:
                     TimeRemainingColumn(), transient=True, disable=quiet, console=Console(stderr=True))
 
 
+FrequencyOption = Annotated[str | None, typer.Option(
+    help="START:STOP:STEP in Hz (stop included) or a JSON frequency object. Default: the assembly's, else the "
+         "measurement's lines, else 5:5000:1.")]
+JointsOption = Annotated[Path | None, typer.Option(
+    help="Joints JSON {spindle_holder, holder_tool} for every tool (default: the assembly's, else rigid).")]
+ImportOptions = Annotated[str | None, typer.Option(
+    help='Import options as JSON, e.g. \'{"holder_segments_per_cone": 6}\'.')]
+NaturalFrequenciesOption = Annotated[bool, typer.Option(help="Compute exact natural frequencies.")]
+QuietOption = Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")]
+
+
 @library_app.command("predict")
 def predict(
     library: Annotated[Path, typer.Argument(help="Fusion tool library: .json, or .tools (zip).")],
@@ -113,18 +124,14 @@ def predict(
                                                       "are used.")] = None,
     measurement: Annotated[str | None, typer.Option(help="Instead of --spindle: a stored measurement id "
                                                          "(hybrid).")] = None,
-    frequency: Annotated[str | None, typer.Option(help="START:STOP:STEP in Hz (stop included) or a JSON "
-                                                       "frequency object. Default: the assembly's, else the "
-                                                       "measurement's lines, else 5:5000:1.")] = None,
-    joints: Annotated[Path | None, typer.Option(help="Joints JSON {spindle_holder, holder_tool} for every "
-                                                     "tool (default: the assembly's, else rigid).")] = None,
-    options: Annotated[str | None, typer.Option(help="Import options as JSON, e.g. "
-                                                     '\'{"holder_segments_per_cone": 6}\'.')] = None,
-    natural_frequencies: Annotated[bool, typer.Option(help="Compute exact natural frequencies.")] = True,
+    frequency: FrequencyOption = None,
+    joints: JointsOption = None,
+    options: ImportOptions = None,
+    natural_frequencies: NaturalFrequenciesOption = True,
     out: Annotated[Path | None, typer.Option("-o", "--out", help="Write the result here instead of stdout.")] = None,
     store: Annotated[Path | None, typer.Option("--store", help="Measurement store (default: RCSA_STORE or "
                                                                "the per-user store).")] = None,
-    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")] = False,
+    quiet: QuietOption = False,
 ) -> None:
     """Predict the tool-point FRF of every tool in a Fusion library on one spindle."""
     from .. import library_api
@@ -182,18 +189,14 @@ def sync(
                                               "joints and materials are used.")],
     library_id: Annotated[str | None, typer.Option("--library-id", help="Id of the stored library (default: the "
                                                                         "file name without suffix).")] = None,
-    frequency: Annotated[str | None, typer.Option(help="START:STOP:STEP in Hz (stop included) or a JSON "
-                                                       "frequency object. Default: the assembly's, else the "
-                                                       "measurement's lines, else 5:5000:1.")] = None,
-    joints: Annotated[Path | None, typer.Option(help="Joints JSON {spindle_holder, holder_tool} for every "
-                                                     "tool (default: the assembly's, else rigid).")] = None,
-    options: Annotated[str | None, typer.Option(help="Import options as JSON, e.g. "
-                                                     '\'{"holder_segments_per_cone": 6}\'.')] = None,
-    natural_frequencies: Annotated[bool, typer.Option(help="Compute exact natural frequencies.")] = True,
+    frequency: FrequencyOption = None,
+    joints: JointsOption = None,
+    options: ImportOptions = None,
+    natural_frequencies: NaturalFrequenciesOption = True,
     out: Annotated[Path | None, typer.Option("-o", "--out", help="Write the sync report here instead of "
                                                                  "stdout.")] = None,
     store: StoreOption = None,
-    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")] = False,
+    quiet: QuietOption = False,
 ) -> None:
     """Keep a Fusion library's tool-point FRFs in the store, computing only new or changed tools."""
     from .. import library_api, library_sync
