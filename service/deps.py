@@ -7,14 +7,14 @@ from typing import Annotated
 from fastapi import Depends, Request
 
 from .config import Settings
-from .state import AppState
+from .state import AppState, ensure_state
 
 __all__ = ["SettingsDep", "StateDep", "get_settings", "get_state"]
 
 
 def get_state(request: Request) -> AppState:
-    """The process's :class:`AppState` (built by the lifespan)."""
-    return request.app.state.rcsa
+    """The process's :class:`AppState` (built by the lifespan, or on first use without one)."""
+    return ensure_state(request.app)
 
 
 def get_settings(state: Annotated[AppState, Depends(get_state)]) -> Settings:

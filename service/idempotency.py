@@ -65,6 +65,7 @@ from rcsa.errors import NotFoundError
 from rcsa.jobs import runner_is_dead
 
 from .errors import PROBLEM_MEDIA_TYPE, ProblemError
+from .state import ensure_state
 
 __all__ = [
     "IDEMPOTENCY_PROBLEMS",
@@ -346,7 +347,7 @@ async def run_idempotent(request: Request, raw_key: str, handler: Callable[[Requ
                          ) -> Response:
     """Answer ``request`` under its ``Idempotency-Key`` (see the module docstring)."""
     key = parse_key(raw_key)
-    state = request.app.state.rcsa
+    state = await run_in_threadpool(ensure_state, request.app)
     owner = _owner(request, state)
     if owner is None:  # an unknown key: the route answers 401 and nothing is kept
         return await handler(request)

@@ -10,6 +10,7 @@ job-runner thread that claims queued jobs atomically.
 from __future__ import annotations
 
 import logging
+import threading
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from pathlib import Path
@@ -36,7 +37,7 @@ from .metrics import Metrics
 from .middleware import RequestContextMiddleware, configure_logging
 from .routes import ROUTERS
 from .routes.libraries import job_handlers as library_job_handlers
-from .state import AppState, CachedMeasurements
+from .state import AppState, CachedMeasurements, ensure_state
 
 __all__ = ["create_app"]
 
@@ -123,8 +124,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
-        state = await run_in_threadpool(_startup, settings, metrics)
-        app.state.rcsa = state
+        state = await run_in_threadpool(ensure_state, app)
         try:
             yield
         finally:
@@ -133,6 +133,10 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     app = FastAPI(title="rcsa — tool-point FRF service", version=__version__, description=DESCRIPTION,
                   lifespan=lifespan, separate_input_output_schemas=False)
+    # the state is built by the lifespan, or on the first request when the app is served
+    # without one (e.g. a TestClient used outside a ``with`` block)
+    app.state.rcsa_factory = lambda: _startup(settings, metrics)
+    app.state.rcsa_lock = threading.Lock()
     install_error_handlers(app)
     for router in ROUTERS:
         app.include_router(router)
@@ -154,3 +158,14 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     app.openapi = openapi  # type: ignore[method-assign]
     return app
+
+
+def __getattr__(name: str) -> Any:
+    """``service.main.app``: an app built from the environment on first access (PEP 562).
+
+    ``uvicorn service.main:app`` works as well as the factory form.
+    """
+    if name == "app":
+        globals()["app"] = built = create_app()
+        return built
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

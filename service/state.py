@@ -69,3 +69,18 @@ class AppState:
     jobs: JobStore
     metrics: Metrics
     runners: list[JobRunner]
+
+
+def ensure_state(app: Any) -> AppState:
+    """The app's :class:`AppState`, built once (thread-safe) on first need.
+
+    The lifespan builds it at startup; when an app is served without lifespan events (a
+    ``TestClient`` outside a ``with`` block) the first request builds it instead.
+    """
+    state = getattr(app.state, "rcsa", None)
+    if state is None:
+        with app.state.rcsa_lock:
+            state = getattr(app.state, "rcsa", None)
+            if state is None:
+                state = app.state.rcsa = app.state.rcsa_factory()
+    return state
