@@ -100,3 +100,30 @@ def test_log_lines_carry_the_request_id(make_client, assembly, caplog):
     assert [r.request_id for r in access] == ["trace-42", access[1].request_id]
     assert "POST /v1/tool-point-frf\" 200" in access[0].getMessage()
     assert all(hasattr(r, "request_id") for r in caplog.records)
+
+
+def test_the_app_works_without_its_lifespan(tmp_path, monkeypatch):
+    # Integrators often write TestClient(app) without a ``with`` block, or mount the app in
+    # an ASGI server that skips lifespan events: the state is then built on first use.
+    from fastapi.testclient import TestClient
+    from service.main import create_app
+
+    from rcsa.reference import ra1
+
+    monkeypatch.setenv("RCSA_STORE", str(tmp_path / "store"))
+    client = TestClient(create_app())
+    r = client.post("/v1/tool-point-frf", json=ra1({"start_hz": 500.0, "stop_hz": 700.0, "step_hz": 5.0}))
+    assert r.status_code == 200, r.text
+    assert [round(f, 2) for f in r.json()["natural_frequencies_hz"]] == [599.85]
+    for runner in client.app.state.rcsa.runners:
+        runner.stop(10.0)
+
+
+def test_module_level_app_for_uvicorn_without_factory(tmp_path, monkeypatch):
+    import service.main
+
+    monkeypatch.setenv("RCSA_STORE", str(tmp_path / "store"))
+    monkeypatch.delitem(service.main.__dict__, "app", raising=False)
+    app = service.main.app
+    assert app is service.main.app  # built once, on first access
+    assert "/v1/tool-point-frf" in app.openapi()["paths"]
