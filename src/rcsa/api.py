@@ -147,21 +147,13 @@ def _fill_natural_frequencies(slots: list, frequency_hz: np.ndarray) -> None:
     for i, slot in enumerate(slots):
         if not isinstance(slot, dict):
             model = slot[1]
-            groups.setdefault(model.spindle + _opt(model.spindle_holder), []).append(i)
+            groups.setdefault(model.spindle_side(), []).append(i)
     for prefix, members in groups.items():
-        tails = [slots[i][1].holder + _tail(slots[i][1]) for i in members]
+        tails = [slots[i][1].holder + slots[i][1].tool_side() for i in members]
         found = natural_frequencies_batch(prefix, tails, float(frequency_hz[0]), float(frequency_hz[-1]))
         for i, nat in zip(members, found, strict=True):
             ident, model, prediction = slots[i]
             slots[i] = (ident, model, replace(prediction, natural_frequencies_hz=nat))
-
-
-def _opt(spring: Any) -> tuple:
-    return () if spring is None else (spring,)
-
-
-def _tail(model: AssemblyModel) -> tuple:
-    return model.tool if model.holder_tool is None else (model.holder_tool, *model.tool)
 
 
 def predict_batch(request: Mapping[str, Any], *, store: Any = None, max_lines: int = MAX_FREQUENCY_LINES,

@@ -59,11 +59,19 @@ class AssemblyModel:
 
     def to_holder_tip(self) -> Chain:
         """Spindle, spindle–holder joint and holder, as one chain."""
-        return self.spindle + _opt(self.spindle_holder) + self.holder
+        return self.spindle_side() + self.holder
+
+    def spindle_side(self) -> Chain:
+        """Spindle and the spindle–holder joint: what every holder and tool is coupled to."""
+        return self.spindle + _opt(self.spindle_holder)
+
+    def tool_side(self) -> Chain:
+        """Holder–tool joint and tool overhang: what changes from tool to tool."""
+        return _opt(self.holder_tool) + self.tool
 
     def chain(self) -> Chain:
         """The whole assembly, spindle rear → tool tip."""
-        return self.to_holder_tip() + _opt(self.holder_tool) + self.tool
+        return self.to_holder_tip() + self.tool_side()
 
 
 def _opt(spring: Spring | None) -> Chain:

@@ -153,7 +153,7 @@ def _coarse_match(problem: Problem, values: dict[str, float], measured_ln: list[
         total = 0.0
         for i, (f, cache) in enumerate(grids):
             model = build_model(problem.spec(i, {**values, **k_values}))
-            tail = model.tool if model.holder_tool is None else (model.holder_tool, *model.tool)
+            tail = model.tool_side()
             h = inv2(march(tail, cache.omega_rad_s, cache.condensed(model.to_holder_tip()))[0])[:, 0, 0]
             total += _peak_mismatch(peaks_ln_hz(f, h), measured_ln[i])
         return total / len(grids)

@@ -170,7 +170,7 @@ def predict_model(model: AssemblyModel, frequency_hz: np.ndarray, *,
     if cache is None:
         cache = SubassemblyCache(omega, base_receptance)
     prefix = model.to_holder_tip()
-    rest = model.tool if model.holder_tool is None else (model.holder_tool, *model.tool)
+    rest = model.tool_side()
     if any(isinstance(item, Beam) for item in prefix):
         k_tip = march(rest, omega, cache.condensed(prefix))[0]
     else:  # a measured spindle at the holder tip: only the tool is coupled to it
