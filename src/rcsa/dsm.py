@@ -27,7 +27,7 @@ import numpy as np
 
 from .beams import _Waves, dynamic_stiffness, segment_terms, static_stiffness
 from .chain import Beam, Chain, Ground, Spring
-from .linalg2 import inv2, negative_count_sym2
+from .linalg2 import inv2, negative_count_sym, negative_count_sym2
 from .sections import Section
 
 __all__ = ["Sym", "beam_step", "march", "spring_step", "static_condense", "static_tip_receptance", "subdivide", "tip_receptance", "wittrick_williams_count"]
@@ -88,10 +88,7 @@ def spring_step(k: Sym, spring: Spring, omega_rad_s: np.ndarray) -> tuple[Sym, S
 def _negatives(pivot: Sym | np.ndarray) -> np.ndarray:
     if isinstance(pivot, np.ndarray):
         return (pivot.real < 0).astype(int)
-    p11, p12, p22 = (x.real for x in pivot)
-    det = p11 * p22 - p12 * p12
-    tr = p11 + p22
-    return np.where(det < 0, 1, np.where((det >= 0) & (tr < 0), 2 - (det == 0), 0))
+    return negative_count_sym(*pivot)
 
 
 def _absorb_compliance(chain: Chain, w: np.ndarray, compliance: np.ndarray) -> tuple[np.ndarray, int]:
@@ -196,17 +193,18 @@ def tip_receptance(chain: Chain, omega_rad_s: np.ndarray, start: np.ndarray | No
     return inv2(march(chain, omega_rad_s, start)[0])
 
 
-def wittrick_williams_count(chain: Chain, omega_rad_s: np.ndarray) -> np.ndarray:
+def wittrick_williams_count(chain: Chain, omega_rad_s: np.ndarray, start: np.ndarray | None = None) -> np.ndarray:
     """Number of natural frequencies below each ω of an undamped, subdivided chain.
 
     The chain must be real (undamped) and subdivided with :func:`subdivide` for at least the
     largest ω, so that no beam has a clamped–clamped natural frequency below it (J₀ = 0).
+    ``start`` is the condensed stiffness of a prefix whose own negative pivots the caller adds.
 
     Returns
     -------
     numpy.ndarray of int, shape (nfreq,)
     """
-    k, neg = march(chain, omega_rad_s, count=True)
+    k, neg = march(chain, omega_rad_s, start, count=True)
     return neg + negative_count_sym2(k)
 
 

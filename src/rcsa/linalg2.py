@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["det2", "inv2", "negative_count_sym2", "solve2"]
+__all__ = ["det2", "inv2", "negative_count_sym", "negative_count_sym2"]
 
 
 def det2(a: np.ndarray) -> np.ndarray:
@@ -27,17 +27,18 @@ def inv2(a: np.ndarray) -> np.ndarray:
     return out
 
 
-def solve2(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``inv(a) @ b`` for stacks of 2×2 ``a`` and (..., 2, k) ``b``."""
-    return inv2(a) @ b
+def negative_count_sym(a11: np.ndarray, a12: np.ndarray, a22: np.ndarray) -> np.ndarray:
+    """Negative eigenvalues of real symmetric 2×2 matrices given by their entries, int.
+
+    Sylvester's criterion: det < 0 → one negative; det > 0 and trace < 0 → two; det = 0 and
+    trace < 0 → one (the other eigenvalue is zero). Imaginary parts are ignored.
+    """
+    a11, a12, a22 = np.real(a11), np.real(a12), np.real(a22)
+    d = a11 * a22 - a12 * a12
+    tr = a11 + a22
+    return np.where(d < 0, 1, np.where(tr < 0, np.where(d > 0, 2, 1), 0))
 
 
 def negative_count_sym2(a: np.ndarray) -> np.ndarray:
-    """Number of negative eigenvalues of each real symmetric 2×2 matrix, shape (...), int.
-
-    Uses Sylvester's criterion: det < 0 → one negative; det > 0 and trace < 0 → two.
-    """
-    a = a.real
-    d = det2(a)
-    tr = a[..., 0, 0] + a[..., 1, 1]
-    return np.where(d < 0, 1, np.where((d > 0) & (tr < 0), 2, np.where((d == 0) & (tr < 0), 1, 0)))
+    """Number of negative eigenvalues of each real symmetric 2×2 matrix, shape (...), int."""
+    return negative_count_sym(a[..., 0, 0], a[..., 0, 1], a[..., 1, 1])

@@ -17,8 +17,7 @@ import numpy as np
 from scipy.signal import find_peaks
 
 from .chain import Beam, Chain, Ground, Spring, undamped
-from .dsm import march, subdivide
-from .linalg2 import negative_count_sym2
+from .dsm import march, subdivide, wittrick_williams_count
 from .sections import Section
 
 __all__ = [
@@ -110,8 +109,7 @@ def natural_frequencies_batch(prefix: Chain, tails: Sequence[Chain], start_hz: f
 
 def _count_tail(stacked: Chain, rows: np.ndarray, f_hz: np.ndarray, k0: np.ndarray, n0: np.ndarray) -> np.ndarray:
     """Wittrick–Williams count: prefix negatives ``n0`` plus the stacked tail's, per row."""
-    k, neg = march(take_rows(stacked, rows), _TWO_PI * f_hz, start=k0, count=True)
-    return n0 + neg + negative_count_sym2(k)
+    return n0 + wittrick_williams_count(take_rows(stacked, rows), _TWO_PI * f_hz, k0)
 
 
 def chain_signature(chain: Chain) -> tuple:
