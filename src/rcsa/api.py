@@ -16,7 +16,13 @@ import numpy as np
 from .assembly import AssemblyModel, build_model, spindle_chain
 from .errors import InputError
 from .modes import natural_frequencies_batch
-from .prediction import Prediction, SubassemblyCache, predict_model
+from .prediction import (
+    Prediction,
+    SubassemblyCache,
+    complex_to_json,
+    predict_model,
+    tool_point_receptance,
+)
 from .spec import (
     MAX_FREQUENCY_LINES,
     AssemblySpec,
@@ -49,7 +55,6 @@ class _SpindleContext:
     """The spindle side shared by all combinations: plane, base receptance and cache."""
 
     def __init__(self, common: CommonSpec, store: Any = None) -> None:
-        self.common = common
         self.base = None
         omega = 2 * np.pi * common.frequency_hz
         if isinstance(common.spindle, MeasuredSpindleSpec):
@@ -81,8 +86,7 @@ class _SpindleContext:
         model = build_model(spec, base.plane)
         extra: dict[str, Any] = {"spindle_measurement": base.report}
         if self.alt_caches:
-            h = [predict_model(model, spec.frequency_hz, cache=c, natural_frequencies=False).tool_point.h
-                 for c in self.alt_caches]
+            h = [tool_point_receptance(model, c)[:, 0, 0] for c in self.alt_caches]
             extra["uncertainty"] = _spread(spec.frequency_hz, h)
         return model, predict_model(model, spec.frequency_hz, base_receptance=base.receptance, cache=self.cache,
                                     natural_frequencies=natural_frequencies, notes=base.notes, extra=extra)
@@ -93,8 +97,7 @@ def _spread(frequency_hz: np.ndarray, bounds: list[np.ndarray]) -> dict[str, Any
     lo, hi = bounds
     ref = max(float(np.max(np.abs(lo))), float(np.max(np.abs(hi))))
     rel = np.abs(hi - lo) / ref
-    return {"h_bounds": {"low": {"real": lo.real.tolist(), "imag": lo.imag.tolist()},
-                         "high": {"real": hi.real.tolist(), "imag": hi.imag.tolist()}},
+    return {"h_bounds": {"low": complex_to_json(lo), "high": complex_to_json(hi)},
             "max_relative_spread_of_peak": float(rel.max()),
             "frequency_of_max_spread_hz": float(frequency_hz[int(np.argmax(rel))])}
 

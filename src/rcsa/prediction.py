@@ -20,7 +20,7 @@ from .frf import Receptance
 from .linalg2 import inv2
 from .modes import find_frf_peaks, modal_fit_peaks, natural_frequencies_batch
 
-__all__ = ["Prediction", "SubassemblyCache", "complex_to_json", "predict_model"]
+__all__ = ["Prediction", "SubassemblyCache", "complex_to_json", "predict_model", "tool_point_receptance"]
 
 
 def complex_to_json(x: np.ndarray) -> dict[str, list[float]]:
@@ -142,6 +142,20 @@ class SubassemblyCache:
         return hit
 
 
+def tool_point_receptance(model: AssemblyModel, cache: SubassemblyCache) -> np.ndarray:
+    """Tool-point ``[[h, l], [n, p]]`` of a model on the cache's grid, shape (nfreq, 2, 2).
+
+    The spindle + holder condensation comes from (and stays in) ``cache``; a measured spindle
+    at the holder tip couples only the tool, straight onto its receptance.
+    """
+    prefix, rest = model.to_holder_tip(), model.tool_side()
+    if any(isinstance(item, Beam) for item in prefix):
+        k_tip = march(rest, cache.omega_rad_s, cache.condensed(prefix))[0]
+    else:
+        k_tip = march(prefix + rest, cache.omega_rad_s, start_compliance=cache.base_receptance)[0]
+    return inv2(k_tip)
+
+
 def predict_model(model: AssemblyModel, frequency_hz: np.ndarray, *,
                   base_receptance: np.ndarray | None = None,
                   cache: SubassemblyCache | None = None,
@@ -169,13 +183,8 @@ def predict_model(model: AssemblyModel, frequency_hz: np.ndarray, *,
     omega = 2.0 * np.pi * f
     if cache is None:
         cache = SubassemblyCache(omega, base_receptance)
-    prefix = model.to_holder_tip()
-    rest = model.tool_side()
-    if any(isinstance(item, Beam) for item in prefix):
-        k_tip = march(rest, omega, cache.condensed(prefix))[0]
-    else:  # a measured spindle at the holder tip: only the tool is coupled to it
-        k_tip = march(prefix + rest, omega, start_compliance=cache.base_receptance)[0]
-    g = inv2(k_tip)
+    prefix, rest = model.to_holder_tip(), model.tool_side()
+    g = tool_point_receptance(model, cache)
     tool_point = Receptance(f, g)
     h = g[:, 0, 0]
     notes_out = list(notes)
