@@ -1,9 +1,9 @@
 """Withheld-effect benchmark of the sim-to-real diagnosis (issue 6, ``diagnosis.md`` §5).
 
 Each trial draws a hidden effect (or none), realises it physically in the independent FE
-truth (``tests/diagnosis/truth.py``) with in-tolerance scatter of the nominal parameters and
+truth (``tests/analysis/diagnosis/truth.py``) with in-tolerance scatter of the nominal parameters and
 1 % noise, measures five stickouts (50–82 mm, 50–8000 Hz, 2 Hz lines) and asks
-``rcsa.diagnosis`` for a verdict against the RA-1 base model. Scores (``diagnosis.md`` §5.2):
+``rcsa.analysis.diagnosis`` for a verdict against the RA-1 base model. Scores (``diagnosis.md`` §5.2):
 
 * top-1 attribution: ``status == identified`` and the named effect is the hidden one
   (an ``ambiguous`` verdict never counts as a top-1 hit); also the best-ranked effect, set
@@ -47,10 +47,10 @@ REPO = Path(__file__).resolve().parents[1]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
-from tests.diagnosis import truth  # noqa: E402
+from tests.analysis.diagnosis import truth  # noqa: E402
 
-from rcsa.diagnosis.api import analyse  # noqa: E402
-from rcsa.diagnosis.report import build_response  # noqa: E402
+from rcsa.analysis.diagnosis.report import build_response  # noqa: E402
+from rcsa.analysis.diagnosis.state import analyse  # noqa: E402
 
 EQUIVALENT = ({"holder_tool_joint", "insertion_depth"}, {"spindle_holder_joint", "spindle_rotational_receptance"})
 SNR_BINS = ((0.0, 5.0), (5.0, 10.0), (10.0, 20.0), (20.0, float("inf")))
@@ -198,9 +198,9 @@ def check_mesh() -> None:
     """FE discretisation error of the truth against the exact RA-1 model, relative to |H|."""
     from tests.oracles.fe_assembly import tool_point_receptance
 
-    from rcsa.assembly import build_model
-    from rcsa.dsm import tip_receptance
-    from rcsa.spec import parse_assembly
+    from rcsa.model.assembly import build_model
+    from rcsa.model.contract import parse_assembly
+    from rcsa.physics.elimination import tip_receptance
 
     f = truth.FREQUENCY_HZ
     for stickout in truth.STICKOUTS_M:
@@ -222,7 +222,7 @@ def calibrate(kind: str, evaluations: int = 400) -> dict[str, float]:
     """
     from scipy.optimize import minimize
 
-    from rcsa.diagnosis.features import design_windows, extract
+    from rcsa.analysis.diagnosis.features import design_windows, extract
 
     f = np.geomspace(50.0, 8000.0, 1000)
     ones = dict.fromkeys(["tool_e", "tool_rho", "steel_e", "steel_rho", "loss", "bearing_k", "bearing_c",
@@ -262,8 +262,8 @@ def calibrate(kind: str, evaluations: int = 400) -> dict[str, float]:
 
 def example(request_path: Path, png_path: Path, effect: str = "holder_tool_joint", seed: int = 3) -> None:
     """The README's worked example: one trial's request, its diagnosis and the figure."""
-    from rcsa.diagnosis.report import diagnosis_figure
-    from rcsa.plots import save_figure
+    from rcsa.analysis.diagnosis.report import diagnosis_figure
+    from rcsa.analysis.figures import save_figure
 
     trial = truth.make_trial(np.random.default_rng([seed, 0]), effect, with_null=False)
     request_path.parent.mkdir(parents=True, exist_ok=True)

@@ -16,11 +16,11 @@ import time
 
 import numpy as np
 
-from rcsa import api
-from rcsa.assembly import build_model
-from rcsa.dsm import tip_receptance
+from rcsa import app
+from rcsa.model.assembly import build_model
+from rcsa.model.contract import parse_assembly
+from rcsa.physics.elimination import tip_receptance
 from rcsa.reference import ra1
-from rcsa.spec import parse_assembly
 
 
 def median_time_s(fn, repeats: int) -> float:
@@ -56,7 +56,7 @@ def main() -> None:
     chain = model.chain()
     omega = 2 * np.pi * spec.frequency_hz
     t_vec = median_time_s(lambda: tip_receptance(chain, omega), args.repeats)
-    t_pred = median_time_s(lambda: api.predict(spec), max(3, args.repeats // 2))
+    t_pred = median_time_s(lambda: app.predict(spec), max(3, args.repeats // 2))
     sub = omega[::20]  # the loop baseline is timed on 500 lines and scaled to 10 000
     t_loop = median_time_s(lambda: [tip_receptance(chain, sub[i:i + 1]) for i in range(sub.size)], 3) * 20
     print("RA-1 tool-point FRF, 10 000 lines")
@@ -70,10 +70,10 @@ def main() -> None:
               for t in tools(args.tools, rng)]
     request = {"frequency": grid, "spindle": doc["spindle"], "combinations": combos}
     # results kept as numpy arrays (what the service serialises with orjson); "list" adds ~0.7 ms/tool
-    t_frf = median_time_s(lambda: api.predict_batch({**request, "natural_frequencies": False}, arrays="numpy"), 3)
-    t_full = median_time_s(lambda: api.predict_batch(request, arrays="numpy"), 1)
+    t_frf = median_time_s(lambda: app.predict_batch({**request, "natural_frequencies": False}, arrays="numpy"), 3)
+    t_full = median_time_s(lambda: app.predict_batch(request, arrays="numpy"), 1)
     n_base = max(20, args.tools // 20)
-    t_base = median_time_s(lambda: [api.predict({**ra1(grid), "tool": c["tool"]}) for c in combos[:n_base]], 1)
+    t_base = median_time_s(lambda: [app.predict({**ra1(grid), "tool": c["tool"]}) for c in combos[:n_base]], 1)
     t_base *= args.tools / n_base
     print(f"{args.tools} tools on one spindle + holder, 1 999 lines (results as contract documents)")
     print(f"  batch, FRFs + peaks (spindle+holder reused)  {t_frf:7.2f} s")

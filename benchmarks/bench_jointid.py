@@ -3,7 +3,7 @@
 Run: ``.venv/bin/python benchmarks/bench_jointid.py [--repeats N] [--stickouts 1|2]``.
 The measurement is RA-1 (seed Table 2 joints) on 50–5000 Hz at 1 Hz (4951 lines) with 1 %
 complex noise; the identification starts 3× off in both joints' k_t and c_t. Prints the
-median wall time of ``rcsa.jointid.identify`` (request validation included) and the
+median wall time of ``rcsa.analysis.joint_identification.identify.identify`` (request validation included) and the
 identified values' relative errors.
 """
 
@@ -15,8 +15,8 @@ import time
 
 import numpy as np
 
-from rcsa.api import predict
-from rcsa.jointid import identify
+from rcsa.analysis.joint_identification.identify import identify
+from rcsa.app.predictions import predict
 from rcsa.reference import ra1
 
 TRUE = {"spindle_holder.stiffness_n_m": 3.05e7, "spindle_holder.damping_ns_m": 365.0,

@@ -34,8 +34,8 @@ from pathlib import Path
 import httpx
 import orjson
 
-from rcsa.importers import measurement_to_contract
-from rcsa.measurement_api import demo_measurement
+from rcsa.app.measurements import demo_measurement
+from rcsa.measured.importers import measurement_to_contract
 from rcsa.reference import ra1
 
 REPO = Path(__file__).resolve().parents[1]
@@ -201,7 +201,7 @@ def main() -> None:
         print(f"  {name:15s} p50 {row['p50_ms']:6.1f} ms   p99 {row['p99_ms']:6.1f} ms   "
               f"{row['requests_per_s']:6.1f} requests/s   ({row['requests']} requests)")
     srv = results["server_side"]
-    print(f"  server side: mean request {srv['mean_request_ms']:.1f} ms, of which rcsa.api.predict "
+    print(f"  server side: mean request {srv['mean_request_ms']:.1f} ms, of which rcsa.app.predictions.predict "
           f"{srv['mean_predict_ms']:.1f} ms")
     for b in results["batch"]:
         print(f"batch of {b['combinations']} at {b['lines']} lines, tool_point={b['tool_point']}, "

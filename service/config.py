@@ -1,7 +1,7 @@
 """Service settings, from ``RCSA_*`` environment variables (pydantic-settings).
 
 Every setting has a default that works on a fresh machine; the store is ``RCSA_STORE`` or
-the per-user default (:func:`rcsa.store.default_store_path`), created on first use.
+the per-user default (:func:`rcsa.measured.store.default_store_path`), created on first use.
 """
 
 from __future__ import annotations

@@ -27,6 +27,8 @@ from starlette.responses import Response
 
 from rcsa.errors import InputError, NotFoundError, StoreError
 
+from .field_errors import pydantic_errors
+
 __all__ = [
     "PROBLEM_MEDIA_TYPE",
     "BodyTooLarge",
@@ -134,67 +136,8 @@ def problem_response(request: Request | None, status: int, detail: str, *,
                     headers=dict(headers or {}))
 
 
-# --------------------------------------------------------------------------- field paths
-
-#: What pydantic puts in error locations for the members of a union (not field names).
-_PYDANTIC_TAGS = ("literal[", "function-", "json-or-python[", "lax-or-strict[", "constrained-", "list[", "dict[",
-                  "tagged-union[", "nullable[", "union[", "model-fields[")
-_PYDANTIC_TYPES = frozenset({"float", "int", "str", "bool", "none", "bytes", "list", "dict"})
-
-
-def field_path(loc: Sequence[Any]) -> str:
-    """Dotted path of a pydantic error location, without the ``body``/``query`` prefix and
-    without the names pydantic gives union members."""
-    from .schemas import UNION_TAGS
-
-    parts: list[str] = []
-    for i, item in enumerate(loc):
-        if i == 0 and item in ("body", "query", "path", "header", "cookie", "form"):
-            continue
-        if isinstance(item, int):
-            if parts:
-                parts[-1] += f"[{item}]"
-            else:
-                parts.append(f"[{item}]")
-            continue
-        text = str(item)
-        if text in UNION_TAGS or text.startswith(_PYDANTIC_TAGS) or text in _PYDANTIC_TYPES:
-            continue
-        parts.append(text)
-    return ".".join(parts)
-
-
 def _validation_errors(exc: RequestValidationError) -> list[dict[str, str]]:
     return pydantic_errors(exc.errors())
-
-
-def pydantic_errors(errors: Sequence[Mapping[str, Any]], prefix: str = "") -> list[dict[str, str]]:
-    """``[{"field", "detail"}]`` of pydantic errors (fields prefixed with ``prefix``)."""
-    out: list[dict[str, str]] = []
-    seen: set[tuple[str, str]] = set()
-    for err in errors:
-        loc = tuple(err.get("loc", ()))
-        kind = err.get("type", "")
-        if kind == "json_invalid":
-            pos = loc[1] if len(loc) > 1 else "?"
-            item = ("", f"the body is not valid JSON: {err.get('ctx', {}).get('error', 'decode error')} "
-                        f"at character {pos}")
-        else:
-            field = field_path(loc)
-            if kind == "unknown_field":
-                field = ".".join(p for p in (field, str(err.get("ctx", {}).get("field", ""))) if p)
-            if prefix:
-                field = prefix + ("." + field if field and not field.startswith("[") else field)
-            msg = str(err.get("msg", "invalid"))
-            if kind == "extra_forbidden":
-                msg = "unknown field; check its spelling against the schema at /docs"
-            elif kind == "missing":
-                msg = "is required"
-            item = (field, msg)
-        if item not in seen:
-            seen.add(item)
-            out.append({"field": item[0], "detail": item[1]})
-    return out
 
 
 # --------------------------------------------------------------------------- handlers

@@ -62,7 +62,7 @@ from fastapi.routing import APIRoute
 from starlette.responses import Response
 
 from rcsa.errors import NotFoundError
-from rcsa.jobs import runner_is_dead
+from rcsa.infra.job_queue import runner_is_dead
 
 from .errors import PROBLEM_MEDIA_TYPE, ProblemError
 from .state import ensure_state

@@ -1,6 +1,6 @@
 """Service side of background jobs: the handlers, and the 202 / status answers.
 
-The durable job store and the runner live in :mod:`rcsa.jobs` (SQLite in the store
+The durable job store and the runner live in :mod:`rcsa.infra.job_queue` (SQLite in the store
 directory, atomic claims, heartbeats, resume after a restart). Here: what a ``batch`` and a
 ``library`` job compute (the same :mod:`rcsa` calls as the synchronous routes), and how a
 job is shown over HTTP.
@@ -12,8 +12,8 @@ from typing import Any
 
 from starlette.responses import Response
 
-from rcsa import library_api
-from rcsa.jobs import Handler, Job
+from rcsa.app import libraries as library_api
+from rcsa.infra.job_queue import Handler, Job
 
 from .responses import json_response
 from .state import AppState

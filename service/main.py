@@ -22,12 +22,12 @@ from fastapi.openapi.utils import get_openapi
 from pydantic.json_schema import models_json_schema
 from starlette.middleware.gzip import GZipMiddleware
 
-from rcsa import __version__
+from rcsa._version import __version__
+from rcsa.app.measurements import seed_demo
 from rcsa.errors import RcsaError
-from rcsa.jobs import Job, JobRunner, JobStore
-from rcsa.keys import KeyFile, KeyRing, parse_key_list
-from rcsa.measurement_api import seed_demo
-from rcsa.store import MeasurementStore
+from rcsa.infra.api_keys import KeyFile, KeyRing, parse_key_list
+from rcsa.infra.job_queue import Job, JobRunner, JobStore
+from rcsa.measured.store import MeasurementStore
 
 from . import schemas
 from .config import Settings

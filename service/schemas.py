@@ -32,6 +32,8 @@ from pydantic_core import PydanticCustomError
 
 from rcsa.reference import ra1
 
+from .field_errors import pydantic_errors
+
 __all__ = [
     "Assembly",
     "BatchRequest",
@@ -64,8 +66,6 @@ MAX_DAMPING = 1.0e12
 MAX_FRF_VALUE = 1.0e6
 MAX_SPEED_RPM = 1.0e6
 
-#: Names pydantic puts in error locations for the members of the unions below.
-UNION_TAGS = frozenset({"frequency-range", "frequency-values", "spindle-analytical", "spindle-measured"})
 
 _EXAMPLE_GRID = {"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 5.0}
 _RA1 = ra1(_EXAMPLE_GRID)
@@ -95,7 +95,7 @@ class FrequencyRange(_Request):
 
     @model_validator(mode="after")
     def _finite_line_count(self) -> FrequencyRange:
-        # rcsa.spec.parse_frequency counts the lines with math.floor, which overflows (a 500)
+        # rcsa.model.contract.parse_frequency counts the lines with math.floor, which overflows (a 500)
         # when (stop - start) / step is infinite; refuse such a grid here with the same field.
         if not math.isfinite((self.stop_hz - self.start_hz) / self.step_hz):
             raise PydanticCustomError("frequency_lines", "step_hz is too small for this band: the grid would "
@@ -304,8 +304,6 @@ class BatchRequest(_Request):
 
     def to_request(self) -> tuple[dict[str, Any], dict[int, dict[str, str]]]:
         """The batch document (combinations as sent) and the refused ones: index → {field, detail}."""
-        from .errors import pydantic_errors
-
         doc = self.model_dump(exclude_unset=True, exclude={"combinations"})
         combos: list[Any] = []
         refused: dict[int, dict[str, str]] = {}
@@ -533,7 +531,7 @@ class MeasurementUpload(_Request):
         return data
 
     def to_document(self) -> dict[str, Any]:
-        """The contract JSON document for :func:`rcsa.importers.measurement_from_contract`."""
+        """The contract JSON document for :func:`rcsa.measured.importers.measurement_from_contract`."""
         doc = self.model_dump(exclude_none=True)
         for key in ("id", "created_utc", "software_version", "frfs", "n_frequencies", "frequency_min_hz",
                     "frequency_max_hz", "units", "convention", "summary"):

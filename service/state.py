@@ -7,9 +7,9 @@ from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Any
 
-from rcsa.jobs import JobRunner, JobStore
-from rcsa.keys import KeyRing
-from rcsa.store import Measurement, MeasurementStore
+from rcsa.infra.api_keys import KeyRing
+from rcsa.infra.job_queue import JobRunner, JobStore
+from rcsa.measured.store import Measurement, MeasurementStore
 
 from .config import Settings
 from .metrics import Metrics

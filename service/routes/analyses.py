@@ -1,6 +1,6 @@
-"""Diagnoses, joint identifications and effect analyses: thin doors onto ``rcsa.api``.
+"""Diagnoses, joint identifications and effect analyses: thin doors onto ``rcsa.app.analyses``.
 
-Each route passes the JSON body to ``rcsa.api.diagnose`` / ``identify`` / ``effects``.
+Each route passes the JSON body to ``rcsa.app.analyses.diagnose`` / ``identify`` / ``effects``.
 """
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Body, Depends
 from starlette.responses import Response
 
-from rcsa import api
+from rcsa import app
 
 from ..bodies import require_json
 from ..deps import StateDep
@@ -29,7 +29,7 @@ _Request = Annotated[dict[str, Any], Body(description="The request document (see
 
 def _call(name: str, body: dict[str, Any], state: Any) -> Any:
     with state.metrics.timed(name):
-        return getattr(api, name)(body)
+        return getattr(app, name)(body)
 
 
 def _route(name: str, path: str, summary: str) -> None:
@@ -38,7 +38,7 @@ def _route(name: str, path: str, summary: str) -> None:
         return json_response(_call(name, body, state))
 
     endpoint.__name__ = f"post_{name}"
-    endpoint.__doc__ = f"{summary}: the body goes to ``rcsa.api.{name}``."
+    endpoint.__doc__ = f"{summary}: the body goes to ``rcsa.app.analyses.{name}``."
     router.add_api_route(path, endpoint, methods=["POST"], summary=summary, dependencies=[Depends(require_json)],
                          responses={200: {"description": "The analysis result (see the contract)."},
                                     **problems(401, 413, 415, 422)})

@@ -12,7 +12,7 @@ from typing import Annotated
 from fastapi import APIRouter, Depends, Header, Path, Query
 from starlette.responses import FileResponse, Response
 
-from rcsa import library_api
+from rcsa.app import libraries as library_api
 
 from ..bodies import require_json
 from ..deps import StateDep

@@ -7,7 +7,7 @@ everything as one JSON document. Every library item gets one result in library o
 ``error`` naming the field. Libraries with more tools than ``RCSA_ASYNC_BATCH_THRESHOLD`` (or
 ``Prefer: respond-async``) run as a job.
 
-Stored libraries (:mod:`rcsa.library_sync`; writes need a write key, reads follow the read
+Stored libraries (:mod:`rcsa.libraries.sync`; writes need a write key, reads follow the read
 policy):
 
 * ``POST /v1/libraries/{library_id}:sync`` — the same body as ``:predict``. Computes only
@@ -35,9 +35,11 @@ from fastapi import APIRouter, Header, Path, Query, Request
 from fastapi.concurrency import run_in_threadpool
 from starlette.responses import Response
 
-from rcsa import exports, library_api, library_sync
+from rcsa.app import libraries as exports
+from rcsa.app import libraries as library_api
+from rcsa.app import libraries as library_sync
 from rcsa.errors import InputError
-from rcsa.jobs import Handler
+from rcsa.infra.job_queue import Handler
 
 from ..bodies import form_text, read_body, read_upload, validate_json
 from ..deps import StateDep

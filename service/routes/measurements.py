@@ -8,7 +8,7 @@ from fastapi import APIRouter, Header, Path, Query, Request
 from fastapi.concurrency import run_in_threadpool
 from starlette.responses import Response
 
-from rcsa import measurement_api as M
+from rcsa.app import measurements as M
 from rcsa.errors import InputError
 
 from ..bodies import form_text, read_body, read_upload, validate_json

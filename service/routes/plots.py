@@ -1,10 +1,10 @@
 """Figures and CSV files: what a person downloads next to the JSON.
 
-* ``POST /v1/plots/frf`` — the tool-point FRF as PNG or SVG (:func:`rcsa.plots.frf_figure`:
+* ``POST /v1/plots/frf`` — the tool-point FRF as PNG or SVG (:func:`rcsa.analysis.figures.frf_figure`:
   real and imaginary parts, magnitude and phase, in µm/N), from an inline FRF (``frf``, as
   in the stability-lobes request) or from an ``assembly`` predicted first.
 * ``POST /v1/plots/lobes`` — the stability lobe diagram (axial depth mm vs spindle speed
-  rpm, :func:`rcsa.plots.lobes_figure`); the body is a stability-lobes request plus
+  rpm, :func:`rcsa.analysis.figures.lobes_figure`); the body is a stability-lobes request plus
   optional drawing options (operating point, y limit, title).
 * ``POST /v1/exports/frf.csv`` — an assembly's prediction as CSV: frequency and the real
   and imaginary parts of ``h, l, n, p`` in SI units (the header names every unit).
@@ -29,9 +29,9 @@ from fastapi import APIRouter, Depends, Header, Query
 from pydantic import BaseModel, ConfigDict, Field
 from starlette.responses import Response
 
-from rcsa import api
+from rcsa import app
+from rcsa.analysis.figures import frf_figure, lobes_figure, save_figure
 from rcsa.errors import InputError
-from rcsa.plots import frf_figure, lobes_figure, save_figure
 from rcsa.reference import ra1
 
 from ..bodies import require_json
@@ -125,7 +125,7 @@ def plot_frf(body: FrfPlotRequest, state: StateDep, _: ReadAccess, format: Forma
         where = "frf"
     else:
         with state.metrics.timed("predict"):
-            result = api.predict(body.assembly.model_dump(exclude_unset=True), store=state.reader,
+            result = app.predict(body.assembly.model_dump(exclude_unset=True), store=state.reader,
                                  max_lines=state.settings.max_frequency_lines)
         frequency_hz, h_m_n, where = result.frequency_hz, result.tool_point.h, "assembly"
     _check_drawable(frequency_hz, h_m_n, where, log_scale=body.layout != "real_imag")
@@ -146,7 +146,7 @@ def plot_lobes(body: LobesPlotRequest, state: StateDep, _: ReadAccess, format: F
     request = body.model_dump(exclude_unset=True,
                               exclude={"show_lobes", "operating_point", "depth_max_mm", "title"})
     with state.metrics.timed("lobes"):
-        result = api.stability_lobes_result(request, store=state.reader,
+        result = app.stability_lobes_result(request, store=state.reader,
                                             max_lines=state.settings.max_frequency_lines)
     point = body.operating_point
     fmt = _image_format(format, accept)
@@ -168,7 +168,7 @@ def export_frf_csv(body: Assembly, state: StateDep, _: ReadAccess) -> Response:
     receptances as CSV: frequency in Hz, then real and imaginary parts of h (m/N), l (1/N),
     n (rad/N) and p (rad/(N·m)). The numbers equal the JSON result's."""
     with state.metrics.timed("predict"):
-        result = api.predict(body.model_dump(exclude_unset=True), store=state.reader,
+        result = app.predict(body.model_dump(exclude_unset=True), store=state.reader,
                              max_lines=state.settings.max_frequency_lines)
     state.metrics.frfs.labels("predict").inc()
     doc = result.to_dict()
@@ -191,7 +191,7 @@ def export_lobes_csv(body: LobesRequest, state: StateDep, _: ReadAccess) -> Resp
     envelope as CSV: spindle speed in rpm, depth limit in m, chatter frequency in Hz and the
     index k of the governing lobe."""
     with state.metrics.timed("lobes"):
-        doc = api.stability_lobes(body.model_dump(exclude_unset=True), store=state.reader,
+        doc = app.stability_lobes(body.model_dump(exclude_unset=True), store=state.reader,
                                   max_lines=state.settings.max_frequency_lines)
     return _csv(list(LOBES_COLUMNS), [doc[name] for name in LOBES_COLUMNS], "stability-lobes")
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 from fastapi import APIRouter, Depends
 from starlette.responses import Response
 
-from rcsa import api, library_api
+from rcsa import app
+from rcsa.app import libraries as library_api
 
 from ..bodies import require_json
 from ..deps import StateDep
@@ -28,7 +29,7 @@ def predict_tool_point_frf(body: Assembly, state: StateDep, _: ReadAccess,
     ``h, l, n, p`` in m/N, 1/N, rad/N, rad/(N·m).
     """
     with state.metrics.timed("predict"):
-        result = api.predict(body.model_dump(exclude_unset=True), store=state.reader,
+        result = app.predict(body.model_dump(exclude_unset=True), store=state.reader,
                              max_lines=state.settings.max_frequency_lines)
     state.metrics.frfs.labels("predict").inc()
     out = result.to_dict(arrays="numpy")

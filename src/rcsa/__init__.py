@@ -1,7 +1,10 @@
 """rcsa: tool-point frequency response functions of spindle–holder–tool assemblies.
 
 Exact Timoshenko receptance coupling (Budak, Ertürk & Özgüven, CIRP Annals 2006), measured
-spindle FRFs, and a diagnosis of the gap between model and measurement.
+spindle FRFs, and a diagnosis of the gap between model and measurement. The package is
+layered (``docs/architecture.md``): :mod:`rcsa.physics` < :mod:`rcsa.model` <
+:mod:`rcsa.measured` < :mod:`rcsa.analysis` < :mod:`rcsa.libraries` < :mod:`rcsa.app`, with
+:mod:`rcsa.infra` as domain-free plumbing beside them.
 
 The Python API of the contract:
 
@@ -16,14 +19,12 @@ The Python API of the contract:
 
 from __future__ import annotations
 
-from typing import Any
-
-from .api import predict, predict_batch, stability_lobes
-from .errors import FrequencyMismatch, InputError, NotFoundError, RcsaError, StoreError
-from .frf import Receptance, TwoEnd
-from .prediction import Prediction
-
-__version__ = "0.1.0"
+from rcsa._version import __version__
+from rcsa.app.analyses import diagnose, stability_lobes
+from rcsa.app.predictions import predict, predict_batch
+from rcsa.errors import FrequencyMismatch, InputError, NotFoundError, RcsaError, StoreError
+from rcsa.model.prediction import Prediction
+from rcsa.physics.receptance import Receptance
 
 __all__ = [
     "FrequencyMismatch",
@@ -33,19 +34,9 @@ __all__ = [
     "RcsaError",
     "Receptance",
     "StoreError",
-    "TwoEnd",
+    "__version__",
     "diagnose",
     "predict",
     "predict_batch",
     "stability_lobes",
 ]
-
-
-def diagnose(request: Any, **kwargs: Any) -> dict[str, Any]:
-    """Sim-to-real gap diagnosis of a base model against tap tests (``contract.md`` "Diagnosis").
-
-    See :func:`rcsa.diagnosis.api.diagnose`; imported on first use.
-    """
-    from .diagnosis.api import diagnose as _diagnose
-
-    return _diagnose(request, **kwargs)

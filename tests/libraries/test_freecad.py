@@ -10,8 +10,8 @@ import pytest
 from rcsa.errors import InputError
 from rcsa.libraries import freecad_combination, load_freecad_object, parse_length_m
 from rcsa.libraries.freecad import outline_radius
-from rcsa.materials import BUILTIN_MATERIALS
-from rcsa.spec import parse_holder, parse_tool
+from rcsa.model.contract import parse_holder, parse_tool
+from rcsa.physics.materials import BUILTIN_MATERIALS
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "tool-libraries" / "freecad"
 ENDMILL = DATA / "5mm_Endmill.fctb"

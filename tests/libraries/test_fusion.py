@@ -23,8 +23,8 @@ from rcsa.libraries import (
     load_fusion_library,
     unit_to_metres,
 )
-from rcsa.materials import BUILTIN_MATERIALS, Material
-from rcsa.spec import parse_holder, parse_tool
+from rcsa.model.contract import parse_holder, parse_tool
+from rcsa.physics.materials import BUILTIN_MATERIALS, Material
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "tool-libraries" / "fusion-synthetic"
 JSON_PATH = DATA / "synthetic_library.json"

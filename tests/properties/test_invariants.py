@@ -11,13 +11,13 @@ import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
 
-from rcsa.beams import free_free_receptance
-from rcsa.chain import Beam, Ground, Spring
-from rcsa.coupling import couple
-from rcsa.dsm import tip_receptance
-from rcsa.materials import Material
-from rcsa.modes import natural_frequencies_hz
-from rcsa.sections import tube
+from rcsa.physics.chain import Beam, Ground, Spring
+from rcsa.physics.coupling import couple
+from rcsa.physics.elimination import tip_receptance
+from rcsa.physics.materials import Material
+from rcsa.physics.natural_frequencies import natural_frequencies_hz
+from rcsa.physics.sections import tube
+from rcsa.physics.segments import free_free_receptance
 from tests.helpers import assert_receptance_close
 
 diameters = st.floats(0.005, 0.1)

@@ -51,7 +51,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rcsa.lobes import directional_factors, engagement_angles_rad, stability_lobes, zoa_depth_limit
+from rcsa.analysis.lobes.zoa import (
+    directional_factors,
+    engagement_angles_rad,
+    stability_lobes,
+    zoa_depth_limit,
+)
 
 pytestmark = pytest.mark.reference
 

@@ -13,11 +13,11 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from rcsa.beams import dynamic_stiffness, free_free_receptance
-from rcsa.chain import Beam
-from rcsa.materials import Material
-from rcsa.modes import natural_frequencies_hz
-from rcsa.sections import tube
+from rcsa.physics.chain import Beam
+from rcsa.physics.materials import Material
+from rcsa.physics.natural_frequencies import natural_frequencies_hz
+from rcsa.physics.sections import tube
+from rcsa.physics.segments import dynamic_stiffness, free_free_receptance
 
 STEEL = Material(210e9, 0.30, 7850.0, 0.0)
 pytestmark = pytest.mark.reference

@@ -6,8 +6,8 @@ import json
 
 import pytest
 
-from rcsa.keys import KeyFile, KeyRing, hash_key, parse_key_list
-from rcsa.store import MeasurementStore
+from rcsa.infra.api_keys import KeyFile, KeyRing, hash_key, parse_key_list
+from rcsa.measured.store import MeasurementStore
 from tests.helpers import REPO
 
 from .conftest import READ, WRITE, assert_problem

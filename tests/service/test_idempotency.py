@@ -11,7 +11,7 @@ from contextlib import closing
 import pytest
 from service.idempotency import IdempotencyStore, Stored, parse_key, store_for
 
-from rcsa.jobs import JobStore
+from rcsa.infra.job_queue import JobStore
 from tests.helpers import REPO
 
 from .conftest import GRID, READ, WRITE, assert_problem

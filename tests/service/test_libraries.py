@@ -9,8 +9,8 @@ import pytest
 import typer
 from typer.testing import CliRunner
 
-from rcsa import library_api
 from rcsa.cli.library_cmd import register
+from rcsa.libraries import library_prediction as library_api
 from rcsa.reference import ra1
 from tests.helpers import REPO
 

@@ -14,10 +14,10 @@ import h5py
 import numpy as np
 import pytest
 
-from rcsa import library_sync
-from rcsa.jobs import JobStore
+from rcsa.infra.job_queue import JobStore
+from rcsa.libraries import sync as library_sync
 from rcsa.reference import ra1
-from tests.test_library_sync import make_library, make_tool, tool_id
+from tests.libraries.test_sync import make_library, make_tool, tool_id
 
 from .conftest import READ, WRITE, assert_problem
 

@@ -9,7 +9,7 @@ import h5py
 import numpy as np
 import pytest
 
-from rcsa.store import MeasurementStore
+from rcsa.measured.store import MeasurementStore
 from tests.helpers import REPO
 
 from .conftest import WRITE, assert_problem

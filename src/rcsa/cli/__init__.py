@@ -1,6 +1,6 @@
 """Command-line interface: ``rcsa predict | serve | store | ...``.
 
-Every command is a thin door onto :mod:`rcsa.api` (the REST service is the other door).
+Every command is a thin door onto :mod:`rcsa.app.predictions` (the REST service is the other door).
 A failure prints one line ``error: <field>: <rule>`` on stderr and exits with status 1.
 """
 
@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import typer
 
-from . import (
+from rcsa.cli import (
     diagnose_cmd,
     effects_cmd,
     identify_cmd,
@@ -19,8 +19,8 @@ from . import (
     predict_cmd,
     serve_cmd,
 )
-from ._common import run_guarded
-from .store_cmd import store_app
+from rcsa.cli._common import run_guarded
+from rcsa.cli.store_cmd import store_app
 
 __all__ = ["app", "main", "run_guarded"]
 

@@ -11,7 +11,7 @@ from typing import Any, TypeVar
 import orjson
 import typer
 
-from ..errors import InputError, NotFoundError, RcsaError
+from rcsa.errors import InputError, NotFoundError, RcsaError
 
 __all__ = ["fail", "read_json", "run_guarded", "write_json"]
 

@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from ._common import fail, read_json, run_guarded, write_json
+from rcsa.cli._common import fail, read_json, run_guarded, write_json
 
 
 def register(app: typer.Typer) -> None:
@@ -21,9 +21,9 @@ def register(app: typer.Typer) -> None:
                                                                   "gap map to this .png or .svg file.")] = None,
     ) -> None:
         """Where model and measurement part, which unmodelled effect explains it, and how far the gap shrinks."""
-        from ..diagnosis.api import analyse
-        from ..diagnosis.report import build_response, diagnosis_figure
-        from ..plots import save_figure
+        from rcsa.analysis.diagnosis.report import build_response, diagnosis_figure
+        from rcsa.analysis.diagnosis.state import analyse
+        from rcsa.analysis.figures import save_figure
 
         if plot is not None and plot.suffix.lower() not in (".png", ".svg"):
             raise fail(f"--plot: the file must end in .png or .svg, got {plot.name!r}")

@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from ._common import read_json, run_guarded, write_json
+from rcsa.cli._common import read_json, run_guarded, write_json
 
 
 def register(app: typer.Typer) -> None:
@@ -22,19 +22,19 @@ def register(app: typer.Typer) -> None:
         plot: Annotated[Path | None, typer.Option("--plot", help="Also draw the sensitivity heat map (.png or .svg).")] = None,
     ) -> None:
         """Effect analysis: normalised sensitivities of every mode to bearing, joint and tool parameters."""
-        from ..effects import effects_figure, effects_report
+        from rcsa.analysis.sensitivity import effects_figure, effects_report
 
         doc = read_json(assembly)
         report = run_guarded(lambda: effects_report(doc))
         if plot is not None:
-            from ..plots import save_figure
+            from rcsa.analysis.figures import save_figure
 
             run_guarded(lambda: save_figure(effects_figure(report), _plot_path(plot)))
         write_json(report.to_dict(), out)
 
 
 def _plot_path(path: Path) -> Path:
-    from ..errors import InputError
+    from rcsa.errors import InputError
 
     if path.suffix.lower() not in (".png", ".svg"):
         raise InputError("--plot", f"the picture must end in .png or .svg, got {path.name!r}")

@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from ._common import read_json, run_guarded, write_json
+from rcsa.cli._common import read_json, run_guarded, write_json
 
 
 def register(app: typer.Typer) -> None:
@@ -24,7 +24,7 @@ def register(app: typer.Typer) -> None:
         Prints the result JSON; ``status`` is ``identified`` or ``not_identifiable`` (with a
         ``detail``), and both exit 0: only a malformed request fails.
         """
-        from ..jointid import identify as run
+        from rcsa.analysis.joint_identification.identify import identify as run
 
         doc = read_json(request)
         write_json(run_guarded(lambda: run(doc)), out)

@@ -13,7 +13,7 @@ from typing import Annotated
 
 import typer
 
-from ._common import run_guarded, write_json
+from rcsa.cli._common import run_guarded, write_json
 
 __all__ = ["keys_app", "register"]
 
@@ -25,8 +25,8 @@ StoreOpt = Annotated[Path | None, typer.Option("--store", help="Store directory 
 
 
 def _key_file(store: Path | None):
-    from ..keys import KeyFile
-    from ..store import MeasurementStore
+    from rcsa.infra.api_keys import KeyFile
+    from rcsa.measured.store import MeasurementStore
 
     return KeyFile.in_store(MeasurementStore(store).path)  # creates the store (and its marker) first
 

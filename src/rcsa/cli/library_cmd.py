@@ -7,7 +7,7 @@ library item: ``ok``, ``skipped`` with a reason, or ``error``) goes to stdout or
 OUT.json``; the exit status is 1 when any tool errored.
 
 ``rcsa library sync LIBRARY --spindle ID-or-SPINDLE.json [--library-id ID]``: keep the
-library in the store (:mod:`rcsa.library_sync`, the same code as ``POST
+library in the store (:mod:`rcsa.libraries.sync`, the same code as ``POST
 /v1/libraries/{id}:sync``): only tools whose result is not stored yet are computed; the
 added / changed / unchanged / removed summary goes to stderr, the sync report (JSON) to
 stdout; exit status 1 when any tool failed. ``rcsa library show ID`` prints a stored
@@ -23,9 +23,9 @@ from typing import Annotated, Any
 
 import typer
 
-from ..atomic import atomic_write_bytes
-from ..errors import InputError
-from ._common import fail, read_json, run_guarded, write_json
+from rcsa.cli._common import fail, read_json, run_guarded, write_json
+from rcsa.errors import InputError
+from rcsa.infra.atomic_files import atomic_write_bytes
 
 __all__ = ["library_app", "register"]
 
@@ -76,7 +76,7 @@ def _options_json(options: str | None) -> dict[str, Any] | None:
 
 def _inputs(base: dict[str, Any], measurement: str | None, frequency: str | None, joints: Path | None,
             store: Any) -> dict[str, Any]:
-    """Keyword arguments of :func:`rcsa.library_api.library_request` from the command's options."""
+    """Keyword arguments of :func:`rcsa.libraries.library_prediction.library_request` from the command's options."""
     if frequency is not None:
         grid = parse_frequency_option(frequency)
     elif "frequency" in base:
@@ -134,14 +134,14 @@ def predict(
     quiet: QuietOption = False,
 ) -> None:
     """Predict the tool-point FRF of every tool in a Fusion library on one spindle."""
-    from .. import library_api
+    from rcsa.app import libraries as library_api
 
     if (spindle is None) == (measurement is None):
         raise fail("give exactly one of --spindle SPINDLE.json or --measurement ID")
     base = _spindle_document(spindle) if spindle is not None else {"spindle": {"measurement_id": measurement}}
 
     def build() -> tuple[dict[str, Any], Any]:
-        from ..store import MeasurementStore
+        from rcsa.measured.store import MeasurementStore
 
         st = MeasurementStore(store) if (store is not None or measurement is not None) else None
         request = library_api.library_request(library, **_inputs(base, measurement, frequency, joints, st),
@@ -174,8 +174,8 @@ StoreOption = Annotated[Path | None, typer.Option("--store", help="Store directo
 
 
 def _library_store(store: Path | None) -> tuple[Any, Any]:
-    from ..library_sync import LibraryStore
-    from ..store import MeasurementStore
+    from rcsa.libraries.sync import LibraryStore
+    from rcsa.measured.store import MeasurementStore
 
     measurements = MeasurementStore(store)
     return measurements, LibraryStore.in_store(measurements.path)
@@ -199,8 +199,9 @@ def sync(
     quiet: QuietOption = False,
 ) -> None:
     """Keep a Fusion library's tool-point FRFs in the store, computing only new or changed tools."""
-    from .. import library_api, library_sync
-    from ..store import is_measurement_id
+    from rcsa.app import libraries as library_api
+    from rcsa.app import libraries as library_sync
+    from rcsa.measured.store import is_measurement_id
 
     measurement = spindle if is_measurement_id(spindle) else None
     base = {"spindle": {"measurement_id": measurement}} if measurement else _spindle_document(Path(spindle))
@@ -255,7 +256,7 @@ def export(
 ) -> None:
     """Write a stored library's results to a file; the format follows its suffix."""
 
-    from .. import exports
+    from rcsa.app import libraries as exports
 
     suffix = out.suffix.lower()
     if suffix not in (".h5", ".hdf5", ".zip", ".json"):

@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from ._common import read_json, run_guarded, write_json
+from rcsa.cli._common import read_json, run_guarded, write_json
 
 
 def register(app: typer.Typer) -> None:
@@ -21,20 +21,20 @@ def register(app: typer.Typer) -> None:
         store: Annotated[Path | None, typer.Option("--store", help="Measurement store for hybrid assemblies.")] = None,
     ) -> None:
         """Stability lobes (Altintas–Budak zero-order) from inline FRFs or an assembly."""
-        from .. import api
-        from ..store import MeasurementStore
+        from rcsa import app
+        from rcsa.measured.store import MeasurementStore
 
         doc = read_json(request)
-        result = run_guarded(lambda: api.stability_lobes_result(doc, store=MeasurementStore(store) if store else None))
+        result = run_guarded(lambda: app.stability_lobes_result(doc, store=MeasurementStore(store) if store else None))
         if plot is not None:
-            from ..plots import lobes_figure, save_figure
+            from rcsa.analysis.figures import lobes_figure, save_figure
 
             run_guarded(lambda: save_figure(lobes_figure(result), _plot_path(plot)))
         write_json(result.to_dict(), out)
 
 
 def _plot_path(path: Path) -> Path:
-    from ..errors import InputError
+    from rcsa.errors import InputError
 
     if path.suffix.lower() not in (".png", ".svg"):
         raise InputError("--plot", f"the picture must end in .png or .svg, got {path.name!r}")

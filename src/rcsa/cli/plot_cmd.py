@@ -13,11 +13,11 @@ from typing import Annotated, Any
 import numpy as np
 import typer
 
-from ._common import read_json, run_guarded
+from rcsa.cli._common import read_json, run_guarded
 
 
 def _complex(doc: Any, field: str) -> np.ndarray:
-    from ..errors import InputError
+    from rcsa.errors import InputError
 
     try:
         return np.asarray(doc["real"], dtype=float) + 1j * np.asarray(doc["imag"], dtype=float)
@@ -27,9 +27,9 @@ def _complex(doc: Any, field: str) -> np.ndarray:
 
 def figure_for(doc: Any, layout: str, store: Any) -> Any:
     """The figure that fits the document (see the module docstring)."""
-    from .. import api
-    from ..errors import InputError
-    from ..plots import frf_figure, lobes_figure
+    from rcsa import app
+    from rcsa.analysis.figures import frf_figure, lobes_figure
+    from rcsa.errors import InputError
 
     if not isinstance(doc, dict):
         raise InputError("", "the input must be a JSON object")
@@ -39,9 +39,9 @@ def figure_for(doc: Any, layout: str, store: Any) -> Any:
     if "h" in doc and "frequency_hz" in doc:
         return frf_figure(doc["frequency_hz"], _complex(doc["h"], "h"), labels=["measured h"], layout=layout)
     if "tangential_coefficient_n_m2" in doc:
-        return lobes_figure(api.stability_lobes_result(doc, store=store))
+        return lobes_figure(app.stability_lobes_result(doc, store=store))
     if "tool" in doc and "spindle" in doc:
-        result = api.predict(doc, store=store)
+        result = app.predict(doc, store=store)
         return frf_figure(result.frequency_hz, result.tool_point.h, labels=["tool point h"], layout=layout)
     raise InputError("", "not a prediction result, measurement, assembly or stability-lobes request")
 
@@ -57,9 +57,9 @@ def register(app: typer.Typer) -> None:
         store: Annotated[Path | None, typer.Option("--store", help="Measurement store for hybrid assemblies.")] = None,
     ) -> None:
         """Draw an FRF (real/imaginary, magnitude/phase) or a stability lobe diagram."""
-        from ..errors import InputError
-        from ..plots import save_figure
-        from ..store import MeasurementStore
+        from rcsa.analysis.figures import save_figure
+        from rcsa.errors import InputError
+        from rcsa.measured.store import MeasurementStore
 
         doc = read_json(source)
 

@@ -1,7 +1,7 @@
 """``rcsa store import | list | show | delete``: the measured-spindle FRF store from the shell.
 
 The store is ``--store DIR``, else ``$RCSA_STORE``, else the per-user default
-(:func:`rcsa.store.default_store_path`). Output is JSON on stdout (``list`` prints a table
+(:func:`rcsa.measured.store.default_store_path`). Output is JSON on stdout (``list`` prints a table
 unless ``--json``); a failure prints one line ``error: ...`` on stderr and exits 1.
 """
 
@@ -14,8 +14,8 @@ from typing import Annotated, Any, TypeVar
 
 import typer
 
-from ..errors import InputError, RcsaError
-from ._common import fail, write_json
+from rcsa.cli._common import fail, write_json
+from rcsa.errors import InputError, RcsaError
 
 __all__ = ["store_app"]
 
@@ -53,7 +53,7 @@ def _guard(fn: Callable[[], T]) -> T:
 
 
 def _open_store(path: Path | None):
-    from ..store import MeasurementStore
+    from rcsa.measured.store import MeasurementStore
 
     return MeasurementStore(path)
 
@@ -156,7 +156,7 @@ def import_(
     """Import a measurement file and print the new measurement's metadata JSON (with its id)."""
 
     def run() -> dict[str, Any]:
-        from .. import measurement_api as M
+        from rcsa.app import measurements as M
 
         metadata = {"spindle_id": spindle_id, "direction": direction, "plane": plane, "kind": kind,
                     "machine": machine, "notes": notes, "points_m": points_m,
@@ -245,7 +245,7 @@ def show(
     """Print a measurement's metadata and a summary (peak of each FRF) as JSON."""
 
     def run() -> dict[str, Any]:
-        from ..measurement_api import measurement_document
+        from rcsa.app.measurements import measurement_document
 
         return measurement_document(_open_store(store), measurement_id, include_data=data)
 
@@ -258,6 +258,6 @@ def delete(
     store: StoreOpt = None,
 ) -> None:
     """Delete a measurement (its id is never reused)."""
-    from ..measurement_api import delete_measurement
+    from rcsa.app.measurements import delete_measurement
 
     write_json(_guard(lambda: delete_measurement(_open_store(store), measurement_id)), None)

@@ -9,8 +9,8 @@ contract's assembly format (SI metres).
 
 from __future__ import annotations
 
-from .freecad import freecad_combination, load_freecad_object, parse_length_m
-from .fusion import (
+from rcsa.libraries.freecad import freecad_combination, load_freecad_object, parse_length_m
+from rcsa.libraries.fusion import (
     SUPPORTED_TOOL_TYPES,
     Combination,
     FusionLibrary,

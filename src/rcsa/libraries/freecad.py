@@ -38,8 +38,8 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from ..errors import InputError
-from .fusion import Combination, cone_cylinders, unit_to_metres
+from rcsa.errors import InputError
+from rcsa.libraries.fusion import Combination, cone_cylinders, unit_to_metres
 
 __all__ = ["freecad_combination", "load_freecad_object", "parse_length_m"]
 

@@ -63,7 +63,7 @@ from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 from typing import Any, Literal
 
-from ..errors import InputError
+from rcsa.errors import InputError
 
 __all__ = [
     "SUPPORTED_TOOL_TYPES",

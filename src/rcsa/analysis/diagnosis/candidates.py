@@ -1,0 +1,224 @@
+"""The catalogue of candidate unmodelled effects: bounded add-ons to the base model.
+
+Each candidate has one or two physically bounded parameters with a uniform prior, a null
+value at which the model *is* the base model, and a pure ``apply(knobs, values) -> knobs``.
+Parameters are shared by all measurements (a joint stiffness does not change with the
+stickout). Bounds follow ``diagnosis.md`` §2:
+
+================================  =========================================  ==============
+effect                            parameters (prior range)                   null
+================================  =========================================  ==============
+holder_tool_joint                 log10 k_t/k_t0, log10 k_r/k_r0 ∈ [−2, 0.5]  0, 0
+spindle_holder_joint              log10 k_t/k_t0, log10 k_r/k_r0 ∈ [−2, 0.5]  0, 0
+bearings                          log10 of all bearing stiffnesses, [−1, 0.5]  0
+shear_and_rotary_inertia          shear/rotary-inertia scale s ∈ [0, 1.5]     0 (EB) / 1
+fluted_section                    D_I/DC, D_A/DC ∈ [0.6, 1.0]                 base ratios
+insertion_depth                   clamping point δ inside the holder,         0
+                                  [0, 0.3 · inserted length]
+sensor_mass                       mass m ∈ [0, m_max], d ∈ [0, 6 mm] behind   0, 0
+                                  the tip
+joint_damping                     log10 scale of all joint dampers, [−1, 1.2]  0
+spindle_rotational_receptance     residual compliance added to the spindle's   0, 0
+                                  nose receptance: c_wψ = a·l₀, c_ψψ = b·p₀
+                                  (l₀, p₀ its own static values),
+                                  a ∈ [−0.5, 1.5], b ∈ [−0.5, 4]
+================================  =========================================  ==============
+
+``m_max`` is 1.5 × the largest declared ``sensor_mass_kg`` of the measurements, or 20 g.
+Speed-dependent effects are listed in :data:`NOT_OBSERVABLE_AT_STANDSTILL`; they are never
+candidates for a standstill tap test.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from rcsa.analysis.diagnosis.perturbed_model import Knobs, Solver, config_parts, null_shear_scale
+from rcsa.model.contract import AssemblySpec, ToolSpec
+from rcsa.physics.algebra2x2 import inv2
+
+__all__ = ["CANDIDATE_NAMES", "NOT_OBSERVABLE_AT_STANDSTILL", "STANDSTILL_SENTENCE", "Candidate",
+           "Parameter", "catalogue"]
+
+CANDIDATE_NAMES = ("holder_tool_joint", "spindle_holder_joint", "bearings", "shear_and_rotary_inertia",
+                   "fluted_section", "insertion_depth", "sensor_mass", "joint_damping",
+                   "spindle_rotational_receptance")
+NOT_OBSERVABLE_AT_STANDSTILL = ("gyroscopic_coupling", "centrifugal_bearing_softening",
+                                "centrifugal_taper_expansion")
+STANDSTILL_SENTENCE = ("Speed-dependent effects (gyroscopic coupling, centrifugal softening of the bearings, "
+                       "centrifugal expansion of the spindle taper) do not act in a standstill tap test; "
+                       "these measurements carry no information about them, so none of them is blamed "
+                       "or ruled out.")
+DEFAULT_SENSOR_MASS_MAX_KG = 0.020
+# An accelerometer glued near the tip has its centre a few mm behind it (6 mm: half a 12 mm cube).
+SENSOR_DISTANCE_MAX_M = 0.006
+
+
+@dataclass(frozen=True, slots=True)
+class Parameter:
+    """One bounded effect parameter with a uniform prior on ``[lo, hi]``."""
+
+    name: str
+    lo: float
+    hi: float
+    null: float
+    unit: str
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A candidate effect: name, parameters and the add-on it makes to the base model."""
+
+    name: str
+    parameters: tuple[Parameter, ...]
+    apply: Callable[[Knobs, np.ndarray], Knobs]
+    meaning: Callable[[np.ndarray], dict[str, float]]
+
+    @property
+    def null(self) -> np.ndarray:
+        """Parameter values that reproduce the base model."""
+        return np.array([p.null for p in self.parameters])
+
+    @property
+    def lo(self) -> np.ndarray:
+        """Lower bounds."""
+        return np.array([p.lo for p in self.parameters])
+
+    @property
+    def hi(self) -> np.ndarray:
+        """Upper bounds."""
+        return np.array([p.hi for p in self.parameters])
+
+
+def _mul(k: Knobs, **scales: float) -> Knobs:
+    return replace(k, **{name: getattr(k, name) * s for name, s in scales.items()})
+
+
+def _static_nose_rotational_receptance(spec: AssemblySpec, solver: Solver) -> tuple[float, float]:
+    """The spindle's own ``l`` (rad/N) and ``p`` (rad/(N·m)) at the nose, at the lowest analysis line."""
+    k = solver.nose_stiffness(config_parts(spec, spec.tool, Knobs()))
+    r = inv2(k[:1])[0].real
+    return float(r[0, 1]), float(r[1, 1])
+
+
+def catalogue(spec: AssemblySpec, tools: Sequence[ToolSpec], solver: Solver,
+              sensor_mass_max_kg: float | None = None, names: Sequence[str] | None = None
+              ) -> tuple[list[Candidate], list[str]]:
+    """Candidates applicable to this base model, and notes on those left out.
+
+    Parameters
+    ----------
+    spec : AssemblySpec
+        Base assembly.
+    tools : sequence of ToolSpec
+        The measurements' tools (bounds of ``insertion_depth``).
+    solver : Solver
+        Used once for the spindle's static nose compliance.
+    sensor_mass_max_kg : float, optional
+        Upper bound of ``sensor_mass``.
+    names : sequence of str, optional
+        Restrict the catalogue to these effects.
+
+    Returns
+    -------
+    candidates : list of Candidate
+    notes : list of str
+    """
+    out: list[Candidate] = []
+    notes: list[str] = []
+    ht, sh = spec.holder_tool, spec.spindle_holder
+
+    if ht is not None and ht.rotational_stiffness_nm_rad is not None:
+        def ht_meaning(v: np.ndarray) -> dict[str, float]:
+            return {"holder_tool.stiffness_n_m": ht.stiffness_n_m * 10 ** v[0],
+                    "holder_tool.rotational_stiffness_nm_rad": ht.rotational_stiffness_nm_rad * 10 ** v[1]}
+        out.append(Candidate(
+            "holder_tool_joint",
+            (Parameter("log10_translational_stiffness_scale", -2.0, 0.5, 0.0, "1"),
+             Parameter("log10_rotational_stiffness_scale", -2.0, 0.5, 0.0, "1")),
+            lambda k, v: _mul(k, ht_translational_scale=10 ** v[0], ht_rotational_scale=10 ** v[1]),
+            ht_meaning))
+    else:
+        notes.append("holder_tool_joint: not a candidate because the base model's holder-tool joint "
+                     "(or its rotational stiffness) is rigid; give finite stiffnesses to test it.")
+
+    if sh is not None:
+        rot = sh.rotational_stiffness_nm_rad
+
+        def sh_meaning(v: np.ndarray) -> dict[str, float]:
+            out_ = {"spindle_holder.stiffness_n_m": sh.stiffness_n_m * 10 ** v[0]}
+            if rot is not None:
+                out_["spindle_holder.rotational_stiffness_nm_rad"] = rot * 10 ** v[1]
+            return out_
+        params = [Parameter("log10_translational_stiffness_scale", -2.0, 0.5, 0.0, "1")]
+        if rot is not None:
+            params.append(Parameter("log10_rotational_stiffness_scale", -2.0, 0.5, 0.0, "1"))
+        out.append(Candidate(
+            "spindle_holder_joint", tuple(params),
+            lambda k, v: _mul(k, sh_translational_scale=10 ** v[0],
+                              sh_rotational_scale=10 ** v[-1] if v.size > 1 else 1.0),
+            sh_meaning))
+    else:
+        notes.append("spindle_holder_joint: not a candidate because the base model's spindle-holder joint "
+                     "is rigid.")
+
+    out.append(Candidate(
+        "bearings", (Parameter("log10_stiffness_scale", -1.0, 0.5, 0.0, "1"),),
+        lambda k, v: _mul(k, bearing_stiffness_scale=10 ** v[0]),
+        lambda v: {"bearing_stiffness_scale": float(10 ** v[0])}))
+
+    s0 = null_shear_scale(spec)
+    out.append(Candidate(
+        "shear_and_rotary_inertia", (Parameter("shear_and_rotary_inertia_scale", 0.0, 1.5, s0, "1"),),
+        lambda k, v: replace(k, shear_scale=float(v[0])),
+        lambda v: {"shear_and_rotary_inertia_scale": float(v[0])}))
+
+    r_i = spec.tool.fluted_diameter_ratio
+    r_a = spec.tool.fluted_mass_diameter_ratio or r_i
+    lo_r, hi_r = min(0.6, r_i, r_a), max(1.0, r_i, r_a)
+    out.append(Candidate(
+        "fluted_section",
+        (Parameter("stiffness_diameter_ratio", lo_r, hi_r, r_i, "1"),
+         Parameter("mass_diameter_ratio", lo_r, hi_r, r_a, "1")),
+        lambda k, v: replace(k, fluted_stiffness_ratio=float(v[0]), fluted_mass_ratio=float(v[1])),
+        lambda v: {"fluted_diameter_ratio": float(v[0]), "fluted_mass_diameter_ratio": float(v[1])}))
+
+    holder_len = spec.holder.length_m if spec.holder is not None else 0.0
+    inserted = min(min(t.inserted_length_m for t in tools), holder_len)
+    if inserted > 0.0:
+        out.append(Candidate(
+            "insertion_depth", (Parameter("clamping_point_inside_holder_m", 0.0, 0.3 * inserted, 0.0, "m"),),
+            lambda k, v: replace(k, insertion_offset_m=float(v[0])),
+            lambda v: {"clamping_point_inside_holder_m": float(v[0])}))
+    else:
+        notes.append("insertion_depth: not a candidate because no tool shank is inserted in the holder.")
+
+    m_max = DEFAULT_SENSOR_MASS_MAX_KG if sensor_mass_max_kg is None else sensor_mass_max_kg
+    out.append(Candidate(
+        "sensor_mass", (Parameter("tip_mass_kg", 0.0, m_max, 0.0, "kg"),
+                        Parameter("distance_from_tip_m", 0.0, SENSOR_DISTANCE_MAX_M, 0.0, "m")),
+        lambda k, v: replace(k, tip_mass_kg=float(v[0]), tip_mass_distance_m=float(v[1])),
+        lambda v: {"tip_mass_kg": float(v[0]), "distance_from_tip_m": float(v[1])}))
+
+    out.append(Candidate(
+        "joint_damping", (Parameter("log10_joint_damping_scale", -1.0, 1.2, 0.0, "1"),),
+        lambda k, v: _mul(k, sh_damping_scale=10 ** v[0], ht_damping_scale=10 ** v[0]),
+        lambda v: {"joint_damping_scale": float(10 ** v[0])}))
+
+    l0, p0 = _static_nose_rotational_receptance(spec, solver)
+    out.append(Candidate(
+        "spindle_rotational_receptance",
+        (Parameter("cross_residual_over_static_l", -0.5, 1.5, 0.0, "1"),
+         Parameter("rotational_residual_over_static_p", -0.5, 4.0, 0.0, "1")),
+        lambda k, v: replace(k, nose_cross_compliance_rad_n=float(v[0]) * l0,
+                             nose_rotational_residual_rad_nm=float(v[1]) * p0),
+        lambda v: {"added_cross_compliance_rad_n": float(v[0]) * l0,
+                   "added_rotational_compliance_rad_nm": float(v[1]) * p0,
+                   "spindle_static_l_rad_n": l0, "spindle_static_p_rad_nm": p0}))
+
+    if names is not None:
+        out = [c for c in out if c.name in names]
+    return out, notes

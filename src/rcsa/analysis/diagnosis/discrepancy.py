@@ -1,0 +1,196 @@
+"""What the base model already expects: the discrepancy covariance Σ by Monte Carlo.
+
+The known imperfections of the base model — material grade, bearing and joint stiffness,
+damping, re-clamping and the stickout setting — and the measurement noise are pushed through
+the model and the feature extractor (``diagnosis.md`` §4.3)::
+
+    for i in 1..n_mc:
+        knobs_i = draw(tolerances)               # shared by all measurements + per measurement
+        f_i     = features(noise(h(knobs_i), coherence))
+    mu    = mean(f_i) − features(base)           # bias (nonlinearity, noise), added to every prediction
+    Sigma = (1 − a) cov(f_i) + a diag(cov(f_i))  # a = 0.1: shrinkage keeps Σ invertible
+
+This is a structured Kennedy–O'Hagan discrepancy: a gap the base model already expects is
+never blamed on an effect. Noise is complex Gaussian with the Bendat & Piersol random error of
+|H| (and of its phase, rad) ``σ = √(1−γ²) / (|γ| √(2 n_avg))`` from the measured coherence γ².
+
+Default tolerances (one standard deviation; overridable per request, ``tolerances``) follow
+``diagnosis.md`` §2 and §5.1:
+
+==================================  =======  =============================================
+key                                 default  meaning
+==================================  =======  =============================================
+tool_youngs_modulus_rel             0.03     carbide E (grade/Co content: ±6 % at 2σ)
+tool_density_rel                    0.01     tool ρ
+structure_youngs_modulus_rel        0.02     E of the other materials (spindle, holder)
+structure_density_rel               0.01     ρ of the other materials
+loss_factor_log                     0.25     ln-scale of every material loss factor
+bearing_stiffness_log               0.08     ln-scale of all bearing stiffnesses
+bearing_damping_log                 0.25     ln-scale of all bearing dampers
+spindle_holder_stiffness_log        0.15     ln-scale of k_t and k_r (independent draws)
+spindle_holder_damping_log          0.25     ln-scale of the spindle–holder dampers
+holder_tool_stiffness_log           0.15     per measurement (re-clamp), k_t and k_r
+holder_tool_damping_log             0.25     per measurement
+stickout_m                          0.0003   per measurement, m
+==================================  =======  =============================================
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from rcsa.analysis.diagnosis.perturbed_model import Knobs
+
+__all__ = ["DEFAULT_TOLERANCES", "Discrepancy", "build_discrepancy", "draw_knobs", "noise_sd_rel",
+           "shrink"]
+
+DEFAULT_TOLERANCES: dict[str, float] = {
+    "tool_youngs_modulus_rel": 0.03,
+    "tool_density_rel": 0.01,
+    "structure_youngs_modulus_rel": 0.02,
+    "structure_density_rel": 0.01,
+    "loss_factor_log": 0.25,
+    "bearing_stiffness_log": 0.08,
+    "bearing_damping_log": 0.25,
+    "spindle_holder_stiffness_log": 0.15,
+    "spindle_holder_damping_log": 0.25,
+    "holder_tool_stiffness_log": 0.15,
+    "holder_tool_damping_log": 0.25,
+    "stickout_m": 0.0003,
+}
+# Shrinkage towards the diagonal (Ledoit–Wolf style, fixed weight as in the prototype): with
+# ~40-60 features and a few hundred draws the sample covariance is invertible but noisy.
+SHRINKAGE = 0.1
+# Floor on the relative noise (1e-4 = 0.01 %): coherence of exactly 1 must not make a
+# feature infinitely precise.
+MIN_NOISE_REL = 1e-4
+
+
+def noise_sd_rel(coherence: np.ndarray, n_averages: float) -> np.ndarray:
+    """Random error of |H| (relative) from the coherence (Bendat & Piersol 2010, Table 9.6).
+
+    Parameters
+    ----------
+    coherence : numpy.ndarray, shape (nlines,)
+        γ² in [0, 1].
+    n_averages : float
+        Number of averaged impacts n_d.
+
+    Returns
+    -------
+    numpy.ndarray, shape (nlines,)
+        ``√(1−γ²) / (|γ| √(2 n_d))``; also the phase error in rad.
+    """
+    g2 = np.clip(np.asarray(coherence, dtype=float), 1e-3, 1.0)
+    return np.maximum(np.sqrt(1.0 - g2) / (np.sqrt(g2) * np.sqrt(2.0 * n_averages)), MIN_NOISE_REL)
+
+
+def draw_knobs(rng: np.random.Generator, tol: Mapping[str, float], n_configs: int,
+               base: Knobs | None = None) -> list[Knobs]:
+    """One nuisance draw: the shared part once, the per-measurement part per configuration."""
+    base = Knobs() if base is None else base
+    n = rng.standard_normal
+    shared = {
+        "tool_youngs_scale": 1.0 + tol["tool_youngs_modulus_rel"] * n(),
+        "tool_density_scale": 1.0 + tol["tool_density_rel"] * n(),
+        "structure_youngs_scale": 1.0 + tol["structure_youngs_modulus_rel"] * n(),
+        "structure_density_scale": 1.0 + tol["structure_density_rel"] * n(),
+        "loss_factor_scale": float(np.exp(tol["loss_factor_log"] * n())),
+        "bearing_stiffness_scale": float(np.exp(tol["bearing_stiffness_log"] * n())),
+        "bearing_damping_scale": float(np.exp(tol["bearing_damping_log"] * n())),
+        "sh_translational_scale": float(np.exp(tol["spindle_holder_stiffness_log"] * n())),
+        "sh_rotational_scale": float(np.exp(tol["spindle_holder_stiffness_log"] * n())),
+        "sh_damping_scale": float(np.exp(tol["spindle_holder_damping_log"] * n())),
+    }
+    out = []
+    for _ in range(n_configs):
+        per = {
+            "ht_translational_scale": float(np.exp(tol["holder_tool_stiffness_log"] * n())),
+            "ht_rotational_scale": float(np.exp(tol["holder_tool_stiffness_log"] * n())),
+            "ht_damping_scale": float(np.exp(tol["holder_tool_damping_log"] * n())),
+            "stickout_offset_m": tol["stickout_m"] * n(),
+        }
+        fields = {**shared, **per}
+        out.append(replace(base, **{k: (getattr(base, k) + v if k == "stickout_offset_m" else getattr(base, k) * v)
+                                    for k, v in fields.items()}))
+    return out
+
+
+def shrink(cov: np.ndarray, weight: float = SHRINKAGE) -> np.ndarray:
+    """``(1 − a) C + a diag(C)``: positive definite whenever diag(C) > 0 and a > 0."""
+    return (1.0 - weight) * cov + weight * np.diag(np.diag(cov))
+
+
+@dataclass(frozen=True)
+class Discrepancy:
+    """Bias, covariance and whitening of the features under tolerances and noise.
+
+    Attributes
+    ----------
+    mu : numpy.ndarray, shape (nfeat,)
+        Mean feature offset of the nuisance draws from the base features.
+    sigma : numpy.ndarray, shape (nfeat, nfeat)
+        Shrunk covariance.
+    samples : numpy.ndarray, shape (n_mc, nfeat)
+        Feature deviations of the draws from ``base + mu`` (for empirical nulls).
+    band_db : numpy.ndarray, shape (n_mc, nbands)
+        Band RMS dB error of each draw against the base model.
+    """
+
+    mu: np.ndarray
+    sigma: np.ndarray
+    samples: np.ndarray
+    band_db: np.ndarray
+
+    def whitener(self, rows: np.ndarray | slice = slice(None)) -> np.ndarray:
+        """``Σ_rows^{-1/2}`` (symmetric), shape (nrows, nrows)."""
+        s = self.sigma[rows, rows] if isinstance(rows, slice) else self.sigma[np.ix_(rows, rows)]
+        vals, vecs = np.linalg.eigh(s)
+        return (vecs / np.sqrt(vals)) @ vecs.T
+
+    @property
+    def sd(self) -> np.ndarray:
+        """Feature standard deviations, shape (nfeat,)."""
+        return np.sqrt(np.diag(self.sigma))
+
+
+def build_discrepancy(base_features: np.ndarray, draws_h: Callable[[int], list[np.ndarray]],
+                      features: Callable[[list[np.ndarray]], np.ndarray],
+                      band_db: Callable[[list[np.ndarray]], np.ndarray],
+                      noise_rel: list[np.ndarray], n_mc: int, rng: np.random.Generator) -> Discrepancy:
+    """Monte-Carlo Σ from tolerance draws plus coherence noise.
+
+    Parameters
+    ----------
+    base_features : numpy.ndarray, shape (nfeat,)
+    draws_h : callable
+        ``draws_h(n)`` → per measurement an array (n, nlines) of noise-free model FRFs under
+        ``n`` nuisance draws (cached by the caller).
+    features : callable
+        Per-measurement FRF stacks → features, shape (n, nfeat).
+    band_db : callable
+        Per-measurement FRF stacks → band RMS dB against the base, shape (n, nbands).
+    noise_rel : list of numpy.ndarray
+        Per measurement, relative noise sd per analysis line.
+    n_mc : int
+    rng : numpy.random.Generator
+        For the noise (the tolerance draws are the caller's).
+
+    Returns
+    -------
+    Discrepancy
+    """
+    clean = draws_h(n_mc)
+    noisy = []
+    for h, s in zip(clean, noise_rel, strict=True):
+        e = rng.standard_normal((2,) + h.shape)
+        noisy.append(h * (1.0 + s * (e[0] + 1j * e[1])))
+    f = features(noisy)
+    mu = f.mean(axis=0) - base_features
+    cov = np.cov(f, rowvar=False)
+    # Floor: the feature extractor resolves ~1e-4 in ln f / ln|h| on the analysis lines.
+    cov = cov + np.eye(cov.shape[0]) * 1e-8
+    return Discrepancy(mu, shrink(cov), f - (base_features + mu), band_db(noisy))

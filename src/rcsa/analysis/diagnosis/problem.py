@@ -1,0 +1,190 @@
+"""One diagnosis problem: analysis lines, base model, windows and measured features.
+
+The model is solved on a log-spaced subset of the measured lines inside each measurement's
+valid band (coherence γ² ≥ 0.8 after a 9-line running median): at most ``max_lines`` lines
+per measurement, all of them where the measured grid is sparser than the log grid. The same
+lines carry the measured and the modelled FRF through the same extractor. When the
+measurements share a frequency grid they share the lines, and the spindle (and holder) are
+condensed once for all of them.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from collections import OrderedDict
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.ndimage import median_filter
+
+from rcsa.analysis.diagnosis.discrepancy import (
+    Discrepancy,
+    build_discrepancy,
+    draw_knobs,
+    noise_sd_rel,
+)
+from rcsa.analysis.diagnosis.features import Windows, band_rms_db, design_windows, extract
+from rcsa.analysis.diagnosis.perturbed_model import Knobs, Solver, config_parts
+from rcsa.analysis.diagnosis.request import DEFAULT_NOISE_REL, MIN_VALID_LINES, Request
+from rcsa.errors import InputError
+
+__all__ = ["Problem", "VALID_COHERENCE"]
+
+VALID_COHERENCE = 0.8
+_DRAW_CACHE: OrderedDict[str, list[np.ndarray]] = OrderedDict()
+_DRAW_CACHE_SIZE = 4
+
+
+def _valid_band(coherence: np.ndarray | None, n: int) -> tuple[int, int]:
+    if coherence is None:
+        return 0, n
+    ok = median_filter(coherence, size=9, mode="nearest") >= VALID_COHERENCE
+    idx = np.flatnonzero(ok)
+    if idx.size == 0:
+        return 0, 0
+    return int(idx[0]), int(idx[-1]) + 1
+
+
+def _log_subset(f: np.ndarray, lo: int, hi: int, f_lo: float, f_hi: float, n_target: int) -> np.ndarray:
+    """Indices (into ``f``) of the lines nearest a log grid of ``n_target`` points, inside [lo, hi)."""
+    target = np.geomspace(f_lo, f_hi, n_target)
+    band = f[lo:hi]
+    j = np.clip(np.searchsorted(band, target), 1, band.size - 1)
+    nearer = np.where(np.abs(band[j - 1] - target) <= np.abs(band[j] - target), j - 1, j)
+    keep = (target >= band[0] * (1 - 1e-12)) & (target <= band[-1] * (1 + 1e-12))
+    return lo + np.unique(nearer[keep])
+
+
+@dataclass
+class Config:
+    """One measurement as the diagnosis sees it."""
+
+    index: int
+    lines: np.ndarray        # indices into the measurement's own grid
+    grid_lines: np.ndarray   # the same lines as indices into the solver grid
+    frequency_hz: np.ndarray
+    h_meas: np.ndarray
+    noise_rel: np.ndarray
+    h_base: np.ndarray
+    windows: Windows
+    bands: list[np.ndarray]  # per window, its lines with coherence >= VALID_COHERENCE
+    good: np.ndarray         # lines with coherence >= VALID_COHERENCE (dB gaps are taken there)
+
+    def db_error(self, h_model: np.ndarray) -> np.ndarray:
+        """20 log10 |h_meas / h_model| on the good lines, dB."""
+        return 20.0 * np.log10(np.abs(self.h_meas[self.good] / h_model[self.good]))
+
+
+class Problem:
+    """Analysis setup shared by the gap map, the discrepancy and the attribution.
+
+    Parameters
+    ----------
+    request : Request
+    """
+
+    def __init__(self, request: Request) -> None:
+        self.request = request
+        self.spec = request.spec
+        self.tools = [m.tool for m in request.measurements]
+        n_lines = request.options.max_lines
+        bands = []
+        for i, m in enumerate(request.measurements):
+            lo, hi = _valid_band(m.coherence, m.frequency_hz.size)
+            if hi - lo < MIN_VALID_LINES:
+                raise InputError(f"measurements[{i}].coherence" if m.coherence is not None
+                                 else f"measurements[{i}].frequency_hz",
+                                 f"needs at least {MIN_VALID_LINES} lines with coherence >= {VALID_COHERENCE}, "
+                                 f"has {max(hi - lo, 0)}")
+            bands.append((lo, hi))
+        f_lo = min(m.frequency_hz[lo] for m, (lo, _) in zip(request.measurements, bands, strict=True))
+        f_hi = max(m.frequency_hz[hi - 1] for m, (_, hi) in zip(request.measurements, bands, strict=True))
+        picks = [_log_subset(m.frequency_hz, lo, hi, f_lo, f_hi, n_lines)
+                 for m, (lo, hi) in zip(request.measurements, bands, strict=True)]
+        grid = np.unique(np.concatenate([m.frequency_hz[p] for m, p in zip(request.measurements, picks, strict=True)]))
+        self.solver = Solver(grid)
+        self.configs: list[Config] = []
+        for i, (m, p) in enumerate(zip(request.measurements, picks, strict=True)):
+            f = m.frequency_hz[p]
+            grid_lines = np.searchsorted(grid, f)
+            h_base = self.solver.tip_h(config_parts(self.spec, m.tool, Knobs()), grid_lines)
+            noise = (noise_sd_rel(m.coherence[p], m.n_averages) if m.coherence is not None
+                     else np.full(p.size, DEFAULT_NOISE_REL))
+            try:
+                windows = design_windows(f, h_base)
+            except ValueError:
+                raise InputError(f"measurements[{i}].frequency_hz",
+                                 "the base model has no resonance inside the valid band of this measurement; "
+                                 "measure over a band that contains at least one mode") from None
+            good = (m.coherence[p] >= VALID_COHERENCE) if m.coherence is not None else np.ones(p.size, bool)
+            good_idx = np.flatnonzero(good)
+            edges = windows.edges
+            bands_i = []
+            for j in range(edges.size - 1):
+                band = good_idx[(good_idx >= edges[j]) & (good_idx < edges[j + 1])]
+                bands_i.append(band if band.size else np.arange(edges[j], edges[j + 1]))
+            self.configs.append(Config(i, p, grid_lines, f, m.h[p], noise, h_base, windows, bands_i, good_idx))
+        self.offsets = np.cumsum([0] + [c.windows.size for c in self.configs])
+        self.base_features = self.features([c.h_base for c in self.configs])
+        self.measured_features = self.features([c.h_meas for c in self.configs])
+        self.feature_config = np.concatenate([np.full(c.windows.size, c.index) for c in self.configs])
+        self.feature_names = [n for c in self.configs for n in c.windows.names]
+
+    # ------------------------------------------------------------------ evaluation
+    def h(self, knobs: Knobs | Sequence[Knobs]) -> list[np.ndarray]:
+        """Model ``h`` of every configuration on its analysis lines (one knobs, or one per config)."""
+        ks = [knobs] * len(self.configs) if isinstance(knobs, Knobs) else list(knobs)
+        return [self.solver.tip_h(config_parts(self.spec, self.tools[c.index], k), c.grid_lines)
+                for c, k in zip(self.configs, ks, strict=True)]
+
+    def features(self, hs: Sequence[np.ndarray]) -> np.ndarray:
+        """Concatenated features of per-configuration FRFs (each (nlines,) or (n, nlines))."""
+        return np.concatenate([extract(c.frequency_hz, h, c.windows) for c, h in zip(self.configs, hs, strict=True)],
+                              axis=-1)
+
+    def band_db(self, hs: Sequence[np.ndarray], ref: Sequence[np.ndarray] | None = None) -> np.ndarray:
+        """Band RMS dB of ``hs`` against ``ref`` (default: the base), concatenated over configurations."""
+        ref = [c.h_base for c in self.configs] if ref is None else ref
+        return np.concatenate([band_rms_db(h, r, c.bands) for c, h, r in zip(self.configs, hs, ref, strict=True)],
+                              axis=-1)
+
+    def rows(self, configs: Sequence[int]) -> np.ndarray:
+        """Feature indices belonging to the given configurations."""
+        return np.flatnonzero(np.isin(self.feature_config, list(configs)))
+
+    # ------------------------------------------------------------------ discrepancy
+    def _cache_key(self, n_mc: int) -> str:
+        req = self.request
+        payload = json.dumps({"assembly": req.assembly, "tools": [m.overrides for m in req.measurements],
+                              "tolerances": req.tolerances, "n": n_mc, "seed": req.options.seed},
+                             sort_keys=True, default=str).encode()
+        digest = hashlib.sha256(payload)
+        for c in self.configs:
+            digest.update(c.frequency_hz.tobytes())
+        return digest.hexdigest()
+
+    def _draws(self, n_mc: int) -> list[np.ndarray]:
+        key = self._cache_key(n_mc)
+        hit = _DRAW_CACHE.get(key)
+        if hit is None:
+            rng = np.random.default_rng([self.request.options.seed, 1])
+            out = [np.empty((n_mc, c.frequency_hz.size), dtype=complex) for c in self.configs]
+            for d in range(n_mc):
+                for c, h in zip(out, self.h(draw_knobs(rng, self.request.tolerances, len(self.configs))),
+                                strict=True):
+                    c[d] = h
+            hit = _DRAW_CACHE[key] = out
+            if len(_DRAW_CACHE) > _DRAW_CACHE_SIZE:
+                _DRAW_CACHE.popitem(last=False)
+        else:
+            _DRAW_CACHE.move_to_end(key)
+        return hit
+
+    def discrepancy(self) -> Discrepancy:
+        """Σ and μ of the features under the stated tolerances and the measured coherence."""
+        n_mc = self.request.options.monte_carlo_draws
+        return build_discrepancy(self.base_features, self._draws, self.features, self.band_db,
+                                 [c.noise_rel for c in self.configs], n_mc,
+                                 np.random.default_rng([self.request.options.seed, 2]))

@@ -1,0 +1,246 @@
+"""The diagnosis, step by step; :class:`Analysis` keeps the full state (benchmark, figure).
+
+The pipeline (``diagnosis.md`` §4):
+
+1. parse and validate the request (:mod:`.request`);
+2. fix the analysis lines, the base model and its feature windows (:mod:`.problem`);
+3. build the discrepancy μ, Σ from tolerances and coherence (:mod:`.discrepancy`);
+4. gap map of the measurements against the base (:mod:`.report`);
+5. evidence of every candidate effect, decision (:mod:`.attribution`);
+6. held-out validation and an optional greedy second effect (:mod:`.validation`);
+7. the response, with the corrected FRF of each reported effect on the measured lines
+   (:mod:`.report`, called by :func:`rcsa.analysis.diagnosis.diagnose.diagnose`).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from rcsa.analysis.diagnosis.attribution import Decision, Fit, Likelihood, decide, fit_candidate
+from rcsa.analysis.diagnosis.candidates import Candidate, catalogue
+from rcsa.analysis.diagnosis.perturbed_model import Knobs, Solver, config_parts
+from rcsa.analysis.diagnosis.problem import Problem
+from rcsa.analysis.diagnosis.request import parse_request
+from rcsa.analysis.diagnosis.validation import HeldOut, folds, held_out
+
+__all__ = ["Analysis", "analyse"]
+
+# Signatures more collinear than this cannot be told apart: a second effect along the first
+# one's direction is refused (``diagnosis.md`` §4.7).
+MAX_SIGNATURE_COSINE = 0.9
+# Held-out validation and parameter meanings are computed for the verdict's effects and for
+# this many best-ranked others (the rest is ranked by evidence only, to bound the runtime).
+RANKED_WITH_HELD_OUT = 3
+# A second effect is only looked for when the first leaves a significant remainder.
+RESIDUAL_P = 0.05
+
+
+class Analysis:
+    """The full diagnosis state (kept for the benchmark and the figure)."""
+
+    def __init__(self, request: Mapping[str, Any]) -> None:
+        self.started = t0 = time.perf_counter()
+        self.request = parse_request(request)
+        opts = self.request.options
+        self.problem = p = Problem(self.request)
+        self.disc = p.discrepancy()
+        masses = [m.sensor_mass_kg for m in self.request.measurements if m.sensor_mass_kg is not None]
+        self.candidates, self.notes = catalogue(p.spec, p.tools, p.solver,
+                                                1.5 * max(masses) if masses and max(masses) > 0 else None,
+                                                opts.effects)
+        self._cache: dict[tuple, np.ndarray] = {}
+        n_feat = p.base_features.size
+        self.like = Likelihood(p.measured_features, self.disc, np.arange(n_feat), opts.likelihood)
+        self.log_z0 = float(self.like(p.base_features))
+        self.fits = [fit_candidate(c, self.features_at, self.like, self.log_z0) for c in self.candidates]
+        self.decision: Decision = decide(self.fits, opts.claim_threshold, opts.ambiguity_window)
+        self.folds = folds([m.tool.stickout_m for m in self.request.measurements], opts.held_out)
+        self.held: dict[str, HeldOut | None] = {}
+        shown = self.reported_names() + [f.candidate.name for f in self.decision.ranking[:RANKED_WITH_HELD_OUT]]
+        for f in self.decision.ranking:
+            if f.candidate.name in shown:
+                self.held[f.candidate.name] = self._held_out([f.candidate], [f.map])
+        self.second: tuple[Fit, HeldOut | None, float] | None = None
+        if self.decision.status == "identified" and opts.max_effects >= 2:
+            self.second = self._greedy_second()
+        self.runtime_s = time.perf_counter() - t0
+
+    # ------------------------------------------------------------------ model features
+    def knobs_of(self, cands: Sequence[Candidate], values: Sequence[np.ndarray]) -> Knobs:
+        """Knobs with the candidates' add-ons applied in order."""
+        k = Knobs()
+        for c, v in zip(cands, values, strict=True):
+            k = c.apply(k, np.asarray(v, dtype=float))
+        return k
+
+    def features_many(self, cands: Sequence[Candidate], fixed: Sequence[np.ndarray], values: np.ndarray
+                      ) -> np.ndarray:
+        """Model features (all measurements) for many values of the last candidate; cached.
+
+        Parameters
+        ----------
+        cands : sequence of Candidate
+            Effects applied in order; all but the last at ``fixed``.
+        fixed : sequence of numpy.ndarray
+            Values of ``cands[:-1]``.
+        values : numpy.ndarray, shape (n, d)
+            Values of ``cands[-1]``.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n, nfeat)
+        """
+        p = self.problem
+        prefix = tuple((c.name, tuple(np.round(np.asarray(v, float), 12))) for c, v in zip(cands[:-1], fixed,
+                                                                                          strict=True))
+        values = np.atleast_2d(np.asarray(values, dtype=float))
+        keys = [prefix + ((cands[-1].name, tuple(np.round(v, 12))),) for v in values]
+        todo: dict[tuple, np.ndarray] = {}
+        for k, v in zip(keys, values, strict=True):
+            if k not in self._cache:
+                todo.setdefault(k, v)
+        if todo:
+            hs = [p.h(self.knobs_of(cands, [*fixed, v])) for v in todo.values()]
+            feats = p.features([np.stack([h[c] for h in hs]) for c in range(len(p.configs))])
+            for row, k in enumerate(todo):
+                self._cache[k] = feats[row]
+        return np.stack([self._cache[k] for k in keys])
+
+    def features_of(self, cands: Sequence[Candidate], values: Sequence[np.ndarray]) -> np.ndarray:
+        """Model features with every candidate at its value, shape (nfeat,)."""
+        if not cands:
+            return self.problem.base_features
+        return self.features_many(cands, values[:-1], np.asarray(values[-1], dtype=float)[None, :])[0]
+
+    def features_at(self, cand: Candidate, v: np.ndarray) -> np.ndarray:
+        """Features with one candidate at ``v`` (shape (d,)), or at many values (shape (n, d))."""
+        v = np.asarray(v, dtype=float)
+        return self.features_many([cand], [], v) if v.ndim == 2 else self.features_many([cand], [], v[None, :])[0]
+
+    # ------------------------------------------------------------------ validation
+    def _held_out(self, cands: list[Candidate], values: list[np.ndarray],
+                  fixed_per_fold: list[list[np.ndarray]] | None = None) -> HeldOut | None:
+        """Refit the last candidate per fold and score the held-out data against the base model.
+
+        Candidates before the last are fixed: at ``fixed_per_fold[k]`` in fold k (their own
+        training-only fits, so no held-out data leak in), else at ``values``.
+        """
+        p = self.problem
+        fixed_c, last = cands[:-1], cands[-1]
+
+        def fixed(k: int) -> list[np.ndarray]:
+            return list(values[:-1]) if fixed_per_fold is None else list(fixed_per_fold[k])
+
+        def feats(k: int, x: np.ndarray) -> np.ndarray:
+            return self.features_of([*fixed_c, last], [*fixed(k), x])
+
+        def db_of(k: int, x: np.ndarray, test: Sequence[int]) -> tuple[float, float, int]:
+            h_after = p.h(self.knobs_of([*fixed_c, last], [*fixed(k), x]))
+            sb = sa = 0.0
+            n = 0
+            for i in test:
+                c = p.configs[i]
+                eb, ea = c.db_error(c.h_base), c.db_error(h_after[i])
+                sb, sa, n = sb + float(eb @ eb), sa + float(ea @ ea), n + eb.size
+            return sb, sa, n
+
+        return held_out(self.folds, p.rows, p.measured_features, self.disc, self.request.options.likelihood,
+                        p.base_features, feats, values[-1], last.lo, last.hi, db_of)
+
+    def _greedy_second(self) -> tuple[Fit, HeldOut | None, float] | None:
+        """Best second effect with the first fixed at its MAP; accepted only if it passes every test."""
+        first = self.decision.ranking[0]
+        f1 = self.features_at(first.candidate, first.map)
+        if self.residual_p_value(f1) >= RESIDUAL_P:
+            return None  # the first effect leaves nothing that tolerances and noise do not explain
+        ll1 = float(self.like(f1))
+        w = self.like.w
+        s1 = w @ (f1 - self.problem.base_features)
+        best: tuple[Fit, HeldOut | None, float] | None = None
+        for f in self.decision.ranking[1:1 + RANKED_WITH_HELD_OUT]:
+            c2 = f.candidate
+            fit = fit_candidate(c2, lambda c, v: self.features_many([first.candidate, c], [first.map], v),
+                                self.like, ll1)
+            if fit.log_bayes_factor <= self.request.options.claim_threshold:
+                continue
+            s2 = w @ (self.features_of([first.candidate, c2], [first.map, fit.map]) - f1)
+            cos = float(s1 @ s2 / max(np.linalg.norm(s1) * np.linalg.norm(s2), 1e-300))
+            if abs(cos) >= MAX_SIGNATURE_COSINE:
+                continue
+            ho1 = self.held.get(first.candidate.name)
+            ho = self._held_out([first.candidate, c2], [first.map, fit.map],
+                                None if ho1 is None else [[m] for m in ho1.maps])
+            if ho is not None and ho1 is not None and ho.chi2_after >= ho1.chi2_after:
+                continue
+            if best is None or fit.log_bayes_factor > best[0].log_bayes_factor:
+                best = (fit, ho, cos)
+        return best
+
+    # ------------------------------------------------------------------ reporting
+    def residual_p_value(self, model_features: np.ndarray) -> float:
+        """P(χ² ≥ χ²_observed) under the Monte-Carlo null of tolerances and noise (all measurements)."""
+        r = self.problem.measured_features - (model_features + self.disc.mu)
+        chi2 = float(np.sum((self.like.w @ r) ** 2))
+        null = np.sum((self.disc.samples @ self.like.w.T) ** 2, axis=1)
+        return float((np.sum(null >= chi2) + 1) / (null.size + 1))
+
+    def collinear_rivals(self) -> list[dict[str, float | str]]:
+        """Claimable rivals whose fitted feature shift points the same way as the verdict's.
+
+        Listed when the verdict's effect leaves a significant remainder (the truth is then
+        neither form exactly, so an evidence difference between two collinear forms says which
+        approximates better, not which mechanism acts; ``diagnosis.md`` §5.4).
+        """
+        d = self.decision
+        if d.status == "none":
+            return []
+        best = d.ranking[0]
+        f_best = self.features_at(best.candidate, best.map)
+        if self.residual_p_value(f_best) >= RESIDUAL_P:
+            return []
+        s_best = self.like.w @ (f_best - self.problem.base_features)
+        out = []
+        for f in d.ranking[1:]:
+            if f.log_bayes_factor <= self.request.options.claim_threshold or f.candidate.name in d.ambiguous_with:
+                continue
+            s = self.like.w @ (self.features_at(f.candidate, f.map) - self.problem.base_features)
+            cos = float(s_best @ s / max(np.linalg.norm(s_best) * np.linalg.norm(s), 1e-300))
+            if cos >= MAX_SIGNATURE_COSINE:
+                out.append({"effect": f.candidate.name, "log_bayes_factor": f.log_bayes_factor,
+                            "signature_cosine": cos})
+        return out
+
+    def reported_names(self) -> list[str]:
+        """Effects that appear in ``effects[]``: the verdict (and its rivals)."""
+        d = self.decision
+        if d.status == "none":
+            return []
+        return [d.effect, *d.ambiguous_with]
+
+    def snr(self, cands: Sequence[Candidate], values: Sequence[np.ndarray]) -> float:
+        """Whitened norm of the effect's feature shift (all measurements)."""
+        shift = self.features_of(cands, values) - self.problem.base_features
+        return float(np.linalg.norm(self.like.w @ shift))
+
+    def full_h(self, cands: Sequence[Candidate], values: Sequence[np.ndarray]) -> list[np.ndarray]:
+        """Model ``h`` on every measurement's own (full) lines."""
+        p = self.problem
+        k = self.knobs_of(cands, values)
+        out = []
+        solvers: dict[bytes, Solver] = {}
+        for m in self.request.measurements:
+            key = m.frequency_hz.tobytes()
+            s = solvers.get(key)
+            if s is None:
+                s = solvers[key] = Solver(m.frequency_hz, cache_size=4)
+            out.append(s.tip_h(config_parts(p.spec, m.tool, k)))
+        return out
+
+
+def analyse(request: Mapping[str, Any]) -> Analysis:
+    """Run a diagnosis and keep its full state (see :class:`Analysis`)."""
+    return Analysis(request)

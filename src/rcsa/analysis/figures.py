@@ -1,0 +1,267 @@
+"""Headless figures: tool-point FRFs and stability lobe diagrams.
+
+Built on :class:`matplotlib.figure.Figure` with the Agg canvas — ``matplotlib.pyplot``
+is never imported, so no global figure registry, no GUI backend and no state shared
+between requests (safe in a web service and in threads). SI arrays come in; conversions
+to the units people read happen only here: receptance in µm/N, depth of cut in mm,
+spindle speed in rpm, phase in degrees.
+
+Examples
+--------
+>>> import numpy as np
+>>> f = np.linspace(100.0, 2000.0, 400)
+>>> h = 1.0 / (2e7 * (1 - (f / 800) ** 2 + 0.06j * f / 800))
+>>> png = save_figure(frf_figure(f, h, labels=["xx"]), "png")
+>>> png[:8] == b"\\x89PNG\\r\\n\\x1a\\n"
+True
+"""
+
+from __future__ import annotations
+
+import io
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Literal
+
+import matplotlib
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from rcsa.analysis.lobes.zoa import LobeResult
+from rcsa.errors import InputError
+from rcsa.physics.receptance import check_frequency_hz
+
+__all__ = ["FrfLayout", "frf_figure", "lobes_figure", "save_figure"]
+
+FrfLayout = Literal["full", "real_imag", "bode"]
+
+UM_PER_M = 1e6
+MM_PER_M = 1e3
+_FORMATS = ("png", "svg")
+
+
+def _new_figure(width_in: float, height_in: float) -> Figure:
+    fig = Figure(figsize=(width_in, height_in), layout="constrained")
+    FigureCanvasAgg(fig)  # attach the headless canvas explicitly
+    return fig
+
+
+def _freeze_layout(fig: Figure) -> Figure:
+    """Run the constrained layout once and fix it, so every save writes identical files
+    (the solver otherwise nudges the axes by ~1e-3 pt on each draw)."""
+    fig.draw_without_rendering()
+    fig.set_layout_engine("none")
+    return fig
+
+
+def _frf_columns(frequency_hz: object, frf_m_n: object) -> tuple[np.ndarray, np.ndarray]:
+    f = check_frequency_hz(frequency_hz)
+    h = np.asarray(frf_m_n, dtype=complex)
+    if h.ndim == 1:
+        h = h[:, None]
+    if h.ndim != 2 or h.shape[0] != f.size:
+        raise InputError(
+            "frf_m_n", f"expected shape ({f.size},) or ({f.size}, ncurves), got {h.shape}"
+        )
+    if not np.all(np.isfinite(h)):
+        raise InputError("frf_m_n", "contains NaN or infinite values")
+    return f, h
+
+
+def frf_figure(
+    frequency_hz: object,
+    frf_m_n: object,
+    *,
+    labels: Sequence[str] | None = None,
+    layout: FrfLayout = "full",
+    title: str | None = None,
+) -> Figure:
+    """Figure of one or more receptances, shown in µm/N.
+
+    Parameters
+    ----------
+    frequency_hz : array_like, shape (nfreq,)
+        Frequency grid, Hz (linear axis).
+    frf_m_n : array_like, shape (nfreq,) or (nfreq, ncurves)
+        Complex receptances, m/N (frequency first; one column per curve).
+    labels : sequence of str, optional
+        One legend entry per curve.
+    layout : {"full", "real_imag", "bode"}
+        ``"real_imag"``: real and imaginary parts (the tap-test view whose negative real
+        minimum drives stability); ``"bode"``: magnitude (log y) and phase (deg);
+        ``"full"`` (default): both, as a 2 × 2 grid.
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Each axes carries ``gid`` ``"real"``, ``"imag"``, ``"mag"`` or ``"phase"`` and
+        holds one line per curve, in input order.
+    """
+    f, h = _frf_columns(frequency_hz, frf_m_n)
+    if labels is not None and len(labels) != h.shape[1]:
+        raise InputError("labels", f"expected {h.shape[1]} labels, got {len(labels)}")
+    if layout not in ("full", "real_imag", "bode"):
+        raise InputError("layout", f"must be 'full', 'real_imag' or 'bode', got {layout!r}")
+    h_um = h * UM_PER_M
+    panels = {
+        "real": ("Real (µm/N)", h_um.real, "linear"),
+        "imag": ("Imaginary (µm/N)", h_um.imag, "linear"),
+        "mag": ("Magnitude (µm/N)", np.abs(h_um), "log"),
+        "phase": ("Phase (deg)", np.degrees(np.angle(h)), "linear"),
+    }
+    names = {
+        "real_imag": ["real", "imag"],
+        "bode": ["mag", "phase"],
+        "full": ["real", "imag", "mag", "phase"],
+    }[layout]
+    fig = _new_figure(10.0 if layout == "full" else 6.4, 6.0)
+    axes = fig.subplots(2, 2 if layout == "full" else 1, sharex=True, squeeze=False).T.ravel()
+    for ax, name in zip(axes, names, strict=True):
+        ylabel, data, scale = panels[name]
+        for c in range(h.shape[1]):
+            ax.plot(f, data[:, c], lw=1.2, label=None if labels is None else labels[c])
+        ax.set_ylabel(ylabel)
+        ax.set_yscale(scale)
+        ax.set_gid(name)
+        ax.grid(True, which="both", alpha=0.3)
+        if name == "phase":
+            ax.set_yticks(np.arange(-180, 181, 90))
+    for ax in axes[1::2]:
+        ax.set_xlabel("Frequency (Hz)")
+    axes[0].set_xlim(f[0], f[-1])
+    if labels is not None:
+        axes[0].legend(loc="best", fontsize="small")
+    if title:
+        fig.suptitle(title)
+    return _freeze_layout(fig)
+
+
+def lobes_figure(
+    result: LobeResult,
+    *,
+    show_lobes: bool = True,
+    operating_point: tuple[float, float] | None = None,
+    depth_max_mm: float | None = None,
+    title: str | None = None,
+) -> Figure:
+    """Stability lobe diagram: axial depth limit (mm) against spindle speed (rpm).
+
+    Parameters
+    ----------
+    result : LobeResult
+        From :func:`rcsa.analysis.lobes.zoa.stability_lobes`.
+    show_lobes : bool
+        Draw every lobe as a thin line under the envelope.
+    operating_point : (float, float), optional
+        Current ``(spindle_speed_rpm, depth_m)``, e.g. from a CAM preset; drawn as a
+        marker, green if below the envelope (stable) and red otherwise.
+    depth_max_mm : float, optional
+        Upper y limit, mm. Default: the envelope's maximum, capped at 8 × the absolute
+        limit so that the pockets stay readable.
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One axes. Its lines carry ``gid`` ``"lobe-<k>"`` for the lobes and ``"envelope"``
+        for the lower envelope; the stable region under the envelope is shaded.
+    """
+    fig = _new_figure(8.0, 4.8)
+    ax = fig.add_subplot()
+    speed = result.spindle_speed_rpm
+    env_mm = result.depth_limit_m * MM_PER_M
+    if show_lobes:
+        for lobe in result.lobes:
+            if lobe.spindle_speed_rpm.size:
+                ax.plot(
+                    lobe.spindle_speed_rpm,
+                    lobe.depth_limit_m * MM_PER_M,
+                    color="0.6",
+                    lw=0.8,
+                    gid=f"lobe-{lobe.index}",
+                )
+    covered = np.isfinite(env_mm)
+    ax.fill_between(
+        speed,
+        0.0,
+        np.where(covered, env_mm, 0.0),
+        where=covered,
+        color="tab:green",
+        alpha=0.15,
+        lw=0,
+        label="stable",
+    )
+    ax.plot(speed, env_mm, color="tab:blue", lw=2.0, gid="envelope", label="stability limit")
+    min_mm = result.min_depth_limit_m * MM_PER_M
+    ax.axhline(min_mm, color="tab:red", lw=0.8, ls="--", label=f"absolute limit {min_mm:.3g} mm")
+    if operating_point is not None:
+        n_op, b_op = (float(v) for v in operating_point)
+        limit = (
+            np.interp(n_op, speed[covered], result.depth_limit_m[covered])
+            if covered.any()
+            else np.nan
+        )
+        stable = bool(b_op < limit)
+        ax.plot(
+            [n_op],
+            [b_op * MM_PER_M],
+            marker="o",
+            ms=8,
+            ls="none",
+            gid="operating-point",
+            color="tab:green" if stable else "tab:red",
+            label="operating point",
+        )
+    top = depth_max_mm
+    if top is None:
+        finite_max = float(np.nanmax(env_mm)) if covered.any() else min_mm
+        top = 1.1 * min(finite_max, 8.0 * min_mm)
+    ax.set_xlim(speed[0], speed[-1])
+    ax.set_ylim(0.0, top)
+    ax.set_xlabel("Spindle speed (rpm)")
+    ax.set_ylabel("Axial depth of cut limit (mm)")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="upper left", fontsize="small")
+    note = "Φyy = Φxx assumed (only x given)" if result.same_frf_in_y else None
+    if title or note:
+        ax.set_title(" — ".join(t for t in (title, note) if t), fontsize="medium")
+    return _freeze_layout(fig)
+
+
+def save_figure(fig: Figure, path_or_format: str | Path, *, dpi: int = 150) -> bytes | Path:
+    """Write a figure as PNG or SVG.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+    path_or_format : str or pathlib.Path
+        ``"png"`` or ``"svg"`` (case-insensitive): return the file's bytes. Anything else
+        is a path whose suffix (``.png``/``.svg``) selects the format; the file is written.
+    dpi : int
+        Resolution of PNG output.
+
+    Returns
+    -------
+    bytes or pathlib.Path
+        The bytes, or the path written.
+    """
+    as_bytes = isinstance(path_or_format, str) and path_or_format.lower() in _FORMATS
+    if as_bytes:
+        fmt = str(path_or_format).lower()
+    else:
+        path = Path(path_or_format)
+        fmt = path.suffix.lower().lstrip(".")
+        if fmt not in _FORMATS:
+            raise InputError("path", f"suffix must be .png or .svg, got {path.suffix!r}")
+    buf = io.BytesIO()
+    # Reproducible files: no timestamp, fixed SVG id salt (temporary, restored on exit).
+    metadata = {"Date": None} if fmt == "svg" else {"Software": None}
+    with matplotlib.rc_context({"svg.hashsalt": "rcsa", "svg.fonttype": "path"}):
+        fig.savefig(buf, format=fmt, dpi=dpi, metadata=metadata)
+    data = buf.getvalue()
+    if as_bytes:
+        return data
+    path.write_bytes(data)
+    return path

@@ -1,0 +1,1 @@
+"""Stability lobe diagrams for milling: :mod:`.zoa` (zero-order solution), :mod:`.request`."""

@@ -1,0 +1,231 @@
+"""Validation of stability-lobes request bodies (contract "Stability lobes").
+
+Turns the JSON body of ``POST /v1/stability-lobes`` / ``rcsa lobes REQUEST.json`` into a
+:class:`LobesRequest` of numpy arrays, or raises :class:`~rcsa.errors.InputError` naming
+the offending field. No web framework is imported here.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from rcsa.analysis.lobes.zoa import (
+    MAX_SPEED_COUNT,
+    LobeResult,
+    Milling,
+    _check_frf,
+    _count,
+    _finite,
+    _immersion,
+    _positive,
+    _teeth,
+    stability_lobes,
+)
+from rcsa.errors import FrequencyMismatch, InputError
+from rcsa.model.wire import complex_from_wire, number_list
+from rcsa.physics.receptance import check_frequency_hz
+
+__all__ = ["LobesRequest", "parse_lobes_request"]
+
+
+@dataclass(frozen=True, slots=True)
+class LobesRequest:
+    """A validated stability-lobes request (contract "Stability lobes").
+
+    Either the inline FRFs (``frequency_hz``, ``frf_xx`` and optionally ``frf_yy``) or
+    ``assembly`` (returned untouched for the caller to predict the tool-point FRF) is set.
+
+    Attributes
+    ----------
+    frequency_hz : numpy.ndarray or None, shape (nfreq,)
+    frf_xx, frf_yy : numpy.ndarray or None, shape (nfreq,)
+        Complex receptances, m/N.
+    assembly : Mapping or None
+        The request's ``assembly`` object, unvalidated here.
+    teeth, tangential_coefficient_n_m2, radial_ratio, radial_immersion, milling
+        As in :func:`stability_lobes`.
+    spindle_speed_rpm : numpy.ndarray, shape (count,)
+        ``linspace(start, stop, count)``, rpm.
+    """
+
+    frequency_hz: np.ndarray | None
+    frf_xx: np.ndarray | None
+    frf_yy: np.ndarray | None
+    assembly: Mapping[str, Any] | None
+    teeth: int
+    tangential_coefficient_n_m2: float
+    radial_ratio: float
+    radial_immersion: float
+    milling: Milling
+    spindle_speed_rpm: np.ndarray
+
+    def solve(
+        self,
+        frequency_hz: object | None = None,
+        frf_xx: object | None = None,
+        frf_yy: object | None = None,
+    ) -> LobeResult:
+        """Run :func:`stability_lobes` with this request's parameters.
+
+        The inline receptances are used unless given here (e.g. the tool-point FRF the
+        caller predicted from ``assembly``); ``frf_yy=None`` then means "same as x".
+        """
+        if frequency_hz is None:
+            if self.frequency_hz is None:
+                raise InputError(
+                    "frf_x", "the request has an assembly: predict its FRF and pass it to solve()"
+                )
+            frequency_hz, frf_xx, frf_yy = self.frequency_hz, self.frf_xx, self.frf_yy
+        return stability_lobes(
+            frequency_hz,
+            frf_xx,
+            frf_yy,
+            teeth=self.teeth,
+            tangential_coefficient_n_m2=self.tangential_coefficient_n_m2,
+            radial_ratio=self.radial_ratio,
+            radial_immersion=self.radial_immersion,
+            milling=self.milling,
+            spindle_speed_rpm=self.spindle_speed_rpm,
+        )
+
+
+_REQUEST_KEYS = {
+    "frf_x",
+    "frf_y",
+    "assembly",
+    "teeth",
+    "tangential_coefficient_n_m2",
+    "radial_ratio",
+    "radial_immersion",
+    "milling",
+    "spindle_speed_rpm",
+}
+_REQUIRED_KEYS = (
+    "teeth",
+    "tangential_coefficient_n_m2",
+    "radial_ratio",
+    "radial_immersion",
+    "milling",
+    "spindle_speed_rpm",
+)
+
+
+def _mapping(value: object, field: str, keys: set[str]) -> Mapping[str, Any]:
+    if not isinstance(value, Mapping):
+        raise InputError(field, f"must be an object, got {type(value).__name__}")
+    unknown = sorted(set(value) - keys)
+    if unknown:
+        raise InputError(
+            f"{field}.{unknown[0]}" if field else unknown[0],
+            f"unknown field; allowed: {', '.join(sorted(keys))}",
+        )
+    missing = sorted(keys - set(value))
+    if missing and field:  # nested objects: every key is required
+        raise InputError(f"{field}.{missing[0]}", "is required")
+    return value
+
+
+def _parse_frf(value: object, field: str) -> tuple[np.ndarray, np.ndarray]:
+    body = _mapping(value, field, {"frequency_hz", "h"})
+    f = check_frequency_hz(
+        number_list(body["frequency_hz"], f"{field}.frequency_hz", finite=False), f"{field}.frequency_hz"
+    )
+    h = complex_from_wire(body["h"], f"{field}.h", f.size, finite=False)
+    return f, _check_frf(h, f.size, field)
+
+
+def parse_lobes_request(body: object) -> LobesRequest:
+    """Validate a stability-lobes request body (contract "Stability lobes").
+
+    Parameters
+    ----------
+    body : Mapping
+        Parsed JSON: ``frf_x`` (``{"frequency_hz": [...], "h": {"real": [...],
+        "imag": [...]}}``) or ``assembly``, optional ``frf_y`` (same form and grid as
+        ``frf_x``; null = same as x), ``teeth``, ``tangential_coefficient_n_m2``,
+        ``radial_ratio``, ``radial_immersion``, ``milling`` (``"up"``/``"down"``) and
+        ``spindle_speed_rpm`` (``{"start", "stop", "count"}``).
+
+    Returns
+    -------
+    LobesRequest
+
+    Raises
+    ------
+    InputError
+        Unknown or missing fields, wrong types, or a rule broken (``teeth`` integer ≥ 1,
+        ``Kt > 0``, ``0 < radial_immersion <= 1``, ``start < stop``,
+        ``2 <= count <= MAX_SPEED_COUNT``, exactly one of ``frf_x``/``assembly``).
+
+    Examples
+    --------
+    >>> req = parse_lobes_request({
+    ...     "frf_x": {"frequency_hz": [100.0, 200.0], "h": {"real": [1e-7, -1e-7], "imag": [-1e-8, -2e-7]}},
+    ...     "teeth": 4, "tangential_coefficient_n_m2": 6e8, "radial_ratio": 0.3,
+    ...     "radial_immersion": 0.5, "milling": "down",
+    ...     "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 3}})
+    >>> req.spindle_speed_rpm.tolist(), req.frf_yy is None
+    ([2000.0, 16000.0, 30000.0], True)
+    """
+    body = _mapping(body, "", _REQUEST_KEYS)
+    for key in _REQUIRED_KEYS:
+        if key not in body:
+            raise InputError(key, "is required")
+
+    frf_x, frf_y, assembly = body.get("frf_x"), body.get("frf_y"), body.get("assembly")
+    if (frf_x is None) == (assembly is None):
+        raise InputError("frf_x", "give exactly one of frf_x (inline FRF) or assembly")
+    freq = hxx = hyy = None
+    if frf_x is not None:
+        freq, hxx = _parse_frf(frf_x, "frf_x")
+        if frf_y is not None:
+            freq_y, hyy = _parse_frf(frf_y, "frf_y")
+            if freq_y.shape != freq.shape or not np.array_equal(freq_y, freq):
+                raise FrequencyMismatch(
+                    "frf_y.frequency_hz", "must equal frf_x.frequency_hz exactly"
+                )
+    else:
+        if frf_y is not None:
+            raise InputError(
+                "frf_y", "only allowed together with frf_x (an assembly gives both directions)"
+            )
+        if not isinstance(assembly, Mapping):
+            raise InputError("assembly", f"must be an object, got {type(assembly).__name__}")
+
+    teeth = _teeth(body["teeth"])
+    kt = _positive(body["tangential_coefficient_n_m2"], "tangential_coefficient_n_m2")
+    kr = _finite(body["radial_ratio"], "radial_ratio")
+    if kr < 0:
+        raise InputError("radial_ratio", f"must be >= 0 (Kr = Kn/Kt), got {kr}")
+    immersion = _immersion(body["radial_immersion"])
+    milling = body["milling"]
+    if milling not in ("up", "down"):
+        raise InputError("milling", f"must be 'up' or 'down', got {milling!r}")
+
+    speed = _mapping(body["spindle_speed_rpm"], "spindle_speed_rpm", {"start", "stop", "count"})
+    start = _positive(speed["start"], "spindle_speed_rpm.start")
+    stop = _positive(speed["stop"], "spindle_speed_rpm.stop")
+    if not start < stop:
+        raise InputError(
+            "spindle_speed_rpm.stop", f"must be greater than start ({start}), got {stop}"
+        )
+    count = _count(speed["count"], "spindle_speed_rpm.count", 2, MAX_SPEED_COUNT)
+    grid = np.linspace(start, stop, count)
+    grid.flags.writeable = False
+
+    return LobesRequest(
+        frequency_hz=freq,
+        frf_xx=hxx,
+        frf_yy=hyy,
+        assembly=assembly,
+        teeth=teeth,
+        tangential_coefficient_n_m2=kt,
+        radial_ratio=kr,
+        radial_immersion=immersion,
+        milling=milling,
+        spindle_speed_rpm=grid,
+    )

@@ -1,0 +1,460 @@
+"""Effect analysis: which bearing, joint or tool parameter moves which mode, and how.
+
+For an analytical assembly, every mode inside a band is described by four features of the
+exact model:
+
+* ``frequency_hz`` — the undamped natural frequency (Wittrick–Williams, exact);
+* ``peak_magnitude_m_n`` — the local maximum of the damped tool-point ``|h|`` next to it;
+* ``peak_frequency_hz`` — where that maximum sits;
+* ``damping_ratio`` — from a single-mode (Levy) fit of the damped ``h`` around the peak.
+
+Their normalised (logarithmic) sensitivities ``S = d ln(feature) / d ln(parameter)`` to each
+bearing's k and c, each joint's k_t, c_t, k_r, c_r, the stickout and the fluted diameter
+ratio are central finite differences of the exact model::
+
+    S ≈ [ln q(p·e^{+δ}) − ln q(p·e^{−δ})] / (2δ),      δ = relative_step (default 1e-3)
+
+Step: the truncation error is ``δ²/6 · d³ln q/d(ln p)³``. The most curved entry on RA-1,
+the stickout's effect on the 1384 Hz peak height (next to its veering with the 1445 Hz
+mode), has ``S(δ) − S(0) ≈ −390 δ²`` (measured: −0.304 at δ = 0.01 against −0.265), so
+δ = 1e-3 keeps it within 0.04 % of S = −0.27; the features themselves are computed to
+~1e-10 relative (natural frequencies bracketed to 1e-11, peaks refined to sub-ppm, fits
+linear), so the rounding part ``1e-10/δ`` stays near 1e-7. A 0.1 % change moves every
+mode by far less than the gap to its neighbours (RA-1's closest pair, 1384/1445 Hz, is
+4 % apart), so modes are tracked between the ± runs by proximity of their exact natural
+frequencies. Halving the step changes the sensitivities by less than 0.2 % (tested).
+
+This is the quantitative form of the "effect analysis" of Ertürk, Özgüven & Budak,
+IJMTM 47 (2007) 23–32 (``diagnosis.md`` §3.3): bearings act on the lowest spindle modes,
+the interfaces on the higher holder/tool modes; stiffness moves frequencies, damping moves
+peaks.
+
+Examples
+--------
+>>> from rcsa.reference import ra1
+>>> doc = ra1({"start_hz": 300.0, "stop_hz": 1500.0, "step_hz": 1.0})
+>>> report = effect_analysis(doc, parameters=["holder_tool.stiffness_n_m"])
+>>> [round(float(f), 1) for f in report.frequency_hz]
+[599.9, 921.7, 1115.5, 1383.6, 1444.7]
+>>> round(report.controls("holder_tool.stiffness_n_m"), 1)
+1383.6
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from rcsa.analysis.mode_features import (
+    ModeFeatures,
+    mode_features,
+)
+from rcsa.errors import InputError
+from rcsa.model.assembly import build_model
+from rcsa.model.contract import AssemblySpec, SpindleSpec, parse_assembly
+from rcsa.model.parameters import get_parameter, is_damping, parameter_names, set_parameter
+from rcsa.physics.chain import Chain
+from rcsa.physics.natural_frequencies import natural_frequencies_hz
+
+__all__ = [
+    "FEATURES",
+    "DEFAULT_RELATIVE_STEP",
+    "EffectReport",
+    "effect_analysis",
+    "effects",
+    "effects_figure",
+    "effects_report",
+    "nominal_features",
+]
+
+_TWO_PI = 2.0 * np.pi
+
+#: Relative (logarithmic) finite-difference step δ; see the module docstring.
+DEFAULT_RELATIVE_STEP = 0.001
+
+#: Mode features whose sensitivities are reported, in table order.
+FEATURES = ("frequency_hz", "peak_magnitude_m_n", "damping_ratio", "peak_frequency_hz")
+
+
+# ---------------------------------------------------------------------------- effect analysis
+
+
+@dataclass(frozen=True)
+class EffectReport:
+    """Normalised sensitivities of the modes of an assembly to its parameters.
+
+    Attributes
+    ----------
+    band_hz : tuple of float
+        Band whose modes are analysed, Hz.
+    relative_step : float
+        Finite-difference step δ in ln(parameter).
+    modes : ModeFeatures
+        Features of the nominal model, arrays (nmodes,).
+    parameters : tuple of str
+        Parameter names, in column order.
+    values : numpy.ndarray, shape (nparams,)
+        Their nominal values, SI.
+    sensitivity : dict of str to numpy.ndarray, shape (nmodes, nparams)
+        ``d ln(feature)/d ln(parameter)`` per feature of :data:`FEATURES`; NaN where the
+        feature is undefined (no peak) or the mode could not be tracked.
+    notes : tuple of str
+    """
+
+    band_hz: tuple[float, float]
+    relative_step: float
+    modes: ModeFeatures
+    parameters: tuple[str, ...]
+    values: np.ndarray
+    sensitivity: Mapping[str, np.ndarray]
+    notes: tuple[str, ...] = ()
+
+    @property
+    def frequency_hz(self) -> np.ndarray:
+        """Natural frequencies of the analysed modes, Hz, shape (nmodes,)."""
+        return self.modes.frequency_hz
+
+    @property
+    def tip_participation(self) -> np.ndarray:
+        """Tip residue relative to the largest in the band, shape (nmodes,), in [0, 1]."""
+        r = np.abs(self.modes.tip_residue_1_kg)
+        return r / r.max() if r.size and r.max() > 0 else r
+
+    def column(self, parameter: str, feature: str = "frequency_hz") -> np.ndarray:
+        """Sensitivities of all modes to one parameter, shape (nmodes,)."""
+        return self.sensitivity[feature][:, self.parameters.index(parameter)]
+
+    def controls(self, parameter: str, feature: str | None = None) -> float | None:
+        """Natural frequency (Hz) of the mode a parameter moves most.
+
+        By default a stiffness or geometry parameter is judged on ``frequency_hz`` and a
+        damping on ``peak_magnitude_m_n`` (stiffness moves frequencies, damping peaks).
+        Returns ``None`` when no mode responds.
+        """
+        i = self.controlled_mode(parameter, feature)
+        return None if i is None else float(self.frequency_hz[i])
+
+    def controlled_mode(self, parameter: str, feature: str | None = None,
+                        min_participation: float = 0.0) -> int | None:
+        """Index of the mode with the largest ``|S|`` for ``parameter`` (see :meth:`controls`).
+
+        Parameters
+        ----------
+        min_participation : float
+            Consider only modes whose :attr:`tip_participation` reaches this.
+        """
+        feature = feature or ("peak_magnitude_m_n" if is_damping(parameter) else "frequency_hz")
+        s = np.abs(self.column(parameter, feature))
+        s = np.where(self.tip_participation >= min_participation, s, np.nan)
+        if not np.any(np.isfinite(s)) or np.nanmax(s) == 0:
+            return None
+        return int(np.nanargmax(s))
+
+    def controlled_by(self, mode: int, feature: str = "frequency_hz",
+                      among: Sequence[str] | None = None) -> str | None:
+        """The parameter with the largest ``|S|`` for one mode (``among`` a subset of names)."""
+        names = list(among) if among is not None else list(self.parameters)
+        cols = [self.parameters.index(n) for n in names if n in self.parameters]
+        s = np.abs(self.sensitivity[feature][mode, cols])
+        if not np.any(np.isfinite(s)) or np.nanmax(s) == 0:
+            return None
+        return self.parameters[cols[int(np.nanargmax(s))]]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form: modes, parameters and the sensitivity table (NaN → null)."""
+        interface = [p for p in self.parameters if not p.startswith("tool.")]
+        part = self.tip_participation
+        modes = []
+        for i in range(self.frequency_hz.size):
+            modes.append({
+                "index": i,
+                "frequency_hz": float(self.frequency_hz[i]),
+                "tip_residue_1_kg": _num(self.modes.tip_residue_1_kg[i]),
+                "tip_participation": _num(part[i]),
+                "peak_frequency_hz": _num(self.modes.peak_frequency_hz[i]),
+                "peak_magnitude_m_n": _num(self.modes.peak_magnitude_m_n[i]),
+                "damping_ratio": _num(self.modes.damping_ratio[i]),
+                "controlled_by": {q: self.controlled_by(i, q) for q in FEATURES},
+                "controlled_by_interface": {q: self.controlled_by(i, q, interface) for q in FEATURES},
+            })
+        table = []
+        for j, name in enumerate(self.parameters):
+            row: dict[str, Any] = {"parameter": name, "value": float(self.values[j])}
+            for q in FEATURES:
+                row[q] = [_num(x) for x in self.sensitivity[q][:, j]]
+            i = self.controlled_mode(name)
+            row["controls_mode"] = i
+            row["controls_frequency_hz"] = None if i is None else float(self.frequency_hz[i])
+            table.append(row)
+        return {
+            "band_hz": list(self.band_hz),
+            "relative_step": self.relative_step,
+            "sensitivity": "d ln(feature) / d ln(parameter), central finite differences of the exact model",
+            "features": list(FEATURES),
+            "modes": modes,
+            "parameters": table,
+            "notes": list(self.notes),
+        }
+
+
+def _num(x: float) -> float | None:
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def _band_modes(chain: Chain, band_hz: tuple[float, float], margin: float = 0.12) -> np.ndarray:
+    """Natural frequencies in the band widened by ``margin`` (relative) on both sides."""
+    return natural_frequencies_hz(chain, band_hz[0] / (1 + margin), band_hz[1] * (1 + margin))
+
+
+def _track(base_hz: np.ndarray, other_hz: np.ndarray, window_rel: np.ndarray) -> np.ndarray:
+    """Index in ``other_hz`` of each base mode (−1 where no unique nearest mode in its window)."""
+    out = np.full(base_hz.size, -1)
+    if other_hz.size == 0:
+        return out
+    d = np.abs(np.log(other_hz[None, :]) - np.log(base_hz[:, None]))
+    nearest = np.argmin(d, axis=1)
+    back = np.argmin(d, axis=0)
+    for i, j in enumerate(nearest):
+        within = d[i, j] < np.log1p(min(window_rel[i]))
+        if within and back[j] == i:
+            out[i] = j
+    return out
+
+
+def _features_at(spec: AssemblySpec, base: ModeFeatures, band_hz: tuple[float, float],
+                 reuse_frequencies: bool) -> tuple[ModeFeatures, bool]:
+    """Features of a perturbed model, for the base modes (tracked); ``ok`` = all tracked."""
+    chain = build_model(spec).chain()
+    if reuse_frequencies:  # damping never moves the undamped natural frequencies
+        fn, ok = base.frequency_hz, True
+    else:
+        all_hz = _band_modes(chain, band_hz)
+        idx = _track(base.frequency_hz, all_hz, base.window_rel)
+        ok = bool(np.all(idx >= 0))
+        fn = np.where(idx >= 0, all_hz[np.maximum(idx, 0)] if all_hz.size else np.nan, np.nan)
+    good = np.isfinite(fn)
+    feats = mode_features(chain, fn[good], base.window_rel[good])
+    if good.all():
+        return feats, ok
+    full = {k: np.full(fn.size, np.nan) for k in ("tip_residue_1_kg", "peak_frequency_hz",
+                                                  "peak_magnitude_m_n", "damping_ratio")}
+    for k, arr in full.items():
+        arr[good] = getattr(feats, k)
+    return ModeFeatures(fn, full["tip_residue_1_kg"], full["peak_frequency_hz"], full["peak_magnitude_m_n"],
+                        full["damping_ratio"], base.window_rel), ok
+
+
+def _band_of(spec: AssemblySpec, band_hz: Sequence[float] | None) -> tuple[float, float]:
+    if band_hz is None:
+        return float(spec.frequency_hz[0]), float(spec.frequency_hz[-1])
+    if len(band_hz) != 2 or not 0 < band_hz[0] < band_hz[1]:
+        raise InputError("band_hz", f"must be [start_hz, stop_hz] with 0 < start < stop, got {list(band_hz)}")
+    return float(band_hz[0]), float(band_hz[1])
+
+
+def nominal_features(spec: AssemblySpec, band_hz: Sequence[float] | None = None) -> ModeFeatures:
+    """Features of the modes of ``spec`` whose natural frequency lies in the band.
+
+    Parameters
+    ----------
+    spec : AssemblySpec
+        Analytical assembly.
+    band_hz : (float, float), optional
+        Default: the assembly's frequency range.
+    """
+    band = _band_of(spec, band_hz)
+    chain = build_model(spec).chain()
+    all_hz = _band_modes(chain, band)
+    fn = all_hz[(all_hz >= band[0]) & (all_hz <= band[1])]
+    return mode_features(chain, fn, neighbours_hz=all_hz)
+
+
+def effect_analysis(assembly: Mapping[str, Any] | AssemblySpec, *, parameters: Sequence[str] | None = None,
+                    relative_step: float = DEFAULT_RELATIVE_STEP,
+                    band_hz: Sequence[float] | None = None) -> EffectReport:
+    """Normalised sensitivities of every mode in a band to bearing, joint and tool parameters.
+
+    Parameters
+    ----------
+    assembly : dict or AssemblySpec
+        Contract assembly document (analytical spindle).
+    parameters : sequence of str, optional
+        Names as in :func:`parameter_names` (default: all of them).
+    relative_step : float
+        δ of the central difference in ln(parameter), in (0, 0.1].
+    band_hz : (float, float), optional
+        Modes whose undamped natural frequency lies here (default: the assembly's grid range).
+
+    Returns
+    -------
+    EffectReport
+
+    References
+    ----------
+    Ertürk, Özgüven, Budak, IJMTM 47 (2007) 23–32 ("effect analysis").
+    """
+    spec = assembly if isinstance(assembly, AssemblySpec) else parse_assembly(assembly)
+    if not isinstance(spec.spindle, SpindleSpec):
+        raise InputError("spindle", "effect analysis needs an analytical spindle (segments and bearings), "
+                         "not a measured one")
+    if not 0 < relative_step <= 0.1:
+        raise InputError("relative_step", f"must be in (0, 0.1], got {relative_step:g}")
+    available = parameter_names(spec)
+    if parameters is None:
+        names = available
+    else:
+        names = tuple(parameters)
+        for n in names:
+            if n not in available:
+                get_parameter(spec, n)  # raises for an unknown name
+                raise InputError("parameters", f"{n!r} is zero or rigid in this assembly: its normalised "
+                                 "sensitivity is not defined")
+        if len(set(names)) != len(names):
+            raise InputError("parameters", "names must be unique")
+    band = _band_of(spec, band_hz)
+    base = nominal_features(spec, band)
+    values = np.array([get_parameter(spec, n) for n in names], dtype=float)
+    nm = base.frequency_hz.size
+    sens = {q: np.full((nm, len(names)), np.nan) for q in FEATURES}
+    notes: list[str] = []
+    for j, name in enumerate(names):
+        runs = []
+        for sign in (+1.0, -1.0):
+            perturbed = set_parameter(spec, name, values[j] * math.exp(sign * relative_step))
+            feats, ok = _features_at(perturbed, base, band, reuse_frequencies=is_damping(name))
+            if not ok:
+                notes.append(f"{name}: some modes could not be tracked between the perturbed runs")
+            runs.append(feats)
+        for q in FEATURES:
+            with np.errstate(invalid="ignore", divide="ignore"):
+                sens[q][:, j] = (np.log(runs[0].feature(q)) - np.log(runs[1].feature(q))) / (2 * relative_step)
+    if nm == 0:
+        notes.append(f"no natural frequency lies in the band {band[0]:g}–{band[1]:g} Hz: nothing to analyse")
+    hidden = [f"{f:.1f}" for f, p in zip(base.frequency_hz, base.peak_magnitude_m_n, strict=True)
+              if not math.isfinite(p)]
+    if hidden:
+        notes.append(f"modes at {', '.join(hidden)} Hz show no peak of |h| at the tool point: peak and "
+                     "damping sensitivities are null there")
+    return EffectReport(band, relative_step, base, names, values, sens, tuple(dict.fromkeys(notes)))
+
+
+# ---------------------------------------------------------------------------- application layer
+
+
+_REQUEST_FIELDS = ("assembly", "parameters", "relative_step", "band_hz")
+
+
+def effects_report(request: Mapping[str, Any]) -> EffectReport:
+    """Parse an effect-analysis request and run it (see :func:`effects` for the request).
+
+    Returns
+    -------
+    EffectReport
+    """
+    if not isinstance(request, Mapping):
+        raise InputError("", "the request must be a JSON object")
+    if "assembly" not in request:
+        return effect_analysis(request)
+    unknown = sorted(set(request) - set(_REQUEST_FIELDS))
+    if unknown:
+        raise InputError(unknown[0], f"unknown field (allowed: {', '.join(_REQUEST_FIELDS)})")
+    params = request.get("parameters")
+    if params is not None and (not isinstance(params, list) or not all(isinstance(p, str) for p in params)):
+        raise InputError("parameters", "must be a list of parameter names")
+    step = request.get("relative_step", DEFAULT_RELATIVE_STEP)
+    if isinstance(step, bool) or not isinstance(step, int | float):
+        raise InputError("relative_step", "must be a number")
+    band = request.get("band_hz")
+    if band is not None and (not isinstance(band, list) or len(band) != 2
+                             or not all(isinstance(b, int | float) and not isinstance(b, bool) for b in band)):
+        raise InputError("band_hz", "must be [start_hz, stop_hz]")
+    try:
+        spec = parse_assembly(request["assembly"])
+    except InputError as exc:
+        raise InputError(f"assembly.{exc.field}".rstrip("."), exc.rule) from None
+    return effect_analysis(spec, parameters=params, relative_step=float(step), band_hz=band)
+
+
+def effects(request: Mapping[str, Any]) -> dict[str, Any]:
+    """Effect analysis as a JSON document (the CLI's and the REST route's entry point).
+
+    Parameters
+    ----------
+    request : dict
+        Either a contract assembly document (all parameters, the assembly's frequency
+        range, δ = 1e-3), or ``{"assembly": {...}, "parameters": [names] (optional, default
+        all, see :func:`parameter_names`), "relative_step": 0.001 (optional, in (0, 0.1]),
+        "band_hz": [start, stop] (optional, default the assembly's frequency range)}``.
+        The spindle must be analytical (segments and bearings).
+
+    Returns
+    -------
+    dict
+        :meth:`EffectReport.to_dict`: ``band_hz``, ``relative_step``, ``modes`` (each with
+        ``frequency_hz``, ``tip_residue_1_kg``, ``tip_participation``, peak, damping ratio,
+        ``controlled_by`` and ``controlled_by_interface`` per feature) and ``parameters``
+        (each with its ``value`` and a list of sensitivities per feature, one per mode).
+
+    Raises
+    ------
+    InputError
+        For a malformed request.
+    """
+    return effects_report(request).to_dict()
+
+
+# ---------------------------------------------------------------------------- figure
+
+
+def effects_figure(report: EffectReport, features: Sequence[str] = ("frequency_hz", "peak_magnitude_m_n",
+                                                                      "damping_ratio")) -> Any:
+    """Heat map of the sensitivities, modes × parameters, one panel per feature.
+
+    Uses :class:`matplotlib.figure.Figure` with the Agg canvas (never pyplot).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Save it with :func:`rcsa.analysis.figures.save_figure`.
+
+    Raises
+    ------
+    InputError
+        When the report holds no mode or no parameter.
+    """
+    import matplotlib
+    from matplotlib.colors import TwoSlopeNorm
+
+    from rcsa.analysis.figures import _freeze_layout, _new_figure
+
+    nm, npar = report.frequency_hz.size, len(report.parameters)
+    if nm == 0 or npar == 0:
+        raise InputError("band_hz", "the report has no mode (or no parameter) to draw")
+    fig = _new_figure(max(6.0, 0.5 * npar + 2.5), 2.2 + len(features) * max(1.6, 0.3 * nm + 0.8))
+    axes = fig.subplots(len(features), 1, squeeze=False, sharex=True)[:, 0]
+    part = report.tip_participation
+    ylabels = [f"{f:.0f} Hz ({100 * p:.2g} %)" for f, p in zip(report.frequency_hz, part, strict=True)]
+    titles = {"frequency_hz": "natural frequency", "peak_magnitude_m_n": "peak |h|",
+              "damping_ratio": "damping ratio", "peak_frequency_hz": "peak frequency"}
+    cmap = matplotlib.colormaps["RdBu_r"].with_extremes(bad="0.85")
+    for ax, q in zip(axes, features, strict=True):
+        s = np.asarray(report.sensitivity[q], dtype=float)
+        lim = float(np.nanmax(np.abs(s))) if np.any(np.isfinite(s)) else 1.0
+        lim = lim if lim > 0 else 1.0
+        image = ax.imshow(np.ma.masked_invalid(s), aspect="auto", cmap=cmap,
+                          norm=TwoSlopeNorm(0.0, -lim, lim), interpolation="nearest")
+        for (i, j), v in np.ndenumerate(s):
+            if math.isfinite(v) and abs(v) >= 0.01 * lim:
+                ax.text(j, i, f"{v:.2g}", ha="center", va="center", fontsize=6)
+        ax.set_yticks(range(nm), ylabels, fontsize=7)
+        ax.set_title(f"d ln({titles.get(q, q)}) / d ln(parameter)", fontsize=9)
+        fig.colorbar(image, ax=ax, shrink=0.9)
+    axes[-1].set_xticks(range(npar), report.parameters, rotation=60, ha="right", fontsize=7)
+    axes[0].text(0.0, 1.12, "modes: natural frequency (tip participation); grey: no peak at the tool point",
+                 transform=axes[0].transAxes, fontsize=7)
+    return _freeze_layout(fig)

@@ -1,0 +1,73 @@
+"""Analyses as the CLI and the REST service ask for them: lobes, effects, identification, diagnosis."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from rcsa.analysis.diagnosis.diagnose import diagnose as _diagnose
+from rcsa.analysis.joint_identification.identify import identify as _identify
+from rcsa.analysis.lobes.request import parse_lobes_request
+from rcsa.analysis.lobes.zoa import LobeResult
+from rcsa.analysis.sensitivity import effects as _effects
+from rcsa.app.predictions import predict
+from rcsa.measured.store import MeasurementStore
+from rcsa.model.bounds import MAX_FREQUENCY_LINES
+
+__all__ = ["diagnose", "effects", "identify", "stability_lobes", "stability_lobes_result"]
+
+
+def stability_lobes_result(request: Mapping[str, Any], *, store: MeasurementStore | None = None,
+                           max_lines: int = MAX_FREQUENCY_LINES) -> LobeResult:
+    """Stability lobes (``contract.md`` "Stability lobes") from inline FRFs or an assembly.
+
+    With an ``assembly``, its tool-point ``h`` is predicted first and used in x and y (the
+    result says so: ``same_frf_in_y``).
+
+    Returns
+    -------
+    rcsa.analysis.lobes.zoa.LobeResult
+    """
+    parsed = parse_lobes_request(request)
+    if parsed.assembly is None:
+        return parsed.solve()
+    prediction = predict(parsed.assembly, store=store, max_lines=max_lines)
+    return parsed.solve(prediction.frequency_hz, prediction.tool_point.h)
+
+
+def stability_lobes(request: Mapping[str, Any], *, store: MeasurementStore | None = None,
+                    max_lines: int = MAX_FREQUENCY_LINES) -> dict[str, Any]:
+    """The contract's stability-lobes response (see :func:`stability_lobes_result`).
+
+    Returns
+    -------
+    dict
+        ``spindle_speed_rpm``, ``depth_limit_m``, ``chatter_frequency_hz``, ``lobes`` and
+        the extras of :class:`rcsa.analysis.lobes.zoa.LobeResult` (``frf_y_source``, minimum depth, …).
+    """
+    return stability_lobes_result(request, store=store, max_lines=max_lines).to_dict()
+
+
+def effects(request: Mapping[str, Any]) -> dict[str, Any]:
+    """Effect analysis: sensitivity of each mode to every bearing and joint parameter.
+
+    See :func:`rcsa.analysis.sensitivity.effects` (request: an assembly, or ``{"assembly",
+    "parameters", "relative_step", "band_hz"}``).
+    """
+    return _effects(request)
+
+
+def identify(request: Mapping[str, Any]) -> dict[str, Any]:
+    """Joint identification from measured tool-point FRFs (``contract.md`` "Joint identification").
+
+    See :func:`rcsa.analysis.joint_identification.identify.identify`.
+    """
+    return _identify(request)
+
+
+def diagnose(request: Mapping[str, Any], **kwargs: Any) -> dict[str, Any]:
+    """Sim-to-real gap diagnosis (``contract.md`` "Diagnosis").
+
+    See :func:`rcsa.analysis.diagnosis.diagnose.diagnose`.
+    """
+    return _diagnose(request, **kwargs)

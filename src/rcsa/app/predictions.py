@@ -1,0 +1,66 @@
+"""Predictions as the CLI and the REST service ask for them: one assembly, or a batch.
+
+Each function takes and returns plain contract documents (dicts) or the library's own
+objects, validates at the edge, and never depends on how it was reached.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, Literal
+
+from rcsa.app.stores import resolver
+from rcsa.measured.store import MeasurementStore
+from rcsa.model import batch
+from rcsa.model.bounds import MAX_BATCH_COMBINATIONS, MAX_FREQUENCY_LINES
+from rcsa.model.contract import AssemblySpec, CommonSpec, parse_assembly
+from rcsa.model.prediction import Prediction
+from rcsa.model.spindle_side import SpindleSide
+
+__all__ = ["predict", "predict_batch"]
+
+
+def predict(assembly: Mapping[str, Any] | AssemblySpec, *, store: MeasurementStore | None = None,
+            max_lines: int = MAX_FREQUENCY_LINES) -> Prediction:
+    """Tool-point prediction of one assembly (``contract.md`` "Python API").
+
+    Parameters
+    ----------
+    assembly : dict or AssemblySpec
+        The contract's assembly document (SI units), or an already parsed spec.
+    store : MeasurementStore, optional
+        Where ``"spindle": {"measurement_id": ...}`` is looked up; the default store
+        (``RCSA_STORE`` or the per-user location) when omitted.
+    max_lines : int
+        Largest accepted number of frequency lines.
+
+    Returns
+    -------
+    Prediction
+        Typed result; also a read-only mapping in the contract's JSON shape
+        (``result["natural_frequencies_hz"]``, ``result.to_dict()``).
+
+    Examples
+    --------
+    >>> from rcsa.reference import ra1
+    >>> result = predict(ra1({"start_hz": 500.0, "stop_hz": 1500.0, "step_hz": 1.0}))
+    >>> [round(f, 2) for f in result["natural_frequencies_hz"]]
+    [599.85, 921.69, 1115.51, 1383.61, 1444.68]
+    """
+    spec = assembly if isinstance(assembly, AssemblySpec) else parse_assembly(assembly, max_lines)
+    common = CommonSpec(spec.frequency_hz, spec.beam_theory, spec.shear_coefficient, spec.materials,
+                        spec.spindle)
+    return SpindleSide(common, resolver(store)).predict(spec)
+
+
+def predict_batch(request: Mapping[str, Any], *, store: MeasurementStore | None = None,
+                  max_lines: int = MAX_FREQUENCY_LINES, max_combinations: int = MAX_BATCH_COMBINATIONS,
+                  progress: batch.Progress | None = None,
+                  arrays: Literal["list", "numpy"] = "list") -> dict[str, Any]:
+    """Tool-point FRFs of many tool–holder combinations on one spindle.
+
+    See :func:`rcsa.model.batch.predict_batch`; ``store`` is where a measured spindle is
+    looked up (the default store when omitted).
+    """
+    return batch.predict_batch(request, resolve_base=resolver(store), max_lines=max_lines,
+                               max_combinations=max_combinations, progress=progress, arrays=arrays)

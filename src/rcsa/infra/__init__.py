@@ -1,0 +1,5 @@
+"""Infrastructure: domain-free plumbing the layers above share.
+
+Modules: :mod:`.atomic_files` (durable writes), :mod:`.job_queue` (durable background
+jobs), :mod:`.api_keys` (the service's keys). Nothing here knows what a receptance is.
+"""

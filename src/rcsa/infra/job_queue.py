@@ -1,0 +1,618 @@
+"""Durable background jobs (large batches, tool libraries) in a store directory.
+
+Layout (under ``<store>/jobs/``)::
+
+    jobs.sqlite          one row per job (SQLite, WAL): request, status, progress, heartbeat
+    results/<id>.json    the finished result (JSON), written atomically before the row says
+                         "succeeded"
+
+Life of a job: :meth:`JobStore.submit` inserts it ``queued``. A :class:`JobRunner` (a
+thread in every service process, or ``run_one`` from a command) **claims** it in one
+``BEGIN IMMEDIATE`` transaction — the database's write lock makes the claim atomic across
+processes, so two uvicorn workers never run the same job — and marks it ``running`` with
+its runner id and a heartbeat. While computing, the runner refreshes the heartbeat and the
+progress; at the end it writes the result file and marks the job ``succeeded`` (or
+``failed`` with a problem document). Every update checks that the runner still owns the job.
+
+Restarts: a job whose runner died (process killed, machine rebooted) keeps ``running`` with
+a heartbeat that stops moving; once it is older than ``stale_after_s`` any runner may claim
+it again (``attempts`` counts the tries). A runner on the same host whose process no longer
+exists (runner ids are ``host:pid:token``) is recognised at once, so a restarted service
+resumes its own interrupted jobs without waiting for the heartbeat to go stale. After ``max_attempts`` interrupted tries the job is
+failed instead of being retried for ever (a request that kills its worker, e.g. by memory).
+
+Idempotency (``Idempotency-Key``, issue 8): rows carry ``idempotency_key``, ``owner``
+and ``request_sha256`` with a unique index on ``(owner, idempotency_key)``. ``submit`` with a
+key already used by that owner returns the first job when the request is the same (same
+``request_sha256``), so a retried submission never queues a duplicate; with a different
+request it raises :class:`IdempotencyConflict` while the first job is unfinished, and moves
+the key to the new job once the first has finished (the HTTP layer,
+:mod:`service.idempotency`, is the authority on reuse of keys; the job table only links a
+key to its job). :meth:`JobStore.find_idempotent` looks a key up.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import logging
+import os
+import secrets
+import socket
+import sqlite3
+import threading
+import time
+from collections.abc import Callable, Mapping
+from contextlib import closing
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import orjson
+
+from rcsa.errors import InputError, NotFoundError, RcsaError
+
+__all__ = [
+    "JOB_STATUSES",
+    "IdempotencyConflict",
+    "Job",
+    "JobRunner",
+    "JobStore",
+    "LostClaim",
+    "is_job_id",
+    "runner_is_dead",
+]
+
+log = logging.getLogger("rcsa.infra.job_queue")
+
+JOB_STATUSES = ("queued", "running", "succeeded", "failed")
+_JOB_ID_CHARS = set("0123456789abcdef")
+
+_SCHEMA = """
+CREATE TABLE IF NOT EXISTS jobs (
+    id               TEXT PRIMARY KEY,
+    kind             TEXT NOT NULL,
+    status           TEXT NOT NULL CHECK (status IN ('queued', 'running', 'succeeded', 'failed')),
+    progress         REAL NOT NULL DEFAULT 0,
+    request          BLOB NOT NULL,
+    request_sha256   TEXT NOT NULL,
+    idempotency_key  TEXT,
+    owner            TEXT,
+    created_utc      TEXT NOT NULL,
+    started_utc      TEXT,
+    finished_utc     TEXT,
+    heartbeat_unix   REAL,
+    runner           TEXT,
+    attempts         INTEGER NOT NULL DEFAULT 0,
+    result_file      TEXT,
+    error            TEXT,
+    summary          TEXT
+);
+CREATE INDEX IF NOT EXISTS jobs_status ON jobs (status, created_utc);
+CREATE UNIQUE INDEX IF NOT EXISTS jobs_idempotency ON jobs (owner, idempotency_key)
+    WHERE idempotency_key IS NOT NULL;
+"""
+_COLUMNS = ("id, kind, status, progress, created_utc, started_utc, finished_utc, attempts, "
+            "error, summary, idempotency_key, request_sha256, heartbeat_unix")
+_BUSY_TIMEOUT_S = 30.0
+_PURGE_EVERY_S = 3600.0
+
+
+_HOST = socket.gethostname()
+
+
+def runner_is_dead(runner: str | None) -> bool:
+    """Whether a runner id ``host:pid:token`` of this host names a process that no longer exists.
+
+    False for other hosts, for this process and whenever it cannot be told.
+    """
+    try:
+        host, pid, _ = str(runner).split(":")
+        if host != _HOST or int(pid) == os.getpid():
+            return False
+        os.kill(int(pid), 0)
+    except ProcessLookupError:
+        return True
+    except (ValueError, PermissionError, OSError):
+        return False
+    return False
+
+
+def is_job_id(text: object) -> bool:
+    """Whether ``text`` has the shape of a job id (``j-`` + 32 hex digits)."""
+    return (isinstance(text, str) and len(text) == 34 and text.startswith("j-")
+            and set(text[2:]) <= _JOB_ID_CHARS)
+
+
+def _utc_now() -> str:
+    return datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
+
+
+def request_fingerprint(request: Mapping[str, Any]) -> tuple[bytes, str]:
+    """Canonical JSON bytes of a request (sorted keys) and their SHA-256."""
+    data = orjson.dumps(request, option=orjson.OPT_SORT_KEYS | orjson.OPT_SERIALIZE_NUMPY)
+    return data, hashlib.sha256(data).hexdigest()
+
+
+class IdempotencyConflict(InputError):
+    """An owner's ``Idempotency-Key`` names an unfinished job submitted with another request."""
+
+    def __init__(self, job_id: str) -> None:
+        super().__init__("Idempotency-Key", f"is already used for another request (job {job_id}, still "
+                                            "unfinished); use a new key for a new request")
+        self.job_id = job_id
+
+
+class LostClaim(RcsaError):
+    """The runner no longer owns the job (another runner took it over as stale)."""
+
+
+@dataclass(frozen=True, slots=True)
+class Job:
+    """A job's public state (never its request or result, which may be large).
+
+    Attributes
+    ----------
+    id : str
+    kind : str
+        What it computes, e.g. ``"batch"`` or ``"library"``.
+    status : {"queued", "running", "succeeded", "failed"}
+    progress : float
+        Fraction done, 0…1.
+    created_utc, started_utc, finished_utc : str or None
+    attempts : int
+        How many times a runner started it.
+    error : dict or None
+        A problem document (``title``, ``detail``, ``status``, ``errors``) when failed.
+    summary : dict or None
+        Small result summary when succeeded (e.g. ``{"ok": 997, "error": 3}``).
+    idempotency_key, request_sha256 : str or None
+    heartbeat_unix : float or None
+        Last sign of life of its runner, s since the epoch.
+    """
+
+    id: str
+    kind: str
+    status: str
+    progress: float
+    created_utc: str
+    started_utc: str | None
+    finished_utc: str | None
+    attempts: int
+    error: dict[str, Any] | None
+    summary: dict[str, Any] | None
+    idempotency_key: str | None
+    request_sha256: str
+    heartbeat_unix: float | None
+
+    @classmethod
+    def _from_row(cls, row: tuple) -> Job:
+        (jid, kind, status, progress, created, started, finished, attempts, error, summary,
+         key, sha, heartbeat) = row
+        return cls(jid, kind, status, float(progress), created, started, finished, int(attempts),
+                   json.loads(error) if error else None, json.loads(summary) if summary else None,
+                   key, sha, heartbeat)
+
+    @property
+    def finished(self) -> bool:
+        """Whether the job reached ``succeeded`` or ``failed``."""
+        return self.status in ("succeeded", "failed")
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready public state."""
+        return {"id": self.id, "kind": self.kind, "status": self.status, "progress": self.progress,
+                "created_utc": self.created_utc, "started_utc": self.started_utc,
+                "finished_utc": self.finished_utc, "attempts": self.attempts,
+                "error": self.error, "summary": self.summary}
+
+
+class JobStore:
+    """The job table and result files of one store directory; safe across processes.
+
+    Parameters
+    ----------
+    directory : str or os.PathLike
+        Normally ``<store>/jobs``; created on first use.
+    stale_after_s : float
+        A running job whose heartbeat is older than this is considered abandoned, s.
+    max_attempts : int
+        Interrupted tries after which a job is failed rather than resumed.
+    """
+
+    def __init__(self, directory: str | os.PathLike[str], *, stale_after_s: float = 60.0,
+                 max_attempts: int = 3) -> None:
+        self.directory = Path(directory)
+        self.results = self.directory / "results"
+        self.stale_after_s = float(stale_after_s)
+        self.max_attempts = int(max_attempts)
+        self.results.mkdir(parents=True, exist_ok=True)
+        with closing(self._connect()) as con:
+            con.executescript(_SCHEMA)
+
+    def __repr__(self) -> str:
+        return f"JobStore({str(self.directory)!r})"
+
+    def _connect(self) -> sqlite3.Connection:
+        con = sqlite3.connect(self.directory / "jobs.sqlite", timeout=_BUSY_TIMEOUT_S,
+                              isolation_level=None)
+        try:
+            con.execute("PRAGMA journal_mode=WAL")
+            con.execute("PRAGMA synchronous=NORMAL")
+        except BaseException:
+            con.close()
+            raise
+        return con
+
+    # ------------------------------------------------------------------ submit / read
+    def submit(self, kind: str, request: Mapping[str, Any], *, idempotency_key: str | None = None,
+               owner: str | None = None) -> Job:
+        """Queue a job; return its state.
+
+        Parameters
+        ----------
+        kind : str
+            Name of the handler that will run it.
+        request : mapping
+            JSON-ready request document (kept until the job is purged).
+        idempotency_key, owner : str, optional
+            The caller's ``Idempotency-Key`` and who sent it. A key the owner already used for
+            the same kind and request returns that job instead of queuing another.
+
+        Raises
+        ------
+        IdempotencyConflict
+            The key names an unfinished job of this owner with a different request.
+        """
+        data, sha = request_fingerprint(request)
+        job_id = "j-" + secrets.token_hex(16)
+        with closing(self._connect()) as con:
+            con.execute("BEGIN IMMEDIATE")
+            try:
+                if idempotency_key is not None:
+                    row = con.execute("SELECT id, kind, request_sha256, status FROM jobs WHERE owner IS ? AND "
+                                      "idempotency_key = ?", (owner, idempotency_key)).fetchone()
+                    if row is not None and row[1] == kind and row[2] == sha:
+                        con.execute("COMMIT")
+                        return self.get(row[0])
+                    if row is not None and row[3] not in ("succeeded", "failed"):
+                        raise IdempotencyConflict(row[0])
+                    if row is not None:  # a finished job keeps its result, the key moves on
+                        con.execute("UPDATE jobs SET idempotency_key = NULL WHERE id = ?", (row[0],))
+                con.execute(
+                    "INSERT INTO jobs (id, kind, status, request, request_sha256, idempotency_key, owner, "
+                    "created_utc) VALUES (?, ?, 'queued', ?, ?, ?, ?, ?)",
+                    (job_id, kind, data, sha, idempotency_key, owner, _utc_now()))
+                con.execute("COMMIT")
+            except BaseException:
+                con.execute("ROLLBACK")
+                raise
+        return self.get(job_id)
+
+    def get(self, job_id: str) -> Job:
+        """The job's state.
+
+        Raises
+        ------
+        NotFoundError
+            No such job (or not a job id).
+        """
+        if not is_job_id(job_id):
+            raise NotFoundError("job", str(job_id))
+        with closing(self._connect()) as con:
+            row = con.execute(f"SELECT {_COLUMNS} FROM jobs WHERE id = ?", (job_id,)).fetchone()
+        if row is None:
+            raise NotFoundError("job", job_id)
+        return Job._from_row(row)
+
+    def find_idempotent(self, owner: str | None, idempotency_key: str) -> Job | None:
+        """The job submitted earlier by ``owner`` with ``idempotency_key``, if any."""
+        with closing(self._connect()) as con:
+            row = con.execute(f"SELECT {_COLUMNS} FROM jobs WHERE owner IS ? AND idempotency_key = ?",
+                              (owner, idempotency_key)).fetchone()
+        return None if row is None else Job._from_row(row)
+
+    def request(self, job_id: str) -> dict[str, Any]:
+        """The request document a job was submitted with."""
+        self.get(job_id)
+        with closing(self._connect()) as con:
+            row = con.execute("SELECT request FROM jobs WHERE id = ?", (job_id,)).fetchone()
+        if row is None:
+            raise NotFoundError("job", job_id)
+        return orjson.loads(row[0])
+
+    def result_path(self, job_id: str) -> Path:
+        """The result file of a succeeded job.
+
+        Raises
+        ------
+        NotFoundError
+            No such job, or it has not succeeded (see :meth:`get` for its status).
+        """
+        job = self.get(job_id)
+        path = self.results / f"{job.id}.json"
+        if job.status != "succeeded" or not path.is_file():
+            raise NotFoundError("result of job", job_id)
+        return path
+
+    def list(self, status: str | None = None, limit: int = 100) -> list[Job]:
+        """Jobs, newest first, optionally of one status."""
+        sql, args = f"SELECT {_COLUMNS} FROM jobs", []
+        if status is not None:
+            sql += " WHERE status = ?"
+            args.append(status)
+        sql += " ORDER BY created_utc DESC, id LIMIT ?"
+        args.append(int(limit))
+        with closing(self._connect()) as con:
+            return [Job._from_row(r) for r in con.execute(sql, args)]
+
+    def counts(self) -> dict[str, int]:
+        """Number of jobs by status."""
+        with closing(self._connect()) as con:
+            found = dict(con.execute("SELECT status, COUNT(*) FROM jobs GROUP BY status").fetchall())
+        return {s: int(found.get(s, 0)) for s in JOB_STATUSES}
+
+    # ------------------------------------------------------------------ runner side
+    def claim(self, runner: str) -> Job | None:
+        """Atomically take the oldest queued (or abandoned running) job for ``runner``."""
+        now = time.time()
+        with closing(self._connect()) as con:
+            con.execute("BEGIN IMMEDIATE")
+            try:
+                dead = [(job_id,) for job_id, owner in con.execute(
+                    "SELECT id, runner FROM jobs WHERE status = 'running' AND runner LIKE ?", (_HOST + ":%",))
+                    if runner_is_dead(owner)]
+                if dead:  # its process is gone from this machine: no need to wait for the heartbeat
+                    con.executemany("UPDATE jobs SET heartbeat_unix = NULL WHERE id = ?", dead)
+                while True:
+                    row = con.execute(
+                        "SELECT id, attempts FROM jobs WHERE status = 'queued' OR "
+                        "(status = 'running' AND (heartbeat_unix IS NULL OR heartbeat_unix < ?)) "
+                        "ORDER BY created_utc, id LIMIT 1", (now - self.stale_after_s,)).fetchone()
+                    if row is None:
+                        con.execute("COMMIT")
+                        return None
+                    job_id, attempts = row
+                    if attempts >= self.max_attempts:
+                        error = {"title": "Job abandoned", "status": 500,
+                                 "detail": f"the job was interrupted {attempts} times (its worker stopped "
+                                           "while running it); submit it again, perhaps split into "
+                                           "smaller batches"}
+                        con.execute("UPDATE jobs SET status = 'failed', finished_utc = ?, error = ?, "
+                                    "runner = NULL WHERE id = ?", (_utc_now(), json.dumps(error), job_id))
+                        continue
+                    con.execute(
+                        "UPDATE jobs SET status = 'running', runner = ?, heartbeat_unix = ?, progress = 0, "
+                        "attempts = attempts + 1, started_utc = ? WHERE id = ?",
+                        (runner, now, _utc_now(), job_id))
+                    con.execute("COMMIT")
+                    break
+            except BaseException:
+                con.execute("ROLLBACK")
+                raise
+        return self.get(job_id)
+
+    def heartbeat(self, job_id: str, runner: str, progress: float | None = None) -> None:
+        """Refresh the heartbeat (and progress) of a job ``runner`` owns.
+
+        Raises
+        ------
+        LostClaim
+            Another runner has taken the job over.
+        """
+        with closing(self._connect()) as con:
+            if progress is None:
+                cur = con.execute("UPDATE jobs SET heartbeat_unix = ? WHERE id = ? AND runner = ? "
+                                  "AND status = 'running'", (time.time(), job_id, runner))
+            else:
+                cur = con.execute("UPDATE jobs SET heartbeat_unix = ?, progress = ? WHERE id = ? AND "
+                                  "runner = ? AND status = 'running'",
+                                  (time.time(), min(max(float(progress), 0.0), 1.0), job_id, runner))
+        if cur.rowcount != 1:
+            raise LostClaim(f"job {job_id} is no longer owned by {runner}")
+
+    def succeed(self, job_id: str, runner: str, result: bytes,
+                summary: Mapping[str, Any] | None = None) -> None:
+        """Store the result (JSON bytes) and mark the job succeeded."""
+        final = self.results / f"{job_id}.json"
+        tmp = self.results / f".{job_id}.{runner.replace(':', '_')}.tmp"
+        with open(tmp, "wb") as fh:
+            fh.write(result)
+            fh.flush()
+            os.fsync(fh.fileno())
+        self._finish(job_id, runner, "succeeded", summary=summary, rename=(tmp, final))
+
+    def fail(self, job_id: str, runner: str, error: Mapping[str, Any]) -> None:
+        """Mark the job failed with a problem document."""
+        self._finish(job_id, runner, "failed", error=error)
+
+    def _finish(self, job_id: str, runner: str, status: str, *, summary: Mapping[str, Any] | None = None,
+                error: Mapping[str, Any] | None = None, rename: tuple[Path, Path] | None = None) -> None:
+        with closing(self._connect()) as con:
+            con.execute("BEGIN IMMEDIATE")
+            try:
+                owned = con.execute("SELECT 1 FROM jobs WHERE id = ? AND runner = ? AND status = 'running'",
+                                    (job_id, runner)).fetchone()
+                if owned is None:
+                    raise LostClaim(f"job {job_id} is no longer owned by {runner}")
+                if rename is not None:
+                    os.replace(*rename)
+                con.execute(
+                    "UPDATE jobs SET status = ?, progress = CASE WHEN ? = 'succeeded' THEN 1 ELSE progress END, "
+                    "finished_utc = ?, result_file = ?, error = ?, summary = ?, runner = NULL WHERE id = ?",
+                    (status, status, _utc_now(), rename[1].name if rename else None,
+                     json.dumps(error) if error is not None else None,
+                     json.dumps(summary) if summary is not None else None, job_id))
+                con.execute("COMMIT")
+            except BaseException:
+                con.execute("ROLLBACK")
+                if rename is not None:
+                    with contextlib.suppress(OSError):
+                        rename[0].unlink()
+                raise
+
+    def purge(self, older_than_s: float) -> int:
+        """Delete finished jobs (rows and result files) finished more than ``older_than_s`` ago."""
+        cutoff = datetime.fromtimestamp(time.time() - older_than_s, UTC).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
+        with closing(self._connect()) as con:
+            ids = [r[0] for r in con.execute(
+                "SELECT id FROM jobs WHERE status IN ('succeeded', 'failed') AND finished_utc < ?", (cutoff,))]
+            con.executemany("DELETE FROM jobs WHERE id = ?", [(i,) for i in ids])
+        for i in ids:
+            with contextlib.suppress(FileNotFoundError):
+                (self.results / f"{i}.json").unlink()
+        return len(ids)
+
+
+#: A handler computes a job: ``handler(request, progress) -> (result document, summary)``,
+#: where ``progress(done, total)`` may be called as work advances.
+Handler = Callable[[dict[str, Any], Callable[[int, int], None]], tuple[Any, Mapping[str, Any] | None]]
+
+
+class JobRunner:
+    """Runs claimed jobs in a background thread of this process.
+
+    Parameters
+    ----------
+    jobs : JobStore
+    handlers : mapping of str to Handler
+        One per job ``kind``. A handler raising :class:`~rcsa.errors.InputError` fails the
+        job with a 422 problem naming the field; any other exception with a 500 problem
+        (and a logged traceback).
+    poll_s : float
+        How often an idle runner looks for work, s (``wake`` makes it look at once).
+    heartbeat_s : float
+        How often a busy runner refreshes its heartbeat and progress, s.
+    on_finish : callable, optional
+        ``on_finish(job, seconds)`` after each job (for metrics).
+    retention_s : float, optional
+        Purge finished jobs older than this, hourly (:meth:`JobStore.purge`); None keeps them.
+    """
+
+    def __init__(self, jobs: JobStore, handlers: Mapping[str, Handler], *, poll_s: float = 1.0,
+                 heartbeat_s: float = 2.0, on_finish: Callable[[Job, float], None] | None = None,
+                 retention_s: float | None = None) -> None:
+        self.jobs = jobs
+        self.handlers = dict(handlers)
+        self.poll_s = float(poll_s)
+        self.heartbeat_s = float(heartbeat_s)
+        self.on_finish = on_finish
+        self.retention_s = retention_s
+        self._next_purge = time.monotonic() + _PURGE_EVERY_S
+        self.runner_id = f"{_HOST}:{os.getpid()}:{secrets.token_hex(4)}"
+        self._stop = threading.Event()
+        self._wake = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    @property
+    def alive(self) -> bool:
+        """Whether the background thread is running."""
+        return self._thread is not None and self._thread.is_alive()
+
+    def start(self) -> None:
+        """Start the background thread (idempotent)."""
+        if self._thread is None or not self._thread.is_alive():
+            self._stop.clear()
+            self._thread = threading.Thread(target=self._loop, name="rcsa-job-runner", daemon=True)
+            self._thread.start()
+
+    def stop(self, timeout_s: float = 30.0) -> None:
+        """Ask the thread to stop after the current job and wait for it.
+
+        A job still running when the timeout expires is left ``running``; its heartbeat goes
+        stale and a runner resumes it later.
+        """
+        self._stop.set()
+        self._wake.set()
+        if self._thread is not None:
+            self._thread.join(timeout_s)
+
+    def wake(self) -> None:
+        """Look for work now (after a submit in this process)."""
+        self._wake.set()
+
+    def _loop(self) -> None:
+        while not self._stop.is_set():
+            try:
+                worked = self.run_one()
+            except Exception:  # the database itself failed: log, wait, try again
+                log.exception("job runner: could not claim or record a job")
+                worked = False
+            if self.retention_s is not None and time.monotonic() > self._next_purge:
+                self._next_purge = time.monotonic() + _PURGE_EVERY_S
+                try:
+                    self.jobs.purge(self.retention_s)
+                except Exception:
+                    log.exception("job runner: could not purge old jobs")
+            if not worked:
+                self._wake.wait(self.poll_s)
+                self._wake.clear()
+
+    def run_one(self) -> bool:
+        """Claim and run one job; return whether there was one."""
+        job = self.jobs.claim(self.runner_id)
+        if job is None:
+            return False
+        t0 = time.perf_counter()
+        log.info("job %s (%s) started, attempt %d", job.id, job.kind, job.attempts)
+        state = {"progress": 0.0}
+        done = threading.Event()
+        lost = threading.Event()
+
+        def beat() -> None:
+            while not done.wait(self.heartbeat_s):
+                try:
+                    self.jobs.heartbeat(job.id, self.runner_id, state["progress"])
+                except LostClaim:
+                    lost.set()
+                    return
+                except Exception:  # keep computing; a later beat or the finish will tell
+                    log.exception("job %s: heartbeat failed", job.id)
+
+        def progress(n_done: int, total: int) -> None:
+            state["progress"] = n_done / total if total else 1.0
+            if lost.is_set():
+                raise LostClaim(f"job {job.id} was taken over by another runner")
+
+        beater = threading.Thread(target=beat, name=f"rcsa-job-heartbeat-{job.id}", daemon=True)
+        beater.start()
+        try:
+            handler = self.handlers.get(job.kind)
+            if handler is None:
+                raise InputError("kind", f"this service cannot run jobs of kind {job.kind!r}")
+            document, summary = handler(self.jobs.request(job.id), progress)
+            result = orjson.dumps(document, option=orjson.OPT_SERIALIZE_NUMPY)
+            done.set()
+            beater.join()
+            self.jobs.succeed(job.id, self.runner_id, result, summary)
+        except LostClaim:
+            log.warning("job %s was taken over by another runner; dropping this run", job.id)
+            return True
+        except InputError as exc:
+            self._fail(job, {"title": "Invalid job request", "status": 422, "detail": str(exc),
+                             "errors": [{"field": exc.field, "detail": exc.rule}]})
+        except RcsaError as exc:
+            self._fail(job, {"title": "Job failed", "status": 409, "detail": str(exc)})
+        except Exception:
+            log.exception("job %s failed with an internal error", job.id)
+            self._fail(job, {"title": "Internal error", "status": 500,
+                             "detail": "the job failed with an internal error; the service log has the "
+                                       f"traceback (job {job.id})"})
+        finally:
+            done.set()
+            beater.join()
+        elapsed = time.perf_counter() - t0
+        with contextlib.suppress(NotFoundError):
+            final = self.jobs.get(job.id)
+            log.info("job %s %s in %.2f s", job.id, final.status, elapsed)
+            if self.on_finish is not None:
+                try:
+                    self.on_finish(final, elapsed)
+                except Exception:
+                    log.exception("job %s: on_finish hook failed", job.id)
+        return True
+
+    def _fail(self, job: Job, error: Mapping[str, Any]) -> None:
+        with contextlib.suppress(LostClaim):
+            self.jobs.fail(job.id, self.runner_id, error)

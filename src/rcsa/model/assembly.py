@@ -1,0 +1,217 @@
+"""From a validated :class:`~rcsa.model.contract.AssemblySpec` to the beam chain that is solved.
+
+Modelling rules (``contract.md`` "Assembly", ``domain.md`` §1.3, §5):
+
+* Spindle segments are listed nose → rear; the chain runs rear → nose (global axis).
+  Bearings are springs/dampers to ground at their position; a segment is split where a
+  bearing falls inside it.
+* Holder segments are listed from the gauge line toward the tool end. The inserted shank
+  (OAL − stickout) fills the bore from the holder's tool end toward the spindle: over that
+  length each section is the composite of the holder annulus and a solid tool core of the
+  shank diameter; the segment where the insertion starts is split there; inserted length
+  beyond the holder is ignored.
+* The tool overhang is a shank segment (stickout − flute length, at the shank diameter, or
+  up to the shoulder for a necked tool), an optional neck, and the fluted segment at
+  ``fluted_diameter_ratio · DC`` (stiffness) and ``fluted_mass_diameter_ratio · DC`` (mass).
+* Joints are :class:`~rcsa.physics.chain.Spring` items at the gauge line and the holder face.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from rcsa.errors import InputError
+from rcsa.model.contract import AssemblySpec, HolderSpec, JointSpec, SpindleSpec, ToolSpec
+from rcsa.physics.chain import Beam, Chain, Ground, Spring
+from rcsa.physics.materials import Material
+from rcsa.physics.sections import (
+    BeamTheory,
+    Section,
+    ShearModel,
+    composite,
+    shear_coefficient,
+    tube,
+)
+
+__all__ = ["AssemblyModel", "build_model", "holder_chain", "joint_spring", "spindle_chain", "tool_chain"]
+
+_TOL_M = 1e-12
+
+
+@dataclass(frozen=True, slots=True)
+class AssemblyModel:
+    """The solved chain, kept in its substructures so they can be reused and cached.
+
+    Attributes
+    ----------
+    spindle : Chain
+        Rear → nose, bearings included; empty for a measured spindle.
+    spindle_holder : Spring or None
+    holder : Chain
+        Gauge line → holder tip (composite over the insertion); empty when a measured
+        spindle already contains the holder (plane ``holder_tip``).
+    holder_tool : Spring or None
+    tool : Chain
+        Holder face → tool tip.
+    """
+
+    spindle: Chain
+    spindle_holder: Spring | None
+    holder: Chain
+    holder_tool: Spring | None
+    tool: Chain
+
+    def to_holder_tip(self) -> Chain:
+        """Spindle, spindle–holder joint and holder, as one chain."""
+        return self.spindle_side() + self.holder
+
+    def spindle_side(self) -> Chain:
+        """Spindle and the spindle–holder joint: what every holder and tool is coupled to."""
+        return self.spindle + _opt(self.spindle_holder)
+
+    def tool_side(self) -> Chain:
+        """Holder–tool joint and tool overhang: what changes from tool to tool."""
+        return _opt(self.holder_tool) + self.tool
+
+    def chain(self) -> Chain:
+        """The whole assembly, spindle rear → tool tip."""
+        return self.to_holder_tip() + self.tool_side()
+
+
+def _opt(spring: Spring | None) -> Chain:
+    return () if spring is None else (spring,)
+
+
+def joint_spring(joint: JointSpec | None) -> Spring | None:
+    """The chain item of an elastic joint (``None`` = rigid)."""
+    if joint is None:
+        return None
+    return Spring(joint.stiffness_n_m, joint.damping_ns_m, joint.rotational_stiffness_nm_rad,
+                  joint.rotational_damping_nms_rad)
+
+
+def spindle_chain(spindle: SpindleSpec, materials: Mapping[str, Material],
+                  shear: ShearModel | float = "hutchinson", theory: BeamTheory = "timoshenko") -> Chain:
+    """Spindle shaft with bearings, from the rear end to the nose."""
+    total = spindle.length_m
+    # Bearing positions along the chain (from the rear), grouped by node.
+    stations = sorted({round(total - b.position_m, 12) for b in spindle.bearings})
+    grounds = {x: [b for b in spindle.bearings if abs(total - b.position_m - x) < 1e-9] for x in stations}
+    items: list[Beam | Spring | Ground] = []
+    x0 = 0.0
+
+    def ground_at(x: float) -> None:
+        for key in [k for k in grounds if abs(k - x) < 1e-9]:
+            for b in grounds.pop(key):
+                items.append(Ground(b.stiffness_n_m, b.damping_ns_m, b.rotational_stiffness_nm_rad,
+                                    b.rotational_damping_nms_rad))
+
+    ground_at(0.0)
+    for seg in reversed(spindle.segments):
+        section = tube(seg.outer_diameter_m, seg.inner_diameter_m, materials[seg.material], shear, theory)
+        x1 = x0 + seg.length_m
+        cuts = [x for x in sorted(grounds) if x0 + 1e-9 < x < x1 - 1e-9]
+        for a, b in zip([x0, *cuts], [*cuts, x1], strict=True):
+            items.append(Beam(section, b - a))
+            ground_at(b)
+        x0 = x1
+    ground_at(x0)
+    return tuple(items)
+
+
+def holder_chain(holder: HolderSpec, tool: ToolSpec, materials: Mapping[str, Material],
+                 shear: ShearModel | float = "hutchinson", theory: BeamTheory = "timoshenko") -> Chain:
+    """Holder from the gauge line to its tool end, composite with the tool core over the insertion."""
+    length = holder.length_m
+    insertion_start = length - min(tool.inserted_length_m, length)
+    core = (tube(tool.shank_diameter_m, 0.0, materials[tool.material], shear, theory)
+            if tool.inserted_length_m > _TOL_M else None)
+    items: list[Beam | Spring | Ground] = []
+    x0 = 0.0
+    for i, seg in enumerate(holder.segments):
+        x1 = x0 + seg.length_m
+        annulus = tube(seg.outer_diameter_m, seg.inner_diameter_m, materials[seg.material], shear, theory)
+        pieces = [(x0, x1)]
+        if x0 + 1e-9 < insertion_start < x1 - 1e-9:
+            pieces = [(x0, insertion_start), (insertion_start, x1)]
+        for a, b in pieces:
+            filled = core is not None and a >= insertion_start - 1e-9
+            if filled and tool.shank_diameter_m > seg.inner_diameter_m * (1 + 1e-9):
+                raise InputError(
+                    "tool.shank_diameter_m",
+                    f"the shank ({tool.shank_diameter_m:g} m) does not fit the bore "
+                    f"({seg.inner_diameter_m:g} m) of holder.segments[{i}], which the inserted "
+                    f"length ({tool.inserted_length_m:g} m) reaches")
+            items.append(Beam(composite(annulus, core) if filled else annulus, b - a))  # type: ignore[arg-type]
+        x0 = x1
+    return tuple(items)
+
+
+def fluted_section(tool: ToolSpec, material: Material, shear: ShearModel | float,
+                   theory: BeamTheory) -> Section:
+    """Equivalent section of the fluted part: stiffness from d_I, mass from d_A (``domain.md`` §5.1)."""
+    d_i = tool.fluted_diameter_ratio * tool.diameter_m
+    d_a = (tool.fluted_mass_diameter_ratio or tool.fluted_diameter_ratio) * tool.diameter_m
+    stiff = tube(d_i, 0.0, material, shear, theory)
+    if d_a == d_i:
+        return stiff
+    area_a = np.pi * d_a**2 / 4
+    damping = 1.0 + 1j * material.loss_factor
+    kappa = shear_coefficient(material.poisson_ratio, 0.0, shear)
+    flex = 0j if theory == "euler_bernoulli" else 1.0 / (kappa * material.shear_modulus_pa * damping * area_a)
+    return Section(ei=stiff.ei, shear_flexibility=complex(flex), rho_a=material.density_kg_m3 * area_a,
+                   rho_i=stiff.rho_i)
+
+
+def tool_chain(tool: ToolSpec, materials: Mapping[str, Material], shear: ShearModel | float = "hutchinson",
+               theory: BeamTheory = "timoshenko") -> Chain:
+    """Tool overhang from the holder face to the tip: shank, optional neck, flutes."""
+    mat = materials[tool.material]
+    shoulder = tool.shoulder_length_m if tool.shoulder_length_m is not None else tool.flute_length_m
+    items: list[Beam | Spring | Ground] = []
+    shank_length = tool.stickout_m - shoulder
+    if shank_length > _TOL_M:
+        items.append(Beam(tube(tool.shank_diameter_m, 0.0, mat, shear, theory), shank_length))
+    neck_length = shoulder - tool.flute_length_m
+    if neck_length > _TOL_M and tool.shoulder_diameter_m is not None:
+        items.append(Beam(tube(tool.shoulder_diameter_m, 0.0, mat, shear, theory), neck_length))
+    items.append(Beam(fluted_section(tool, mat, shear, theory), tool.flute_length_m))
+    return tuple(items)
+
+
+def build_model(spec: AssemblySpec, base_plane: str | None = None, spindle: Chain | None = None) -> AssemblyModel:
+    """The chain model of an assembly.
+
+    Parameters
+    ----------
+    spec : AssemblySpec
+    base_plane : {None, "spindle_nose", "holder_tip"}
+        For a measured spindle, the plane of the measurement; ``None`` for an analytical one.
+    spindle : Chain, optional
+        The spindle chain of ``spec``, already built (a batch builds it once for all tools).
+
+    Returns
+    -------
+    AssemblyModel
+    """
+    shear, theory, mats = spec.shear_coefficient, spec.beam_theory, spec.materials
+    if spindle is None:
+        spindle = spindle_chain(spec.spindle, mats, shear, theory) if isinstance(spec.spindle, SpindleSpec) else ()
+    holder: Chain = ()
+    if base_plane != "holder_tip":
+        if spec.holder is None:
+            raise InputError("holder", "is required unless the measured spindle's plane is holder_tip")
+        holder = holder_chain(spec.holder, spec.tool, mats, shear, theory)
+    elif spec.holder is not None:
+        raise InputError("holder", "must be left out: the measured spindle (plane holder_tip) already "
+                         "contains its holder")
+    return AssemblyModel(
+        spindle=spindle,
+        spindle_holder=joint_spring(spec.spindle_holder) if base_plane != "holder_tip" else None,
+        holder=holder,
+        holder_tool=joint_spring(spec.holder_tool),
+        tool=tool_chain(spec.tool, mats, shear, theory),
+    )

@@ -1,0 +1,121 @@
+"""Tool-point FRFs of many tool–holder combinations on one spindle.
+
+The spindle (and each distinct spindle + holder + insertion) is condensed once and reused;
+the exact natural frequencies of all tools are found together afterwards (one lockstep
+bisection, :func:`rcsa.physics.natural_frequencies.natural_frequencies_batch`). Results come
+in input order, each with its own ``status``; a bad combination never fails the others.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import replace
+from typing import Any, Literal
+
+import numpy as np
+
+from rcsa.errors import InputError
+from rcsa.model.assembly import AssemblyModel
+from rcsa.model.bounds import MAX_BATCH_COMBINATIONS, MAX_FREQUENCY_LINES
+from rcsa.model.contract import assemble, parse_combination, parse_common
+from rcsa.model.prediction import Prediction
+from rcsa.model.spindle_side import BaseResolver, SpindleSide
+from rcsa.physics.natural_frequencies import natural_frequencies_batch
+
+__all__ = ["BATCH_FIELDS", "Progress", "predict_batch"]
+
+#: Called as ``progress(done, total)``.
+Progress = Callable[[int, int], None]
+
+#: Fields of a batch request.
+BATCH_FIELDS = ("frequency", "beam_theory", "shear_coefficient", "materials", "spindle", "combinations",
+                "natural_frequencies")
+
+_Slot = dict[str, Any] | tuple[str, AssemblyModel, Prediction]
+
+
+def _fill_natural_frequencies(slots: list[_Slot], frequency_hz: np.ndarray) -> None:
+    """Exact natural frequencies of every ok combination, all tools on one spindle solved together.
+
+    The spindle (with its joint to the holder) is the shared prefix; holders and tools are
+    the stacked tails, so tools in different holders or with different shanks still share
+    one lockstep bisection (:func:`rcsa.physics.natural_frequencies.natural_frequencies_batch`).
+    """
+    groups: dict[Any, list[int]] = {}
+    for i, slot in enumerate(slots):
+        if not isinstance(slot, dict):
+            groups.setdefault(slot[1].spindle_side(), []).append(i)
+    for prefix, members in groups.items():
+        models = [slots[i][1] for i in members]  # type: ignore[index]
+        tails = [m.holder + m.tool_side() for m in models]
+        found = natural_frequencies_batch(prefix, tails, float(frequency_hz[0]), float(frequency_hz[-1]))
+        for i, nat in zip(members, found, strict=True):
+            ident, model, prediction = slots[i]  # type: ignore[misc]
+            slots[i] = (ident, model, replace(prediction, natural_frequencies_hz=nat))
+
+
+def predict_batch(request: Mapping[str, Any], *, resolve_base: BaseResolver | None = None,
+                  max_lines: int = MAX_FREQUENCY_LINES, max_combinations: int = MAX_BATCH_COMBINATIONS,
+                  progress: Progress | None = None, arrays: Literal["list", "numpy"] = "list") -> dict[str, Any]:
+    """Tool-point FRFs of many tool–holder combinations on one spindle.
+
+    Parameters
+    ----------
+    request : dict
+        ``{"spindle", "frequency", "combinations": [{"id", "holder", "tool", "joints"}]}``,
+        optionally ``materials``, ``beam_theory``, ``shear_coefficient`` and
+        ``natural_frequencies`` (bool, default true).
+    resolve_base : callable, optional
+        Turns a measured spindle into its base receptance
+        (:func:`rcsa.measured.hybrid.base_resolver`); needed for ``{"measurement_id"}``.
+    max_lines, max_combinations : int
+        Largest accepted number of frequency lines and of combinations.
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each combination.
+    arrays : {"list", "numpy"}
+        Long arrays of the results as lists (JSON-ready) or numpy arrays (for orjson).
+
+    Returns
+    -------
+    dict
+        ``{"results": [{"id", "status": "ok", ...prediction} | {"id", "status": "error",
+        "error": {"field", "detail"}}], "summary": {"ok", "error"}}``
+    """
+    if not isinstance(request, Mapping):
+        raise InputError("", "the batch request must be a JSON object")
+    unknown = sorted(set(request) - set(BATCH_FIELDS))
+    if unknown:
+        raise InputError(unknown[0], f"unknown field (allowed: {', '.join(BATCH_FIELDS)})")
+    combos = request.get("combinations")
+    if not isinstance(combos, list) or not combos:
+        raise InputError("combinations", "must be a non-empty list")
+    if len(combos) > max_combinations:
+        raise InputError("combinations", f"at most {max_combinations} combinations per request, got {len(combos)}")
+    with_modes = request.get("natural_frequencies", True)
+    if not isinstance(with_modes, bool):
+        raise InputError("natural_frequencies", "must be true or false")
+    common = parse_common({k: v for k, v in request.items() if k not in ("combinations", "natural_frequencies")},
+                          max_lines=max_lines)
+    side = SpindleSide(common, resolve_base)
+    slots: list[_Slot] = []
+    for i, raw in enumerate(combos):
+        ident = raw.get("id") if isinstance(raw, Mapping) else None
+        path = f"combinations[{i}]"
+        try:
+            if not isinstance(ident, str) or not ident:
+                raise InputError(f"{path}.id", "is required (a non-empty string)")
+            spec = assemble(common, parse_combination(raw, common.materials, path, extra_fields=("id",)))
+            # exact modes come afterwards for all tools at once (natural_frequencies_batch)
+            model, prediction = side.predict_with_model(spec, natural_frequencies=False)
+            slots.append((ident, model, prediction))
+        except InputError as exc:
+            field = exc.field if exc.field.startswith(path) else f"{path}.{exc.field}".rstrip(".")
+            slots.append({"id": ident if isinstance(ident, str) else None, "status": "error",
+                          "error": {"field": field, "detail": exc.rule}})
+        if progress is not None:
+            progress(i + 1, len(combos))
+    if with_modes and side.base is None:
+        _fill_natural_frequencies(slots, common.frequency_hz)
+    results = [s if isinstance(s, dict) else {"id": s[0], "status": "ok", **s[2].to_dict(arrays)} for s in slots]
+    ok = sum(r["status"] == "ok" for r in results)
+    return {"results": results, "summary": {"ok": ok, "error": len(results) - ok}}

@@ -1,0 +1,500 @@
+"""The contract's assembly document, parsed into immutable, validated specifications.
+
+Every rule of ``contract.md`` "Assembly" is checked here, once, at the edge; a violation
+raises :class:`~rcsa.errors.InputError` naming the field (dotted path) and the rule. The
+numerical code downstream never sees an unchecked value.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+
+from rcsa.errors import InputError
+from rcsa.model.bounds import (
+    MAX_DAMPING,
+    MAX_DENSITY_KG_M3,
+    MAX_FREQUENCY_HZ,
+    MAX_FREQUENCY_LINES,
+    MAX_LENGTH_M,
+    MAX_MODULUS_PA,
+    MAX_STIFFNESS,
+    MIN_LENGTH_M,
+)
+from rcsa.physics.materials import BUILTIN_MATERIALS, Material
+from rcsa.physics.receptance import check_frequency_hz
+from rcsa.physics.sections import BeamTheory, ShearModel
+
+__all__ = [
+    "AssemblySpec",
+    "BearingSpec",
+    "HolderSpec",
+    "JointSpec",
+    "MeasuredSpindleSpec",
+    "SegmentSpec",
+    "SpindleSpec",
+    "ToolSpec",
+    "CombinationSpec",
+    "CommonSpec",
+    "assemble",
+    "parse_assembly",
+    "parse_combination",
+    "parse_common",
+    "parse_frequency",
+    "parse_holder",
+    "parse_joint",
+    "parse_materials",
+    "parse_spindle",
+    "parse_tool",
+]
+
+class _Obj:
+    """Reads one JSON object: typed getters that name the path, and an unknown-key check."""
+
+    def __init__(self, value: object, path: str) -> None:
+        if not isinstance(value, Mapping):
+            raise InputError(path, f"must be an object, got {type(value).__name__}")
+        self.value, self.path = value, path
+
+    def at(self, key: str) -> str:
+        return f"{self.path}.{key}" if self.path else key
+
+    def only(self, *allowed: str) -> None:
+        unknown = sorted(set(self.value) - set(allowed))
+        if unknown:
+            raise InputError(self.at(unknown[0]), f"unknown field (allowed: {', '.join(allowed)})")
+
+    def has(self, key: str) -> bool:
+        return self.value.get(key) is not None
+
+    def number(self, key: str, *, default: float | None = None, gt: float | None = None,
+               ge: float | None = None, le: float | None = None, lt: float | None = None,
+               required: bool = True) -> float:
+        raw = self.value.get(key)
+        if raw is None:
+            if default is not None or not required:
+                return default  # type: ignore[return-value]
+            raise InputError(self.at(key), "is required")
+        if isinstance(raw, bool) or not isinstance(raw, int | float):
+            raise InputError(self.at(key), f"must be a number, got {type(raw).__name__}")
+        x = float(raw)
+        if not math.isfinite(x):
+            raise InputError(self.at(key), "must be a finite number")
+        for bound, ok, word in ((gt, lambda b: x > b, ">"), (ge, lambda b: x >= b, ">="),
+                                (le, lambda b: x <= b, "<="), (lt, lambda b: x < b, "<")):
+            if bound is not None and not ok(bound):
+                raise InputError(self.at(key), f"must be {word} {bound:g}, got {x:g}")
+        return x
+
+    def string(self, key: str, default: str | None = None, choices: tuple[str, ...] | None = None) -> str:
+        raw = self.value.get(key, default)
+        if raw is None:
+            raise InputError(self.at(key), "is required")
+        if not isinstance(raw, str) or not raw:
+            raise InputError(self.at(key), "must be a non-empty string")
+        if choices is not None and raw not in choices:
+            raise InputError(self.at(key), f"must be one of {', '.join(choices)}, got {raw!r}")
+        return raw
+
+    def array(self, key: str) -> list[Any]:
+        raw = self.value.get(key)
+        if not isinstance(raw, list):
+            raise InputError(self.at(key), "must be a list")
+        return raw
+
+
+# ---------------------------------------------------------------------------- specs
+
+
+@dataclass(frozen=True, slots=True)
+class SegmentSpec:
+    """A uniform (hollow) circular segment; lengths and diameters in m."""
+
+    length_m: float
+    outer_diameter_m: float
+    inner_diameter_m: float
+    material: str
+
+
+@dataclass(frozen=True, slots=True)
+class BearingSpec:
+    """A bearing: spring/damper to rigid ground at ``position_m`` from the spindle nose."""
+
+    position_m: float
+    stiffness_n_m: float
+    damping_ns_m: float = 0.0
+    rotational_stiffness_nm_rad: float = 0.0
+    rotational_damping_nms_rad: float = 0.0
+
+
+@dataclass(frozen=True, slots=True)
+class SpindleSpec:
+    """Analytical spindle: segments listed from the nose toward the rear, bearings."""
+
+    segments: tuple[SegmentSpec, ...]
+    bearings: tuple[BearingSpec, ...]
+
+    @property
+    def length_m(self) -> float:
+        """Total shaft length, m."""
+        return sum(s.length_m for s in self.segments)
+
+
+@dataclass(frozen=True, slots=True)
+class MeasuredSpindleSpec:
+    """A stored measured spindle (hybrid assembly).
+
+    ``artifact_method`` chooses how an ``artifact_frfs`` measurement is identified
+    (``exact`` three-FRF method, or the labelled ``finite_difference`` fallback);
+    ``effective_length_m`` is the equivalent-cantilever length used to estimate the rotations
+    of a ``direct_frf`` measurement (:mod:`rcsa.measured.hybrid`).
+    """
+
+    measurement_id: str
+    artifact_method: str = "exact"
+    effective_length_m: float = 0.2
+
+
+@dataclass(frozen=True, slots=True)
+class HolderSpec:
+    """Holder segments listed from the gauge line toward the tool end."""
+
+    segments: tuple[SegmentSpec, ...]
+
+    @property
+    def length_m(self) -> float:
+        """Gauge length of the modelled holder, m."""
+        return sum(s.length_m for s in self.segments)
+
+
+@dataclass(frozen=True, slots=True)
+class ToolSpec:
+    """Parametric tool (ISO 13399 / Fusion meaning; ``contract.md`` "Assembly").
+
+    ``shoulder_length_m``/``shoulder_diameter_m`` (extension) describe a reduced neck from
+    the flute end up to ``shoulder_length_m`` from the tip. ``fluted_mass_diameter_ratio``
+    (extension) uses a separate equivalent diameter for the flutes' mass (default: the
+    stiffness one, ``domain.md`` §5.1).
+    """
+
+    material: str
+    diameter_m: float
+    shank_diameter_m: float
+    overall_length_m: float
+    flute_length_m: float
+    stickout_m: float
+    fluted_diameter_ratio: float = 0.8
+    fluted_mass_diameter_ratio: float | None = None
+    shoulder_length_m: float | None = None
+    shoulder_diameter_m: float | None = None
+
+    @property
+    def inserted_length_m(self) -> float:
+        """Length of the shank inside the holder, OAL − stickout, m."""
+        return self.overall_length_m - self.stickout_m
+
+
+@dataclass(frozen=True, slots=True)
+class JointSpec:
+    """Elastic joint ``diag(k_t + iωc_t, k_r + iωc_r)``; ``None`` rotational stiffness = rigid."""
+
+    stiffness_n_m: float
+    damping_ns_m: float = 0.0
+    rotational_stiffness_nm_rad: float | None = None
+    rotational_damping_nms_rad: float = 0.0
+
+
+@dataclass(frozen=True, slots=True)
+class AssemblySpec:
+    """A validated assembly document (``contract.md`` "Assembly")."""
+
+    frequency_hz: np.ndarray
+    spindle: SpindleSpec | MeasuredSpindleSpec
+    holder: HolderSpec | None
+    tool: ToolSpec
+    spindle_holder: JointSpec | None = None
+    holder_tool: JointSpec | None = None
+    beam_theory: BeamTheory = "timoshenko"
+    shear_coefficient: ShearModel | float = "hutchinson"
+    materials: Mapping[str, Material] = field(default_factory=lambda: MappingProxyType(dict(BUILTIN_MATERIALS)))
+
+
+# ---------------------------------------------------------------------------- parsers
+
+
+def parse_frequency(value: object, path: str = "frequency", max_lines: int = MAX_FREQUENCY_LINES) -> np.ndarray:
+    """Frequency grid from ``{start_hz, stop_hz, step_hz}`` (stop included) or ``{values_hz}``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (nfreq,)
+        Read-only, strictly increasing, > 0 Hz.
+    """
+    o = _Obj(value, path)
+    if "values_hz" in o.value:
+        o.only("values_hz")
+        values = o.array("values_hz")
+        if len(values) > max_lines:
+            raise InputError(o.at("values_hz"), f"at most {max_lines} frequency lines, got {len(values)}")
+        if any(isinstance(v, bool) or not isinstance(v, int | float) for v in values):
+            raise InputError(o.at("values_hz"), "must be a list of numbers")
+        f = check_frequency_hz(values, o.at("values_hz"))
+        if f[-1] > MAX_FREQUENCY_HZ:
+            raise InputError(o.at("values_hz"), f"frequencies must be <= {MAX_FREQUENCY_HZ:g} Hz")
+        return f
+    o.only("start_hz", "stop_hz", "step_hz")
+    start = o.number("start_hz", gt=0.0, le=MAX_FREQUENCY_HZ)
+    stop = o.number("stop_hz", gt=0.0, le=MAX_FREQUENCY_HZ)
+    step = o.number("step_hz", gt=0.0)
+    if stop < start:
+        raise InputError(o.at("stop_hz"), f"must be >= start_hz ({start:g}), got {stop:g}")
+    span = (stop - start) / step
+    if not span < max_lines:
+        raise InputError(path, f"at most {max_lines} frequency lines, this grid has {span + 1:.6g}")
+    n = math.floor(span * (1 + 1e-12) + 1e-9) + 1
+    if n > max_lines:
+        raise InputError(path, f"at most {max_lines} frequency lines, this grid has {n}")
+    return check_frequency_hz(start + step * np.arange(n), path)
+
+
+_MATERIAL_FIELDS = ("youngs_modulus_pa", "poisson_ratio", "density_kg_m3", "loss_factor")
+
+
+def parse_materials(value: object, path: str = "materials") -> Mapping[str, Material]:
+    """Built-in materials, updated by the document's ``materials`` (new names or overrides).
+
+    A built-in may be overridden field by field; a new material needs E, ν and ρ.
+    """
+    out = dict(BUILTIN_MATERIALS)
+    if value is None:
+        return MappingProxyType(out)
+    o = _Obj(value, path)
+    for name, raw in o.value.items():
+        m = _Obj(raw, o.at(name))
+        m.only(*_MATERIAL_FIELDS)
+        base = BUILTIN_MATERIALS.get(name)
+        out[name] = Material(
+            youngs_modulus_pa=m.number("youngs_modulus_pa", gt=0.0, le=MAX_MODULUS_PA,
+                                       default=base.youngs_modulus_pa if base else None),
+            poisson_ratio=m.number("poisson_ratio", gt=-1.0, lt=0.5, default=base.poisson_ratio if base else None),
+            density_kg_m3=m.number("density_kg_m3", gt=0.0, le=MAX_DENSITY_KG_M3,
+                                   default=base.density_kg_m3 if base else None),
+            loss_factor=m.number("loss_factor", ge=0.0, lt=1.0, default=base.loss_factor if base else 0.0),
+        )
+    return MappingProxyType(out)
+
+
+def _material(o: _Obj, materials: Mapping[str, Material], default: str) -> str:
+    name = o.string("material", default)
+    if name not in materials:
+        raise InputError(o.at("material"), f"unknown material {name!r} (known: {', '.join(sorted(materials))})")
+    return name
+
+
+def _segments(value: object, path: str, materials: Mapping[str, Material]) -> tuple[SegmentSpec, ...]:
+    if not isinstance(value, list) or not value:
+        raise InputError(path, "must be a non-empty list of segments")
+    out = []
+    for i, raw in enumerate(value):
+        o = _Obj(raw, f"{path}[{i}]")
+        o.only("length_m", "outer_diameter_m", "inner_diameter_m", "material")
+        length = o.number("length_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
+        outer = o.number("outer_diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
+        inner = o.number("inner_diameter_m", ge=0.0, default=0.0)
+        if inner >= outer:
+            raise InputError(o.at("inner_diameter_m"),
+                             f"must be smaller than outer_diameter_m ({outer:g}), got {inner:g}")
+        out.append(SegmentSpec(length, outer, inner, _material(o, materials, "steel")))
+    return tuple(out)
+
+
+def parse_spindle(value: object, materials: Mapping[str, Material], path: str = "spindle"
+                  ) -> SpindleSpec | MeasuredSpindleSpec:
+    """An analytical spindle (segments nose → rear, bearings) or a stored measurement id."""
+    o = _Obj(value, path)
+    if "measurement_id" in o.value:
+        o.only("measurement_id", "artifact_method", "effective_length_m")
+        return MeasuredSpindleSpec(o.string("measurement_id"),
+                                   o.string("artifact_method", "exact", ("exact", "finite_difference")),
+                                   o.number("effective_length_m", gt=0.0, default=0.2))
+    o.only("segments", "bearings")
+    segments = _segments(o.value.get("segments"), o.at("segments"), materials)
+    total = sum(s.length_m for s in segments)
+    raw_bearings = o.value.get("bearings", [])
+    if not isinstance(raw_bearings, list):
+        raise InputError(o.at("bearings"), "must be a list")
+    bearings = []
+    for i, raw in enumerate(raw_bearings):
+        b = _Obj(raw, f"{o.at('bearings')}[{i}]")
+        b.only("position_m", "stiffness_n_m", "damping_ns_m", "rotational_stiffness_nm_rad",
+               "rotational_damping_nms_rad")
+        pos = b.number("position_m", ge=0.0)
+        if pos > total * (1 + 1e-12):
+            raise InputError(b.at("position_m"),
+                             f"bearing lies outside the spindle: must be <= its length {total:g} m, got {pos:g}")
+        bearings.append(BearingSpec(
+            min(pos, total), b.number("stiffness_n_m", ge=0.0, le=MAX_STIFFNESS),
+            b.number("damping_ns_m", ge=0.0, le=MAX_DAMPING, default=0.0),
+            b.number("rotational_stiffness_nm_rad", ge=0.0, le=MAX_STIFFNESS, default=0.0),
+            b.number("rotational_damping_nms_rad", ge=0.0, le=MAX_DAMPING, default=0.0)))
+    return SpindleSpec(segments, tuple(bearings))
+
+
+def parse_holder(value: object, materials: Mapping[str, Material], path: str = "holder") -> HolderSpec:
+    """Holder segments from the gauge line toward the tool end."""
+    o = _Obj(value, path)
+    o.only("segments")
+    return HolderSpec(_segments(o.value.get("segments"), o.at("segments"), materials))
+
+
+_TOOL_FIELDS = ("material", "diameter_m", "shank_diameter_m", "overall_length_m", "flute_length_m",
+                "stickout_m", "fluted_diameter_ratio", "fluted_mass_diameter_ratio",
+                "shoulder_length_m", "shoulder_diameter_m")
+
+
+def parse_tool(value: object, materials: Mapping[str, Material], path: str = "tool") -> ToolSpec:
+    """The parametric tool, with the geometric rules of the contract checked."""
+    o = _Obj(value, path)
+    o.only(*_TOOL_FIELDS)
+    diameter = o.number("diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
+    shank = o.number("shank_diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M, default=diameter)
+    overall = o.number("overall_length_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
+    stickout = o.number("stickout_m", gt=0.0, ge=MIN_LENGTH_M)
+    if stickout > overall:
+        raise InputError(o.at("stickout_m"), f"must be <= overall_length_m ({overall:g}), got {stickout:g}")
+    flute = o.number("flute_length_m", gt=0.0, ge=MIN_LENGTH_M)
+    if flute > stickout:
+        raise InputError(o.at("flute_length_m"), f"must be <= stickout_m ({stickout:g}), got {flute:g}")
+    ratio = o.number("fluted_diameter_ratio", gt=0.0, le=1.0, default=0.8)
+    mass_ratio = o.number("fluted_mass_diameter_ratio", gt=0.0, le=1.0, required=False)
+    shoulder_length = o.number("shoulder_length_m", gt=0.0, ge=MIN_LENGTH_M, required=False)
+    shoulder_diameter = o.number("shoulder_diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M, required=False)
+    if (shoulder_length is None) != (shoulder_diameter is None):
+        raise InputError(o.at("shoulder_length_m"), "shoulder_length_m and shoulder_diameter_m go together")
+    if shoulder_length is not None and not flute <= shoulder_length <= stickout:
+        raise InputError(o.at("shoulder_length_m"),
+                         f"must lie between flute_length_m ({flute:g}) and stickout_m ({stickout:g})")
+    return ToolSpec(_material(o, materials, "carbide"), diameter, shank, overall, flute, stickout,
+                    ratio, mass_ratio, shoulder_length, shoulder_diameter)
+
+
+def parse_joint(value: object, path: str) -> JointSpec | None:
+    """An elastic joint; ``None`` (left out) means rigid."""
+    if value is None:
+        return None
+    o = _Obj(value, path)
+    o.only("stiffness_n_m", "damping_ns_m", "rotational_stiffness_nm_rad", "rotational_damping_nms_rad")
+    return JointSpec(o.number("stiffness_n_m", gt=0.0, le=MAX_STIFFNESS),
+                     o.number("damping_ns_m", ge=0.0, le=MAX_DAMPING, default=0.0),
+                     o.number("rotational_stiffness_nm_rad", gt=0.0, le=MAX_STIFFNESS, required=False),
+                     o.number("rotational_damping_nms_rad", ge=0.0, le=MAX_DAMPING, default=0.0))
+
+
+@dataclass(frozen=True, slots=True)
+class CombinationSpec:
+    """One tool–holder combination of a batch: holder, tool and joints."""
+
+    holder: HolderSpec | None
+    tool: ToolSpec
+    spindle_holder: JointSpec | None
+    holder_tool: JointSpec | None
+
+
+def parse_combination(value: object, materials: Mapping[str, Material], path: str = "",
+                      extra_fields: tuple[str, ...] = ()) -> CombinationSpec:
+    """Holder, tool and joints of one assembly or batch combination.
+
+    Parameters
+    ----------
+    value : dict
+        Object holding ``holder`` (optional), ``tool`` and ``joints`` (optional).
+    path : str
+        Path prefix for error messages (``"combinations[3]"``).
+    extra_fields : tuple of str
+        Other keys allowed in ``value`` (checked by the caller).
+    """
+    o = _Obj(value, path)
+    o.only("holder", "tool", "joints", *extra_fields)
+    holder = parse_holder(o.value["holder"], materials, o.at("holder")) if o.has("holder") else None
+    if not o.has("tool"):
+        raise InputError(o.at("tool"), "is required")
+    tool = parse_tool(o.value["tool"], materials, o.at("tool"))
+    joints = _Obj(o.value.get("joints") or {}, o.at("joints"))
+    joints.only("spindle_holder", "holder_tool")
+    return CombinationSpec(holder, tool,
+                           parse_joint(joints.value.get("spindle_holder"), joints.at("spindle_holder")),
+                           parse_joint(joints.value.get("holder_tool"), joints.at("holder_tool")))
+
+
+@dataclass(frozen=True, slots=True)
+class CommonSpec:
+    """What every combination of an assembly or batch shares: grid, options, materials, spindle."""
+
+    frequency_hz: np.ndarray
+    beam_theory: BeamTheory
+    shear_coefficient: ShearModel | float
+    materials: Mapping[str, Material]
+    spindle: SpindleSpec | MeasuredSpindleSpec
+
+
+_COMMON_FIELDS = ("frequency", "beam_theory", "shear_coefficient", "materials", "spindle")
+
+
+def parse_common(document: object, path: str = "", max_lines: int = MAX_FREQUENCY_LINES) -> CommonSpec:
+    """Frequency grid, beam theory, shear coefficient, materials and spindle of a document."""
+    o = _Obj(document, path)
+    if "frequency" not in o.value:
+        raise InputError(o.at("frequency"), "is required")
+    frequency = parse_frequency(o.value["frequency"], o.at("frequency"), max_lines=max_lines)
+    theory = o.string("beam_theory", "timoshenko", ("timoshenko", "euler_bernoulli"))
+    if isinstance(o.value.get("shear_coefficient", "hutchinson"), str):
+        kappa: ShearModel | float = o.string("shear_coefficient", "hutchinson", ("hutchinson", "cowper"))  # type: ignore[assignment]
+    else:
+        kappa = o.number("shear_coefficient", gt=0.0, le=1.5)
+    materials = parse_materials(o.value.get("materials"), o.at("materials"))
+    if "spindle" not in o.value:
+        raise InputError(o.at("spindle"), "is required")
+    spindle = parse_spindle(o.value["spindle"], materials, o.at("spindle"))
+    return CommonSpec(frequency, theory, kappa, materials, spindle)  # type: ignore[arg-type]
+
+
+def assemble(common: CommonSpec, combination: CombinationSpec) -> AssemblySpec:
+    """An assembly from the shared part and one combination."""
+    if combination.holder is None and isinstance(common.spindle, SpindleSpec):
+        raise InputError("holder", "is required for an analytical spindle")
+    return AssemblySpec(
+        frequency_hz=common.frequency_hz, spindle=common.spindle, holder=combination.holder,
+        tool=combination.tool, spindle_holder=combination.spindle_holder,
+        holder_tool=combination.holder_tool, beam_theory=common.beam_theory,
+        shear_coefficient=common.shear_coefficient, materials=common.materials)
+
+
+def parse_assembly(document: object, max_lines: int = MAX_FREQUENCY_LINES) -> AssemblySpec:
+    """Validate a contract assembly document.
+
+    Parameters
+    ----------
+    document : dict
+        The assembly as in ``contract.md`` "Assembly" (SI units).
+    max_lines : int
+        Largest accepted number of frequency lines.
+
+    Returns
+    -------
+    AssemblySpec
+
+    Raises
+    ------
+    InputError
+        Naming the offending field and the rule.
+    """
+    o = _Obj(document, "")
+    o.only(*_COMMON_FIELDS, "holder", "tool", "joints", "name", "description")
+    common = parse_common(document, max_lines=max_lines)
+    rest = {k: v for k, v in o.value.items() if k in ("holder", "tool", "joints")}
+    return assemble(common, parse_combination(rest, common.materials))

@@ -1,0 +1,204 @@
+"""Tool-point prediction of an assembly: the receptance and what users read from it.
+
+:func:`predict_model` solves an :class:`~rcsa.model.assembly.AssemblyModel` and returns a
+:class:`Prediction`, which is both a typed object (numpy arrays) and a read-only mapping in
+exactly the contract's JSON shape (``contract.md`` "Prediction result").
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from rcsa.model.assembly import AssemblyModel
+from rcsa.model.peaks import find_frf_peaks, modal_fit_peaks
+from rcsa.model.wire import complex_to_wire
+from rcsa.physics.algebra2x2 import inv2
+from rcsa.physics.chain import Beam, Chain
+from rcsa.physics.elimination import march, static_condense, static_tip_receptance
+from rcsa.physics.natural_frequencies import natural_frequencies_batch
+from rcsa.physics.receptance import Receptance
+
+__all__ = ["Prediction", "SubassemblyCache", "predict_model", "tool_point_receptance"]
+
+
+@dataclass(frozen=True)
+class Prediction(Mapping[str, Any]):
+    """Result of a tool-point prediction.
+
+    Attributes
+    ----------
+    tool_point : Receptance
+        ``[[h, l], [n, p]]`` at the tool tip, shape (nfreq, 2, 2).
+    natural_frequencies_hz : numpy.ndarray, shape (nmodes,)
+        Exact undamped natural frequencies in the band (analytical), or modal-fit estimates
+        (hybrid; ``natural_frequencies_method == "modal_fit"``).
+    peaks : list of dict
+        ``{"frequency_hz", "magnitude_m_n"}`` local maxima of ``|h|``.
+    static_stiffness_n_m : float or None
+        1 / h at 0 Hz of the undamped model; ``None`` when it cannot be given.
+    min_real_m_n, min_real_frequency_hz : float
+        Most negative real part of h and where it occurs.
+    notes : tuple of str
+        What the numbers mean where it is not obvious (hybrid estimates, uncertainty).
+    extra : dict
+        Further JSON fields (e.g. the hybrid identification report).
+    """
+
+    tool_point: Receptance
+    natural_frequencies_hz: np.ndarray
+    natural_frequencies_method: str
+    peaks: list[dict[str, float]]
+    static_stiffness_n_m: float | None
+    min_real_m_n: float
+    min_real_frequency_hz: float
+    notes: tuple[str, ...] = ()
+    extra: Mapping[str, Any] = field(default_factory=dict)
+
+    @property
+    def frequency_hz(self) -> np.ndarray:
+        """Frequency grid, Hz, shape (nfreq,)."""
+        return self.tool_point.frequency_hz
+
+    def to_dict(self, arrays: str = "list") -> dict[str, Any]:
+        """The contract's prediction result.
+
+        Parameters
+        ----------
+        arrays : {"list", "numpy"}
+            ``"list"``: JSON-ready Python lists. ``"numpy"``: the same document with numpy
+            arrays in place of the long lists (for fast serialisers such as orjson).
+        """
+        tp = self.tool_point
+
+        out: dict[str, Any] = {
+            "frequency_hz": tp.frequency_hz.tolist() if arrays == "list" else np.ascontiguousarray(tp.frequency_hz),
+            "tool_point": {k: complex_to_wire(getattr(tp, k), arrays) for k in ("h", "l", "n", "p")},
+            "natural_frequencies_hz": self.natural_frequencies_hz.tolist(),
+            "natural_frequencies_method": self.natural_frequencies_method,
+            "peaks": [dict(p) for p in self.peaks],
+            "static_stiffness_n_m": self.static_stiffness_n_m,
+            "min_real_m_n": self.min_real_m_n,
+            "min_real_frequency_hz": self.min_real_frequency_hz,
+            "notes": list(self.notes),
+        }
+        out.update(self.extra)
+        return out
+
+    def _dict(self) -> dict[str, Any]:
+        cached = self.__dict__.get("_cached")
+        if cached is None:
+            cached = self.to_dict()
+            object.__setattr__(self, "_cached", cached)
+        return cached
+
+    def __getitem__(self, key: str) -> Any:
+        return self._dict()[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._dict())
+
+    def __len__(self) -> int:
+        return len(self._dict())
+
+
+class SubassemblyCache:
+    """Condensed substructures on one frequency grid, reused across tools.
+
+    Keys are the (hashable, immutable) chains themselves, so two tools with the same
+    holder, shank and insertion share the spindle + holder condensation exactly.
+    """
+
+    def __init__(self, omega_rad_s: np.ndarray, base_receptance: np.ndarray | None = None) -> None:
+        self.omega_rad_s = np.asarray(omega_rad_s, dtype=float)
+        self.base_receptance = base_receptance
+        self._store: dict[Chain, np.ndarray] = {}
+        self._static: dict[Chain, np.ndarray] = {}
+
+    def static(self, chain: Chain) -> np.ndarray:
+        """Static undamped stiffness at the end of ``chain`` (cached), shape (2, 2)."""
+        hit = self._static.get(chain)
+        if hit is None:
+            hit = self._static[chain] = static_condense(chain)
+        return hit
+
+    def condensed(self, chain: Chain) -> np.ndarray:
+        """Dynamic stiffness at the end of ``chain`` (plus the base), shape (nfreq, 2, 2)."""
+        hit = self._store.get(chain)
+        if hit is None:
+            hit = march(chain, self.omega_rad_s, start_compliance=self.base_receptance)[0]
+            self._store[chain] = hit
+        return hit
+
+
+def tool_point_receptance(model: AssemblyModel, cache: SubassemblyCache) -> np.ndarray:
+    """Tool-point ``[[h, l], [n, p]]`` of a model on the cache's grid, shape (nfreq, 2, 2).
+
+    The spindle + holder condensation comes from (and stays in) ``cache``; a measured spindle
+    at the holder tip couples only the tool, straight onto its receptance.
+    """
+    prefix, rest = model.to_holder_tip(), model.tool_side()
+    if any(isinstance(item, Beam) for item in prefix):
+        k_tip = march(rest, cache.omega_rad_s, cache.condensed(prefix))[0]
+    else:
+        k_tip = march(prefix + rest, cache.omega_rad_s, start_compliance=cache.base_receptance)[0]
+    return inv2(k_tip)
+
+
+def predict_model(model: AssemblyModel, frequency_hz: np.ndarray, *,
+                  base_receptance: np.ndarray | None = None,
+                  cache: SubassemblyCache | None = None,
+                  natural_frequencies: bool = True,
+                  notes: tuple[str, ...] = (), extra: Mapping[str, Any] | None = None) -> Prediction:
+    """Solve a chain model for its tool-point receptance and derived quantities.
+
+    Parameters
+    ----------
+    model : AssemblyModel
+    frequency_hz : numpy.ndarray, shape (nfreq,)
+    base_receptance : numpy.ndarray, shape (nfreq, 2, 2), optional
+        Measured spindle-side receptance at the first node (hybrid); then natural
+        frequencies are modal-fit estimates and the static stiffness is not given.
+    cache : SubassemblyCache, optional
+        Reuse of the spindle + holder condensation across calls on the same grid.
+    natural_frequencies : bool
+        Compute the exact natural frequencies (analytical models).
+
+    Returns
+    -------
+    Prediction
+    """
+    f = np.asarray(frequency_hz, dtype=float)
+    omega = 2.0 * np.pi * f
+    if cache is None:
+        cache = SubassemblyCache(omega, base_receptance)
+    prefix, rest = model.to_holder_tip(), model.tool_side()
+    g = tool_point_receptance(model, cache)
+    tool_point = Receptance(f, g)
+    h = g[:, 0, 0]
+    notes_out = list(notes)
+    if base_receptance is None:
+        nat = natural_frequencies_batch(prefix, [rest], float(f[0]), float(f[-1]))[0] if natural_frequencies \
+            else np.empty(0)
+        method = "wittrick_williams"
+        static = static_tip_receptance(rest, cache.static(prefix))
+        static_k = None if static is None else float(1.0 / static[0, 0])
+        if static is None:
+            notes_out.append("static_stiffness_n_m is null: the assembly is not grounded (no bearings)")
+    else:
+        fits = modal_fit_peaks(f, h)
+        nat = np.array([m["frequency_hz"] for m in fits])
+        method = "modal_fit"
+        static_k = None
+        notes_out.append("hybrid assembly: natural_frequencies_hz are single-mode fits to the predicted "
+                         "tool-point h around its peaks, not exact eigenvalues; static stiffness is not "
+                         "available from a measured spindle")
+        extra = {**(extra or {}), "modal_fit": fits}
+    i_min = int(np.argmin(h.real))
+    return Prediction(tool_point=tool_point, natural_frequencies_hz=np.asarray(nat, dtype=float),
+                      natural_frequencies_method=method, peaks=find_frf_peaks(f, h),
+                      static_stiffness_n_m=static_k, min_real_m_n=float(h.real[i_min]),
+                      min_real_frequency_hz=float(f[i_min]), notes=tuple(notes_out), extra=dict(extra or {}))

@@ -1,0 +1,106 @@
+"""The wire form of numbers: one place that reads and writes the contract's arrays.
+
+JSON has no complex type, so the contract carries a complex array as
+``{"real": [...], "imag": [...]}`` (``contract.md`` "Units"). Every parser of a request or
+file in that form, and every writer of a result, goes through these functions, so the rules
+(numbers only, finite, one value per frequency line) and their error messages are the same
+everywhere.
+
+>>> import numpy as np
+>>> complex_to_wire(np.array([1 - 2j]))
+{'real': [1.0], 'imag': [-2.0]}
+>>> complex_from_wire({"real": [1.0, 2.0], "imag": [0.0, -1.0]}, "h")
+array([1.+0.j, 2.-1.j])
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, Literal
+
+import numpy as np
+
+from rcsa.errors import InputError
+
+__all__ = ["WIRE_KEYS", "complex_from_wire", "complex_to_wire", "number_list"]
+
+#: The two keys of a complex array on the wire.
+WIRE_KEYS = frozenset({"real", "imag"})
+
+
+def number_list(value: object, field: str, n: int | None = None, *, nonempty: bool = False,
+                finite: bool = True) -> np.ndarray:
+    """A JSON list of numbers as a float64 array, shape (len,).
+
+    Parameters
+    ----------
+    value : object
+        The parsed JSON value.
+    field : str
+        Dotted path of the value, for the error.
+    n : int, optional
+        Required length (one value per frequency line).
+    nonempty : bool
+        Refuse an empty list.
+    finite : bool
+        Refuse NaN and infinities.
+
+    Raises
+    ------
+    InputError
+        Naming ``field`` and the rule broken.
+    """
+    if not isinstance(value, list | tuple) or any(isinstance(v, bool) or not isinstance(v, int | float)
+                                                  for v in value):
+        raise InputError(field, "must be a non-empty list of numbers" if nonempty else "must be a list of numbers")
+    if nonempty and not value:
+        raise InputError(field, "must be a non-empty list of numbers")
+    if n is not None and len(value) != n:
+        raise InputError(field, f"must have one value per frequency line ({n}), got {len(value)}")
+    try:
+        x = np.array(value, dtype=float)
+    except OverflowError:  # an integer beyond float range
+        raise InputError(field, "must contain only finite numbers") from None
+    if finite and not np.all(np.isfinite(x)):
+        raise InputError(field, "must contain only finite numbers")
+    return x
+
+
+def complex_from_wire(value: object, field: str, n: int | None = None, *, nonempty: bool = False,
+                      finite: bool = True) -> np.ndarray:
+    """``{"real": [...], "imag": [...]}`` as a complex128 array, shape (len,).
+
+    Parameters
+    ----------
+    value : object
+        The parsed JSON value.
+    field : str
+        Dotted path of the value, for the error.
+    n : int, optional
+        Required length of both parts.
+    nonempty, finite : bool
+        As in :func:`number_list`.
+    """
+    if not isinstance(value, Mapping) or set(value) != WIRE_KEYS:
+        raise InputError(field, 'must be {"real": [...], "imag": [...]}')
+    re = number_list(value["real"], f"{field}.real", n, nonempty=nonempty, finite=finite)
+    im = number_list(value["imag"], f"{field}.imag", n, nonempty=nonempty, finite=finite)
+    if re.shape != im.shape:
+        raise InputError(f"{field}.imag", f"has {im.size} values but {field}.real has {re.size}")
+    return re + 1j * im
+
+
+def complex_to_wire(x: Any, arrays: Literal["list", "numpy"] = "list") -> dict[str, Any]:
+    """A complex array as ``{"real": [...], "imag": [...]}``.
+
+    Parameters
+    ----------
+    x : array_like, complex
+    arrays : {"list", "numpy"}
+        ``"list"``: JSON-ready Python lists. ``"numpy"``: contiguous float64 arrays (for
+        serialisers such as orjson that write numpy directly).
+    """
+    z = np.asarray(x)
+    if arrays == "list":
+        return {"real": z.real.tolist(), "imag": z.imag.tolist()}
+    return {"real": np.ascontiguousarray(z.real), "imag": np.ascontiguousarray(z.imag)}

@@ -1,0 +1,55 @@
+"""A reduced, seeded withheld-effect benchmark (the full one is ``benchmarks/bench_diagnosis.py``).
+
+Five classes × three trials from the independent FE truth (``tests/analysis/diagnosis/truth.py``),
+4 Hz lines to keep it under ~2 minutes. Thresholds sit well below the issue's targets
+(top-1 ≥ 0.9 at SNR ≥ 10, false claims ≤ 5 %) so the test guards against regressions, not
+against the luck of a few draws: at most one false claim in three no-effect trials, and at
+least 7 of the 12 effect trials identified correctly.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rcsa.analysis.diagnosis import analyse
+from rcsa.analysis.diagnosis.report import build_response
+from tests.analysis.diagnosis import truth
+
+CLASSES = ("none", "sensor_mass", "bearings", "fluted_section", "joint_damping")
+TRIALS_PER_CLASS = 3
+SEED = 20260601
+
+
+@pytest.fixture(scope="module")
+def outcomes():
+    f = np.arange(50.0, 8000.0 + 1e-9, 4.0)
+    out = []
+    for k, effect in enumerate(CLASSES * TRIALS_PER_CLASS):
+        rng = np.random.default_rng([SEED, k])
+        trial = truth.make_trial(rng, effect, frequency_hz=f, with_null=False)
+        r = build_response(analyse(trial.request))
+        out.append((effect, r["verdict"]["status"], r["verdict"]["effect"], r))
+    return out
+
+
+@pytest.mark.slow
+def test_no_effect_trials_rarely_claim_an_effect(outcomes):
+    null = [o for o in outcomes if o[0] == "none"]
+    false_claims = sum(status != "none" for _, status, _, _ in null)
+    assert false_claims <= 1, [(s, e) for _, s, e, _ in null]
+
+
+@pytest.mark.slow
+def test_hidden_effects_are_mostly_identified(outcomes):
+    effect_trials = [o for o in outcomes if o[0] != "none"]
+    hits = sum(status == "identified" and named == effect for effect, status, named, _ in effect_trials)
+    assert hits >= 7, [(e, s, n) for e, s, n, _ in effect_trials]
+
+
+@pytest.mark.slow
+def test_identified_effects_shrink_the_held_out_gap(outcomes):
+    ratios = [r["effects"][0]["held_out_gap_ratio"] for effect, status, named, r in outcomes
+              if status == "identified" and named == effect]
+    assert ratios and float(np.median(ratios)) < 0.8
+    assert all(r["not_observable_at_standstill"] for *_, r in outcomes)

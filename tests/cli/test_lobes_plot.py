@@ -1,0 +1,56 @@
+"""``rcsa lobes`` and ``rcsa plot`` on the command line."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from typer.testing import CliRunner
+
+import rcsa
+from rcsa.cli import app
+from rcsa.reference import ra1
+
+runner = CliRunner()
+GRID = {"start_hz": 100.0, "stop_hz": 5000.0, "step_hz": 2.0}
+LOBES = {"teeth": 4, "tangential_coefficient_n_m2": 6.0e8, "radial_ratio": 0.3, "radial_immersion": 0.5,
+         "milling": "down", "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 300}}
+
+
+def test_lobes_from_an_assembly_with_a_plot(tmp_path):
+    request = tmp_path / "lobes.json"
+    request.write_text(json.dumps({"assembly": ra1(GRID), **LOBES}))
+    picture = tmp_path / "lobes.png"
+    result = runner.invoke(app, ["lobes", str(request), "--plot", str(picture)])
+    assert result.exit_code == 0, result.stderr
+    out = json.loads(result.stdout)
+    assert out["frf_y_source"] == "same_as_x"
+    assert len(out["depth_limit_m"]) == 300 and out["lobes"][0]["index"] == 0
+    assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_lobes_bad_request_is_one_line(tmp_path):
+    request = tmp_path / "lobes.json"
+    request.write_text(json.dumps({"assembly": ra1(GRID), **LOBES, "teeth": 0}))
+    result = runner.invoke(app, ["lobes", str(request)])
+    assert result.exit_code == 1 and result.stderr.startswith("error: teeth")
+
+
+@pytest.mark.parametrize("suffix", [".png", ".svg"])
+def test_plot_a_prediction_result(tmp_path, suffix):
+    source = tmp_path / "result.json"
+    source.write_text(json.dumps(rcsa.predict(ra1(GRID)).to_dict()))
+    picture = tmp_path / f"frf{suffix}"
+    result = runner.invoke(app, ["plot", str(source), "-o", str(picture)])
+    assert result.exit_code == 0, result.stderr
+    data = picture.read_bytes()
+    assert data.startswith(b"\x89PNG") if suffix == ".png" else b"<svg" in data[:2000]
+
+
+def test_plot_refuses_unknown_documents_and_formats(tmp_path):
+    source = tmp_path / "x.json"
+    source.write_text(json.dumps({"hello": 1}))
+    result = runner.invoke(app, ["plot", str(source), "-o", str(tmp_path / "x.png")])
+    assert result.exit_code == 1 and "not a prediction result" in result.stderr
+    result = runner.invoke(app, ["plot", str(source), "-o", str(tmp_path / "x.jpg")])
+    assert result.exit_code == 1 and ".png or .svg" in result.stderr
