@@ -16,12 +16,14 @@ An Euler–Bernoulli section has no shear flexibility and no rotary inertia; it 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
-from typing import Literal
+from typing import Literal, TypeVar
 
 import numpy as np
 
 from rcsa.errors import InputError
+from rcsa.physics.arrays import ComplexArray, ComplexParam, IntArray, RealParam
 from rcsa.physics.materials import Material
 
 __all__ = [
@@ -41,6 +43,9 @@ BeamTheory = Literal["timoshenko", "euler_bernoulli"]
 class Section:
     """Cross-section properties per unit length.
 
+    Each is one number, or (in a chain stacked over several tools,
+    :mod:`rcsa.physics.stacking`) an array with one value per row.
+
     Parameters
     ----------
     ei : complex
@@ -53,10 +58,10 @@ class Section:
         Rotary inertia per unit length ρI, kg·m; 0 for Euler–Bernoulli.
     """
 
-    ei: complex
-    shear_flexibility: complex
-    rho_a: float
-    rho_i: float
+    ei: ComplexParam
+    shear_flexibility: ComplexParam
+    rho_a: RealParam
+    rho_i: RealParam
 
     @property
     def kappa_ga(self) -> complex:
@@ -79,8 +84,27 @@ class Section:
         """True when rigid in shear (all stacked entries)."""
         return bool(np.all(np.asarray(self.shear_flexibility) == 0))
 
+    @classmethod
+    def stack(cls, sections: Sequence[Section]) -> Section:
+        """One section whose properties are arrays over ``sections``, shape (nsections,) each."""
+        return cls(np.array([s.ei for s in sections]), np.array([s.shear_flexibility for s in sections]),
+                   np.array([s.rho_a for s in sections]), np.array([s.rho_i for s in sections]))
 
-def _like(value: np.ndarray, template: object) -> complex | np.ndarray:
+    def take_rows(self, rows: IntArray) -> Section:
+        """A stacked section with its property arrays indexed by ``rows`` (scalars kept as they are)."""
+        return Section(_rows(self.ei, rows), _rows(self.shear_flexibility, rows), _rows(self.rho_a, rows),
+                       _rows(self.rho_i, rows))
+
+
+_P = TypeVar("_P", ComplexParam, RealParam)
+
+
+def _rows(value: _P, rows: IntArray) -> _P:
+    """``value[rows]`` for a per-row array, the scalar itself otherwise."""
+    return value if np.ndim(value) == 0 else np.asarray(value)[rows]
+
+
+def _like(value: ComplexArray, template: ComplexParam) -> ComplexParam:
     """A Python complex for scalar sections (hashable, cacheable), an array for stacked ones."""
     return complex(value) if np.ndim(template) == 0 else np.asarray(value)
 

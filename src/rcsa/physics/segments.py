@@ -13,24 +13,32 @@ State ``y = [w, ψ, V, M]`` with ``V = κGA (w' − ψ)`` and ``M = EI ψ'``; ex
 from __future__ import annotations
 
 import math
+from typing import TypeAlias
 
 import numpy as np
 
 from rcsa.physics.algebra2x2 import inv2
+from rcsa.physics.arrays import ComplexArray, FloatArray, RealParam
 from rcsa.physics.sections import Section
 
 __all__ = [
-    "dynamic_stiffness",
     "MAX_DECAY_PER_PIECE",
-    "segment_terms",
-    "stiffness_terms",
+    "SixTerms",
+    "Waves",
+    "dynamic_stiffness",
     "free_free_receptance",
+    "segment_terms",
     "static_stiffness",
+    "stiffness_terms",
     "transfer_matrix",
     "wavenumbers",
 ]
 
-def wavenumbers(omega_rad_s: np.ndarray, section: Section) -> tuple[np.ndarray, np.ndarray]:
+#: The six distinct entries ``(A, B, C, E, F, G)`` of a uniform segment's dynamic stiffness
+#: (:func:`stiffness_terms`), each shape (nfreq,), complex.
+SixTerms: TypeAlias = tuple[ComplexArray, ComplexArray, ComplexArray, ComplexArray, ComplexArray, ComplexArray]
+
+def wavenumbers(omega_rad_s: FloatArray, section: Section) -> tuple[ComplexArray, ComplexArray]:
     """Squared wavenumbers ``s₁, s₂`` (1/m²) of the Timoshenko dispersion relation.
 
     ``EI s² − (ρIω² + EI ρAω²/κGA) s − ρAω² (1 − ρIω²/κGA) = 0`` (``domain.md`` §2.2),
@@ -57,7 +65,7 @@ def wavenumbers(omega_rad_s: np.ndarray, section: Section) -> tuple[np.ndarray, 
     return s1, s2
 
 
-def _cos_sin(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _cos_sin(z: ComplexArray) -> tuple[ComplexArray, ComplexArray]:
     """``cos z`` and ``sin z`` of a complex array from one set of real cos, sin, cosh, sinh.
 
     ``cos(x+iy) = cos x cosh y − i sin x sinh y``, ``sin(x+iy) = sin x cosh y + i cos x sinh y``:
@@ -72,7 +80,7 @@ def _cos_sin(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return c, s
 
 
-def _c_and_s(k: np.ndarray, length_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _c_and_s(k: ComplexArray, length_m: RealParam) -> tuple[ComplexArray, ComplexArray, ComplexArray]:
     """``C = cos(kL)``, ``S = sin(kL)/k`` and ``sS = k sin(kL)`` for ``k = √s``.
 
     ``sin(z)/k`` keeps full relative precision for small ``z = kL``; only ``k = 0`` exactly
@@ -88,7 +96,7 @@ def _c_and_s(k: np.ndarray, length_m: float) -> tuple[np.ndarray, np.ndarray, np
     return cos_z, s_fun, k * sin_z
 
 
-def transfer_matrix(omega_rad_s: np.ndarray, section: Section, length_m: float) -> np.ndarray:
+def transfer_matrix(omega_rad_s: FloatArray, section: Section, length_m: float) -> ComplexArray:
     """Field transfer matrix ``T(L)`` with ``y(L) = T y(0)``, ``y = [w, ψ, V, M]``.
 
     Closed form of ``B(L) B(0)⁻¹`` (``domain.md`` §2.3) with ``q_j = s_j − ρAω²/κGA``.
@@ -138,7 +146,7 @@ def transfer_matrix(omega_rad_s: np.ndarray, section: Section, length_m: float) 
     return t
 
 
-def _blocks(t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def _blocks(t: ComplexArray) -> tuple[ComplexArray, ComplexArray, ComplexArray, ComplexArray]:
     return t[:, :2, :2], t[:, :2, 2:], t[:, 2:, :2], t[:, 2:, 2:]
 
 
@@ -147,12 +155,37 @@ def _blocks(t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarr
 MAX_DECAY_PER_PIECE = 3.0
 
 
-class _Waves:
-    """Wavenumber data of one section on one frequency grid (shared by equal sections)."""
+class Waves:
+    """Wavenumber data of one section on one frequency grid, shared by the segments of that section.
+
+    Everything of :func:`stiffness_terms` that depends on the section and ω but not on the
+    length, so equal sections along a chain (and the pieces of a long segment) compute it once.
+
+    Parameters
+    ----------
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies, rad/s.
+    section : Section
+
+    Attributes
+    ----------
+    ra : numpy.ndarray, shape (nfreq,)
+        ρAω², N/m².
+    s1, s2 : numpy.ndarray, shape (nfreq,), complex
+        Squared wavenumbers (:func:`wavenumbers`), 1/m².
+    q1, q2 : numpy.ndarray, shape (nfreq,), complex
+        ``s_j − ρAω²/κGA``, 1/m².
+    d : numpy.ndarray, shape (nfreq,), complex
+        ``s₁ − s₂``, 1/m².
+    k1, k2 : numpy.ndarray, shape (nfreq,), complex
+        Wavenumbers ``√s_j``, 1/m.
+    decay_per_m : float
+        Largest ``|Im √s|`` over the grid, 1/m (how fast the evanescent waves decay).
+    """
 
     __slots__ = ("d", "decay_per_m", "k1", "k2", "q1", "q2", "ra", "s1", "s2")
 
-    def __init__(self, omega_rad_s: np.ndarray, section: Section) -> None:
+    def __init__(self, omega_rad_s: FloatArray, section: Section) -> None:
         self.ra = section.rho_a * np.asarray(omega_rad_s, dtype=float) ** 2
         self.s1, self.s2 = wavenumbers(omega_rad_s, section)
         self.q1 = self.s1 - self.ra * section.shear_flexibility
@@ -161,13 +194,13 @@ class _Waves:
         self.k1, self.k2 = np.sqrt(self.s1), np.sqrt(self.s2)
         self.decay_per_m = float(max(np.abs(self.k1.imag).max(initial=0.0), np.abs(self.k2.imag).max(initial=0.0)))
 
-    def pieces(self, length_m: float | np.ndarray) -> int:
+    def pieces(self, length_m: RealParam) -> int:
         """Number of equal pieces keeping each piece's decay exponent ≤ MAX_DECAY_PER_PIECE."""
         return max(1, math.ceil(self.decay_per_m * float(np.max(length_m)) / MAX_DECAY_PER_PIECE))
 
 
-def stiffness_terms(omega_rad_s: np.ndarray, section: Section, length_m: float,
-                    waves: _Waves | None = None) -> tuple[np.ndarray, ...]:
+def stiffness_terms(omega_rad_s: FloatArray, section: Section, length_m: RealParam,
+                    waves: Waves | None = None) -> SixTerms:
     """The six distinct entries ``(A, B, C, E, F, G)`` of a uniform segment's dynamic stiffness.
 
     By reciprocity and the mirror symmetry of a uniform segment::
@@ -186,7 +219,7 @@ def stiffness_terms(omega_rad_s: np.ndarray, section: Section, length_m: float,
     -------
     tuple of numpy.ndarray, each shape (nfreq,), complex
     """
-    wv = waves if waves is not None else _Waves(omega_rad_s, section)
+    wv = waves if waves is not None else Waves(omega_rad_s, section)
     ei, ra, q1, q2 = section.ei, wv.ra, wv.q1, wv.q2
     c1, sf1, ss1 = _c_and_s(wv.k1, length_m)
     c2, sf2, ss2 = _c_and_s(wv.k2, length_m)
@@ -208,7 +241,7 @@ def stiffness_terms(omega_rad_s: np.ndarray, section: Section, length_m: float,
     return a, b, c, -t_pm * scale, t_wm * scale, -t_wv * scale
 
 
-def _double(terms: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ...]:
+def _double(terms: SixTerms) -> SixTerms:
     """Six-term stiffness of two equal pieces in a row, the middle node condensed.
 
     For equal pieces the middle pivot is ``P = D22 + D11 = diag(2A, 2C)``, so
@@ -220,15 +253,15 @@ def _double(terms: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ...]:
             f * f * ic - e * e * ia, -(e * ia + g * ic) * f, f * f * ia - g * g * ic)
 
 
-def segment_terms(omega_rad_s: np.ndarray, section: Section, length_m: float,
-                  waves: _Waves | None = None) -> tuple[np.ndarray, ...]:
+def segment_terms(omega_rad_s: FloatArray, section: Section, length_m: RealParam,
+                  waves: Waves | None = None) -> SixTerms:
     """:func:`stiffness_terms` of a whole segment of any length.
 
     A segment whose decay exponent exceeds ``MAX_DECAY_PER_PIECE`` is computed as ``2^m``
     equal pieces joined by :func:`_double`, which is exact and keeps full precision for long,
     strongly evanescent segments.
     """
-    wv = waves if waves is not None else _Waves(omega_rad_s, section)
+    wv = waves if waves is not None else Waves(omega_rad_s, section)
     m = math.ceil(math.log2(wv.pieces(length_m)))
     terms = stiffness_terms(omega_rad_s, section, length_m / 2**m, wv)
     for _ in range(m):
@@ -236,7 +269,7 @@ def segment_terms(omega_rad_s: np.ndarray, section: Section, length_m: float,
     return terms
 
 
-def dynamic_stiffness(omega_rad_s: np.ndarray, section: Section, length_m: float) -> np.ndarray:
+def dynamic_stiffness(omega_rad_s: FloatArray, section: Section, length_m: RealParam) -> ComplexArray:
     """Exact dynamic stiffness ``D``: ``[f₀; f_L] = D [d₀; d_L]``, DOFs ``(w₀, ψ₀, w_L, ψ_L)``.
 
     Assembled from :func:`stiffness_terms`; a segment too long for one piece (strongly
@@ -252,7 +285,7 @@ def dynamic_stiffness(omega_rad_s: np.ndarray, section: Section, length_m: float
     return np.stack([np.stack(r, axis=-1) for r in rows], axis=-2)
 
 
-def free_free_receptance(omega_rad_s: np.ndarray, section: Section, length_m: float) -> np.ndarray:
+def free_free_receptance(omega_rad_s: FloatArray, section: Section, length_m: float) -> ComplexArray:
     """Exact free-free receptance ``R``: ``[d₀; d_L] = R [f₀; f_L]``.
 
     ``R = [[T_sd⁻¹T_ss, T_sd⁻¹], [·, T_dd T_sd⁻¹]]`` (``domain.md`` §2.4), lower-left block by
@@ -265,7 +298,7 @@ def free_free_receptance(omega_rad_s: np.ndarray, section: Section, length_m: fl
     numpy.ndarray, shape (nfreq, 4, 4), complex
     """
     w = np.asarray(omega_rad_s, dtype=float)
-    wv = _Waves(w, section)
+    wv = Waves(w, section)
     decay = np.maximum(np.abs(wv.k1.imag), np.abs(wv.k2.imag)) * length_m
     long = decay > MAX_DECAY_PER_PIECE
     out = np.empty((w.size, 4, 4), dtype=complex)
@@ -281,7 +314,7 @@ def free_free_receptance(omega_rad_s: np.ndarray, section: Section, length_m: fl
     return out
 
 
-def static_stiffness(section: Section, length_m: float) -> np.ndarray:
+def static_stiffness(section: Section, length_m: RealParam) -> ComplexArray:
     """Exact static Timoshenko stiffness matrix (the ω → 0 limit of :func:`dynamic_stiffness`).
 
     ``EI/((1+Φ)L³) [[12, 6L, −12, 6L], [6L, (4+Φ)L², −6L, (2−Φ)L²], …]``, Φ = 12EI/(κGA L²)

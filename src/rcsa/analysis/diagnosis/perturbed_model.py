@@ -7,7 +7,7 @@ measurement's tool, knobs) into the three sub-chains that are solved one after t
 
     spindle (rear → nose, bearings)  |  nose residual, SH joint, holder  |  HT joint, tool, tip mass
 
-and :class:`Solver` condenses them as :func:`rcsa.physics.elimination.march` does, caching each condensed
+and :class:`Solver` condenses them with :func:`rcsa.physics.elimination.march`, caching each condensed
 stiffness under the sub-chain itself (chain items are frozen and hashable) and each beam's
 stiffness terms. A change of a tool-side knob then costs three beams per measurement, not
 the twenty of the whole chain.
@@ -33,7 +33,6 @@ different, physical realisations, see ``tests/analysis/diagnosis/truth.py``):
 
 from __future__ import annotations
 
-from collections import OrderedDict
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from functools import lru_cache
@@ -50,11 +49,12 @@ from rcsa.model.contract import (
     SpindleSpec,
     ToolSpec,
 )
-from rcsa.physics.chain import Beam, Chain, Ground, Spring
-from rcsa.physics.elimination import Sym, beam_step, spring_step
+from rcsa.physics.arrays import ComplexArray, FloatArray, IntArray
+from rcsa.physics.chain import Beam, Chain, ChainItem, Grid, Ground, Lumped, Sym
+from rcsa.physics.elimination import march
 from rcsa.physics.materials import Material
 from rcsa.physics.sections import Section
-from rcsa.physics.segments import segment_terms
+from rcsa.physics.segments import SixTerms, segment_terms
 
 __all__ = ["Knobs", "Parts", "Solver", "config_parts", "null_shear_scale"]
 
@@ -91,15 +91,60 @@ class Knobs:
 
 
 @dataclass(frozen=True, slots=True)
-class AddedCompliance:
+class AddedCompliance(Lumped):
     """A residual compliance added to the receptance at this node: R → R + [[0, c_wψ], [c_wψ, c_ψψ]].
 
     ``c_wψ`` in rad/N (= m/(N·m)), ``c_ψψ`` in rad/(N·m). A correction term of the kind used to
     compensate truncated or estimated rotational receptances (Duarte & Ewins 2000), not a spring.
+    A chain item (:class:`rcsa.physics.chain.ChainItem`): frequency-independent and undamped,
+    it eliminates no node.
+
+    Parameters
+    ----------
+    cross_rad_n : float
+        ``c_wψ``, rad/N.
+    rotational_rad_nm : float
+        ``c_ψψ``, rad/(N·m).
     """
 
     cross_rad_n: float
     rotational_rad_nm: float
+
+    def eliminate(self, k: Sym, grid: Grid, count: bool = False) -> tuple[Sym, IntArray | None]:
+        """``K ← (K⁻¹ + C)⁻¹`` with ``C = [[0, c_wψ], [c_wψ, c_ψψ]]``; no pivot."""
+        k11, k12, k22 = k
+        det = k11 * k22 - k12 * k12
+        r11, r12, r22 = k22 / det, -k12 / det + self.cross_rad_n, k11 / det + self.rotational_rad_nm
+        det_r = r11 * r22 - r12 * r12
+        return (r22 / det_r, -r12 / det_r, r11 / det_r), None
+
+    def eliminate_static(self, k: Sym) -> Sym:
+        """The same as :meth:`eliminate`: the compliance does not depend on frequency."""
+        return self.eliminate(k, Grid(np.zeros(1)))[0]
+
+    def absorb_compliance(self, compliance: ComplexArray, grid: Grid) -> tuple[ComplexArray, bool]:
+        """``S ← S + C``."""
+        c = np.array([[0.0, self.cross_rad_n], [self.cross_rad_n, self.rotational_rad_nm]])
+        return compliance + c, False
+
+    def undamped(self) -> AddedCompliance:
+        """Real already: itself."""
+        return self
+
+
+class _BeamTermsGrid(Grid):
+    """A grid that keeps the six stiffness terms of the most recently used beams."""
+
+    def __init__(self, omega_rad_s: FloatArray, max_beams: int) -> None:
+        super().__init__(omega_rad_s)
+        self._terms = lru_cache(maxsize=max_beams)(self._segment_terms)
+
+    def _segment_terms(self, beam: Beam) -> SixTerms:
+        return segment_terms(self.omega_rad_s, beam.section, beam.length_m)
+
+    def beam_terms(self, beam: Beam) -> SixTerms:
+        """Six-term dynamic stiffness of ``beam``, cached by beam (section and length)."""
+        return self._terms(beam)
 
 
 @dataclass(frozen=True, slots=True)
@@ -176,13 +221,10 @@ def _trim_holder(holder: HolderSpec, cut_m: float, materials: Mapping[str, Mater
 
 
 def _scale_shear(chain: Chain, s: float) -> Chain:
-    out: list[Beam | Spring | Ground] = []
-    for item in chain:
-        if isinstance(item, Beam):
-            sec = item.section
-            item = Beam(Section(sec.ei, complex(sec.shear_flexibility * s), sec.rho_a, sec.rho_i * s), item.length_m)
-        out.append(item)
-    return tuple(out)
+    def scaled(sec: Section) -> Section:
+        return Section(sec.ei, complex(sec.shear_flexibility * s), sec.rho_a, sec.rho_i * s)
+
+    return tuple(item.map_sections(scaled) for item in chain)
 
 
 @lru_cache(maxsize=256)
@@ -200,7 +242,7 @@ def _tool_chain(tool: ToolSpec, mats: tuple, shear: object, theory: str) -> Chai
     return tool_chain(tool, dict(mats), shear, theory)  # type: ignore[arg-type]
 
 
-def _with_mass(chain: list[Beam | Spring | Ground], mass_kg: float, distance_m: float) -> list[Beam | Spring | Ground]:
+def _with_mass(chain: list[ChainItem], mass_kg: float, distance_m: float) -> list[ChainItem]:
     """A point mass ``distance_m`` behind the chain's end (splits the beam it falls on)."""
     if distance_m <= 0.0:
         return [*chain, Ground(mass_kg=mass_kg)]
@@ -250,7 +292,7 @@ def config_parts(spec: AssemblySpec, tool: ToolSpec, k: Knobs) -> Parts:
 
     items = tuple(sorted(mats.items()))
     spindle = _spindle_chain(_spindle(spec.spindle, k), items, shear, theory)
-    middle: list[Beam | Spring | Ground | AddedCompliance] = []
+    middle: list[ChainItem] = []
     if k.nose_cross_compliance_rad_n != 0.0 or k.nose_rotational_residual_rad_nm != 0.0:
         middle.append(AddedCompliance(k.nose_cross_compliance_rad_n, k.nose_rotational_residual_rad_nm))
     sh = joint_spring(_joint(spec.spindle_holder, k.sh_translational_scale, k.sh_rotational_scale,
@@ -260,7 +302,7 @@ def config_parts(spec: AssemblySpec, tool: ToolSpec, k: Knobs) -> Parts:
     middle.extend(_holder_chain(holder, t, items, shear, theory))
     if ring is not None:
         middle.append(ring)
-    tail: list[Beam | Spring | Ground] = []
+    tail: list[ChainItem] = []
     ht = joint_spring(_joint(spec.holder_tool, k.ht_translational_scale, k.ht_rotational_scale,
                              k.ht_damping_scale))
     if ht is not None:
@@ -279,10 +321,11 @@ def config_parts(spec: AssemblySpec, tool: ToolSpec, k: Knobs) -> Parts:
 class Solver:
     """Tool-point ``h`` of many configurations on one frequency grid, with caches.
 
-    The chain is condensed from the spindle rear to the tool tip with the steps of
+    The chain is condensed from the spindle rear to the tool tip by
     :func:`rcsa.physics.elimination.march`, with two caches: the condensed stiffness after
     each sub-chain (keyed by the sub-chains themselves), and the six stiffness terms of each
-    beam (keyed by section and length), so a changed bearing or joint re-uses every beam.
+    beam (keyed by section and length, in the grid the march runs on), so a changed bearing
+    or joint re-uses every beam.
 
     Parameters
     ----------
@@ -292,73 +335,30 @@ class Solver:
         Condensed stiffnesses kept (least recently used are dropped); beam terms keep 4×.
     """
 
-    def __init__(self, frequency_hz: np.ndarray, cache_size: int = 128) -> None:
+    def __init__(self, frequency_hz: FloatArray, cache_size: int = 128) -> None:
         self.frequency_hz = np.asarray(frequency_hz, dtype=float)
         self.omega_rad_s = 2.0 * np.pi * self.frequency_hz
-        self._cache: OrderedDict[tuple[Chain, ...], Sym] = OrderedDict()
-        self._terms: OrderedDict[Beam, tuple[np.ndarray, ...]] = OrderedDict()
-        self._size = cache_size
+        self._grid = _BeamTermsGrid(self.omega_rad_s, 4 * cache_size)
+        self._condensed = lru_cache(maxsize=cache_size)(self._condense)
         self.evaluations = 0
 
-    @staticmethod
-    def _lru(cache: OrderedDict, key: object, value: object, size: int) -> None:
-        cache[key] = value
-        if len(cache) > size:
-            cache.popitem(last=False)
-
-    def _beam_terms(self, beam: Beam) -> tuple[np.ndarray, ...]:
-        hit = self._terms.get(beam)
-        if hit is None:
-            hit = segment_terms(self.omega_rad_s, beam.section, beam.length_m)
-            self._lru(self._terms, beam, hit, 4 * self._size)
-        else:
-            self._terms.move_to_end(beam)
-        return hit
-
-    def _march(self, chain: Chain, k: Sym) -> Sym:
-        """Condense ``chain`` onto its last node, starting from ``k`` at its first node.
-
-        Beams and joints use the engine's own steps (:func:`rcsa.physics.elimination.beam_step`,
-        :func:`rcsa.physics.elimination.spring_step`) with cached beam terms; an :class:`AddedCompliance` adds
-        a rotational compliance at the node: ``K ← (K⁻¹ + C)⁻¹``.
-        """
-        w = self.omega_rad_s
-        for item in chain:
-            if isinstance(item, Beam):
-                k = beam_step(k, self._beam_terms(item))[0]
-            elif isinstance(item, Spring):
-                k = spring_step(k, item, w)[0]
-            elif isinstance(item, AddedCompliance):
-                k11, k12, k22 = k
-                det = k11 * k22 - k12 * k12
-                r11, r12, r22 = k22 / det, -k12 / det + item.cross_rad_n, k11 / det + item.rotational_rad_nm
-                det_r = r11 * r22 - r12 * r12
-                k = (r22 / det_r, -r12 / det_r, r11 / det_r)
-            else:
-                g = item.stiffness(w)
-                k = (k[0] + g[:, 0, 0], k[1], k[2] + g[:, 1, 1])
-        return k
-
-    def _condensed(self, key: tuple[Chain, ...]) -> Sym:
+    def _condense(self, key: tuple[Chain, ...]) -> ComplexArray | None:
+        """Dynamic stiffness at the end of the sub-chains ``key``, shape (nfreq, 2, 2); None if empty."""
         if not key:
-            zero = np.zeros(self.omega_rad_s.size, dtype=complex)
-            return zero, zero, zero
-        hit = self._cache.get(key)
-        if hit is not None:
-            self._cache.move_to_end(key)
-            return hit
-        k = self._march(key[-1], self._condensed(key[:-1]))
-        self._lru(self._cache, key, k, self._size)
+            return None
+        k = march(key[-1], self.omega_rad_s, self._condensed(key[:-1]), grid=self._grid)[0]
+        k.flags.writeable = False  # shared by every later configuration with this prefix
         return k
 
-    def tip_h(self, parts: Parts, lines: np.ndarray | slice = slice(None)) -> np.ndarray:
+    def tip_h(self, parts: Parts, lines: IntArray | slice = slice(None)) -> ComplexArray:
         """Driving-point tool-tip receptance ``h`` (m/N), shape (nlines,)."""
-        k11, k12, k22 = self._march(parts.tool, self._condensed((parts.spindle, parts.middle)))
+        k = march(parts.tool, self.omega_rad_s, self._condensed((parts.spindle, parts.middle)), grid=self._grid)[0]
         self.evaluations += 1
+        k11, k12, k22 = k[:, 0, 0], k[:, 0, 1], k[:, 1, 1]
         return (k22 / (k11 * k22 - k12 * k12))[lines]
 
-    def nose_stiffness(self, parts: Parts) -> np.ndarray:
+    def nose_stiffness(self, parts: Parts) -> ComplexArray:
         """Condensed dynamic stiffness of the spindle at its nose, shape (nfreq, 2, 2)."""
-        k11, k12, k22 = self._condensed((parts.spindle,))
-        return np.stack([np.stack([k11, k12], -1), np.stack([k12, k22], -1)], -2)
-
+        k = self._condensed((parts.spindle,))
+        assert k is not None
+        return k.copy()
