@@ -1,39 +1,89 @@
 """Peaks of a tool-point FRF, and single-mode fits around them.
 
-Every prediction reports the local maxima of ``|h|``; a hybrid prediction (measured
-spindle, no exact eigenvalues) also reports single-mode fits around them.
+:func:`peak_lines` is the package's one peak picker: every caller that looks for resonance
+peaks on a grid (predictions here, the joint identification's measured peaks, the
+diagnosis's feature windows) calls it with its own, documented prominence rule.
+
+Every prediction reports the local maxima of ``|h|`` (:func:`find_frf_peaks`); a hybrid
+prediction (measured spindle, no exact eigenvalues) also reports single-mode fits around
+them.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["find_frf_peaks", "modal_fit_peaks", "single_mode_fit"]
+from rcsa.physics.arrays import ComplexArray, FloatArray, IntArray
+
+__all__ = ["find_frf_peaks", "modal_fit_peaks", "peak_lines", "single_mode_fit"]
 
 _TWO_PI = 2.0 * np.pi
 
 
-def find_frf_peaks(frequency_hz: np.ndarray, h: np.ndarray, *, rel_prominence: float = 0.01
+def peak_lines(y: FloatArray, min_prominence: float) -> tuple[IntArray, FloatArray]:
+    """Lines where a sampled curve has a local maximum that stands out by ``min_prominence``.
+
+    The prominence of a peak is how far it rises above the higher of the two lowest points
+    that separate it from any higher peak (topographic prominence; ``scipy.signal.find_peaks``).
+    The curve and the rule are the caller's: ``|h|`` with a fraction of ``max|h|`` (a peak
+    visible on a linear plot), or ``ln|h|`` with a ratio (a peak visible on a dB plot).
+
+    Parameters
+    ----------
+    y : numpy.ndarray, shape (n,), real
+        The curve, e.g. ``|h|`` (m/N) or ``ln|h|``, on an increasing grid.
+    min_prominence : float
+        Least prominence of a peak, in the units of ``y``.
+
+    Returns
+    -------
+    lines : numpy.ndarray of int, shape (npeaks,)
+        Indices of the peaks, ascending; never the first or last line.
+    prominences : numpy.ndarray, shape (npeaks,)
+        Their prominences, in the units of ``y``.
+
+    Examples
+    --------
+    The peak at line 1 rises 1.0 above the dip at line 2 that separates it from the higher
+    peak at line 5; the bump at line 3 rises only 0.5:
+
+    >>> lines, prominences = peak_lines(np.array([0.0, 2.0, 1.0, 1.5, 1.0, 3.0, 0.0]), 0.8)
+    >>> lines.tolist(), prominences.tolist()
+    ([1, 5], [1.0, 3.0])
+    """
+    # Imported here, not at module level: scipy.signal is most of the time of `import rcsa`,
+    # and only callers that pick peaks should pay it.
+    from scipy.signal import find_peaks
+
+    lines, props = find_peaks(y, prominence=min_prominence)
+    return lines, props["prominences"]
+
+
+def find_frf_peaks(frequency_hz: FloatArray, h: ComplexArray, *, rel_prominence: float = 0.01
                    ) -> list[dict[str, float]]:
     """Local maxima of ``|h|`` on the grid, with a prominence of at least ``rel_prominence·max|h|``.
+
+    The prediction's rule: a peak that shows on a linear plot of ``|h|`` (1 % of the largest
+    peak by default), so the list names the modes a user sees, not numerical ripples.
 
     Parameters
     ----------
     frequency_hz : numpy.ndarray, shape (nfreq,)
+        Hz.
     h : numpy.ndarray, shape (nfreq,), complex
         Receptance, m/N.
+    rel_prominence : float
+        Least prominence relative to ``max|h|``.
 
     Returns
     -------
     list of dict
         ``{"frequency_hz", "magnitude_m_n"}`` in ascending frequency.
     """
-    from scipy.signal import find_peaks  # local: scipy.signal is most of the import time
-
     mag = np.abs(h)
     if mag.size < 3:
         return []
-    idx, _ = find_peaks(mag, prominence=rel_prominence * float(mag.max()))
+    idx, _ = peak_lines(mag, rel_prominence * float(mag.max()))
     return [{"frequency_hz": float(frequency_hz[i]), "magnitude_m_n": float(mag[i])} for i in idx]
 
 

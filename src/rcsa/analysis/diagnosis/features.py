@@ -26,14 +26,17 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import find_peaks
+
+from rcsa.model.peaks import peak_lines
 
 __all__ = ["Windows", "band_rms_db", "design_windows", "extract"]
 
 # Peaks smaller than this fraction of the largest one are not used as features: at the
 # benchmark's 1 % noise with a -50 dB floor their frequency would be mostly noise.
 MIN_RELATIVE_PEAK = 0.05
-# Prominence in ln|h| of a base peak (0.35 ≈ 3 dB): a visible resonance, not a ripple.
+# Prominence in ln|h| of a base peak (0.35 ≈ 3 dB): a visible resonance, not a ripple. On the
+# log scale, unlike the linear |h| rule of predictions (rcsa.model.peaks.find_frf_peaks): the
+# windows must catch weak modes far below the dominant one, whose gap features still count.
 MIN_PROMINENCE_LN = 0.35
 # Two base peaks closer than this frequency ratio share one window (the larger one is kept).
 MIN_PEAK_RATIO = 1.08
@@ -84,9 +87,9 @@ def design_windows(frequency_hz: np.ndarray, h_base: np.ndarray, max_modes: int 
     """
     f = np.asarray(frequency_hz, dtype=float)
     y = np.log(np.abs(h_base))
-    idx, props = find_peaks(y, prominence=MIN_PROMINENCE_LN)
+    idx, prominences = peak_lines(y, MIN_PROMINENCE_LN)
     keep = y[idx] >= y[idx].max() + np.log(MIN_RELATIVE_PEAK) if idx.size else np.zeros(0, bool)
-    idx, prom = idx[keep], props["prominences"][keep]
+    idx, prom = idx[keep], prominences[keep]
     chosen: list[int] = []
     for k in np.argsort(-prom):  # most prominent first, drop close neighbours
         if all(max(f[idx[k]], f[c]) / min(f[idx[k]], f[c]) >= MIN_PEAK_RATIO for c in chosen):

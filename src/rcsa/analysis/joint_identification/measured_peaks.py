@@ -13,16 +13,17 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import find_peaks
 
-from rcsa.model.peaks import single_mode_fit
+from rcsa.model.peaks import peak_lines, single_mode_fit
 
 __all__ = ["LENIENT_PROMINENCE", "PEAK_PROMINENCE", "MeasuredPeak", "coherence_weights", "measured_peaks",
            "peaks_ln_hz", "relative_noise"]
 
 #: A peak is prominent when it rises by this fraction of the largest |h| above its
-#: surroundings; peaks down to LENIENT_PROMINENCE are still listed, so that a borderline
-#: peak seen on one side (model or measurement) can be matched on the other.
+#: surroundings (:func:`rcsa.model.peaks.peak_lines` on the linear |h|, as a user reads a
+#: measured FRF); peaks down to LENIENT_PROMINENCE (the prediction's own rule,
+#: :func:`rcsa.model.peaks.find_frf_peaks`) are still listed, so that a borderline peak seen
+#: on one side (model or measurement) can be matched on the other.
 PEAK_PROMINENCE = 0.03
 LENIENT_PROMINENCE = 0.01
 #: … and by this many noise standard deviations of its own height.
@@ -148,10 +149,10 @@ def measured_peaks(frequency_hz: np.ndarray, h: np.ndarray, noise_rel: float) ->
     if mag.size < 3:
         return []
     top = float(mag.max())
-    idx, props = find_peaks(mag, prominence=LENIENT_PROMINENCE * top)
+    idx, prominences = peak_lines(mag, LENIENT_PROMINENCE * top)
     out = []
     sigma = noise_rel if math.isfinite(noise_rel) else 0.0
-    for i, prom in zip(idx, props["prominences"], strict=True):
+    for i, prom in zip(idx, prominences, strict=True):
         if prom < PEAK_NOISE_SIGMAS * sigma * mag[i]:
             continue
         first = _fitted_peak(f, h, int(i), 0.01)
@@ -179,9 +180,9 @@ def peaks_ln_hz(frequency_hz: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np
         Their prominence relative to max ``|h|``.
     """
     mag = np.abs(h)
-    idx, props = find_peaks(mag, prominence=LENIENT_PROMINENCE * float(mag.max()))
+    idx, prominences = peak_lines(mag, LENIENT_PROMINENCE * float(mag.max()))
     keep = (idx > 0) & (idx < mag.size - 1)
-    idx, prom = idx[keep], props["prominences"][keep] / float(mag.max())
+    idx, prom = idx[keep], prominences[keep] / float(mag.max())
     x = np.log(frequency_hz)
     y0, y1, y2 = mag[idx - 1], mag[idx], mag[idx + 1]
     x0, x1, x2 = x[idx - 1], x[idx], x[idx + 1]
