@@ -32,7 +32,7 @@ from rcsa.analysis.lobes.zoa import LobeResult
 from rcsa.errors import InputError
 from rcsa.physics.receptance import check_frequency_hz
 
-__all__ = ["FrfLayout", "frf_figure", "lobes_figure", "save_figure"]
+__all__ = ["FrfLayout", "freeze_layout", "frf_figure", "lobes_figure", "new_figure", "save_figure"]
 
 FrfLayout = Literal["full", "real_imag", "bode"]
 
@@ -41,15 +41,30 @@ MM_PER_M = 1e3
 _FORMATS = ("png", "svg")
 
 
-def _new_figure(width_in: float, height_in: float) -> Figure:
+def new_figure(width_in: float, height_in: float) -> Figure:
+    """A headless figure with constrained layout (every figure of the package starts here).
+
+    Parameters
+    ----------
+    width_in, height_in : float
+        Size, inches.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        With its Agg canvas attached (no pyplot, no GUI backend).
+    """
     fig = Figure(figsize=(width_in, height_in), layout="constrained")
     FigureCanvasAgg(fig)  # attach the headless canvas explicitly
     return fig
 
 
-def _freeze_layout(fig: Figure) -> Figure:
-    """Run the constrained layout once and fix it, so every save writes identical files
-    (the solver otherwise nudges the axes by ~1e-3 pt on each draw)."""
+def freeze_layout(fig: Figure) -> Figure:
+    """Run the constrained layout once and fix it, so every save writes identical files.
+
+    (The layout solver otherwise nudges the axes by ~1e-3 pt on each draw.) Call it last,
+    when everything is drawn; returns ``fig``.
+    """
     fig.draw_without_rendering()
     fig.set_layout_engine("none")
     return fig
@@ -116,7 +131,7 @@ def frf_figure(
         "bode": ["mag", "phase"],
         "full": ["real", "imag", "mag", "phase"],
     }[layout]
-    fig = _new_figure(10.0 if layout == "full" else 6.4, 6.0)
+    fig = new_figure(10.0 if layout == "full" else 6.4, 6.0)
     axes = fig.subplots(2, 2 if layout == "full" else 1, sharex=True, squeeze=False).T.ravel()
     for ax, name in zip(axes, names, strict=True):
         ylabel, data, scale = panels[name]
@@ -135,7 +150,7 @@ def frf_figure(
         axes[0].legend(loc="best", fontsize="small")
     if title:
         fig.suptitle(title)
-    return _freeze_layout(fig)
+    return freeze_layout(fig)
 
 
 def lobes_figure(
@@ -168,7 +183,7 @@ def lobes_figure(
         One axes. Its lines carry ``gid`` ``"lobe-<k>"`` for the lobes and ``"envelope"``
         for the lower envelope; the stable region under the envelope is shaded.
     """
-    fig = _new_figure(8.0, 4.8)
+    fig = new_figure(8.0, 4.8)
     ax = fig.add_subplot()
     speed = result.spindle_speed_rpm
     env_mm = result.depth_limit_m * MM_PER_M
@@ -227,7 +242,7 @@ def lobes_figure(
     note = "Φyy = Φxx assumed (only x given)" if result.same_frf_in_y else None
     if title or note:
         ax.set_title(" — ".join(t for t in (title, note) if t), fontsize="medium")
-    return _freeze_layout(fig)
+    return freeze_layout(fig)
 
 
 def save_figure(fig: Figure, path_or_format: str | Path, *, dpi: int = 150) -> bytes | Path:

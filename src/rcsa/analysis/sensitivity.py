@@ -430,12 +430,12 @@ def effects_figure(report: EffectReport, features: Sequence[str] = ("frequency_h
     import matplotlib
     from matplotlib.colors import TwoSlopeNorm
 
-    from rcsa.analysis.figures import _freeze_layout, _new_figure
+    from rcsa.analysis.figures import freeze_layout, new_figure
 
     nm, npar = report.frequency_hz.size, len(report.parameters)
     if nm == 0 or npar == 0:
         raise InputError("band_hz", "the report has no mode (or no parameter) to draw")
-    fig = _new_figure(max(6.0, 0.5 * npar + 2.5), 2.2 + len(features) * max(1.6, 0.3 * nm + 0.8))
+    fig = new_figure(max(6.0, 0.5 * npar + 2.5), 2.2 + len(features) * max(1.6, 0.3 * nm + 0.8))
     axes = fig.subplots(len(features), 1, squeeze=False, sharex=True)[:, 0]
     part = report.tip_participation
     ylabels = [f"{f:.0f} Hz ({100 * p:.2g} %)" for f, p in zip(report.frequency_hz, part, strict=True)]
@@ -457,4 +457,4 @@ def effects_figure(report: EffectReport, features: Sequence[str] = ("frequency_h
     axes[-1].set_xticks(range(npar), report.parameters, rotation=60, ha="right", fontsize=7)
     axes[0].text(0.0, 1.12, "modes: natural frequency (tip participation); grey: no peak at the tool point",
                  transform=axes[0].transAxes, fontsize=7)
-    return _freeze_layout(fig)
+    return freeze_layout(fig)

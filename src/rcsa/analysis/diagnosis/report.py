@@ -20,13 +20,13 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import TwoSlopeNorm
 from matplotlib.figure import Figure
 
 from rcsa.analysis.diagnosis.attribution import Fit
 from rcsa.analysis.diagnosis.candidates import NOT_OBSERVABLE_AT_STANDSTILL, STANDSTILL_SENTENCE
 from rcsa.analysis.diagnosis.validation import HeldOut
+from rcsa.analysis.figures import freeze_layout, new_figure
 from rcsa.model.wire import complex_to_wire
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -243,19 +243,6 @@ def build_response(a: Analysis) -> dict[str, Any]:
     }
 
 
-def _new_figure(width_in: float, height_in: float) -> Figure:
-    fig = Figure(figsize=(width_in, height_in), layout="constrained")
-    FigureCanvasAgg(fig)  # the headless canvas, attached explicitly (no pyplot)
-    return fig
-
-
-def _freeze_layout(fig: Figure) -> Figure:
-    """Run the constrained layout once and fix it (identical files on every save)."""
-    fig.draw_without_rendering()
-    fig.set_layout_engine("none")
-    return fig
-
-
 def _z_matrix(a: Analysis, model_features: np.ndarray) -> tuple[np.ndarray, list[str]]:
     p = a.problem
     z = (p.measured_features - model_features - a.disc.mu) / a.disc.sd
@@ -283,7 +270,7 @@ def diagnosis_figure(a: Analysis, response: dict[str, Any] | None = None) -> Fig
     n = len(p.configs)
     cols = 2 if n > 1 else 1
     rows = (n + cols - 1) // cols
-    fig = _new_figure(5.2 * cols, 2.3 * rows + 2.6)
+    fig = new_figure(5.2 * cols, 2.3 * rows + 2.6)
     grid = fig.add_gridspec(rows + 1, cols, height_ratios=[1.0] * rows + [1.2])
     effects = response["effects"]
     corrected = None
@@ -328,4 +315,4 @@ def diagnosis_figure(a: Analysis, response: dict[str, Any] | None = None) -> Fig
             fig.colorbar(im, ax=ax, shrink=0.8)
     v = response["verdict"]
     fig.suptitle(f"verdict: {v['effect']} ({v['status']})", fontsize=10)
-    return _freeze_layout(fig)
+    return freeze_layout(fig)

@@ -17,14 +17,14 @@ from rcsa.analysis.lobes.zoa import (
     MAX_SPEED_COUNT,
     LobeResult,
     Milling,
-    _check_frf,
-    _count,
-    _finite,
-    _immersion,
-    _positive,
-    _teeth,
     stability_lobes,
 )
+from rcsa.analysis.lobes.zoa import check_count as _count
+from rcsa.analysis.lobes.zoa import check_finite as _finite
+from rcsa.analysis.lobes.zoa import check_frf as _check_frf
+from rcsa.analysis.lobes.zoa import check_immersion as _immersion
+from rcsa.analysis.lobes.zoa import check_positive as _positive
+from rcsa.analysis.lobes.zoa import check_teeth as _teeth
 from rcsa.errors import FrequencyMismatch, InputError
 from rcsa.model.wire import complex_from_wire, number_list
 from rcsa.physics.receptance import check_frequency_hz

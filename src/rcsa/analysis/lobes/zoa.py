@@ -50,6 +50,12 @@ __all__ = [
     "Lobe",
     "LobeResult",
     "Milling",
+    "check_count",
+    "check_finite",
+    "check_frf",
+    "check_immersion",
+    "check_positive",
+    "check_teeth",
     "directional_factors",
     "engagement_angles_rad",
     "stability_lobes",
@@ -94,7 +100,7 @@ def engagement_angles_rad(radial_immersion: float, milling: Milling) -> tuple[fl
     >>> [round(a, 6) for a in engagement_angles_rad(0.5, "down")]
     [1.570796, 3.141593]
     """
-    a = _immersion(radial_immersion)
+    a = check_immersion(radial_immersion)
     if milling == "up":
         return 0.0, float(math.acos(1.0 - 2.0 * a))
     if milling == "down":
@@ -486,12 +492,12 @@ def stability_lobes(
     (True, 2.22)
     """
     f = check_frequency_hz(frequency_hz)
-    hxx = _check_frf(frf_xx, f.size, "frf_x")
+    hxx = check_frf(frf_xx, f.size, "frf_x")
     same_y = frf_yy is None
-    hyy = hxx if same_y else _check_frf(frf_yy, f.size, "frf_y")
-    n_teeth = _teeth(teeth)
-    kt = _positive(tangential_coefficient_n_m2, "tangential_coefficient_n_m2")
-    kr = _finite(radial_ratio, "radial_ratio")
+    hyy = hxx if same_y else check_frf(frf_yy, f.size, "frf_y")
+    n_teeth = check_teeth(teeth)
+    kt = check_positive(tangential_coefficient_n_m2, "tangential_coefficient_n_m2")
+    kr = check_finite(radial_ratio, "radial_ratio")
     if kr < 0:
         raise InputError("radial_ratio", f"must be >= 0 (Kr = Kn/Kt), got {kr}")
     grid = _speed_grid(spindle_speed_rpm)
@@ -513,7 +519,7 @@ def stability_lobes(
         needed = math.ceil(60.0 * float(f_valid.max()) / (n_teeth * float(grid[0]))) + 1
         lobes_count = min(needed, MAX_AUTO_LOBES)
     else:
-        lobes_count = _count(n_lobes, "n_lobes", 1, MAX_AUTO_LOBES)
+        lobes_count = check_count(n_lobes, "n_lobes", 1, MAX_AUTO_LOBES)
 
     # Absolute minimum (grid-independent) and where each lobe reaches it.
     flat = int(np.nanargmin(depth))
@@ -566,7 +572,8 @@ def stability_lobes(
 # --------------------------------------------------------------------------- validation
 
 
-def _finite(value: object, field: str) -> float:
+def check_finite(value: object, field: str) -> float:
+    """``value`` as a finite float; ``InputError`` on ``field`` otherwise (booleans are not numbers)."""
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise InputError(field, f"must be a number, got {type(value).__name__}")
     x = float(value)
@@ -575,14 +582,16 @@ def _finite(value: object, field: str) -> float:
     return x
 
 
-def _positive(value: object, field: str) -> float:
-    x = _finite(value, field)
+def check_positive(value: object, field: str) -> float:
+    """``value`` as a finite float > 0; ``InputError`` on ``field`` otherwise."""
+    x = check_finite(value, field)
     if x <= 0:
         raise InputError(field, f"must be > 0, got {x}")
     return x
 
 
-def _count(value: object, field: str, low: int, high: int) -> int:
+def check_count(value: object, field: str, low: int, high: int) -> int:
+    """``value`` as an integer in ``[low, high]``; ``InputError`` on ``field`` otherwise."""
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
         raise InputError(field, f"must be an integer, got {value!r}")
     n = int(value)
@@ -591,18 +600,25 @@ def _count(value: object, field: str, low: int, high: int) -> int:
     return n
 
 
-def _teeth(value: object) -> int:
-    return _count(value, "teeth", 1, MAX_TEETH)
+def check_teeth(value: object) -> int:
+    """Number of teeth, 1 … ``MAX_TEETH``; ``InputError`` on ``teeth`` otherwise."""
+    return check_count(value, "teeth", 1, MAX_TEETH)
 
 
-def _immersion(value: object) -> float:
-    a = _finite(value, "radial_immersion")
+def check_immersion(value: object) -> float:
+    """Radial immersion ``a_e/D`` in (0, 1]; ``InputError`` on ``radial_immersion`` otherwise."""
+    a = check_finite(value, "radial_immersion")
     if not 0.0 < a <= 1.0:
         raise InputError("radial_immersion", f"must satisfy 0 < a_e/D <= 1, got {a}")
     return a
 
 
-def _check_frf(values: object, nfreq: int, field: str) -> np.ndarray:
+def check_frf(values: object, nfreq: int, field: str) -> np.ndarray:
+    """A tool-point FRF (m/N) as a read-only complex array, shape (nfreq,).
+
+    ``InputError`` on ``field`` for a wrong shape, non-finite values, or a positive
+    imaginary part at the resonance peak (the ``exp(−iωt)`` convention: conjugate the data).
+    """
     h = np.array(values, dtype=complex)
     if h.shape != (nfreq,):
         raise InputError(
