@@ -12,11 +12,12 @@ from __future__ import annotations
 
 import hashlib
 import json
-from collections import OrderedDict
+import threading
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from cachetools import LRUCache, cached
 from scipy.ndimage import median_filter
 
 from rcsa.analysis.diagnosis.discrepancy import (
@@ -33,8 +34,9 @@ from rcsa.errors import InputError
 __all__ = ["Problem", "VALID_COHERENCE"]
 
 VALID_COHERENCE = 0.8
-_DRAW_CACHE: OrderedDict[str, list[np.ndarray]] = OrderedDict()
-_DRAW_CACHE_SIZE = 4
+#: Monte-Carlo draws of the last few problems, by content (:meth:`Problem._cache_key`): a
+#: repeated diagnosis of the same measurements (e.g. with another claim threshold) reuses them.
+_DRAW_CACHE: LRUCache[str, list[np.ndarray]] = LRUCache(maxsize=4)
 
 
 def _valid_band(coherence: np.ndarray | None, n: int) -> tuple[int, int]:
@@ -165,22 +167,15 @@ class Problem:
             digest.update(c.frequency_hz.tobytes())
         return digest.hexdigest()
 
+    @cached(_DRAW_CACHE, key=lambda self, n_mc: self._cache_key(n_mc), lock=threading.Lock())
     def _draws(self, n_mc: int) -> list[np.ndarray]:
-        key = self._cache_key(n_mc)
-        hit = _DRAW_CACHE.get(key)
-        if hit is None:
-            rng = np.random.default_rng([self.request.options.seed, 1])
-            out = [np.empty((n_mc, c.frequency_hz.size), dtype=complex) for c in self.configs]
-            for d in range(n_mc):
-                for c, h in zip(out, self.h(draw_knobs(rng, self.request.tolerances, len(self.configs))),
-                                strict=True):
-                    c[d] = h
-            hit = _DRAW_CACHE[key] = out
-            if len(_DRAW_CACHE) > _DRAW_CACHE_SIZE:
-                _DRAW_CACHE.popitem(last=False)
-        else:
-            _DRAW_CACHE.move_to_end(key)
-        return hit
+        """Model ``h`` of every configuration under ``n_mc`` tolerance draws, each (n_mc, nlines)."""
+        rng = np.random.default_rng([self.request.options.seed, 1])
+        out = [np.empty((n_mc, c.frequency_hz.size), dtype=complex) for c in self.configs]
+        for d in range(n_mc):
+            for c, h in zip(out, self.h(draw_knobs(rng, self.request.tolerances, len(self.configs))), strict=True):
+                c[d] = h
+        return out
 
     def discrepancy(self) -> Discrepancy:
         """Σ and μ of the features under the stated tolerances and the measured coherence."""
