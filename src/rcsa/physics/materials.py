@@ -38,10 +38,6 @@ class Material:
         """G = E / (2 (1 + ν)), Pa."""
         return self.youngs_modulus_pa / (2.0 * (1.0 + self.poisson_ratio))
 
-    def undamped(self) -> Material:
-        """The same material with η = 0."""
-        return Material(self.youngs_modulus_pa, self.poisson_ratio, self.density_kg_m3, 0.0)
-
 
 BUILTIN_MATERIALS: dict[str, Material] = {
     "steel": Material(210.0e9, 0.30, 7850.0, 0.002),

@@ -63,11 +63,6 @@ class Section:
     rho_a: RealParam
     rho_i: RealParam
 
-    @property
-    def kappa_ga(self) -> complex:
-        """Shear stiffness κGA, N (``inf`` for Euler–Bernoulli)."""
-        return complex(np.inf) if self.shear_flexibility == 0 else 1.0 / self.shear_flexibility
-
     def undamped(self) -> Section:
         """The section with real moduli (damping removed); works on stacked (array) sections too."""
         flex = np.asarray(self.shear_flexibility)

@@ -132,7 +132,6 @@ class Problem:
         self.base_features = self.features([c.h_base for c in self.configs])
         self.measured_features = self.features([c.h_meas for c in self.configs])
         self.feature_config = np.concatenate([np.full(c.windows.size, c.index) for c in self.configs])
-        self.feature_names = [n for c in self.configs for n in c.windows.names]
 
     # ------------------------------------------------------------------ evaluation
     def h(self, knobs: Knobs | Sequence[Knobs]) -> list[np.ndarray]:

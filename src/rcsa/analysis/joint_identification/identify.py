@@ -171,10 +171,6 @@ class Identification:
 # ---------------------------------------------------------------------------- stages 3–5
 
 
-def _vector(names: list[str], values: Mapping[str, float]) -> np.ndarray:
-    return np.log([values[n] for n in names])
-
-
 def _fit(fun: Any, names: list[str], values: dict[str, float], problem: Problem
          ) -> tuple[dict[str, float], Any]:
     """Least squares in θ = ln(p/p₀) within the bounds (p₀: the values on entry).
