@@ -711,7 +711,8 @@ class LibrarySummary(_Response):
     settings: dict[str, Any] = Field(description="Spindle, frequency, materials, joints, options of the last sync.")
     measurement_sha256: str | None = Field(description="Content hash of the spindle measurement (hybrid).")
     frequency: dict[str, Any] = Field(description="n_lines, min_hz, max_hz, sha256 of the grid.")
-    model_version: int
+    model_version: str = Field(description="Fingerprint of the model that computed the results (SHA-256 of its "
+                               "source; older libraries: a version number).")
     software_version: str
     summary: dict[str, int] = Field(description="Tools by status: ok, skipped, error.")
     last_sync: SyncReport

@@ -110,7 +110,7 @@ def library_hdf5(results: Mapping[str, Any]) -> bytes:
         a["exported_utc"] = _utc_now()
         a["source"] = lib.get("source") or ""
         a["library_sha256"] = lib.get("library_sha256") or ""
-        a["model_version"] = int(lib.get("model_version") or 0)
+        a["model_version"] = str(lib.get("model_version") or "")
         a["software_version"] = lib.get("software_version") or __version__
         a["convention"] = _CONVENTION
         a["tools_json"] = json.dumps(index)

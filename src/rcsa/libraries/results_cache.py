@@ -12,7 +12,9 @@ A result is filed under the SHA-256 of everything that determines it (``ecosyste
   and ``natural_frequencies`` (defaults filled in, so "left out" and "the default" agree);
 * the frequency grid as computed (SHA-256 of the float64 lines), so ``{start, stop, step}``
   and the same lines given as ``values_hz`` share results;
-* the model: ``rcsa.__version__`` and :data:`MODEL_VERSION`.
+* the model: ``rcsa.__version__`` and :func:`model_fingerprint`, the SHA-256 of the source of
+  every module that determines a prediction (:data:`MODEL_SOURCES`), so any change to the
+  physics gives new keys by itself — no version number to remember to bump.
 
 Layout (under the cache directory, normally ``<store>/libraries/results``)::
 
@@ -29,13 +31,16 @@ second rename just replaces the first. Files are never modified afterwards.
 from __future__ import annotations
 
 import contextlib
+import functools
 import hashlib
 import json
 import math
 import os
 import secrets
 import time
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
+from importlib import resources
+from importlib.resources.abc import Traversable
 from pathlib import Path
 from typing import Any
 
@@ -47,23 +52,25 @@ from rcsa.errors import StoreError
 from rcsa.infra.atomic_files import fsync_dir
 
 __all__ = [
-    "MODEL_VERSION",
+    "MODEL_SOURCES",
     "RESULT_KEY_SCHEMA",
     "ResultCache",
     "canonical_json",
     "frequency_sha256",
     "measurement_sha256",
+    "model_fingerprint",
     "result_key",
     "shared_part",
 ]
 
-#: Bump whenever the physics (or anything else that changes computed numbers) changes: every
-#: cached result is then recomputed on its next request. ``rcsa.__version__`` is part of the
-#: key too, so a release invalidates the cache as well.
-MODEL_VERSION = 1
+#: What determines a computed result, relative to the ``rcsa`` package directory: all of the
+#: physics and the model (segments, chain, solver, contract parsing, assembly building,
+#: prediction) and, for measured spindles, the hybrid coupling and the artifact
+#: identification. Every ``.py`` file under a directory counts.
+MODEL_SOURCES = ("physics", "model", "measured/hybrid.py", "measured/artifact_identification.py")
 
 #: Version of the key's own layout (bump if the set of hashed fields changes).
-RESULT_KEY_SCHEMA = "rcsa.result-key/1"
+RESULT_KEY_SCHEMA = "rcsa.result-key/2"
 
 _ARRAYS = ("h", "l", "n", "p")
 _DEFAULTS = {"beam_theory": "timoshenko", "shear_coefficient": "hutchinson", "natural_frequencies": True}
@@ -160,6 +167,57 @@ def shared_part(batch: Mapping[str, Any], measurement_sha: str | None) -> dict[s
     return out
 
 
+def _source_files(node: Traversable, rel: str) -> Iterator[tuple[str, Traversable]]:
+    """``(relative path, file)`` of every ``.py`` file at or under ``node`` (bytecode caches skipped)."""
+    if node.is_file():
+        if node.name.endswith(".py"):
+            yield rel, node
+    elif node.is_dir() and node.name != "__pycache__":
+        for child in node.iterdir():
+            yield from _source_files(child, f"{rel}/{child.name}")
+
+
+def _fingerprint(package: Traversable) -> str:
+    digest = hashlib.sha256(b"rcsa.model-fingerprint/1\0")
+    files = [f for source in MODEL_SOURCES for f in _source_files(package.joinpath(*source.split("/")), source)]
+    if not files:
+        raise FileNotFoundError(f"no model source under {package}")
+    for rel, file in sorted(files, key=lambda f: f[0]):
+        data = file.read_bytes()
+        digest.update(rel.encode() + b"\0" + len(data).to_bytes(8, "little"))
+        digest.update(data)
+    return digest.hexdigest()
+
+
+@functools.cache
+def _installed_fingerprint() -> str:
+    return _fingerprint(resources.files("rcsa"))
+
+
+def model_fingerprint(root: str | os.PathLike[str] | None = None) -> str:
+    """SHA-256 (hex) of the source of every module that determines a prediction.
+
+    The files of :data:`MODEL_SOURCES`, sorted by their path relative to the package, each
+    hashed with its path and length. Any edit to one of them (a physics change, a fixed bug)
+    changes the fingerprint, and with it every :func:`result_key`, so stale results are
+    never served.
+
+    Parameters
+    ----------
+    root : str or os.PathLike, optional
+        A directory holding the ``rcsa`` package's files (``src/rcsa``). Default: the
+        installed package, read once per process.
+
+    Returns
+    -------
+    str
+        64 hex digits.
+    """
+    if root is None:
+        return _installed_fingerprint()
+    return _fingerprint(Path(root))
+
+
 def result_key(combination: Mapping[str, Any], shared: Mapping[str, Any], frequency_sha: str) -> str:
     """The cache key (SHA-256 hex) of one combination's result.
 
@@ -172,7 +230,7 @@ def result_key(combination: Mapping[str, Any], shared: Mapping[str, Any], freque
     frequency_sha : str
         :func:`frequency_sha256` of the computed grid.
     """
-    doc = {"schema": RESULT_KEY_SCHEMA, "model_version": MODEL_VERSION, "rcsa_version": __version__,
+    doc = {"schema": RESULT_KEY_SCHEMA, "model_fingerprint": model_fingerprint(), "rcsa_version": __version__,
            "combination": {k: v for k, v in combination.items() if k != "id"},
            "shared": shared, "frequency_sha256": frequency_sha}
     return hashlib.sha256(canonical_json(doc)).hexdigest()

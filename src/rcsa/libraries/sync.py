@@ -56,11 +56,11 @@ from rcsa._version import __version__
 from rcsa.errors import InputError, NotFoundError, StoreError
 from rcsa.libraries.library_prediction import library_request, resolver_of, select_tool_point
 from rcsa.libraries.results_cache import (
-    MODEL_VERSION,
     ResultCache,
     canonical_json,
     frequency_sha256,
     measurement_sha256,
+    model_fingerprint,
     result_key,
     shared_part,
 )
@@ -109,7 +109,7 @@ CREATE TABLE IF NOT EXISTS libraries (
     n_frequencies      INTEGER NOT NULL,
     frequency_min_hz   REAL NOT NULL,
     frequency_max_hz   REAL NOT NULL,
-    model_version      INTEGER NOT NULL,
+    model_version      TEXT NOT NULL,
     software_version   TEXT NOT NULL,
     last_sync          TEXT NOT NULL
 );
@@ -481,7 +481,7 @@ class LibraryStore:
                     (library_id, revision, now if prev_row is None else prev_row[1], now,
                      str(request["library"].get("source", "")), str(request["library"].get("library_sha256", "")),
                      json.dumps(settings), plan.measurement_sha256, plan.frequency_sha256, int(f.size),
-                     float(f[0]), float(f[-1]), MODEL_VERSION, __version__, json.dumps(report.to_dict())))
+                     float(f[0]), float(f[-1]), model_fingerprint(), __version__, json.dumps(report.to_dict())))
                 con.execute("COMMIT")
             except BaseException:
                 con.execute("ROLLBACK")
@@ -500,7 +500,7 @@ def _library_doc(row: tuple, counts: Mapping[str, int]) -> dict[str, Any]:
     return {"id": lib, "revision": revision, "created_utc": created, "synced_utc": synced, "source": source,
             "library_sha256": sha, "settings": json.loads(settings), "measurement_sha256": msha,
             "frequency": {"n_lines": n, "min_hz": fmin, "max_hz": fmax, "sha256": fsha},
-            "model_version": model, "software_version": software,
+            "model_version": str(model), "software_version": software,
             "summary": {s: int(counts.get(s, 0)) for s in ("ok", "skipped", "error")},
             "last_sync": json.loads(last)}
 
