@@ -138,14 +138,14 @@ def holder_chain(holder: HolderSpec, tool: ToolSpec, materials: Mapping[str, Mat
         if x0 + 1e-9 < insertion_start < x1 - 1e-9:
             pieces = [(x0, insertion_start), (insertion_start, x1)]
         for a, b in pieces:
-            filled = core is not None and a >= insertion_start - 1e-9
-            if filled and tool.shank_diameter_m > seg.inner_diameter_m * (1 + 1e-9):
+            filling = core if a >= insertion_start - 1e-9 else None  # the tool core inside this piece
+            if filling is not None and tool.shank_diameter_m > seg.inner_diameter_m * (1 + 1e-9):
                 raise InputError(
                     "tool.shank_diameter_m",
                     f"the shank ({tool.shank_diameter_m:g} m) does not fit the bore "
                     f"({seg.inner_diameter_m:g} m) of holder.segments[{i}], which the inserted "
                     f"length ({tool.inserted_length_m:g} m) reaches")
-            items.append(Beam(composite(annulus, core) if filled else annulus, b - a))  # type: ignore[arg-type]
+            items.append(Beam(annulus if filling is None else composite(annulus, filling), b - a))
         x0 = x1
     return tuple(items)
 

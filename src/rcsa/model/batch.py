@@ -12,14 +12,14 @@ from collections.abc import Callable, Mapping
 from dataclasses import replace
 from typing import Any, Literal
 
-import numpy as np
-
 from rcsa.errors import InputError
 from rcsa.model.assembly import AssemblyModel
 from rcsa.model.bounds import MAX_BATCH_COMBINATIONS, MAX_FREQUENCY_LINES
 from rcsa.model.contract import assemble, parse_combination, parse_common
 from rcsa.model.prediction import Prediction
 from rcsa.model.spindle_side import BaseResolver, SpindleSide
+from rcsa.physics.arrays import FloatArray
+from rcsa.physics.chain import Chain
 from rcsa.physics.natural_frequencies import natural_frequencies_batch
 
 __all__ = ["BATCH_FIELDS", "Progress", "predict_batch"]
@@ -34,23 +34,22 @@ BATCH_FIELDS = ("frequency", "beam_theory", "shear_coefficient", "materials", "s
 _Slot = dict[str, Any] | tuple[str, AssemblyModel, Prediction]
 
 
-def _fill_natural_frequencies(slots: list[_Slot], frequency_hz: np.ndarray) -> None:
+def _fill_natural_frequencies(slots: list[_Slot], frequency_hz: FloatArray) -> None:
     """Exact natural frequencies of every ok combination, all tools on one spindle solved together.
 
     The spindle (with its joint to the holder) is the shared prefix; holders and tools are
     the stacked tails, so tools in different holders or with different shanks still share
     one lockstep bisection (:func:`rcsa.physics.natural_frequencies.natural_frequencies_batch`).
     """
-    groups: dict[Any, list[int]] = {}
-    for i, slot in enumerate(slots):
-        if not isinstance(slot, dict):
-            groups.setdefault(slot[1].spindle_side(), []).append(i)
+    solved = {i: slot for i, slot in enumerate(slots) if isinstance(slot, tuple)}
+    groups: dict[Chain, list[int]] = {}
+    for i, (_, model, _) in solved.items():
+        groups.setdefault(model.spindle_side(), []).append(i)
     for prefix, members in groups.items():
-        models = [slots[i][1] for i in members]  # type: ignore[index]
-        tails = [m.holder + m.tool_side() for m in models]
+        tails = [solved[i][1].holder + solved[i][1].tool_side() for i in members]
         found = natural_frequencies_batch(prefix, tails, float(frequency_hz[0]), float(frequency_hz[-1]))
         for i, nat in zip(members, found, strict=True):
-            ident, model, prediction = slots[i]  # type: ignore[misc]
+            ident, model, prediction = solved[i]
             slots[i] = (ident, model, replace(prediction, natural_frequencies_hz=nat))
 
 

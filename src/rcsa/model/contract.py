@@ -8,10 +8,11 @@ numerical code downstream never sees an unchecked value.
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -26,6 +27,7 @@ from rcsa.model.bounds import (
     MAX_STIFFNESS,
     MIN_LENGTH_M,
 )
+from rcsa.physics.arrays import FloatArray
 from rcsa.physics.materials import BUILTIN_MATERIALS, Material
 from rcsa.physics.receptance import check_frequency_hz
 from rcsa.physics.sections import BeamTheory, ShearModel
@@ -53,6 +55,11 @@ __all__ = [
     "parse_tool",
 ]
 
+_L = TypeVar("_L", bound=str)
+_BEAM_THEORIES: tuple[BeamTheory, ...] = ("timoshenko", "euler_bernoulli")
+_SHEAR_MODELS: tuple[ShearModel, ...] = ("hutchinson", "cowper")
+
+
 class _Obj:
     """Reads one JSON object: typed getters that name the path, and an unknown-key check."""
 
@@ -73,23 +80,32 @@ class _Obj:
         return self.value.get(key) is not None
 
     def number(self, key: str, *, default: float | None = None, gt: float | None = None,
-               ge: float | None = None, le: float | None = None, lt: float | None = None,
-               required: bool = True) -> float:
+               ge: float | None = None, le: float | None = None, lt: float | None = None) -> float:
         raw = self.value.get(key)
         if raw is None:
-            if default is not None or not required:
-                return default  # type: ignore[return-value]
+            if default is not None:
+                return default
             raise InputError(self.at(key), "is required")
         if isinstance(raw, bool) or not isinstance(raw, int | float):
             raise InputError(self.at(key), f"must be a number, got {type(raw).__name__}")
         x = float(raw)
         if not math.isfinite(x):
             raise InputError(self.at(key), "must be a finite number")
-        for bound, ok, word in ((gt, lambda b: x > b, ">"), (ge, lambda b: x >= b, ">="),
-                                (le, lambda b: x <= b, "<="), (lt, lambda b: x < b, "<")):
-            if bound is not None and not ok(bound):
+        for bound, ok, word in ((gt, operator.gt, ">"), (ge, operator.ge, ">="), (le, operator.le, "<="),
+                                (lt, operator.lt, "<")):
+            if bound is not None and not ok(x, bound):
                 raise InputError(self.at(key), f"must be {word} {bound:g}, got {x:g}")
         return x
+
+    def optional_number(self, key: str, *, gt: float | None = None, ge: float | None = None,
+                        le: float | None = None, lt: float | None = None) -> float | None:
+        """:meth:`number`, or ``None`` when the field is absent (or null)."""
+        return None if self.value.get(key) is None else self.number(key, gt=gt, ge=ge, le=le, lt=lt)
+
+    def choice(self, key: str, default: _L, choices: tuple[_L, ...]) -> _L:
+        """:meth:`string` restricted to ``choices``, typed as their ``Literal``."""
+        raw = self.string(key, default, choices)
+        return next(c for c in choices if c == raw)
 
     def string(self, key: str, default: str | None = None, choices: tuple[str, ...] | None = None) -> str:
         raw = self.value.get(key, default)
@@ -213,7 +229,7 @@ class JointSpec:
 class AssemblySpec:
     """A validated assembly document (``contract.md`` "Assembly")."""
 
-    frequency_hz: np.ndarray
+    frequency_hz: FloatArray
     spindle: SpindleSpec | MeasuredSpindleSpec
     holder: HolderSpec | None
     tool: ToolSpec
@@ -227,7 +243,7 @@ class AssemblySpec:
 # ---------------------------------------------------------------------------- parsers
 
 
-def parse_frequency(value: object, path: str = "frequency", max_lines: int = MAX_FREQUENCY_LINES) -> np.ndarray:
+def parse_frequency(value: object, path: str = "frequency", max_lines: int = MAX_FREQUENCY_LINES) -> FloatArray:
     """Frequency grid from ``{start_hz, stop_hz, step_hz}`` (stop included) or ``{values_hz}``.
 
     Returns
@@ -371,9 +387,9 @@ def parse_tool(value: object, materials: Mapping[str, Material], path: str = "to
     if flute > stickout:
         raise InputError(o.at("flute_length_m"), f"must be <= stickout_m ({stickout:g}), got {flute:g}")
     ratio = o.number("fluted_diameter_ratio", gt=0.0, le=1.0, default=0.8)
-    mass_ratio = o.number("fluted_mass_diameter_ratio", gt=0.0, le=1.0, required=False)
-    shoulder_length = o.number("shoulder_length_m", gt=0.0, ge=MIN_LENGTH_M, required=False)
-    shoulder_diameter = o.number("shoulder_diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M, required=False)
+    mass_ratio = o.optional_number("fluted_mass_diameter_ratio", gt=0.0, le=1.0)
+    shoulder_length = o.optional_number("shoulder_length_m", gt=0.0, ge=MIN_LENGTH_M)
+    shoulder_diameter = o.optional_number("shoulder_diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
     if (shoulder_length is None) != (shoulder_diameter is None):
         raise InputError(o.at("shoulder_length_m"), "shoulder_length_m and shoulder_diameter_m go together")
     if shoulder_length is not None and not flute <= shoulder_length <= stickout:
@@ -391,7 +407,7 @@ def parse_joint(value: object, path: str) -> JointSpec | None:
     o.only("stiffness_n_m", "damping_ns_m", "rotational_stiffness_nm_rad", "rotational_damping_nms_rad")
     return JointSpec(o.number("stiffness_n_m", gt=0.0, le=MAX_STIFFNESS),
                      o.number("damping_ns_m", ge=0.0, le=MAX_DAMPING, default=0.0),
-                     o.number("rotational_stiffness_nm_rad", gt=0.0, le=MAX_STIFFNESS, required=False),
+                     o.optional_number("rotational_stiffness_nm_rad", gt=0.0, le=MAX_STIFFNESS),
                      o.number("rotational_damping_nms_rad", ge=0.0, le=MAX_DAMPING, default=0.0))
 
 
@@ -435,7 +451,7 @@ def parse_combination(value: object, materials: Mapping[str, Material], path: st
 class CommonSpec:
     """What every combination of an assembly or batch shares: grid, options, materials, spindle."""
 
-    frequency_hz: np.ndarray
+    frequency_hz: FloatArray
     beam_theory: BeamTheory
     shear_coefficient: ShearModel | float
     materials: Mapping[str, Material]
@@ -451,16 +467,17 @@ def parse_common(document: object, path: str = "", max_lines: int = MAX_FREQUENC
     if "frequency" not in o.value:
         raise InputError(o.at("frequency"), "is required")
     frequency = parse_frequency(o.value["frequency"], o.at("frequency"), max_lines=max_lines)
-    theory = o.string("beam_theory", "timoshenko", ("timoshenko", "euler_bernoulli"))
+    theory = o.choice("beam_theory", "timoshenko", _BEAM_THEORIES)
+    kappa: ShearModel | float
     if isinstance(o.value.get("shear_coefficient", "hutchinson"), str):
-        kappa: ShearModel | float = o.string("shear_coefficient", "hutchinson", ("hutchinson", "cowper"))  # type: ignore[assignment]
+        kappa = o.choice("shear_coefficient", "hutchinson", _SHEAR_MODELS)
     else:
         kappa = o.number("shear_coefficient", gt=0.0, le=1.5)
     materials = parse_materials(o.value.get("materials"), o.at("materials"))
     if "spindle" not in o.value:
         raise InputError(o.at("spindle"), "is required")
     spindle = parse_spindle(o.value["spindle"], materials, o.at("spindle"))
-    return CommonSpec(frequency, theory, kappa, materials, spindle)  # type: ignore[arg-type]
+    return CommonSpec(frequency, theory, kappa, materials, spindle)
 
 
 def assemble(common: CommonSpec, combination: CombinationSpec) -> AssemblySpec:

@@ -10,6 +10,7 @@ Names are stable strings: ``bearings[i].stiffness_n_m``, ``spindle_holder.dampin
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import Any
 
 from rcsa.errors import InputError
 from rcsa.model.contract import AssemblySpec, SpindleSpec
@@ -111,7 +112,8 @@ def set_parameter(spec: AssemblySpec, name: str, value: float) -> AssemblySpec:
             raise InputError("parameters", f"{name!r}: the joint {group} is rigid in this assembly")
         return replace(spec, **{group: replace(joint, **{field: float(value)})})
     if group == "tool" and field in _TOOL_FIELDS:
-        return replace(spec, tool=replace(spec.tool, **{field: float(value)}))
+        change: dict[str, Any] = {field: float(value)}  # a float field of ToolSpec (_TOOL_FIELDS)
+        return replace(spec, tool=replace(spec.tool, **change))
     raise InputError("parameters", f"unknown parameter {name!r}")
 
 

@@ -87,7 +87,7 @@ def find_frf_peaks(frequency_hz: FloatArray, h: ComplexArray, *, rel_prominence:
     return [{"frequency_hz": float(frequency_hz[i]), "magnitude_m_n": float(mag[i])} for i in idx]
 
 
-def modal_fit_peaks(frequency_hz: np.ndarray, h: np.ndarray, *, rel_prominence: float = 0.01,
+def modal_fit_peaks(frequency_hz: FloatArray, h: ComplexArray, *, rel_prominence: float = 0.01,
                     half_width_lines: int = 6) -> list[dict[str, float]]:
     """Single-mode fits around each peak of ``h`` (for FRFs without an exact model).
 
@@ -115,7 +115,7 @@ def modal_fit_peaks(frequency_hz: np.ndarray, h: np.ndarray, *, rel_prominence: 
     return out
 
 
-def single_mode_fit(frequency_hz: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, float] | None:
+def single_mode_fit(frequency_hz: FloatArray, h: ComplexArray) -> tuple[FloatArray, float] | None:
     """One mode with residual terms fitted by Levy's linearised least squares.
 
     ``h ≈ (c₀ + c₁s + c₂s²)/(s² + a₁s + a₀)`` with the scaled ``s = iω/scale``.

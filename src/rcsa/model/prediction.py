@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -17,6 +17,7 @@ from rcsa.model.assembly import AssemblyModel
 from rcsa.model.peaks import find_frf_peaks, modal_fit_peaks
 from rcsa.model.wire import complex_to_wire
 from rcsa.physics.algebra2x2 import inv2
+from rcsa.physics.arrays import ComplexArray, FloatArray
 from rcsa.physics.chain import Beam, Chain
 from rcsa.physics.elimination import march, static_condense, static_tip_receptance
 from rcsa.physics.natural_frequencies import natural_frequencies_batch
@@ -49,7 +50,7 @@ class Prediction(Mapping[str, Any]):
     """
 
     tool_point: Receptance
-    natural_frequencies_hz: np.ndarray
+    natural_frequencies_hz: FloatArray
     natural_frequencies_method: str
     peaks: list[dict[str, float]]
     static_stiffness_n_m: float | None
@@ -59,11 +60,11 @@ class Prediction(Mapping[str, Any]):
     extra: Mapping[str, Any] = field(default_factory=dict)
 
     @property
-    def frequency_hz(self) -> np.ndarray:
+    def frequency_hz(self) -> FloatArray:
         """Frequency grid, Hz, shape (nfreq,)."""
         return self.tool_point.frequency_hz
 
-    def to_dict(self, arrays: str = "list") -> dict[str, Any]:
+    def to_dict(self, arrays: Literal["list", "numpy"] = "list") -> dict[str, Any]:
         """The contract's prediction result.
 
         Parameters
@@ -112,20 +113,20 @@ class SubassemblyCache:
     holder, shank and insertion share the spindle + holder condensation exactly.
     """
 
-    def __init__(self, omega_rad_s: np.ndarray, base_receptance: np.ndarray | None = None) -> None:
+    def __init__(self, omega_rad_s: FloatArray, base_receptance: ComplexArray | None = None) -> None:
         self.omega_rad_s = np.asarray(omega_rad_s, dtype=float)
         self.base_receptance = base_receptance
-        self._store: dict[Chain, np.ndarray] = {}
-        self._static: dict[Chain, np.ndarray] = {}
+        self._store: dict[Chain, ComplexArray] = {}
+        self._static: dict[Chain, FloatArray] = {}
 
-    def static(self, chain: Chain) -> np.ndarray:
+    def static(self, chain: Chain) -> FloatArray:
         """Static undamped stiffness at the end of ``chain`` (cached), shape (2, 2)."""
         hit = self._static.get(chain)
         if hit is None:
             hit = self._static[chain] = static_condense(chain)
         return hit
 
-    def condensed(self, chain: Chain) -> np.ndarray:
+    def condensed(self, chain: Chain) -> ComplexArray:
         """Dynamic stiffness at the end of ``chain`` (plus the base), shape (nfreq, 2, 2)."""
         hit = self._store.get(chain)
         if hit is None:
@@ -134,7 +135,7 @@ class SubassemblyCache:
         return hit
 
 
-def tool_point_receptance(model: AssemblyModel, cache: SubassemblyCache) -> np.ndarray:
+def tool_point_receptance(model: AssemblyModel, cache: SubassemblyCache) -> ComplexArray:
     """Tool-point ``[[h, l], [n, p]]`` of a model on the cache's grid, shape (nfreq, 2, 2).
 
     The spindle + holder condensation comes from (and stays in) ``cache``; a measured spindle
@@ -148,8 +149,8 @@ def tool_point_receptance(model: AssemblyModel, cache: SubassemblyCache) -> np.n
     return inv2(k_tip)
 
 
-def predict_model(model: AssemblyModel, frequency_hz: np.ndarray, *,
-                  base_receptance: np.ndarray | None = None,
+def predict_model(model: AssemblyModel, frequency_hz: FloatArray, *,
+                  base_receptance: ComplexArray | None = None,
                   cache: SubassemblyCache | None = None,
                   natural_frequencies: bool = True,
                   notes: tuple[str, ...] = (), extra: Mapping[str, Any] | None = None) -> Prediction:

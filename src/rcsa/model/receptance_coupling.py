@@ -21,6 +21,7 @@ from functools import reduce
 import numpy as np
 
 from rcsa.model.assembly import AssemblyModel
+from rcsa.physics.arrays import ComplexArray, FloatArray
 from rcsa.physics.chain import Beam, Chain, Ground, Spring
 from rcsa.physics.coupling import couple, couple_general, couple_to_base, modify
 from rcsa.physics.segments import free_free_receptance
@@ -28,16 +29,16 @@ from rcsa.physics.segments import free_free_receptance
 __all__ = ["component_receptance", "free_free_nodes", "spindle_nose_receptance", "tool_point_receptance"]
 
 
-def component_receptance(chain: Chain, omega_rad_s: np.ndarray) -> np.ndarray:
+def component_receptance(chain: Chain, omega_rad_s: FloatArray) -> ComplexArray:
     """Free-free two-end receptance of a rigid chain of beams, shape (nfreq, 4, 4)."""
     beams = [item for item in chain if isinstance(item, Beam)]
     if len(beams) != len(chain):
         raise ValueError("a rigid component holds beams only")
-    parts = [free_free_receptance(omega_rad_s, b.section, b.length_m) for b in beams]
+    parts = [free_free_receptance(omega_rad_s, b.section, float(b.length_m)) for b in beams]
     return reduce(couple, parts)
 
 
-def free_free_nodes(beams: list[Beam], omega_rad_s: np.ndarray) -> np.ndarray:
+def free_free_nodes(beams: list[Beam], omega_rad_s: FloatArray) -> ComplexArray:
     """Free-free receptance of a rigid chain of beams with every node retained.
 
     Block-diagonal ``Y`` of the segments, a signed Boolean ``B`` joining end 2 of each beam to
@@ -52,7 +53,7 @@ def free_free_nodes(beams: list[Beam], omega_rad_s: np.ndarray) -> np.ndarray:
     m = len(beams)
     y = np.zeros((omega_rad_s.size, 4 * m, 4 * m), dtype=complex)
     for j, b in enumerate(beams):
-        y[:, 4 * j:4 * j + 4, 4 * j:4 * j + 4] = free_free_receptance(omega_rad_s, b.section, b.length_m)
+        y[:, 4 * j:4 * j + 4, 4 * j:4 * j + 4] = free_free_receptance(omega_rad_s, b.section, float(b.length_m))
     rows = []
     for j in range(m - 1):  # end 2 of beam j == end 1 of beam j+1, both DOFs
         for dof in range(2):
@@ -64,7 +65,7 @@ def free_free_nodes(beams: list[Beam], omega_rad_s: np.ndarray) -> np.ndarray:
     return g[:, keep][:, :, keep]
 
 
-def spindle_nose_receptance(spindle: Chain, omega_rad_s: np.ndarray) -> np.ndarray:
+def spindle_nose_receptance(spindle: Chain, omega_rad_s: FloatArray) -> ComplexArray:
     """Receptance at the last node (the nose) of a spindle chain with grounded bearings.
 
     The beams are coupled rigidly with every node retained (:func:`free_free_nodes`); the
@@ -94,12 +95,12 @@ def spindle_nose_receptance(spindle: Chain, omega_rad_s: np.ndarray) -> np.ndarr
     return g[:, nose][:, :, nose]
 
 
-def _compliance(spring: Spring | None, omega_rad_s: np.ndarray) -> np.ndarray | None:
+def _compliance(spring: Spring | None, omega_rad_s: FloatArray) -> ComplexArray | None:
     return None if spring is None else spring.compliance(omega_rad_s)
 
 
-def tool_point_receptance(model: AssemblyModel, omega_rad_s: np.ndarray,
-                          base_receptance: np.ndarray | None = None) -> np.ndarray:
+def tool_point_receptance(model: AssemblyModel, omega_rad_s: FloatArray,
+                          base_receptance: ComplexArray | None = None) -> ComplexArray:
     """Tool-point receptance by the paper's receptance-coupling steps.
 
     Parameters

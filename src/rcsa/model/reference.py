@@ -36,7 +36,7 @@ def ra1(frequency: dict[str, Any] | None = None) -> dict[str, Any]:
     >>> doc["tool"]["stickout_m"]
     0.074
     """
-    doc = copy.deepcopy(json.loads(_ra1_text()))
+    doc: dict[str, Any] = copy.deepcopy(json.loads(_ra1_text()))
     if frequency is not None:
         doc["frequency"] = dict(frequency)
     return doc

@@ -21,6 +21,7 @@ from rcsa.model.assembly import AssemblyModel, build_model, spindle_chain
 from rcsa.model.contract import AssemblySpec, CommonSpec, MeasuredSpindleSpec, SpindleSpec
 from rcsa.model.prediction import Prediction, SubassemblyCache, predict_model, tool_point_receptance
 from rcsa.model.wire import complex_to_wire
+from rcsa.physics.arrays import ComplexArray, FloatArray
 
 __all__ = ["BaseResolver", "MeasuredBase", "SpindleSide", "spread_of_bounds"]
 
@@ -43,15 +44,15 @@ class MeasuredBase:
     """
 
     plane: str
-    receptance: np.ndarray
-    alternatives: tuple[np.ndarray, ...] = ()
+    receptance: ComplexArray
+    alternatives: tuple[ComplexArray, ...] = ()
     notes: tuple[str, ...] = ()
     report: dict[str, Any] = field(default_factory=dict)
     artifact_diameter_m: float | None = None
 
 
 #: Turns a measured spindle of a request into its base receptance on a grid (Hz).
-BaseResolver = Callable[[MeasuredSpindleSpec, np.ndarray], MeasuredBase]
+BaseResolver = Callable[[MeasuredSpindleSpec, FloatArray], MeasuredBase]
 
 
 class SpindleSide:
@@ -103,7 +104,7 @@ class SpindleSide:
                                     natural_frequencies=natural_frequencies, notes=base.notes, extra=extra)
 
 
-def spread_of_bounds(frequency_hz: np.ndarray, bounds: list[np.ndarray]) -> dict[str, Any]:
+def spread_of_bounds(frequency_hz: FloatArray, bounds: list[ComplexArray]) -> dict[str, Any]:
     """Envelope of the tool-point h over an estimate's bounds, relative to its peak.
 
     Parameters

@@ -8,15 +8,18 @@ from __future__ import annotations
 
 import numpy as np
 
+from rcsa.physics.arrays import ComplexArray, FloatArray, IntArray
+
 __all__ = ["det2", "inv2", "negative_count_sym", "negative_count_sym2"]
 
 
-def det2(a: np.ndarray) -> np.ndarray:
+def det2(a: ComplexArray) -> ComplexArray:
     """Determinant of each 2×2 matrix, shape (...)."""
-    return a[..., 0, 0] * a[..., 1, 1] - a[..., 0, 1] * a[..., 1, 0]
+    out: ComplexArray = a[..., 0, 0] * a[..., 1, 1] - a[..., 0, 1] * a[..., 1, 0]
+    return out
 
 
-def inv2(a: np.ndarray) -> np.ndarray:
+def inv2(a: ComplexArray) -> ComplexArray:
     """Inverse of each 2×2 matrix, shape (..., 2, 2)."""
     d = det2(a)
     out = np.empty_like(a)
@@ -27,7 +30,8 @@ def inv2(a: np.ndarray) -> np.ndarray:
     return out
 
 
-def negative_count_sym(a11: np.ndarray, a12: np.ndarray, a22: np.ndarray) -> np.ndarray:
+def negative_count_sym(a11: ComplexArray | FloatArray, a12: ComplexArray | FloatArray,
+                       a22: ComplexArray | FloatArray) -> IntArray:
     """Negative eigenvalues of real symmetric 2×2 matrices given by their entries, int.
 
     Sylvester's criterion: det < 0 → one negative; det > 0 and trace < 0 → two; det = 0 and
@@ -39,6 +43,6 @@ def negative_count_sym(a11: np.ndarray, a12: np.ndarray, a22: np.ndarray) -> np.
     return np.where(d < 0, 1, np.where(tr < 0, np.where(d > 0, 2, 1), 0))
 
 
-def negative_count_sym2(a: np.ndarray) -> np.ndarray:
+def negative_count_sym2(a: ComplexArray | FloatArray) -> IntArray:
     """Number of negative eigenvalues of each real symmetric 2×2 matrix, shape (...), int."""
     return negative_count_sym(a[..., 0, 0], a[..., 0, 1], a[..., 1, 1])

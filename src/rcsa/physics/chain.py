@@ -278,7 +278,8 @@ class Beam:
             Length, m.
         """
         s = self.section
-        ei, ra, ri = np.real(s.ei), np.asarray(s.rho_a, dtype=float), np.asarray(s.rho_i, dtype=float)
+        ei = np.real(np.asarray(s.ei))
+        ra, ri = np.asarray(s.rho_a, dtype=float), np.asarray(s.rho_i, dtype=float)
         w2 = omega_rad_s**2 * 1.0001
         shear_rigid = s.is_euler_bernoulli
         a = ra if shear_rigid else 2.0 * ra

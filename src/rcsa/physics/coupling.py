@@ -23,11 +23,12 @@ from __future__ import annotations
 import numpy as np
 
 from rcsa.physics.algebra2x2 import inv2
+from rcsa.physics.arrays import ComplexArray, FloatArray, IntArray
 
 __all__ = ["couple", "couple_general", "couple_to_base", "decouple_base", "modify"]
 
 
-def couple_general(y: np.ndarray, b: np.ndarray, k_inv: np.ndarray | None = None) -> np.ndarray:
+def couple_general(y: ComplexArray, b: FloatArray, k_inv: ComplexArray | None = None) -> ComplexArray:
     """Coupled receptance ``G = Y − Y Bᵀ (B Y Bᵀ + K⁻¹)⁻¹ B Y``.
 
     Parameters
@@ -47,10 +48,11 @@ def couple_general(y: np.ndarray, b: np.ndarray, k_inv: np.ndarray | None = None
     z = b @ yb
     if k_inv is not None:
         z = z + k_inv
-    return y - yb @ np.linalg.solve(z, b @ y)
+    out: ComplexArray = y - yb @ np.linalg.solve(z, b @ y)
+    return out
 
 
-def couple(a: np.ndarray, b: np.ndarray, joint_compliance: np.ndarray | None = None) -> np.ndarray:
+def couple(a: ComplexArray, b: ComplexArray, joint_compliance: ComplexArray | None = None) -> ComplexArray:
     """Couple end 2 of ``a`` to end 1 of ``b``; keep ``a``'s end 1 and ``b``'s end 2.
 
     ``Z = A22 + B11 + K⁻¹``; ``G11 = A11 − A12 Z⁻¹ A21``, ``G12 = A12 Z⁻¹ B12``,
@@ -81,8 +83,8 @@ def couple(a: np.ndarray, b: np.ndarray, joint_compliance: np.ndarray | None = N
     return out
 
 
-def couple_to_base(a: np.ndarray, base: np.ndarray,
-                   joint_compliance: np.ndarray | None = None) -> np.ndarray:
+def couple_to_base(a: ComplexArray, base: ComplexArray,
+                   joint_compliance: ComplexArray | None = None) -> ComplexArray:
     """Receptance at end 2 of ``a`` once its end 1 sits on a grounded ``base``.
 
     ``G22 = A22 − A21 (A11 + K⁻¹ + S)⁻¹ A12`` — the Budak/Ertürk form (``domain.md`` §3.3).
@@ -102,10 +104,11 @@ def couple_to_base(a: np.ndarray, base: np.ndarray,
     z = a[:, :2, :2] + base
     if joint_compliance is not None:
         z = z + joint_compliance
-    return a[:, 2:, 2:] - a[:, 2:, :2] @ inv2(z) @ a[:, :2, 2:]
+    out: ComplexArray = a[:, 2:, 2:] - a[:, 2:, :2] @ inv2(z) @ a[:, :2, 2:]
+    return out
 
 
-def modify(y: np.ndarray, dofs: list[int] | np.ndarray, delta: np.ndarray) -> np.ndarray:
+def modify(y: ComplexArray, dofs: list[int] | IntArray, delta: ComplexArray) -> ComplexArray:
     """Özgüven's FRF-based structural modification.
 
     ``G = Y − Y[:, m] Δ (I + Y[m, m] Δ)⁻¹ Y[m, :]`` for a modification of dynamic stiffness
@@ -131,11 +134,12 @@ def modify(y: np.ndarray, dofs: list[int] | np.ndarray, delta: np.ndarray) -> np
     y_cm = y[:, :, m]
     y_mm = y[:, m[:, None], m[None, :]]
     eye = np.eye(m.size)
-    return y - y_cm @ delta @ np.linalg.solve(eye + y_mm @ delta, y[:, m, :])
+    out: ComplexArray = y - y_cm @ delta @ np.linalg.solve(eye + y_mm @ delta, y[:, m, :])
+    return out
 
 
-def decouple_base(a: np.ndarray, coupled_tip: np.ndarray,
-                  joint_compliance: np.ndarray | None = None) -> np.ndarray:
+def decouple_base(a: ComplexArray, coupled_tip: ComplexArray,
+                  joint_compliance: ComplexArray | None = None) -> ComplexArray:
     """Inverse RCSA: the base receptance ``S`` from a measured/computed tip receptance ``G22``.
 
     Inverts :func:`couple_to_base`: ``S = A12 (A22 − G22)⁻¹ A21 − A11 − K⁻¹``
@@ -152,7 +156,7 @@ def decouple_base(a: np.ndarray, coupled_tip: np.ndarray,
     -------
     numpy.ndarray, shape (nfreq, 2, 2)
     """
-    s = a[:, :2, 2:] @ inv2(a[:, 2:, 2:] - coupled_tip) @ a[:, 2:, :2] - a[:, :2, :2]
+    s: ComplexArray = a[:, :2, 2:] @ inv2(a[:, 2:, 2:] - coupled_tip) @ a[:, 2:, :2] - a[:, :2, :2]
     if joint_compliance is not None:
         s = s - joint_compliance
     return s

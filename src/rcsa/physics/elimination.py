@@ -118,12 +118,26 @@ def march(chain: Chain, omega_rad_s: FloatArray, start: ComplexArray | None = No
     return _from_sym(k), neg
 
 
-def tip_receptance(chain: Chain, omega_rad_s: np.ndarray, start: np.ndarray | None = None) -> np.ndarray:
-    """Point receptance ``[[h, l], [n, p]]`` at the last node, shape (nfreq, 2, 2)."""
+def tip_receptance(chain: Chain, omega_rad_s: FloatArray, start: ComplexArray | None = None) -> ComplexArray:
+    """Point receptance ``[[h, l], [n, p]]`` at the last node, shape (nfreq, 2, 2).
+
+    Parameters
+    ----------
+    chain : Chain
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies, rad/s.
+    start : numpy.ndarray, shape (nfreq, 2, 2), optional
+        Dynamic stiffness attached at the first node (see :func:`march`).
+
+    Returns
+    -------
+    numpy.ndarray, shape (nfreq, 2, 2), complex
+        m/N, m/(N·m), rad/N, rad/(N·m).
+    """
     return inv2(march(chain, omega_rad_s, start)[0])
 
 
-def wittrick_williams_count(chain: Chain, omega_rad_s: np.ndarray, start: np.ndarray | None = None) -> np.ndarray:
+def wittrick_williams_count(chain: Chain, omega_rad_s: FloatArray, start: ComplexArray | None = None) -> IntArray:
     """Number of natural frequencies below each ω of an undamped, subdivided chain.
 
     The chain must be real (undamped) and subdivided with :func:`subdivide` for at least the
@@ -135,6 +149,7 @@ def wittrick_williams_count(chain: Chain, omega_rad_s: np.ndarray, start: np.nda
     numpy.ndarray of int, shape (nfreq,)
     """
     k, neg = march(chain, omega_rad_s, start, count=True)
+    assert neg is not None  # count=True
     return neg + negative_count_sym2(k)
 
 
@@ -163,7 +178,7 @@ def static_condense(chain: Chain, start: FloatArray | None = None) -> FloatArray
     return np.array([[k11, k12], [k12, k22]])
 
 
-def static_tip_receptance(chain: Chain, start: np.ndarray | None = None) -> np.ndarray | None:
+def static_tip_receptance(chain: Chain, start: FloatArray | None = None) -> FloatArray | None:
     """Static (ω = 0) undamped point receptance at the last node, shape (2, 2).
 
     ``None`` when the chain is not grounded (a free body has no static stiffness).
@@ -172,4 +187,5 @@ def static_tip_receptance(chain: Chain, start: np.ndarray | None = None) -> np.n
     det = k[0, 0] * k[1, 1] - k[0, 1] ** 2
     if abs(det) <= 1e-12 * max(abs(k[0, 0] * k[1, 1]), 1e-300):
         return None
-    return np.array([[k[1, 1], -k[0, 1]], [-k[0, 1], k[0, 0]]]) / det
+    out: FloatArray = np.array([[k[1, 1], -k[0, 1]], [-k[0, 1], k[0, 0]]]) / det
+    return out

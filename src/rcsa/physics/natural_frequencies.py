@@ -13,6 +13,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from rcsa.physics.arrays import ComplexArray, FloatArray, IntArray
 from rcsa.physics.chain import Chain, undamped
 from rcsa.physics.elimination import march, subdivide, wittrick_williams_count
 from rcsa.physics.stacking import chain_signature, stack_chains, take_rows
@@ -23,7 +24,7 @@ _TWO_PI = 2.0 * np.pi
 
 
 def natural_frequencies_hz(chain: Chain, start_hz: float, stop_hz: float, *, rtol: float = 1e-11,
-                           scan_points: int = 64) -> np.ndarray:
+                           scan_points: int = 64) -> FloatArray:
     """Undamped natural frequencies of a chain in ``[start_hz, stop_hz]``.
 
     Parameters
@@ -46,7 +47,7 @@ def natural_frequencies_hz(chain: Chain, start_hz: float, stop_hz: float, *, rto
 
 
 def natural_frequencies_batch(prefix: Chain, tails: Sequence[Chain], start_hz: float, stop_hz: float, *,
-                              rtol: float = 1e-11, scan_points: int = 64) -> list[np.ndarray]:
+                              rtol: float = 1e-11, scan_points: int = 64) -> list[FloatArray]:
     """Natural frequencies of many assemblies sharing a prefix (``prefix + tail`` for each tail).
 
     All assemblies are bracketed and bisected in lockstep: each step counts (Wittrick–Williams)
@@ -62,9 +63,9 @@ def natural_frequencies_batch(prefix: Chain, tails: Sequence[Chain], start_hz: f
     w_max = _TWO_PI * stop_hz
     head = subdivide(undamped(prefix), w_max)
     grid = np.geomspace(start_hz, stop_hz, scan_points)
-    k_grid, n_grid = march(head, _TWO_PI * grid, count=True)
-    out: list[np.ndarray] = [np.empty(0)] * len(tails)
-    groups: dict[tuple, list[int]] = {}
+    k_grid, n_grid = _march_counting(head, _TWO_PI * grid)
+    out: list[FloatArray] = [np.empty(0)] * len(tails)
+    groups: dict[tuple[tuple[object, ...], ...], list[int]] = {}
     for i, tail in enumerate(tails):
         groups.setdefault(chain_signature(tail), []).append(i)
     for members in groups.values():
@@ -85,7 +86,7 @@ def natural_frequencies_batch(prefix: Chain, tails: Sequence[Chain], start_hz: f
         lo_a, hi_a = np.concatenate(lo), np.concatenate(hi)
         while rt.size and np.any(hi_a - lo_a > rtol * hi_a):
             mid = 0.5 * (lo_a + hi_a)
-            k_mid, n_mid = march(head, _TWO_PI * mid, count=True)
+            k_mid, n_mid = _march_counting(head, _TWO_PI * mid)
             above = _count_tail(stacked, rt, mid, k_mid, n_mid) > rm
             hi_a = np.where(above, mid, hi_a)
             lo_a = np.where(above, lo_a, mid)
@@ -95,6 +96,14 @@ def natural_frequencies_batch(prefix: Chain, tails: Sequence[Chain], start_hz: f
     return out
 
 
-def _count_tail(stacked: Chain, rows: np.ndarray, f_hz: np.ndarray, k0: np.ndarray, n0: np.ndarray) -> np.ndarray:
+def _march_counting(chain: Chain, omega_rad_s: FloatArray) -> tuple[ComplexArray, IntArray]:
+    """:func:`march` with the negative pivot count (never None when asked for)."""
+    k, negatives = march(chain, omega_rad_s, count=True)
+    assert negatives is not None
+    return k, negatives
+
+
+def _count_tail(stacked: Chain, rows: IntArray, f_hz: FloatArray, k0: ComplexArray, n0: IntArray) -> IntArray:
     """Wittrick–Williams count: prefix negatives ``n0`` plus the stacked tail's, per row."""
-    return n0 + wittrick_williams_count(take_rows(stacked, rows), _TWO_PI * f_hz, k0)
+    out: IntArray = n0 + wittrick_williams_count(take_rows(stacked, rows), _TWO_PI * f_hz, k0)
+    return out

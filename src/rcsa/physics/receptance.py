@@ -22,11 +22,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from rcsa.errors import InputError
+from rcsa.physics.arrays import ComplexArray, FloatArray
 
 __all__ = ["Receptance", "check_frequency_hz"]
 
 
-def check_frequency_hz(frequency_hz: object, field: str = "frequency_hz") -> np.ndarray:
+def check_frequency_hz(frequency_hz: object, field: str = "frequency_hz") -> FloatArray:
     """Validate a frequency axis and return it as a read-only float64 array.
 
     Parameters
@@ -55,7 +56,7 @@ def check_frequency_hz(frequency_hz: object, field: str = "frequency_hz") -> np.
     return f
 
 
-def _readonly_complex(values: object, shape_tail: tuple[int, ...], nfreq: int, what: str) -> np.ndarray:
+def _readonly_complex(values: object, shape_tail: tuple[int, ...], nfreq: int, what: str) -> ComplexArray:
     v = np.array(values, dtype=complex)
     if v.shape != (nfreq, *shape_tail):
         raise InputError(what, f"expected shape {(nfreq, *shape_tail)}, got {v.shape}")
@@ -77,8 +78,8 @@ class Receptance:
         Complex receptance; units m/N, 1/N, rad/N, rad/(N·m) (see module docstring).
     """
 
-    frequency_hz: np.ndarray
-    values: np.ndarray
+    frequency_hz: FloatArray
+    values: ComplexArray
 
     def __post_init__(self) -> None:
         f = check_frequency_hz(self.frequency_hz)
@@ -86,27 +87,27 @@ class Receptance:
         object.__setattr__(self, "values", _readonly_complex(self.values, (2, 2), f.size, "values"))
 
     @property
-    def omega_rad_s(self) -> np.ndarray:
+    def omega_rad_s(self) -> FloatArray:
         """Angular frequency, rad/s, shape (nfreq,)."""
         return 2.0 * np.pi * self.frequency_hz
 
     @property
-    def h(self) -> np.ndarray:
+    def h(self) -> ComplexArray:
         """Displacement per force, m/N, shape (nfreq,)."""
         return self.values[:, 0, 0]
 
     @property
-    def l(self) -> np.ndarray:  # noqa: E743 - the literature's name
+    def l(self) -> ComplexArray:  # noqa: E743 - the literature's name
         """Displacement per moment, 1/N, shape (nfreq,)."""
         return self.values[:, 0, 1]
 
     @property
-    def n(self) -> np.ndarray:
+    def n(self) -> ComplexArray:
         """Rotation per force, rad/N, shape (nfreq,)."""
         return self.values[:, 1, 0]
 
     @property
-    def p(self) -> np.ndarray:
+    def p(self) -> ComplexArray:
         """Rotation per moment, rad/(N·m), shape (nfreq,)."""
         return self.values[:, 1, 1]
 

@@ -68,7 +68,8 @@ class Section:
         flex = np.asarray(self.shear_flexibility)
         with np.errstate(divide="ignore"):
             real_flex = np.where(flex == 0, 0.0, 1.0 / np.real(1.0 / np.where(flex == 0, 1.0, flex)))
-        return replace(self, ei=_like(np.real(self.ei) + 0j, self.ei), shear_flexibility=_like(real_flex + 0j, flex))
+        real_ei = np.asarray(np.real(self.ei), dtype=float) + 0j
+        return replace(self, ei=_like(real_ei, self.ei), shear_flexibility=_like(real_flex + 0j, flex))
 
     def euler_bernoulli(self) -> Section:
         """The Euler–Bernoulli counterpart: no shear flexibility, no rotary inertia."""
@@ -178,6 +179,7 @@ def composite(*parts: Section) -> Section:
     EI, κGA, ρA and ρI add (``domain.md`` §2.6). Any Euler–Bernoulli part makes the
     composite rigid in shear.
     """
+    flex: ComplexParam
     if any(p.shear_flexibility == 0 for p in parts):
         flex = 0j
     else:

@@ -60,8 +60,8 @@ def wavenumbers(omega_rad_s: FloatArray, section: Section) -> tuple[ComplexArray
     c = ra * (1.0 - ri * fs)
     r = np.sqrt(b * b + 4.0 * ei * c + 0j)
     r = np.where((np.conj(b) * r).real < 0, -r, r)
-    s1 = (b + r) / (2.0 * ei)
-    s2 = -c / (ei * s1)
+    s1: ComplexArray = (b + r) / (2.0 * ei)
+    s2: ComplexArray = -c / (ei * s1)
     return s1, s2
 
 
