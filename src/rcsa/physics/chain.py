@@ -339,23 +339,25 @@ class Lumped:
         """Its type name: lumped items of one type stack."""
         return (type(self).__name__,)
 
+    def _values(self) -> dict[str, Any]:
+        """The dataclass fields of the subclass, by name."""
+        item: Any = self  # a dataclass: every subclass is one
+        return {f.name: getattr(self, f.name) for f in fields(item)}
+
     def stack(self, items: Sequence[Self]) -> Self:
         """Every field as an array over ``items`` (``None`` stays ``None``: equal signatures agree on it)."""
-        first: Any = self
-        values = {f.name: None if getattr(first, f.name) is None else np.array([getattr(i, f.name) for i in items])
-                  for f in fields(first)}
-        return type(self)(**values)
+        values = [i._values() for i in items]
+        return type(self)(**{name: None if value is None else np.array([v[name] for v in values])
+                             for name, value in self._values().items()})
 
     def take_rows(self, rows: IntArray) -> Self:
         """Every array field indexed by ``rows`` (scalars kept)."""
-        first: Any = self
-        return type(self)(**{f.name: _row(getattr(self, f.name), rows) for f in fields(first)})
+        return type(self)(**{name: _row(value, rows) for name, value in self._values().items()})
 
     @property
     def is_stacked(self) -> bool:
         """True when some field is an array (one value per row)."""
-        first: Any = self
-        return any(np.ndim(getattr(self, f.name)) > 0 for f in fields(first) if getattr(self, f.name) is not None)
+        return any(value is not None and np.ndim(value) > 0 for value in self._values().values())
 
 
 @dataclass(frozen=True, slots=True)
