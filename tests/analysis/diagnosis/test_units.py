@@ -180,3 +180,20 @@ def test_solver_matches_the_engine(spec):
     h = solver.tip_h(config_parts(spec, tool, Knobs()))
     exact = tip_receptance(build_model(replace(spec, tool=tool)).chain(), 2 * np.pi * F_HZ)[:, 0, 0]
     np.testing.assert_allclose(h, exact, rtol=1e-10)
+
+
+def test_added_compliance_is_a_chain_item_adding_to_the_receptance(spec):
+    """R → R + [[0, c_wψ], [c_wψ, c_ψψ]], through march and through a measured (compliance) base."""
+    from rcsa.analysis.diagnosis.perturbed_model import AddedCompliance
+    from rcsa.model.assembly import build_model
+    from rcsa.physics.algebra2x2 import inv2
+    from rcsa.physics.elimination import march, tip_receptance
+    omega = 2 * np.pi * F_HZ[::10]
+    chain = build_model(spec).chain()
+    added = AddedCompliance(2e-8, 3e-7)
+    c = np.array([[0.0, 2e-8], [2e-8, 3e-7]])
+    r = tip_receptance(chain, omega)
+    np.testing.assert_allclose(tip_receptance((*chain, added), omega), r + c, rtol=1e-9, atol=1e-9 * np.abs(r).max())
+    beam = next(i for i in chain if hasattr(i, "section"))
+    on_base = inv2(march((added, beam), omega, start_compliance=r)[0])
+    np.testing.assert_allclose(on_base, inv2(march((beam,), omega, inv2(r + c))[0]), rtol=1e-8)
