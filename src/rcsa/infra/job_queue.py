@@ -46,13 +46,13 @@ import time
 from collections.abc import Callable, Mapping
 from contextlib import closing
 from dataclasses import dataclass
-from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
 import orjson
 
 from rcsa.errors import InputError, NotFoundError, RcsaError
+from rcsa.infra.clock import utc_iso, utc_now_iso
 
 __all__ = [
     "JOB_STATUSES",
@@ -125,9 +125,6 @@ def is_job_id(text: object) -> bool:
     return (isinstance(text, str) and len(text) == 34 and text.startswith("j-")
             and set(text[2:]) <= _JOB_ID_CHARS)
 
-
-def _utc_now() -> str:
-    return datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
 
 
 def request_fingerprint(request: Mapping[str, Any]) -> tuple[bytes, str]:
@@ -283,7 +280,7 @@ class JobStore:
                 con.execute(
                     "INSERT INTO jobs (id, kind, status, request, request_sha256, idempotency_key, owner, "
                     "created_utc) VALUES (?, ?, 'queued', ?, ?, ?, ?, ?)",
-                    (job_id, kind, data, sha, idempotency_key, owner, _utc_now()))
+                    (job_id, kind, data, sha, idempotency_key, owner, utc_now_iso()))
                 con.execute("COMMIT")
             except BaseException:
                 con.execute("ROLLBACK")
@@ -380,12 +377,12 @@ class JobStore:
                                            "while running it); submit it again, perhaps split into "
                                            "smaller batches"}
                         con.execute("UPDATE jobs SET status = 'failed', finished_utc = ?, error = ?, "
-                                    "runner = NULL WHERE id = ?", (_utc_now(), json.dumps(error), job_id))
+                                    "runner = NULL WHERE id = ?", (utc_now_iso(), json.dumps(error), job_id))
                         continue
                     con.execute(
                         "UPDATE jobs SET status = 'running', runner = ?, heartbeat_unix = ?, progress = 0, "
                         "attempts = attempts + 1, started_utc = ? WHERE id = ?",
-                        (runner, now, _utc_now(), job_id))
+                        (runner, now, utc_now_iso(), job_id))
                     con.execute("COMMIT")
                     break
             except BaseException:
@@ -441,7 +438,7 @@ class JobStore:
                 con.execute(
                     "UPDATE jobs SET status = ?, progress = CASE WHEN ? = 'succeeded' THEN 1 ELSE progress END, "
                     "finished_utc = ?, result_file = ?, error = ?, summary = ?, runner = NULL WHERE id = ?",
-                    (status, status, _utc_now(), rename[1].name if rename else None,
+                    (status, status, utc_now_iso(), rename[1].name if rename else None,
                      json.dumps(error) if error is not None else None,
                      json.dumps(summary) if summary is not None else None, job_id))
                 con.execute("COMMIT")
@@ -454,7 +451,7 @@ class JobStore:
 
     def purge(self, older_than_s: float) -> int:
         """Delete finished jobs (rows and result files) finished more than ``older_than_s`` ago."""
-        cutoff = datetime.fromtimestamp(time.time() - older_than_s, UTC).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
+        cutoff = utc_iso(time.time() - older_than_s)
         with closing(self._connect()) as con:
             ids = [r[0] for r in con.execute(
                 "SELECT id FROM jobs WHERE status IN ('succeeded', 'failed') AND finished_utc < ?", (cutoff,))]

@@ -33,7 +33,6 @@ import re
 import tempfile
 import zipfile
 from collections.abc import Mapping
-from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 from urllib.parse import quote
@@ -41,6 +40,7 @@ from urllib.parse import quote
 import numpy as np
 
 from rcsa._version import __version__
+from rcsa.infra.clock import utc_now_iso
 
 __all__ = ["HDF5_SCHEMA", "library_hdf5", "library_uff_zip", "tool_file_names"]
 
@@ -52,9 +52,6 @@ _CONVENTION = (
     "tool tip; time dependence exp(+i*omega*t), so a damped driving-point receptance has Im h <= 0"
 )
 
-
-def _utc_now() -> str:
-    return datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
 
 
 def _complex(pair: Mapping[str, Any]) -> np.ndarray:
@@ -107,7 +104,7 @@ def library_hdf5(results: Mapping[str, Any]) -> bytes:
         a["library_id"] = lib["id"]
         a["revision"] = int(lib["revision"])
         a["synced_utc"] = lib["synced_utc"]
-        a["exported_utc"] = _utc_now()
+        a["exported_utc"] = utc_now_iso()
         a["source"] = lib.get("source") or ""
         a["library_sha256"] = lib.get("library_sha256") or ""
         a["model_version"] = int(lib.get("model_version") or 0)

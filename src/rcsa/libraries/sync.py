@@ -46,7 +46,6 @@ import sqlite3
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import closing
 from dataclasses import dataclass, field
-from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
@@ -54,6 +53,7 @@ import numpy as np
 
 from rcsa._version import __version__
 from rcsa.errors import InputError, NotFoundError, StoreError
+from rcsa.infra.clock import utc_now_iso
 from rcsa.libraries.library_prediction import library_request, resolver_of, select_tool_point
 from rcsa.libraries.results_cache import (
     MODEL_VERSION,
@@ -152,9 +152,6 @@ def _check_id(library_id: object, field_name: str = "library_id") -> str:
                                      f"or digit; got {library_id!r}")
     return str(library_id)
 
-
-def _utc_now() -> str:
-    return datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
 
 
 # --------------------------------------------------------------------------- reports
@@ -441,7 +438,7 @@ class LibraryStore:
             r["status"] = known[key]["status"]
             if r["status"] == "error":
                 r["entry"]["error"] = known[key].get("error")
-        now = _utc_now()
+        now = utc_now_iso()
         batch = request["batch"]
         settings = {**{k: v for k, v in batch.items() if k != "combinations"}, **request.get("settings", {})}
         f = plan.frequency_hz
