@@ -53,6 +53,7 @@ import orjson
 
 from rcsa.errors import InputError, NotFoundError, RcsaError
 from rcsa.infra.clock import utc_iso, utc_now_iso
+from rcsa.infra.sqlite import connect, transaction
 
 __all__ = [
     "JOB_STATUSES",
@@ -232,15 +233,8 @@ class JobStore:
         return f"JobStore({str(self.directory)!r})"
 
     def _connect(self) -> sqlite3.Connection:
-        con = sqlite3.connect(self.directory / "jobs.sqlite", timeout=_BUSY_TIMEOUT_S,
-                              isolation_level=None)
-        try:
-            con.execute("PRAGMA journal_mode=WAL")
-            con.execute("PRAGMA synchronous=NORMAL")
-        except BaseException:
-            con.close()
-            raise
-        return con
+        # FULL: a queued job was acknowledged (202) and its result row is what the client polls
+        return connect(self.directory / "jobs.sqlite", synchronous="FULL", timeout_s=_BUSY_TIMEOUT_S)
 
     # ------------------------------------------------------------------ submit / read
     def submit(self, kind: str, request: Mapping[str, Any], *, idempotency_key: str | None = None,
@@ -264,27 +258,20 @@ class JobStore:
         """
         data, sha = request_fingerprint(request)
         job_id = "j-" + secrets.token_hex(16)
-        with closing(self._connect()) as con:
-            con.execute("BEGIN IMMEDIATE")
-            try:
-                if idempotency_key is not None:
-                    row = con.execute("SELECT id, kind, request_sha256, status FROM jobs WHERE owner IS ? AND "
-                                      "idempotency_key = ?", (owner, idempotency_key)).fetchone()
-                    if row is not None and row[1] == kind and row[2] == sha:
-                        con.execute("COMMIT")
-                        return self.get(row[0])
-                    if row is not None and row[3] not in ("succeeded", "failed"):
-                        raise IdempotencyConflict(row[0])
-                    if row is not None:  # a finished job keeps its result, the key moves on
-                        con.execute("UPDATE jobs SET idempotency_key = NULL WHERE id = ?", (row[0],))
-                con.execute(
-                    "INSERT INTO jobs (id, kind, status, request, request_sha256, idempotency_key, owner, "
-                    "created_utc) VALUES (?, ?, 'queued', ?, ?, ?, ?, ?)",
-                    (job_id, kind, data, sha, idempotency_key, owner, utc_now_iso()))
-                con.execute("COMMIT")
-            except BaseException:
-                con.execute("ROLLBACK")
-                raise
+        with closing(self._connect()) as con, transaction(con):
+            if idempotency_key is not None:
+                row = con.execute("SELECT id, kind, request_sha256, status FROM jobs WHERE owner IS ? AND "
+                                  "idempotency_key = ?", (owner, idempotency_key)).fetchone()
+                if row is not None and row[1] == kind and row[2] == sha:
+                    return self.get(row[0])
+                if row is not None and row[3] not in ("succeeded", "failed"):
+                    raise IdempotencyConflict(row[0])
+                if row is not None:  # a finished job keeps its result, the key moves on
+                    con.execute("UPDATE jobs SET idempotency_key = NULL WHERE id = ?", (row[0],))
+            con.execute(
+                "INSERT INTO jobs (id, kind, status, request, request_sha256, idempotency_key, owner, "
+                "created_utc) VALUES (?, ?, 'queued', ?, ?, ?, ?, ?)",
+                (job_id, kind, data, sha, idempotency_key, owner, utc_now_iso()))
         return self.get(job_id)
 
     def get(self, job_id: str) -> Job:
@@ -354,41 +341,35 @@ class JobStore:
     def claim(self, runner: str) -> Job | None:
         """Atomically take the oldest queued (or abandoned running) job for ``runner``."""
         now = time.time()
-        with closing(self._connect()) as con:
-            con.execute("BEGIN IMMEDIATE")
-            try:
-                dead = [(job_id,) for job_id, owner in con.execute(
-                    "SELECT id, runner FROM jobs WHERE status = 'running' AND runner LIKE ?", (_HOST + ":%",))
-                    if runner_is_dead(owner)]
-                if dead:  # its process is gone from this machine: no need to wait for the heartbeat
-                    con.executemany("UPDATE jobs SET heartbeat_unix = NULL WHERE id = ?", dead)
-                while True:
-                    row = con.execute(
-                        "SELECT id, attempts FROM jobs WHERE status = 'queued' OR "
-                        "(status = 'running' AND (heartbeat_unix IS NULL OR heartbeat_unix < ?)) "
-                        "ORDER BY created_utc, id LIMIT 1", (now - self.stale_after_s,)).fetchone()
-                    if row is None:
-                        con.execute("COMMIT")
-                        return None
-                    job_id, attempts = row
-                    if attempts >= self.max_attempts:
-                        error = {"title": "Job abandoned", "status": 500,
-                                 "detail": f"the job was interrupted {attempts} times (its worker stopped "
-                                           "while running it); submit it again, perhaps split into "
-                                           "smaller batches"}
-                        con.execute("UPDATE jobs SET status = 'failed', finished_utc = ?, error = ?, "
-                                    "runner = NULL WHERE id = ?", (utc_now_iso(), json.dumps(error), job_id))
-                        continue
-                    con.execute(
-                        "UPDATE jobs SET status = 'running', runner = ?, heartbeat_unix = ?, progress = 0, "
-                        "attempts = attempts + 1, started_utc = ? WHERE id = ?",
-                        (runner, now, utc_now_iso(), job_id))
-                    con.execute("COMMIT")
+        with closing(self._connect()) as con, transaction(con):
+            dead = [(job_id,) for job_id, owner in con.execute(
+                "SELECT id, runner FROM jobs WHERE status = 'running' AND runner LIKE ?", (_HOST + ":%",))
+                if runner_is_dead(owner)]
+            if dead:  # its process is gone from this machine: no need to wait for the heartbeat
+                con.executemany("UPDATE jobs SET heartbeat_unix = NULL WHERE id = ?", dead)
+            while True:
+                row = con.execute(
+                    "SELECT id, attempts FROM jobs WHERE status = 'queued' OR "
+                    "(status = 'running' AND (heartbeat_unix IS NULL OR heartbeat_unix < ?)) "
+                    "ORDER BY created_utc, id LIMIT 1", (now - self.stale_after_s,)).fetchone()
+                if row is None:
+                    job_id = None
                     break
-            except BaseException:
-                con.execute("ROLLBACK")
-                raise
-        return self.get(job_id)
+                job_id, attempts = row
+                if attempts >= self.max_attempts:
+                    error = {"title": "Job abandoned", "status": 500,
+                             "detail": f"the job was interrupted {attempts} times (its worker stopped "
+                                       "while running it); submit it again, perhaps split into "
+                                       "smaller batches"}
+                    con.execute("UPDATE jobs SET status = 'failed', finished_utc = ?, error = ?, "
+                                "runner = NULL WHERE id = ?", (utc_now_iso(), json.dumps(error), job_id))
+                    continue
+                con.execute(
+                    "UPDATE jobs SET status = 'running', runner = ?, heartbeat_unix = ?, progress = 0, "
+                    "attempts = attempts + 1, started_utc = ? WHERE id = ?",
+                    (runner, now, utc_now_iso(), job_id))
+                break
+        return None if job_id is None else self.get(job_id)
 
     def heartbeat(self, job_id: str, runner: str, progress: float | None = None) -> None:
         """Refresh the heartbeat (and progress) of a job ``runner`` owns.
@@ -426,9 +407,8 @@ class JobStore:
 
     def _finish(self, job_id: str, runner: str, status: str, *, summary: Mapping[str, Any] | None = None,
                 error: Mapping[str, Any] | None = None, rename: tuple[Path, Path] | None = None) -> None:
-        with closing(self._connect()) as con:
-            con.execute("BEGIN IMMEDIATE")
-            try:
+        try:
+            with closing(self._connect()) as con, transaction(con):
                 owned = con.execute("SELECT 1 FROM jobs WHERE id = ? AND runner = ? AND status = 'running'",
                                     (job_id, runner)).fetchone()
                 if owned is None:
@@ -441,13 +421,11 @@ class JobStore:
                     (status, status, utc_now_iso(), rename[1].name if rename else None,
                      json.dumps(error) if error is not None else None,
                      json.dumps(summary) if summary is not None else None, job_id))
-                con.execute("COMMIT")
-            except BaseException:
-                con.execute("ROLLBACK")
-                if rename is not None:
-                    with contextlib.suppress(OSError):
-                        rename[0].unlink()
-                raise
+        except BaseException:
+            if rename is not None:
+                with contextlib.suppress(OSError):
+                    rename[0].unlink()
+            raise
 
     def purge(self, older_than_s: float) -> int:
         """Delete finished jobs (rows and result files) finished more than ``older_than_s`` ago."""
