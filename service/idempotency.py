@@ -61,9 +61,8 @@ from fastapi.concurrency import run_in_threadpool
 from fastapi.routing import APIRoute
 from starlette.responses import Response
 
+from rcsa.app.runtime import connect_sqlite, runner_is_dead, transaction
 from rcsa.errors import NotFoundError
-from rcsa.infra.job_queue import runner_is_dead
-from rcsa.infra.sqlite import connect, transaction
 
 from .errors import PROBLEM_MEDIA_TYPE, ProblemError
 from .state import ensure_state
@@ -220,7 +219,7 @@ class IdempotencyStore:
 
     def _connect(self) -> sqlite3.Connection:
         # FULL: a kept answer is what stops a retried upload or batch from acting twice
-        return connect(self.directory / "keys.sqlite", synchronous="FULL", timeout_s=30.0)
+        return connect_sqlite(self.directory / "keys.sqlite", synchronous="FULL", timeout_s=30.0)
 
     def _maybe_purge(self) -> None:
         now = time.monotonic()

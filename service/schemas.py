@@ -30,7 +30,7 @@ from pydantic import (
 )
 from pydantic_core import PydanticCustomError
 
-from rcsa.reference import ra1
+from rcsa.app.examples import ra1
 
 from .field_errors import pydantic_errors
 

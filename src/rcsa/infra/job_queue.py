@@ -21,14 +21,13 @@ exists (runner ids are ``host:pid:token``) is recognised at once, so a restarted
 resumes its own interrupted jobs without waiting for the heartbeat to go stale. After ``max_attempts`` interrupted tries the job is
 failed instead of being retried for ever (a request that kills its worker, e.g. by memory).
 
-Idempotency (``Idempotency-Key``, issue 8): rows carry ``idempotency_key``, ``owner``
-and ``request_sha256`` with a unique index on ``(owner, idempotency_key)``. ``submit`` with a
-key already used by that owner returns the first job when the request is the same (same
-``request_sha256``), so a retried submission never queues a duplicate; with a different
-request it raises :class:`IdempotencyConflict` while the first job is unfinished, and moves
-the key to the new job once the first has finished (the HTTP layer,
-:mod:`service.idempotency`, is the authority on reuse of keys; the job table only links a
-key to its job). :meth:`JobStore.find_idempotent` looks a key up.
+Duplicates: every row carries ``request_sha256``, the SHA-256 of the request's canonical
+JSON (:func:`canonical_request`). ``submit(..., reuse_unfinished=True)`` returns the
+unfinished job of the same kind and request instead of queuing a copy — for callers that
+retry a submission (the REST service does so for requests with an ``Idempotency-Key``;
+the key itself, and every other HTTP rule of idempotency, live in :mod:`service.idempotency`).
+Tables created by earlier versions keep their ``idempotency_key`` and ``owner`` columns,
+which are no longer written.
 """
 
 from __future__ import annotations
@@ -57,11 +56,11 @@ from rcsa.infra.sqlite import connect, transaction
 
 __all__ = [
     "JOB_STATUSES",
-    "IdempotencyConflict",
     "Job",
     "JobRunner",
     "JobStore",
     "LostClaim",
+    "canonical_request",
     "is_job_id",
     "runner_is_dead",
 ]
@@ -79,8 +78,6 @@ CREATE TABLE IF NOT EXISTS jobs (
     progress         REAL NOT NULL DEFAULT 0,
     request          BLOB NOT NULL,
     request_sha256   TEXT NOT NULL,
-    idempotency_key  TEXT,
-    owner            TEXT,
     created_utc      TEXT NOT NULL,
     started_utc      TEXT,
     finished_utc     TEXT,
@@ -92,11 +89,10 @@ CREATE TABLE IF NOT EXISTS jobs (
     summary          TEXT
 );
 CREATE INDEX IF NOT EXISTS jobs_status ON jobs (status, created_utc);
-CREATE UNIQUE INDEX IF NOT EXISTS jobs_idempotency ON jobs (owner, idempotency_key)
-    WHERE idempotency_key IS NOT NULL;
+CREATE INDEX IF NOT EXISTS jobs_request ON jobs (request_sha256, kind);
 """
 _COLUMNS = ("id, kind, status, progress, created_utc, started_utc, finished_utc, attempts, "
-            "error, summary, idempotency_key, request_sha256, heartbeat_unix")
+            "error, summary, request_sha256, heartbeat_unix")
 _BUSY_TIMEOUT_S = 30.0
 _PURGE_EVERY_S = 3600.0
 
@@ -128,19 +124,10 @@ def is_job_id(text: object) -> bool:
 
 
 
-def request_fingerprint(request: Mapping[str, Any]) -> tuple[bytes, str]:
-    """Canonical JSON bytes of a request (sorted keys) and their SHA-256."""
+def canonical_request(request: Mapping[str, Any]) -> tuple[bytes, str]:
+    """Canonical JSON bytes of a request (sorted keys) and their SHA-256 (``request_sha256``)."""
     data = orjson.dumps(request, option=orjson.OPT_SORT_KEYS | orjson.OPT_SERIALIZE_NUMPY)
     return data, hashlib.sha256(data).hexdigest()
-
-
-class IdempotencyConflict(InputError):
-    """An owner's ``Idempotency-Key`` names an unfinished job submitted with another request."""
-
-    def __init__(self, job_id: str) -> None:
-        super().__init__("Idempotency-Key", f"is already used for another request (job {job_id}, still "
-                                            "unfinished); use a new key for a new request")
-        self.job_id = job_id
 
 
 class LostClaim(RcsaError):
@@ -166,7 +153,8 @@ class Job:
         A problem document (``title``, ``detail``, ``status``, ``errors``) when failed.
     summary : dict or None
         Small result summary when succeeded (e.g. ``{"ok": 997, "error": 3}``).
-    idempotency_key, request_sha256 : str or None
+    request_sha256 : str
+        SHA-256 of the request's canonical JSON (:func:`canonical_request`).
     heartbeat_unix : float or None
         Last sign of life of its runner, s since the epoch.
     """
@@ -181,17 +169,16 @@ class Job:
     attempts: int
     error: dict[str, Any] | None
     summary: dict[str, Any] | None
-    idempotency_key: str | None
     request_sha256: str
     heartbeat_unix: float | None
 
     @classmethod
     def _from_row(cls, row: tuple) -> Job:
         (jid, kind, status, progress, created, started, finished, attempts, error, summary,
-         key, sha, heartbeat) = row
+         sha, heartbeat) = row
         return cls(jid, kind, status, float(progress), created, started, finished, int(attempts),
                    json.loads(error) if error else None, json.loads(summary) if summary else None,
-                   key, sha, heartbeat)
+                   sha, heartbeat)
 
     @property
     def finished(self) -> bool:
@@ -237,8 +224,7 @@ class JobStore:
         return connect(self.directory / "jobs.sqlite", synchronous="FULL", timeout_s=_BUSY_TIMEOUT_S)
 
     # ------------------------------------------------------------------ submit / read
-    def submit(self, kind: str, request: Mapping[str, Any], *, idempotency_key: str | None = None,
-               owner: str | None = None) -> Job:
+    def submit(self, kind: str, request: Mapping[str, Any], *, reuse_unfinished: bool = False) -> Job:
         """Queue a job; return its state.
 
         Parameters
@@ -247,31 +233,21 @@ class JobStore:
             Name of the handler that will run it.
         request : mapping
             JSON-ready request document (kept until the job is purged).
-        idempotency_key, owner : str, optional
-            The caller's ``Idempotency-Key`` and who sent it. A key the owner already used for
-            the same kind and request returns that job instead of queuing another.
-
-        Raises
-        ------
-        IdempotencyConflict
-            The key names an unfinished job of this owner with a different request.
+        reuse_unfinished : bool
+            Return the queued or running job of this kind with the same request (same
+            ``request_sha256``), if there is one, instead of queuing a copy.
         """
-        data, sha = request_fingerprint(request)
+        data, sha = canonical_request(request)
         job_id = "j-" + secrets.token_hex(16)
         with closing(self._connect()) as con, transaction(con):
-            if idempotency_key is not None:
-                row = con.execute("SELECT id, kind, request_sha256, status FROM jobs WHERE owner IS ? AND "
-                                  "idempotency_key = ?", (owner, idempotency_key)).fetchone()
-                if row is not None and row[1] == kind and row[2] == sha:
+            if reuse_unfinished:
+                row = con.execute("SELECT id FROM jobs WHERE request_sha256 = ? AND kind = ? AND status IN "
+                                  "('queued', 'running') ORDER BY created_utc, id LIMIT 1", (sha, kind)).fetchone()
+                if row is not None:
                     return self.get(row[0])
-                if row is not None and row[3] not in ("succeeded", "failed"):
-                    raise IdempotencyConflict(row[0])
-                if row is not None:  # a finished job keeps its result, the key moves on
-                    con.execute("UPDATE jobs SET idempotency_key = NULL WHERE id = ?", (row[0],))
             con.execute(
-                "INSERT INTO jobs (id, kind, status, request, request_sha256, idempotency_key, owner, "
-                "created_utc) VALUES (?, ?, 'queued', ?, ?, ?, ?, ?)",
-                (job_id, kind, data, sha, idempotency_key, owner, utc_now_iso()))
+                "INSERT INTO jobs (id, kind, status, request, request_sha256, created_utc) "
+                "VALUES (?, ?, 'queued', ?, ?, ?)", (job_id, kind, data, sha, utc_now_iso()))
         return self.get(job_id)
 
     def get(self, job_id: str) -> Job:
@@ -289,13 +265,6 @@ class JobStore:
         if row is None:
             raise NotFoundError("job", job_id)
         return Job._from_row(row)
-
-    def find_idempotent(self, owner: str | None, idempotency_key: str) -> Job | None:
-        """The job submitted earlier by ``owner`` with ``idempotency_key``, if any."""
-        with closing(self._connect()) as con:
-            row = con.execute(f"SELECT {_COLUMNS} FROM jobs WHERE owner IS ? AND idempotency_key = ?",
-                              (owner, idempotency_key)).fetchone()
-        return None if row is None else Job._from_row(row)
 
     def request(self, job_id: str) -> dict[str, Any]:
         """The request document a job was submitted with."""

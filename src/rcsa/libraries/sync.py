@@ -43,7 +43,7 @@ import json
 import os
 import re
 import sqlite3
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Mapping
 from contextlib import closing
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -77,7 +77,6 @@ __all__ = [
     "SyncPlan",
     "SyncReport",
     "is_library_id",
-    "iter_ok_results",
     "library_id_from_name",
     "plan_sync",
     "run_sync",
@@ -667,7 +666,3 @@ def sync_library(libraries: LibraryStore, library_id: str,
     return run_sync(libraries, sync_request(library_id, library, **kwargs), store=store, max_lines=max_lines,
                     progress=progress)
 
-
-def iter_ok_results(results: Mapping[str, Any]) -> Iterator[dict[str, Any]]:
-    """The ``ok`` results of :meth:`LibraryStore.results`, in library order."""
-    return (r for r in results["results"] if r["status"] == "ok")
