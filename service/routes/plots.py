@@ -29,13 +29,14 @@ from starlette.responses import Response
 
 from rcsa.app import exports, figures
 from rcsa.app.analyses import stability_lobes, stability_lobes_result
+from rcsa.app.bounds import MAX_LENGTH_M, MAX_SPEED_RPM, MIN_SPEED_RPM
 from rcsa.app.examples import ra1
 from rcsa.app.predictions import predict
 
 from ..bodies import require_json
 from ..deps import StateDep
 from ..responses import problems
-from ..schemas import MAX_LENGTH_M, MAX_SPEED_RPM, MIN_FREQUENCY_HZ, Assembly, FrfIn, LobesRequest
+from ..schemas import Assembly, FrfIn, LobesRequest
 from ..security import ReadAccess
 
 router = APIRouter(prefix="/v1", tags=["plots and exports"])
@@ -88,7 +89,7 @@ class OperatingPoint(BaseModel):
 
     model_config = _STRICT
 
-    spindle_speed_rpm: float = Field(ge=MIN_FREQUENCY_HZ, le=MAX_SPEED_RPM, description="Spindle speed, rpm.")
+    spindle_speed_rpm: float = Field(ge=MIN_SPEED_RPM, le=MAX_SPEED_RPM, description="Spindle speed, rpm.")
     depth_m: float = Field(gt=0, le=MAX_LENGTH_M, description="Axial depth of cut, m.")
 
 
