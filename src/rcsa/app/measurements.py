@@ -20,6 +20,7 @@ import numpy as np
 
 from rcsa.errors import InputError, NotFoundError, StoreError
 from rcsa.infra.atomic_files import atomic_write_bytes
+from rcsa.model import fields
 
 __all__ = [
     "DEMO_SPINDLE_ID",
@@ -137,23 +138,9 @@ def _parse_artifact(value: str | Mapping[str, Any] | None) -> Mapping[str, Any] 
     return doc
 
 
-def _bool(value: Any, field: str) -> bool:
-    if isinstance(value, bool):
-        return value
-    if isinstance(value, str) and value.strip().lower() in ("true", "1", "yes", "on", "false", "0", "no", "off", ""):
-        return value.strip().lower() in ("true", "1", "yes", "on")
-    raise InputError(field, f"must be true or false, got {value!r}")
-
-
 def _float(value: Any, field: str) -> float | None:
-    if value is None or value == "":
-        return None
-    if isinstance(value, bool):
-        raise InputError(field, "must be a number")
-    try:
-        return float(value)
-    except (TypeError, ValueError):
-        raise InputError(field, f"must be a number, got {value!r}") from None
+    """A number from an option or form field; None when left out or empty."""
+    return None if value is None or value == "" else fields.number(value, field, text=True)
 
 
 def import_measurement(
@@ -212,7 +199,7 @@ def import_measurement(
     for key in opts:
         if key not in IMPORT_OPTIONS:
             raise InputError(key, f"unknown import option (allowed: {', '.join(IMPORT_OPTIONS)})")
-        if form not in IMPORT_OPTIONS[key] and not (key == "drop_nonpositive" and not _bool(opts[key], key)):
+        if form not in IMPORT_OPTIONS[key] and not (key == "drop_nonpositive" and not fields.boolean(opts[key], key, text=True)):
             raise InputError(key, f"does not apply to format {form!r}")
     if extra_taps and form != "tap":
         raise InputError("file", f"several files can only be averaged for format 'tap', not {form!r}")
@@ -222,7 +209,7 @@ def import_measurement(
     if "artifact" in given:
         given["artifact"] = _parse_artifact(given["artifact"])
     common = {"sensor_mass_kg": _float(opts.get("sensor_mass_kg"), "sensor_mass_kg"), "file_name": file_name}
-    drop = _bool(opts.get("drop_nonpositive", False), "drop_nonpositive")
+    drop = fields.boolean(opts.get("drop_nonpositive", False), "drop_nonpositive", text=True)
     if form == "json":
         overrides = {k: (list(v) if isinstance(v, tuple) else v) for k, v in given.items()}
         return read_contract_json(data, overrides=overrides, drop_nonpositive=drop, **common)
@@ -344,8 +331,7 @@ def list_measurements(store: Any, *, limit: int = 100, cursor: str | None = None
     dict
         ``{"items": [metadata...], "next_cursor": str | None}``.
     """
-    if isinstance(limit, bool) or not isinstance(limit, int) or not 1 <= limit <= _MAX_PAGE:
-        raise InputError("limit", f"must be an integer from 1 to {_MAX_PAGE}, got {limit!r}")
+    fields.integer(limit, "limit", ge=1, le=_MAX_PAGE)
     infos = store.list(filters.pop("spindle_id", None), **filters)
     if cursor:
         after = _decode_cursor(cursor)

@@ -591,11 +591,7 @@ def _number(obj: Mapping[str, Any], key: str, path: str, *, required: bool) -> f
         if required:
             raise InputError(f"{path}{key}", "missing (required)")
         return None
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise InputError(f"{path}{key}", f"must be a number, got {value!r}")
-    if value <= 0:
-        raise InputError(f"{path}{key}", f"must be > 0, got {value!r}")
-    return float(value)
+    return fields.number(value, f"{path}{key}", gt=0.0)
 
 
 def _tool_unit(item: Mapping[str, Any]) -> tuple[int, int]:

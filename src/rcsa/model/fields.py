@@ -45,18 +45,24 @@ def _is_number(value: object) -> bool:
 
 
 def number(value: object, field: str, *, gt: float | None = None, ge: float | None = None,
-           le: float | None = None, lt: float | None = None) -> float:
+           le: float | None = None, lt: float | None = None, text: bool = False) -> float:
     """A finite number within the bounds given.
 
     The bounds are checked in the order ``gt``, ``ge``, ``le``, ``lt``, so that a value
-    that is not positive hears "must be > 0" before any sanity minimum.
+    that is not positive hears "must be > 0" before any sanity minimum. With ``text``, a
+    string holding a number is read too (form fields, command-line options).
 
     Raises
     ------
     InputError
-        ``must be a number, got <type>``, ``must be a finite number`` or
+        ``must be a number, got <type or text>``, ``must be a finite number`` or
         ``must be <op> <bound>, got <value>``.
     """
+    if text and isinstance(value, str):
+        try:
+            value = float(value)
+        except ValueError:
+            raise InputError(field, f"must be a number, got {value!r}") from None
     if not _is_number(value):
         raise InputError(field, f"must be a number, got {type(value).__name__}")
     x = float(value)  # type: ignore[arg-type]
@@ -88,14 +94,20 @@ def integer(value: object, field: str, *, ge: int | None = None, le: int | None 
     return n
 
 
-def boolean(value: object, field: str) -> bool:
-    """``true`` or ``false``.
+_TRUE, _FALSE = ("true", "1", "yes", "on"), ("false", "0", "no", "off", "")
+
+
+def boolean(value: object, field: str, *, text: bool = False) -> bool:
+    """``true`` or ``false``; with ``text`` also a string (``true``/``1``/``yes``/``on``,
+    ``false``/``0``/``no``/``off``/empty, any case) from a form field.
 
     Raises
     ------
     InputError
         ``must be true or false, got <value>``.
     """
+    if text and isinstance(value, str) and value.strip().lower() in (*_TRUE, *_FALSE):
+        return value.strip().lower() in _TRUE
     if not isinstance(value, bool):
         raise InputError(field, f"must be true or false, got {value!r}")
     return value
