@@ -17,6 +17,7 @@ from typing import Any, Literal
 import numpy as np
 
 from rcsa.analysis.lobes.zoa import LobeResult
+from rcsa.analysis.sensitivity import effects_figure, effects_report
 from rcsa.app.analyses import stability_lobes_result
 from rcsa.app.predictions import predict
 from rcsa.errors import InputError
@@ -179,8 +180,6 @@ def effects_with_figure(request: Mapping[str, Any], picture: str | os.PathLike[s
                         ) -> dict[str, Any]:
     """Effect analysis (:func:`rcsa.app.analyses.effects`), its heat map drawn to ``picture``
     (.png or .svg) when given."""
-    from rcsa.analysis.sensitivity import effects_figure, effects_report
-
     report = effects_report(request)
     if picture is not None:
         save_figure(effects_figure(report), picture)
@@ -197,6 +196,7 @@ def diagnosis_with_figure(request: Mapping[str, Any], picture: str | os.PathLike
     OSError
         The picture cannot be written (the diagnosis itself succeeded).
     """
+    # scipy.stats and scipy.optimize (~0.9 s to import): only when a diagnosis is asked for
     from rcsa.analysis.diagnosis.report import build_response, diagnosis_figure
     from rcsa.analysis.diagnosis.state import analyse
 
