@@ -7,7 +7,7 @@
 * A key that is sent but unknown or revoked is always ``401`` (a misconfigured client should
   learn it at once, not fall back to anonymous).
 
-Keys are looked up in :class:`rcsa.infra.api_keys.KeyRing` (environment + the store's hashed key
+Keys are looked up in :class:`rcsa.app.keys.KeyRing` (environment + the store's hashed key
 file), compared in constant time.
 """
 

@@ -11,8 +11,9 @@ identification, diagnosis), :mod:`.measurements` (the store as users see it),
 :mod:`.libraries` (batches and whole tool libraries prepared as work, stored libraries and
 their exports), :mod:`.jobs` (answer now or queue a job: one decision, one handler),
 :mod:`.figures` and :mod:`.exports` (pictures and CSV files), :mod:`.stores` (which store a
-call uses), :mod:`.keys` (API keys), :mod:`.examples` (RA-1), :mod:`.runtime` (SQLite and
-process liveness for the service's own database).
+call uses), :mod:`.keys` (API keys), :mod:`.bounds` (the validation bounds the REST schemas
+publish), :mod:`.examples` (RA-1), :mod:`.runtime` (SQLite and process liveness for the
+service's own database).
 """
 
 from __future__ import annotations

@@ -62,7 +62,6 @@ DEFAULT_GRID = {"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 1.0}
 #: Export formats of a stored library's results, by file suffix.
 EXPORT_FORMATS: dict[str, Literal["hdf5", "zip", "json"]] = {".h5": "hdf5", ".hdf5": "hdf5", ".zip": "zip",
                                                              ".json": "json"}
-_MEDIA = {"hdf5": "application/x-hdf5", "zip": "application/zip", "json": "application/json"}
 _SUFFIX = {"hdf5": ".h5", "zip": ".zip", "json": ".json"}
 
 
@@ -198,7 +197,6 @@ class ExportFile:
     data : bytes
     file_name : str
         ``<library_id>-r<revision>.<suffix>``.
-    media_type : str
     ok : int
         Tools with a result in it.
     revision : int
@@ -207,7 +205,6 @@ class ExportFile:
 
     data: bytes
     file_name: str
-    media_type: str
     ok: int
     revision: int
 
@@ -220,16 +217,15 @@ def export_file(libraries: LibraryStore, library_id: str, fmt: Literal["hdf5", "
     NotFoundError
         No such library.
     """
-    if fmt not in _MEDIA:
-        raise InputError("format", f"must be one of {', '.join(_MEDIA)}, got {fmt!r}")
+    if fmt not in _SUFFIX:
+        raise InputError("format", f"must be one of {', '.join(_SUFFIX)}, got {fmt!r}")
     results = libraries.results(library_id)
     if fmt == "json":
         data = orjson.dumps(results, option=orjson.OPT_SERIALIZE_NUMPY)
     else:
         data = library_hdf5(results) if fmt == "hdf5" else library_uff_zip(results)
     revision = int(results["library"]["revision"])
-    return ExportFile(data, f"{library_id}-r{revision}{_SUFFIX[fmt]}", _MEDIA[fmt], int(results["summary"]["ok"]),
-                      revision)
+    return ExportFile(data, f"{library_id}-r{revision}{_SUFFIX[fmt]}", int(results["summary"]["ok"]), revision)
 
 
 def write_export(libraries: LibraryStore, library_id: str, path: str | os.PathLike[str]) -> ExportFile:

@@ -8,7 +8,7 @@ busy timeout, explicit transactions) and recognises a dead holder as the job que
 from __future__ import annotations
 
 from rcsa.infra.job_queue import runner_is_dead
-from rcsa.infra.sqlite import Synchronous, transaction
 from rcsa.infra.sqlite import connect as connect_sqlite
+from rcsa.infra.sqlite import transaction
 
-__all__ = ["Synchronous", "connect_sqlite", "runner_is_dead", "transaction"]
+__all__ = ["connect_sqlite", "runner_is_dead", "transaction"]
