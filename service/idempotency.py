@@ -65,6 +65,7 @@ from rcsa.app.runtime import connect_sqlite, runner_is_dead, transaction
 from rcsa.errors import NotFoundError
 
 from .errors import PROBLEM_MEDIA_TYPE, ProblemError
+from .jobs import job_document
 from .state import ensure_state
 
 __all__ = [
@@ -360,8 +361,6 @@ async def run_idempotent(request: Request, raw_key: str, handler: Callable[[Requ
         assert isinstance(found, Stored)
         job = await run_in_threadpool(_running_job, found, state)
         if job is not None:
-            from .jobs import job_document
-
             raise ProblemError(409, f"the job {job.id} started by the request with this {KEY_HEADER} is still "
                                     f"{job.status} ({job.progress:.0%} done); poll /v1/jobs/{job.id}, or retry "
                                     "after Retry-After to get the first answer", slug="idempotent-job-running",

@@ -63,6 +63,7 @@ class Metrics:
     def exposition(self) -> bytes:
         """The Prometheus text of this process, or of all processes in multi-process mode."""
         if os.environ.get("PROMETHEUS_MULTIPROC_DIR"):
+            # needed in multi-process mode only
             from prometheus_client import multiprocess
 
             registry = CollectorRegistry()

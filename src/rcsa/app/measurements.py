@@ -16,11 +16,28 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+import filelock
 import numpy as np
 
 from rcsa.errors import InputError, NotFoundError, StoreError
 from rcsa.infra.atomic_files import atomic_write_bytes
+from rcsa.measured.importers import (
+    measurement_from_contract,
+    measurement_to_contract,
+    read_contract_json,
+    read_csv,
+    read_cutpro,
+    read_tap,
+    read_uff,
+)
+from rcsa.measured.store import Measurement, MeasurementMeta, Provenance, is_measurement_id
+from rcsa.measured.store import paths as P
+from rcsa.measured.store.schema import frf_unit
 from rcsa.model import fields
+from rcsa.model.assembly import build_model
+from rcsa.model.contract import parse_assembly
+from rcsa.physics.elimination import tip_receptance
+from rcsa.reference import ra1
 
 __all__ = [
     "DEMO_SPINDLE_ID",
@@ -181,15 +198,6 @@ def import_measurement(
     InputError
         Naming the field: unknown format or option, missing metadata, unreadable file.
     """
-    from rcsa.measured.importers import (
-        read_contract_json,
-        read_csv,
-        read_cutpro,
-        read_tap,
-        read_uff,
-    )
-    from rcsa.measured.store import MeasurementMeta
-
     form = format_from_name(file_name, fmt)
     meta_in = dict(metadata or {})
     unknown = sorted(set(meta_in) - set(META_FIELDS))
@@ -244,15 +252,11 @@ def import_measurement(
 def measurement_from_document(doc: Mapping[str, Any], *, drop_nonpositive: bool = False,
                               sensor_mass_kg: float | None = None):
     """A measurement from the contract's JSON form, already parsed (a JSON request body)."""
-    from rcsa.measured.importers import measurement_from_contract
-
     return measurement_from_contract(doc, drop_nonpositive=drop_nonpositive, sensor_mass_kg=sensor_mass_kg)
 
 
 def measurement_summary(m: Any) -> dict[str, Any]:
     """Peak of each FRF: ``{name: {"units", "max_magnitude", "frequency_at_max_hz"}}``."""
-    from rcsa.measured.store.schema import frf_unit
-
     out = {}
     for name, v in m.frfs.items():
         i = int(np.argmax(np.abs(v)))
@@ -268,8 +272,6 @@ def measurement_document(store: Any, measurement_id: str, *, include_data: bool 
     ------
     NotFoundError
     """
-    from rcsa.measured.importers import measurement_to_contract
-
     m = store.get(measurement_id)
     out = measurement_to_contract(m, include_data=include_data)
     out["summary"] = measurement_summary(m)
@@ -283,9 +285,6 @@ def measurement_hdf5(store: Any, measurement_id: str) -> bytes:
     ------
     NotFoundError
     """
-    from rcsa.measured.store import is_measurement_id
-    from rcsa.measured.store import paths as P
-
     if not is_measurement_id(measurement_id):
         raise NotFoundError("measurement", str(measurement_id))
     try:
@@ -364,12 +363,6 @@ def demo_measurement(frequency: Mapping[str, float] | None = None):
     1…10 000 Hz in 1 Hz steps by default, so that a fresh user can try a hybrid prediction
     (``"spindle": {"measurement_id": ...}``) with RA-1's holder and tool at once.
     """
-    from rcsa.measured.store import Measurement, MeasurementMeta, Provenance
-    from rcsa.model.assembly import build_model
-    from rcsa.model.contract import parse_assembly
-    from rcsa.physics.elimination import tip_receptance
-    from rcsa.reference import ra1
-
     spec = parse_assembly(ra1(dict(frequency or {"start_hz": 1.0, "stop_hz": 10000.0, "step_hz": 1.0})))
     r = tip_receptance(build_model(spec).spindle, 2.0 * np.pi * spec.frequency_hz)
     meta = MeasurementMeta(spindle_id=DEMO_SPINDLE_ID, direction="x", plane="spindle_nose",
@@ -394,8 +387,6 @@ def seed_demo(store: Any) -> str | None:
     str or None
         The new measurement's id, or None when nothing was done.
     """
-    import filelock
-
     root = Path(store.path)
     marker = root / _DEMO_MARKER
     try:
