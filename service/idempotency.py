@@ -61,10 +61,11 @@ from fastapi.concurrency import run_in_threadpool
 from fastapi.routing import APIRoute
 from starlette.responses import Response
 
+from rcsa.app.runtime import connect_sqlite, runner_is_dead, transaction
 from rcsa.errors import NotFoundError
-from rcsa.infra.job_queue import runner_is_dead
 
 from .errors import PROBLEM_MEDIA_TYPE, ProblemError
+from .jobs import job_document
 from .state import ensure_state
 
 __all__ = [
@@ -218,10 +219,8 @@ class IdempotencyStore:
         self._maybe_purge()
 
     def _connect(self) -> sqlite3.Connection:
-        con = sqlite3.connect(self.directory / "keys.sqlite", timeout=30.0, isolation_level=None)
-        con.execute("PRAGMA journal_mode=WAL")
-        con.execute("PRAGMA synchronous=NORMAL")
-        return con
+        # FULL: a kept answer is what stops a retried upload or batch from acting twice
+        return connect_sqlite(self.directory / "keys.sqlite", synchronous="FULL", timeout_s=30.0)
 
     def _maybe_purge(self) -> None:
         now = time.monotonic()
@@ -254,32 +253,26 @@ class IdempotencyStore:
         self._maybe_purge()
         holder = f"{_HOST}:{os.getpid()}:{secrets.token_hex(4)}"
         now = time.time()
-        with closing(self._connect()) as con:
-            con.execute("BEGIN IMMEDIATE")
-            try:
-                row = con.execute("SELECT fingerprint, state, holder, created_unix, status, headers, body FROM "
-                                  "idempotency WHERE owner = ? AND key = ?", (owner, key)).fetchone()
-                if row is not None and now - row[3] > self.retention_s:
-                    row = None  # expired but not purged yet: a fresh key
-                if row is None:
-                    con.execute("INSERT OR REPLACE INTO idempotency (owner, key, fingerprint, method, path, state, "
-                                "holder, created_unix) VALUES (?, ?, ?, ?, ?, 'running', ?, ?)",
-                                (owner, key, fingerprint, method, path, holder, now))
-                    outcome: tuple[str, Stored | str | None] = ("new", holder)
-                elif row[0] != fingerprint:
-                    outcome = ("mismatch", None)
-                elif row[1] == "done":
-                    outcome = ("replay", Stored(int(row[4]), orjson.loads(row[5]), bytes(row[6])))
-                elif now - row[3] > self.lease_s or runner_is_dead(row[2]):
-                    con.execute("UPDATE idempotency SET holder = ?, created_unix = ? WHERE owner = ? AND key = ?",
-                                (holder, now, owner, key))
-                    outcome = ("new", holder)
-                else:
-                    outcome = ("running", None)
-                con.execute("COMMIT")
-            except BaseException:
-                con.execute("ROLLBACK")
-                raise
+        with closing(self._connect()) as con, transaction(con):
+            row = con.execute("SELECT fingerprint, state, holder, created_unix, status, headers, body FROM "
+                              "idempotency WHERE owner = ? AND key = ?", (owner, key)).fetchone()
+            if row is not None and now - row[3] > self.retention_s:
+                row = None  # expired but not purged yet: a fresh key
+            if row is None:
+                con.execute("INSERT OR REPLACE INTO idempotency (owner, key, fingerprint, method, path, state, "
+                            "holder, created_unix) VALUES (?, ?, ?, ?, ?, 'running', ?, ?)",
+                            (owner, key, fingerprint, method, path, holder, now))
+                outcome: tuple[str, Stored | str | None] = ("new", holder)
+            elif row[0] != fingerprint:
+                outcome = ("mismatch", None)
+            elif row[1] == "done":
+                outcome = ("replay", Stored(int(row[4]), orjson.loads(row[5]), bytes(row[6])))
+            elif now - row[3] > self.lease_s or runner_is_dead(row[2]):
+                con.execute("UPDATE idempotency SET holder = ?, created_unix = ? WHERE owner = ? AND key = ?",
+                            (holder, now, owner, key))
+                outcome = ("new", holder)
+            else:
+                outcome = ("running", None)
         return outcome
 
     def complete(self, owner: str, key: str, holder: str, answer: Stored) -> bool:
@@ -368,8 +361,6 @@ async def run_idempotent(request: Request, raw_key: str, handler: Callable[[Requ
         assert isinstance(found, Stored)
         job = await run_in_threadpool(_running_job, found, state)
         if job is not None:
-            from .jobs import job_document
-
             raise ProblemError(409, f"the job {job.id} started by the request with this {KEY_HEADER} is still "
                                     f"{job.status} ({job.progress:.0%} done); poll /v1/jobs/{job.id}, or retry "
                                     "after Retry-After to get the first answer", slug="idempotent-job-running",

@@ -1,58 +1,61 @@
-"""Service side of background jobs: the handlers, and the 202 / status answers.
+"""Service side of work that may become a job: the one answer, and how a job is shown over HTTP.
 
-The durable job store and the runner live in :mod:`rcsa.infra.job_queue` (SQLite in the store
-directory, atomic claims, heartbeats, resume after a restart). Here: what a ``batch`` and a
-``library`` job compute (the same :mod:`rcsa` calls as the synchronous routes), and how a
-job is shown over HTTP.
+Whether a batch, library or sync is answered at once or queued is decided by
+:func:`rcsa.app.jobs.answer_or_queue` (size against ``RCSA_ASYNC_BATCH_THRESHOLD``, or
+``Prefer: respond-async``); the job runners run the same :func:`rcsa.app.jobs.run_work`.
+Here: the ``Prefer`` header, the ``202 Accepted`` answer, the links a sync report carries,
+and the public JSON of a job.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 from starlette.responses import Response
 
-from rcsa.app import libraries as library_api
-from rcsa.infra.job_queue import Handler, Job
+from rcsa.app.jobs import Job, Outcome, Work, answer_or_queue
 
 from .responses import json_response
 from .state import AppState
 
-__all__ = ["accepted", "handlers", "job_document", "wants_async"]
+__all__ = ["accepted", "answer", "job_document", "present", "wants_async"]
 
 
-def handlers(state: AppState) -> dict[str, Handler]:
-    """The job kinds this service runs: ``batch`` and ``library``."""
-    s, m = state.settings, state.metrics
+def wants_async(prefer: str | None) -> bool:
+    """Whether a ``Prefer`` header (RFC 7240) asks for ``respond-async``."""
+    return any(p.split(";")[0].strip().lower() == "respond-async" for p in (prefer or "").split(","))
 
-    def batch(request: dict[str, Any], progress: Any) -> tuple[Any, dict[str, Any]]:
-        with m.timed("batch"):
-            out = library_api.run_entries(request, store=state.reader, max_lines=s.max_frequency_lines,
-                                          max_combinations=s.max_batch_combinations, progress=progress,
-                                          arrays="numpy")
-        m.frfs.labels("batch").inc(out["summary"]["ok"])
-        return out, out["summary"]
 
-    def library(request: dict[str, Any], progress: Any) -> tuple[Any, dict[str, Any]]:
-        with m.timed("library"):
-            out = library_api.run_library_request(request, store=state.reader, max_lines=s.max_frequency_lines,
-                                                  max_combinations=s.max_batch_combinations,
-                                                  progress=progress, arrays="numpy")
-        m.frfs.labels("library").inc(out["summary"]["ok"])
-        return out, out["summary"]
+def present(outcome: Outcome) -> dict[str, Any]:
+    """The document the service answers (and a job stores) for an outcome: a sync report
+    gets the links of its library."""
+    if outcome.kind != "library-sync":
+        return outcome.document
+    base = f"/v1/libraries/{outcome.document['library_id']}"
+    return {**outcome.document, "library_url": base, "results_url": base + "/results"}
 
-    return {"batch": batch, "library": library}
+
+def answer(state: AppState, work: Work, *, prefer: str | None, idempotency_key: str | None,
+           headers: Mapping[str, str] | None = None) -> Response:
+    """Run ``work`` now (``200`` with its document) or queue it (``202``, :func:`accepted`).
+
+    A request with an ``Idempotency-Key`` may be a retry whose first answer was lost: its
+    submission reuses the unfinished job of the same request instead of queuing it twice.
+    """
+    asked = wants_async(prefer)
+    result = answer_or_queue(state.bench, state.jobs, work, respond_async=asked,
+                             async_threshold=state.settings.async_batch_threshold,
+                             reuse_unfinished=idempotency_key is not None)
+    if isinstance(result, Job):
+        return accepted(state, result, preference_applied=asked)
+    return json_response(present(result), headers=headers)
 
 
 def job_document(job: Job) -> dict[str, Any]:
     """The public JSON of a job, with its status and result URLs."""
     return {**job.to_dict(), "status_url": f"/v1/jobs/{job.id}",
             "result_url": f"/v1/jobs/{job.id}/result" if job.status == "succeeded" else None}
-
-
-def wants_async(prefer: str | None) -> bool:
-    """Whether a ``Prefer`` header (RFC 7240) asks for ``respond-async``."""
-    return any(p.split(";")[0].strip().lower() == "respond-async" for p in (prefer or "").split(","))
 
 
 def accepted(state: AppState, job: Job, *, preference_applied: bool) -> Response:

@@ -13,7 +13,6 @@ import logging
 import threading
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
-from pathlib import Path
 from typing import Any
 
 from fastapi import FastAPI
@@ -23,21 +22,20 @@ from pydantic.json_schema import models_json_schema
 from starlette.middleware.gzip import GZipMiddleware
 
 from rcsa._version import __version__
+from rcsa.app.jobs import Job, JobRunner, Workbench, job_handlers, job_store
+from rcsa.app.keys import key_ring
 from rcsa.app.measurements import seed_demo
+from rcsa.app.stores import CachedMeasurements, open_store
 from rcsa.errors import RcsaError
-from rcsa.infra.api_keys import KeyFile, KeyRing, parse_key_list
-from rcsa.infra.job_queue import Job, JobRunner, JobStore
-from rcsa.measured.store import MeasurementStore
 
 from . import schemas
 from .config import Settings
 from .errors import install_error_handlers
-from .jobs import handlers
+from .jobs import present
 from .metrics import Metrics
 from .middleware import RequestContextMiddleware, configure_logging
 from .routes import ROUTERS
-from .routes.libraries import job_handlers as library_job_handlers
-from .state import AppState, CachedMeasurements, ensure_state
+from .state import AppState, ensure_state
 
 __all__ = ["create_app"]
 
@@ -74,7 +72,7 @@ _EXTRA_MODELS = (schemas.Problem, schemas.MeasurementUpload, schemas.LibraryPred
 
 def _startup(settings: Settings, metrics: Metrics) -> AppState:
     """Open the store (creating it), seed it once, and start the job runners."""
-    store = MeasurementStore(settings.store)
+    store = open_store(settings.store)
     if settings.seed_demo:
         try:
             seeded = seed_demo(store)
@@ -83,19 +81,21 @@ def _startup(settings: Settings, metrics: Metrics) -> AppState:
                          store.path, seeded)
         except (RcsaError, OSError) as exc:
             log.warning("could not seed the store with the demo measurement: %s", exc)
-    keys = KeyRing(parse_key_list(settings.api_keys.get_secret_value()), KeyFile.in_store(store.path))
-    jobs = JobStore(Path(store.path) / "jobs", stale_after_s=settings.job_stale_s,
-                    max_attempts=settings.job_max_attempts)
+    keys = key_ring(store.path, settings.api_keys.get_secret_value())
+    jobs = job_store(store.path, stale_after_s=settings.job_stale_s, max_attempts=settings.job_max_attempts)
     purged = jobs.purge(settings.job_retention_s)  # and hourly by the runners
     if purged:
         log.info("purged %d finished jobs older than %g s", purged, settings.job_retention_s)
-    state = AppState(settings=settings, store=store, reader=CachedMeasurements(store, settings.measurement_cache),
-                     keys=keys, jobs=jobs, metrics=metrics, runners=[])
+    reader = CachedMeasurements(store, settings.measurement_cache)
+    bench = Workbench(reader, store.path, max_lines=settings.max_frequency_lines,
+                      max_combinations=settings.max_batch_combinations, observer=metrics)
+    state = AppState(settings=settings, store=store, reader=reader, keys=keys, jobs=jobs, metrics=metrics,
+                     bench=bench, runners=[])
 
     def finished(job: Job, seconds: float) -> None:
         metrics.jobs.labels(job.kind, job.status).inc()
 
-    table = {**handlers(state), **library_job_handlers(state)}
+    table = job_handlers(bench, present)
     for _ in range(settings.job_workers):
         runner = JobRunner(jobs, table, poll_s=settings.job_poll_s, heartbeat_s=settings.job_heartbeat_s,
                            on_finish=finished, retention_s=settings.job_retention_s)

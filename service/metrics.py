@@ -56,9 +56,14 @@ class Metrics:
         finally:
             self.compute.labels(operation).observe(time.perf_counter() - t0)
 
+    def computed(self, operation: str, n: int) -> None:
+        """Count ``n`` tool-point FRFs computed by ``operation`` into ``rcsa_frfs_computed_total``."""
+        self.frfs.labels(operation).inc(n)
+
     def exposition(self) -> bytes:
         """The Prometheus text of this process, or of all processes in multi-process mode."""
         if os.environ.get("PROMETHEUS_MULTIPROC_DIR"):
+            # needed in multi-process mode only
             from prometheus_client import multiprocess
 
             registry = CollectorRegistry()

@@ -2,9 +2,11 @@
 
 SI units everywhere; every numeric field name ends in its unit and every description says
 it. Request models forbid unknown fields and refuse strings where numbers belong (strict
-mode). They check types and simple bounds; every physical rule (stickout within the
-overall length, the shank fits the bore, ...) is checked by :mod:`rcsa`, which names the
-field in the same way. Response models allow extra fields (the contract lets results grow).
+mode). They check types and the library's own bounds (:mod:`rcsa.app.bounds`, so the
+OpenAPI document publishes exactly what :mod:`rcsa` accepts); every rule between fields
+(stickout within the overall length, the shank fits the bore, ...) is checked by
+:mod:`rcsa`, which names the field in the same way. Response models allow extra fields (the
+contract lets results grow).
 
 A batch's combinations are validated one by one by :mod:`rcsa` (so that one bad
 combination never fails the others): their schema is documented here, but an item that does
@@ -30,7 +32,38 @@ from pydantic import (
 )
 from pydantic_core import PydanticCustomError
 
-from rcsa.reference import ra1
+from rcsa.app.bounds import (
+    MAX_COHERENCE,
+    MAX_CUTTING_COEFFICIENT_N_M2,
+    MAX_DAMPING,
+    MAX_DENSITY_KG_M3,
+    MAX_FREQUENCY_HZ,
+    MAX_FRF_VALUE,
+    MAX_HOLDER_SEGMENTS_PER_CONE,
+    MAX_LENGTH_M,
+    MAX_LOSS_FACTOR,
+    MAX_MODULUS_PA,
+    MAX_POISSON_RATIO,
+    MAX_RADIAL_RATIO,
+    MAX_SHEAR_COEFFICIENT,
+    MAX_SPEED_COUNT,
+    MAX_SPEED_RPM,
+    MAX_STIFFNESS,
+    MAX_TEETH,
+    MIN_CUTTING_COEFFICIENT_N_M2,
+    MIN_DENSITY_KG_M3,
+    MIN_FLUTED_DIAMETER_RATIO,
+    MIN_FREQUENCY_HZ,
+    MIN_JOINT_STIFFNESS,
+    MIN_LENGTH_M,
+    MIN_MODULUS_PA,
+    MIN_POISSON_RATIO,
+    MIN_RADIAL_IMMERSION,
+    MIN_SHEAR_COEFFICIENT,
+    MIN_SPEED_COUNT,
+    MIN_SPEED_RPM,
+)
+from rcsa.app.examples import ra1
 
 from .field_errors import pydantic_errors
 
@@ -51,22 +84,6 @@ __all__ = [
     "Problem",
 ]
 
-#: Sanity bounds of the API (far beyond any machine tool; they keep arithmetic finite).
-MIN_FREQUENCY_HZ = 1.0e-3
-MAX_FREQUENCY_HZ = 1.0e7
-MIN_LENGTH_M = 1.0e-6
-MIN_STIFFNESS = 1.0e-3
-MIN_MODULUS_PA = 1.0
-MIN_DENSITY_KG_M3 = 1.0e-3
-MAX_LENGTH_M = 100.0
-MAX_MODULUS_PA = 1.0e15
-MAX_DENSITY_KG_M3 = 1.0e6
-MAX_STIFFNESS = 1.0e15
-MAX_DAMPING = 1.0e12
-MAX_FRF_VALUE = 1.0e6
-MAX_SPEED_RPM = 1.0e6
-
-
 _EXAMPLE_GRID = {"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 5.0}
 _RA1 = ra1(_EXAMPLE_GRID)
 
@@ -83,7 +100,7 @@ class _Response(BaseModel):
 
 FrequencyValue = Annotated[float, Field(le=MAX_FREQUENCY_HZ)]  # > 0 and increasing: checked by rcsa
 FrfValue = Annotated[float, Field(ge=-MAX_FRF_VALUE, le=MAX_FRF_VALUE)]
-Coherence = Annotated[float, Field(ge=0, le=1.0 + 1e-9)]
+Coherence = Annotated[float, Field(ge=0, le=MAX_COHERENCE)]
 
 
 class FrequencyRange(_Request):
@@ -131,9 +148,11 @@ class Material(_Request):
     """Material properties; a built-in (steel, carbide) may be overridden field by field."""
 
     youngs_modulus_pa: float | None = Field(None, ge=MIN_MODULUS_PA, le=MAX_MODULUS_PA, description="Young's modulus E, Pa.")
-    poisson_ratio: float | None = Field(None, gt=-1, lt=0.5, description="Poisson's ratio ν (dimensionless).")
+    poisson_ratio: float | None = Field(None, gt=MIN_POISSON_RATIO, lt=MAX_POISSON_RATIO,
+                                       description="Poisson's ratio ν (dimensionless).")
     density_kg_m3: float | None = Field(None, ge=MIN_DENSITY_KG_M3, le=MAX_DENSITY_KG_M3, description="Density ρ, kg/m³.")
-    loss_factor: float | None = Field(None, ge=0, lt=1, description="Loss factor η (E and G become E(1+iη)).")
+    loss_factor: float | None = Field(None, ge=0, lt=MAX_LOSS_FACTOR,
+                                      description="Loss factor η (E and G become E(1+iη)).")
 
 
 class Segment(_Request):
@@ -206,9 +225,9 @@ class Tool(_Request):
     overall_length_m: float = Field(ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Overall length OAL, m.")
     flute_length_m: float = Field(ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Flute length LCF, m; <= stickout_m.")
     stickout_m: float = Field(ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Length from the holder's tool-end face to the tip (Fusion LB), m.")
-    fluted_diameter_ratio: float = Field(0.8, ge=0.01, le=1, description="Equivalent fluted diameter / DC "
+    fluted_diameter_ratio: float = Field(0.8, ge=MIN_FLUTED_DIAMETER_RATIO, le=1, description="Equivalent fluted diameter / DC "
                                                                       "(dimensionless).")
-    fluted_mass_diameter_ratio: float | None = Field(None, ge=0.01, le=1, description="Separate equivalent diameter "
+    fluted_mass_diameter_ratio: float | None = Field(None, ge=MIN_FLUTED_DIAMETER_RATIO, le=1, description="Separate equivalent diameter "
                                                      "ratio for the flutes' mass (default: fluted_diameter_ratio).")
     shoulder_length_m: float | None = Field(None, ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Reduced neck: from the tip to the neck's end, "
                                             "m (with shoulder_diameter_m).")
@@ -218,9 +237,9 @@ class Tool(_Request):
 class Joint(_Request):
     """Elastic joint diag(k_t + iωc_t, k_r + iωc_r); a rotational stiffness left out is rigid."""
 
-    stiffness_n_m: float = Field(ge=MIN_STIFFNESS, le=MAX_STIFFNESS, description="Translational stiffness k_t, N/m.")
+    stiffness_n_m: float = Field(ge=MIN_JOINT_STIFFNESS, le=MAX_STIFFNESS, description="Translational stiffness k_t, N/m.")
     damping_ns_m: float = Field(0.0, ge=0, le=MAX_DAMPING, description="Translational damping c_t, N·s/m.")
-    rotational_stiffness_nm_rad: float | None = Field(None, ge=MIN_STIFFNESS, le=MAX_STIFFNESS, description="Rotational stiffness k_r, N·m/rad.")
+    rotational_stiffness_nm_rad: float | None = Field(None, ge=MIN_JOINT_STIFFNESS, le=MAX_STIFFNESS, description="Rotational stiffness k_r, N·m/rad.")
     rotational_damping_nms_rad: float = Field(0.0, ge=0, le=MAX_DAMPING, description="Rotational damping c_r, N·m·s/rad.")
 
 
@@ -232,7 +251,8 @@ class Joints(_Request):
 
 
 BeamTheory = Literal["timoshenko", "euler_bernoulli"]
-ShearCoefficient = Literal["hutchinson", "cowper"] | Annotated[float, Field(ge=0.01, le=1.5)]
+ShearCoefficient = Literal["hutchinson", "cowper"] | Annotated[float, Field(ge=MIN_SHEAR_COEFFICIENT,
+                                                                          le=MAX_SHEAR_COEFFICIENT)]
 
 
 class Assembly(_Request):
@@ -418,9 +438,10 @@ class LibraryOptions(_Request):
     holder_material: str | None = Field(None, description="Material of every holder segment (default steel).")
     tool_material_default: str | None = Field(None, description="Tool material when BMC is missing (default "
                                               "carbide).")
-    holder_segments_per_cone: int | None = Field(None, ge=1, le=50, description="Cylinders per conical holder "
+    holder_segments_per_cone: int | None = Field(None, ge=1, le=MAX_HOLDER_SEGMENTS_PER_CONE, description="Cylinders per conical holder "
                                                  "segment (default 4).")
-    fluted_diameter_ratio: float | None = Field(None, ge=0.01, le=1, description="Equivalent fluted diameter / DC.")
+    fluted_diameter_ratio: float | None = Field(None, ge=MIN_FLUTED_DIAMETER_RATIO, le=1,
+                                                description="Equivalent fluted diameter / DC.")
     shaft_origin: Literal["shoulder", "flute_end"] | None = Field(None, description="Where shaft.segments start.")
     default_holder: str | dict[str, Any] | None = Field(None, description="Holder for tools without one: the guid "
                                                         "of a standalone holder in the library, or a Fusion "
@@ -604,9 +625,9 @@ class FrfIn(_Request):
 class SpeedRange(_Request):
     """Spindle-speed grid: count values from start to stop."""
 
-    start: float = Field(ge=MIN_FREQUENCY_HZ, le=MAX_SPEED_RPM, description="Lowest spindle speed, rpm.")
-    stop: float = Field(ge=MIN_FREQUENCY_HZ, le=MAX_SPEED_RPM, description="Highest spindle speed, rpm.")
-    count: int = Field(ge=2, description="Number of speeds.")
+    start: float = Field(ge=MIN_SPEED_RPM, le=MAX_SPEED_RPM, description="Lowest spindle speed, rpm.")
+    stop: float = Field(ge=MIN_SPEED_RPM, le=MAX_SPEED_RPM, description="Highest spindle speed, rpm.")
+    count: int = Field(ge=MIN_SPEED_COUNT, le=MAX_SPEED_COUNT, description="Number of speeds.")
 
 
 class LobesRequest(_Request):
@@ -620,10 +641,13 @@ class LobesRequest(_Request):
     frf_x: FrfIn | None = Field(None, description="Tool-point FRF in x (or give assembly).")
     frf_y: FrfIn | None = Field(None, description="FRF in y on the same grid; null: same as x.")
     assembly: Assembly | None = Field(None, description="Predict the FRF of this assembly instead.")
-    teeth: int = Field(ge=1, le=1000, description="Number of teeth (flutes).")
-    tangential_coefficient_n_m2: float = Field(ge=MIN_MODULUS_PA, le=MAX_MODULUS_PA, description="Tangential cutting coefficient Kt, N/m².")
-    radial_ratio: float = Field(ge=0, le=1000, description="Radial to tangential coefficient ratio Kr (dimensionless).")
-    radial_immersion: float = Field(ge=1e-4, le=1, description="Radial immersion ae/D (dimensionless).")
+    teeth: int = Field(ge=1, le=MAX_TEETH, description="Number of teeth (flutes).")
+    tangential_coefficient_n_m2: float = Field(ge=MIN_CUTTING_COEFFICIENT_N_M2, le=MAX_CUTTING_COEFFICIENT_N_M2,
+                                               description="Tangential cutting coefficient Kt, N/m².")
+    radial_ratio: float = Field(ge=0, le=MAX_RADIAL_RATIO, description="Radial to tangential coefficient ratio Kr "
+                                                                       "(dimensionless).")
+    radial_immersion: float = Field(ge=MIN_RADIAL_IMMERSION, le=1, description="Radial immersion ae/D "
+                                                                                "(dimensionless).")
     milling: Literal["up", "down"]
     spindle_speed_rpm: SpeedRange
 

@@ -7,7 +7,7 @@
 * A key that is sent but unknown or revoked is always ``401`` (a misconfigured client should
   learn it at once, not fall back to anonymous).
 
-Keys are looked up in :class:`rcsa.infra.api_keys.KeyRing` (environment + the store's hashed key
+Keys are looked up in :class:`rcsa.app.keys.KeyRing` (environment + the store's hashed key
 file), compared in constant time.
 """
 
@@ -18,7 +18,7 @@ from typing import Annotated
 from fastapi import Depends, Security
 from fastapi.security import APIKeyHeader
 
-from rcsa.infra.api_keys import Principal
+from rcsa.app.keys import Principal
 
 from .deps import StateDep
 from .errors import ProblemError

@@ -2,65 +2,26 @@
 
 from __future__ import annotations
 
-import threading
-from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Any
 
-from rcsa.infra.api_keys import KeyRing
-from rcsa.infra.job_queue import JobRunner, JobStore
-from rcsa.measured.store import Measurement, MeasurementStore
+from rcsa.app.jobs import JobRunner, JobStore, Workbench
+from rcsa.app.keys import KeyRing
+from rcsa.app.stores import CachedMeasurements, MeasurementStore
 
 from .config import Settings
 from .metrics import Metrics
 
-__all__ = ["AppState", "CachedMeasurements"]
-
-
-class CachedMeasurements:
-    """Read-through cache of stored measurements for computations (per process).
-
-    Stored measurements are immutable and ids are never reused, so a cached copy is exact
-    for as long as the file exists; each ``get`` checks that it still does (one ``stat``),
-    so a deleted measurement is never used by a request that starts after the delete.
-
-    Parameters
-    ----------
-    store : MeasurementStore
-    size : int
-        Measurements kept (least recently used dropped first); 0 disables the cache.
-    """
-
-    def __init__(self, store: MeasurementStore, size: int) -> None:
-        self.store = store
-        self.path = store.path
-        self.size = int(size)
-        self._items: OrderedDict[str, Measurement] = OrderedDict()
-        self._lock = threading.Lock()
-
-    def get(self, measurement_id: str) -> Measurement:
-        """The measurement, from memory when possible (``NotFoundError`` if gone)."""
-        if self.size and measurement_id in self.store:
-            with self._lock:
-                hit = self._items.get(measurement_id)
-                if hit is not None:
-                    self._items.move_to_end(measurement_id)
-                    return hit
-        m = self.store.get(measurement_id)
-        if self.size:
-            with self._lock:
-                self._items[measurement_id] = m
-                while len(self._items) > self.size:
-                    self._items.popitem(last=False)
-        return m
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(self.store, name)
+__all__ = ["AppState", "ensure_state"]
 
 
 @dataclass
 class AppState:
-    """Everything the routes need, built by the lifespan (``app.state.rcsa``)."""
+    """Everything the routes need, built by the lifespan (``app.state.rcsa``).
+
+    ``bench`` is where batches, libraries and syncs run: the cached store, the size limits
+    of the settings, and the metrics as observer.
+    """
 
     settings: Settings
     store: MeasurementStore
@@ -68,6 +29,7 @@ class AppState:
     keys: KeyRing
     jobs: JobStore
     metrics: Metrics
+    bench: Workbench
     runners: list[JobRunner]
 
 

@@ -1,4 +1,4 @@
-"""HTTP routes: each validates, converts, calls one :mod:`rcsa` function and answers.
+"""HTTP routes: each validates, converts, calls one :mod:`rcsa.app` function and answers.
 
 Every router carries its full path prefix (``/v1/...``) so that a route's path is its
 template in metrics and logs.

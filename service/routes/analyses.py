@@ -10,7 +10,7 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Body, Depends
 from starlette.responses import Response
 
-from rcsa import app
+from rcsa.app import analyses
 
 from ..bodies import require_json
 from ..deps import StateDep
@@ -29,7 +29,7 @@ _Request = Annotated[dict[str, Any], Body(description="The request document (see
 
 def _call(name: str, body: dict[str, Any], state: Any) -> Any:
     with state.metrics.timed(name):
-        return getattr(app, name)(body)
+        return getattr(analyses, name)(body)
 
 
 def _route(name: str, path: str, summary: str) -> None:

@@ -12,13 +12,13 @@ from typing import Annotated
 from fastapi import APIRouter, Depends, Header, Path, Query
 from starlette.responses import FileResponse, Response
 
-from rcsa.app import libraries as library_api
+from rcsa.app.libraries import prepare_batch
 
 from ..bodies import require_json
 from ..deps import StateDep
 from ..errors import ProblemError
-from ..idempotency import IDEMPOTENCY_PROBLEMS, IdempotencyKeyHeader, IdempotentRoute, parse_key
-from ..jobs import accepted, job_document, wants_async
+from ..idempotency import IDEMPOTENCY_PROBLEMS, IdempotencyKeyHeader, IdempotentRoute
+from ..jobs import answer, job_document
 from ..responses import json_response, problems
 from ..schemas import BatchRequest, BatchResult, JobStatus
 from ..security import ReadAccess
@@ -35,7 +35,7 @@ ToolPointQuery = Annotated[str | None, Query(pattern=r"^[hlnp](,[hlnp]){0,3}$", 
 @router.post("/tool-point-frf/batch", dependencies=[Depends(require_json)], response_model=BatchResult, responses={
     202: {"model": JobStatus, "description": "Queued as a job; poll Location."}, **problems(401, 413, 415, 422),
     **IDEMPOTENCY_PROBLEMS}, summary="Tool-point FRFs of many combinations")
-def predict_batch(body: BatchRequest, state: StateDep, who: ReadAccess, prefer: PreferHeader = None,
+def predict_batch(body: BatchRequest, state: StateDep, _: ReadAccess, prefer: PreferHeader = None,
                   tool_point: ToolPointQuery = None, idempotency_key: IdempotencyKeyHeader = None) -> Response:
     """One result per combination, in input order, each with its own ``status``.
 
@@ -43,25 +43,9 @@ def predict_batch(body: BatchRequest, state: StateDep, who: ReadAccess, prefer: 
     combination gets ``status: error`` with the offending field and never fails the others.
     With ``Idempotency-Key``, a retry gets the first answer (the same job, for a large batch).
     """
-    s = state.settings
     request, refused = body.to_request()
-    n = len(request["combinations"])
-    if n > s.max_batch_combinations:
-        raise ProblemError(422, f"combinations: at most {s.max_batch_combinations} per request, got {n}; split "
-                                "the batch", errors=[{"field": "combinations", "detail": f"at most "
-                                                     f"{s.max_batch_combinations} combinations"}])
-    checked = library_api.checked_batch(request, refused, tool_point.split(",") if tool_point else None)
-    asked = wants_async(prefer)
-    if asked or n > s.async_batch_threshold:
-        library_api.check_common(request, store=state.reader, max_lines=s.max_frequency_lines)
-        key = parse_key(idempotency_key) if idempotency_key is not None else None
-        return accepted(state, state.jobs.submit("batch", checked, idempotency_key=key, owner=who.key_id),
-                        preference_applied=asked)
-    with state.metrics.timed("batch"):
-        out = library_api.run_entries(checked, store=state.reader, max_lines=s.max_frequency_lines,
-                                      max_combinations=s.max_batch_combinations, arrays="numpy")
-    state.metrics.frfs.labels("batch").inc(out["summary"]["ok"])
-    return json_response(out)
+    work = prepare_batch(state.bench, request, refused, tool_point.split(",") if tool_point else None)
+    return answer(state, work, prefer=prefer, idempotency_key=idempotency_key)
 
 
 @router.get("/jobs/{job_id}", response_model=JobStatus, responses=problems(401, 404), summary="Job status")

@@ -27,25 +27,20 @@ policy):
 from __future__ import annotations
 
 import json
-import threading
-from pathlib import Path as FilePath
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Header, Path, Query, Request
 from fastapi.concurrency import run_in_threadpool
 from starlette.responses import Response
 
-from rcsa.app import libraries as exports
-from rcsa.app import libraries as library_api
-from rcsa.app import libraries as library_sync
+from rcsa.app.libraries import LIBRARY_ID_PATTERN, export_file, prepare_library, prepare_sync
 from rcsa.errors import InputError
-from rcsa.infra.job_queue import Handler
 
 from ..bodies import form_text, read_body, read_upload, validate_json
 from ..deps import StateDep
 from ..errors import ProblemError
-from ..idempotency import IDEMPOTENCY_PROBLEMS, IdempotencyKeyHeader, IdempotentRoute, parse_key
-from ..jobs import accepted, wants_async
+from ..idempotency import IDEMPOTENCY_PROBLEMS, IdempotencyKeyHeader, IdempotentRoute
+from ..jobs import answer
 from ..responses import json_response, problems
 from ..schemas import (
     Deleted,
@@ -103,31 +98,12 @@ async def _library_inputs(request: Request, state: AppState) -> tuple[Any, dict[
 @router.post("/tool-libraries:predict", response_model=LibraryResult, openapi_extra=_BODY, responses={
     202: {"model": JobStatus, "description": "Queued as a job; poll Location."},
     **problems(400, 401, 413, 415, 422), **IDEMPOTENCY_PROBLEMS}, summary="Tool-point FRFs of a Fusion tool library")
-async def predict_library(request: Request, state: StateDep, who: ReadAccess, prefer: PreferHeader = None,
+async def predict_library(request: Request, state: StateDep, _: ReadAccess, prefer: PreferHeader = None,
                           idempotency_key: IdempotencyKeyHeader = None) -> Response:
     """One tool-point FRF per library tool that has a holder; the others skipped with a reason."""
     library, doc = await _library_inputs(request, state)
-    s = state.settings
-    plan = await run_in_threadpool(lambda: library_api.library_request(library, **doc))
-    n = len(plan["batch"]["combinations"])
-    if n > s.max_batch_combinations:
-        raise InputError("library", f"has {n} tools to predict; at most {s.max_batch_combinations} per request")
-    await run_in_threadpool(lambda: library_api.check_common(plan["batch"], store=state.reader,
-                                                             max_lines=s.max_frequency_lines))
-    asked = wants_async(prefer)
-    if n and (asked or n > s.async_batch_threshold):
-        key = parse_key(idempotency_key) if idempotency_key is not None else None
-        return accepted(state, state.jobs.submit("library", plan, idempotency_key=key, owner=who.key_id),
-                        preference_applied=asked)
-
-    def run() -> dict[str, Any]:
-        with state.metrics.timed("library"):
-            return library_api.run_library_request(plan, store=state.reader, max_lines=s.max_frequency_lines,
-                                                   max_combinations=s.max_batch_combinations, arrays="numpy")
-
-    out = await run_in_threadpool(run)
-    state.metrics.frfs.labels("library").inc(out["summary"]["ok"])
-    return json_response(out)
+    work = await run_in_threadpool(lambda: prepare_library(state.bench, library, **doc))
+    return await run_in_threadpool(lambda: answer(state, work, prefer=prefer, idempotency_key=idempotency_key))
 
 
 async def _from_form(form: Any, limit_bytes: int) -> tuple[bytes, dict[str, Any]]:
@@ -170,43 +146,10 @@ async def _from_form(form: Any, limit_bytes: int) -> tuple[bytes, dict[str, Any]
 
 # --------------------------------------------------------------------------- stored libraries
 
-LibraryId = Annotated[str, Path(pattern=library_sync.LIBRARY_ID_PATTERN.pattern, description=(
+LibraryId = Annotated[str, Path(pattern=LIBRARY_ID_PATTERN.pattern, description=(
     "Your name for the library (1-128 letters, digits, '.', '_', '-'), e.g. the CAM library's name; each sync "
     "is compared with the previous sync under the same id."), examples=["bt40-mills"])]
 HDF5, ZIP, JSON = "application/x-hdf5", "application/zip", "application/json"
-
-_STORES: dict[str, library_sync.LibraryStore] = {}
-_STORES_LOCK = threading.Lock()
-
-
-def library_store(state: AppState) -> library_sync.LibraryStore:
-    """The libraries of the service's store (one :class:`LibraryStore` per process)."""
-    directory = FilePath(state.store.path) / library_sync.DIRECTORY
-    with _STORES_LOCK:
-        found = _STORES.get(str(directory))
-        if found is None or not directory.is_dir():
-            found = _STORES[str(directory)] = library_sync.LibraryStore(directory)
-        return found
-
-
-def _report(report: library_sync.SyncReport) -> dict[str, Any]:
-    base = f"/v1/libraries/{report.library_id}"
-    return {**report.to_dict(), "library_url": base, "results_url": base + "/results"}
-
-
-def job_handlers(state: AppState) -> dict[str, Handler]:
-    """The ``library-sync`` job kind (registered by :func:`service.main.create_app`)."""
-    s, m = state.settings, state.metrics
-
-    def sync(request: dict[str, Any], progress: Any) -> tuple[Any, dict[str, Any]]:
-        with m.timed("library-sync"):
-            report = library_sync.run_sync(library_store(state), request, store=state.reader,
-                                           max_lines=s.max_frequency_lines, progress=progress)
-        m.frfs.labels("library-sync").inc(report.computed)
-        doc = _report(report)
-        return doc, {**doc["counts"], **report.summary, "computed": report.computed}
-
-    return {"library-sync": sync}
 
 
 @router.post("/libraries/{library_id}:sync", response_model=SyncReport, openapi_extra=_BODY, responses={
@@ -214,7 +157,7 @@ def job_handlers(state: AppState) -> dict[str, Handler]:
                                              "sync report)."},
     **problems(400, 401, 403, 413, 415, 422), **IDEMPOTENCY_PROBLEMS},
     summary="Sync a stored library with a new export (write key)")
-async def sync_library(library_id: LibraryId, request: Request, state: StateDep, who: WriteAccess,
+async def sync_library(library_id: LibraryId, request: Request, state: StateDep, _: WriteAccess,
                        prefer: PreferHeader = None, idempotency_key: IdempotencyKeyHeader = None) -> Response:
     """Bring the stored library ``library_id`` up to date with this export of the tool library.
 
@@ -224,42 +167,22 @@ async def sync_library(library_id: LibraryId, request: Request, state: StateDep,
     ``Idempotency-Key`` from automated (retrying) callers.
     """
     library, doc = await _library_inputs(request, state)
-    s, libs = state.settings, await run_in_threadpool(library_store, state)
-    sync = await run_in_threadpool(lambda: library_sync.sync_request(library_id, library, **doc))
-    n = len(sync["batch"]["combinations"])
-    if n > s.max_batch_combinations:
-        raise InputError("library", f"has {n} tools to predict; at most {s.max_batch_combinations} per request")
-    plan = await run_in_threadpool(lambda: library_sync.plan_sync(libs, sync, store=state.reader,
-                                                                  max_lines=s.max_frequency_lines))
-    if plan.pending:
-        await run_in_threadpool(lambda: library_api.check_common(sync["batch"], store=state.reader,
-                                                                 max_lines=s.max_frequency_lines))
-    asked = wants_async(prefer)
-    if asked or len(plan.pending) > s.async_batch_threshold:
-        key = parse_key(idempotency_key) if idempotency_key is not None else None
-        job = state.jobs.submit("library-sync", sync, idempotency_key=key, owner=who.key_id)
-        return accepted(state, job, preference_applied=asked)
-
-    def run() -> library_sync.SyncReport:
-        with state.metrics.timed("library-sync"):
-            return library_sync.run_sync(libs, sync, store=state.reader, max_lines=s.max_frequency_lines, plan=plan)
-
-    report = await run_in_threadpool(run)
-    state.metrics.frfs.labels("library-sync").inc(report.computed)
-    return json_response(_report(report), headers={"Location": f"/v1/libraries/{library_id}"})
+    work = await run_in_threadpool(lambda: prepare_sync(state.bench, library_id, library, **doc))
+    return await run_in_threadpool(lambda: answer(state, work, prefer=prefer, idempotency_key=idempotency_key,
+                                                  headers={"Location": f"/v1/libraries/{library_id}"}))
 
 
 @router.get("/libraries", response_model=LibraryList, responses=problems(401), summary="List stored libraries")
 def list_libraries(state: StateDep, _: ReadAccess) -> Response:
     """Every stored library: settings, grid, counts and last sync report (no per-tool list)."""
-    return json_response({"libraries": library_store(state).list()})
+    return json_response({"libraries": state.bench.libraries.list()})
 
 
 @router.get("/libraries/{library_id}", response_model=LibrarySummary, responses=problems(401, 404),
             summary="A stored library and the status of each tool")
 def get_library(library_id: LibraryId, state: StateDep, _: ReadAccess) -> Response:
     """Summary of a stored library with every tool's status and result key (no arrays)."""
-    return json_response(library_store(state).get(library_id))
+    return json_response(state.bench.libraries.get(library_id))
 
 
 @router.get("/libraries/{library_id}/results", response_model=LibraryResult, responses={
@@ -281,24 +204,18 @@ def get_library_results(
 ) -> Response:
     """Every tool's stored result, fetched again by library id."""
     media = {"json": JSON, "hdf5": HDF5, "zip": ZIP}[format] if format else _negotiate(accept)
-    libs = library_store(state)
-    keep = tool_point.split(",") if tool_point and media == JSON else None
-    results = libs.results(library_id, keep)
     if media == JSON:
-        return json_response(results)
-    name = f"{library_id}-r{results['library']['revision']}"
-    if media == HDF5:
-        data, filename = exports.library_hdf5(results), f"{name}.h5"
-    else:
-        data, filename = exports.library_uff_zip(results), f"{name}.zip"
-    return Response(data, media_type=media, headers={"Content-Disposition": f'attachment; filename="{filename}"'})
+        return json_response(state.bench.libraries.results(library_id, tool_point.split(",") if tool_point else None))
+    export = export_file(state.bench.libraries, library_id, "hdf5" if media == HDF5 else "zip")
+    return Response(export.data, media_type=media,
+                    headers={"Content-Disposition": f'attachment; filename="{export.file_name}"'})
 
 
 @router.delete("/libraries/{library_id}", response_model=Deleted, responses=problems(401, 403, 404),
                summary="Forget a stored library (write key)")
 def delete_library(library_id: LibraryId, state: StateDep, _: WriteAccess) -> Response:
     """Forget a library and its per-tool status (the shared result cache keeps the results)."""
-    return json_response(library_store(state).delete(library_id))
+    return json_response(state.bench.libraries.delete(library_id))
 
 
 def _negotiate(accept: str | None) -> str:

@@ -5,7 +5,7 @@ from __future__ import annotations
 from fastapi import APIRouter, Depends
 from starlette.responses import Response
 
-from rcsa import app
+from rcsa.app.analyses import stability_lobes as lobes
 
 from ..bodies import require_json
 from ..deps import StateDep
@@ -22,6 +22,6 @@ def stability_lobes(body: LobesRequest, state: StateDep, _: ReadAccess) -> Respo
     """Axial depth limit (m) versus spindle speed (rpm), its chatter frequency (Hz) and every
     lobe, from inline tool-point FRFs (``frf_x``, optional ``frf_y``) or an ``assembly``."""
     with state.metrics.timed("lobes"):
-        result = app.stability_lobes(body.model_dump(exclude_unset=True), store=state.reader,
-                                     max_lines=state.settings.max_frequency_lines)
+        result = lobes(body.model_dump(exclude_unset=True), store=state.reader,
+                       max_lines=state.settings.max_frequency_lines)
     return json_response(result)

@@ -1,10 +1,10 @@
 """Figures and CSV files: what a person downloads next to the JSON.
 
-* ``POST /v1/plots/frf`` — the tool-point FRF as PNG or SVG (:func:`rcsa.analysis.figures.frf_figure`:
+* ``POST /v1/plots/frf`` — the tool-point FRF as PNG or SVG (:func:`rcsa.app.figures.frf_picture`:
   real and imaginary parts, magnitude and phase, in µm/N), from an inline FRF (``frf``, as
   in the stability-lobes request) or from an ``assembly`` predicted first.
 * ``POST /v1/plots/lobes`` — the stability lobe diagram (axial depth mm vs spindle speed
-  rpm, :func:`rcsa.analysis.figures.lobes_figure`); the body is a stability-lobes request plus
+  rpm, :func:`rcsa.app.figures.lobes_picture`); the body is a stability-lobes request plus
   optional drawing options (operating point, y limit, title).
 * ``POST /v1/exports/frf.csv`` — an assembly's prediction as CSV: frequency and the real
   and imaginary parts of ``h, l, n, p`` in SI units (the header names every unit).
@@ -19,25 +19,24 @@ cell.
 
 from __future__ import annotations
 
-import csv
-import io
 import threading
-from collections.abc import Sequence
+from contextlib import nullcontext
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Depends, Header, Query
 from pydantic import BaseModel, ConfigDict, Field
 from starlette.responses import Response
 
-from rcsa import app
-from rcsa.analysis.figures import frf_figure, lobes_figure, save_figure
-from rcsa.errors import InputError
-from rcsa.reference import ra1
+from rcsa.app import exports, figures
+from rcsa.app.analyses import stability_lobes, stability_lobes_result
+from rcsa.app.bounds import MAX_LENGTH_M, MAX_SPEED_RPM, MIN_SPEED_RPM
+from rcsa.app.examples import ra1
+from rcsa.app.predictions import predict
 
 from ..bodies import require_json
 from ..deps import StateDep
 from ..responses import problems
-from ..schemas import MAX_LENGTH_M, MAX_SPEED_RPM, MIN_FREQUENCY_HZ, Assembly, FrfIn, LobesRequest
+from ..schemas import Assembly, FrfIn, LobesRequest
 from ..security import ReadAccess
 
 router = APIRouter(prefix="/v1", tags=["plots and exports"])
@@ -45,10 +44,6 @@ router = APIRouter(prefix="/v1", tags=["plots and exports"])
 PNG = "image/png"
 SVG = "image/svg+xml"
 CSV_MEDIA = "text/csv"
-
-#: Columns of the FRF export: (receptance, SI unit suffix of its column names).
-FRF_COLUMNS = (("h", "m_n"), ("l", "1_n"), ("n", "rad_n"), ("p", "rad_n_m"))
-LOBES_COLUMNS = ("spindle_speed_rpm", "depth_limit_m", "chatter_frequency_hz", "governing_lobe")
 
 # matplotlib keeps caches (fonts, text layout) shared by all figures; draw one at a time.
 _RENDER_LOCK = threading.Lock()
@@ -94,7 +89,7 @@ class OperatingPoint(BaseModel):
 
     model_config = _STRICT
 
-    spindle_speed_rpm: float = Field(ge=MIN_FREQUENCY_HZ, le=MAX_SPEED_RPM, description="Spindle speed, rpm.")
+    spindle_speed_rpm: float = Field(ge=MIN_SPEED_RPM, le=MAX_SPEED_RPM, description="Spindle speed, rpm.")
     depth_m: float = Field(gt=0, le=MAX_LENGTH_M, description="Axial depth of cut, m.")
 
 
@@ -118,20 +113,12 @@ def plot_frf(body: FrfPlotRequest, state: StateDep, _: ReadAccess, format: Forma
     Give ``frf`` (``frequency_hz`` in Hz and ``h`` in m/N, e.g. from a prediction result) or
     an ``assembly``, which is predicted first (as ``POST /v1/tool-point-frf``).
     """
-    if (body.frf is None) == (body.assembly is None):
-        raise InputError("frf", "give either frf (an inline FRF) or assembly, exactly one of them")
-    if body.frf is not None:
-        frequency_hz, h_m_n = _inline_frf(body.frf)
-        where = "frf"
-    else:
-        with state.metrics.timed("predict"):
-            result = app.predict(body.assembly.model_dump(exclude_unset=True), store=state.reader,
-                                 max_lines=state.settings.max_frequency_lines)
-        frequency_hz, h_m_n, where = result.frequency_hz, result.tool_point.h, "assembly"
-    _check_drawable(frequency_hz, h_m_n, where, log_scale=body.layout != "real_imag")
+    doc = body.model_dump(exclude_unset=True, include={"frf", "assembly"})
+    with state.metrics.timed("predict") if body.assembly is not None else nullcontext():
+        curve = figures.tool_point_curve(**doc, store=state.reader, max_lines=state.settings.max_frequency_lines)
     fmt = _image_format(format, accept)
     with state.metrics.timed("plot"), _RENDER_LOCK:
-        image = save_figure(frf_figure(frequency_hz, h_m_n, layout=body.layout, title=body.title), fmt)
+        image = figures.frf_picture(curve, fmt=fmt, layout=body.layout, title=body.title)
     return _image(image, fmt, "tool-point-frf")
 
 
@@ -146,14 +133,13 @@ def plot_lobes(body: LobesPlotRequest, state: StateDep, _: ReadAccess, format: F
     request = body.model_dump(exclude_unset=True,
                               exclude={"show_lobes", "operating_point", "depth_max_mm", "title"})
     with state.metrics.timed("lobes"):
-        result = app.stability_lobes_result(request, store=state.reader,
-                                            max_lines=state.settings.max_frequency_lines)
+        result = stability_lobes_result(request, store=state.reader, max_lines=state.settings.max_frequency_lines)
     point = body.operating_point
     fmt = _image_format(format, accept)
     with state.metrics.timed("plot"), _RENDER_LOCK:
-        figure = lobes_figure(result, show_lobes=body.show_lobes, depth_max_mm=body.depth_max_mm, title=body.title,
-                              operating_point=None if point is None else (point.spindle_speed_rpm, point.depth_m))
-        image = save_figure(figure, fmt)
+        image = figures.lobes_picture(result, fmt=fmt, show_lobes=body.show_lobes, depth_max_mm=body.depth_max_mm,
+                                      title=body.title, operating_point=None if point is None else
+                                      (point.spindle_speed_rpm, point.depth_m))
     return _image(image, fmt, "stability-lobes")
 
 
@@ -168,16 +154,10 @@ def export_frf_csv(body: Assembly, state: StateDep, _: ReadAccess) -> Response:
     receptances as CSV: frequency in Hz, then real and imaginary parts of h (m/N), l (1/N),
     n (rad/N) and p (rad/(N·m)). The numbers equal the JSON result's."""
     with state.metrics.timed("predict"):
-        result = app.predict(body.model_dump(exclude_unset=True), store=state.reader,
-                             max_lines=state.settings.max_frequency_lines)
-    state.metrics.frfs.labels("predict").inc()
-    doc = result.to_dict()
-    header = ["frequency_hz"]
-    columns: list[Sequence[float | None]] = [doc["frequency_hz"]]
-    for name, unit in FRF_COLUMNS:
-        header += [f"{name}_real_{unit}", f"{name}_imag_{unit}"]
-        columns += [doc["tool_point"][name]["real"], doc["tool_point"][name]["imag"]]
-    return _csv(header, columns, "tool-point-frf")
+        result = predict(body.model_dump(exclude_unset=True), store=state.reader,
+                         max_lines=state.settings.max_frequency_lines)
+    state.metrics.computed("predict", 1)
+    return _csv(exports.frf_csv(result.to_dict()), "tool-point-frf")
 
 
 @router.post("/exports/lobes.csv", dependencies=[Depends(require_json)], response_class=Response,
@@ -191,33 +171,12 @@ def export_lobes_csv(body: LobesRequest, state: StateDep, _: ReadAccess) -> Resp
     envelope as CSV: spindle speed in rpm, depth limit in m, chatter frequency in Hz and the
     index k of the governing lobe."""
     with state.metrics.timed("lobes"):
-        doc = app.stability_lobes(body.model_dump(exclude_unset=True), store=state.reader,
-                                  max_lines=state.settings.max_frequency_lines)
-    return _csv(list(LOBES_COLUMNS), [doc[name] for name in LOBES_COLUMNS], "stability-lobes")
+        doc = stability_lobes(body.model_dump(exclude_unset=True), store=state.reader,
+                              max_lines=state.settings.max_frequency_lines)
+    return _csv(exports.lobes_csv(doc), "stability-lobes")
 
 
 # --------------------------------------------------------------------------- helpers
-
-def _inline_frf(frf: FrfIn) -> tuple[list[float], list[complex]]:
-    """Frequencies (Hz) and complex h (m/N) of an inline FRF; lengths checked."""
-    n = len(frf.frequency_hz)
-    for part in ("real", "imag"):
-        got = len(getattr(frf.h, part))
-        if got != n:
-            raise InputError(f"frf.h.{part}", f"has {got} values; it needs one per frequency line ({n})")
-    return frf.frequency_hz, [complex(re, im) for re, im in zip(frf.h.real, frf.h.imag, strict=True)]
-
-
-def _check_drawable(frequency_hz: Sequence[float], h_m_n: Sequence[complex], where: str, *, log_scale: bool) -> None:
-    """A figure needs two frequency lines, and a log-scaled magnitude a nonzero value."""
-    if len(frequency_hz) < 2:
-        field = f"{where}.frequency_hz" if where == "frf" else f"{where}.frequency"
-        raise InputError(field, "a figure needs at least 2 frequency lines")
-    if log_scale and not any(abs(v) > 0 for v in h_m_n):
-        raise InputError(f"{where}.h" if where == "frf" else where,
-                         "h is zero at every line, so its magnitude cannot be drawn on a log scale; "
-                         "use layout real_imag")
-
 
 def _image_format(format: str | None, accept: str | None) -> str:  # noqa: A002
     if format is not None:
@@ -231,12 +190,6 @@ def _image(data: bytes, fmt: str, stem: str) -> Response:
                     headers={"Content-Disposition": f'inline; filename="{stem}.{fmt}"'})
 
 
-def _csv(header: list[str], columns: Sequence[Sequence[float | None]], stem: str) -> Response:
-    """CSV (RFC 4180, CRLF) of equal-length columns; None is an empty cell."""
-    buf = io.StringIO()
-    writer = csv.writer(buf)
-    writer.writerow(header)
-    for row in zip(*columns, strict=True):
-        writer.writerow(["" if v is None else repr(v) for v in row])
-    return Response(buf.getvalue().encode(), media_type=f"{CSV_MEDIA}; charset=utf-8",
+def _csv(data: bytes, stem: str) -> Response:
+    return Response(data, media_type=f"{CSV_MEDIA}; charset=utf-8",
                     headers={"Content-Disposition": f'attachment; filename="{stem}.csv"'})

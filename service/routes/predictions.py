@@ -5,8 +5,8 @@ from __future__ import annotations
 from fastapi import APIRouter, Depends
 from starlette.responses import Response
 
-from rcsa import app
-from rcsa.app import libraries as library_api
+from rcsa.app.libraries import select_tool_point
+from rcsa.app.predictions import predict
 
 from ..bodies import require_json
 from ..deps import StateDep
@@ -29,8 +29,8 @@ def predict_tool_point_frf(body: Assembly, state: StateDep, _: ReadAccess,
     ``h, l, n, p`` in m/N, 1/N, rad/N, rad/(N·m).
     """
     with state.metrics.timed("predict"):
-        result = app.predict(body.model_dump(exclude_unset=True), store=state.reader,
-                             max_lines=state.settings.max_frequency_lines)
-    state.metrics.frfs.labels("predict").inc()
+        result = predict(body.model_dump(exclude_unset=True), store=state.reader,
+                         max_lines=state.settings.max_frequency_lines)
+    state.metrics.computed("predict", 1)
     out = result.to_dict(arrays="numpy")
-    return json_response(library_api.select_tool_point(out, tool_point.split(",")) if tool_point else out)
+    return json_response(select_tool_point(out, tool_point.split(",")) if tool_point else out)

@@ -25,9 +25,9 @@ from fastapi.exceptions import RequestValidationError
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from starlette.responses import FileResponse, RedirectResponse, Response
 
+from rcsa.app.examples import ra1
+from rcsa.app.libraries import library_entries as read_entries
 from rcsa.errors import InputError
-from rcsa.libraries import library_combinations
-from rcsa.reference import ra1
 
 from ..bodies import form_text, read_body, read_upload, validate_json
 from ..deps import StateDep
@@ -159,11 +159,7 @@ async def library_entries(request: Request, state: StateDep, _: ReadAccess) -> R
         if kind == "form":
             await body.close()
     opts = options.model_dump(exclude_none=True) if options is not None else {}
-    imported = await run_in_threadpool(library_combinations, library, **opts)
-    out = imported.to_dict()
-    return json_response({"library": {"source": out["source"], "file_name": file_name,
-                                      "library_sha256": out["library_sha256"], "summary": out["summary"]},
-                          "entries": out["combinations"]})
+    return json_response(await run_in_threadpool(lambda: read_entries(library, options=opts, file_name=file_name)))
 
 
 async def _entries_form(form: Any, limit_bytes: int) -> tuple[bytes, str, LibraryOptions | None]:

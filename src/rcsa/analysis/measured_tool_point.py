@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from rcsa.errors import InputError
+from rcsa.model import fields
 from rcsa.model.contract import MAX_FREQUENCY_LINES, ToolSpec, parse_tool
 from rcsa.model.wire import complex_from_wire, number_list
 from rcsa.physics.materials import Material
@@ -74,18 +75,8 @@ def _readonly(x: np.ndarray) -> np.ndarray:
 
 def _tap_test(raw: object, path: str, base_tool: Mapping[str, Any], materials: Mapping[str, Material],
               extra_fields: tuple[str, ...], min_lines: int, max_lines: int) -> TapTest:
-    if not isinstance(raw, Mapping):
-        raise InputError(path, "must be an object")
-    allowed = (*_BASE_FIELDS, *extra_fields)
-    unknown = sorted(set(raw) - set(allowed))
-    if unknown:
-        raise InputError(f"{path}.{unknown[0]}", f"unknown field (allowed: {', '.join(allowed)})")
-    overrides = raw.get("tool") or {}
-    if not isinstance(overrides, Mapping):
-        raise InputError(f"{path}.tool", "must be an object of tool fields to override")
-    unknown = sorted(set(overrides) - set(TOOL_OVERRIDES))
-    if unknown:
-        raise InputError(f"{path}.tool.{unknown[0]}", f"unknown tool field (allowed: {', '.join(TOOL_OVERRIDES)})")
+    raw = fields.json_object(raw, path, (*_BASE_FIELDS, *extra_fields))
+    overrides = fields.json_object(raw.get("tool") or {}, f"{path}.tool", TOOL_OVERRIDES)
     tool = parse_tool({**base_tool, **overrides}, materials, f"{path}.tool")
     for key in ("frequency_hz", "h"):
         if key not in raw:

@@ -54,6 +54,7 @@ from rcsa.analysis.mode_features import (
     mode_features,
 )
 from rcsa.errors import InputError
+from rcsa.model import fields
 from rcsa.model.assembly import build_model
 from rcsa.model.contract import AssemblySpec, SpindleSpec, parse_assembly
 from rcsa.model.parameters import get_parameter, is_damping, parameter_names, set_parameter
@@ -360,15 +361,11 @@ def effects_report(request: Mapping[str, Any]) -> EffectReport:
         raise InputError("", "the request must be a JSON object")
     if "assembly" not in request:
         return effect_analysis(request)
-    unknown = sorted(set(request) - set(_REQUEST_FIELDS))
-    if unknown:
-        raise InputError(unknown[0], f"unknown field (allowed: {', '.join(_REQUEST_FIELDS)})")
+    o = fields.Fields(request, "", _REQUEST_FIELDS)
     params = request.get("parameters")
     if params is not None and (not isinstance(params, list) or not all(isinstance(p, str) for p in params)):
         raise InputError("parameters", "must be a list of parameter names")
-    step = request.get("relative_step", DEFAULT_RELATIVE_STEP)
-    if isinstance(step, bool) or not isinstance(step, int | float):
-        raise InputError("relative_step", "must be a number")
+    step = o.number("relative_step", default=DEFAULT_RELATIVE_STEP)  # its range is effect_analysis's rule
     band = request.get("band_hz")
     if band is not None and (not isinstance(band, list) or len(band) != 2
                              or not all(isinstance(b, int | float) and not isinstance(b, bool) for b in band)):
@@ -377,7 +374,7 @@ def effects_report(request: Mapping[str, Any]) -> EffectReport:
         spec = parse_assembly(request["assembly"])
     except InputError as exc:
         raise InputError(f"assembly.{exc.field}".rstrip("."), exc.rule) from None
-    return effect_analysis(spec, parameters=params, relative_step=float(step), band_hz=band)
+    return effect_analysis(spec, parameters=params, relative_step=step, band_hz=band)
 
 
 def effects(request: Mapping[str, Any]) -> dict[str, Any]:

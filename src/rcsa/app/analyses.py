@@ -5,8 +5,6 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from rcsa.analysis.diagnosis.diagnose import diagnose as _diagnose
-from rcsa.analysis.joint_identification.identify import identify as _identify
 from rcsa.analysis.lobes.request import parse_lobes_request
 from rcsa.analysis.lobes.zoa import LobeResult
 from rcsa.analysis.sensitivity import effects as _effects
@@ -62,7 +60,10 @@ def identify(request: Mapping[str, Any]) -> dict[str, Any]:
 
     See :func:`rcsa.analysis.joint_identification.identify.identify`.
     """
-    return _identify(request)
+    # scipy.optimize (~0.4 s to import): only when an identification is asked for
+    from rcsa.analysis.joint_identification.identify import identify as run
+
+    return run(request)
 
 
 def diagnose(request: Mapping[str, Any], **kwargs: Any) -> dict[str, Any]:
@@ -70,4 +71,7 @@ def diagnose(request: Mapping[str, Any], **kwargs: Any) -> dict[str, Any]:
 
     See :func:`rcsa.analysis.diagnosis.diagnose.diagnose`.
     """
-    return _diagnose(request, **kwargs)
+    # scipy.stats and scipy.optimize (~0.9 s to import): only when a diagnosis is asked for
+    from rcsa.analysis.diagnosis.diagnose import diagnose as run
+
+    return run(request, **kwargs)

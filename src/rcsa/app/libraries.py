@@ -1,7 +1,25 @@
-"""Whole tool libraries as the CLI and the REST service use them: predictions, syncs, exports."""
+"""Batches and whole tool libraries as the CLI and the REST service use them.
+
+A batch, a library prediction and a library sync are *prepared* here — read, sized and
+given the checks to make before queuing — into a :class:`rcsa.app.jobs.Work` that
+:func:`rcsa.app.jobs.answer_or_queue` runs now or queues (or the CLI runs with
+:func:`rcsa.app.jobs.run_work`).
+Stored libraries are listed, shown and exported (HDF5, a zip of UFF 58 files, JSON) here too.
+"""
 
 from __future__ import annotations
 
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+import orjson
+
+from rcsa.app.jobs import Work, Workbench
+from rcsa.errors import InputError
+from rcsa.infra.atomic_files import atomic_write_bytes
 from rcsa.libraries.exports import library_hdf5, library_uff_zip
 from rcsa.libraries.fusion import library_combinations
 from rcsa.libraries.library_prediction import (
@@ -9,44 +27,222 @@ from rcsa.libraries.library_prediction import (
     check_common,
     checked_batch,
     library_request,
-    predict_library,
-    run_entries,
-    run_library_request,
     select_tool_point,
 )
 from rcsa.libraries.sync import (
-    DIRECTORY,
     LIBRARY_ID_PATTERN,
     LibraryStore,
-    SyncPlan,
-    SyncReport,
     library_id_from_name,
     plan_sync,
-    run_sync,
-    sync_library,
     sync_request,
 )
+from rcsa.measured.hybrid import MeasurementSource
 
 __all__ = [
-    "DIRECTORY",
+    "DEFAULT_GRID",
+    "EXPORT_FORMATS",
     "LIBRARY_ID_PATTERN",
     "LIBRARY_OPTIONS",
+    "ExportFile",
     "LibraryStore",
-    "SyncPlan",
-    "SyncReport",
-    "check_common",
-    "checked_batch",
-    "library_combinations",
-    "library_hdf5",
+    "export_file",
+    "library_entries",
     "library_id_from_name",
-    "library_request",
-    "library_uff_zip",
-    "plan_sync",
-    "predict_library",
-    "run_entries",
-    "run_library_request",
-    "run_sync",
+    "prepare_batch",
+    "prepare_library",
+    "prepare_sync",
     "select_tool_point",
-    "sync_library",
-    "sync_request",
+    "spindle_settings",
+    "write_export",
 ]
+
+#: Frequency grid of a library prediction when neither the caller, the spindle's assembly
+#: nor a measured spindle gives one, Hz.
+DEFAULT_GRID = {"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 1.0}
+#: Export formats of a stored library's results, by file suffix.
+EXPORT_FORMATS: dict[str, Literal["hdf5", "zip", "json"]] = {".h5": "hdf5", ".hdf5": "hdf5", ".zip": "zip",
+                                                             ".json": "json"}
+_SUFFIX = {"hdf5": ".h5", "zip": ".zip", "json": ".json"}
+
+
+def _check_tools(n: int, limit: int) -> None:
+    if n > limit:
+        raise InputError("library", f"has {n} tools to predict; at most {limit} per request")
+
+
+# --------------------------------------------------------------------------- preparing work
+
+def prepare_batch(bench: Workbench, request: Mapping[str, Any],
+                  refused: Mapping[int, Mapping[str, str]] | None = None,
+                  tool_point: list[str] | None = None) -> Work:
+    """A batch request (``contract.md`` "Batch"), read and sized: work of kind ``batch``.
+
+    Parameters
+    ----------
+    bench : Workbench
+    request : mapping
+        The batch request, combinations as sent.
+    refused : mapping of int to dict, optional
+        Combinations already refused by the caller (the REST schema), by index: they get an
+        ``error`` result in their place (:func:`rcsa.libraries.library_prediction.checked_batch`).
+    tool_point : list of str, optional
+        Keep only these receptances of each result (``["h"]``).
+
+    Raises
+    ------
+    InputError
+        Too many combinations, or the grid, spindle or materials they share are invalid.
+    """
+    combinations = request.get("combinations") if isinstance(request, Mapping) else None
+    n = len(combinations) if isinstance(combinations, list) else 0
+    if n > bench.max_combinations:
+        raise InputError("combinations", f"at most {bench.max_combinations} per request, got {n}; split the batch")
+    checked = checked_batch(request, refused or {}, tool_point)
+    return Work("batch", checked, n, check=lambda: check_common(request, store=bench.store, max_lines=bench.max_lines))
+
+
+def prepare_library(bench: Workbench, library: str | os.PathLike[str] | bytes | Mapping[str, Any],
+                    **fields: Any) -> Work:
+    """A Fusion tool library on one spindle, imported and sized: work of kind ``library``.
+
+    ``fields`` are those of :func:`rcsa.libraries.library_prediction.library_request`:
+    ``spindle``, ``frequency``, ``joints``, ``materials``, ``beam_theory``,
+    ``shear_coefficient``, ``natural_frequencies`` and ``options``.
+    """
+    request = library_request(library, **fields)
+    n = len(request["batch"]["combinations"])
+    _check_tools(n, bench.max_combinations)
+    return Work("library", request, n,
+                check=lambda: check_common(request["batch"], store=bench.store, max_lines=bench.max_lines))
+
+
+def prepare_sync(bench: Workbench, library_id: str, library: str | os.PathLike[str] | bytes | Mapping[str, Any],
+                 **fields: Any) -> Work:
+    """A sync of the stored library ``library_id`` with this export: work of kind ``library-sync``.
+
+    Its size is the number of results not in the result cache yet (only those are
+    computed). ``fields`` as in :func:`prepare_library`.
+    """
+    request = sync_request(library_id, library, **fields)
+    _check_tools(len(request["batch"]["combinations"]), bench.max_combinations)
+    plan = plan_sync(bench.libraries, request, store=bench.store, max_lines=bench.max_lines)
+    return Work("library-sync", request, len(plan.pending), plan,
+                check=lambda: check_common(request["batch"], store=bench.store, max_lines=bench.max_lines))
+
+
+def spindle_settings(base: Mapping[str, Any], *, frequency: Mapping[str, Any] | None = None,
+                     joints: Mapping[str, Any] | None = None,
+                     store: MeasurementSource | None = None) -> dict[str, Any]:
+    """The spindle, grid, joints and materials of a library prediction from a base document.
+
+    Parameters
+    ----------
+    base : mapping
+        An assembly (its ``spindle``, ``frequency``, ``joints``, ``materials``,
+        ``beam_theory`` and ``shear_coefficient`` are used) or ``{"spindle": {...}}``.
+    frequency : mapping, optional
+        The grid; default the base's, else a measured spindle's own lines, else
+        :data:`DEFAULT_GRID`.
+    joints : mapping, optional
+        Joints for every tool; default the base's (rigid when it has none).
+    store : MeasurementSource, optional
+        Where a measured spindle's lines are read.
+
+    Returns
+    -------
+    dict
+        Keyword arguments of :func:`prepare_library` / :func:`prepare_sync`.
+    """
+    spindle = base["spindle"]
+    if frequency is not None:
+        grid = dict(frequency)
+    elif "frequency" in base:
+        grid = base["frequency"]
+    elif isinstance(spindle, Mapping) and spindle.get("measurement_id") is not None and store is not None:
+        grid = {"values_hz": store.get(spindle["measurement_id"]).frequency_hz.tolist()}
+    else:
+        grid = dict(DEFAULT_GRID)
+    return {"spindle": spindle, "frequency": grid, "joints": joints if joints is not None else base.get("joints"),
+            "materials": base.get("materials"), "beam_theory": base.get("beam_theory"),
+            "shear_coefficient": base.get("shear_coefficient")}
+
+
+# --------------------------------------------------------------------------- reading libraries
+
+def library_entries(library: str | os.PathLike[str] | bytes | Mapping[str, Any], *,
+                    options: Mapping[str, Any] | None = None, file_name: str | None = None) -> dict[str, Any]:
+    """Every item of a Fusion library mapped to a holder and tool, without computing anything.
+
+    Returns
+    -------
+    dict
+        ``{"library": {"source", "file_name", "library_sha256", "summary"}, "entries": [...]}``;
+        each entry has ``id``, ``index``, ``status`` (``ok``/``skipped``/``error``), and for
+        ``ok`` items the assembly's ``holder`` and ``tool``.
+    """
+    out = library_combinations(library, **dict(options or {})).to_dict()
+    return {"library": {"source": out["source"], "file_name": file_name, "library_sha256": out["library_sha256"],
+                        "summary": out["summary"]},
+            "entries": out["combinations"]}
+
+
+# --------------------------------------------------------------------------- exports
+
+@dataclass(frozen=True)
+class ExportFile:
+    """A stored library's results as one file.
+
+    Attributes
+    ----------
+    data : bytes
+    file_name : str
+        ``<library_id>-r<revision>.<suffix>``.
+    ok : int
+        Tools with a result in it.
+    revision : int
+        The library revision exported.
+    """
+
+    data: bytes
+    file_name: str
+    ok: int
+    revision: int
+
+
+def export_file(libraries: LibraryStore, library_id: str, fmt: Literal["hdf5", "zip", "json"]) -> ExportFile:
+    """A stored library's results as HDF5, a zip of UFF 58 files, or JSON.
+
+    Raises
+    ------
+    NotFoundError
+        No such library.
+    """
+    if fmt not in _SUFFIX:
+        raise InputError("format", f"must be one of {', '.join(_SUFFIX)}, got {fmt!r}")
+    results = libraries.results(library_id)
+    if fmt == "json":
+        data = orjson.dumps(results, option=orjson.OPT_SERIALIZE_NUMPY)
+    else:
+        data = library_hdf5(results) if fmt == "hdf5" else library_uff_zip(results)
+    revision = int(results["library"]["revision"])
+    return ExportFile(data, f"{library_id}-r{revision}{_SUFFIX[fmt]}", int(results["summary"]["ok"]), revision)
+
+
+def write_export(libraries: LibraryStore, library_id: str, path: str | os.PathLike[str]) -> ExportFile:
+    """Write a stored library's results to ``path`` (atomically); the format follows its suffix.
+
+    Raises
+    ------
+    InputError
+        Field ``out``: a suffix that names no format (:data:`EXPORT_FORMATS`).
+    NotFoundError
+        No such library.
+    OSError
+        The file cannot be written.
+    """
+    suffix = Path(path).suffix.lower()
+    if suffix not in EXPORT_FORMATS:
+        raise InputError("out", f"{path}: the file name must end in .h5, .hdf5, .zip or .json")
+    export = export_file(libraries, library_id, EXPORT_FORMATS[suffix])
+    atomic_write_bytes(Path(path), export.data)
+    return export

@@ -16,10 +16,28 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+import filelock
 import numpy as np
 
 from rcsa.errors import InputError, NotFoundError, StoreError
 from rcsa.infra.atomic_files import atomic_write_bytes
+from rcsa.measured.importers import (
+    measurement_from_contract,
+    measurement_to_contract,
+    read_contract_json,
+    read_csv,
+    read_cutpro,
+    read_tap,
+    read_uff,
+)
+from rcsa.measured.store import Measurement, MeasurementMeta, Provenance, is_measurement_id
+from rcsa.measured.store import paths as P
+from rcsa.measured.store.schema import frf_unit
+from rcsa.model import fields
+from rcsa.model.assembly import build_model
+from rcsa.model.contract import parse_assembly
+from rcsa.physics.elimination import tip_receptance
+from rcsa.reference import ra1
 
 __all__ = [
     "DEMO_SPINDLE_ID",
@@ -137,23 +155,9 @@ def _parse_artifact(value: str | Mapping[str, Any] | None) -> Mapping[str, Any] 
     return doc
 
 
-def _bool(value: Any, field: str) -> bool:
-    if isinstance(value, bool):
-        return value
-    if isinstance(value, str) and value.strip().lower() in ("true", "1", "yes", "on", "false", "0", "no", "off", ""):
-        return value.strip().lower() in ("true", "1", "yes", "on")
-    raise InputError(field, f"must be true or false, got {value!r}")
-
-
 def _float(value: Any, field: str) -> float | None:
-    if value is None or value == "":
-        return None
-    if isinstance(value, bool):
-        raise InputError(field, "must be a number")
-    try:
-        return float(value)
-    except (TypeError, ValueError):
-        raise InputError(field, f"must be a number, got {value!r}") from None
+    """A number from an option or form field; None when left out or empty."""
+    return None if value is None or value == "" else fields.number(value, field, text=True)
 
 
 def import_measurement(
@@ -194,15 +198,6 @@ def import_measurement(
     InputError
         Naming the field: unknown format or option, missing metadata, unreadable file.
     """
-    from rcsa.measured.importers import (
-        read_contract_json,
-        read_csv,
-        read_cutpro,
-        read_tap,
-        read_uff,
-    )
-    from rcsa.measured.store import MeasurementMeta
-
     form = format_from_name(file_name, fmt)
     meta_in = dict(metadata or {})
     unknown = sorted(set(meta_in) - set(META_FIELDS))
@@ -212,7 +207,7 @@ def import_measurement(
     for key in opts:
         if key not in IMPORT_OPTIONS:
             raise InputError(key, f"unknown import option (allowed: {', '.join(IMPORT_OPTIONS)})")
-        if form not in IMPORT_OPTIONS[key] and not (key == "drop_nonpositive" and not _bool(opts[key], key)):
+        if form not in IMPORT_OPTIONS[key] and not (key == "drop_nonpositive" and not fields.boolean(opts[key], key, text=True)):
             raise InputError(key, f"does not apply to format {form!r}")
     if extra_taps and form != "tap":
         raise InputError("file", f"several files can only be averaged for format 'tap', not {form!r}")
@@ -222,7 +217,7 @@ def import_measurement(
     if "artifact" in given:
         given["artifact"] = _parse_artifact(given["artifact"])
     common = {"sensor_mass_kg": _float(opts.get("sensor_mass_kg"), "sensor_mass_kg"), "file_name": file_name}
-    drop = _bool(opts.get("drop_nonpositive", False), "drop_nonpositive")
+    drop = fields.boolean(opts.get("drop_nonpositive", False), "drop_nonpositive", text=True)
     if form == "json":
         overrides = {k: (list(v) if isinstance(v, tuple) else v) for k, v in given.items()}
         return read_contract_json(data, overrides=overrides, drop_nonpositive=drop, **common)
@@ -257,15 +252,11 @@ def import_measurement(
 def measurement_from_document(doc: Mapping[str, Any], *, drop_nonpositive: bool = False,
                               sensor_mass_kg: float | None = None):
     """A measurement from the contract's JSON form, already parsed (a JSON request body)."""
-    from rcsa.measured.importers import measurement_from_contract
-
     return measurement_from_contract(doc, drop_nonpositive=drop_nonpositive, sensor_mass_kg=sensor_mass_kg)
 
 
 def measurement_summary(m: Any) -> dict[str, Any]:
     """Peak of each FRF: ``{name: {"units", "max_magnitude", "frequency_at_max_hz"}}``."""
-    from rcsa.measured.store.schema import frf_unit
-
     out = {}
     for name, v in m.frfs.items():
         i = int(np.argmax(np.abs(v)))
@@ -281,8 +272,6 @@ def measurement_document(store: Any, measurement_id: str, *, include_data: bool 
     ------
     NotFoundError
     """
-    from rcsa.measured.importers import measurement_to_contract
-
     m = store.get(measurement_id)
     out = measurement_to_contract(m, include_data=include_data)
     out["summary"] = measurement_summary(m)
@@ -296,9 +285,6 @@ def measurement_hdf5(store: Any, measurement_id: str) -> bytes:
     ------
     NotFoundError
     """
-    from rcsa.measured.store import is_measurement_id
-    from rcsa.measured.store import paths as P
-
     if not is_measurement_id(measurement_id):
         raise NotFoundError("measurement", str(measurement_id))
     try:
@@ -344,8 +330,7 @@ def list_measurements(store: Any, *, limit: int = 100, cursor: str | None = None
     dict
         ``{"items": [metadata...], "next_cursor": str | None}``.
     """
-    if isinstance(limit, bool) or not isinstance(limit, int) or not 1 <= limit <= _MAX_PAGE:
-        raise InputError("limit", f"must be an integer from 1 to {_MAX_PAGE}, got {limit!r}")
+    fields.integer(limit, "limit", ge=1, le=_MAX_PAGE)
     infos = store.list(filters.pop("spindle_id", None), **filters)
     if cursor:
         after = _decode_cursor(cursor)
@@ -378,12 +363,6 @@ def demo_measurement(frequency: Mapping[str, float] | None = None):
     1…10 000 Hz in 1 Hz steps by default, so that a fresh user can try a hybrid prediction
     (``"spindle": {"measurement_id": ...}``) with RA-1's holder and tool at once.
     """
-    from rcsa.measured.store import Measurement, MeasurementMeta, Provenance
-    from rcsa.model.assembly import build_model
-    from rcsa.model.contract import parse_assembly
-    from rcsa.physics.elimination import tip_receptance
-    from rcsa.reference import ra1
-
     spec = parse_assembly(ra1(dict(frequency or {"start_hz": 1.0, "stop_hz": 10000.0, "step_hz": 1.0})))
     r = tip_receptance(build_model(spec).spindle, 2.0 * np.pi * spec.frequency_hz)
     meta = MeasurementMeta(spindle_id=DEMO_SPINDLE_ID, direction="x", plane="spindle_nose",
@@ -408,8 +387,6 @@ def seed_demo(store: Any) -> str | None:
     str or None
         The new measurement's id, or None when nothing was done.
     """
-    import filelock
-
     root = Path(store.path)
     marker = root / _DEMO_MARKER
     try:

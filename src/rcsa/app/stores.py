@@ -1,31 +1,112 @@
-"""Which measurement store a call uses: the caller's, or the default one.
+"""Which measurement store a call uses, and how a long-running process reads it.
 
 The default store is ``$RCSA_STORE`` if set, else the per-user location
 (:func:`rcsa.measured.store.paths.default_store_path`); only the application layer picks
-it, so everything below receives its store explicitly.
+it, so everything below receives its store explicitly. The stored tool libraries live in
+the same directory (:func:`library_store`). A server process reads measurements through
+:class:`CachedMeasurements` (immutable files, so a cached copy stays exact).
 """
 
 from __future__ import annotations
 
-from rcsa.measured.hybrid import base_resolver
-from rcsa.measured.store import MeasurementStore
+import os
+import threading
+from collections import OrderedDict
+from pathlib import Path
+from typing import Any
+
+from rcsa.libraries.sync import DIRECTORY as LIBRARIES_DIRECTORY
+from rcsa.libraries.sync import LibraryStore
+from rcsa.measured.hybrid import MeasurementSource, base_resolver
+from rcsa.measured.store import Measurement, MeasurementStore, is_measurement_id
 from rcsa.model.spindle_side import BaseResolver
 
-__all__ = ["measurement_store", "resolver"]
+__all__ = [
+    "CachedMeasurements",
+    "Measurement",
+    "MeasurementSource",
+    "MeasurementStore",
+    "LibraryStore",
+    "is_measurement_id",
+    "library_store",
+    "open_store",
+    "resolver",
+]
 
 
-def measurement_store(store: MeasurementStore | None = None) -> MeasurementStore:
-    """``store``, or the default store when it is None."""
-    return store if store is not None else MeasurementStore()
+def open_store(path: str | os.PathLike[str] | None = None) -> MeasurementStore:
+    """The store at ``path`` (the default store when None), created on first use."""
+    return MeasurementStore(path)
 
 
-def resolver(store: MeasurementStore | None = None) -> BaseResolver:
+_LIBRARY_STORES: dict[str, LibraryStore] = {}
+_LIBRARY_STORES_LOCK = threading.Lock()
+
+
+def library_store(store_path: str | os.PathLike[str] | None = None) -> LibraryStore:
+    """The stored libraries of the store at ``store_path`` (``<store>/libraries``).
+
+    One :class:`LibraryStore` per directory and process (it sets its database up once),
+    made again if the directory was removed. None: the default store's.
+    """
+    with _LIBRARY_STORES_LOCK:
+        if store_path is not None:
+            found = _LIBRARY_STORES.get(str(Path(store_path).expanduser() / LIBRARIES_DIRECTORY))
+            if found is not None and found.directory.is_dir():
+                return found
+        root = MeasurementStore(store_path).path  # the store (and its marker) first: never a stray directory
+        found = _LIBRARY_STORES[str(root / LIBRARIES_DIRECTORY)] = LibraryStore(root / LIBRARIES_DIRECTORY)
+        return found
+
+
+def resolver(store: MeasurementSource | None = None) -> BaseResolver:
     """Looks measured spindles up in ``store`` (the default store, opened on first use)."""
-    opened: list[MeasurementStore] = []
+    opened: list[MeasurementSource] = []
 
     def resolve(spindle, frequency_hz):  # type: ignore[no-untyped-def]
         if not opened:
-            opened.append(measurement_store(store))
+            opened.append(store if store is not None else MeasurementStore())
         return base_resolver(opened[0])(spindle, frequency_hz)
 
     return resolve
+
+
+class CachedMeasurements:
+    """Read-through cache of stored measurements for computations (per process).
+
+    Stored measurements are immutable and ids are never reused, so a cached copy is exact
+    for as long as the file exists; each ``get`` checks that it still does (one ``stat``),
+    so a deleted measurement is never used by a request that starts after the delete.
+
+    Parameters
+    ----------
+    store : MeasurementStore
+    size : int
+        Measurements kept (least recently used dropped first); 0 disables the cache.
+    """
+
+    def __init__(self, store: MeasurementStore, size: int) -> None:
+        self.store = store
+        self.path = store.path
+        self.size = int(size)
+        self._items: OrderedDict[str, Measurement] = OrderedDict()
+        self._lock = threading.Lock()
+
+    def get(self, measurement_id: str) -> Measurement:
+        """The measurement, from memory when possible (``NotFoundError`` if gone)."""
+        if self.size and measurement_id in self.store:
+            with self._lock:
+                hit = self._items.get(measurement_id)
+                if hit is not None:
+                    self._items.move_to_end(measurement_id)
+                    return hit
+        m = self.store.get(measurement_id)
+        if self.size:
+            with self._lock:
+                self._items[measurement_id] = m
+                while len(self._items) > self.size:
+                    self._items.popitem(last=False)
+        return m
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.store, name)

@@ -7,6 +7,7 @@ from typing import Annotated
 
 import typer
 
+from rcsa.app.figures import FIGURE_SUFFIXES, diagnosis_with_figure
 from rcsa.cli._common import fail, read_json, run_guarded, write_json
 
 
@@ -21,18 +22,11 @@ def register(app: typer.Typer) -> None:
                                                                   "gap map to this .png or .svg file.")] = None,
     ) -> None:
         """Where model and measurement part, which unmodelled effect explains it, and how far the gap shrinks."""
-        from rcsa.analysis.diagnosis.report import build_response, diagnosis_figure
-        from rcsa.analysis.diagnosis.state import analyse
-        from rcsa.analysis.figures import save_figure
-
-        if plot is not None and plot.suffix.lower() not in (".png", ".svg"):
+        if plot is not None and plot.suffix.lower() not in FIGURE_SUFFIXES:
             raise fail(f"--plot: the file must end in .png or .svg, got {plot.name!r}")
         doc = read_json(request)
-        analysis = run_guarded(lambda: analyse(doc))
-        response = build_response(analysis)
-        if plot is not None:
-            try:
-                save_figure(diagnosis_figure(analysis, response), plot)
-            except OSError as exc:
-                raise fail(f"cannot write {plot}: {exc.strerror or exc}") from None
+        try:
+            response = run_guarded(lambda: diagnosis_with_figure(doc, plot))
+        except OSError as exc:
+            raise fail(f"cannot write {plot}: {exc.strerror or exc}") from None
         write_json(response, out)

@@ -7,6 +7,7 @@ from typing import Annotated
 
 import typer
 
+from rcsa.app.figures import check_picture_path, effects_with_figure
 from rcsa.cli._common import read_json, run_guarded, write_json
 
 
@@ -22,20 +23,6 @@ def register(app: typer.Typer) -> None:
         plot: Annotated[Path | None, typer.Option("--plot", help="Also draw the sensitivity heat map (.png or .svg).")] = None,
     ) -> None:
         """Effect analysis: normalised sensitivities of every mode to bearing, joint and tool parameters."""
-        from rcsa.analysis.sensitivity import effects_figure, effects_report
-
         doc = read_json(assembly)
-        report = run_guarded(lambda: effects_report(doc))
-        if plot is not None:
-            from rcsa.analysis.figures import save_figure
-
-            run_guarded(lambda: save_figure(effects_figure(report), _plot_path(plot)))
-        write_json(report.to_dict(), out)
-
-
-def _plot_path(path: Path) -> Path:
-    from rcsa.errors import InputError
-
-    if path.suffix.lower() not in (".png", ".svg"):
-        raise InputError("--plot", f"the picture must end in .png or .svg, got {path.name!r}")
-    return path
+        picture = None if plot is None else run_guarded(lambda: check_picture_path(plot, "--plot"))
+        write_json(run_guarded(lambda: effects_with_figure(doc, picture)), out)

@@ -7,6 +7,7 @@ from typing import Annotated
 
 import typer
 
+from rcsa.app.analyses import identify as identify_joints
 from rcsa.cli._common import read_json, run_guarded, write_json
 
 
@@ -24,7 +25,5 @@ def register(app: typer.Typer) -> None:
         Prints the result JSON; ``status`` is ``identified`` or ``not_identifiable`` (with a
         ``detail``), and both exit 0: only a malformed request fails.
         """
-        from rcsa.analysis.joint_identification.identify import identify as run
-
         doc = read_json(request)
-        write_json(run_guarded(lambda: run(doc)), out)
+        write_json(run_guarded(lambda: identify_joints(doc)), out)

@@ -13,6 +13,7 @@ from typing import Annotated
 
 import typer
 
+from rcsa.app.keys import key_file
 from rcsa.cli._common import run_guarded, write_json
 
 __all__ = ["keys_app", "register"]
@@ -24,13 +25,6 @@ StoreOpt = Annotated[Path | None, typer.Option("--store", help="Store directory 
                                                                 "~/.local/share/rcsa/store).")]
 
 
-def _key_file(store: Path | None):
-    from rcsa.infra.api_keys import KeyFile
-    from rcsa.measured.store import MeasurementStore
-
-    return KeyFile.in_store(MeasurementStore(store).path)  # creates the store (and its marker) first
-
-
 @keys_app.command("create")
 def create(
     scope: Annotated[str, typer.Option(help="read (predictions, listings) or write (also upload and delete).")],
@@ -39,7 +33,7 @@ def create(
     store: StoreOpt = None,
 ) -> None:
     """Create a key and print its secret once (only its hash is kept)."""
-    record, secret = run_guarded(lambda: _key_file(store).create(scope, label))
+    record, secret = run_guarded(lambda: key_file(store).create(scope, label))
     if as_json:
         write_json({**record.to_dict(with_hash=False), "key": secret}, None)
         return
@@ -54,7 +48,7 @@ def list_(
     store: StoreOpt = None,
 ) -> None:
     """List keys (ids, scopes, labels, dates; never secrets) as JSON."""
-    records = run_guarded(lambda: _key_file(store).list(include_revoked=include_revoked))
+    records = run_guarded(lambda: key_file(store).list(include_revoked=include_revoked))
     write_json([r.to_dict(with_hash=False) for r in records], None)
 
 
@@ -64,7 +58,7 @@ def revoke(
     store: StoreOpt = None,
 ) -> None:
     """Revoke a key; services on this store refuse it from the next request on."""
-    record = run_guarded(lambda: _key_file(store).revoke(key))
+    record = run_guarded(lambda: key_file(store).revoke(key))
     write_json(record.to_dict(with_hash=False), None)
 
 

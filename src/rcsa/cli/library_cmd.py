@@ -7,7 +7,7 @@ library item: ``ok``, ``skipped`` with a reason, or ``error``) goes to stdout or
 OUT.json``; the exit status is 1 when any tool errored.
 
 ``rcsa library sync LIBRARY --spindle ID-or-SPINDLE.json [--library-id ID]``: keep the
-library in the store (:mod:`rcsa.libraries.sync`, the same code as ``POST
+library in the store (:func:`rcsa.app.libraries.prepare_sync`, the same code as ``POST
 /v1/libraries/{id}:sync``): only tools whose result is not stored yet are computed; the
 added / changed / unchanged / removed summary goes to stderr, the sync report (JSON) to
 stdout; exit status 1 when any tool failed. ``rcsa library show ID`` prints a stored
@@ -23,16 +23,23 @@ from typing import Annotated, Any
 
 import typer
 
+from rcsa.app.jobs import Workbench, run_work
+from rcsa.app.libraries import (
+    EXPORT_FORMATS,
+    library_id_from_name,
+    prepare_library,
+    prepare_sync,
+    spindle_settings,
+    write_export,
+)
+from rcsa.app.stores import is_measurement_id, library_store, open_store
 from rcsa.cli._common import fail, read_json, run_guarded, write_json
 from rcsa.errors import InputError
-from rcsa.infra.atomic_files import atomic_write_bytes
 
 __all__ = ["library_app", "register"]
 
 library_app = typer.Typer(help="Tool-point FRFs of whole CAM tool libraries.", no_args_is_help=True,
                           add_completion=False, pretty_exceptions_enable=False)
-
-_DEFAULT_GRID = {"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 1.0}
 
 
 def parse_frequency_option(text: str) -> dict[str, Any]:
@@ -74,24 +81,18 @@ def _options_json(options: str | None) -> dict[str, Any] | None:
         raise InputError("options", f"not valid JSON ({exc})") from None
 
 
-def _inputs(base: dict[str, Any], measurement: str | None, frequency: str | None, joints: Path | None,
-            store: Any) -> dict[str, Any]:
-    """Keyword arguments of :func:`rcsa.libraries.library_prediction.library_request` from the command's options."""
-    if frequency is not None:
-        grid = parse_frequency_option(frequency)
-    elif "frequency" in base:
-        grid = base["frequency"]
-    elif measurement is not None:
-        grid = {"values_hz": store.get(measurement).frequency_hz.tolist()}
-    else:
-        grid = dict(_DEFAULT_GRID)
-    return {"spindle": base["spindle"], "frequency": grid,
-            "joints": read_json(joints) if joints is not None else base.get("joints"),
-            "materials": base.get("materials"), "beam_theory": base.get("beam_theory"),
-            "shear_coefficient": base.get("shear_coefficient")}
+def _settings(base: dict[str, Any], frequency: str | None, joints: Path | None, store: Any) -> dict[str, Any]:
+    """Keyword arguments of :func:`rcsa.app.libraries.prepare_library` from the command's options.
+
+    ``store`` is given when the spindle is a stored measurement named on the command line;
+    its lines are then the default grid.
+    """
+    return spindle_settings(base, frequency=parse_frequency_option(frequency) if frequency is not None else None,
+                            joints=read_json(joints) if joints is not None else None, store=store)
 
 
 def _progress_bar(quiet: bool) -> Any:
+    # rich: only when a command computes (``rcsa --help`` and the other commands do without it)
     from rich.console import Console
     from rich.progress import (
         BarColumn,
@@ -134,31 +135,27 @@ def predict(
     quiet: QuietOption = False,
 ) -> None:
     """Predict the tool-point FRF of every tool in a Fusion library on one spindle."""
-    from rcsa.app import libraries as library_api
-
     if (spindle is None) == (measurement is None):
         raise fail("give exactly one of --spindle SPINDLE.json or --measurement ID")
     base = _spindle_document(spindle) if spindle is not None else {"spindle": {"measurement_id": measurement}}
 
-    def build() -> tuple[dict[str, Any], Any]:
-        from rcsa.measured.store import MeasurementStore
+    def build() -> tuple[Workbench, Any]:
+        bench = Workbench(open_store(store) if (store is not None or measurement is not None) else None)
+        settings = _settings(base, frequency, joints, bench.store if measurement is not None else None)
+        work = prepare_library(bench, library, **settings, natural_frequencies=natural_frequencies,
+                               options=_options_json(options))
+        if work.check is not None:
+            work.check()  # before the progress bar starts
+        return bench, work
 
-        st = MeasurementStore(store) if (store is not None or measurement is not None) else None
-        request = library_api.library_request(library, **_inputs(base, measurement, frequency, joints, st),
-                                              natural_frequencies=natural_frequencies,
-                                              options=_options_json(options))
-        library_api.check_common(request["batch"], store=st)
-        return request, st
-
-    request, st = run_guarded(build)
+    bench, work = run_guarded(build)
     with _progress_bar(quiet) as bar:
-        task = bar.add_task("tools", total=max(len(request["batch"]["combinations"]), 1))
+        task = bar.add_task("tools", total=max(work.size, 1))
 
         def progress(done: int, total: int) -> None:
             bar.update(task, completed=done, total=max(total, 1))
 
-        result = run_guarded(lambda: library_api.run_library_request(request, store=st, progress=progress,
-                                                                     arrays="numpy"))
+        result = run_guarded(lambda: run_work(bench, work.kind, work.request, progress=progress)).document
     write_json(result, out)
     s = result["summary"]
     typer.echo(f"{s['ok']} ok, {s['skipped']} skipped, {s['error']} error", err=True)
@@ -171,14 +168,6 @@ def predict(
 
 StoreOption = Annotated[Path | None, typer.Option("--store", help="Store directory (default: RCSA_STORE or the "
                                                                    "per-user store).")]
-
-
-def _library_store(store: Path | None) -> tuple[Any, Any]:
-    from rcsa.libraries.sync import LibraryStore
-    from rcsa.measured.store import MeasurementStore
-
-    measurements = MeasurementStore(store)
-    return measurements, LibraryStore.in_store(measurements.path)
 
 
 @library_app.command("sync")
@@ -199,39 +188,37 @@ def sync(
     quiet: QuietOption = False,
 ) -> None:
     """Keep a Fusion library's tool-point FRFs in the store, computing only new or changed tools."""
-    from rcsa.app import libraries as library_api
-    from rcsa.app import libraries as library_sync
-    from rcsa.measured.store import is_measurement_id
-
     measurement = spindle if is_measurement_id(spindle) else None
     base = {"spindle": {"measurement_id": measurement}} if measurement else _spindle_document(Path(spindle))
-    ident = library_id if library_id is not None else library_sync.library_id_from_name(library)
+    ident = library_id if library_id is not None else library_id_from_name(library)
 
-    def build() -> tuple[Any, Any, Any]:
-        st, libs = _library_store(store)
-        request = library_sync.sync_request(ident, library, **_inputs(base, measurement, frequency, joints, st),
-                                            natural_frequencies=natural_frequencies, options=_options_json(options))
-        plan = library_sync.plan_sync(libs, request, store=st)
-        if plan.pending:
-            library_api.check_common(request["batch"], store=st)
-        return st, libs, plan
+    def build() -> tuple[Workbench, Any]:
+        st = open_store(store)
+        bench = Workbench(st, st.path)
+        settings = _settings(base, frequency, joints, st if measurement is not None else None)
+        work = prepare_sync(bench, ident, library, **settings, natural_frequencies=natural_frequencies,
+                            options=_options_json(options))
+        if work.size and work.check is not None:
+            work.check()  # before the progress bar starts
+        return bench, work
 
-    st, libs, plan = run_guarded(build)
+    bench, work = run_guarded(build)
     with _progress_bar(quiet) as bar:
-        task = bar.add_task(f"{ident}: computing", total=max(len(plan.pending), 1))
+        task = bar.add_task(f"{ident}: computing", total=max(work.size, 1))
 
         def progress(done: int, total: int) -> None:
             bar.update(task, completed=done, total=max(total, 1))
 
-        report = run_guarded(lambda: library_sync.run_sync(libs, plan.request, store=st, progress=progress,
-                                                           plan=plan))
-    write_json(report.to_dict(), out)
-    c, s = report.to_dict()["counts"], report.summary
-    typer.echo(f"{ident} revision {report.revision}: {c['added']} added, {c['changed']} changed, "
-               f"{c['unchanged']} unchanged, {c['removed']} removed ({report.computed} computed, "
-               f"{report.from_cache} from cache; {s['ok']} ok, {s['skipped']} skipped, {s['error']} error)", err=True)
-    if report.failed:
-        for f in report.failed:
+        report = run_guarded(lambda: run_work(bench, work.kind, work.request, progress=progress,
+                                              plan=work.plan)).document
+    write_json(report, out)
+    c, s = report["counts"], report["summary"]
+    typer.echo(f"{ident} revision {report['revision']}: {c['added']} added, {c['changed']} changed, "
+               f"{c['unchanged']} unchanged, {c['removed']} removed ({report['computed']} computed, "
+               f"{report['from_cache']} from cache; {s['ok']} ok, {s['skipped']} skipped, {s['error']} error)",
+               err=True)
+    if report["failed"]:
+        for f in report["failed"]:
             error = f.get("error") or {}
             typer.echo(f"error: {f['id']}: {error.get('field', '')}: {error.get('detail', '')}", err=True)
         raise typer.Exit(1)
@@ -244,7 +231,7 @@ def show(
     out: Annotated[Path | None, typer.Option("-o", "--out", help="Write here instead of stdout.")] = None,
 ) -> None:
     """Print a stored library's summary and every tool's status (JSON)."""
-    write_json(run_guarded(lambda: _library_store(store)[1].get(library_id)), out)
+    write_json(run_guarded(lambda: library_store(store).get(library_id)), out)
 
 
 @library_app.command("export")
@@ -255,26 +242,14 @@ def export(
     store: StoreOption = None,
 ) -> None:
     """Write a stored library's results to a file; the format follows its suffix."""
-
-    from rcsa.app import libraries as exports
-
-    suffix = out.suffix.lower()
-    if suffix not in (".h5", ".hdf5", ".zip", ".json"):
+    if out.suffix.lower() not in EXPORT_FORMATS:
         raise fail(f"{out}: the file name must end in .h5, .hdf5, .zip or .json")
-    results = run_guarded(lambda: _library_store(store)[1].results(library_id))
-    if suffix == ".json":
-        import orjson
-
-        data = orjson.dumps(results, option=orjson.OPT_SERIALIZE_NUMPY)
-    else:
-        data = exports.library_uff_zip(results) if suffix == ".zip" else exports.library_hdf5(results)
     try:
-        atomic_write_bytes(out, data)
+        export = run_guarded(lambda: write_export(library_store(store), library_id, out))
     except OSError as exc:
         raise fail(f"cannot write {out}: {exc.strerror or exc}") from None
-    ok = results["summary"]["ok"]
-    typer.echo(f"{out}: {ok} tool{'s' if ok != 1 else ''} of {library_id} revision {results['library']['revision']}",
-               err=True)
+    ok = export.ok
+    typer.echo(f"{out}: {ok} tool{'s' if ok != 1 else ''} of {library_id} revision {export.revision}", err=True)
 
 
 def register(app: typer.Typer) -> None:

@@ -7,6 +7,9 @@ from typing import Annotated
 
 import typer
 
+from rcsa.app.analyses import stability_lobes_result
+from rcsa.app.figures import check_picture_path, lobes_figure, save_figure
+from rcsa.app.stores import open_store
 from rcsa.cli._common import read_json, run_guarded, write_json
 
 
@@ -21,21 +24,8 @@ def register(app: typer.Typer) -> None:
         store: Annotated[Path | None, typer.Option("--store", help="Measurement store for hybrid assemblies.")] = None,
     ) -> None:
         """Stability lobes (Altintas–Budak zero-order) from inline FRFs or an assembly."""
-        from rcsa import app
-        from rcsa.measured.store import MeasurementStore
-
         doc = read_json(request)
-        result = run_guarded(lambda: app.stability_lobes_result(doc, store=MeasurementStore(store) if store else None))
+        result = run_guarded(lambda: stability_lobes_result(doc, store=open_store(store) if store else None))
         if plot is not None:
-            from rcsa.analysis.figures import lobes_figure, save_figure
-
-            run_guarded(lambda: save_figure(lobes_figure(result), _plot_path(plot)))
+            run_guarded(lambda: save_figure(lobes_figure(result), check_picture_path(plot, "--plot")))
         write_json(result.to_dict(), out)
-
-
-def _plot_path(path: Path) -> Path:
-    from rcsa.errors import InputError
-
-    if path.suffix.lower() not in (".png", ".svg"):
-        raise InputError("--plot", f"the picture must end in .png or .svg, got {path.name!r}")
-    return path

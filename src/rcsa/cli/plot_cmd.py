@@ -8,42 +8,14 @@ request (solved first).
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
-import numpy as np
 import typer
 
+from rcsa.app.figures import FRF_LAYOUTS, check_picture_path, document_figure, save_figure
+from rcsa.app.stores import open_store
 from rcsa.cli._common import read_json, run_guarded
-
-
-def _complex(doc: Any, field: str) -> np.ndarray:
-    from rcsa.errors import InputError
-
-    try:
-        return np.asarray(doc["real"], dtype=float) + 1j * np.asarray(doc["imag"], dtype=float)
-    except (KeyError, TypeError, ValueError):
-        raise InputError(field, "must be {\"real\": [...], \"imag\": [...]}") from None
-
-
-def figure_for(doc: Any, layout: str, store: Any) -> Any:
-    """The figure that fits the document (see the module docstring)."""
-    from rcsa import app
-    from rcsa.analysis.figures import frf_figure, lobes_figure
-    from rcsa.errors import InputError
-
-    if not isinstance(doc, dict):
-        raise InputError("", "the input must be a JSON object")
-    if "tool_point" in doc:
-        return frf_figure(doc["frequency_hz"], _complex(doc["tool_point"].get("h"), "tool_point.h"),
-                          labels=["tool point h"], layout=layout)
-    if "h" in doc and "frequency_hz" in doc:
-        return frf_figure(doc["frequency_hz"], _complex(doc["h"], "h"), labels=["measured h"], layout=layout)
-    if "tangential_coefficient_n_m2" in doc:
-        return lobes_figure(app.stability_lobes_result(doc, store=store))
-    if "tool" in doc and "spindle" in doc:
-        result = app.predict(doc, store=store)
-        return frf_figure(result.frequency_hz, result.tool_point.h, labels=["tool point h"], layout=layout)
-    raise InputError("", "not a prediction result, measurement, assembly or stability-lobes request")
+from rcsa.errors import InputError
 
 
 def register(app: typer.Typer) -> None:
@@ -57,17 +29,12 @@ def register(app: typer.Typer) -> None:
         store: Annotated[Path | None, typer.Option("--store", help="Measurement store for hybrid assemblies.")] = None,
     ) -> None:
         """Draw an FRF (real/imaginary, magnitude/phase) or a stability lobe diagram."""
-        from rcsa.analysis.figures import save_figure
-        from rcsa.errors import InputError
-        from rcsa.measured.store import MeasurementStore
-
         doc = read_json(source)
 
         def draw() -> None:
-            if out.suffix.lower() not in (".png", ".svg"):
-                raise InputError("--out", f"the picture must end in .png or .svg, got {out.name!r}")
-            if layout not in ("full", "real_imag", "bode"):
+            check_picture_path(out, "--out")
+            if layout not in FRF_LAYOUTS:
                 raise InputError("--layout", "must be full, real_imag or bode")
-            save_figure(figure_for(doc, layout, MeasurementStore(store) if store else None), out)
+            save_figure(document_figure(doc, layout=layout, store=open_store(store) if store else None), out)
 
         run_guarded(draw)

@@ -7,6 +7,8 @@ from typing import Annotated
 
 import typer
 
+from rcsa.app.predictions import predict as predict_assembly
+from rcsa.app.stores import open_store
 from rcsa.cli._common import read_json, run_guarded, write_json
 
 StoreOption = Annotated[Path | None, typer.Option("--store", help="Measurement store (default: RCSA_STORE or the per-user store).")]
@@ -22,9 +24,6 @@ def register(app: typer.Typer) -> None:
         store: StoreOption = None,
     ) -> None:
         """Predict the tool-point FRF of an assembly; prints the contract's result JSON."""
-        from rcsa import app
-        from rcsa.measured.store import MeasurementStore
-
         doc = read_json(assembly)
-        result = run_guarded(lambda: app.predict(doc, store=MeasurementStore(store) if store else None))
+        result = run_guarded(lambda: predict_assembly(doc, store=open_store(store) if store else None))
         write_json(result.to_dict(), out)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import tempfile
 from typing import Annotated
 
 import typer
@@ -17,9 +19,7 @@ def register(app: typer.Typer) -> None:
         workers: Annotated[int, typer.Option(help="Worker processes (all share one store safely).")] = 1,
     ) -> None:
         """Run the REST service (uvicorn) with the store from RCSA_STORE or the default location."""
-        import os
-        import tempfile
-
+        # uvicorn: only for this command (``rcsa --help`` and the others do without it)
         import uvicorn
 
         if workers > 1 and not os.environ.get("PROMETHEUS_MULTIPROC_DIR"):

@@ -14,6 +14,8 @@ from typing import Annotated, Any, TypeVar
 
 import typer
 
+from rcsa.app import measurements as M
+from rcsa.app.stores import open_store
 from rcsa.cli._common import fail, write_json
 from rcsa.errors import InputError, RcsaError
 
@@ -50,12 +52,6 @@ def _guard(fn: Callable[[], T]) -> T:
         raise fail(
             f"internal error ({type(exc).__name__}: {exc}); set RCSA_DEBUG=1 for a traceback"
         ) from None
-
-
-def _open_store(path: Path | None):
-    from rcsa.measured.store import MeasurementStore
-
-    return MeasurementStore(path)
 
 
 def _read_bytes(path: Path) -> bytes:
@@ -156,8 +152,6 @@ def import_(
     """Import a measurement file and print the new measurement's metadata JSON (with its id)."""
 
     def run() -> dict[str, Any]:
-        from rcsa.app import measurements as M
-
         metadata = {"spindle_id": spindle_id, "direction": direction, "plane": plane, "kind": kind,
                     "machine": machine, "notes": notes, "points_m": points_m,
                     "artifact": _artifact_text(artifact)}
@@ -180,7 +174,7 @@ def import_(
             _read_bytes(file), file_name=file.name, fmt=form, metadata=metadata, options=options,
             extra_taps=[_read_bytes(t) for t in tap or ()],
         )
-        return M.store_measurement(_open_store(store), m)
+        return M.store_measurement(open_store(store), m)
 
     write_json(_guard(run), None)
 
@@ -201,13 +195,14 @@ def list_(
 ) -> None:
     """List stored measurements (metadata only), oldest first."""
     infos = _guard(
-        lambda: _open_store(store).list(
+        lambda: open_store(store).list(
             spindle_id, machine=machine, direction=direction, plane=plane, kind=kind
         )
     )
     if as_json:
         write_json([i.to_dict() for i in infos], None)
         return
+    # rich: only for the table (``--json`` and the other commands do without it)
     from rich.console import Console
     from rich.table import Table
 
@@ -245,9 +240,7 @@ def show(
     """Print a measurement's metadata and a summary (peak of each FRF) as JSON."""
 
     def run() -> dict[str, Any]:
-        from rcsa.app.measurements import measurement_document
-
-        return measurement_document(_open_store(store), measurement_id, include_data=data)
+        return M.measurement_document(open_store(store), measurement_id, include_data=data)
 
     write_json(_guard(run), None)
 
@@ -258,6 +251,4 @@ def delete(
     store: StoreOpt = None,
 ) -> None:
     """Delete a measurement (its id is never reused)."""
-    from rcsa.app.measurements import delete_measurement
-
-    write_json(_guard(lambda: delete_measurement(_open_store(store), measurement_id)), None)
+    write_json(_guard(lambda: M.delete_measurement(open_store(store), measurement_id)), None)

@@ -1,5 +1,7 @@
 """Infrastructure: domain-free plumbing the layers above share.
 
-Modules: :mod:`.atomic_files` (durable writes), :mod:`.job_queue` (durable background
-jobs), :mod:`.api_keys` (the service's keys). Nothing here knows what a receptance is.
+Modules: :mod:`.sqlite` (how every SQLite database is opened, and transactions),
+:mod:`.clock` (UTC timestamps as the stores write them), :mod:`.atomic_files` (durable
+writes), :mod:`.job_queue` (durable background jobs), :mod:`.api_keys` (the service's keys).
+Nothing here knows what a receptance is.
 """

@@ -30,7 +30,6 @@ import os
 import secrets
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass
-from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
@@ -38,6 +37,7 @@ import filelock
 
 from rcsa.errors import InputError, NotFoundError, StoreError
 from rcsa.infra.atomic_files import atomic_write_bytes
+from rcsa.infra.clock import utc_now_iso
 
 __all__ = [
     "KEY_FILE",
@@ -70,9 +70,6 @@ def new_secret() -> str:
     """A fresh random key secret (256 bits), e.g. ``rcsa_3q2...``."""
     return _PREFIX + secrets.token_urlsafe(32)
 
-
-def _utc_now() -> str:
-    return datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
 
 
 def _check_scope(scope: object, field: str = "scope") -> str:
@@ -201,7 +198,7 @@ class KeyFile:
             key_id = "k-" + secrets.token_hex(4)
             while key_id in known:  # pragma: no cover - 2**32 ids
                 key_id = "k-" + secrets.token_hex(4)
-            record = KeyRecord(key_id, scope, hash_key(secret), _utc_now(), label)
+            record = KeyRecord(key_id, scope, hash_key(secret), utc_now_iso(timespec="seconds"), label)
             self._write([*records, record])
         return record, secret
 
@@ -222,7 +219,7 @@ class KeyFile:
             records = self.records()
             for i, r in enumerate(records):
                 if r.revoked_utc is None and (r.id == key or hmac.compare_digest(r.sha256, digest)):
-                    records[i] = KeyRecord(r.id, r.scope, r.sha256, r.created_utc, r.label, _utc_now())
+                    records[i] = KeyRecord(r.id, r.scope, r.sha256, r.created_utc, r.label, utc_now_iso(timespec="seconds"))
                     self._write(records)
                     return records[i]
         raise NotFoundError("API key", key if key.startswith("k-") else "(secret)")

@@ -21,14 +21,13 @@ exists (runner ids are ``host:pid:token``) is recognised at once, so a restarted
 resumes its own interrupted jobs without waiting for the heartbeat to go stale. After ``max_attempts`` interrupted tries the job is
 failed instead of being retried for ever (a request that kills its worker, e.g. by memory).
 
-Idempotency (``Idempotency-Key``, issue 8): rows carry ``idempotency_key``, ``owner``
-and ``request_sha256`` with a unique index on ``(owner, idempotency_key)``. ``submit`` with a
-key already used by that owner returns the first job when the request is the same (same
-``request_sha256``), so a retried submission never queues a duplicate; with a different
-request it raises :class:`IdempotencyConflict` while the first job is unfinished, and moves
-the key to the new job once the first has finished (the HTTP layer,
-:mod:`service.idempotency`, is the authority on reuse of keys; the job table only links a
-key to its job). :meth:`JobStore.find_idempotent` looks a key up.
+Duplicates: every row carries ``request_sha256``, the SHA-256 of the request's canonical
+JSON (:func:`canonical_request`). ``submit(..., reuse_unfinished=True)`` returns the
+unfinished job of the same kind and request instead of queuing a copy — for callers that
+retry a submission (the REST service does so for requests with an ``Idempotency-Key``;
+the key itself, and every other HTTP rule of idempotency, live in :mod:`service.idempotency`).
+Tables created by earlier versions keep their ``idempotency_key`` and ``owner`` columns,
+which are no longer written.
 """
 
 from __future__ import annotations
@@ -46,21 +45,22 @@ import time
 from collections.abc import Callable, Mapping
 from contextlib import closing
 from dataclasses import dataclass
-from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
 import orjson
 
 from rcsa.errors import InputError, NotFoundError, RcsaError
+from rcsa.infra.clock import utc_iso, utc_now_iso
+from rcsa.infra.sqlite import connect, transaction
 
 __all__ = [
     "JOB_STATUSES",
-    "IdempotencyConflict",
     "Job",
     "JobRunner",
     "JobStore",
     "LostClaim",
+    "canonical_request",
     "is_job_id",
     "runner_is_dead",
 ]
@@ -78,8 +78,6 @@ CREATE TABLE IF NOT EXISTS jobs (
     progress         REAL NOT NULL DEFAULT 0,
     request          BLOB NOT NULL,
     request_sha256   TEXT NOT NULL,
-    idempotency_key  TEXT,
-    owner            TEXT,
     created_utc      TEXT NOT NULL,
     started_utc      TEXT,
     finished_utc     TEXT,
@@ -91,11 +89,10 @@ CREATE TABLE IF NOT EXISTS jobs (
     summary          TEXT
 );
 CREATE INDEX IF NOT EXISTS jobs_status ON jobs (status, created_utc);
-CREATE UNIQUE INDEX IF NOT EXISTS jobs_idempotency ON jobs (owner, idempotency_key)
-    WHERE idempotency_key IS NOT NULL;
+CREATE INDEX IF NOT EXISTS jobs_request ON jobs (request_sha256, kind);
 """
 _COLUMNS = ("id, kind, status, progress, created_utc, started_utc, finished_utc, attempts, "
-            "error, summary, idempotency_key, request_sha256, heartbeat_unix")
+            "error, summary, request_sha256, heartbeat_unix")
 _BUSY_TIMEOUT_S = 30.0
 _PURGE_EVERY_S = 3600.0
 
@@ -126,23 +123,11 @@ def is_job_id(text: object) -> bool:
             and set(text[2:]) <= _JOB_ID_CHARS)
 
 
-def _utc_now() -> str:
-    return datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
 
-
-def request_fingerprint(request: Mapping[str, Any]) -> tuple[bytes, str]:
-    """Canonical JSON bytes of a request (sorted keys) and their SHA-256."""
+def canonical_request(request: Mapping[str, Any]) -> tuple[bytes, str]:
+    """Canonical JSON bytes of a request (sorted keys) and their SHA-256 (``request_sha256``)."""
     data = orjson.dumps(request, option=orjson.OPT_SORT_KEYS | orjson.OPT_SERIALIZE_NUMPY)
     return data, hashlib.sha256(data).hexdigest()
-
-
-class IdempotencyConflict(InputError):
-    """An owner's ``Idempotency-Key`` names an unfinished job submitted with another request."""
-
-    def __init__(self, job_id: str) -> None:
-        super().__init__("Idempotency-Key", f"is already used for another request (job {job_id}, still "
-                                            "unfinished); use a new key for a new request")
-        self.job_id = job_id
 
 
 class LostClaim(RcsaError):
@@ -168,7 +153,8 @@ class Job:
         A problem document (``title``, ``detail``, ``status``, ``errors``) when failed.
     summary : dict or None
         Small result summary when succeeded (e.g. ``{"ok": 997, "error": 3}``).
-    idempotency_key, request_sha256 : str or None
+    request_sha256 : str
+        SHA-256 of the request's canonical JSON (:func:`canonical_request`).
     heartbeat_unix : float or None
         Last sign of life of its runner, s since the epoch.
     """
@@ -183,17 +169,16 @@ class Job:
     attempts: int
     error: dict[str, Any] | None
     summary: dict[str, Any] | None
-    idempotency_key: str | None
     request_sha256: str
     heartbeat_unix: float | None
 
     @classmethod
     def _from_row(cls, row: tuple) -> Job:
         (jid, kind, status, progress, created, started, finished, attempts, error, summary,
-         key, sha, heartbeat) = row
+         sha, heartbeat) = row
         return cls(jid, kind, status, float(progress), created, started, finished, int(attempts),
                    json.loads(error) if error else None, json.loads(summary) if summary else None,
-                   key, sha, heartbeat)
+                   sha, heartbeat)
 
     @property
     def finished(self) -> bool:
@@ -235,19 +220,11 @@ class JobStore:
         return f"JobStore({str(self.directory)!r})"
 
     def _connect(self) -> sqlite3.Connection:
-        con = sqlite3.connect(self.directory / "jobs.sqlite", timeout=_BUSY_TIMEOUT_S,
-                              isolation_level=None)
-        try:
-            con.execute("PRAGMA journal_mode=WAL")
-            con.execute("PRAGMA synchronous=NORMAL")
-        except BaseException:
-            con.close()
-            raise
-        return con
+        # FULL: a queued job was acknowledged (202) and its result row is what the client polls
+        return connect(self.directory / "jobs.sqlite", synchronous="FULL", timeout_s=_BUSY_TIMEOUT_S)
 
     # ------------------------------------------------------------------ submit / read
-    def submit(self, kind: str, request: Mapping[str, Any], *, idempotency_key: str | None = None,
-               owner: str | None = None) -> Job:
+    def submit(self, kind: str, request: Mapping[str, Any], *, reuse_unfinished: bool = False) -> Job:
         """Queue a job; return its state.
 
         Parameters
@@ -256,38 +233,21 @@ class JobStore:
             Name of the handler that will run it.
         request : mapping
             JSON-ready request document (kept until the job is purged).
-        idempotency_key, owner : str, optional
-            The caller's ``Idempotency-Key`` and who sent it. A key the owner already used for
-            the same kind and request returns that job instead of queuing another.
-
-        Raises
-        ------
-        IdempotencyConflict
-            The key names an unfinished job of this owner with a different request.
+        reuse_unfinished : bool
+            Return the queued or running job of this kind with the same request (same
+            ``request_sha256``), if there is one, instead of queuing a copy.
         """
-        data, sha = request_fingerprint(request)
+        data, sha = canonical_request(request)
         job_id = "j-" + secrets.token_hex(16)
-        with closing(self._connect()) as con:
-            con.execute("BEGIN IMMEDIATE")
-            try:
-                if idempotency_key is not None:
-                    row = con.execute("SELECT id, kind, request_sha256, status FROM jobs WHERE owner IS ? AND "
-                                      "idempotency_key = ?", (owner, idempotency_key)).fetchone()
-                    if row is not None and row[1] == kind and row[2] == sha:
-                        con.execute("COMMIT")
-                        return self.get(row[0])
-                    if row is not None and row[3] not in ("succeeded", "failed"):
-                        raise IdempotencyConflict(row[0])
-                    if row is not None:  # a finished job keeps its result, the key moves on
-                        con.execute("UPDATE jobs SET idempotency_key = NULL WHERE id = ?", (row[0],))
-                con.execute(
-                    "INSERT INTO jobs (id, kind, status, request, request_sha256, idempotency_key, owner, "
-                    "created_utc) VALUES (?, ?, 'queued', ?, ?, ?, ?, ?)",
-                    (job_id, kind, data, sha, idempotency_key, owner, _utc_now()))
-                con.execute("COMMIT")
-            except BaseException:
-                con.execute("ROLLBACK")
-                raise
+        with closing(self._connect()) as con, transaction(con):
+            if reuse_unfinished:
+                row = con.execute("SELECT id FROM jobs WHERE request_sha256 = ? AND kind = ? AND status IN "
+                                  "('queued', 'running') ORDER BY created_utc, id LIMIT 1", (sha, kind)).fetchone()
+                if row is not None:
+                    return self.get(row[0])
+            con.execute(
+                "INSERT INTO jobs (id, kind, status, request, request_sha256, created_utc) "
+                "VALUES (?, ?, 'queued', ?, ?, ?)", (job_id, kind, data, sha, utc_now_iso()))
         return self.get(job_id)
 
     def get(self, job_id: str) -> Job:
@@ -305,13 +265,6 @@ class JobStore:
         if row is None:
             raise NotFoundError("job", job_id)
         return Job._from_row(row)
-
-    def find_idempotent(self, owner: str | None, idempotency_key: str) -> Job | None:
-        """The job submitted earlier by ``owner`` with ``idempotency_key``, if any."""
-        with closing(self._connect()) as con:
-            row = con.execute(f"SELECT {_COLUMNS} FROM jobs WHERE owner IS ? AND idempotency_key = ?",
-                              (owner, idempotency_key)).fetchone()
-        return None if row is None else Job._from_row(row)
 
     def request(self, job_id: str) -> dict[str, Any]:
         """The request document a job was submitted with."""
@@ -357,41 +310,35 @@ class JobStore:
     def claim(self, runner: str) -> Job | None:
         """Atomically take the oldest queued (or abandoned running) job for ``runner``."""
         now = time.time()
-        with closing(self._connect()) as con:
-            con.execute("BEGIN IMMEDIATE")
-            try:
-                dead = [(job_id,) for job_id, owner in con.execute(
-                    "SELECT id, runner FROM jobs WHERE status = 'running' AND runner LIKE ?", (_HOST + ":%",))
-                    if runner_is_dead(owner)]
-                if dead:  # its process is gone from this machine: no need to wait for the heartbeat
-                    con.executemany("UPDATE jobs SET heartbeat_unix = NULL WHERE id = ?", dead)
-                while True:
-                    row = con.execute(
-                        "SELECT id, attempts FROM jobs WHERE status = 'queued' OR "
-                        "(status = 'running' AND (heartbeat_unix IS NULL OR heartbeat_unix < ?)) "
-                        "ORDER BY created_utc, id LIMIT 1", (now - self.stale_after_s,)).fetchone()
-                    if row is None:
-                        con.execute("COMMIT")
-                        return None
-                    job_id, attempts = row
-                    if attempts >= self.max_attempts:
-                        error = {"title": "Job abandoned", "status": 500,
-                                 "detail": f"the job was interrupted {attempts} times (its worker stopped "
-                                           "while running it); submit it again, perhaps split into "
-                                           "smaller batches"}
-                        con.execute("UPDATE jobs SET status = 'failed', finished_utc = ?, error = ?, "
-                                    "runner = NULL WHERE id = ?", (_utc_now(), json.dumps(error), job_id))
-                        continue
-                    con.execute(
-                        "UPDATE jobs SET status = 'running', runner = ?, heartbeat_unix = ?, progress = 0, "
-                        "attempts = attempts + 1, started_utc = ? WHERE id = ?",
-                        (runner, now, _utc_now(), job_id))
-                    con.execute("COMMIT")
+        with closing(self._connect()) as con, transaction(con):
+            dead = [(job_id,) for job_id, owner in con.execute(
+                "SELECT id, runner FROM jobs WHERE status = 'running' AND runner LIKE ?", (_HOST + ":%",))
+                if runner_is_dead(owner)]
+            if dead:  # its process is gone from this machine: no need to wait for the heartbeat
+                con.executemany("UPDATE jobs SET heartbeat_unix = NULL WHERE id = ?", dead)
+            while True:
+                row = con.execute(
+                    "SELECT id, attempts FROM jobs WHERE status = 'queued' OR "
+                    "(status = 'running' AND (heartbeat_unix IS NULL OR heartbeat_unix < ?)) "
+                    "ORDER BY created_utc, id LIMIT 1", (now - self.stale_after_s,)).fetchone()
+                if row is None:
+                    job_id = None
                     break
-            except BaseException:
-                con.execute("ROLLBACK")
-                raise
-        return self.get(job_id)
+                job_id, attempts = row
+                if attempts >= self.max_attempts:
+                    error = {"title": "Job abandoned", "status": 500,
+                             "detail": f"the job was interrupted {attempts} times (its worker stopped "
+                                       "while running it); submit it again, perhaps split into "
+                                       "smaller batches"}
+                    con.execute("UPDATE jobs SET status = 'failed', finished_utc = ?, error = ?, "
+                                "runner = NULL WHERE id = ?", (utc_now_iso(), json.dumps(error), job_id))
+                    continue
+                con.execute(
+                    "UPDATE jobs SET status = 'running', runner = ?, heartbeat_unix = ?, progress = 0, "
+                    "attempts = attempts + 1, started_utc = ? WHERE id = ?",
+                    (runner, now, utc_now_iso(), job_id))
+                break
+        return None if job_id is None else self.get(job_id)
 
     def heartbeat(self, job_id: str, runner: str, progress: float | None = None) -> None:
         """Refresh the heartbeat (and progress) of a job ``runner`` owns.
@@ -429,9 +376,8 @@ class JobStore:
 
     def _finish(self, job_id: str, runner: str, status: str, *, summary: Mapping[str, Any] | None = None,
                 error: Mapping[str, Any] | None = None, rename: tuple[Path, Path] | None = None) -> None:
-        with closing(self._connect()) as con:
-            con.execute("BEGIN IMMEDIATE")
-            try:
+        try:
+            with closing(self._connect()) as con, transaction(con):
                 owned = con.execute("SELECT 1 FROM jobs WHERE id = ? AND runner = ? AND status = 'running'",
                                     (job_id, runner)).fetchone()
                 if owned is None:
@@ -441,20 +387,18 @@ class JobStore:
                 con.execute(
                     "UPDATE jobs SET status = ?, progress = CASE WHEN ? = 'succeeded' THEN 1 ELSE progress END, "
                     "finished_utc = ?, result_file = ?, error = ?, summary = ?, runner = NULL WHERE id = ?",
-                    (status, status, _utc_now(), rename[1].name if rename else None,
+                    (status, status, utc_now_iso(), rename[1].name if rename else None,
                      json.dumps(error) if error is not None else None,
                      json.dumps(summary) if summary is not None else None, job_id))
-                con.execute("COMMIT")
-            except BaseException:
-                con.execute("ROLLBACK")
-                if rename is not None:
-                    with contextlib.suppress(OSError):
-                        rename[0].unlink()
-                raise
+        except BaseException:
+            if rename is not None:
+                with contextlib.suppress(OSError):
+                    rename[0].unlink()
+            raise
 
     def purge(self, older_than_s: float) -> int:
         """Delete finished jobs (rows and result files) finished more than ``older_than_s`` ago."""
-        cutoff = datetime.fromtimestamp(time.time() - older_than_s, UTC).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
+        cutoff = utc_iso(time.time() - older_than_s)
         with closing(self._connect()) as con:
             ids = [r[0] for r in con.execute(
                 "SELECT id FROM jobs WHERE status IN ('succeeded', 'failed') AND finished_utc < ?", (cutoff,))]

@@ -33,7 +33,6 @@ import re
 import tempfile
 import zipfile
 from collections.abc import Mapping
-from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 from urllib.parse import quote
@@ -41,27 +40,14 @@ from urllib.parse import quote
 import numpy as np
 
 from rcsa._version import __version__
+from rcsa.infra.clock import utc_now_iso
+from rcsa.model.wire import CONVENTION, RECEPTANCE_UNITS, complex_from_wire
 
 __all__ = ["HDF5_SCHEMA", "library_hdf5", "library_uff_zip", "tool_file_names"]
 
 HDF5_SCHEMA = "rcsa.library-results"
 SCHEMA_VERSION = 1
-_UNITS = {"h": "m/N", "l": "m/(N*m)", "n": "rad/N", "p": "rad/(N*m)"}
-_CONVENTION = (
-    "domain.md 2.1: axis x from spindle rear to tool tip; h=w/F, l=w/M, n=psi/F, p=psi/M at the "
-    "tool tip; time dependence exp(+i*omega*t), so a damped driving-point receptance has Im h <= 0"
-)
 
-
-def _utc_now() -> str:
-    return datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
-
-
-def _complex(pair: Mapping[str, Any]) -> np.ndarray:
-    re_, im = np.asarray(pair["real"], dtype=np.float64), np.asarray(pair["imag"], dtype=np.float64)
-    out = np.empty(re_.shape, dtype=np.complex128)
-    out.real, out.imag = re_, im
-    return out
 
 
 def _group_name(tool_id: str) -> str:
@@ -107,12 +93,12 @@ def library_hdf5(results: Mapping[str, Any]) -> bytes:
         a["library_id"] = lib["id"]
         a["revision"] = int(lib["revision"])
         a["synced_utc"] = lib["synced_utc"]
-        a["exported_utc"] = _utc_now()
+        a["exported_utc"] = utc_now_iso()
         a["source"] = lib.get("source") or ""
         a["library_sha256"] = lib.get("library_sha256") or ""
         a["model_version"] = str(lib.get("model_version") or "")
         a["software_version"] = lib.get("software_version") or __version__
-        a["convention"] = _CONVENTION
+        a["convention"] = CONVENTION
         a["tools_json"] = json.dumps(index)
         freq = np.asarray(ok[0]["frequency_hz"], dtype=np.float64) if ok else np.zeros(0)
         fd = f.create_dataset("frequency_hz", data=freq)
@@ -137,9 +123,10 @@ def library_hdf5(results: Mapping[str, Any]) -> bytes:
                 raise ValueError(f"tool {r['id']!r} is on another frequency grid than the library")
             g["frequency_hz"] = fd
             for name, pair in r["tool_point"].items():
-                d = g.create_dataset(name, data=_complex(pair), dtype=np.complex128)
+                values = complex_from_wire(pair, f"{r['id']}.tool_point.{name}", finite=False)
+                d = g.create_dataset(name, data=values, dtype=np.complex128)
                 d.attrs["schema"], d.attrs["schema_version"] = "rcsa.frf", SCHEMA_VERSION
-                d.attrs["units"], d.attrs["quantity"] = _UNITS[name], "receptance"
+                d.attrs["units"], d.attrs["quantity"] = RECEPTANCE_UNITS[name], "receptance"
     return buffer.getvalue()
 
 
@@ -156,7 +143,7 @@ def library_uff_zip(results: Mapping[str, Any]) -> bytes:
         index = []
         for r, name in zip(ok, names, strict=True):
             f = np.asarray(r["frequency_hz"], dtype=np.float64)
-            h = _complex(r["tool_point"]["h"])
+            h = complex_from_wire(r["tool_point"]["h"], f"{r['id']}.tool_point.h", finite=False)
             steps = np.diff(f)
             even = f.size > 1 and bool(np.allclose(steps, steps[0], rtol=1e-9, atol=0.0))
             units = pyuff.prepare_164(units_code=1, units_description="SI", temp_mode=2, length=1.0, force=1.0,

@@ -40,6 +40,8 @@ from typing import Any
 
 from rcsa.errors import InputError
 from rcsa.libraries.fusion import Combination, cone_cylinders, unit_to_metres
+from rcsa.model import fields
+from rcsa.model.bounds import MAX_HOLDER_SEGMENTS_PER_CONE
 
 __all__ = ["freecad_combination", "load_freecad_object", "parse_length_m"]
 
@@ -179,9 +181,7 @@ def freecad_combination(
     if isinstance(stickout_m, bool) or not isinstance(stickout_m, (int, float)) \
             or not math.isfinite(stickout_m) or stickout_m <= 0:
         raise InputError("stickout_m", f"must be a number > 0, got {stickout_m!r}")
-    if isinstance(holder_segments_per_cone, bool) or not isinstance(holder_segments_per_cone, int) \
-            or holder_segments_per_cone < 1:
-        raise InputError("holder_segments_per_cone", f"must be an integer ≥ 1, got {holder_segments_per_cone!r}")
+    fields.integer(holder_segments_per_cone, "holder_segments_per_cone", ge=1, le=MAX_HOLDER_SEGMENTS_PER_CONE)
     if isinstance(fluted_diameter_ratio, bool) or not isinstance(fluted_diameter_ratio, (int, float)) \
             or not 0 < fluted_diameter_ratio <= 1:
         raise InputError("fluted_diameter_ratio", f"must be a number in (0, 1], got {fluted_diameter_ratio!r}")

@@ -64,6 +64,8 @@ from pathlib import Path, PurePosixPath
 from typing import Any, Literal
 
 from rcsa.errors import InputError
+from rcsa.model import fields
+from rcsa.model.bounds import MAX_HOLDER_SEGMENTS_PER_CONE, MIN_FLUTED_DIAMETER_RATIO
 
 __all__ = [
     "SUPPORTED_TOOL_TYPES",
@@ -443,15 +445,11 @@ def _name_option(value: object, field: str) -> str:
 
 
 def _per_cone_option(value: object) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-        raise InputError("holder_segments_per_cone", f"must be an integer ≥ 1, got {value!r}")
-    return value
+    return fields.integer(value, "holder_segments_per_cone", ge=1, le=MAX_HOLDER_SEGMENTS_PER_CONE)
 
 
 def _ratio_option(value: object) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value <= 1:
-        raise InputError("fluted_diameter_ratio", f"must be a number in (0, 1], got {value!r}")
-    return float(value)
+    return fields.number(value, "fluted_diameter_ratio", gt=0.0, ge=MIN_FLUTED_DIAMETER_RATIO, le=1.0)
 
 
 def _shaft_origin_option(value: object) -> ShaftOrigin:
@@ -593,11 +591,7 @@ def _number(obj: Mapping[str, Any], key: str, path: str, *, required: bool) -> f
         if required:
             raise InputError(f"{path}{key}", "missing (required)")
         return None
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise InputError(f"{path}{key}", f"must be a number, got {value!r}")
-    if value <= 0:
-        raise InputError(f"{path}{key}", f"must be > 0, got {value!r}")
-    return float(value)
+    return fields.number(value, f"{path}{key}", gt=0.0)
 
 
 def _tool_unit(item: Mapping[str, Any]) -> tuple[int, int]:

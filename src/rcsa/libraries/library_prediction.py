@@ -32,7 +32,6 @@ __all__ = [
     "predict_library",
     "checked_batch",
     "run_entries",
-    "run_library_request",
     "select_tool_point",
 ]
 
@@ -250,16 +249,12 @@ def _rebase(error: Mapping[str, Any], position: int, path: str) -> dict[str, Any
     return {**error, "field": field}
 
 
-#: Alias: a library request is an entries request.
-run_library_request = run_entries
-
-
 def predict_library(library: str | os.PathLike[str] | bytes | Mapping[str, Any], *, store: MeasurementSource | None = None,
                     max_lines: int = MAX_FREQUENCY_LINES,
                     max_combinations: int = MAX_BATCH_COMBINATIONS,
                     progress: Callable[[int, int], None] | None = None, arrays: str = "list",
                     **kwargs: Any) -> dict[str, Any]:
-    """:func:`library_request` then :func:`run_library_request` (``kwargs`` go to the first)."""
+    """:func:`library_request` then :func:`run_entries` (``kwargs`` go to the first)."""
     request = library_request(library, **kwargs)
     return run_entries(request, store=store, max_lines=max_lines, max_combinations=max_combinations,
                                progress=progress, arrays=arrays)

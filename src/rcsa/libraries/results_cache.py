@@ -50,6 +50,7 @@ import orjson
 from rcsa._version import __version__
 from rcsa.errors import StoreError
 from rcsa.infra.atomic_files import fsync_dir
+from rcsa.model.wire import complex_from_wire, complex_to_wire
 
 __all__ = [
     "MODEL_SOURCES",
@@ -281,9 +282,7 @@ class ResultCache:
                 doc = {"status": meta.pop("status", "ok")}
                 if "frequency_hz" in npz.files:
                     doc["frequency_hz"] = npz["frequency_hz"]
-                    doc["tool_point"] = {k: {"real": np.ascontiguousarray(npz[k].real),
-                                             "imag": np.ascontiguousarray(npz[k].imag)}
-                                         for k in _ARRAYS if k in npz.files}
+                    doc["tool_point"] = {k: complex_to_wire(npz[k], arrays="numpy") for k in _ARRAYS if k in npz.files}
                 doc.update(meta)
         except FileNotFoundError:
             raise KeyError(key) from None
@@ -348,8 +347,6 @@ def _encode(doc: Mapping[str, Any]) -> dict[str, np.ndarray]:
     if "frequency_hz" in doc:
         out["frequency_hz"] = np.asarray(doc["frequency_hz"], dtype=np.float64)
         for k, v in (doc.get("tool_point") or {}).items():
-            c = np.empty(out["frequency_hz"].shape, dtype=np.complex128)
-            c.real, c.imag = v["real"], v["imag"]
-            out[k] = c
+            out[k] = complex_from_wire(v, f"tool_point.{k}", out["frequency_hz"].size, finite=False)
     out["meta"] = np.frombuffer(orjson.dumps(meta, option=orjson.OPT_SERIALIZE_NUMPY), dtype=np.uint8)
     return out

@@ -43,10 +43,9 @@ import json
 import os
 import re
 import sqlite3
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Mapping
 from contextlib import closing
 from dataclasses import dataclass, field
-from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
@@ -54,6 +53,8 @@ import numpy as np
 
 from rcsa._version import __version__
 from rcsa.errors import InputError, NotFoundError, StoreError
+from rcsa.infra.clock import utc_now_iso
+from rcsa.infra.sqlite import connect, transaction
 from rcsa.libraries.library_prediction import library_request, resolver_of, select_tool_point
 from rcsa.libraries.results_cache import (
     ResultCache,
@@ -76,7 +77,6 @@ __all__ = [
     "SyncPlan",
     "SyncReport",
     "is_library_id",
-    "iter_ok_results",
     "library_id_from_name",
     "plan_sync",
     "run_sync",
@@ -152,9 +152,6 @@ def _check_id(library_id: object, field_name: str = "library_id") -> str:
                                      f"or digit; got {library_id!r}")
     return str(library_id)
 
-
-def _utc_now() -> str:
-    return datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
 
 
 # --------------------------------------------------------------------------- reports
@@ -266,13 +263,11 @@ class LibraryStore:
         return f"LibraryStore({str(self.directory)!r})"
 
     def _connect(self) -> sqlite3.Connection:
+        # FULL: a commit is a library revision its caller was told about (the sync report)
         try:
-            con = sqlite3.connect(self.directory / "index.sqlite", timeout=_BUSY_TIMEOUT_S, isolation_level=None)
-            con.execute("PRAGMA journal_mode=WAL")
-            con.execute("PRAGMA synchronous=FULL")
+            return connect(self.directory / "index.sqlite", synchronous="FULL", timeout_s=_BUSY_TIMEOUT_S)
         except sqlite3.Error as exc:
             raise StoreError(f"cannot open the library index in {self.directory}: {exc}") from None
-        return con
 
     # ------------------------------------------------------------------ reads
     def __contains__(self, library_id: object) -> bool:
@@ -322,14 +317,10 @@ class LibraryStore:
     def _snapshot(self, library_id: str) -> tuple[tuple, list[dict[str, Any]]]:
         if not is_library_id(library_id):
             raise NotFoundError("library", str(library_id))
-        with closing(self._connect()) as con:
-            con.execute("BEGIN")
-            try:
-                row = con.execute(f"SELECT {_LIB_COLUMNS} FROM libraries WHERE id = ?", (library_id,)).fetchone()
-                tools = con.execute("SELECT tool_id, position, status, result_key, entry, revision FROM tools "
-                                    "WHERE library_id = ? ORDER BY position, tool_id", (library_id,)).fetchall()
-            finally:
-                con.execute("COMMIT")
+        with closing(self._connect()) as con, transaction(con, immediate=False):
+            row = con.execute(f"SELECT {_LIB_COLUMNS} FROM libraries WHERE id = ?", (library_id,)).fetchone()
+            tools = con.execute("SELECT tool_id, position, status, result_key, entry, revision FROM tools "
+                                "WHERE library_id = ? ORDER BY position, tool_id", (library_id,)).fetchall()
         if row is None:
             raise NotFoundError("library", library_id)
         out = []
@@ -393,15 +384,9 @@ class LibraryStore:
         """
         if not is_library_id(library_id):
             raise NotFoundError("library", str(library_id))
-        with closing(self._connect()) as con:
-            con.execute("BEGIN IMMEDIATE")
-            try:
-                cur = con.execute("DELETE FROM libraries WHERE id = ?", (library_id,))
-                con.execute("DELETE FROM tools WHERE library_id = ?", (library_id,))
-                con.execute("COMMIT")
-            except BaseException:
-                con.execute("ROLLBACK")
-                raise
+        with closing(self._connect()) as con, transaction(con):
+            cur = con.execute("DELETE FROM libraries WHERE id = ?", (library_id,))
+            con.execute("DELETE FROM tools WHERE library_id = ?", (library_id,))
         if cur.rowcount != 1:
             raise NotFoundError("library", library_id)
         return {"deleted": library_id}
@@ -441,51 +426,45 @@ class LibraryStore:
             r["status"] = known[key]["status"]
             if r["status"] == "error":
                 r["entry"]["error"] = known[key].get("error")
-        now = _utc_now()
+        now = utc_now_iso()
         batch = request["batch"]
         settings = {**{k: v for k, v in batch.items() if k != "combinations"}, **request.get("settings", {})}
         f = plan.frequency_hz
-        with closing(self._connect()) as con:
-            con.execute("BEGIN IMMEDIATE")
-            try:
-                prev_row = con.execute("SELECT revision, created_utc FROM libraries WHERE id = ?",
-                                       (library_id,)).fetchone()
-                prev = {tid: (fp, rev) for tid, fp, rev in con.execute(
-                    "SELECT tool_id, fingerprint, revision FROM tools WHERE library_id = ? ORDER BY position, "
-                    "tool_id", (library_id,))}
-                revision = 1 if prev_row is None else prev_row[0] + 1
-                new_ids = {r["id"] for r in rows}
-                added = tuple(r["id"] for r in rows if r["id"] not in prev)
-                changed = tuple(r["id"] for r in rows if r["id"] in prev and prev[r["id"]][0] != r["fingerprint"])
-                unchanged = tuple(r["id"] for r in rows if r["id"] in prev and prev[r["id"]][0] == r["fingerprint"])
-                removed = tuple(tid for tid in prev if tid not in new_ids)
-                summary = {s: sum(r["status"] == s for r in rows) for s in ("ok", "skipped", "error")}
-                failed = tuple({"id": r["id"], "error": r["entry"].get("error")} for r in rows
-                               if r["status"] == "error")
-                n_ok_entries = sum(r["result_key"] is not None for r in rows)
-                same = frozenset(unchanged)
-                report = SyncReport(library_id, revision, now, added, changed, unchanged, removed, computed,
-                                    max(n_ok_entries - computed, 0), summary, failed)
-                con.execute("DELETE FROM tools WHERE library_id = ?", (library_id,))
-                con.executemany(
-                    "INSERT INTO tools (library_id, tool_id, position, status, fingerprint, result_key, entry, "
-                    "revision) VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
-                    [(library_id, r["id"], r["index"], r["status"], r["fingerprint"], r["result_key"],
-                      json.dumps(r["entry"]), prev[r["id"]][1] if r["id"] in same else revision)
-                     for r in rows])
-                con.execute(
-                    "INSERT OR REPLACE INTO libraries (id, revision, created_utc, synced_utc, source, library_sha256, "
-                    "settings, measurement_sha256, frequency_sha256, n_frequencies, frequency_min_hz, "
-                    "frequency_max_hz, model_version, software_version, last_sync) "
-                    "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
-                    (library_id, revision, now if prev_row is None else prev_row[1], now,
-                     str(request["library"].get("source", "")), str(request["library"].get("library_sha256", "")),
-                     json.dumps(settings), plan.measurement_sha256, plan.frequency_sha256, int(f.size),
-                     float(f[0]), float(f[-1]), model_fingerprint(), __version__, json.dumps(report.to_dict())))
-                con.execute("COMMIT")
-            except BaseException:
-                con.execute("ROLLBACK")
-                raise
+        with closing(self._connect()) as con, transaction(con):
+            prev_row = con.execute("SELECT revision, created_utc FROM libraries WHERE id = ?",
+                                   (library_id,)).fetchone()
+            prev = {tid: (fp, rev) for tid, fp, rev in con.execute(
+                "SELECT tool_id, fingerprint, revision FROM tools WHERE library_id = ? ORDER BY position, "
+                "tool_id", (library_id,))}
+            revision = 1 if prev_row is None else prev_row[0] + 1
+            new_ids = {r["id"] for r in rows}
+            added = tuple(r["id"] for r in rows if r["id"] not in prev)
+            changed = tuple(r["id"] for r in rows if r["id"] in prev and prev[r["id"]][0] != r["fingerprint"])
+            unchanged = tuple(r["id"] for r in rows if r["id"] in prev and prev[r["id"]][0] == r["fingerprint"])
+            removed = tuple(tid for tid in prev if tid not in new_ids)
+            summary = {s: sum(r["status"] == s for r in rows) for s in ("ok", "skipped", "error")}
+            failed = tuple({"id": r["id"], "error": r["entry"].get("error")} for r in rows
+                           if r["status"] == "error")
+            n_ok_entries = sum(r["result_key"] is not None for r in rows)
+            same = frozenset(unchanged)
+            report = SyncReport(library_id, revision, now, added, changed, unchanged, removed, computed,
+                                max(n_ok_entries - computed, 0), summary, failed)
+            con.execute("DELETE FROM tools WHERE library_id = ?", (library_id,))
+            con.executemany(
+                "INSERT INTO tools (library_id, tool_id, position, status, fingerprint, result_key, entry, "
+                "revision) VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
+                [(library_id, r["id"], r["index"], r["status"], r["fingerprint"], r["result_key"],
+                  json.dumps(r["entry"]), prev[r["id"]][1] if r["id"] in same else revision)
+                 for r in rows])
+            con.execute(
+                "INSERT OR REPLACE INTO libraries (id, revision, created_utc, synced_utc, source, library_sha256, "
+                "settings, measurement_sha256, frequency_sha256, n_frequencies, frequency_min_hz, "
+                "frequency_max_hz, model_version, software_version, last_sync) "
+                "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                (library_id, revision, now if prev_row is None else prev_row[1], now,
+                 str(request["library"].get("source", "")), str(request["library"].get("library_sha256", "")),
+                 json.dumps(settings), plan.measurement_sha256, plan.frequency_sha256, int(f.size),
+                 float(f[0]), float(f[-1]), model_fingerprint(), __version__, json.dumps(report.to_dict())))
         return report
 
 
@@ -687,7 +666,3 @@ def sync_library(libraries: LibraryStore, library_id: str,
     return run_sync(libraries, sync_request(library_id, library, **kwargs), store=store, max_lines=max_lines,
                     progress=progress)
 
-
-def iter_ok_results(results: Mapping[str, Any]) -> Iterator[dict[str, Any]]:
-    """The ``ok`` results of :meth:`LibraryStore.results`, in library order."""
-    return (r for r in results["results"] if r["status"] == "ok")

@@ -1,36 +1,107 @@
 """Validation bounds of every request: the one source the library and the REST schemas share.
 
 Sanity bounds lie far outside any machine tool, so that no accepted value can overflow the
-arithmetic (2πf, d⁴, k/ω …); size limits bound the work a request may ask for.
+arithmetic (2πf, d⁴, k/ω …); size limits bound the work a request may ask for. The parsers
+(:mod:`rcsa.model.contract`, the lobes, diagnosis and identification requests) check them,
+and ``service/schemas.py`` publishes exactly these numbers in the OpenAPI document, so the
+REST schema accepts what the library accepts (``tests/service/test_schema_bounds.py``).
+
+Where a quantity must be positive, the parsers check ``> 0`` first (so that ``0`` and
+negative values are told "must be > 0") and the sanity minimum after it.
 """
 
 from __future__ import annotations
 
 __all__ = [
     "MAX_BATCH_COMBINATIONS",
+    "MAX_COHERENCE",
+    "MAX_CUTTING_COEFFICIENT_N_M2",
     "MAX_DAMPING",
     "MAX_DENSITY_KG_M3",
     "MAX_FREQUENCY_HZ",
     "MAX_FREQUENCY_LINES",
+    "MAX_FRF_VALUE",
+    "MAX_HOLDER_SEGMENTS_PER_CONE",
     "MAX_LENGTH_M",
+    "MAX_LOSS_FACTOR",
     "MAX_MODULUS_PA",
+    "MAX_POISSON_RATIO",
+    "MAX_RADIAL_RATIO",
+    "MAX_SHEAR_COEFFICIENT",
+    "MAX_SPEED_COUNT",
+    "MAX_SPEED_RPM",
     "MAX_STIFFNESS",
+    "MAX_TEETH",
+    "MIN_CUTTING_COEFFICIENT_N_M2",
+    "MIN_DENSITY_KG_M3",
+    "MIN_FLUTED_DIAMETER_RATIO",
+    "MIN_FREQUENCY_HZ",
+    "MIN_JOINT_STIFFNESS",
     "MIN_LENGTH_M",
+    "MIN_MODULUS_PA",
+    "MIN_POISSON_RATIO",
+    "MIN_RADIAL_IMMERSION",
+    "MIN_SHEAR_COEFFICIENT",
+    "MIN_SPEED_COUNT",
+    "MIN_SPEED_RPM",
 ]
+
+# ---------------------------------------------------------------------------- sizes
 
 #: Frequency lines of one request.
 MAX_FREQUENCY_LINES = 200_000
 #: Tool–holder combinations of one batch.
 MAX_BATCH_COMBINATIONS = 10_000
-#: Highest frequency, Hz.
-MAX_FREQUENCY_HZ = 1.0e7
+
+# ---------------------------------------------------------------------------- assembly
+
+#: Lowest first line and highest line of a frequency grid, Hz (0 Hz is singular).
+MIN_FREQUENCY_HZ, MAX_FREQUENCY_HZ = 1.0e-3, 1.0e7
 #: Shortest and longest length or diameter, m.
 MIN_LENGTH_M, MAX_LENGTH_M = 1.0e-6, 100.0
-#: Largest Young's modulus, Pa.
-MAX_MODULUS_PA = 1.0e13
-#: Largest density, kg/m³.
-MAX_DENSITY_KG_M3 = 1.0e5
-#: Largest stiffness, N/m or N·m/rad.
+#: Young's modulus, Pa.
+MIN_MODULUS_PA, MAX_MODULUS_PA = 1.0, 1.0e13
+#: Density, kg/m³.
+MIN_DENSITY_KG_M3, MAX_DENSITY_KG_M3 = 1.0e-3, 1.0e5
+#: Poisson's ratio, both exclusive (dimensionless).
+MIN_POISSON_RATIO, MAX_POISSON_RATIO = -1.0, 0.5
+#: Loss factor η, exclusive (dimensionless; 0 included).
+MAX_LOSS_FACTOR = 1.0
+#: Largest stiffness (bearings and joints), N/m or N·m/rad.
 MAX_STIFFNESS = 1.0e15
+#: Smallest stiffness of an elastic joint, N/m or N·m/rad (a bearing may have 0).
+MIN_JOINT_STIFFNESS = 1.0e-3
 #: Largest viscous damping, N·s/m or N·m·s/rad.
 MAX_DAMPING = 1.0e12
+#: Smallest equivalent fluted diameter over the cutting diameter (the largest is 1).
+MIN_FLUTED_DIAMETER_RATIO = 0.01
+#: A numeric shear coefficient κ (dimensionless).
+MIN_SHEAR_COEFFICIENT, MAX_SHEAR_COEFFICIENT = 0.01, 1.5
+
+# ---------------------------------------------------------------------------- measured FRFs
+
+#: Largest magnitude of the real or imaginary part of an inline FRF value, m/N.
+MAX_FRF_VALUE = 1.0e6
+#: Largest ordinary coherence γ²: 1, and estimates may exceed it by rounding
+#: (|Sxy|² / (Sxx Syy)); allow that much.
+MAX_COHERENCE = 1.0 + 1e-9
+
+# ---------------------------------------------------------------------------- stability lobes
+
+#: Teeth (flutes) of a cutter.
+MAX_TEETH = 100
+#: Tangential cutting coefficient Kt, N/m².
+MIN_CUTTING_COEFFICIENT_N_M2, MAX_CUTTING_COEFFICIENT_N_M2 = 1.0, 1.0e15
+#: Radial to tangential coefficient ratio Kr (dimensionless; 0 included).
+MAX_RADIAL_RATIO = 1000.0
+#: Smallest radial immersion a_e/D (the largest is 1, slotting).
+MIN_RADIAL_IMMERSION = 1.0e-4
+#: Spindle speeds of a lobes grid, rpm.
+MIN_SPEED_RPM, MAX_SPEED_RPM = 1.0e-3, 1.0e6
+#: Speeds of a lobes grid.
+MIN_SPEED_COUNT, MAX_SPEED_COUNT = 2, 100_000
+
+# ---------------------------------------------------------------------------- tool libraries
+
+#: Cylinders per conical holder segment of a CAM library's holder.
+MAX_HOLDER_SEGMENTS_PER_CONE = 50

@@ -8,11 +8,9 @@ numerical code downstream never sees an unchecked value.
 from __future__ import annotations
 
 import math
-import operator
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Any, TypeVar
 
 import numpy as np
 
@@ -23,10 +21,21 @@ from rcsa.model.bounds import (
     MAX_FREQUENCY_HZ,
     MAX_FREQUENCY_LINES,
     MAX_LENGTH_M,
+    MAX_LOSS_FACTOR,
     MAX_MODULUS_PA,
+    MAX_POISSON_RATIO,
+    MAX_SHEAR_COEFFICIENT,
     MAX_STIFFNESS,
+    MIN_DENSITY_KG_M3,
+    MIN_FLUTED_DIAMETER_RATIO,
+    MIN_FREQUENCY_HZ,
+    MIN_JOINT_STIFFNESS,
     MIN_LENGTH_M,
+    MIN_MODULUS_PA,
+    MIN_POISSON_RATIO,
+    MIN_SHEAR_COEFFICIENT,
 )
+from rcsa.model.fields import Fields
 from rcsa.physics.arrays import FloatArray
 from rcsa.physics.materials import BUILTIN_MATERIALS, Material
 from rcsa.physics.receptance import check_frequency_hz
@@ -55,73 +64,8 @@ __all__ = [
     "parse_tool",
 ]
 
-_L = TypeVar("_L", bound=str)
 _BEAM_THEORIES: tuple[BeamTheory, ...] = ("timoshenko", "euler_bernoulli")
 _SHEAR_MODELS: tuple[ShearModel, ...] = ("hutchinson", "cowper")
-
-
-class _Obj:
-    """Reads one JSON object: typed getters that name the path, and an unknown-key check."""
-
-    def __init__(self, value: object, path: str) -> None:
-        if not isinstance(value, Mapping):
-            raise InputError(path, f"must be an object, got {type(value).__name__}")
-        self.value, self.path = value, path
-
-    def at(self, key: str) -> str:
-        return f"{self.path}.{key}" if self.path else key
-
-    def only(self, *allowed: str) -> None:
-        unknown = sorted(set(self.value) - set(allowed))
-        if unknown:
-            raise InputError(self.at(unknown[0]), f"unknown field (allowed: {', '.join(allowed)})")
-
-    def has(self, key: str) -> bool:
-        return self.value.get(key) is not None
-
-    def number(self, key: str, *, default: float | None = None, gt: float | None = None,
-               ge: float | None = None, le: float | None = None, lt: float | None = None) -> float:
-        raw = self.value.get(key)
-        if raw is None:
-            if default is not None:
-                return default
-            raise InputError(self.at(key), "is required")
-        if isinstance(raw, bool) or not isinstance(raw, int | float):
-            raise InputError(self.at(key), f"must be a number, got {type(raw).__name__}")
-        x = float(raw)
-        if not math.isfinite(x):
-            raise InputError(self.at(key), "must be a finite number")
-        for bound, ok, word in ((gt, operator.gt, ">"), (ge, operator.ge, ">="), (le, operator.le, "<="),
-                                (lt, operator.lt, "<")):
-            if bound is not None and not ok(x, bound):
-                raise InputError(self.at(key), f"must be {word} {bound:g}, got {x:g}")
-        return x
-
-    def optional_number(self, key: str, *, gt: float | None = None, ge: float | None = None,
-                        le: float | None = None, lt: float | None = None) -> float | None:
-        """:meth:`number`, or ``None`` when the field is absent (or null)."""
-        return None if self.value.get(key) is None else self.number(key, gt=gt, ge=ge, le=le, lt=lt)
-
-    def choice(self, key: str, default: _L, choices: tuple[_L, ...]) -> _L:
-        """:meth:`string` restricted to ``choices``, typed as their ``Literal``."""
-        raw = self.string(key, default, choices)
-        return next(c for c in choices if c == raw)
-
-    def string(self, key: str, default: str | None = None, choices: tuple[str, ...] | None = None) -> str:
-        raw = self.value.get(key, default)
-        if raw is None:
-            raise InputError(self.at(key), "is required")
-        if not isinstance(raw, str) or not raw:
-            raise InputError(self.at(key), "must be a non-empty string")
-        if choices is not None and raw not in choices:
-            raise InputError(self.at(key), f"must be one of {', '.join(choices)}, got {raw!r}")
-        return raw
-
-    def array(self, key: str) -> list[Any]:
-        raw = self.value.get(key)
-        if not isinstance(raw, list):
-            raise InputError(self.at(key), "must be a list")
-        return raw
 
 
 # ---------------------------------------------------------------------------- specs
@@ -251,7 +195,7 @@ def parse_frequency(value: object, path: str = "frequency", max_lines: int = MAX
     numpy.ndarray, shape (nfreq,)
         Read-only, strictly increasing, > 0 Hz.
     """
-    o = _Obj(value, path)
+    o = Fields(value, path)
     if "values_hz" in o.value:
         o.only("values_hz")
         values = o.array("values_hz")
@@ -264,9 +208,9 @@ def parse_frequency(value: object, path: str = "frequency", max_lines: int = MAX
             raise InputError(o.at("values_hz"), f"frequencies must be <= {MAX_FREQUENCY_HZ:g} Hz")
         return f
     o.only("start_hz", "stop_hz", "step_hz")
-    start = o.number("start_hz", gt=0.0, le=MAX_FREQUENCY_HZ)
-    stop = o.number("stop_hz", gt=0.0, le=MAX_FREQUENCY_HZ)
-    step = o.number("step_hz", gt=0.0)
+    start = o.number("start_hz", gt=0.0, ge=MIN_FREQUENCY_HZ, le=MAX_FREQUENCY_HZ)
+    stop = o.number("stop_hz", gt=0.0, ge=MIN_FREQUENCY_HZ, le=MAX_FREQUENCY_HZ)
+    step = o.number("step_hz", gt=0.0, le=MAX_FREQUENCY_HZ)
     if stop < start:
         raise InputError(o.at("stop_hz"), f"must be >= start_hz ({start:g}), got {stop:g}")
     span = (stop - start) / step
@@ -289,23 +233,24 @@ def parse_materials(value: object, path: str = "materials") -> Mapping[str, Mate
     out = dict(BUILTIN_MATERIALS)
     if value is None:
         return MappingProxyType(out)
-    o = _Obj(value, path)
+    o = Fields(value, path)
     for name, raw in o.value.items():
-        m = _Obj(raw, o.at(name))
+        m = Fields(raw, o.at(name))
         m.only(*_MATERIAL_FIELDS)
         base = BUILTIN_MATERIALS.get(name)
         out[name] = Material(
-            youngs_modulus_pa=m.number("youngs_modulus_pa", gt=0.0, le=MAX_MODULUS_PA,
+            youngs_modulus_pa=m.number("youngs_modulus_pa", gt=0.0, ge=MIN_MODULUS_PA, le=MAX_MODULUS_PA,
                                        default=base.youngs_modulus_pa if base else None),
-            poisson_ratio=m.number("poisson_ratio", gt=-1.0, lt=0.5, default=base.poisson_ratio if base else None),
-            density_kg_m3=m.number("density_kg_m3", gt=0.0, le=MAX_DENSITY_KG_M3,
+            poisson_ratio=m.number("poisson_ratio", gt=MIN_POISSON_RATIO, lt=MAX_POISSON_RATIO,
+                                   default=base.poisson_ratio if base else None),
+            density_kg_m3=m.number("density_kg_m3", gt=0.0, ge=MIN_DENSITY_KG_M3, le=MAX_DENSITY_KG_M3,
                                    default=base.density_kg_m3 if base else None),
-            loss_factor=m.number("loss_factor", ge=0.0, lt=1.0, default=base.loss_factor if base else 0.0),
+            loss_factor=m.number("loss_factor", ge=0.0, lt=MAX_LOSS_FACTOR, default=base.loss_factor if base else 0.0),
         )
     return MappingProxyType(out)
 
 
-def _material(o: _Obj, materials: Mapping[str, Material], default: str) -> str:
+def _material(o: Fields, materials: Mapping[str, Material], default: str) -> str:
     name = o.string("material", default)
     if name not in materials:
         raise InputError(o.at("material"), f"unknown material {name!r} (known: {', '.join(sorted(materials))})")
@@ -317,11 +262,11 @@ def _segments(value: object, path: str, materials: Mapping[str, Material]) -> tu
         raise InputError(path, "must be a non-empty list of segments")
     out = []
     for i, raw in enumerate(value):
-        o = _Obj(raw, f"{path}[{i}]")
+        o = Fields(raw, f"{path}[{i}]")
         o.only("length_m", "outer_diameter_m", "inner_diameter_m", "material")
         length = o.number("length_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
         outer = o.number("outer_diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
-        inner = o.number("inner_diameter_m", ge=0.0, default=0.0)
+        inner = o.number("inner_diameter_m", ge=0.0, le=MAX_LENGTH_M, default=0.0)
         if inner >= outer:
             raise InputError(o.at("inner_diameter_m"),
                              f"must be smaller than outer_diameter_m ({outer:g}), got {inner:g}")
@@ -332,12 +277,13 @@ def _segments(value: object, path: str, materials: Mapping[str, Material]) -> tu
 def parse_spindle(value: object, materials: Mapping[str, Material], path: str = "spindle"
                   ) -> SpindleSpec | MeasuredSpindleSpec:
     """An analytical spindle (segments nose → rear, bearings) or a stored measurement id."""
-    o = _Obj(value, path)
+    o = Fields(value, path)
     if "measurement_id" in o.value:
         o.only("measurement_id", "artifact_method", "effective_length_m")
         return MeasuredSpindleSpec(o.string("measurement_id"),
                                    o.string("artifact_method", "exact", ("exact", "finite_difference")),
-                                   o.number("effective_length_m", gt=0.0, default=0.2))
+                                   o.number("effective_length_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M,
+                                            default=0.2))
     o.only("segments", "bearings")
     segments = _segments(o.value.get("segments"), o.at("segments"), materials)
     total = sum(s.length_m for s in segments)
@@ -346,10 +292,10 @@ def parse_spindle(value: object, materials: Mapping[str, Material], path: str = 
         raise InputError(o.at("bearings"), "must be a list")
     bearings = []
     for i, raw in enumerate(raw_bearings):
-        b = _Obj(raw, f"{o.at('bearings')}[{i}]")
+        b = Fields(raw, f"{o.at('bearings')}[{i}]")
         b.only("position_m", "stiffness_n_m", "damping_ns_m", "rotational_stiffness_nm_rad",
                "rotational_damping_nms_rad")
-        pos = b.number("position_m", ge=0.0)
+        pos = b.number("position_m", ge=0.0, le=MAX_LENGTH_M)
         if pos > total * (1 + 1e-12):
             raise InputError(b.at("position_m"),
                              f"bearing lies outside the spindle: must be <= its length {total:g} m, got {pos:g}")
@@ -363,7 +309,7 @@ def parse_spindle(value: object, materials: Mapping[str, Material], path: str = 
 
 def parse_holder(value: object, materials: Mapping[str, Material], path: str = "holder") -> HolderSpec:
     """Holder segments from the gauge line toward the tool end."""
-    o = _Obj(value, path)
+    o = Fields(value, path)
     o.only("segments")
     return HolderSpec(_segments(o.value.get("segments"), o.at("segments"), materials))
 
@@ -375,20 +321,20 @@ _TOOL_FIELDS = ("material", "diameter_m", "shank_diameter_m", "overall_length_m"
 
 def parse_tool(value: object, materials: Mapping[str, Material], path: str = "tool") -> ToolSpec:
     """The parametric tool, with the geometric rules of the contract checked."""
-    o = _Obj(value, path)
+    o = Fields(value, path)
     o.only(*_TOOL_FIELDS)
     diameter = o.number("diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
     shank = o.number("shank_diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M, default=diameter)
     overall = o.number("overall_length_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
-    stickout = o.number("stickout_m", gt=0.0, ge=MIN_LENGTH_M)
+    stickout = o.number("stickout_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
     if stickout > overall:
         raise InputError(o.at("stickout_m"), f"must be <= overall_length_m ({overall:g}), got {stickout:g}")
-    flute = o.number("flute_length_m", gt=0.0, ge=MIN_LENGTH_M)
+    flute = o.number("flute_length_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
     if flute > stickout:
         raise InputError(o.at("flute_length_m"), f"must be <= stickout_m ({stickout:g}), got {flute:g}")
-    ratio = o.number("fluted_diameter_ratio", gt=0.0, le=1.0, default=0.8)
-    mass_ratio = o.optional_number("fluted_mass_diameter_ratio", gt=0.0, le=1.0)
-    shoulder_length = o.optional_number("shoulder_length_m", gt=0.0, ge=MIN_LENGTH_M)
+    ratio = o.number("fluted_diameter_ratio", gt=0.0, ge=MIN_FLUTED_DIAMETER_RATIO, le=1.0, default=0.8)
+    mass_ratio = o.optional_number("fluted_mass_diameter_ratio", gt=0.0, ge=MIN_FLUTED_DIAMETER_RATIO, le=1.0)
+    shoulder_length = o.optional_number("shoulder_length_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
     shoulder_diameter = o.optional_number("shoulder_diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
     if (shoulder_length is None) != (shoulder_diameter is None):
         raise InputError(o.at("shoulder_length_m"), "shoulder_length_m and shoulder_diameter_m go together")
@@ -403,11 +349,12 @@ def parse_joint(value: object, path: str) -> JointSpec | None:
     """An elastic joint; ``None`` (left out) means rigid."""
     if value is None:
         return None
-    o = _Obj(value, path)
+    o = Fields(value, path)
     o.only("stiffness_n_m", "damping_ns_m", "rotational_stiffness_nm_rad", "rotational_damping_nms_rad")
-    return JointSpec(o.number("stiffness_n_m", gt=0.0, le=MAX_STIFFNESS),
+    return JointSpec(o.number("stiffness_n_m", gt=0.0, ge=MIN_JOINT_STIFFNESS, le=MAX_STIFFNESS),
                      o.number("damping_ns_m", ge=0.0, le=MAX_DAMPING, default=0.0),
-                     o.optional_number("rotational_stiffness_nm_rad", gt=0.0, le=MAX_STIFFNESS),
+                     o.optional_number("rotational_stiffness_nm_rad", gt=0.0, ge=MIN_JOINT_STIFFNESS,
+                                       le=MAX_STIFFNESS),
                      o.number("rotational_damping_nms_rad", ge=0.0, le=MAX_DAMPING, default=0.0))
 
 
@@ -434,13 +381,13 @@ def parse_combination(value: object, materials: Mapping[str, Material], path: st
     extra_fields : tuple of str
         Other keys allowed in ``value`` (checked by the caller).
     """
-    o = _Obj(value, path)
+    o = Fields(value, path)
     o.only("holder", "tool", "joints", *extra_fields)
     holder = parse_holder(o.value["holder"], materials, o.at("holder")) if o.has("holder") else None
     if not o.has("tool"):
         raise InputError(o.at("tool"), "is required")
     tool = parse_tool(o.value["tool"], materials, o.at("tool"))
-    joints = _Obj(o.value.get("joints") or {}, o.at("joints"))
+    joints = Fields(o.value.get("joints") or {}, o.at("joints"))
     joints.only("spindle_holder", "holder_tool")
     return CombinationSpec(holder, tool,
                            parse_joint(joints.value.get("spindle_holder"), joints.at("spindle_holder")),
@@ -463,7 +410,7 @@ _COMMON_FIELDS = ("frequency", "beam_theory", "shear_coefficient", "materials", 
 
 def parse_common(document: object, path: str = "", max_lines: int = MAX_FREQUENCY_LINES) -> CommonSpec:
     """Frequency grid, beam theory, shear coefficient, materials and spindle of a document."""
-    o = _Obj(document, path)
+    o = Fields(document, path)
     if "frequency" not in o.value:
         raise InputError(o.at("frequency"), "is required")
     frequency = parse_frequency(o.value["frequency"], o.at("frequency"), max_lines=max_lines)
@@ -472,7 +419,7 @@ def parse_common(document: object, path: str = "", max_lines: int = MAX_FREQUENC
     if isinstance(o.value.get("shear_coefficient", "hutchinson"), str):
         kappa = o.choice("shear_coefficient", "hutchinson", _SHEAR_MODELS)
     else:
-        kappa = o.number("shear_coefficient", gt=0.0, le=1.5)
+        kappa = o.number("shear_coefficient", gt=0.0, ge=MIN_SHEAR_COEFFICIENT, le=MAX_SHEAR_COEFFICIENT)
     materials = parse_materials(o.value.get("materials"), o.at("materials"))
     if "spindle" not in o.value:
         raise InputError(o.at("spindle"), "is required")
@@ -510,7 +457,7 @@ def parse_assembly(document: object, max_lines: int = MAX_FREQUENCY_LINES) -> As
     InputError
         Naming the offending field and the rule.
     """
-    o = _Obj(document, "")
+    o = Fields(document, "")
     o.only(*_COMMON_FIELDS, "holder", "tool", "joints", "name", "description")
     common = parse_common(document, max_lines=max_lines)
     rest = {k: v for k, v in o.value.items() if k in ("holder", "tool", "joints")}

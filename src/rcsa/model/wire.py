@@ -4,7 +4,9 @@ JSON has no complex type, so the contract carries a complex array as
 ``{"real": [...], "imag": [...]}`` (``contract.md`` "Units"). Every parser of a request or
 file in that form, and every writer of a result, goes through these functions, so the rules
 (numbers only, finite, one value per frequency line) and their error messages are the same
-everywhere.
+everywhere. The units and the sign convention every receptance on the wire (and in every
+file rcsa writes) is expressed in are stated here once: :data:`RECEPTANCE_UNITS`,
+:data:`CONVENTION`.
 
 >>> import numpy as np
 >>> complex_to_wire(np.array([1 - 2j]))
@@ -22,10 +24,21 @@ import numpy as np
 
 from rcsa.errors import InputError
 
-__all__ = ["WIRE_KEYS", "complex_from_wire", "complex_to_wire", "number_list"]
+__all__ = ["CONVENTION", "RECEPTANCE_UNITS", "WIRE_KEYS", "complex_from_wire", "complex_to_wire", "number_list"]
 
 #: The two keys of a complex array on the wire.
 WIRE_KEYS = frozenset({"real", "imag"})
+
+#: Units of the receptances h, l, n, p (``contract.md`` "Units").
+RECEPTANCE_UNITS = {"h": "m/N", "l": "m/(N*m)", "n": "rad/N", "p": "rad/(N*m)"}
+
+#: The axis and sign conventions of every receptance (``domain.md`` §2.1, ``contract.md``).
+CONVENTION = (
+    "domain.md 2.1: axis x from spindle rear to tool tip; w lateral displacement (m), "
+    "psi rotation counter-clockwise positive = dw/dx (rad); F force (N), M moment (N*m); "
+    "h=w/F, l=w/M, n=psi/F, p=psi/M; time dependence exp(+i*omega*t), "
+    "so a damped driving-point receptance has Im h <= 0"
+)
 
 
 def number_list(value: object, field: str, n: int | None = None, *, nonempty: bool = False,
@@ -35,7 +48,8 @@ def number_list(value: object, field: str, n: int | None = None, *, nonempty: bo
     Parameters
     ----------
     value : object
-        The parsed JSON value.
+        The parsed JSON value, or a 1-D real numpy array (a document rcsa wrote with
+        ``arrays="numpy"``).
     field : str
         Dotted path of the value, for the error.
     n : int, optional
@@ -50,13 +64,14 @@ def number_list(value: object, field: str, n: int | None = None, *, nonempty: bo
     InputError
         Naming ``field`` and the rule broken.
     """
-    if not isinstance(value, list | tuple) or any(isinstance(v, bool) or not isinstance(v, int | float)
-                                                  for v in value):
+    is_array = isinstance(value, np.ndarray) and value.ndim == 1 and value.dtype.kind in "fiu"
+    if not is_array and (not isinstance(value, list | tuple)
+                         or any(isinstance(v, bool) or not isinstance(v, int | float) for v in value)):
         raise InputError(field, "must be a non-empty list of numbers" if nonempty else "must be a list of numbers")
-    if nonempty and not value:
+    if nonempty and not len(value):  # type: ignore[arg-type]
         raise InputError(field, "must be a non-empty list of numbers")
-    if n is not None and len(value) != n:
-        raise InputError(field, f"must have one value per frequency line ({n}), got {len(value)}")
+    if n is not None and len(value) != n:  # type: ignore[arg-type]
+        raise InputError(field, f"must have one value per frequency line ({n}), got {len(value)}")  # type: ignore[arg-type]
     try:
         x = np.array(value, dtype=float)
     except OverflowError:  # an integer beyond float range
@@ -87,7 +102,9 @@ def complex_from_wire(value: object, field: str, n: int | None = None, *, nonemp
     im = number_list(value["imag"], f"{field}.imag", n, nonempty=nonempty, finite=finite)
     if re.shape != im.shape:
         raise InputError(f"{field}.imag", f"has {im.size} values but {field}.real has {re.size}")
-    return re + 1j * im
+    out = np.empty(re.shape, dtype=np.complex128)
+    out.real, out.imag = re, im  # exact, also for non-finite parts (re + 1j*im is not: 1j*inf has a NaN)
+    return out
 
 
 def complex_to_wire(x: Any, arrays: Literal["list", "numpy"] = "list") -> dict[str, Any]:

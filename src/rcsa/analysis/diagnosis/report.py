@@ -20,16 +20,15 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from matplotlib.colors import TwoSlopeNorm
-from matplotlib.figure import Figure
 
 from rcsa.analysis.diagnosis.attribution import Fit
 from rcsa.analysis.diagnosis.candidates import NOT_OBSERVABLE_AT_STANDSTILL, STANDSTILL_SENTENCE
 from rcsa.analysis.diagnosis.validation import HeldOut
-from rcsa.analysis.figures import freeze_layout, new_figure
-from rcsa.model.wire import complex_to_wire
+from rcsa.model.wire import complex_from_wire, complex_to_wire
 
 if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
+
     from rcsa.analysis.diagnosis.state import Analysis
 
 __all__ = ["build_response", "diagnosis_figure", "gap_map"]
@@ -265,6 +264,11 @@ def diagnosis_figure(a: Analysis, response: dict[str, Any] | None = None) -> Fig
     response : dict, optional
         The response of ``a`` (its first effect is drawn as "corrected").
     """
+    # matplotlib (~0.3 s to import): only when a figure is drawn, not for every diagnosis
+    from matplotlib.colors import TwoSlopeNorm
+
+    from rcsa.analysis.figures import freeze_layout, new_figure
+
     response = build_response(a) if response is None else response
     p = a.problem
     n = len(p.configs)
@@ -276,7 +280,8 @@ def diagnosis_figure(a: Analysis, response: dict[str, Any] | None = None) -> Fig
     corrected = None
     if effects:
         e = effects[0]
-        corrected = [np.asarray(h["real"]) + 1j * np.asarray(h["imag"]) for h in e["corrected_h"]]
+        corrected = [complex_from_wire(h, f"effects[0].corrected_h[{i}]", finite=False)
+                     for i, h in enumerate(e["corrected_h"])]
     base_full = a.full_h([], [])
     for i, m in enumerate(a.request.measurements):
         ax = fig.add_subplot(grid[i // cols, i % cols])

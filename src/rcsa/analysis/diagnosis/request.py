@@ -19,7 +19,6 @@ Every violation raises :class:`~rcsa.errors.InputError` naming the field and the
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -30,6 +29,7 @@ from rcsa.analysis.diagnosis.candidates import CANDIDATE_NAMES
 from rcsa.analysis.diagnosis.discrepancy import DEFAULT_TOLERANCES
 from rcsa.analysis.measured_tool_point import MAX_TAP_TESTS, TapTest, parse_tap_tests
 from rcsa.errors import InputError
+from rcsa.model import fields
 from rcsa.model.contract import AssemblySpec, SpindleSpec, ToolSpec, parse_assembly
 
 __all__ = ["MAX_MEASUREMENTS", "MIN_VALID_LINES", "Measurement", "Options", "Request", "parse_request"]
@@ -86,45 +86,23 @@ class Request:
     options: Options = field(default_factory=Options)
 
 
-def _obj(value: object, path: str) -> Mapping[str, Any]:
-    if not isinstance(value, Mapping):
-        raise InputError(path, f"must be an object, got {type(value).__name__}")
-    return value
-
-
-def _only(o: Mapping[str, Any], path: str, allowed: tuple[str, ...]) -> None:
-    unknown = sorted(set(o) - set(allowed))
-    if unknown:
-        where = f"{path}.{unknown[0]}" if path else unknown[0]
-        raise InputError(where, f"unknown field (allowed: {', '.join(allowed)})")
-
-
-def _number(value: object, path: str, lo: float | None = None, hi: float | None = None) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(float(value)):
-        raise InputError(path, "must be a finite number")
-    x = float(value)
-    if (lo is not None and x < lo) or (hi is not None and x > hi):
-        raise InputError(path, f"must lie in [{lo if lo is not None else '-inf'}, {hi if hi is not None else 'inf'}], "
-                               f"got {x:g}")
-    return x
-
-
 def _measurement(tap: TapTest, i: int) -> Measurement:
-    path = tap.path
-    n_avg = _number(tap.extra.get("n_averages", DEFAULT_N_AVERAGES), f"{path}.n_averages", 1.0)
-    raw_mass = tap.extra.get("sensor_mass_kg")
-    mass = None if raw_mass is None else _number(raw_mass, f"{path}.sensor_mass_kg", 0.0, 1.0)
+    extra = fields.Fields(tap.extra, tap.path)
+    n_avg = extra.number("n_averages", ge=1.0, default=DEFAULT_N_AVERAGES)
+    mass = extra.optional_number("sensor_mass_kg", ge=0.0, le=1.0)
     label = tap.extra.get("label", f"#{i}")
     if not isinstance(label, str):
-        raise InputError(f"{path}.label", "must be a string")
+        raise InputError(extra.at("label"), "must be a string")
     return Measurement(tap.tool, dict(tap.overrides), tap.frequency_hz, tap.h, tap.coherence, n_avg, mass, label)
 
 
+_OPTIONS = ("effects", "held_out", "seed", "monte_carlo_draws", "likelihood", "claim_threshold",
+            "ambiguity_window", "max_effects", "max_lines")
+
+
 def _options(raw: object, n_meas: int) -> Options:
-    o = _obj(raw or {}, "options")
-    allowed = ("effects", "held_out", "seed", "monte_carlo_draws", "likelihood", "claim_threshold",
-               "ambiguity_window", "max_effects", "max_lines")
-    _only(o, "options", allowed)
+    opts = fields.Fields(raw or {}, "options", _OPTIONS)
+    o = opts.value
     effects = o.get("effects", list(CANDIDATE_NAMES))
     if not isinstance(effects, list) or not effects or any(e not in CANDIDATE_NAMES for e in effects):
         raise InputError("options.effects", f"must be a non-empty list of: {', '.join(CANDIDATE_NAMES)}")
@@ -135,20 +113,16 @@ def _options(raw: object, n_meas: int) -> Options:
             raise InputError("options.held_out", f"must be a list of distinct measurement indices in [0, {n_meas - 1}]")
         if len(held) >= n_meas:
             raise InputError("options.held_out", "must leave at least one measurement for fitting")
-    likelihood = o.get("likelihood", "student_t")
-    if likelihood not in ("student_t", "gaussian"):
-        raise InputError("options.likelihood", "must be 'student_t' or 'gaussian'")
-    seed = o.get("seed", 0)
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise InputError("options.seed", "must be a non-negative integer")
+    # counts may come as JSON numbers with a fraction (e.g. 200.0): read as numbers, then truncated
     return Options(
-        effects=tuple(dict.fromkeys(effects)), held_out=None if held is None else tuple(held), seed=seed,
-        monte_carlo_draws=int(_number(o.get("monte_carlo_draws", 200), "options.monte_carlo_draws", 50, 5000)),
-        likelihood=likelihood,
-        claim_threshold=_number(o.get("claim_threshold", 3.0), "options.claim_threshold", 0.0, 50.0),
-        ambiguity_window=_number(o.get("ambiguity_window", 2.3), "options.ambiguity_window", 0.0, 50.0),
-        max_effects=int(_number(o.get("max_effects", 2), "options.max_effects", 1, 2)),
-        max_lines=int(_number(o.get("max_lines", 1200), "options.max_lines", 200, 20000)))
+        effects=tuple(dict.fromkeys(effects)), held_out=None if held is None else tuple(held),
+        seed=opts.integer("seed", ge=0, default=0),
+        monte_carlo_draws=int(opts.number("monte_carlo_draws", ge=50, le=5000, default=200)),
+        likelihood=opts.string("likelihood", "student_t", ("student_t", "gaussian")),
+        claim_threshold=opts.number("claim_threshold", ge=0.0, le=50.0, default=3.0),
+        ambiguity_window=opts.number("ambiguity_window", ge=0.0, le=50.0, default=2.3),
+        max_effects=int(opts.number("max_effects", ge=1, le=2, default=2)),
+        max_lines=int(opts.number("max_lines", ge=200, le=20000, default=1200)))
 
 
 def parse_request(request: object) -> Request:
@@ -168,11 +142,10 @@ def parse_request(request: object) -> Request:
     InputError
         Naming the offending field and the rule.
     """
-    o = _obj(request, "")
-    _only(o, "", _FIELDS)
+    o = fields.json_object(request, "", _FIELDS)
     if "assembly" not in o:
         raise InputError("assembly", "is required")
-    assembly = dict(_obj(o["assembly"], "assembly"))
+    assembly = dict(fields.json_object(o["assembly"], "assembly"))
     assembly.setdefault("frequency", {"values_hz": [1.0]})  # replaced by each measurement's lines
     try:
         spec = parse_assembly(assembly)
@@ -181,13 +154,13 @@ def parse_request(request: object) -> Request:
     if not isinstance(spec.spindle, SpindleSpec):
         raise InputError("assembly.spindle", "a diagnosis needs an analytical spindle (segments and bearings); "
                                              "measured spindles are not supported yet")
-    taps = parse_tap_tests(o.get("measurements"), _obj(assembly.get("tool") or {}, "assembly.tool"), spec.materials,
+    taps = parse_tap_tests(o.get("measurements"), fields.json_object(assembly.get("tool") or {}, "assembly.tool"),
+                           spec.materials,
                            extra_fields=("n_averages", "sensor_mass_kg", "label"), max_tests=MAX_MEASUREMENTS,
                            max_lines=MAX_LINES_PER_MEASUREMENT)
     measurements = tuple(_measurement(t, i) for i, t in enumerate(taps))
-    tol_raw = _obj(o.get("tolerances") or {}, "tolerances")
-    _only(tol_raw, "tolerances", tuple(DEFAULT_TOLERANCES))
+    tol = fields.Fields(o.get("tolerances") or {}, "tolerances", tuple(DEFAULT_TOLERANCES))
     tolerances = dict(DEFAULT_TOLERANCES)
-    for key, value in tol_raw.items():
-        tolerances[key] = _number(value, f"tolerances.{key}", 0.0, 0.05 if key == "stickout_m" else 2.0)
+    for key in tol.value:
+        tolerances[key] = tol.number(key, ge=0.0, le=0.05 if key == "stickout_m" else 2.0)
     return Request(assembly, spec, measurements, tolerances, _options(o.get("options"), len(measurements)))

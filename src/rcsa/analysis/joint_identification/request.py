@@ -24,6 +24,7 @@ import numpy as np
 
 from rcsa.analysis.measured_tool_point import MAX_TAP_TESTS, parse_tap_tests
 from rcsa.errors import InputError
+from rcsa.model import fields
 from rcsa.model.contract import AssemblySpec, SpindleSpec, parse_assembly
 from rcsa.model.parameters import get_parameter
 
@@ -142,14 +143,10 @@ def parse_identification_request(request: object) -> IdentificationRequest:
     """
     if not isinstance(request, Mapping):
         raise InputError("", "the identification request must be a JSON object")
-    unknown = sorted(set(request) - set(_REQUEST_FIELDS))
-    if unknown:
-        raise InputError(unknown[0], f"unknown field (allowed: {', '.join(_REQUEST_FIELDS)})")
+    o = fields.Fields(request, "", _REQUEST_FIELDS)
     if "assembly" not in request:
         raise InputError("assembly", "is required")
-    document = request["assembly"]
-    if not isinstance(document, Mapping):
-        raise InputError("assembly", "must be an object (the contract's assembly document)")
+    document = fields.json_object(request["assembly"], "assembly")
     try:
         base = parse_assembly(document)
     except InputError as exc:
@@ -170,8 +167,5 @@ def parse_identification_request(request: object) -> IdentificationRequest:
                             extra_fields=("id",), min_lines=MIN_LINES, max_tests=MAX_MEASUREMENTS)
     measurements = tuple(MeasurementData(replace(base, tool=t.tool, frequency_hz=t.frequency_hz), t.frequency_hz,
                                          t.h, t.coherence, t.overrides) for t in tests)
-    ratio = request.get("max_residual_to_noise", DEFAULT_MAX_RESIDUAL_TO_NOISE)
-    if isinstance(ratio, bool) or not isinstance(ratio, int | float) or not ratio > 1:
-        raise InputError("max_residual_to_noise", "must be a number > 1")
-    return IdentificationRequest(base, measurements, names, _bounds(request.get("bounds"), base, names),
-                                 float(ratio))
+    ratio = o.number("max_residual_to_noise", gt=1.0, default=DEFAULT_MAX_RESIDUAL_TO_NOISE)
+    return IdentificationRequest(base, measurements, names, _bounds(request.get("bounds"), base, names), ratio)

@@ -13,19 +13,16 @@ from typing import Any
 
 import numpy as np
 
-from rcsa.analysis.lobes.zoa import (
-    MAX_SPEED_COUNT,
-    LobeResult,
-    Milling,
-    stability_lobes,
-)
-from rcsa.analysis.lobes.zoa import check_count as _count
-from rcsa.analysis.lobes.zoa import check_finite as _finite
-from rcsa.analysis.lobes.zoa import check_frf as _check_frf
-from rcsa.analysis.lobes.zoa import check_immersion as _immersion
-from rcsa.analysis.lobes.zoa import check_positive as _positive
-from rcsa.analysis.lobes.zoa import check_teeth as _teeth
+from rcsa.analysis.lobes.zoa import LobeResult, Milling, check_cut, check_frf, stability_lobes
 from rcsa.errors import FrequencyMismatch, InputError
+from rcsa.model import fields
+from rcsa.model.bounds import (
+    MAX_FRF_VALUE,
+    MAX_SPEED_COUNT,
+    MAX_SPEED_RPM,
+    MIN_SPEED_COUNT,
+    MIN_SPEED_RPM,
+)
 from rcsa.model.wire import complex_from_wire, number_list
 from rcsa.physics.receptance import check_frequency_hz
 
@@ -115,18 +112,11 @@ _REQUIRED_KEYS = (
 
 
 def _mapping(value: object, field: str, keys: set[str]) -> Mapping[str, Any]:
-    if not isinstance(value, Mapping):
-        raise InputError(field, f"must be an object, got {type(value).__name__}")
-    unknown = sorted(set(value) - keys)
-    if unknown:
-        raise InputError(
-            f"{field}.{unknown[0]}" if field else unknown[0],
-            f"unknown field; allowed: {', '.join(sorted(keys))}",
-        )
-    missing = sorted(keys - set(value))
+    body = fields.json_object(value, field, sorted(keys))
+    missing = sorted(keys - set(body))
     if missing and field:  # nested objects: every key is required
-        raise InputError(f"{field}.{missing[0]}", "is required")
-    return value
+        raise InputError(fields.join(field, missing[0]), "is required")
+    return body
 
 
 def _parse_frf(value: object, field: str) -> tuple[np.ndarray, np.ndarray]:
@@ -135,7 +125,9 @@ def _parse_frf(value: object, field: str) -> tuple[np.ndarray, np.ndarray]:
         number_list(body["frequency_hz"], f"{field}.frequency_hz", finite=False), f"{field}.frequency_hz"
     )
     h = complex_from_wire(body["h"], f"{field}.h", f.size, finite=False)
-    return f, _check_frf(h, f.size, field)
+    if np.any(np.abs(h.real) > MAX_FRF_VALUE) or np.any(np.abs(h.imag) > MAX_FRF_VALUE):
+        raise InputError(f"{field}.h", f"real and imaginary parts must lie within ±{MAX_FRF_VALUE:g} m/N")
+    return f, check_frf(h, f.size, field)
 
 
 def parse_lobes_request(body: object) -> LobesRequest:
@@ -196,24 +188,18 @@ def parse_lobes_request(body: object) -> LobesRequest:
         if not isinstance(assembly, Mapping):
             raise InputError("assembly", f"must be an object, got {type(assembly).__name__}")
 
-    teeth = _teeth(body["teeth"])
-    kt = _positive(body["tangential_coefficient_n_m2"], "tangential_coefficient_n_m2")
-    kr = _finite(body["radial_ratio"], "radial_ratio")
-    if kr < 0:
-        raise InputError("radial_ratio", f"must be >= 0 (Kr = Kn/Kt), got {kr}")
-    immersion = _immersion(body["radial_immersion"])
-    milling = body["milling"]
-    if milling not in ("up", "down"):
-        raise InputError("milling", f"must be 'up' or 'down', got {milling!r}")
+    cut = check_cut(body["teeth"], body["tangential_coefficient_n_m2"], body["radial_ratio"],
+                    body["radial_immersion"], body["milling"])
 
-    speed = _mapping(body["spindle_speed_rpm"], "spindle_speed_rpm", {"start", "stop", "count"})
-    start = _positive(speed["start"], "spindle_speed_rpm.start")
-    stop = _positive(speed["stop"], "spindle_speed_rpm.stop")
+    speed = fields.Fields(_mapping(body["spindle_speed_rpm"], "spindle_speed_rpm", {"start", "stop", "count"}),
+                          "spindle_speed_rpm")
+    start = speed.number("start", gt=0.0, ge=MIN_SPEED_RPM, le=MAX_SPEED_RPM)
+    stop = speed.number("stop", gt=0.0, ge=MIN_SPEED_RPM, le=MAX_SPEED_RPM)
     if not start < stop:
         raise InputError(
             "spindle_speed_rpm.stop", f"must be greater than start ({start}), got {stop}"
         )
-    count = _count(speed["count"], "spindle_speed_rpm.count", 2, MAX_SPEED_COUNT)
+    count = speed.integer("count", ge=MIN_SPEED_COUNT, le=MAX_SPEED_COUNT)
     grid = np.linspace(start, stop, count)
     grid.flags.writeable = False
 
@@ -222,10 +208,10 @@ def parse_lobes_request(body: object) -> LobesRequest:
         frf_xx=hxx,
         frf_yy=hyy,
         assembly=assembly,
-        teeth=teeth,
-        tangential_coefficient_n_m2=kt,
-        radial_ratio=kr,
-        radial_immersion=immersion,
-        milling=milling,
+        teeth=cut.teeth,
+        tangential_coefficient_n_m2=cut.tangential_coefficient_n_m2,
+        radial_ratio=cut.radial_ratio,
+        radial_immersion=cut.radial_immersion,
+        milling=cut.milling,
         spindle_speed_rpm=grid,
     )

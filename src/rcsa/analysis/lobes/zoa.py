@@ -42,20 +42,29 @@ from typing import Any, Literal, NamedTuple
 import numpy as np
 
 from rcsa.errors import InputError
+from rcsa.model import fields
+from rcsa.model.bounds import (
+    MAX_CUTTING_COEFFICIENT_N_M2,
+    MAX_RADIAL_RATIO,
+    MAX_SPEED_COUNT,
+    MAX_SPEED_RPM,
+    MAX_TEETH,
+    MIN_CUTTING_COEFFICIENT_N_M2,
+    MIN_RADIAL_IMMERSION,
+    MIN_SPEED_RPM,
+)
 from rcsa.physics.receptance import check_frequency_hz
 
 __all__ = [
     "MAX_AUTO_LOBES",
     "MAX_SPEED_COUNT",
+    "MAX_TEETH",
+    "Cut",
     "Lobe",
     "LobeResult",
     "Milling",
-    "check_count",
-    "check_finite",
+    "check_cut",
     "check_frf",
-    "check_immersion",
-    "check_positive",
-    "check_teeth",
     "directional_factors",
     "engagement_angles_rad",
     "stability_lobes",
@@ -64,12 +73,38 @@ __all__ = [
 
 Milling = Literal["up", "down"]
 
-#: Largest spindle-speed grid accepted (``spindle_speed_rpm.count``).
-MAX_SPEED_COUNT = 100_000
+# MAX_SPEED_COUNT (largest spindle-speed grid) and MAX_TEETH live with every other request
+# bound in rcsa.model.bounds.
 #: Upper bound on the number of lobes, automatic or requested.
 MAX_AUTO_LOBES = 200
-#: Largest number of teeth accepted.
-MAX_TEETH = 100
+
+
+class Cut(NamedTuple):
+    """The cutting parameters of a lobe diagram, checked (:func:`check_cut`)."""
+
+    teeth: int
+    tangential_coefficient_n_m2: float
+    radial_ratio: float
+    radial_immersion: float
+    milling: Milling
+
+
+def check_cut(teeth: object, tangential_coefficient_n_m2: object, radial_ratio: object,
+              radial_immersion: object, milling: object) -> Cut:
+    """Check the cutting parameters (bounds in :mod:`rcsa.model.bounds`).
+
+    Raises
+    ------
+    InputError
+        Naming the field: ``teeth`` an integer in 1…``MAX_TEETH``, ``Kt > 0``,
+        ``Kr >= 0``, ``0 < a_e/D <= 1``, ``milling`` up or down.
+    """
+    return Cut(fields.integer(teeth, "teeth", ge=1, le=MAX_TEETH),
+               fields.number(tangential_coefficient_n_m2, "tangential_coefficient_n_m2", gt=0.0,
+                             ge=MIN_CUTTING_COEFFICIENT_N_M2, le=MAX_CUTTING_COEFFICIENT_N_M2),
+               fields.number(radial_ratio, "radial_ratio", ge=0.0, le=MAX_RADIAL_RATIO),
+               _immersion(radial_immersion),
+               fields.string(milling, "milling", choices=("up", "down")))  # type: ignore[arg-type]
 
 
 # --------------------------------------------------------------------------- geometry
@@ -100,7 +135,7 @@ def engagement_angles_rad(radial_immersion: float, milling: Milling) -> tuple[fl
     >>> [round(a, 6) for a in engagement_angles_rad(0.5, "down")]
     [1.570796, 3.141593]
     """
-    a = check_immersion(radial_immersion)
+    a = _immersion(radial_immersion)
     if milling == "up":
         return 0.0, float(math.acos(1.0 - 2.0 * a))
     if milling == "down":
@@ -495,14 +530,11 @@ def stability_lobes(
     hxx = check_frf(frf_xx, f.size, "frf_x")
     same_y = frf_yy is None
     hyy = hxx if same_y else check_frf(frf_yy, f.size, "frf_y")
-    n_teeth = check_teeth(teeth)
-    kt = check_positive(tangential_coefficient_n_m2, "tangential_coefficient_n_m2")
-    kr = check_finite(radial_ratio, "radial_ratio")
-    if kr < 0:
-        raise InputError("radial_ratio", f"must be >= 0 (Kr = Kn/Kt), got {kr}")
+    n_teeth, kt, kr, immersion, milling = check_cut(teeth, tangential_coefficient_n_m2, radial_ratio,
+                                                    radial_immersion, milling)
     grid = _speed_grid(spindle_speed_rpm)
 
-    phi_st, phi_ex = engagement_angles_rad(radial_immersion, milling)
+    phi_st, phi_ex = engagement_angles_rad(immersion, milling)
     alpha = directional_factors(phi_st, phi_ex, kr)
     depth, epsilon = zoa_depth_limit(
         hxx, hyy, teeth=n_teeth, tangential_coefficient_n_m2=kt, alpha=alpha
@@ -519,7 +551,7 @@ def stability_lobes(
         needed = math.ceil(60.0 * float(f_valid.max()) / (n_teeth * float(grid[0]))) + 1
         lobes_count = min(needed, MAX_AUTO_LOBES)
     else:
-        lobes_count = check_count(n_lobes, "n_lobes", 1, MAX_AUTO_LOBES)
+        lobes_count = fields.integer(n_lobes, "n_lobes", ge=1, le=MAX_AUTO_LOBES)
 
     # Absolute minimum (grid-independent) and where each lobe reaches it.
     flat = int(np.nanargmin(depth))
@@ -572,45 +604,8 @@ def stability_lobes(
 # --------------------------------------------------------------------------- validation
 
 
-def check_finite(value: object, field: str) -> float:
-    """``value`` as a finite float; ``InputError`` on ``field`` otherwise (booleans are not numbers)."""
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise InputError(field, f"must be a number, got {type(value).__name__}")
-    x = float(value)
-    if not math.isfinite(x):
-        raise InputError(field, f"must be finite, got {x}")
-    return x
-
-
-def check_positive(value: object, field: str) -> float:
-    """``value`` as a finite float > 0; ``InputError`` on ``field`` otherwise."""
-    x = check_finite(value, field)
-    if x <= 0:
-        raise InputError(field, f"must be > 0, got {x}")
-    return x
-
-
-def check_count(value: object, field: str, low: int, high: int) -> int:
-    """``value`` as an integer in ``[low, high]``; ``InputError`` on ``field`` otherwise."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise InputError(field, f"must be an integer, got {value!r}")
-    n = int(value)
-    if not low <= n <= high:
-        raise InputError(field, f"must be between {low} and {high}, got {n}")
-    return n
-
-
-def check_teeth(value: object) -> int:
-    """Number of teeth, 1 … ``MAX_TEETH``; ``InputError`` on ``teeth`` otherwise."""
-    return check_count(value, "teeth", 1, MAX_TEETH)
-
-
-def check_immersion(value: object) -> float:
-    """Radial immersion ``a_e/D`` in (0, 1]; ``InputError`` on ``radial_immersion`` otherwise."""
-    a = check_finite(value, "radial_immersion")
-    if not 0.0 < a <= 1.0:
-        raise InputError("radial_immersion", f"must satisfy 0 < a_e/D <= 1, got {a}")
-    return a
+def _immersion(value: object) -> float:
+    return fields.number(value, "radial_immersion", gt=0.0, ge=MIN_RADIAL_IMMERSION, le=1.0)
 
 
 def check_frf(values: object, nfreq: int, field: str) -> np.ndarray:
@@ -646,6 +641,8 @@ def _speed_grid(values: object) -> np.ndarray:
         raise InputError(field, f"at most {MAX_SPEED_COUNT} speeds, got {n.size}")
     if not np.all(np.isfinite(n)) or np.any(n <= 0):
         raise InputError(field, "speeds must be finite and > 0 rpm")
+    if np.any(n < MIN_SPEED_RPM) or np.any(n > MAX_SPEED_RPM):
+        raise InputError(field, f"speeds must lie between {MIN_SPEED_RPM:g} and {MAX_SPEED_RPM:g} rpm")
     if np.any(np.diff(n) <= 0):
         raise InputError(field, "speeds must be strictly increasing")
     n.flags.writeable = False

@@ -19,6 +19,7 @@ from collections.abc import Iterable, Mapping
 from contextlib import closing
 from pathlib import Path
 
+from rcsa.infra.sqlite import connect, transaction
 from rcsa.measured.store.measurement import MeasurementInfo
 
 __all__ = ["Catalogue"]
@@ -48,15 +49,9 @@ class Catalogue:
         self.db_path = Path(db_path)
 
     def _connect(self) -> sqlite3.Connection:
-        con = sqlite3.connect(self.db_path, timeout=_BUSY_TIMEOUT_S, isolation_level=None)
-        try:
-            con.execute("PRAGMA journal_mode=WAL")
-            con.execute("PRAGMA synchronous=NORMAL")
-            con.executescript(_SCHEMA)
-        except BaseException:
-            con.close()
-            raise
-        return con
+        # NORMAL: a rebuildable cache of the (fsynced) files; the schema on every connection,
+        # since the index may be deleted at any time
+        return connect(self.db_path, synchronous="NORMAL", timeout_s=_BUSY_TIMEOUT_S, schema=_SCHEMA)
 
     def ids(self) -> set[str]:
         """Every id with a row."""
@@ -80,22 +75,18 @@ class Catalogue:
         ]
         if not rows:
             return
-        with closing(self._connect()) as con:
-            con.execute("BEGIN IMMEDIATE")
+        with closing(self._connect()) as con, transaction(con):
             con.executemany(
                 "INSERT OR REPLACE INTO measurements VALUES (?, ?, ?, ?, ?, ?, ?, ?)", rows
             )
-            con.execute("COMMIT")
 
     def remove(self, ids: Iterable[str]) -> None:
         """Drop the rows of ``ids`` (missing ones are ignored)."""
         ids = [(i,) for i in ids]
         if not ids:
             return
-        with closing(self._connect()) as con:
-            con.execute("BEGIN IMMEDIATE")
+        with closing(self._connect()) as con, transaction(con):
             con.executemany("DELETE FROM measurements WHERE id = ?", ids)
-            con.execute("COMMIT")
 
     def query(self, filters: Mapping[str, str | None]) -> list[MeasurementInfo]:
         """Rows matching every non-None filter (keys from :data:`FILTERS`), oldest first."""

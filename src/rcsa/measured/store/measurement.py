@@ -19,6 +19,8 @@ import numpy as np
 
 from rcsa.errors import InputError
 from rcsa.measured.store.schema import ARTIFACT_FRF_NAME, DIRECTIONS, KINDS, PLANES
+from rcsa.model import fields
+from rcsa.model.bounds import MAX_COHERENCE
 from rcsa.physics.receptance import Receptance, check_frequency_hz
 
 __all__ = [
@@ -32,8 +34,6 @@ __all__ = [
 
 _EMPTY: Mapping[str, np.ndarray] = MappingProxyType({})
 _SHA256 = re.compile(r"^[0-9a-f]{64}$")
-#: Coherence estimates may exceed 1 by rounding (|Sxy|^2 / (Sxx Syy)); allow that much.
-_COHERENCE_SLACK = 1e-9
 
 
 def freeze_json(value: Any, field_name: str) -> Any:
@@ -82,16 +82,6 @@ def _text(value: object, field_name: str, *, required: bool, max_len: int) -> st
     return value
 
 
-def _positive(value: object, field_name: str) -> float:
-    try:
-        x = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise InputError(field_name, f"must be a number, got {value!r}") from None
-    if isinstance(value, bool) or not math.isfinite(x) or x <= 0:
-        raise InputError(field_name, f"must be a finite number > 0, got {value!r}")
-    return x
-
-
 def _check_artifact(artifact: Mapping[str, Any]) -> None:
     """Light checks of a contract-like artifact description (see :class:`MeasurementMeta`)."""
     for key in ("diameter_m", "stickout_m"):
@@ -100,7 +90,7 @@ def _check_artifact(artifact: Mapping[str, Any]) -> None:
     for key, v in artifact.items():
         if key.endswith("_m") and not isinstance(v, Mapping | tuple):
             if key in ("diameter_m", "stickout_m", "length_m"):
-                _positive(v, f"artifact.{key}")
+                fields.number(v, f"artifact.{key}", gt=0.0)
             elif isinstance(v, bool) or not isinstance(v, int | float) or not 0 <= v < math.inf:
                 raise InputError(f"artifact.{key}", f"must be a finite length >= 0 m, got {v!r}")
     d, bore = float(artifact["diameter_m"]), artifact.get("inner_diameter_m", 0.0)
@@ -224,7 +214,7 @@ class Provenance:
         object.__setattr__(self, "conversions", tuple(str(c) for c in self.conversions))
         if self.sensor_mass_kg is not None:
             object.__setattr__(
-                self, "sensor_mass_kg", _positive(self.sensor_mass_kg, "sensor_mass_kg")
+                self, "sensor_mass_kg", fields.number(self.sensor_mass_kg, "sensor_mass_kg", gt=0.0)
             )
 
 
@@ -310,7 +300,7 @@ class Measurement:
                 raise InputError(
                     f"coherence.{name}", f"has shape {c.shape}, frequency_hz has {f.shape}"
                 )
-            if not np.all(np.isfinite(c)) or np.any(c < 0) or np.any(c > 1 + _COHERENCE_SLACK):
+            if not np.all(np.isfinite(c)) or np.any(c < 0) or np.any(c > MAX_COHERENCE):
                 raise InputError(f"coherence.{name}", "must be finite numbers between 0 and 1")
             c.flags.writeable = False
             coh[name] = c

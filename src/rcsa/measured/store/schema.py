@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import re
 
+from rcsa.model.wire import CONVENTION, RECEPTANCE_UNITS
+
 __all__ = [
     "ARTIFACT_FRF_NAME",
     "COHERENCE_GROUP_SCHEMA",
@@ -52,16 +54,11 @@ KINDS = ("point_receptance", "artifact_frfs", "direct_frf")
 #: counted from the artifact tip toward the spindle (``points_m`` gives their positions).
 ARTIFACT_FRF_NAME = re.compile(r"^h[1-9][1-9]$")
 
-#: Units of each stored receptance (contract.md "Units", frf.py).
-FRF_UNITS = {"h": "m/N", "l": "m/(N*m)", "n": "rad/N", "p": "rad/(N*m)"}
+#: Units of each stored receptance (contract.md "Units"): those of the wire form.
+FRF_UNITS = RECEPTANCE_UNITS
 
-#: The conventions every stored receptance is expressed in (domain.md §2.1).
-CONVENTION = (
-    "domain.md 2.1: axis x from spindle rear to tool tip; w lateral displacement (m), "
-    "psi rotation counter-clockwise positive = dw/dx (rad); F force (N), M moment (N*m); "
-    "h=w/F, l=w/M, n=psi/F, p=psi/M; time dependence exp(+i*omega*t), "
-    "so a damped driving-point receptance has Im h <= 0"
-)
+# CONVENTION (the conventions every stored receptance is expressed in, domain.md §2.1) is the
+# wire form's, rcsa.model.wire.CONVENTION; it is written into every measurement file.
 
 
 def frf_unit(name: str) -> str:

@@ -25,7 +25,6 @@ import json
 import os
 import sqlite3
 from collections.abc import Iterator
-from datetime import UTC, datetime
 from pathlib import Path
 
 import filelock
@@ -34,6 +33,7 @@ from rcsa._version import __version__
 from rcsa.errors import NotFoundError, StoreError
 from rcsa.infra.atomic_files import fsync_dir as _fsync_dir
 from rcsa.infra.atomic_files import fsync_file
+from rcsa.infra.clock import utc_now_iso
 from rcsa.measured.store import paths as P
 from rcsa.measured.store.catalogue import Catalogue
 from rcsa.measured.store.hdf5io import read_info_file, read_measurement_file, write_measurement_file
@@ -45,9 +45,6 @@ __all__ = ["MeasurementStore"]
 #: Attempts at drawing a fresh id; 48 random bits make even a second attempt unlikely.
 _ID_ATTEMPTS = 100
 
-
-def _utc_now() -> str:
-    return datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
 
 
 class MeasurementStore:
@@ -106,7 +103,7 @@ class MeasurementStore:
                 doc = {
                     "schema": STORE_SCHEMA,
                     "schema_version": SCHEMA_VERSION,
-                    "created_utc": _utc_now(),
+                    "created_utc": utc_now_iso(),
                 }
                 tmp = self._tmp / (P.MARKER + ".tmp")
                 tmp.write_text(json.dumps(doc) + "\n", encoding="utf-8")
@@ -189,7 +186,7 @@ class MeasurementStore:
                 provenance=measurement.provenance,
                 coherence=measurement.coherence,
                 id=mid,
-                created_utc=_utc_now(),
+                created_utc=utc_now_iso(),
                 software_version=__version__,
             )
             tmp = self._tmp / f"{mid}.h5.tmp"

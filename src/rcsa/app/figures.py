@@ -1,0 +1,207 @@
+"""Pictures people look at (PNG or SVG): tool-point FRFs, stability lobes, effect maps, diagnoses.
+
+The CLI (``rcsa plot``, ``--plot`` of ``lobes``/``effects``/``diagnose``) and the REST
+service (``POST /v1/plots/...``) both draw through these functions. Figures are matplotlib
+:class:`~matplotlib.figure.Figure` objects on the Agg canvas (:mod:`rcsa.analysis.figures`);
+matplotlib is imported only when something is drawn.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from rcsa.analysis.lobes.zoa import LobeResult
+from rcsa.analysis.sensitivity import effects_figure, effects_report
+from rcsa.app.analyses import stability_lobes_result
+from rcsa.app.predictions import predict
+from rcsa.errors import InputError
+from rcsa.measured.hybrid import MeasurementSource
+from rcsa.model.bounds import MAX_FREQUENCY_LINES
+from rcsa.model.wire import complex_from_wire, number_list
+
+__all__ = [
+    "FIGURE_SUFFIXES",
+    "FRF_LAYOUTS",
+    "Curve",
+    "Figure",
+    "check_picture_path",
+    "diagnosis_with_figure",
+    "document_figure",
+    "effects_with_figure",
+    "frf_figure",
+    "lobes_figure",
+    "save_figure",
+    "tool_point_curve",
+]
+
+#: Picture files: PNG or SVG, chosen by the suffix.
+FIGURE_SUFFIXES = (".png", ".svg")
+#: FRF layouts: real/imaginary and magnitude/phase, real/imaginary only, magnitude/phase only.
+FRF_LAYOUTS = ("full", "real_imag", "bode")
+
+#: A matplotlib figure (typed loosely: matplotlib is imported only when drawing).
+Figure = Any
+
+
+@dataclass(frozen=True)
+class Curve:
+    """A tool-point receptance to draw.
+
+    Attributes
+    ----------
+    frequency_hz : numpy.ndarray, shape (nfreq,)
+    h_m_n : numpy.ndarray, shape (nfreq,), complex
+    source : {"frf", "assembly"}
+        Where it came from (names the field of an error about it).
+    """
+
+    frequency_hz: np.ndarray
+    h_m_n: np.ndarray
+    source: Literal["frf", "assembly"]
+
+
+def check_picture_path(path: str | os.PathLike[str], field: str) -> Path:
+    """``path`` if it ends in .png or .svg.
+
+    Raises
+    ------
+    InputError
+        Naming ``field`` (the option that gave the path).
+    """
+    p = Path(path)
+    if p.suffix.lower() not in FIGURE_SUFFIXES:
+        raise InputError(field, f"the picture must end in .png or .svg, got {p.name!r}")
+    return p
+
+
+def save_figure(figure: Figure, path_or_format: str | os.PathLike[str]) -> bytes | Path:
+    """A figure as PNG or SVG bytes (``"png"``/``"svg"``), or written to a .png/.svg path."""
+    # matplotlib (~0.3 s to import): only when a picture is asked for
+    from rcsa.analysis.figures import save_figure as save
+
+    return save(figure, path_or_format if isinstance(path_or_format, str) else Path(path_or_format))
+
+
+def frf_figure(frequency_hz: Any, h_m_n: Any, *, layout: str = "full", title: str | None = None,
+               labels: list[str] | None = None) -> Figure:
+    """Real and imaginary parts, magnitude and phase of receptances (µm/N) against frequency."""
+    # matplotlib: only when a picture is asked for
+    from rcsa.analysis.figures import frf_figure as draw
+
+    if layout not in FRF_LAYOUTS:
+        raise InputError("layout", f"must be one of {', '.join(FRF_LAYOUTS)}, got {layout!r}")
+    return draw(frequency_hz, h_m_n, layout=layout, title=title, labels=labels)  # type: ignore[arg-type]
+
+
+def lobes_figure(result: LobeResult, **options: Any) -> Figure:
+    """The stability lobe diagram (:func:`rcsa.analysis.figures.lobes_figure`; ``options``:
+    ``show_lobes``, ``operating_point`` (rpm, m), ``depth_max_mm``, ``title``)."""
+    # matplotlib: only when a picture is asked for
+    from rcsa.analysis.figures import lobes_figure as draw
+
+    return draw(result, **options)
+
+
+def tool_point_curve(*, frf: Mapping[str, Any] | None = None, assembly: Mapping[str, Any] | None = None,
+                     store: MeasurementSource | None = None, max_lines: int = MAX_FREQUENCY_LINES) -> Curve:
+    """The tool-point ``h`` of an inline FRF (``{"frequency_hz", "h": {"real", "imag"}}``), or
+    of an assembly predicted first; exactly one of them.
+
+    Raises
+    ------
+    InputError
+        Both or neither given, or the FRF's arrays disagree in length.
+    """
+    if (frf is None) == (assembly is None):
+        raise InputError("frf", "give either frf (an inline FRF) or assembly, exactly one of them")
+    if frf is not None:
+        f = number_list(frf.get("frequency_hz"), "frf.frequency_hz", finite=False)
+        return Curve(f, complex_from_wire(frf.get("h"), "frf.h", f.size, finite=False), "frf")
+    result = predict(assembly, store=store, max_lines=max_lines)  # type: ignore[arg-type]
+    return Curve(result.frequency_hz, result.tool_point.h, "assembly")
+
+
+def frf_picture(curve: Curve, *, fmt: str, layout: str = "full", title: str | None = None) -> bytes:
+    """A tool-point FRF as PNG or SVG bytes.
+
+    Raises
+    ------
+    InputError
+        Fewer than two lines, or (log-scaled layouts) an ``h`` that is zero everywhere.
+    """
+    where = curve.source
+    if curve.frequency_hz.size < 2:
+        raise InputError(f"{where}.frequency_hz" if where == "frf" else f"{where}.frequency",
+                         "a figure needs at least 2 frequency lines")
+    if layout != "real_imag" and not np.any(np.abs(curve.h_m_n) > 0):
+        raise InputError(f"{where}.h" if where == "frf" else where,
+                         "h is zero at every line, so its magnitude cannot be drawn on a log scale; "
+                         "use layout real_imag")
+    return save_figure(frf_figure(curve.frequency_hz, curve.h_m_n, layout=layout, title=title), fmt)  # type: ignore[return-value]
+
+
+def lobes_picture(result: LobeResult, *, fmt: str, **options: Any) -> bytes:
+    """The stability lobe diagram as PNG or SVG bytes (``options`` as in :func:`lobes_figure`)."""
+    return save_figure(lobes_figure(result, **options), fmt)  # type: ignore[return-value]
+
+
+def document_figure(doc: object, *, layout: str = "full", store: MeasurementSource | None = None) -> Figure:
+    """The figure that fits a JSON document, recognised by its content.
+
+    A prediction result (``tool_point``), a measurement in the contract's JSON form
+    (``h`` and ``frequency_hz``), a stability-lobes request (solved first) or an assembly
+    (predicted first).
+    """
+    if not isinstance(doc, dict):
+        raise InputError("", "the input must be a JSON object")
+    if "tool_point" in doc:
+        tool_point = doc["tool_point"]
+        h = tool_point.get("h") if isinstance(tool_point, Mapping) else None
+        return frf_figure(doc.get("frequency_hz"), complex_from_wire(h, "tool_point.h", finite=False),
+                          labels=["tool point h"], layout=layout)
+    if "h" in doc and "frequency_hz" in doc:
+        return frf_figure(doc["frequency_hz"], complex_from_wire(doc["h"], "h", finite=False),
+                          labels=["measured h"], layout=layout)
+    if "tangential_coefficient_n_m2" in doc:
+        return lobes_figure(stability_lobes_result(doc, store=store))
+    if "tool" in doc and "spindle" in doc:
+        result = predict(doc, store=store)
+        return frf_figure(result.frequency_hz, result.tool_point.h, labels=["tool point h"], layout=layout)
+    raise InputError("", "not a prediction result, measurement, assembly or stability-lobes request")
+
+
+def effects_with_figure(request: Mapping[str, Any], picture: str | os.PathLike[str] | None = None
+                        ) -> dict[str, Any]:
+    """Effect analysis (:func:`rcsa.app.analyses.effects`), its heat map drawn to ``picture``
+    (.png or .svg) when given."""
+    report = effects_report(request)
+    if picture is not None:
+        save_figure(effects_figure(report), picture)
+    return report.to_dict()
+
+
+def diagnosis_with_figure(request: Mapping[str, Any], picture: str | os.PathLike[str] | None = None
+                          ) -> dict[str, Any]:
+    """Diagnosis (:func:`rcsa.app.analyses.diagnose`), its figure (measured, base and corrected
+    FRFs, and the gap map) drawn to ``picture`` (.png or .svg) when given.
+
+    Raises
+    ------
+    OSError
+        The picture cannot be written (the diagnosis itself succeeded).
+    """
+    # scipy.stats and scipy.optimize (~0.9 s to import): only when a diagnosis is asked for
+    from rcsa.analysis.diagnosis.report import build_response, diagnosis_figure
+    from rcsa.analysis.diagnosis.state import analyse
+
+    analysis = analyse(request)
+    response = build_response(analysis)
+    if picture is not None:
+        save_figure(diagnosis_figure(analysis, response), picture)
+    return response

@@ -1,0 +1,264 @@
+"""Answer now or queue a job: one decision and one job handler for batches, libraries and syncs.
+
+Three kinds of work may take long: a batch of combinations (``batch``), a whole tool library
+(``library``) and a library sync (``library-sync``). Each is first *prepared*
+(:mod:`rcsa.app.libraries`: read, checked, sized — every input error is raised before
+anything is queued), giving a :class:`Work`. Then :func:`answer_or_queue` decides: work that
+is big (more results to compute than the caller's threshold) or that the caller asked to run
+in the background is queued in the durable job store (:mod:`rcsa.infra.job_queue`); the rest
+is run at once by :func:`run_work`. A job runner calls the very same :func:`run_work`
+(:func:`job_handlers`), so a job's result is exactly what the immediate answer would have been.
+
+Where the work runs — the measurement source, the library store, the size limits and who
+is told about computations (metrics) — is a :class:`Workbench`.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import AbstractContextManager, contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal, Protocol
+
+from rcsa.app.stores import library_store
+from rcsa.errors import InputError
+from rcsa.infra.job_queue import Handler, Job, JobRunner, JobStore
+from rcsa.libraries.library_prediction import run_entries
+from rcsa.libraries.sync import LibraryStore, SyncPlan, run_sync
+from rcsa.measured.hybrid import MeasurementSource
+from rcsa.model.bounds import MAX_BATCH_COMBINATIONS, MAX_FREQUENCY_LINES
+
+__all__ = [
+    "JOBS_DIRECTORY",
+    "JOB_KINDS",
+    "Handler",
+    "Job",
+    "JobRunner",
+    "JobStore",
+    "Kind",
+    "Observer",
+    "Outcome",
+    "Work",
+    "Workbench",
+    "answer_or_queue",
+    "job_handlers",
+    "job_store",
+    "run_work",
+]
+
+#: What may run as a job.
+Kind = Literal["batch", "library", "library-sync"]
+JOB_KINDS: tuple[Kind, ...] = ("batch", "library", "library-sync")
+#: Sub-directory of the store holding the job queue.
+JOBS_DIRECTORY = "jobs"
+
+
+class Observer(Protocol):
+    """Who is told about computations (the service's metrics); every method may do nothing."""
+
+    def timed(self, operation: str) -> AbstractContextManager[None]:
+        """Time one computation of ``operation`` (a :data:`Kind`)."""
+        ...
+
+    def computed(self, operation: str, n: int) -> None:
+        """``n`` tool-point FRFs were computed by ``operation``."""
+        ...
+
+
+class _Unobserved:
+    @contextmanager
+    def timed(self, operation: str) -> Iterator[None]:
+        yield
+
+    def computed(self, operation: str, n: int) -> None:
+        return None
+
+
+@dataclass(frozen=True)
+class Workbench:
+    """Where work runs.
+
+    Attributes
+    ----------
+    store : MeasurementSource or None
+        Where measured spindles are read (a store, or a cache in front of one); None refuses
+        measured spindles.
+    store_path : path or None
+        The store directory, whose ``libraries`` a sync keeps (needed by syncs only).
+    max_lines : int
+        Most frequency lines per request.
+    max_combinations : int
+        Most combinations (tools to predict) per request.
+    observer : Observer
+        Told about every computation (default: nobody).
+    """
+
+    store: MeasurementSource | None
+    store_path: str | os.PathLike[str] | None = None
+    max_lines: int = MAX_FREQUENCY_LINES
+    max_combinations: int = MAX_BATCH_COMBINATIONS
+    observer: Observer = field(default_factory=_Unobserved)
+
+    @property
+    def libraries(self) -> LibraryStore:
+        """The stored libraries of :attr:`store_path` (:func:`rcsa.app.stores.library_store`)."""
+        if self.store_path is None:
+            raise InputError("library_id", "stored libraries need a store directory")
+        return library_store(self.store_path)
+
+
+@dataclass(frozen=True)
+class Work:
+    """Prepared work: checked, JSON-ready (so it can be queued), and sized.
+
+    Attributes
+    ----------
+    kind : {"batch", "library", "library-sync"}
+    request : dict
+        What :func:`run_work` runs (and a job stores).
+    size : int
+        Results it computes (a sync: only those not in the result cache).
+    plan : SyncPlan or None
+        A sync's plan, already made while preparing it (saves making it twice).
+    check : callable or None
+        Checks the computation makes itself as it starts (the grid, spindle and materials
+        the combinations share): run before queuing, so that a bad request is refused at
+        once instead of becoming a failed job.
+    """
+
+    kind: Kind
+    request: dict[str, Any]
+    size: int
+    plan: SyncPlan | None = None
+    check: Callable[[], None] | None = None
+
+    def should_queue(self, *, respond_async: bool, async_threshold: int) -> bool:
+        """Queue it when it computes more than ``async_threshold`` results or the caller asks.
+
+        A library with no tool to predict is answered at once: there is nothing to wait for.
+        """
+        if self.kind == "library" and self.size == 0:
+            return False
+        return respond_async or self.size > async_threshold
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What running work gave.
+
+    Attributes
+    ----------
+    kind : str
+    document : dict
+        The result: a batch or library result (one entry per item), or a sync report.
+    summary : dict
+        Small counts kept with a job (``ok``/``skipped``/``error``; a sync adds ``added``,
+        ``changed``, ``unchanged``, ``removed`` and ``computed``).
+    computed : int
+        Tool-point FRFs computed.
+    """
+
+    kind: str
+    document: dict[str, Any]
+    summary: dict[str, Any]
+    computed: int
+
+
+def run_work(bench: Workbench, kind: str, request: Mapping[str, Any], *,
+             progress: Callable[[int, int], None] | None = None, plan: SyncPlan | None = None) -> Outcome:
+    """Run a batch, library or sync request now (the immediate answer and every job).
+
+    Parameters
+    ----------
+    bench : Workbench
+    kind : {"batch", "library", "library-sync"}
+    request : mapping
+        :attr:`Work.request`.
+    progress : callable, optional
+        ``progress(done, total)`` as results are computed.
+    plan : SyncPlan, optional
+        A sync's plan when the caller already has it.
+
+    Raises
+    ------
+    InputError
+        An unknown kind, or a request the computation refuses.
+    """
+    with bench.observer.timed(kind):
+        if kind in ("batch", "library"):
+            document = run_entries(request, store=bench.store, max_lines=bench.max_lines,
+                                   max_combinations=bench.max_combinations, progress=progress, arrays="numpy")
+            summary = dict(document["summary"])
+            computed = int(summary["ok"])
+        elif kind == "library-sync":
+            report = run_sync(bench.libraries, request, store=bench.store, max_lines=bench.max_lines,
+                              progress=progress, plan=plan)
+            document = report.to_dict()
+            summary = {**document["counts"], **report.summary, "computed": report.computed}
+            computed = report.computed
+        else:
+            raise InputError("kind", f"no work of kind {kind!r} (known: {', '.join(JOB_KINDS)})")
+    bench.observer.computed(kind, computed)
+    return Outcome(kind, document, summary, computed)
+
+
+def answer_or_queue(bench: Workbench, jobs: JobStore, work: Work, *, respond_async: bool, async_threshold: int,
+                    reuse_unfinished: bool = False) -> Job | Outcome:
+    """Queue ``work`` as a job (:meth:`Work.should_queue`), or run it now.
+
+    Parameters
+    ----------
+    bench : Workbench
+    jobs : JobStore
+    work : Work
+    respond_async : bool
+        The caller asks for a job whatever the size.
+    async_threshold : int
+        Work computing more results than this is queued.
+    reuse_unfinished : bool
+        A retried submission: return the unfinished job of the same request, if any,
+        instead of queuing it twice (:meth:`JobStore.submit`).
+
+    Returns
+    -------
+    Job or Outcome
+        The queued job, or the outcome of running it now.
+
+    Raises
+    ------
+    InputError
+        The request is refused (before anything is queued).
+    """
+    if work.should_queue(respond_async=respond_async, async_threshold=async_threshold):
+        if work.check is not None:
+            work.check()
+        return jobs.submit(work.kind, work.request, reuse_unfinished=reuse_unfinished)
+    return run_work(bench, work.kind, work.request, plan=work.plan)
+
+
+def job_handlers(bench: Workbench, present: Callable[[Outcome], dict[str, Any]] | None = None
+                 ) -> dict[str, Handler]:
+    """The job runner's handlers: one per :data:`JOB_KINDS`, all :func:`run_work`.
+
+    Parameters
+    ----------
+    bench : Workbench
+    present : callable, optional
+        Turns an outcome into the result document a job stores (default: its
+        ``document``); the service adds its links there, as in its immediate answers.
+    """
+    def handler(kind: str) -> Handler:
+        def run(request: dict[str, Any], progress: Callable[[int, int], None]) -> tuple[Any, dict[str, Any]]:
+            outcome = run_work(bench, kind, request, progress=progress)
+            return (present(outcome) if present is not None else outcome.document), outcome.summary
+
+        return run
+
+    return {kind: handler(kind) for kind in JOB_KINDS}
+
+
+def job_store(store_path: str | os.PathLike[str], *, stale_after_s: float = 60.0, max_attempts: int = 3) -> JobStore:
+    """The job queue of the store at ``store_path`` (``<store>/jobs``)."""
+    return JobStore(Path(store_path) / JOBS_DIRECTORY, stale_after_s=stale_after_s, max_attempts=max_attempts)
