@@ -9,6 +9,7 @@ from rcsa.analysis.lobes.request import parse_lobes_request
 from rcsa.analysis.lobes.zoa import LobeResult
 from rcsa.analysis.sensitivity import effects as _effects
 from rcsa.app.predictions import predict
+from rcsa.app.stores import MeasurementSource, resolver
 from rcsa.measured.store import MeasurementStore
 from rcsa.model.bounds import MAX_FREQUENCY_LINES
 
@@ -66,12 +67,14 @@ def identify(request: Mapping[str, Any]) -> dict[str, Any]:
     return run(request)
 
 
-def diagnose(request: Mapping[str, Any], **kwargs: Any) -> dict[str, Any]:
+def diagnose(request: Mapping[str, Any], *, store: MeasurementSource | None = None) -> dict[str, Any]:
     """Sim-to-real gap diagnosis (``contract.md`` "Diagnosis").
 
-    See :func:`rcsa.analysis.diagnosis.diagnose.diagnose`.
+    See :func:`rcsa.analysis.diagnosis.diagnose.diagnose`. ``store`` is where a measured
+    spindle (``assembly.spindle = {"measurement_id": ...}``) is looked up; the default store
+    when omitted (opened only if the request has one).
     """
     # scipy.stats and scipy.optimize (~0.9 s to import): only when a diagnosis is asked for
     from rcsa.analysis.diagnosis.diagnose import diagnose as run
 
-    return run(request, **kwargs)
+    return run(request, resolver(store))

@@ -20,6 +20,7 @@ from rcsa.analysis.lobes.zoa import LobeResult
 from rcsa.analysis.sensitivity import effects_figure, effects_report
 from rcsa.app.analyses import stability_lobes_result
 from rcsa.app.predictions import predict
+from rcsa.app.stores import resolver
 from rcsa.errors import InputError
 from rcsa.measured.hybrid import MeasurementSource
 from rcsa.model.bounds import MAX_FREQUENCY_LINES
@@ -186,10 +187,12 @@ def effects_with_figure(request: Mapping[str, Any], picture: str | os.PathLike[s
     return report.to_dict()
 
 
-def diagnosis_with_figure(request: Mapping[str, Any], picture: str | os.PathLike[str] | None = None
-                          ) -> dict[str, Any]:
+def diagnosis_with_figure(request: Mapping[str, Any], picture: str | os.PathLike[str] | None = None, *,
+                          store: MeasurementSource | None = None) -> dict[str, Any]:
     """Diagnosis (:func:`rcsa.app.analyses.diagnose`), its figure (measured, base and corrected
     FRFs, and the gap map) drawn to ``picture`` (.png or .svg) when given.
+
+    ``store``: where a measured spindle is looked up (the default store when omitted).
 
     Raises
     ------
@@ -200,7 +203,7 @@ def diagnosis_with_figure(request: Mapping[str, Any], picture: str | os.PathLike
     from rcsa.analysis.diagnosis.report import build_response, diagnosis_figure
     from rcsa.analysis.diagnosis.state import analyse
 
-    analysis = analyse(request)
+    analysis = analyse(request, resolver(store))
     response = build_response(analysis)
     if picture is not None:
         save_figure(diagnosis_figure(analysis, response), picture)

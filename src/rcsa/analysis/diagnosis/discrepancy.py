@@ -32,7 +32,16 @@ spindle_holder_damping_log          0.25     ln-scale of the spindle–holder da
 holder_tool_stiffness_log           0.15     per measurement (re-clamp), k_t and k_r
 holder_tool_damping_log             0.25     per measurement
 stickout_m                          0.0003   per measurement, m
+spindle_effective_length_log        0.35     measured ``direct_frf`` spindle: ln-scale of the
+                                             equivalent-cantilever length of its estimated
+                                             rotations (L/2 and 2L at 2σ)
+spindle_noise_rel                   0.005    measured spindle: relative noise of its stored FRFs
+                                             where no coherence is stored
 ==================================  =======  =============================================
+
+For a measured spindle the bearing tolerances do not apply (the bearings are inside the
+measurement), and at a ``holder_tip`` plane neither do the spindle–holder ones; the
+measurement's own uncertainty enters instead (:meth:`rcsa.analysis.diagnosis.problem.Problem.discrepancy`).
 """
 
 from __future__ import annotations
@@ -60,6 +69,8 @@ DEFAULT_TOLERANCES: dict[str, float] = {
     "holder_tool_stiffness_log": 0.15,
     "holder_tool_damping_log": 0.25,
     "stickout_m": 0.0003,
+    "spindle_effective_length_log": 0.35,
+    "spindle_noise_rel": 0.005,
 }
 # Shrinkage towards the diagonal (Ledoit–Wolf style, fixed weight as in the prototype): with
 # ~40-60 features and a few hundred draws the sample covariance is invertible but noisy.
@@ -89,8 +100,13 @@ def noise_sd_rel(coherence: np.ndarray, n_averages: float) -> np.ndarray:
 
 
 def draw_knobs(rng: np.random.Generator, tol: Mapping[str, float], n_configs: int,
-               base: Knobs | None = None) -> list[Knobs]:
-    """One nuisance draw: the shared part once, the per-measurement part per configuration."""
+               base: Knobs | None = None, estimated_rotations: bool = False) -> list[Knobs]:
+    """One nuisance draw: the shared part once, the per-measurement part per configuration.
+
+    ``estimated_rotations``: the spindle's rotations are an equivalent-cantilever estimate
+    (a measured ``direct_frf`` spindle); its length is drawn too (``base_rotation_scale``
+    = L/L' with ln L' ~ N(ln L, ``spindle_effective_length_log``²)), after everything else.
+    """
     base = Knobs() if base is None else base
     n = rng.standard_normal
     shared = {
@@ -105,14 +121,14 @@ def draw_knobs(rng: np.random.Generator, tol: Mapping[str, float], n_configs: in
         "sh_rotational_scale": float(np.exp(tol["spindle_holder_stiffness_log"] * n())),
         "sh_damping_scale": float(np.exp(tol["spindle_holder_damping_log"] * n())),
     }
+    per_config = [{"ht_translational_scale": float(np.exp(tol["holder_tool_stiffness_log"] * n())),
+                   "ht_rotational_scale": float(np.exp(tol["holder_tool_stiffness_log"] * n())),
+                   "ht_damping_scale": float(np.exp(tol["holder_tool_damping_log"] * n())),
+                   "stickout_offset_m": tol["stickout_m"] * n()} for _ in range(n_configs)]
+    if estimated_rotations:
+        shared["base_rotation_scale"] = float(np.exp(-tol["spindle_effective_length_log"] * n()))
     out = []
-    for _ in range(n_configs):
-        per = {
-            "ht_translational_scale": float(np.exp(tol["holder_tool_stiffness_log"] * n())),
-            "ht_rotational_scale": float(np.exp(tol["holder_tool_stiffness_log"] * n())),
-            "ht_damping_scale": float(np.exp(tol["holder_tool_damping_log"] * n())),
-            "stickout_offset_m": tol["stickout_m"] * n(),
-        }
+    for per in per_config:
         fields = {**shared, **per}
         out.append(replace(base, **{k: (getattr(base, k) + v if k == "stickout_offset_m" else getattr(base, k) * v)
                                     for k, v in fields.items()}))

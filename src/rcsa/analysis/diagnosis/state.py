@@ -21,11 +21,13 @@ from typing import Any
 import numpy as np
 
 from rcsa.analysis.diagnosis.attribution import Decision, Fit, Likelihood, decide, fit_candidate
-from rcsa.analysis.diagnosis.candidates import Candidate, catalogue
-from rcsa.analysis.diagnosis.perturbed_model import Knobs, Solver, config_parts
+from rcsa.analysis.diagnosis.candidates import Candidate, catalogue, not_applicable
+from rcsa.analysis.diagnosis.perturbed_model import BaseReceptance, Knobs, PartsBuilder, Solver
 from rcsa.analysis.diagnosis.problem import Problem
 from rcsa.analysis.diagnosis.request import parse_request
 from rcsa.analysis.diagnosis.validation import HeldOut, folds, held_out
+from rcsa.errors import InputError
+from rcsa.model.spindle_side import BaseResolver
 
 __all__ = ["Analysis", "analyse"]
 
@@ -40,18 +42,33 @@ RESIDUAL_P = 0.05
 
 
 class Analysis:
-    """The full diagnosis state (kept for the benchmark and the figure)."""
+    """The full diagnosis state (kept for the benchmark and the figure).
 
-    def __init__(self, request: Mapping[str, Any]) -> None:
+    Parameters
+    ----------
+    request : dict
+        The diagnosis request (:mod:`rcsa.analysis.diagnosis.request`).
+    resolve_base : callable, optional
+        Looks a measured spindle up (:data:`rcsa.model.spindle_side.BaseResolver`); needed
+        when ``assembly.spindle`` is ``{"measurement_id": ...}``.
+    """
+
+    def __init__(self, request: Mapping[str, Any], resolve_base: BaseResolver | None = None) -> None:
         self.started = t0 = time.perf_counter()
-        self.request = parse_request(request)
+        self.request = parse_request(request, resolve_base)
         opts = self.request.options
         self.problem = p = Problem(self.request)
+        self.not_applicable = not_applicable(p.spec, p.tools, p.measured)
+        impossible = [e for e in opts.effects if e in self.not_applicable and self.not_applicable[e][1]]
+        if opts.effects_requested and impossible:
+            raise InputError("options.effects", "; ".join(
+                f"{e} is not applicable here ({self.not_applicable[e][0]})" for e in impossible)
+                + ": leave it out")
         self.disc = p.discrepancy()
         masses = [m.sensor_mass_kg for m in self.request.measurements if m.sensor_mass_kg is not None]
         self.candidates, self.notes = catalogue(p.spec, p.tools, p.solver,
                                                 1.5 * max(masses) if masses and max(masses) > 0 else None,
-                                                opts.effects)
+                                                opts.effects, p.measured)
         self._cache: dict[tuple, np.ndarray] = {}
         n_feat = p.base_features.size
         self.like = Likelihood(p.measured_features, self.disc, np.arange(n_feat), opts.likelihood)
@@ -104,8 +121,7 @@ class Analysis:
             if k not in self._cache:
                 todo.setdefault(k, v)
         if todo:
-            hs = [p.h(self.knobs_of(cands, [*fixed, v])) for v in todo.values()]
-            feats = p.features([np.stack([h[c] for h in hs]) for c in range(len(p.configs))])
+            feats = p.features(p.h_many([self.knobs_of(cands, [*fixed, v]) for v in todo.values()]))
             for row, k in enumerate(todo):
                 self._cache[k] = feats[row]
         return np.stack([self._cache[k] for k in keys])
@@ -231,16 +247,25 @@ class Analysis:
         p = self.problem
         k = self.knobs_of(cands, values)
         out = []
-        solvers: dict[bytes, Solver] = {}
+        solvers: dict[bytes, tuple[Solver, PartsBuilder]] = {}
         for m in self.request.measurements:
             key = m.frequency_hz.tobytes()
-            s = solvers.get(key)
-            if s is None:
-                s = solvers[key] = Solver(m.frequency_hz, cache_size=4)
-            out.append(s.tip_h(config_parts(p.spec, m.tool, k)))
+            hit = solvers.get(key)
+            if hit is None:
+                base = None if p.measured is None else BaseReceptance(p.full_bases[key].receptance)
+                hit = solvers[key] = (Solver(m.frequency_hz, cache_size=4), PartsBuilder(p.spec, p.plane, base))
+            out.append(hit[0].tip_h(hit[1].parts(m.tool, k)))
         return out
 
 
-def analyse(request: Mapping[str, Any]) -> Analysis:
-    """Run a diagnosis and keep its full state (see :class:`Analysis`)."""
-    return Analysis(request)
+def analyse(request: Mapping[str, Any], resolve_base: BaseResolver | None = None) -> Analysis:
+    """Run a diagnosis and keep its full state (see :class:`Analysis`).
+
+    Parameters
+    ----------
+    request : dict
+    resolve_base : callable, optional
+        Looks a measured spindle up (needed for ``assembly.spindle = {"measurement_id": ...}``);
+        the application layer passes one on its store.
+    """
+    return Analysis(request, resolve_base)
