@@ -35,6 +35,9 @@ stickout_m                          0.0003   per measurement, m
 spindle_effective_length_log        0.35     measured ``direct_frf`` spindle: ln-scale of the
                                              equivalent-cantilever length of its estimated
                                              rotations (L/2 and 2L at 2σ)
+spindle_rotation_shape_log          0.35     measured ``direct_frf`` spindle: ln-scale of the
+                                             estimate's shape PH/N² (4/3 for a cantilever;
+                                             a real spindle's differs: RA-1's is 1.55)
 spindle_noise_rel                   0.005    measured spindle: relative noise of its stored FRFs
                                              where no coherence is stored
 ==================================  =======  =============================================
@@ -70,6 +73,7 @@ DEFAULT_TOLERANCES: dict[str, float] = {
     "holder_tool_damping_log": 0.25,
     "stickout_m": 0.0003,
     "spindle_effective_length_log": 0.35,
+    "spindle_rotation_shape_log": 0.35,
     "spindle_noise_rel": 0.005,
 }
 # Shrinkage towards the diagonal (Ledoit–Wolf style, fixed weight as in the prototype): with
@@ -127,6 +131,7 @@ def draw_knobs(rng: np.random.Generator, tol: Mapping[str, float], n_configs: in
                    "stickout_offset_m": tol["stickout_m"] * n()} for _ in range(n_configs)]
     if estimated_rotations:
         shared["base_rotation_scale"] = float(np.exp(-tol["spindle_effective_length_log"] * n()))
+        shared["base_rotation_shape"] = float(np.exp(tol["spindle_rotation_shape_log"] * n()))
     out = []
     for per in per_config:
         fields = {**shared, **per}

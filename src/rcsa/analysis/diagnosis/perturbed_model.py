@@ -33,10 +33,11 @@ different, physical realisations, see ``tests/analysis/diagnosis/truth.py``):
   spindle–holder joint), or to a measured receptance at its plane: the rotational receptances
   l = n and p are off by a frequency-independent amount (the residual-compensation form of
   Duarte & Ewins 2000; :class:`~rcsa.analysis.diagnosis.chain_items.AddedCompliance`).
-* ``base_rotation_scale`` s scales the rotational entries of the spindle's receptance
-  (l, n × s, p × s²; :class:`~rcsa.analysis.diagnosis.chain_items.RotationRescale`): for a
-  ``direct_frf`` spindle, whose rotations are an equivalent-cantilever estimate, the estimate
-  with effective length L/s instead of L.
+* ``base_rotation_scale`` s and ``base_rotation_shape`` c scale the rotational entries of
+  the spindle's receptance (l, n × s, p × s²c;
+  :class:`~rcsa.analysis.diagnosis.chain_items.RotationRescale`): for a ``direct_frf``
+  spindle, whose rotations are an equivalent-cantilever estimate, the estimate with effective
+  length L/s instead of L and shape PH/N² = 4c/3 instead of 4/3.
 * At ``holder_tip`` the holder is inside the measurement: ``insertion_offset_m`` only
   lengthens the tool's free length (the holder's annulus over δ is part of the measurement).
 """
@@ -101,6 +102,7 @@ class Knobs:
     nose_cross_compliance_rad_n: float = 0.0
     nose_rotational_residual_rad_nm: float = 0.0
     base_rotation_scale: float = 1.0
+    base_rotation_shape: float = 1.0
 
 
 class _BeamTermsGrid(Grid):
@@ -326,8 +328,8 @@ class PartsBuilder:
 
         def middle() -> Chain:
             items: list[ChainItem] = []
-            if k.base_rotation_scale != 1.0:
-                items.append(RotationRescale(k.base_rotation_scale))
+            if k.base_rotation_scale != 1.0 or k.base_rotation_shape != 1.0:
+                items.append(RotationRescale(k.base_rotation_scale, k.base_rotation_shape))
             if k.nose_cross_compliance_rad_n != 0.0 or k.nose_rotational_residual_rad_nm != 0.0:
                 items.append(AddedCompliance(k.nose_cross_compliance_rad_n, k.nose_rotational_residual_rad_nm))
             if self.plane == "holder_tip":
@@ -343,7 +345,7 @@ class PartsBuilder:
                 items.append(ring)
             return tuple(items)
 
-        mid_key = (mkey, s, k.base_rotation_scale, k.nose_cross_compliance_rad_n, k.nose_rotational_residual_rad_nm)
+        mid_key = (mkey, s, k.base_rotation_scale, k.base_rotation_shape, k.nose_cross_compliance_rad_n, k.nose_rotational_residual_rad_nm)
         if self.plane != "holder_tip":
             mid_key += (k.sh_translational_scale, k.sh_rotational_scale, k.sh_damping_scale, k.insertion_offset_m,
                         t.inserted_length_m, t.shank_diameter_m, t.material)
