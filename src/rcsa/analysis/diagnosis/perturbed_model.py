@@ -66,7 +66,7 @@ from rcsa.physics.arrays import ComplexArray, FloatArray, IntArray
 from rcsa.physics.chain import Beam, Chain, ChainItem, Grid, Ground, Sym
 from rcsa.physics.materials import Material
 from rcsa.physics.sections import Section
-from rcsa.physics.segments import SixTerms, segment_terms
+from rcsa.physics.segments import SixTerms, Waves, segment_terms
 
 __all__ = ["AddedCompliance", "BaseReceptance", "Knobs", "Parts", "PartsBuilder", "RotationRescale", "Solver",
            "config_parts", "null_shear_scale"]
@@ -106,14 +106,21 @@ class Knobs:
 
 
 class _BeamTermsGrid(Grid):
-    """A grid that keeps the six stiffness terms of the most recently used beams."""
+    """A grid that keeps the six stiffness terms of the most recently used beams, and the
+    wavenumbers of the most recently used sections (beams of one section share them: the
+    shank of every stickout, the pieces of a split segment)."""
 
     def __init__(self, omega_rad_s: FloatArray, max_beams: int) -> None:
         super().__init__(omega_rad_s)
         self._terms = lru_cache(maxsize=max_beams)(self._segment_terms)
+        self._section_waves = lru_cache(maxsize=max_beams // 4)(lambda section: Waves(self.omega_rad_s, section))
+
+    def waves(self, section: Section) -> Waves:
+        """Wavenumbers of ``section`` (bounded cache: the Monte Carlo makes new sections all the time)."""
+        return self._section_waves(section)  # type: ignore[no-any-return]
 
     def _segment_terms(self, beam: Beam) -> SixTerms:
-        return segment_terms(self.omega_rad_s, beam.section, beam.length_m)
+        return segment_terms(self.omega_rad_s, beam.section, beam.length_m, self.waves(beam.section))
 
     def beam_terms(self, beam: Beam) -> SixTerms:
         """Six-term dynamic stiffness of ``beam``, cached by beam (section and length)."""
@@ -320,11 +327,15 @@ class PartsBuilder:
             spindle = _cached(self._spindles, (mkey, s, k.bearing_stiffness_scale, k.bearing_damping_scale),
                               lambda: shear_scaled(_spindle_chain(_spindle(sp, k), mats, shear, theory)))
         stickout = tool.stickout_m + k.stickout_offset_m + k.insertion_offset_m
-        t = replace(tool, stickout_m=stickout,
-                    fluted_diameter_ratio=(tool.fluted_diameter_ratio if k.fluted_stiffness_ratio is None
-                                           else k.fluted_stiffness_ratio),
-                    fluted_mass_diameter_ratio=(tool.fluted_mass_diameter_ratio if k.fluted_mass_ratio is None
-                                                else k.fluted_mass_ratio))
+        r_i = tool.fluted_diameter_ratio if k.fluted_stiffness_ratio is None else k.fluted_stiffness_ratio
+        r_a = tool.fluted_mass_diameter_ratio if k.fluted_mass_ratio is None else k.fluted_mass_ratio
+        made: list[ToolSpec] = []
+
+        def tool_of() -> ToolSpec:  # the tool with its knobs, built only when a sub-chain is (a cache miss)
+            if not made:
+                made.append(replace(tool, stickout_m=stickout, fluted_diameter_ratio=r_i,
+                                    fluted_mass_diameter_ratio=r_a))
+            return made[0]
 
         def middle() -> Chain:
             items: list[ChainItem] = []
@@ -340,15 +351,19 @@ class PartsBuilder:
                                      k.sh_damping_scale))
             if sh is not None:
                 items.append(sh)
-            items.extend(shear_scaled(_holder_chain(holder, t, mats, shear, theory)))
+            items.extend(shear_scaled(_holder_chain(holder, tool_of(), mats, shear, theory)))
             if ring is not None:
                 items.append(ring)
             return tuple(items)
 
-        mid_key = (mkey, s, k.base_rotation_scale, k.base_rotation_shape, k.nose_cross_compliance_rad_n, k.nose_rotational_residual_rad_nm)
+        mid_key = (mkey, s, k.base_rotation_scale, k.base_rotation_shape, k.nose_cross_compliance_rad_n,
+                   k.nose_rotational_residual_rad_nm)
         if self.plane != "holder_tip":
+            assert spec.holder is not None
+            # the holder chain sees the tool only through the inserted length inside the (trimmed) holder
+            filled = round(min(tool.overall_length_m - stickout, spec.holder.length_m - k.insertion_offset_m), 12)
             mid_key += (k.sh_translational_scale, k.sh_rotational_scale, k.sh_damping_scale, k.insertion_offset_m,
-                        t.inserted_length_m, t.shank_diameter_m, t.material)
+                        filled, tool.shank_diameter_m, tool.material)
         mid = _cached(self._middles, mid_key, middle)
 
         def tail() -> Chain:
@@ -357,12 +372,12 @@ class PartsBuilder:
                                      k.ht_damping_scale))
             if ht is not None:
                 items.append(ht)
-            items.extend(shear_scaled(_tool_chain(t, mats, shear, theory)))
+            items.extend(shear_scaled(_tool_chain(tool_of(), mats, shear, theory)))
             if k.tip_mass_kg > 0.0:
                 items = _with_mass(items, k.tip_mass_kg, k.tip_mass_distance_m)
             return tuple(items)
 
-        tail_key = (mkey, s, t, k.ht_translational_scale, k.ht_rotational_scale, k.ht_damping_scale,
+        tail_key = (mkey, s, tool, stickout, r_i, r_a, k.ht_translational_scale, k.ht_rotational_scale, k.ht_damping_scale,
                     k.tip_mass_kg, k.tip_mass_distance_m)
         return Parts(spindle, mid, _cached(self._tails, tail_key, tail), self.base if base is None else base)
 
