@@ -255,6 +255,42 @@ def form_error(args: argparse.Namespace) -> None:
     Path(args.out).with_name("second_effect_calibration.json").write_text(json.dumps(rows, indent=1))
 
 
+def timing(repeats: int = 3) -> dict:
+    """CPU and wall time of one diagnosis, and what takes what (the phases of the best cold run).
+
+    Fixed seeded requests with a hidden 1-8 g sensor mass: RA-1 with 5 stickouts (analytical
+    spindle), and 3 stickouts on each kind of measured spindle. "cold" computes the
+    Monte-Carlo Σ; "warm" repeats the request with its draws cached (a re-run with other
+    options, or the benchmark's later trials of one worker on the same lines).
+    """
+    from rcsa.analysis.diagnosis import problem
+
+    cases = [("analytical, 5 stickouts", truth.make_trial(np.random.default_rng([7, 0]), "sensor_mass",
+                                                          with_null=False).request, None)]
+    for kind in truth_hybrid.KINDS:
+        trial = truth_hybrid.make_hybrid_trial(np.random.default_rng([7, 1]), "sensor_mass", kind, with_null=False)
+        cases.append((f"{kind}, 3 stickouts", trial.request, base_resolver(trial.source)))
+    out = {}
+    for name, request, resolve in cases:
+        runs = []
+        for i in range(repeats + 2):
+            if i < repeats:
+                problem._DRAW_CACHE.clear()
+            c0, t0 = time.process_time(), time.perf_counter()
+            r = build_response(analyse(request, resolve))
+            runs.append({"cpu_s": time.process_time() - c0, "wall_s": time.perf_counter() - t0,
+                         "phases_s": r["analysis"]["timings_s"], "verdict": r["verdict"]["effect"]})
+        cold, warm = runs[:repeats], runs[repeats:]
+        best = min(cold, key=lambda x: x["cpu_s"])
+        out[name] = {"cold_cpu_s": best["cpu_s"], "cold_wall_s": min(x["wall_s"] for x in cold),
+                     "warm_cpu_s": min(x["cpu_s"] for x in warm), "warm_wall_s": min(x["wall_s"] for x in warm),
+                     "phases_of_best_cold_run_s": best["phases_s"], "verdict": best["verdict"]}
+        ph = " ".join(f"{k} {v:.2f}" for k, v in best["phases_s"].items())
+        print(f"{name:34s} cold CPU {best['cpu_s']:.2f} s (wall {out[name]['cold_wall_s']:.2f}), "
+              f"warm CPU {out[name]['warm_cpu_s']:.2f} s | phases (wall, s): {ph}", flush=True)
+    return out
+
+
 def summarise(records: list[dict]) -> dict:
     """Scores of ``diagnosis.md`` §5.2 from the trial records."""
     eff = [r for r in records if r["effect"] != "none"]
@@ -452,11 +488,19 @@ def main() -> None:
     ap.add_argument("--example", nargs=2, type=Path, metavar=("REQUEST_JSON", "PNG"),
                     help="only write the README example's request and figure")
     ap.add_argument("--example-effect", default="holder_tool_joint", choices=truth.EFFECTS)
+    ap.add_argument("--timing", action="store_true",
+                    help="only time one diagnosis per kind of spindle, cold and warm, with its phases")
     ap.add_argument("--form-error", action="store_true",
                     help="only measure the candidates' form error on correct fits (--trials-per-class per effect)")
     args = ap.parse_args()
     if args.form_error:
         form_error(args)
+        return
+    if args.timing:
+        result = {"machine": machine(), "timing": timing()}
+        path = DEFAULT_OUT.with_name("diagnosis_timing.json")
+        path.write_text(json.dumps(result, indent=1))
+        print(f"wrote {path}")
         return
     if args.example:
         example(*args.example, effect=args.example_effect, seed=args.seed)

@@ -31,9 +31,9 @@ from rcsa.physics.sections import tube
 from tests.analysis.diagnosis.conftest import model_request
 from tests.analysis.diagnosis.truth import base_document
 
-F_HZ = np.arange(60.0, 6000.0 + 1e-9, 6.0)
+F_HZ = np.arange(60.0, 6000.0 + 1e-9, 8.0)
 STICKOUTS_M = (0.055, 0.066, 0.077)
-FAST = {"monte_carlo_draws": 60, "max_lines": 500}
+FAST = {"monte_carlo_draws": 50, "max_lines": 300}
 NOISE = 0.003
 BLANK_M, POINTS_M = 0.060, (0.0, 0.015)
 
@@ -174,6 +174,7 @@ def test_a_gap_the_spindle_noise_explains_gives_none(store):
     for name, mid, tol in (("honest", honest, {}), ("claimed_precise", silent, {"spindle_noise_rel": 1e-4})):
         req = hybrid_request({("artifact_frfs", "holder_tip"): mid}, "artifact_frfs", "holder_tip", seed=2)
         req["tolerances"] = tol
+        req["options"]["monte_carlo_draws"] = 200  # the identification's errors are heavy-tailed: 50 draws miss them
         out[name] = diagnose(req, base_resolver(st))
     r = out["honest"]
     assert r["verdict"]["effect"] == "none" and not r["gap"]["significant"]

@@ -178,6 +178,7 @@ def _sentence(a: Analysis, effects: list[dict[str, Any]]) -> str:
 
 def build_response(a: Analysis) -> dict[str, Any]:
     """The JSON-ready response of a finished :class:`~rcsa.analysis.diagnosis.state.Analysis`."""
+    response_started = time.perf_counter()
     d, p = a.decision, a.problem
     log_z = {f.candidate.name: f.log_evidence for f in d.ranking}
     top = max([a.log_z0, *log_z.values()])
@@ -247,7 +248,8 @@ def build_response(a: Analysis) -> dict[str, Any]:
                      "claim_threshold": a.request.options.claim_threshold,
                      "ambiguity_window": a.request.options.ambiguity_window,
                      "tolerances": dict(a.request.tolerances),
-                     "log_evidence_base": a.log_z0},
+                     "log_evidence_base": a.log_z0,
+                     "timings_s": {**a.timings_s, "response": time.perf_counter() - response_started}},
         "notes": notes,
         **spindle,
         "runtime_s": time.perf_counter() - a.started,  # analysis and this response

@@ -53,6 +53,19 @@ RESIDUAL_P = 0.05
 MIN_SECOND_SHIFT_RATIO = 0.2
 
 
+class _Phases:
+    """Wall time of the steps of a diagnosis, s (reported in the response's ``analysis``)."""
+
+    def __init__(self) -> None:
+        self.phases: dict[str, float] = {}
+        self._last = time.perf_counter()
+
+    def mark(self, name: str) -> None:
+        now = time.perf_counter()
+        self.phases[name] = now - self._last
+        self._last = now
+
+
 @dataclass
 class SecondCandidate:
     """Scores of one candidate second effect (:meth:`Analysis.second_candidates`)."""
@@ -78,6 +91,7 @@ class Analysis:
 
     def __init__(self, request: Mapping[str, Any], resolve_base: BaseResolver | None = None) -> None:
         self.started = t0 = time.perf_counter()
+        clock = _Phases()
         self.request = parse_request(request, resolve_base)
         opts = self.request.options
         self.problem = p = Problem(self.request)
@@ -87,7 +101,9 @@ class Analysis:
             raise InputError("options.effects", "; ".join(
                 f"{e} is not applicable here ({self.not_applicable[e][0]})" for e in impossible)
                 + ": leave it out")
+        clock.mark("setup")
         self.disc = p.discrepancy()
+        clock.mark("monte_carlo")
         masses = [m.sensor_mass_kg for m in self.request.measurements if m.sensor_mass_kg is not None]
         self.candidates, self.notes = catalogue(p.spec, p.tools, p.solver,
                                                 1.5 * max(masses) if masses and max(masses) > 0 else None,
@@ -98,15 +114,19 @@ class Analysis:
         self.log_z0 = float(self.like(p.base_features))
         self.fits = [fit_candidate(c, self.features_at, self.like, self.log_z0) for c in self.candidates]
         self.decision: Decision = decide(self.fits, opts.claim_threshold, opts.ambiguity_window)
+        clock.mark("candidates")
         self.folds = folds([m.tool.stickout_m for m in self.request.measurements], opts.held_out)
         self.held: dict[str, HeldOut | None] = {}
         shown = self.reported_names() + [f.candidate.name for f in self.decision.ranking[:RANKED_WITH_HELD_OUT]]
         for f in self.decision.ranking:
             if f.candidate.name in shown:
                 self.held[f.candidate.name] = self._held_out([f.candidate], [f.map])
+        clock.mark("held_out")
         self.second: tuple[Fit, HeldOut | None, float] | None = None
         if self.decision.status == "identified" and opts.max_effects >= 2:
             self.second = self._greedy_second()
+        clock.mark("second_effect")
+        self.timings_s = clock.phases
         self.runtime_s = time.perf_counter() - t0
 
     # ------------------------------------------------------------------ model features
