@@ -61,8 +61,8 @@ import numpy as np
 from rcsa.model.peaks import peak_lines
 from rcsa.physics.arrays import ComplexArray, FloatArray, IntArray
 
-__all__ = ["BAND_FACTORS", "FittedMode", "ModalFit", "RationalFit", "modal_fit", "rational_fit", "refit_mode",
-           "relative_noise"]
+__all__ = ["BAND_FACTORS", "FittedMode", "ModalFit", "RationalFit", "local_relative_noise", "modal_fit",
+           "rational_fit", "refit_mode", "relative_noise"]
 
 _TWO_PI = 2.0 * np.pi
 #: Lines each side of a candidate for its local third-difference noise estimate.
@@ -85,7 +85,7 @@ _SETTLE_PASSES = 6
 _PEAK_POINTS = 801
 
 
-def relative_noise(h: ComplexArray, lines: IntArray | None = None) -> float:
+def relative_noise(h: ComplexArray, lines: IntArray | None = None, robust: bool = True) -> float:
     """Standard deviation of the relative complex noise of an FRF, from third differences.
 
     For ``h_k = s_k (1 + n_k)`` with white complex noise ``E|n|² = σ²`` and a smooth ``s``
@@ -100,6 +100,9 @@ def relative_noise(h: ComplexArray, lines: IntArray | None = None) -> float:
     lines : numpy.ndarray of int, optional
         Use only these (ascending) lines; differences are taken within each run of
         consecutive lines, never across a gap.
+    robust : bool
+        The median (default: outliers such as single bad lines do not count) or the mean
+        (``E|Δ³h|²/|h|² = 20σ²``: the RMS noise, spikes included, as a residual sees it).
 
     Returns
     -------
@@ -112,7 +115,40 @@ def relative_noise(h: ComplexArray, lines: IntArray | None = None) -> float:
     ratios = [np.abs(np.diff(h[r], 3)) ** 2 / np.abs(h[r][1:-2]) ** 2 for r in runs if r.size >= 4]
     if not ratios:
         return math.nan
-    return float(np.sqrt(np.median(np.concatenate(ratios)) / (20.0 * math.log(2.0))))
+    all_ratios = np.concatenate(ratios)
+    if not robust:
+        return float(np.sqrt(np.mean(all_ratios) / 20.0))
+    return float(np.sqrt(np.median(all_ratios) / (20.0 * math.log(2.0))))
+
+
+def local_relative_noise(h: ComplexArray, half_lines: int = NOISE_LINES) -> FloatArray:
+    """:func:`relative_noise` around every line: the median over ±``half_lines`` lines.
+
+    Noise that varies along the band (a measured spindle's noise, amplified where its
+    identification is ill-conditioned) is seen where it is.
+
+    Parameters
+    ----------
+    h : numpy.ndarray, shape (nfreq,), complex
+        Receptance on consecutive lines, m/N.
+    half_lines : int
+        Half-width of the running median, lines.
+
+    Returns
+    -------
+    numpy.ndarray, shape (nfreq,)
+        σ per line (relative); NaN everywhere with fewer than 4 lines.
+    """
+    h = np.asarray(h, dtype=complex)
+    if h.size < 4:
+        return np.full(h.size, np.nan)
+    ratios = np.abs(np.diff(h, 3)) ** 2 / np.abs(h[1:-2]) ** 2          # one per line 1 … n − 3
+    width = min(2 * half_lines + 1, ratios.size)
+    padded = np.pad(ratios, (width // 2, width - 1 - width // 2), mode="edge")
+    med = np.median(np.lib.stride_tricks.sliding_window_view(padded, width), axis=1)
+    sigma = np.sqrt(med / (20.0 * math.log(2.0)))
+    out: FloatArray = sigma[np.clip(np.arange(h.size) - 1, 0, sigma.size - 1)]
+    return out
 
 
 # ---------------------------------------------------------------------------- one band

@@ -370,6 +370,17 @@ def _all_joint_values(spec: AssemblySpec) -> dict[str, float]:
     return out
 
 
+def _model_noise(problem: Problem, m: int, values: dict[str, float], lines: np.ndarray) -> float:
+    """RMS relative noise of model ``m``'s FRF on the window ``lines`` (a measured spindle's noise,
+    spikes included: the residual sees them all)."""
+    f = problem.req.measurements[m].frequency_hz
+    if lines.size < 12:
+        return float(np.median(problem.model_noise(m, f)))
+    h = np.ones(f.size, dtype=complex)
+    h[lines] = problem.h(m, values, f[lines])
+    return relative_noise(h, lines, robust=False)
+
+
 def _spindle_estimate(req: IdentificationRequest, values: dict[str, float], names: list[str],
                       lines: list[np.ndarray]) -> dict[str, float]:
     """Standard uncertainty from a ``direct_frf`` spindle's estimated rotations (stage 5 on each bound)."""
@@ -464,9 +475,7 @@ def identify_joints(req: IdentificationRequest) -> Identification:
         local = [relative_noise(m.h, idx) for m, idx in zip(req.measurements, lines, strict=True)]
         noise_lines = [a if math.isfinite(a) and idx.size >= 12 else b
                        for a, b, idx in zip(local, noise, lines, strict=True)]
-        model_noise = [relative_noise(problem.h(k, values, m.frequency_hz[idx]))
-                       if idx.size >= 12 else problem.model_noise[k]
-                       for k, (m, idx) in enumerate(zip(req.measurements, lines, strict=True))]
+        model_noise = [_model_noise(problem, k, values, idx) for k, idx in enumerate(lines)]
         total = [math.hypot(a, b if math.isfinite(b) else 0.0) for a, b in zip(noise_lines, model_noise,
                                                                               strict=True)]
         noise_rel = float(np.sqrt(np.nanmean(np.square(total))))
@@ -501,6 +510,10 @@ def identify_joints(req: IdentificationRequest) -> Identification:
                                       "this measurement; measure the spindle's rotations (artifact_frfs)")
     except NotIdentifiable as exc:
         result.status, result.detail = "not_identifiable", str(exc)
+        if req.spindle is not None and req.spindle.kind == "direct_frf":
+            result.detail += ("; note that the measured spindle is a direct_frf whose rotations are only estimated "
+                              "(equivalent cantilever), a likely model-form error: measure them (artifact_frfs) or "
+                              "adjust spindle.effective_length_m")
         result.values, result.uncertainty, result.uncertainty_components = dict(start), {}, {}
     result.flags = flags
     result.runtime_s = time.perf_counter() - t0

@@ -25,14 +25,13 @@ from rcsa.analysis.joint_identification.measured_peaks import (
     PEAK_PROMINENCE,
     MeasuredPeak,
     peaks_ln_hz,
-    relative_noise,
 )
 from rcsa.analysis.joint_identification.request import IdentificationRequest
 from rcsa.analysis.mode_features import mode_windows
 from rcsa.analysis.sensitivity import effect_analysis
 from rcsa.analysis.tool_point_model import ToolPointModel
 from rcsa.model.contract import AssemblySpec
-from rcsa.model.modal_fit import rational_fit
+from rcsa.model.modal_fit import local_relative_noise, rational_fit
 from rcsa.model.parameters import get_parameter
 from rcsa.physics.arrays import ComplexArray, FloatArray
 
@@ -127,7 +126,7 @@ class Problem:
         if spindle is not None and spindle_index is not None:
             spindle = spindle.alternative(spindle_index)
         self.models = [ToolPointModel(m.spec, spindle) for m in req.measurements]
-        self._model_noise: list[float] | None = None
+        self._model_noise: list[FloatArray] | None = None
 
     def spec(self, m: int, values: Mapping[str, float]) -> AssemblySpec:
         """Measurement ``m``'s assembly with the named parameters set (SI)."""
@@ -141,17 +140,18 @@ class Problem:
         """The same for several parameter sets in one pass, shape (nsets, nfreq)."""
         return self.models[m].h_sets(frequency_hz, sets)
 
-    @property
-    def model_noise(self) -> list[float]:
-        """Relative noise of each model FRF on its measured lines at the start.
+    def model_noise(self, m: int, frequency_hz: FloatArray) -> FloatArray:
+        """Local relative noise of model ``m``'s FRF at the start, read at ``frequency_hz``.
 
         Zero in effect for an analytical spindle; a measured spindle's own noise (the
-        artifact identification's, or the tap test's) for a hybrid one.
+        artifact identification's, or the tap test's) for a hybrid one, where it is
+        (:func:`rcsa.model.modal_fit.local_relative_noise` on the measured lines).
         """
         if self._model_noise is None:
-            self._model_noise = [relative_noise(self.h(m, self.start, meas.frequency_hz))
-                                 for m, meas in enumerate(self.req.measurements)]
-        return self._model_noise
+            self._model_noise = [np.nan_to_num(local_relative_noise(self.h(k, self.start, meas.frequency_hz)))
+                                 for k, meas in enumerate(self.req.measurements)]
+        out: FloatArray = np.interp(frequency_hz, self.req.measurements[m].frequency_hz, self._model_noise[m])
+        return out
 
 
 # ---------------------------------------------------------------------------- stage 1
@@ -192,12 +192,13 @@ def _coarse_match(problem: Problem, values: dict[str, float], measured_ln: list[
     stiffness that does not move the peaks at all is held at its start.
     """
     grids = [_coarse_grid(m.frequency_hz) for m in problem.req.measurements]
+    noise = [problem.model_noise(i, f) for i, f in enumerate(grids)]
 
     def mismatch(k_values: dict[str, float]) -> float:
         total = 0.0
         for i, f in enumerate(grids):
             h = problem.h(i, {**values, **k_values}, f)
-            total += _peak_mismatch(peaks_ln_hz(f, h, problem.model_noise[i]), measured_ln[i])
+            total += _peak_mismatch(peaks_ln_hz(f, h, noise[i]), measured_ln[i])
         return total / len(grids)
 
     def search(axes: list[np.ndarray]) -> tuple[tuple[int, ...], np.ndarray, np.ndarray]:
@@ -325,7 +326,7 @@ def _assign(problem: Problem, values: dict[str, float], peaks: list[list[Measure
         extra = [r for r in rotational if (get_parameter(spec, r) or 0) > 0
                  and r.split(".")[0] in {n.split(".")[0] for n in problem.names}]
         grid = _coarse_grid(meas.frequency_hz)
-        ln_pk, prominence = peaks_ln_hz(grid, problem.h(m, values, grid), problem.model_noise[m])
+        ln_pk, _ = peaks_ln_hz(grid, problem.h(m, values, grid), problem.model_noise(m, grid))
         model_pk = np.exp(ln_pk)
         # search windows between the model's *visible* peaks (hidden modes make no peak)
         windows = mode_windows(model_pk, model_pk) if model_pk.size else np.empty((0, 2))

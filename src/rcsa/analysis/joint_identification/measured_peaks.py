@@ -135,7 +135,8 @@ def measured_peaks(frequency_hz: np.ndarray, h: np.ndarray, noise_rel: float) ->
     return out
 
 
-def peaks_ln_hz(frequency_hz: np.ndarray, h: np.ndarray, noise_rel: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+def peaks_ln_hz(frequency_hz: np.ndarray, h: np.ndarray, noise_rel: float | np.ndarray = 0.0
+                ) -> tuple[np.ndarray, np.ndarray]:
     """ln(frequency) of the peaks of a model FRF, parabola-refined.
 
     Parameters
@@ -143,9 +144,9 @@ def peaks_ln_hz(frequency_hz: np.ndarray, h: np.ndarray, noise_rel: float = 0.0)
     frequency_hz : numpy.ndarray, shape (nfreq,)
         Any increasing grid (a geometric one gives uniform resolution).
     h : numpy.ndarray, shape (nfreq,), complex
-    noise_rel : float
-        Relative noise of ``h`` (a model on a measured spindle carries the spindle's): a
-        peak must also rise by :data:`PEAK_NOISE_SIGMAS` ``· noise_rel · |h_peak|``.
+    noise_rel : float or numpy.ndarray, shape (nfreq,)
+        Relative noise of ``h``, overall or per line (a model on a measured spindle carries
+        the spindle's): a peak must also rise by :data:`PEAK_NOISE_SIGMAS` ``· noise_rel · |h_peak|``.
 
     Returns
     -------
@@ -156,7 +157,8 @@ def peaks_ln_hz(frequency_hz: np.ndarray, h: np.ndarray, noise_rel: float = 0.0)
     """
     mag = np.abs(h)
     idx, prominences = peak_lines(mag, LENIENT_PROMINENCE * float(mag.max()))
-    keep = (idx > 0) & (idx < mag.size - 1) & (prominences >= PEAK_NOISE_SIGMAS * noise_rel * mag[idx])
+    sigma = np.broadcast_to(np.nan_to_num(np.asarray(noise_rel, dtype=float)), mag.shape)
+    keep = (idx > 0) & (idx < mag.size - 1) & (prominences >= PEAK_NOISE_SIGMAS * sigma[idx] * mag[idx])
     idx, prom = idx[keep], prominences[keep] / float(mag.max())
     x = np.log(frequency_hz)
     y0, y1, y2 = mag[idx - 1], mag[idx], mag[idx + 1]
