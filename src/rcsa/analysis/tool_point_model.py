@@ -188,6 +188,11 @@ class ToolPointModel:
             spec = set_parameter(spec, name, float(value))
         return spec
 
+    def model_at(self, values: Mapping[str, float]) -> AssemblyModel:
+        """The chain model at these tool parameters (raises :class:`InputError` for an assembly
+        that does not fit the spindle's plane, e.g. a holder on a holder-tip measurement)."""
+        return self._model(values)
+
     def _model(self, values: Mapping[str, float]) -> AssemblyModel:
         geometry = tuple(float(values[g]) if g in values else float("nan") for g in GEOMETRY)
         hit = self._models.get(geometry)
