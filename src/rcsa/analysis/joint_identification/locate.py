@@ -140,6 +140,13 @@ class Problem:
         """The same for several parameter sets in one pass, shape (nsets, nfreq)."""
         return self.models[m].h_sets(frequency_hz, sets)
 
+    def noise_of(self, h: ComplexArray) -> FloatArray | float:
+        """Local relative noise of a model FRF: a measured spindle's noise, which the joints
+        amplify differently at every value (zero for an analytical spindle)."""
+        if self.req.spindle is None:
+            return 0.0
+        return np.nan_to_num(local_relative_noise(h))
+
     def model_noise(self, m: int, frequency_hz: FloatArray) -> FloatArray:
         """Local relative noise of model ``m``'s FRF at the start, read at ``frequency_hz``.
 
@@ -192,13 +199,12 @@ def _coarse_match(problem: Problem, values: dict[str, float], measured_ln: list[
     stiffness that does not move the peaks at all is held at its start.
     """
     grids = [_coarse_grid(m.frequency_hz) for m in problem.req.measurements]
-    noise = [problem.model_noise(i, f) for i, f in enumerate(grids)]
 
     def mismatch(k_values: dict[str, float]) -> float:
         total = 0.0
         for i, f in enumerate(grids):
             h = problem.h(i, {**values, **k_values}, f)
-            total += _peak_mismatch(peaks_ln_hz(f, h, noise[i]), measured_ln[i])
+            total += _peak_mismatch(peaks_ln_hz(f, h, problem.noise_of(h)), measured_ln[i])
         return total / len(grids)
 
     def search(axes: list[np.ndarray]) -> tuple[tuple[int, ...], np.ndarray, np.ndarray]:
@@ -326,7 +332,8 @@ def _assign(problem: Problem, values: dict[str, float], peaks: list[list[Measure
         extra = [r for r in rotational if (get_parameter(spec, r) or 0) > 0
                  and r.split(".")[0] in {n.split(".")[0] for n in problem.names}]
         grid = _coarse_grid(meas.frequency_hz)
-        ln_pk, _ = peaks_ln_hz(grid, problem.h(m, values, grid), problem.model_noise(m, grid))
+        h_grid = problem.h(m, values, grid)
+        ln_pk, _ = peaks_ln_hz(grid, h_grid, problem.noise_of(h_grid))
         model_pk = np.exp(ln_pk)
         # search windows between the model's *visible* peaks (hidden modes make no peak)
         windows = mode_windows(model_pk, model_pk) if model_pk.size else np.empty((0, 2))

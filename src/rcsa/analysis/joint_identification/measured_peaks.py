@@ -146,7 +146,9 @@ def peaks_ln_hz(frequency_hz: np.ndarray, h: np.ndarray, noise_rel: float | np.n
     h : numpy.ndarray, shape (nfreq,), complex
     noise_rel : float or numpy.ndarray, shape (nfreq,)
         Relative noise of ``h``, overall or per line (a model on a measured spindle carries
-        the spindle's): a peak must also rise by :data:`PEAK_NOISE_SIGMAS` ``· noise_rel · |h_peak|``.
+        the spindle's): a peak that does not rise by :data:`PEAK_NOISE_SIGMAS`
+        ``· noise_rel · |h_peak|`` is still listed, but never as prominent (its prominence is
+        capped at the lenient 1 %), so it can be matched but is never required.
 
     Returns
     -------
@@ -158,8 +160,10 @@ def peaks_ln_hz(frequency_hz: np.ndarray, h: np.ndarray, noise_rel: float | np.n
     mag = np.abs(h)
     idx, prominences = peak_lines(mag, LENIENT_PROMINENCE * float(mag.max()))
     sigma = np.broadcast_to(np.nan_to_num(np.asarray(noise_rel, dtype=float)), mag.shape)
-    keep = (idx > 0) & (idx < mag.size - 1) & (prominences >= PEAK_NOISE_SIGMAS * sigma[idx] * mag[idx])
+    keep = (idx > 0) & (idx < mag.size - 1)
     idx, prom = idx[keep], prominences[keep] / float(mag.max())
+    prom = np.where(prominences[keep] >= PEAK_NOISE_SIGMAS * sigma[idx] * mag[idx], prom,
+                    np.minimum(prom, LENIENT_PROMINENCE))
     x = np.log(frequency_hz)
     y0, y1, y2 = mag[idx - 1], mag[idx], mag[idx + 1]
     x0, x1, x2 = x[idx - 1], x[idx], x[idx + 1]
