@@ -12,6 +12,8 @@ from pathlib import Path
 import numpy as np
 
 from rcsa.errors import InputError
+from rcsa.measured.importers.bounds import check_frequency, check_magnitudes
+from rcsa.measured.importers.bounds import row_label as _where
 from rcsa.measured.importers.sensor import correct_sensor_mass
 from rcsa.measured.importers.units import to_receptance
 from rcsa.measured.store.measurement import Measurement, MeasurementMeta, Provenance
@@ -91,10 +93,6 @@ def numeric_rows(
     return rows, lines
 
 
-def _where(i: int, lines: Sequence[int] | None) -> str:
-    return f"row {i + 1} (line {lines[i]})" if lines is not None else f"index {i}"
-
-
 def finish(
     frequency_hz: np.ndarray,
     values: Mapping[str, np.ndarray],
@@ -106,8 +104,14 @@ def finish(
     lines: Sequence[int] | None = None,
     drop_nonpositive: bool = False,
     sensor_mass_kg: float | None = None,
+    bound_hint: str = "",
 ) -> Measurement:
     """Validate, drop 0 Hz rows if asked, convert to receptance and build the measurement.
+
+    Every array is checked: finite values only, frequencies > 0, strictly increasing and at
+    most :data:`~rcsa.measured.importers.bounds.MAX_FREQUENCY_HZ`, and every receptance
+    within :data:`~rcsa.measured.importers.bounds.BOUNDS_BY_UNIT` once converted (so a unit
+    mix-up of a factor 1e6 is refused, not stored).
 
     Parameters
     ----------
@@ -125,6 +129,8 @@ def finish(
         Drop rows at f <= 0 Hz (e.g. the 0 Hz bin) instead of refusing them.
     sensor_mass_kg : float, optional
         Remove this accelerometer mass from the driving-point FRF (direct_frf only).
+    bound_hint : str
+        Advice appended when a magnitude is out of bounds (importer-specific).
     """
     f = np.asarray(frequency_hz, dtype=float)
     vals = {k: np.asarray(v, dtype=np.complex128) for k, v in values.items()}
@@ -167,7 +173,16 @@ def finish(
         steps.append("mobility -> receptance: H = Y/(i w)")
     elif quantity == "accelerance":
         steps.append("accelerance -> receptance: H = -A/w^2")
-    frfs = {k: to_receptance(f, v, quantity) for k, v in vals.items()}
+    check_frequency(f, lines)
+    with np.errstate(over="ignore", invalid="ignore"):
+        frfs = {k: to_receptance(f, v, quantity) for k, v in vals.items()}
+    for k, v in frfs.items():
+        bad = np.flatnonzero(~np.isfinite(v))
+        if bad.size:  # finite in the file's quantity, overflowed on conversion
+            raise InputError(
+                k, f"{_where(int(bad[0]), lines)} overflows on conversion to receptance"
+            )
+        check_magnitudes(k, v, f, lines=lines, read_as=provenance.original_units, hint=bound_hint)
     m = Measurement(
         frequency_hz=f,
         frfs=frfs,
