@@ -42,9 +42,11 @@ _FORM_FIELDS = {
     "notes": "Free text.",
     "points_m": "artifact_frfs: point positions from the tip, m, e.g. 0,0.025.",
     "artifact": "artifact_frfs: JSON object (diameter_m, stickout_m, ...).",
-    "units": "FRF unit of the file, e.g. m/N, um/N, in/lbf, m/s^2/N, g/N (never guessed).",
-    "columns": "CSV: f,re,im | f,mag,phase | f,h11.re,h11.im,...; tap: t,force,response.",
-    "frequency_unit": "CSV frequency unit: Hz | kHz | rad/s.",
+    "units": "FRF unit of the file, e.g. m/N, um/N, in/lbf, m/s^2/N, g/N, dB re 1 m/N (never guessed; "
+             "default: the one the file's header or UFF datasets state).",
+    "columns": "CSV: f,re,im | f,mag,phase | f,h11.re,h11.im,... (default: from the file's header); "
+               "tap: t,force,response.",
+    "frequency_unit": "CSV frequency unit: Hz | kHz | rad/s (default: the header's, else Hz).",
     "phase_unit": "CSV phase unit: deg | rad.",
     "roles": "UFF: NAME=RSP_NODE:REF_NODE,..., e.g. h11=1:1,h21=2:1,h22=2:2.",
     "sensor_mass_kg": "Remove this accelerometer mass from the driving-point FRF, kg.",

@@ -232,8 +232,8 @@ def import_measurement(
     given.setdefault("kind", "direct_frf")
     meta = MeasurementMeta(**given)
     if form == "csv":
-        return read_csv(data, meta, units=opts.get("units"), columns=opts.get("columns") or "f,re,im",
-                        frequency_unit=opts.get("frequency_unit") or "Hz", phase_unit=opts.get("phase_unit"),
+        return read_csv(data, meta, units=opts.get("units"), columns=opts.get("columns"),  # default: the header
+                        frequency_unit=opts.get("frequency_unit"), phase_unit=opts.get("phase_unit"),
                         drop_nonpositive=drop, **common)
     if form == "frf":
         return read_cutpro(data, meta, units=opts.get("units"), drop_nonpositive=drop, **common)

@@ -98,17 +98,20 @@ def import_(
     machine: Annotated[str | None, typer.Option(help="Machine name.")] = None,
     notes: Annotated[str | None, typer.Option(help="Free text.")] = None,
     units: Annotated[
-        str | None, typer.Option(help="FRF unit, e.g. m/N, um/N, in/lbf, m/s^2/N, g/N.")
+        str | None,
+        typer.Option(help="FRF unit, e.g. m/N, um/N, in/lbf, m/s^2/N, g/N, dB re 1 m/N."),
     ] = None,
     columns: Annotated[
         str | None,
         typer.Option(
-            help="CSV: e.g. f,re,im | f,mag,phase | f,h11.re,h11.im,...; tap: t,force,response."
+            help="CSV: e.g. f,re,im | f,mag,phase | f,h11.re,h11.im,... (default: from the "
+            "file's header); tap: t,force,response."
         ),
     ] = None,
     frequency_unit: Annotated[
-        str, typer.Option(help="CSV frequency unit: Hz | kHz | rad/s.")
-    ] = "Hz",
+        str | None,
+        typer.Option(help="CSV frequency unit: Hz | kHz | rad/s (default: the header's, else Hz)."),
+    ] = None,
     phase_unit: Annotated[str | None, typer.Option(help="CSV phase unit: deg | rad.")] = None,
     roles: Annotated[
         str | None,

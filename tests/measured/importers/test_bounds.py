@@ -84,7 +84,9 @@ def test_pyuff_writes_inf_as_the_largest_double_which_is_refused(tmp_path):
     path = write_uff(tmp_path / "inf.uff", [frf58(F, h, binary=1)], (1, 1.0, 1.0))
     with pytest.raises(InputError) as err:
         read_uff(path, META)
-    assert err.value.field == "h" and "above 1 m/N" in err.value.rule and "index 5" in err.value.rule
+    assert (
+        err.value.field == "h" and "above 1 m/N" in err.value.rule and "index 5" in err.value.rule
+    )
 
 
 def test_accelerance_is_judged_after_conversion(tmp_path):

@@ -33,7 +33,7 @@ def _point_1():
 
 def test_point_1_imports_as_a_direct_frf_and_stores_bit_exact(tmp_path):
     with pytest.raises(InputError) as err:  # row 0 is 0 Hz: refused unless dropped explicitly
-        read_csv(POINT_1, META, units="m/N")
+        read_csv(POINT_1, META, units="m/N", columns="f,re,im")
     assert err.value.field == "frequency_hz" and "line 1" in err.value.rule
     m = _point_1()
     assert m.n_frequencies == 5000 and m.frequency_hz[0] == 1.0 and m.frequency_hz[-1] == 5000.0

@@ -22,6 +22,7 @@ __all__ = [
     "BOUNDS_BY_UNIT",
     "LEVER_ARM_MAX_M",
     "LEVER_ARM_MIN_M",
+    "MAX_ABS_PHASE_RAD",
     "MAX_FREQUENCY_HZ",
     "MAX_RECEPTANCE_M_N",
     "MIN_RECEPTANCE_M_N",
@@ -50,6 +51,12 @@ MAX_RECEPTANCE_M_N = 1.0
 #: anti-resonance of a measured cross FRF; exact zeros (empty lines of an analyser export,
 #: zero padding) and m/N values read as nm/N (x 1e-9) land below it.
 MIN_RECEPTANCE_M_N = 1.0e-15
+
+#: Largest phase magnitude accepted in a column declared in radians, rad. An unwrapped phase
+#: loses at most pi per mode, so 8 turns (16 pi, 50 rad) leave room for cross FRFs over many
+#: modes, while a phase in degrees read as radians exceeds it as soon as it passes 51 deg,
+#: which every FRF through a resonance (-90 deg) does.
+MAX_ABS_PHASE_RAD = 16.0 * np.pi
 
 #: Lever arms that relate the rotational receptances to h: l, n ~ h/a and p ~ h/a^2 with a
 #: between the shortest and longest holder or tool lengths, m.
