@@ -361,3 +361,24 @@ def test_absurd_and_non_finite_values_in_a_table_are_refused(tmp_path):
         "below 1e-15 m/N",
     )
     _refused(tmp_path, text.replace("\n2040,", "\n1e300,"), "frequency_hz", "above 1e+06 Hz")
+
+
+def test_truncated_cutpro_and_tap_files_are_refused(tmp_path):
+    from rcsa.measured.importers import read_cutpro, read_tap
+
+    frf = "".join(f"{a:.6e}\t{b.real:.6e}\t{b.imag:.6e}\n" for a, b in zip(F, H, strict=True))
+    (tmp_path / "x.frf").write_text(frf.rstrip("\n")[:-6])  # '-3.5048' of '-3.504865e-08'
+    with pytest.raises(InputError, match="cut mid-number") as err:
+        read_cutpro(tmp_path / "x.frf", META)
+    assert err.value.field == "file"
+    (tmp_path / "y.frf").write_text(frf.rstrip("\n"))  # whole, only the final newline missing
+    np.testing.assert_allclose(read_cutpro(tmp_path / "y.frf", META).frfs["h"], H, rtol=1e-6)
+    t = np.arange(64) / 1024.0
+    tap = "".join(f"{a:.6e}\t{np.exp(-a):.6e}\t{np.sin(a):.6e}\n" for a in t).rstrip("\n")
+    (tmp_path / "tap.txt").write_text(tap[:-14])  # the last row lost its response value
+    with pytest.raises(InputError, match="cut mid-row") as err:
+        read_tap(tmp_path / "tap.txt", META, force_unit="N", response_unit="m/s^2")
+    assert err.value.field == "columns"
+    (tmp_path / "tap.txt").write_text(tap[:-1])  # "...e-0": the exponent lost a digit
+    with pytest.raises(InputError, match="cut mid-number") as err:
+        read_tap(tmp_path / "tap.txt", META, force_unit="N", response_unit="m/s^2")

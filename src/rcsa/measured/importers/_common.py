@@ -12,6 +12,8 @@ from pathlib import Path
 import numpy as np
 
 from rcsa.errors import InputError
+from rcsa.measured.importers._table import COMMENTS as _COMMENTS
+from rcsa.measured.importers._table import cut_column
 from rcsa.measured.importers.bounds import check_frequency, check_magnitudes
 from rcsa.measured.importers.bounds import row_label as _where
 from rcsa.measured.importers.sensor import correct_sensor_mass
@@ -19,8 +21,6 @@ from rcsa.measured.importers.units import to_receptance
 from rcsa.measured.store.measurement import Measurement, MeasurementMeta, Provenance
 
 __all__ = ["decode_text", "finish", "numeric_rows", "read_source", "split_line"]
-
-_COMMENTS = ("#", "%", "//", "!")
 
 
 def read_source(
@@ -69,11 +69,18 @@ def numeric_rows(
     Blank lines and lines starting with ``#``, ``%``, ``//`` or ``!`` are skipped anywhere;
     lines that are not numbers are skipped before the first data row (a header) and refused
     after it. With ``leading=k`` only the first k tokens of a line must be numbers and the
-    rest is ignored (CutPro's first line carries labels after its first triple).
+    rest is ignored (CutPro's first line carries labels after its first triple). A file
+    that ends without a newline in a last row that is short, or whose last value is written
+    shorter than the same column in the other rows, is refused as truncated
+    (:mod:`rcsa.measured.importers._table`).
     """
     rows: list[list[float]] = []
     lines: list[int] = []
-    for ln, raw in enumerate(text.splitlines(), 1):
+    tokens: list[list[str]] = []
+    raw_lines = text.splitlines()
+    last = next((i for i in range(len(raw_lines), 0, -1) if raw_lines[i - 1].strip()), 0)
+    open_end = not text.endswith(("\n", "\r"))
+    for ln, raw in enumerate(raw_lines, 1):
         s = raw.strip()
         if not s or s.startswith(_COMMENTS):
             continue
@@ -85,11 +92,34 @@ def numeric_rows(
         except ValueError:
             if not rows:
                 continue  # header line
-            raise InputError("file", f"line {ln} is not a row of numbers: {s[:80]!r}") from None
+            cut = (
+                "; the file ends there without a newline: it looks truncated"
+                if (ln == last and open_end)
+                else ""
+            )
+            raise InputError(
+                "file", f"line {ln} is not a row of numbers: {s[:80]!r}{cut}"
+            ) from None
         rows.append(vals)
         lines.append(ln)
+        tokens.append(toks)
     if not rows:
         raise InputError("file", "no rows of numbers found")
+    if open_end and len(rows) > 2 and lines[-1] == last:
+        if len(rows[-1]) < len(rows[-2]):
+            raise InputError(
+                "columns",
+                f"the last line {lines[-1]} has {len(rows[-1])} of {len(rows[-2])} values and no "
+                "newline: the file looks truncated (cut mid-row)",
+            )
+        j = cut_column(tokens[-1], tokens[-50:-1])
+        if j is not None:
+            raise InputError(
+                "file",
+                f"the last line {lines[-1]} ends without a newline and its value "
+                f"{tokens[-1][j]!r} is written shorter than every other row's "
+                f"({tokens[-2][j]!r}): the file looks truncated (cut mid-number)",
+            )
     return rows, lines
 
 

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 from rcsa.errors import InputError
 
-__all__ = ["COMMENTS", "TextTable", "read_table"]
+__all__ = ["COMMENTS", "TextTable", "cut_column", "read_table"]
 
 #: Comment markers: lines starting with one of these are not data (a header may hide there).
 COMMENTS = ("#", "%", "//", "!")
@@ -157,7 +157,7 @@ def _significant(tok: str) -> int:
     return len(mant.lstrip("0"))
 
 
-def _cut_column(last: list[str], rows_toks: list[list[str]]) -> int | None:
+def cut_column(last: list[str], rows_toks: list[list[str]]) -> int | None:
     """Index of a value of ``last`` written shorter than the same column in every other row:
     fewer decimals or exponent digits than a fixed format (``%.6e``) prints, a lost exponent,
     or fewer significant digits than any other row (``%.17g``, ``repr``)."""
@@ -245,7 +245,7 @@ def read_table(text: str, *, delimiter: str | None = None) -> TextTable:
     if not rows:
         raise InputError("file", "no rows of numbers found")
     if not ends_with_newline and len(rows) > 2:
-        j = _cut_column(toks_kept[-1], toks_kept[-50:-1])
+        j = cut_column(toks_kept[-1], toks_kept[-50:-1])
         if j is not None:
             raise InputError(
                 "file",
