@@ -261,6 +261,17 @@ def test_declared_and_header_units_must_agree(tmp_path):
     )
 
 
+def test_quantity_words_must_agree_with_the_declared_unit(tmp_path):
+    a = -(W**2) * H
+    text = _text("Frequency (Hz),Accelerance real,Accelerance imag", (F, a.real, a.imag))
+    _refused(
+        tmp_path, text, "units", "'Accelerance real' (accelerance) but the unit is m/N", units="m/N"
+    )
+    np.testing.assert_allclose(
+        _read(tmp_path, text, units="m/s^2/N").frfs["h"], H, rtol=1e-14, atol=0
+    )
+
+
 def test_phase_in_degrees_declared_as_radians_is_refused(tmp_path):
     text = _text([], (F, np.abs(H), np.degrees(np.angle(H))))
     _refused(

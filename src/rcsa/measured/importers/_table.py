@@ -90,9 +90,12 @@ def _split(line: str, delimiter: str | None) -> list[str]:
 
 
 def _numbers(toks: list[str], decimal_comma: bool) -> list[float] | None:
+    """The tokens as numbers (decimal commas read as points, and then no point allowed)."""
+    if decimal_comma:
+        if any("." in t for t in toks):
+            return None
+        toks = [t.replace(",", ".") for t in toks]
     try:
-        if decimal_comma:
-            return [float(t.replace(",", ".")) if "." not in t else float("x") for t in toks]
         return [float(t) for t in toks]
     except ValueError:
         return None
@@ -126,12 +129,7 @@ def _detect(lines: list[str], delimiter: str | None) -> tuple[str | None, bool]:
     _, cand, dc = best
     if dc:
         mixed = next(
-            (
-                t
-                for line in sample
-                for t in _split(line, cand)
-                if "." in t and "," not in t and _numbers([t], False) is not None and "." in t
-            ),
+            (t for line in sample for t in _split(line, cand) if "." in t and "," not in t),
             None,
         )
         if mixed is not None:

@@ -31,6 +31,7 @@ a commented header (``numpy.savetxt``) is used when there is no other.
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -142,6 +143,7 @@ class _Col:
     unit: str | None = None  # as written in the header
     weak: bool = False
     header: str = ""
+    quantity: str | None = None  # a quantity word of the header (accelerance, ...)
 
 
 def _header_names(cells: list[HeaderCell], meta: MeasurementMeta) -> dict[str, str]:
@@ -197,7 +199,14 @@ def _from_header(table: TextTable, meta: MeasurementMeta) -> list[_Col]:
     cells = [p for p in parsed if isinstance(p, HeaderCell)]
     rename = _header_names(cells, meta)
     cols = [
-        _Col(rename[c.name] if c.role not in ("f", "skip") else "", c.role, c.unit, c.weak, c.text)
+        _Col(
+            rename[c.name] if c.role not in ("f", "skip") else "",
+            c.role,
+            c.unit,
+            c.weak,
+            c.text,
+            c.quantity,
+        )
         for c in cells
     ]
     if meta.kind != "direct_frf" and any(c.name == "" for c in cols if c.role not in ("f", "skip")):
@@ -246,7 +255,7 @@ def _with_declared(declared: list[tuple[str, str]], table: TextTable, spec: str,
                 f"but the header (line {table.header_line}) says {c.text!r} ({said}); fix the "
                 "declaration or leave it out to use the header",
             )
-        out.append(_Col(name, role, c.unit, c.weak, c.text))
+        out.append(_Col(name, role, c.unit, c.weak, c.text, c.quantity))
     return out
 
 
@@ -333,6 +342,13 @@ def _frf_unit(cols: list[_Col], units: str | None, meta: MeasurementMeta) -> tup
     else:
         parse_frf_unit(None)  # raises: the FRF unit must be declared
         raise AssertionError  # pragma: no cover
+    for c in cols:
+        if c.quantity is not None and c.role in _FRF_ROLES and c.quantity != unit.quantity:
+            raise InputError(
+                "units",
+                f"the header says {c.header!r} ({c.quantity}) but the unit is {text} "
+                f"({unit.quantity})",
+            )
     db_si = None
     if has_db:
         db_si = (decl_ref or refs[0][1]).factor_to_si
@@ -343,7 +359,13 @@ def _frf_unit(cols: list[_Col], units: str | None, meta: MeasurementMeta) -> tup
     return unit, db_si, str(text)
 
 
-def _one_unit(cols: list[_Col], role: str, declared: str | None, field: str, parse) -> float | None:  # fmt: skip
+def _one_unit(
+    cols: list[_Col],
+    role: str,
+    declared: str | None,
+    field: str,
+    parse: Callable[[str, str], float],
+) -> float | None:
     """Factor of the frequency or phase columns: header and declaration must agree."""
     factors = []
     for c in cols:
