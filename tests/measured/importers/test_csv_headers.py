@@ -159,6 +159,19 @@ def test_python_csv_writer_crlf_with_quoted_header(tmp_path):
     np.testing.assert_allclose(_read(tmp_path, buf2).frfs["h"], H, rtol=1e-14, atol=0)
 
 
+def test_quoted_numbers_and_trailing_delimiters(tmp_path):
+    buf = io.StringIO()
+    w = csv.writer(buf, quoting=csv.QUOTE_ALL, lineterminator="\n")
+    w.writerow(["Frequency (Hz)", "Real (m/N)", "Imag (m/N)", ""])
+    w.writerows(
+        [
+            [repr(float(f)), repr(float(z.real)), repr(float(z.imag)), ""]
+            for f, z in zip(F, H, strict=True)
+        ]
+    )
+    assert _read(tmp_path, buf.getvalue().replace(',""', ",")).frfs["h"].tobytes() == H.tobytes()
+
+
 def test_re_im_and_magnitude_phase_together_must_agree(tmp_path):
     header = "Frequency (Hz),Real (m/N),Imag (m/N),Magnitude (m/N),Phase (deg)"
     cols = (F, H.real, H.imag, np.abs(H), np.degrees(np.angle(H)))

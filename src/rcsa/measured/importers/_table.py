@@ -83,7 +83,9 @@ class TextTable:
 def _split(line: str, delimiter: str | None) -> list[str]:
     if delimiter is None:
         return line.split()
-    toks = [t.strip() for t in line.split(delimiter)]
+    toks = [
+        t.strip().strip('"').strip() for t in line.split(delimiter)
+    ]  # "1.5" quoted by some writers
     while len(toks) > 1 and toks[-1] == "":  # "1,2,3," : a trailing delimiter, not a field
         toks.pop()
     return toks
