@@ -83,7 +83,7 @@ def test_fixtures_store(tmp_path, name):
             HERE / name,
             MeasurementMeta(
                 "d",
-                "y",
+                "x",  # the file's FRFs are along +X (was "y": the importer ignored the file)
                 "spindle_nose",
                 "artifact_frfs",
                 points_m=(0.0, 0.03),
