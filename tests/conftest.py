@@ -14,6 +14,14 @@ settings.register_profile("dev", max_examples=30, deadline=None)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 
+def pytest_ignore_collect(collection_path, config: pytest.Config) -> bool | None:
+    """Under tests/ only test modules are collected (``--doctest-modules`` would otherwise
+    import the helpers and scripts beside them, e.g. the crash test's writer process)."""
+    if collection_path.suffix == ".py" and not collection_path.name.startswith(("test_", "conftest", "__init__")):
+        return True
+    return None
+
+
 @pytest.fixture
 def rng() -> np.random.Generator:
     """A seeded generator: tests never use global randomness."""
