@@ -144,6 +144,11 @@ class EffectReport:
 
         Parameters
         ----------
+        parameter : str
+            One of :attr:`parameters`.
+        feature : str, optional
+            Which sensitivity; ``"peak_magnitude_m_n"`` for damping parameters and
+            ``"frequency_hz"`` for the others when omitted.
         min_participation : float
             Consider only modes whose :attr:`tip_participation` reaches this.
         """
