@@ -22,6 +22,8 @@ def find_frf_peaks(frequency_hz: np.ndarray, h: np.ndarray, *, rel_prominence: f
     frequency_hz : numpy.ndarray, shape (nfreq,)
     h : numpy.ndarray, shape (nfreq,), complex
         Receptance, m/N.
+    rel_prominence : float
+        Smallest prominence of a peak, relative to ``max|h|``.
 
     Returns
     -------
@@ -44,6 +46,16 @@ def modal_fit_peaks(frequency_hz: np.ndarray, h: np.ndarray, *, rel_prominence: 
     Around every peak, ``h ≈ (c₀ + c₁ iω + c₂ (iω)²) / (ω_n² + 2ζω_n iω + (iω)²)`` is fitted by
     Levy's linearised least squares (one mode plus residual terms). Used for hybrid
     predictions, where the spindle is known only through measured FRFs.
+
+    Parameters
+    ----------
+    frequency_hz : numpy.ndarray, shape (nfreq,)
+    h : numpy.ndarray, shape (nfreq,), complex
+        Receptance, m/N.
+    rel_prominence : float
+        Smallest prominence of a peak, relative to ``max|h|`` (:func:`find_frf_peaks`).
+    half_width_lines : int
+        Lines fitted on each side of a peak.
 
     Returns
     -------

@@ -36,6 +36,8 @@ class Prediction(Mapping[str, Any]):
     natural_frequencies_hz : numpy.ndarray, shape (nmodes,)
         Exact undamped natural frequencies in the band (analytical), or modal-fit estimates
         (hybrid; ``natural_frequencies_method == "modal_fit"``).
+    natural_frequencies_method : {"wittrick_williams", "modal_fit"}
+        How ``natural_frequencies_hz`` were obtained.
     peaks : list of dict
         ``{"frequency_hz", "magnitude_m_n"}`` local maxima of ``|h|``.
     static_stiffness_n_m : float or None
@@ -110,6 +112,13 @@ class SubassemblyCache:
 
     Keys are the (hashable, immutable) chains themselves, so two tools with the same
     holder, shank and insertion share the spindle + holder condensation exactly.
+
+    Parameters
+    ----------
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies of the grid, rad/s.
+    base_receptance : numpy.ndarray, shape (nfreq, 2, 2), optional
+        A measured spindle-side receptance the cached chains start from (hybrid).
     """
 
     def __init__(self, omega_rad_s: np.ndarray, base_receptance: np.ndarray | None = None) -> None:
@@ -119,14 +128,24 @@ class SubassemblyCache:
         self._static: dict[Chain, np.ndarray] = {}
 
     def static(self, chain: Chain) -> np.ndarray:
-        """Static undamped stiffness at the end of ``chain`` (cached), shape (2, 2)."""
+        """Static undamped stiffness at the end of ``chain`` (cached), shape (2, 2).
+
+        Parameters
+        ----------
+        chain : Chain
+        """
         hit = self._static.get(chain)
         if hit is None:
             hit = self._static[chain] = static_condense(chain)
         return hit
 
     def condensed(self, chain: Chain) -> np.ndarray:
-        """Dynamic stiffness at the end of ``chain`` (plus the base), shape (nfreq, 2, 2)."""
+        """Dynamic stiffness at the end of ``chain`` (plus the base), shape (nfreq, 2, 2).
+
+        Parameters
+        ----------
+        chain : Chain
+        """
         hit = self._store.get(chain)
         if hit is None:
             hit = march(chain, self.omega_rad_s, start_compliance=self.base_receptance)[0]
@@ -139,6 +158,12 @@ def tool_point_receptance(model: AssemblyModel, cache: SubassemblyCache) -> np.n
 
     The spindle + holder condensation comes from (and stays in) ``cache``; a measured spindle
     at the holder tip couples only the tool, straight onto its receptance.
+
+    Parameters
+    ----------
+    model : AssemblyModel
+    cache : SubassemblyCache
+        Grid, base receptance and the cached condensations.
     """
     prefix, rest = model.to_holder_tip(), model.tool_side()
     if any(isinstance(item, Beam) for item in prefix):
@@ -166,6 +191,10 @@ def predict_model(model: AssemblyModel, frequency_hz: np.ndarray, *,
         Reuse of the spindle + holder condensation across calls on the same grid.
     natural_frequencies : bool
         Compute the exact natural frequencies (analytical models).
+    notes : tuple of str
+        Notes passed on to the result (e.g. how a measured base was obtained).
+    extra : mapping, optional
+        Further JSON fields of the result.
 
     Returns
     -------

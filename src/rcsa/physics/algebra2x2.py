@@ -12,12 +12,23 @@ __all__ = ["det2", "inv2", "negative_count_sym", "negative_count_sym2"]
 
 
 def det2(a: np.ndarray) -> np.ndarray:
-    """Determinant of each 2×2 matrix, shape (...)."""
+    """Determinant of each 2×2 matrix, shape (...).
+
+    Parameters
+    ----------
+    a : numpy.ndarray, shape (..., 2, 2)
+    """
     return a[..., 0, 0] * a[..., 1, 1] - a[..., 0, 1] * a[..., 1, 0]
 
 
 def inv2(a: np.ndarray) -> np.ndarray:
-    """Inverse of each 2×2 matrix, shape (..., 2, 2)."""
+    """Inverse of each 2×2 matrix, shape (..., 2, 2).
+
+    Parameters
+    ----------
+    a : numpy.ndarray, shape (..., 2, 2)
+        Non-singular matrices (a singular one gives inf or nan entries).
+    """
     d = det2(a)
     out = np.empty_like(a)
     out[..., 0, 0] = a[..., 1, 1] / d
@@ -32,6 +43,11 @@ def negative_count_sym(a11: np.ndarray, a12: np.ndarray, a22: np.ndarray) -> np.
 
     Sylvester's criterion: det < 0 → one negative; det > 0 and trace < 0 → two; det = 0 and
     trace < 0 → one (the other eigenvalue is zero). Imaginary parts are ignored.
+
+    Parameters
+    ----------
+    a11, a12, a22 : numpy.ndarray, shape (...)
+        Entries ``[[a11, a12], [a12, a22]]``, broadcast together.
     """
     a11, a12, a22 = np.real(a11), np.real(a12), np.real(a22)
     d = a11 * a22 - a12 * a12
@@ -40,5 +56,11 @@ def negative_count_sym(a11: np.ndarray, a12: np.ndarray, a22: np.ndarray) -> np.
 
 
 def negative_count_sym2(a: np.ndarray) -> np.ndarray:
-    """Number of negative eigenvalues of each real symmetric 2×2 matrix, shape (...), int."""
+    """Number of negative eigenvalues of each real symmetric 2×2 matrix, shape (...), int.
+
+    Parameters
+    ----------
+    a : numpy.ndarray, shape (..., 2, 2)
+        Real symmetric matrices (only ``a[..., 0, 1]`` of the off-diagonal pair is read).
+    """
     return negative_count_sym(a[..., 0, 0], a[..., 0, 1], a[..., 1, 1])

@@ -58,19 +58,37 @@ class Spring:
     rotational_damping_nms_rad: float = 0.0
 
     def translational(self, omega_rad_s: np.ndarray) -> np.ndarray | None:
-        """``k_t + iωc_t`` (N/m), shape (nfreq,), or ``None`` if rigid."""
+        """``k_t + iωc_t`` (N/m), shape (nfreq,), or ``None`` if rigid.
+
+        Parameters
+        ----------
+        omega_rad_s : numpy.ndarray, shape (nfreq,)
+            Angular frequencies, rad/s.
+        """
         if self.stiffness_n_m is None:
             return None
         return self.stiffness_n_m + 1j * omega_rad_s * self.damping_ns_m
 
     def rotational(self, omega_rad_s: np.ndarray) -> np.ndarray | None:
-        """``k_r + iωc_r`` (N·m/rad), shape (nfreq,), or ``None`` if rigid."""
+        """``k_r + iωc_r`` (N·m/rad), shape (nfreq,), or ``None`` if rigid.
+
+        Parameters
+        ----------
+        omega_rad_s : numpy.ndarray, shape (nfreq,)
+            Angular frequencies, rad/s.
+        """
         if self.rotational_stiffness_nm_rad is None:
             return None
         return self.rotational_stiffness_nm_rad + 1j * omega_rad_s * self.rotational_damping_nms_rad
 
     def compliance(self, omega_rad_s: np.ndarray) -> np.ndarray:
-        """Joint compliance ``K⁻¹``, shape (nfreq, 2, 2); zero for rigid DOFs."""
+        """Joint compliance ``K⁻¹``, shape (nfreq, 2, 2); zero for rigid DOFs.
+
+        Parameters
+        ----------
+        omega_rad_s : numpy.ndarray, shape (nfreq,)
+            Angular frequencies, rad/s.
+        """
         out = np.zeros((omega_rad_s.size, 2, 2), dtype=complex)
         kt, kr = self.translational(omega_rad_s), self.rotational(omega_rad_s)
         if kt is not None:
@@ -106,7 +124,13 @@ class Ground:
     rotary_inertia_kg_m2: float = 0.0
 
     def stiffness(self, omega_rad_s: np.ndarray) -> np.ndarray:
-        """Dynamic stiffness, shape (nfreq, 2, 2)."""
+        """Dynamic stiffness, shape (nfreq, 2, 2).
+
+        Parameters
+        ----------
+        omega_rad_s : numpy.ndarray, shape (nfreq,)
+            Angular frequencies, rad/s.
+        """
         w = omega_rad_s
         out = np.zeros((w.size, 2, 2), dtype=complex)
         out[:, 0, 0] = self.stiffness_n_m + 1j * w * self.damping_ns_m - w**2 * self.mass_kg
@@ -119,7 +143,12 @@ Chain = tuple[Beam | Spring | Ground, ...]
 
 
 def undamped(chain: Chain) -> Chain:
-    """The chain with every damper removed and real moduli (for natural frequencies)."""
+    """The chain with every damper removed and real moduli (for natural frequencies).
+
+    Parameters
+    ----------
+    chain : Chain
+    """
     out: list[Beam | Spring | Ground] = []
     for item in chain:
         if isinstance(item, Beam):

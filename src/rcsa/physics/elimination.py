@@ -50,7 +50,16 @@ def _from_sym(k: Sym) -> np.ndarray:
 
 
 def beam_step(k: Sym, terms: tuple[np.ndarray, ...]) -> tuple[Sym, Sym]:
-    """``P = K + D11``; ``K ← D22 − D21 P⁻¹ D12`` with the six-term segment stiffness."""
+    """``P = K + D11``; ``K ← D22 − D21 P⁻¹ D12`` with the six-term segment stiffness.
+
+    Parameters
+    ----------
+    k : Sym
+        Dynamic stiffness condensed onto the beam's first node, entries ``(k11, k12, k22)``.
+    terms : tuple of numpy.ndarray
+        The beam's six stiffness entries ``(A, B, C, E, F, G)``
+        (:func:`rcsa.physics.segments.segment_terms`), each shape (nfreq,).
+    """
     a, b, c, e, f, g = terms
     p11, p12, p22 = k[0] + a, k[1] + b, k[2] + c
     inv_det = 1.0 / (p11 * p22 - p12 * p12)
@@ -66,6 +75,14 @@ def spring_step(k: Sym, spring: Spring, omega_rad_s: np.ndarray) -> tuple[Sym, S
 
     Returns the new ``K`` and the pivot (a symmetric 2×2, a scalar array when one DOF is
     rigid, or None when the joint is rigid).
+
+    Parameters
+    ----------
+    k : Sym
+        Dynamic stiffness condensed onto the joint's first node, entries ``(k11, k12, k22)``.
+    spring : Spring
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies, rad/s.
     """
     kt, kr = spring.translational(omega_rad_s), spring.rotational(omega_rad_s)
     k11, k12, k22 = k
@@ -189,7 +206,16 @@ def march(chain: Chain, omega_rad_s: np.ndarray, start: np.ndarray | None = None
 
 
 def tip_receptance(chain: Chain, omega_rad_s: np.ndarray, start: np.ndarray | None = None) -> np.ndarray:
-    """Point receptance ``[[h, l], [n, p]]`` at the last node, shape (nfreq, 2, 2)."""
+    """Point receptance ``[[h, l], [n, p]]`` at the last node, shape (nfreq, 2, 2).
+
+    Parameters
+    ----------
+    chain : Chain
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies, rad/s.
+    start : numpy.ndarray, shape (nfreq, 2, 2), optional
+        Dynamic stiffness already attached at the first node (see :func:`march`).
+    """
     return inv2(march(chain, omega_rad_s, start)[0])
 
 
@@ -199,6 +225,15 @@ def wittrick_williams_count(chain: Chain, omega_rad_s: np.ndarray, start: np.nda
     The chain must be real (undamped) and subdivided with :func:`subdivide` for at least the
     largest ω, so that no beam has a clamped–clamped natural frequency below it (J₀ = 0).
     ``start`` is the condensed stiffness of a prefix whose own negative pivots the caller adds.
+
+    Parameters
+    ----------
+    chain : Chain
+        Undamped and subdivided (see above).
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies, rad/s.
+    start : numpy.ndarray, shape (nfreq, 2, 2), optional
+        Condensed stiffness of a prefix (see above).
 
     Returns
     -------
@@ -231,7 +266,14 @@ def _max_piece_length_m(beam: Beam, omega_rad_s: float) -> float:
 
 
 def subdivide(chain: Chain, omega_max_rad_s: float) -> Chain:
-    """Split beams into equal pieces with no clamped–clamped natural frequency below ω_max."""
+    """Split beams into equal pieces with no clamped–clamped natural frequency below ω_max.
+
+    Parameters
+    ----------
+    chain : Chain
+    omega_max_rad_s : float
+        Largest angular frequency the subdivided chain will be counted at, rad/s.
+    """
     out: list[Beam | Spring | Ground] = []
     for item in chain:
         if isinstance(item, Beam):
@@ -247,6 +289,12 @@ def static_condense(chain: Chain, start: np.ndarray | None = None) -> np.ndarray
 
     Uses the exact static Timoshenko stiffness of each beam; ``start`` continues a
     condensation (e.g. a cached spindle + holder).
+
+    Parameters
+    ----------
+    chain : Chain
+    start : numpy.ndarray, shape (2, 2), optional
+        Static stiffness already condensed onto the first node; zero (free end) by default.
     """
     k: Sym = tuple(np.array([x]) for x in (0.0j, 0.0j, 0.0j)) if start is None else \
         tuple(np.array([complex(start[i, j])]) for i, j in ((0, 0), (0, 1), (1, 1)))  # type: ignore[assignment]
@@ -268,6 +316,12 @@ def static_tip_receptance(chain: Chain, start: np.ndarray | None = None) -> np.n
     """Static (ω = 0) undamped point receptance at the last node, shape (2, 2).
 
     ``None`` when the chain is not grounded (a free body has no static stiffness).
+
+    Parameters
+    ----------
+    chain : Chain
+    start : numpy.ndarray, shape (2, 2), optional
+        Static stiffness already condensed onto the first node (as for :func:`static_condense`).
     """
     k = static_condense(chain, start)
     det = k[0, 0] * k[1, 1] - k[0, 1] ** 2

@@ -20,7 +20,12 @@ __all__ = ["chain_signature", "stack_chains", "take_rows"]
 
 
 def chain_signature(chain: Chain) -> tuple:
-    """Structure of a chain (item kinds, rigid joint DOFs): chains with equal signatures stack."""
+    """Structure of a chain (item kinds, rigid joint DOFs): chains with equal signatures stack.
+
+    Parameters
+    ----------
+    chain : Chain
+    """
     sig = []
     for item in chain:
         if isinstance(item, Spring):
@@ -31,7 +36,13 @@ def chain_signature(chain: Chain) -> tuple:
 
 
 def stack_chains(chains: Sequence[Chain]) -> Chain:
-    """One chain whose parameters are arrays over ``chains`` (which share one signature)."""
+    """One chain whose parameters are arrays over ``chains`` (which share one signature).
+
+    Parameters
+    ----------
+    chains : sequence of Chain
+        Chains with one :func:`chain_signature` (none, or empty ones, give an empty chain).
+    """
     if not chains or not chains[0]:
         return ()
     out: list[Beam | Spring | Ground] = []
@@ -53,6 +64,13 @@ def take_rows(chain: Chain, rows: np.ndarray) -> Chain:
     """The stacked chain with its parameter arrays indexed by ``rows`` (one row per frequency).
 
     Scalar parameters (shared by all rows, e.g. a damping set to zero) are kept as they are.
+
+    Parameters
+    ----------
+    chain : Chain
+        A chain made by :func:`stack_chains`.
+    rows : numpy.ndarray of int, shape (nfreq,)
+        Which stacked chain each frequency line uses.
     """
 
     def pick(value: Any) -> Any:
