@@ -34,9 +34,9 @@ def pytest_configure(config: pytest.Config) -> None:
         os.environ.pop(k, None)
     config.stash[_PRIVATE_XDG] = os.environ["XDG_DATA_HOME"] = tempfile.mkdtemp(prefix="rcsa-test-xdg-")
     if getattr(config.option, "numprocesses", None) and not hasattr(config, "workerinput"):
-        # xdist's workers start after this and inherit it: one BLAS thread each, or two
-        # workers' OpenBLAS threads fight over the cores (a 0.5 s FE eigen-solve was seen
-        # taking 28 s)
+        # xdist's workers start after this and inherit it: one BLAS thread each, or the
+        # workers' OpenBLAS threads fight over the cores (two processes running the FE
+        # oracle tests: 216 s wall, 123 s CPU with two threads each; 43 s, 19 s with one)
         for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
             os.environ.setdefault(name, "1")
 
