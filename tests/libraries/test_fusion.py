@@ -158,11 +158,12 @@ def test_every_ok_entry_is_accepted_by_the_assembly_parser():
     materials["hss"] = Material(youngs_modulus_pa=2.15e11, poisson_ratio=0.29,
                                 density_kg_m3=8100.0, loss_factor=0.004)
     for options in ({}, {"shaft_origin": "flute_end"}, {"holder_segments_per_cone": 1}):
-        for combo in library_combinations(JSON_PATH, **options):
-            if combo.status == "ok":
-                parse_holder(combo.holder, materials)
-                tool = parse_tool(combo.tool, materials)
-                assert tool.stickout_m <= tool.overall_length_m
+        ok = [combo for combo in library_combinations(JSON_PATH, **options) if combo.status == "ok"]
+        assert ok, options  # the checks below run on something
+        for combo in ok:
+            parse_holder(combo.holder, materials)
+            tool = parse_tool(combo.tool, materials)
+            assert tool.stickout_m <= tool.overall_length_m
 
 
 # --------------------------------------------------------------------------- holder rules

@@ -97,6 +97,10 @@ class EffectReport:
 
         Parameters
         ----------
+        parameter : str
+            A named parameter (:mod:`rcsa.model.parameters`).
+        feature : str, optional
+            Default: ``peak_magnitude_m_n`` for a damping, else ``frequency_hz``.
         min_participation : float
             Consider only modes whose :attr:`tip_participation` reaches this.
         """

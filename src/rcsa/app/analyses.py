@@ -38,6 +38,15 @@ def stability_lobes(request: Mapping[str, Any], *, store: MeasurementStore | Non
                     max_lines: int = MAX_FREQUENCY_LINES) -> dict[str, Any]:
     """The contract's stability-lobes response (see :func:`stability_lobes_result`).
 
+    Parameters
+    ----------
+    request : dict
+        Inline FRFs or an ``assembly``, with the cutting parameters (contract "Stability lobes").
+    store : MeasurementStore, optional
+        Where a measured spindle of the assembly is looked up (the default store when omitted).
+    max_lines : int
+        Largest accepted number of frequency lines.
+
     Returns
     -------
     dict
@@ -72,7 +81,17 @@ def identify(request: Mapping[str, Any], *, store: MeasurementSource | None = No
 def diagnose(request: Mapping[str, Any], **kwargs: Any) -> dict[str, Any]:
     """Sim-to-real gap diagnosis (``contract.md`` "Diagnosis").
 
-    See :func:`rcsa.analysis.diagnosis.diagnose.diagnose`.
+    Parameters
+    ----------
+    request : dict
+        The diagnosis request: ``{"assembly", "measurements", "tolerances"?, "options"?}``.
+    **kwargs
+        Passed on to :func:`rcsa.analysis.diagnosis.diagnose.diagnose`.
+
+    Returns
+    -------
+    dict
+        The contract's diagnosis response (see :func:`rcsa.analysis.diagnosis.diagnose.diagnose`).
     """
     # scipy.stats and scipy.optimize (~0.9 s to import): only when a diagnosis is asked for
     from rcsa.analysis.diagnosis.diagnose import diagnose as run

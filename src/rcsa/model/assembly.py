@@ -86,7 +86,12 @@ def _opt(spring: Spring | None) -> Chain:
 
 
 def joint_spring(joint: JointSpec | None) -> Spring | None:
-    """The chain item of an elastic joint (``None`` = rigid)."""
+    """The chain item of an elastic joint (``None`` = rigid).
+
+    Parameters
+    ----------
+    joint : JointSpec or None
+    """
     if joint is None:
         return None
     return Spring(joint.stiffness_n_m, joint.damping_ns_m, joint.rotational_stiffness_nm_rad,
@@ -95,7 +100,18 @@ def joint_spring(joint: JointSpec | None) -> Spring | None:
 
 def spindle_chain(spindle: SpindleSpec, materials: Mapping[str, Material],
                   shear: ShearModel | float = "hutchinson", theory: BeamTheory = "timoshenko") -> Chain:
-    """Spindle shaft with bearings, from the rear end to the nose."""
+    """Spindle shaft with bearings, from the rear end to the nose.
+
+    Parameters
+    ----------
+    spindle : SpindleSpec
+    materials : mapping of str to Material
+        Materials by name (built-ins and the document's own).
+
+    shear : {"hutchinson", "cowper"} or float
+        Shear coefficient model, or the coefficient itself.
+    theory : {"timoshenko", "euler_bernoulli"}
+    """
     total = spindle.length_m
     # Bearing positions along the chain (from the rear), grouped by node.
     stations = sorted({round(total - b.position_m, 12) for b in spindle.bearings})
@@ -124,7 +140,20 @@ def spindle_chain(spindle: SpindleSpec, materials: Mapping[str, Material],
 
 def holder_chain(holder: HolderSpec, tool: ToolSpec, materials: Mapping[str, Material],
                  shear: ShearModel | float = "hutchinson", theory: BeamTheory = "timoshenko") -> Chain:
-    """Holder from the gauge line to its tool end, composite with the tool core over the insertion."""
+    """Holder from the gauge line to its tool end, composite with the tool core over the insertion.
+
+    Parameters
+    ----------
+    holder : HolderSpec
+    tool : ToolSpec
+        Its shank fills the holder's bore over the inserted length.
+    materials : mapping of str to Material
+        Materials by name (built-ins and the document's own).
+
+    shear : {"hutchinson", "cowper"} or float
+        Shear coefficient model, or the coefficient itself.
+    theory : {"timoshenko", "euler_bernoulli"}
+    """
     length = holder.length_m
     insertion_start = length - min(tool.inserted_length_m, length)
     core = (tube(tool.shank_diameter_m, 0.0, materials[tool.material], shear, theory)
@@ -168,7 +197,18 @@ def fluted_section(tool: ToolSpec, material: Material, shear: ShearModel | float
 
 def tool_chain(tool: ToolSpec, materials: Mapping[str, Material], shear: ShearModel | float = "hutchinson",
                theory: BeamTheory = "timoshenko") -> Chain:
-    """Tool overhang from the holder face to the tip: shank, optional neck, flutes."""
+    """Tool overhang from the holder face to the tip: shank, optional neck, flutes.
+
+    Parameters
+    ----------
+    tool : ToolSpec
+    materials : mapping of str to Material
+        Materials by name (built-ins and the document's own).
+
+    shear : {"hutchinson", "cowper"} or float
+        Shear coefficient model, or the coefficient itself.
+    theory : {"timoshenko", "euler_bernoulli"}
+    """
     mat = materials[tool.material]
     shoulder = tool.shoulder_length_m if tool.shoulder_length_m is not None else tool.flute_length_m
     items: list[Beam | Spring | Ground] = []

@@ -115,6 +115,13 @@ class SubassemblyCache:
 
     Keys are the (hashable, immutable) chains themselves, so two tools with the same
     holder, shank and insertion share the spindle + holder condensation exactly.
+
+    Parameters
+    ----------
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies of the grid, rad/s.
+    base_receptance : numpy.ndarray, shape (nfreq, 2, 2), optional
+        A measured spindle-side receptance the cached chains start from (hybrid).
     """
 
     def __init__(self, omega_rad_s: FloatArray, base_receptance: ComplexArray | None = None) -> None:
@@ -144,6 +151,12 @@ def tool_point_receptance(model: AssemblyModel, cache: SubassemblyCache) -> Comp
 
     The spindle + holder condensation comes from (and stays in) ``cache``; a measured spindle
     at the holder tip couples only the tool, straight onto its receptance.
+
+    Parameters
+    ----------
+    model : AssemblyModel
+    cache : SubassemblyCache
+        Grid, base receptance and the cached condensations.
     """
     prefix, rest = model.to_holder_tip(), model.tool_side()
     if any(isinstance(item, Beam) for item in prefix):
@@ -171,6 +184,10 @@ def predict_model(model: AssemblyModel, frequency_hz: FloatArray, *,
         Reuse of the spindle + holder condensation across calls on the same grid.
     natural_frequencies : bool
         Compute the exact natural frequencies (analytical models).
+    notes : tuple of str
+        Notes passed on to the result (e.g. how a measured base was obtained).
+    extra : mapping, optional
+        Further JSON fields of the result.
 
     Returns
     -------

@@ -79,12 +79,28 @@ class SpindleSide:
         self.alt_caches = [] if self.base is None else [SubassemblyCache(omega, r) for r in self.base.alternatives]
 
     def predict(self, spec: AssemblySpec, natural_frequencies: bool = True) -> Prediction:
-        """Tool-point prediction of one assembly on this spindle side."""
+        """Tool-point prediction of one assembly on this spindle side.
+
+        Parameters
+        ----------
+        spec : AssemblySpec
+            An assembly on this spindle side's grid and spindle.
+        natural_frequencies : bool
+            Compute the exact natural frequencies (analytical spindles).
+        """
         return self.predict_with_model(spec, natural_frequencies)[1]
 
     def predict_with_model(self, spec: AssemblySpec, natural_frequencies: bool = True
                            ) -> tuple[AssemblyModel, Prediction]:
-        """The solved chain model and its prediction."""
+        """The solved chain model and its prediction.
+
+        Parameters
+        ----------
+        spec : AssemblySpec
+            An assembly on this spindle side's grid and spindle.
+        natural_frequencies : bool
+            Compute the exact natural frequencies (analytical spindles).
+        """
         base = self.base
         if base is None:
             model = build_model(spec, spindle=self.spindle)

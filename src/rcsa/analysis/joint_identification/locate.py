@@ -116,6 +116,9 @@ class Problem:
     Parameters
     ----------
     req : IdentificationRequest
+    spindle_index : int, optional
+        Evaluate on one of the measured spindle's alternative receptances (the bounds of an
+        estimate, e.g. ``direct_frf`` rotations at L/2 and 2L) instead of its nominal one.
     """
 
     def __init__(self, req: IdentificationRequest, spindle_index: int | None = None) -> None:
