@@ -43,6 +43,7 @@ from rcsa.app.bounds import (
     MAX_LENGTH_M,
     MAX_LOSS_FACTOR,
     MAX_MODULUS_PA,
+    MAX_NECK_SEGMENTS,
     MAX_POISSON_RATIO,
     MAX_RADIAL_RATIO,
     MAX_SHEAR_COEFFICIENT,
@@ -216,6 +217,14 @@ class Holder(_Request):
                                                               "inner_diameter_m is the bore.")
 
 
+class NeckSegment(_Request):
+    """One piece of a stepped (or stepped-conical) neck."""
+
+    length_m: float = Field(ge=MIN_LENGTH_M, description="Length of the piece, m (all pieces together at most "
+                                                         "stickout_m − flute_length_m).")
+    diameter_m: float = Field(ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Its diameter, m.")
+
+
 class Tool(_Request):
     """Parametric cutting tool (ISO 13399 / Fusion meaning)."""
 
@@ -232,6 +241,9 @@ class Tool(_Request):
     shoulder_length_m: float | None = Field(None, ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Reduced neck: from the tip to the neck's end, "
                                             "m (with shoulder_diameter_m).")
     shoulder_diameter_m: float | None = Field(None, ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Reduced neck diameter, m.")
+    neck_segments: list[NeckSegment] | None = Field(None, max_length=MAX_NECK_SEGMENTS, description=(
+        "Instead of shoulder_length_m/shoulder_diameter_m: a stepped neck, pieces listed from the flute end toward "
+        "the holder (a conical neck as steps); together at most stickout_m − flute_length_m long."))
 
 
 class Joint(_Request):
