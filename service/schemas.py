@@ -445,25 +445,29 @@ class JobStatus(_Response):
 # --------------------------------------------------------------------------- libraries
 
 class LibraryOptions(_Request):
-    """How a Fusion library is mapped to combinations."""
+    """How a library is mapped to combinations (shaft_origin, default_holder: Fusion; stickout_m: FreeCAD)."""
 
     holder_material: str | None = Field(None, description="Material of every holder segment (default steel).")
     tool_material_default: str | None = Field(None, description="Tool material when BMC is missing (default "
                                               "carbide).")
     holder_segments_per_cone: int | None = Field(None, ge=1, le=MAX_HOLDER_SEGMENTS_PER_CONE, description="Cylinders per conical holder "
-                                                 "segment (default 4).")
+                                                 "segment (default: from each cone's taper, within 0.5 % of the cone).")
     fluted_diameter_ratio: float | None = Field(None, ge=MIN_FLUTED_DIAMETER_RATIO, le=1,
                                                 description="Equivalent fluted diameter / DC.")
     shaft_origin: Literal["shoulder", "flute_end"] | None = Field(None, description="Where shaft.segments start.")
     default_holder: str | dict[str, Any] | None = Field(None, description="Holder for tools without one: the guid "
                                                         "of a standalone holder in the library, or a Fusion "
                                                         "holder object.")
+    stickout_m: float | dict[str, float] | None = Field(None, description="FreeCAD (required there): the "
+                                                        "stickout of every toolbit, m, or {toolbit id: m}.")
 
 
 class LibraryPredictionRequest(_Request):
     """JSON form of POST /v1/tool-libraries:predict (the multipart form carries the same fields)."""
 
-    library: dict[str, Any] = Field(description='The Fusion tool library document {"data": [...], "version": n}.')
+    library: dict[str, Any] = Field(description='The Fusion tool library document {"data": [...], "version": n}, '
+                                                'or FreeCAD toolbits {"format": "freecad", "toolbits": {"<id>": '
+                                                '{.fctb}}, "holder": {"<id>": {.fcholder}}, "library": {.fctl}}.')
     spindle: Spindle
     frequency: Frequency
     joints: Joints | None = Field(None, description="Joints applied to every tool (the library has none); "

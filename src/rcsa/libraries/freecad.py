@@ -50,7 +50,7 @@ from rcsa.model import fields
 from rcsa.model.assembly import shallow_insertion_note
 from rcsa.model.bounds import MAX_HOLDER_SEGMENTS_PER_CONE
 
-__all__ = ["freecad_combination", "load_freecad_object", "parse_length_m"]
+__all__ = ["MAX_FILE_BYTES", "freecad_combination", "load_freecad_object", "map_toolbit", "parse_length_m"]
 
 MAX_FILE_BYTES = 1024 * 1024
 """Largest accepted ``.fctb`` / ``.fcholder`` file, bytes."""
@@ -185,6 +185,20 @@ def freecad_combination(
     """
     tool_obj, tool_id = load_freecad_object(toolbit)
     holder_obj, holder_id = load_freecad_object(holder)
+    return map_toolbit(tool_obj, tool_id, holder_obj, holder_id, stickout_m=stickout_m,
+                       holder_material=holder_material, tool_material_default=tool_material_default,
+                       holder_segments_per_cone=holder_segments_per_cone,
+                       fluted_diameter_ratio=fluted_diameter_ratio)
+
+
+def map_toolbit(tool_obj: Mapping[str, Any], tool_id: str, holder_obj: Mapping[str, Any] | None,
+                holder_id: str | None, *, stickout_m: float, holder_material: str = "steel",
+                tool_material_default: str = "carbide", holder_segments_per_cone: int | None = None,
+                fluted_diameter_ratio: float = 0.8, index: int = 0, number: int | None = None) -> Combination:
+    """:func:`freecad_combination` on objects already read, with their ids (``holder_obj`` None: skipped).
+
+    ``index`` and ``number`` (the ``.fctl`` tool number) are the item's place in its library.
+    """
     if isinstance(stickout_m, bool) or not isinstance(stickout_m, (int, float)) \
             or not math.isfinite(stickout_m) or stickout_m <= 0:
         raise InputError("stickout_m", f"must be a number > 0, got {stickout_m!r}")
@@ -198,11 +212,14 @@ def freecad_combination(
     shape = _shape(tool_obj)
     name = tool_obj.get("name")
     warnings: list[str] = []
-    base = {"id": f"{tool_id}@{holder_id}", "index": 0, "description": name if isinstance(name, str) else "",
+    base = {"id": tool_id if holder_id is None else f"{tool_id}@{holder_id}", "index": index, "number": number,
+            "description": name if isinstance(name, str) else "",
             "teeth": _flutes(params.get("Flutes", attrs.get("Flutes")), warnings), "tool_type": shape}
     if shape.lower() in _SKIPPED_SHAPES:
         return Combination(status="skipped", reason=f"unsupported tool type: {_SKIPPED_SHAPES[shape.lower()]}",
                            warnings=tuple(warnings), **base)
+    if holder_obj is None:
+        return Combination(status="skipped", reason="no holder", warnings=tuple(warnings), **base)
     try:
         tool = _tool(params, attrs, float(stickout_m), tool_material_default, float(fluted_diameter_ratio),
                      warnings)
