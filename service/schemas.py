@@ -384,7 +384,12 @@ class PredictionResult(_Response):
                                                 "(exact for a modelled spindle; modal-fit estimates for a "
                                                 "hybrid one, see natural_frequencies_method).")
     natural_frequencies_method: str = Field(description="wittrick_williams (exact) or modal_fit.")
-    peaks: list[Peak] = Field(description="Peaks of |h|.")
+    natural_frequencies_sd_hz: list[float] | None = Field(None, description="Hybrid only: the standard "
+                                                          "uncertainty of each modal-fit natural frequency, Hz.")
+    modal_fit: list[dict[str, Any]] | None = Field(None, description="Hybrid only: each fitted mode (frequency_hz, "
+                                                   "damping_ratio, sd_hz, damping_ratio_sd, band_hz, modes_in_band, "
+                                                   "residual_rel, significance, peak).")
+    peaks: list[Peak] = Field(description="Peaks of |h| (hybrid: those above the noise, one per mode).")
     static_stiffness_n_m: float | None = Field(description="Static stiffness 1/h(0), N/m; null when it cannot "
                                                "be given (hybrid, ungrounded).")
     min_real_m_n: float = Field(description="Most negative real part of h, m/N.")
