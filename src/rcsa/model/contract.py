@@ -23,6 +23,7 @@ from rcsa.model.bounds import (
     MAX_LENGTH_M,
     MAX_LOSS_FACTOR,
     MAX_MODULUS_PA,
+    MAX_NECK_SEGMENTS,
     MAX_POISSON_RATIO,
     MAX_SHEAR_COEFFICIENT,
     MAX_STIFFNESS,
@@ -180,7 +181,9 @@ class ToolSpec:
     """Parametric tool (ISO 13399 / Fusion meaning; ``contract.md`` "Assembly").
 
     ``shoulder_length_m``/``shoulder_diameter_m`` (extension) describe a reduced neck from
-    the flute end up to ``shoulder_length_m`` from the tip. ``fluted_mass_diameter_ratio``
+    the flute end up to ``shoulder_length_m`` from the tip; ``neck_segments`` (extension,
+    instead of them) a stepped neck as ``(length_m, diameter_m)`` pieces from the flute end
+    toward the holder (a conical neck, stepped). ``fluted_mass_diameter_ratio``
     (extension) uses a separate equivalent diameter for the flutes' mass (default: the
     stiffness one, ``domain.md`` §5.1).
 
@@ -216,6 +219,7 @@ class ToolSpec:
     fluted_mass_diameter_ratio: float | None = None
     shoulder_length_m: float | None = None
     shoulder_diameter_m: float | None = None
+    neck_segments: tuple[tuple[float, float], ...] = ()
 
     @property
     def inserted_length_m(self) -> float:
@@ -424,7 +428,7 @@ def parse_holder(value: object, materials: Mapping[str, Material], path: str = "
 
 _TOOL_FIELDS = ("material", "diameter_m", "shank_diameter_m", "overall_length_m", "flute_length_m",
                 "stickout_m", "fluted_diameter_ratio", "fluted_mass_diameter_ratio",
-                "shoulder_length_m", "shoulder_diameter_m")
+                "shoulder_length_m", "shoulder_diameter_m", "neck_segments")
 
 
 def parse_tool(value: object, materials: Mapping[str, Material], path: str = "tool") -> ToolSpec:
@@ -449,8 +453,28 @@ def parse_tool(value: object, materials: Mapping[str, Material], path: str = "to
     if shoulder_length is not None and not flute <= shoulder_length <= stickout:
         raise InputError(o.at("shoulder_length_m"),
                          f"must lie between flute_length_m ({flute:g}) and stickout_m ({stickout:g})")
+    necks = _neck_segments(o, flute, stickout) if o.has("neck_segments") else ()
+    if necks and shoulder_length is not None:
+        raise InputError(o.at("neck_segments"), "give either neck_segments or shoulder_length_m/shoulder_diameter_m")
     return ToolSpec(_material(o, materials, "carbide"), diameter, shank, overall, flute, stickout,
-                    ratio, mass_ratio, shoulder_length, shoulder_diameter)
+                    ratio, mass_ratio, shoulder_length, shoulder_diameter, necks)
+
+
+def _neck_segments(o: Fields, flute: float, stickout: float) -> tuple[tuple[float, float], ...]:
+    """``[{length_m, diameter_m}]`` from the flute end; together within stickout − flute_length."""
+    raw = o.array("neck_segments")
+    if len(raw) > MAX_NECK_SEGMENTS:
+        raise InputError(o.at("neck_segments"), f"at most {MAX_NECK_SEGMENTS} pieces, got {len(raw)}")
+    out = []
+    for i, item in enumerate(raw):
+        s = Fields(item, f"{o.at('neck_segments')}[{i}]", ("length_m", "diameter_m"))
+        out.append((s.number("length_m", gt=0.0, ge=MIN_LENGTH_M),  # at most stickout − flute, below
+                    s.number("diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)))
+    total = math.fsum(length for length, _ in out)
+    if total > (stickout - flute) * (1 + 1e-9) + 1e-12:
+        raise InputError(o.at("neck_segments"), f"reach {total:g} m beyond the flutes, more than the "
+                                                f"{stickout - flute:g} m between flute_length_m and stickout_m")
+    return tuple(out)
 
 
 def parse_joint(value: object, path: str) -> JointSpec | None:
