@@ -54,6 +54,17 @@ MIN_INSERTION_DIAMETERS = 2.0
 def shallow_insertion_note(inserted_length_m: float, shank_diameter_m: float) -> str | None:
     """A note when the shank is clamped over less than 2 diameters, else None.
 
+    Parameters
+    ----------
+    inserted_length_m : float
+        Length of the shank inside the holder, m.
+    shank_diameter_m : float
+        Shank diameter, m.
+
+    Returns
+    -------
+    str or None
+
     Examples
     --------
     >>> shallow_insertion_note(0.003, 0.010)[:40]
@@ -69,7 +80,16 @@ def shallow_insertion_note(inserted_length_m: float, shank_diameter_m: float) ->
 
 
 def assembly_notes(spec: AssemblySpec) -> tuple[str, ...]:
-    """Notes on modelling assumptions an assembly stretches (shallow insertion)."""
+    """Notes on modelling assumptions an assembly stretches (shallow insertion).
+
+    Parameters
+    ----------
+    spec : AssemblySpec
+
+    Returns
+    -------
+    tuple of str
+    """
     note = shallow_insertion_note(spec.tool.inserted_length_m, spec.tool.shank_diameter_m)
     return () if note is None else (note,)
 
@@ -229,7 +249,17 @@ def fluted_section(tool: ToolSpec, material: Material, shear: ShearModel | float
 
 
 def neck_pieces(tool: ToolSpec) -> tuple[tuple[float, float], ...]:
-    """The neck as ``(length_m, diameter_m)`` pieces from the flute end toward the holder."""
+    """The neck as ``(length_m, diameter_m)`` pieces from the flute end toward the holder.
+
+    Parameters
+    ----------
+    tool : ToolSpec
+
+    Returns
+    -------
+    tuple of (float, float)
+        Lengths and diameters, m; empty when the shank runs to the flutes.
+    """
     if tool.neck_segments:
         return tool.neck_segments
     if tool.shoulder_length_m is not None and tool.shoulder_diameter_m is not None:

@@ -207,6 +207,8 @@ class ToolSpec:
         The same for the flutes' mass (extension).
     shoulder_length_m, shoulder_diameter_m : float, optional
         A reduced neck (extension, see above).
+    neck_segments : tuple of (float, float)
+        A stepped neck (extension, see above): ``(length_m, diameter_m)`` pieces, m.
     """
 
     material: str
