@@ -1,7 +1,8 @@
 """Diagnoses, joint identifications and effect analyses: thin doors onto ``rcsa.app.analyses``.
 
 Each route passes the JSON body to ``rcsa.app.analyses.diagnose`` / ``identify`` / ``effects``;
-a diagnosis also gets the service's measurement store (a measured spindle is looked up there).
+diagnoses, identifications and effect analyses also get the service's measurement store
+(measured spindles are looked up there).
 """
 
 from __future__ import annotations
@@ -28,8 +29,8 @@ _OPERATIONS = {
 _Request = Annotated[dict[str, Any], Body(description="The request document (see the contract).")]
 
 
-#: Operations that look measured spindles up in the service's store.
-_WITH_STORE = frozenset({"diagnose"})
+#: Operations that read measured spindles from the service's store.
+_WITH_STORE = {"diagnose", "identify", "effects"}
 
 
 def _call(name: str, body: dict[str, Any], state: Any) -> Any:
