@@ -39,7 +39,7 @@ from rcsa.measured.artifact_identification import (
 )
 from rcsa.measured.store import Measurement
 from rcsa.model.contract import MeasuredSpindleSpec
-from rcsa.model.spindle_side import BaseResolver, MeasuredBase
+from rcsa.model.spindle_side import BaseResolver, BaseUncertainty, MeasuredBase
 
 __all__ = ["ASSUMED_N_AVERAGES", "DEFAULT_EFFECTIVE_LENGTH_M", "MeasurementSource", "base_resolver",
            "cantilever_rotations", "measured_base"]
@@ -104,7 +104,7 @@ def _complex_noise(rng: np.random.Generator, shape: tuple[int, ...]) -> np.ndarr
 
 
 @dataclass(frozen=True)
-class _EntryNoise:
+class _EntryNoise(BaseUncertainty):
     """Independent relative noise on the stored FRFs of a point receptance (h; l = n; p) or of h alone.
 
     ``direct_frf``: one draw of h's noise scales the whole estimated 2×2 (its rotations are
@@ -115,6 +115,7 @@ class _EntryNoise:
     sd: Mapping[str, np.ndarray | None]  # per stored FRF, (nfreq,) or None (no coherence)
 
     def draw(self, rng: np.random.Generator, n: int, default_noise_rel: float) -> np.ndarray:
+        """See :meth:`rcsa.model.spindle_side.BaseUncertainty.draw`."""
         nf = self.receptance.shape[0]
 
         def sd(name: str) -> np.ndarray:
@@ -133,13 +134,14 @@ class _EntryNoise:
         return out
 
     def summary(self, default_noise_rel: float) -> dict[str, Any]:
+        """See :meth:`rcsa.model.spindle_side.BaseUncertainty.summary`."""
         return {"propagation": "relative noise on each stored FRF" if len(self.sd) > 1 else
                 "relative noise on h, carried by the estimated rotations",
                 **_noise_summary(self.sd, default_noise_rel)}
 
 
 @dataclass(frozen=True)
-class _ArtifactNoise:
+class _ArtifactNoise(BaseUncertainty):
     """Noise on the artifact FRFs pushed through the exact identification (its conditioning included)."""
 
     receptance: np.ndarray               # (nfreq, 2, 2), the identified base receptance
@@ -151,6 +153,7 @@ class _ArtifactNoise:
     condition_number: np.ndarray         # (nfreq,)
 
     def draw(self, rng: np.random.Generator, n: int, default_noise_rel: float) -> np.ndarray:
+        """See :meth:`rcsa.model.spindle_side.BaseUncertainty.draw`."""
         nf = self.frequency_hz.size
         noisy = {}
         for name, v in self.frfs.items():
@@ -162,6 +165,7 @@ class _ArtifactNoise:
         return self.receptance + (drawn - centre)
 
     def summary(self, default_noise_rel: float) -> dict[str, Any]:
+        """See :meth:`rcsa.model.spindle_side.BaseUncertainty.summary`."""
         c = self.condition_number
         return {"propagation": "noise on h11, h21, h22 re-identified by the exact three-FRF method",
                 **_noise_summary(self.sd, default_noise_rel),

@@ -10,9 +10,10 @@ business (:func:`rcsa.measured.hybrid.measured_base`); here it is just a
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
 
@@ -26,7 +27,7 @@ from rcsa.physics.arrays import ComplexArray, FloatArray
 __all__ = ["BaseResolver", "BaseUncertainty", "MeasuredBase", "SpindleSide", "spread_of_bounds"]
 
 
-class BaseUncertainty(Protocol):
+class BaseUncertainty(ABC):
     """How uncertain a measured spindle-side receptance is: draws of it, and what was assumed.
 
     Implemented by the measured layer per kind of measurement (:mod:`rcsa.measured.hybrid`):
@@ -34,17 +35,38 @@ class BaseUncertainty(Protocol):
     artifact identification where there is one.
     """
 
+    @abstractmethod
     def draw(self, rng: np.random.Generator, n: int, default_noise_rel: float) -> ComplexArray:
-        """``n`` equally likely receptances, shape (n, nfreq, 2, 2), on the base's grid.
+        """Equally likely receptances under the measurement's own noise.
 
-        ``default_noise_rel`` (relative sd of |H| and of its phase, per real and imaginary
-        part) is used for FRFs stored without coherence.
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+        n : int
+            Number of draws.
+        default_noise_rel : float
+            Relative sd of the magnitude and of the phase (per real and imaginary part) used for FRFs
+            stored without coherence.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n, nfreq, 2, 2), complex
+            On the base's grid, ``[[h, l], [n, p]]`` in m/N, m/(N·m), rad/N, rad/(N·m).
         """
-        ...
 
+    @abstractmethod
     def summary(self, default_noise_rel: float) -> dict[str, Any]:
-        """What the draws assume (noise source and level, conditioning), JSON-ready."""
-        ...
+        """What the draws assume (noise source and level, conditioning), JSON-ready.
+
+        Parameters
+        ----------
+        default_noise_rel : float
+            As for :meth:`draw`.
+
+        Returns
+        -------
+        dict
+        """
 
 
 @dataclass(frozen=True)
