@@ -152,8 +152,13 @@ class HybridTrial:
 
 def make_hybrid_trial(rng: np.random.Generator, effect: str, kind: str, *,
                       stickouts_m: Sequence[float] = STICKOUTS_M, frequency_hz: np.ndarray = T.FREQUENCY_HZ,
-                      with_null: bool = True, options: dict | None = None) -> HybridTrial:
-    """Draw nuisance, effect, tap-test noise and the stored spindle; return the request and its store."""
+                      with_null: bool = True, options: dict | None = None,
+                      length_log_sd: float = LENGTH_LOG_SD) -> HybridTrial:
+    """Draw nuisance, effect, tap-test noise and the stored spindle; return the request and its store.
+
+    ``length_log_sd``: how well the shop knows its direct_frf spindle's cantilever length (the
+    estimate scatters by it, and the request states it as ``spindle_effective_length_log``).
+    """
     if effect not in HYBRID_EFFECTS:
         raise ValueError(f"{effect!r} is no hybrid benchmark class")
     nz = T.draw_nuisance(rng, len(stickouts_m))
@@ -180,7 +185,7 @@ def make_hybrid_trial(rng: np.random.Generator, effect: str, kind: str, *,
     spindle_spec: dict[str, Any] = {"measurement_id": spindle.id}
     if kind == "direct_frf":
         length_true = effective_length_m(T._spindle_nose_receptance(spindle_doc, frequency_hz[:1]))
-        length_null = length_true * math.exp(LENGTH_LOG_SD * rng.standard_normal())
+        length_null = length_true * math.exp(length_log_sd * rng.standard_normal())
         spindle_spec["effective_length_m"] = length_true * params["length_factor"] if rot else length_null
         if rot:
             length_null = length_true
@@ -197,6 +202,8 @@ def make_hybrid_trial(rng: np.random.Generator, effect: str, kind: str, *,
     assembly = copy.deepcopy(T.base_document(theory))
     assembly["spindle"] = spindle_spec
     request: dict[str, Any] = {"assembly": assembly, "measurements": measurements}
+    if length_log_sd != LENGTH_LOG_SD:
+        request["tolerances"] = {"spindle_effective_length_log": length_log_sd}
     if options:
         request["options"] = options
     return HybridTrial(effect, kind, {k: float(v) for k, v in params.items()}, request, source, clean, null,
