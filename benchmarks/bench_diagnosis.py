@@ -467,12 +467,18 @@ def run_hybrid(args: argparse.Namespace) -> None:
     plan = [plan[i] for i in np.random.default_rng(args.seed).permutation(len(plan))]
     t0 = time.perf_counter()
     records: list[dict] = []
+    out = args.out if args.out != DEFAULT_OUT else DEFAULT_OUT.with_name("diagnosis_hybrid.json")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    partial = out.with_suffix(".partial.jsonl")  # every record as it comes: a run cut short can still be scored
+    partial.write_text("")
     with ProcessPoolExecutor(max_workers=args.workers) as pool:
         futures = [pool.submit(run_hybrid_trial, i, e, k, args.seed, args.length_log_sd)
                    for i, (e, k) in enumerate(plan)]
         for n, fut in enumerate(futures):
             rec = fut.result()
             records.append(rec)
+            with partial.open("a") as fh:
+                fh.write(json.dumps(rec) + "\n")
             print(f"[{n + 1}/{len(plan)}] {rec['kind']:16s} {rec['effect']:29s} -> {rec['status']:10s} "
                   f"{rec['verdict']:29s} SNR {rec['snr_true']:5.1f} lnBF {rec['log_bayes_factor'] or 0:7.1f} "
                   f"{rec['runtime_s']:.1f} s", flush=True)
@@ -496,9 +502,8 @@ def run_hybrid(args: argparse.Namespace) -> None:
     print("===== pooled")
     print_summary(summary["pooled"])
     print(f"direct_frf rotation errors named: {summary['direct_frf_rotation_named']}")
-    out = args.out if args.out != DEFAULT_OUT else DEFAULT_OUT.with_name("diagnosis_hybrid.json")
-    out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps({"summary": summary, "trials": records}, indent=1))
+    partial.unlink()
     print(f"wrote {out}")
 
 
