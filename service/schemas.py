@@ -30,6 +30,14 @@ from pydantic import (
 )
 from pydantic_core import PydanticCustomError
 
+from rcsa.analysis.lobes.options import (
+    DEFAULT_MODES_PER_DIRECTION,
+    DEFAULT_STEPS_PER_PERIOD,
+    MAX_MODES_PER_DIRECTION,
+    MAX_STEPS_PER_PERIOD,
+    MIN_MODES_PER_DIRECTION,
+    MIN_STEPS_PER_PERIOD,
+)
 from rcsa.reference import ra1
 
 from .field_errors import pydantic_errors
@@ -626,6 +634,14 @@ class LobesRequest(_Request):
     radial_immersion: float = Field(ge=1e-4, le=1, description="Radial immersion ae/D (dimensionless).")
     milling: Literal["up", "down"]
     spindle_speed_rpm: SpeedRange
+    method: Literal["zoa", "semi_discretization"] = Field(
+        "zoa", description="zoa: zero-order (Altintas–Budak); semi_discretization: first-order SDM "
+                           "(time-periodic force, flip lobes; slower).")
+    steps_per_period: int | None = Field(None, ge=MIN_STEPS_PER_PERIOD, le=MAX_STEPS_PER_PERIOD,
+                                         description=f"SDM only: steps per tooth period (default {DEFAULT_STEPS_PER_PERIOD}).")
+    modes_per_direction: int | None = Field(None, ge=MIN_MODES_PER_DIRECTION, le=MAX_MODES_PER_DIRECTION,
+                                            description=f"SDM only: at most this many modes in x and in y (default "
+                                                        f"{DEFAULT_MODES_PER_DIRECTION}).")
 
 
 class Lobe(_Response):

@@ -13,6 +13,9 @@ from typing import Any
 
 import numpy as np
 
+from rcsa.analysis.lobes.modal_model import ModalModel, fit_modal_model
+from rcsa.analysis.lobes.options import OPTION_KEYS, LobesMethod, parse_method
+from rcsa.analysis.lobes.semi_discretization import semi_discretization_lobes
 from rcsa.analysis.lobes.zoa import (
     MAX_SPEED_COUNT,
     LobeResult,
@@ -50,6 +53,8 @@ class LobesRequest:
         As in :func:`stability_lobes`.
     spindle_speed_rpm : numpy.ndarray, shape (count,)
         ``linspace(start, stop, count)``, rpm.
+    method : LobesMethod
+        ``"zoa"`` (default) or ``"semi_discretization"`` and its options.
     """
 
     frequency_hz: np.ndarray | None
@@ -62,17 +67,23 @@ class LobesRequest:
     radial_immersion: float
     milling: Milling
     spindle_speed_rpm: np.ndarray
+    method: LobesMethod = LobesMethod()
 
     def solve(
         self,
         frequency_hz: object | None = None,
         frf_xx: object | None = None,
         frf_yy: object | None = None,
+        *,
+        modal_model: ModalModel | None = None,
     ) -> LobeResult:
-        """Run :func:`stability_lobes` with this request's parameters.
+        """Run :func:`stability_lobes` (or the semi-discretization) with this request.
 
         The inline receptances are used unless given here (e.g. the tool-point FRF the
-        caller predicted from ``assembly``); ``frf_yy=None`` then means "same as x".
+        caller predicted from ``assembly``); ``frf_yy=None`` then means "same as x". With
+        ``method.name == "semi_discretization"`` the modes are ``modal_model`` when given
+        (e.g. the exact modes of an analytical assembly), else fitted to the receptances
+        (:func:`~rcsa.analysis.lobes.modal_model.fit_modal_model`).
         """
         if frequency_hz is None:
             if self.frequency_hz is None:
@@ -80,6 +91,24 @@ class LobesRequest:
                     "frf_x", "the request has an assembly: predict its FRF and pass it to solve()"
                 )
             frequency_hz, frf_xx, frf_yy = self.frequency_hz, self.frf_xx, self.frf_yy
+        if self.method.name == "semi_discretization":
+            if modal_model is None:
+                modal_model = fit_modal_model(
+                    np.asarray(frequency_hz, dtype=float),
+                    np.asarray(frf_xx, dtype=complex),
+                    None if frf_yy is None else np.asarray(frf_yy, dtype=complex),
+                    modes_per_direction=self.method.modes_per_direction,
+                )
+            return semi_discretization_lobes(
+                modal_model,
+                teeth=self.teeth,
+                tangential_coefficient_n_m2=self.tangential_coefficient_n_m2,
+                radial_ratio=self.radial_ratio,
+                radial_immersion=self.radial_immersion,
+                milling=self.milling,
+                spindle_speed_rpm=self.spindle_speed_rpm,
+                steps_per_period=self.method.steps_per_period,
+            )
         return stability_lobes(
             frequency_hz,
             frf_xx,
@@ -103,6 +132,7 @@ _REQUEST_KEYS = {
     "radial_immersion",
     "milling",
     "spindle_speed_rpm",
+    *OPTION_KEYS,
 }
 _REQUIRED_KEYS = (
     "teeth",
@@ -148,7 +178,9 @@ def parse_lobes_request(body: object) -> LobesRequest:
         "imag": [...]}}``) or ``assembly``, optional ``frf_y`` (same form and grid as
         ``frf_x``; null = same as x), ``teeth``, ``tangential_coefficient_n_m2``,
         ``radial_ratio``, ``radial_immersion``, ``milling`` (``"up"``/``"down"``) and
-        ``spindle_speed_rpm`` (``{"start", "stop", "count"}``).
+        ``spindle_speed_rpm`` (``{"start", "stop", "count"}``); optional ``method``
+        (``"zoa"`` or ``"semi_discretization"``, with ``steps_per_period`` and
+        ``modes_per_direction``: :func:`~rcsa.analysis.lobes.options.parse_method`).
 
     Returns
     -------
@@ -228,4 +260,5 @@ def parse_lobes_request(body: object) -> LobesRequest:
         radial_immersion=immersion,
         milling=milling,
         spindle_speed_rpm=grid,
+        method=parse_method(body),
     )
