@@ -28,7 +28,12 @@ from typer.testing import CliRunner
 from rcsa import app as rcsa_app
 from rcsa.analysis.lobes import monodromy as md
 from rcsa.analysis.lobes import semi_discretization as sdm
-from rcsa.analysis.lobes.modal_model import ModalModel, fit_modal_model, modal_model_from_assembly
+from rcsa.analysis.lobes.modal_model import (
+    MIN_PEAK_FRACTION,
+    ModalModel,
+    fit_modal_model,
+    modal_model_from_assembly,
+)
 from rcsa.analysis.lobes.options import LobesMethod, parse_method
 from rcsa.analysis.lobes.request import parse_lobes_request
 from rcsa.analysis.lobes.zoa import (
@@ -310,6 +315,12 @@ def test_fit_keeps_the_largest_peaks_and_reports_its_misfit():
     assert np.abs(weak).max() < 0.05 * np.abs(h).max()
     fit = fit_modal_model(f, h + weak, modes_per_direction=3)
     assert fit.n_modes == 4 and fit.same_in_y  # 2 modes, copied to y
+    left = fit.to_dict()["omitted_modes"]
+    assert [o["direction"] for o in left] == ["x", "y"]  # its |h| peak, moved by the 1 400 Hz tail
+    assert all(abs(o["frequency_hz"] / 2500.0 - 1) < 0.02 for o in left)
+    assert 0.01 < left[0]["peak_fraction"] < MIN_PEAK_FRACTION
+    one = fit_modal_model(f, h, modes_per_direction=1)  # keeps 1 400 Hz, the larger |h| peak
+    assert one.frequency_hz[0] == pytest.approx(1400.0) and one.omitted[0][1] == pytest.approx(600.0, abs=5)
     wn = 2 * np.pi * 600.0
     complex_mode = (0.5 + 0.3j * 0.5 * w / wn) / (wn**2 - w**2 + 2j * 0.03 * wn * w)
     fit = fit_modal_model(f, complex_mode, modes_per_direction=1)
@@ -348,6 +359,9 @@ def test_exact_modes_of_an_assembly_reproduce_its_frf():
     for f in m.frequency_hz:  # each fitted mode sits on an exact one (damping shifts it < 0.5 %)
         assert np.min(np.abs(exact / f - 1)) < 5e-3
     assert np.all(m.peak_relative_error < 0.03) and np.all(m.relative_rms_error < 0.05)
+    left = {o["frequency_hz"]: o["peak_fraction"] for o in m.to_dict()["omitted_modes"]}
+    assert len(left) == exact.size - 3  # every other exact mode in the band is listed
+    assert sum(p is not None for p in left.values()) >= 1  # e.g. 1 115 Hz, 14 % of the largest peak
 
 
 # --------------------------------------------------------------------------- requests
@@ -369,6 +383,17 @@ def test_method_options_are_validated(body, field):
     with pytest.raises(InputError) as err:
         parse_method(body)
     assert err.value.field == field
+
+
+def test_sdm_speed_grid_is_bounded():
+    f = np.arange(100.0, 3000.0, 2.0)
+    hx = XY.receptance(f, 0)
+    frf = {"frequency_hz": f.tolist(), "h": {"real": hx.real.tolist(), "imag": hx.imag.tolist()}}
+    body = {"frf_x": frf, **LOBES, "spindle_speed_rpm": {"start": 4000, "stop": 30000, "count": 5001}}
+    parse_lobes_request(body)  # ZOA takes it
+    with pytest.raises(InputError) as err:
+        parse_lobes_request({**body, **SDM})
+    assert err.value.field == "spindle_speed_rpm.count"
 
 
 def test_method_defaults():

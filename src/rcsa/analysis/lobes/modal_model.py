@@ -97,6 +97,9 @@ class ModalModel:
         Misfit ``‖Σ modes − h‖/‖h‖`` over the peak windows, per direction (NaN: not checked).
     peak_relative_error : numpy.ndarray
         ``|Σ modes − h|/|h|`` at each mode's peak (NaN: not checked).
+    omitted : tuple of (int, float, float)
+        Modes (or FRF peaks) left out: ``(direction, frequency_hz, peak / largest peak)``
+        (the fraction is NaN for a mode without a peak at the tool point).
 
     Examples
     --------
@@ -113,6 +116,7 @@ class ModalModel:
     same_in_y: bool = False
     relative_rms_error: np.ndarray = field(default_factory=lambda: np.full(2, np.nan))
     peak_relative_error: np.ndarray | None = None
+    omitted: tuple[tuple[int, float, float], ...] = ()
 
     def __post_init__(self) -> None:
         n = self.frequency_hz.shape
@@ -167,9 +171,12 @@ class ModalModel:
             for d, f, z, r, wi, e in zip(self.direction, self.frequency_hz, self.damping_ratio,
                                          self.residue_1_kg, w, self.peak_relative_error, strict=True)
         ]
+        omitted = [{"direction": _DIRECTIONS[d], "frequency_hz": float(f), "peak_fraction": num(p)}
+                   for d, f, p in self.omitted]
         return {"source": self.source, "same_in_y": self.same_in_y, "modes": modes,
                 "relative_rms_error": {d: num(float(e)) for d, e in zip(_DIRECTIONS, self.relative_rms_error,
-                                                                         strict=True)}}
+                                                                         strict=True)},
+                "omitted_modes": omitted}
 
     def with_quality(self, frequency_hz: np.ndarray, h_by_direction: tuple[np.ndarray | None, np.ndarray | None]
                      ) -> ModalModel:
@@ -189,7 +196,7 @@ class ModalModel:
                 i = np.flatnonzero(win)[np.argmax(np.abs(h[win]))]
                 peak_err[r] = float(abs(model_h[i] - h[i]) / abs(h[i]))
         return ModalModel(self.frequency_hz, self.damping_ratio, self.residue_1_kg, self.direction,
-                          self.source, self.same_in_y, rms, peak_err)
+                          self.source, self.same_in_y, rms, peak_err, self.omitted)
 
 
 def _windows(f: np.ndarray, fn: np.ndarray, zeta: np.ndarray) -> np.ndarray:
@@ -202,14 +209,16 @@ def _windows(f: np.ndarray, fn: np.ndarray, zeta: np.ndarray) -> np.ndarray:
     return mask
 
 
-def _select_peaks(f: np.ndarray, h: np.ndarray, max_modes: int) -> list[float]:
+def _select_peaks(f: np.ndarray, h: np.ndarray, max_modes: int) -> tuple[list[float], list[tuple[float, float]]]:
+    """Frequencies of the largest peaks of ``|h|`` to fit, and the others with their size."""
     peaks = find_frf_peaks(f, h)
     if not peaks:
-        return []
+        return [], []
     top = max(p["magnitude_m_n"] for p in peaks)
-    keep = [p for p in peaks if p["magnitude_m_n"] >= MIN_PEAK_FRACTION * top]
-    keep.sort(key=lambda p: -p["magnitude_m_n"])
-    return sorted(p["frequency_hz"] for p in keep[:max_modes])
+    ranked = sorted(peaks, key=lambda p: -p["magnitude_m_n"])
+    keep = [p for p in ranked if p["magnitude_m_n"] >= MIN_PEAK_FRACTION * top][:max_modes]
+    left = [(p["frequency_hz"], p["magnitude_m_n"] / top) for p in ranked if p not in keep]
+    return sorted(p["frequency_hz"] for p in keep), sorted(left)
 
 
 def _start(f: np.ndarray, h: np.ndarray, peak_hz: float) -> tuple[float, float]:
@@ -274,9 +283,11 @@ def _fit_modes(f: np.ndarray, h: np.ndarray, starts: list[tuple[float, float]]
     return np.empty(0), np.empty(0), np.empty(0)
 
 
-def _fit_direction(f: np.ndarray, h: np.ndarray, max_modes: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Modes of one direct FRF, started from its largest peaks."""
-    return _fit_modes(f, h, [_start(f, h, p) for p in _select_peaks(f, h, max_modes)])
+def _fit_direction(f: np.ndarray, h: np.ndarray, max_modes: int
+                   ) -> tuple[tuple[np.ndarray, np.ndarray, np.ndarray], list[tuple[float, float]]]:
+    """Modes of one direct FRF, started from its largest peaks; the peaks left out."""
+    keep, left = _select_peaks(f, h, max_modes)
+    return _fit_modes(f, h, [_start(f, h, p) for p in keep]), left
 
 
 def fit_modal_model(frequency_hz: np.ndarray, frf_xx: np.ndarray, frf_yy: np.ndarray | None = None, *,
@@ -319,16 +330,17 @@ def fit_modal_model(frequency_hz: np.ndarray, frf_xx: np.ndarray, frf_yy: np.nda
     True
     """
     f = np.asarray(frequency_hz, dtype=float)
-    fx = _fit_direction(f, np.asarray(frf_xx), modes_per_direction)
+    fx, left_x = _fit_direction(f, np.asarray(frf_xx), modes_per_direction)
     if fx[0].size == 0:
         raise InputError("frf_x", "no resonance peak of |h| could be fitted by a stable mode with a "
                                   "positive residue (a time-domain method needs the modes)")
     same = frf_yy is None
-    fy = fx if same else _fit_direction(f, np.asarray(frf_yy), modes_per_direction)
+    fy, left_y = (fx, left_x) if same else _fit_direction(f, np.asarray(frf_yy), modes_per_direction)
+    omitted = tuple((0, fo, p) for fo, p in left_x) + tuple((1, fo, p) for fo, p in left_y)
     model = ModalModel(
         np.concatenate([fx[0], fy[0]]), np.concatenate([fx[1], fy[1]]), np.concatenate([fx[2], fy[2]]),
         np.concatenate([np.zeros(fx[0].size, dtype=np.int64), np.ones(fy[0].size, dtype=np.int64)]),
-        source="fit", same_in_y=same)
+        source="fit", same_in_y=same, omitted=omitted)
     return model.with_quality(f, (np.asarray(frf_xx), np.asarray(frf_xx) if same else np.asarray(frf_yy)))
 
 
@@ -386,6 +398,9 @@ def modal_model_from_assembly(spec: AssemblySpec, *, modes_per_direction: int = 
         raise InputError("assembly", "no mode shows a peak at the tool point in the band")
     usable = usable[peak[usable] >= MIN_PEAK_FRACTION * peak[usable].max()]
     keep = np.sort(usable[np.argsort(-peak[usable])][:modes_per_direction])
+    top = float(np.nanmax(peak[keep]))
+    left = [(float(feats.frequency_hz[i]), float(peak[i] / top)) for i in range(fn.size) if i not in set(keep)]
+    omitted = tuple((d, f, p) for d in (0, 1) for f, p in left)
     z0 = np.clip(feats.damping_ratio[keep], 1e-4, 0.5)
     rel = np.clip(_WINDOW_ZETAS * z0, _WINDOW_MIN_REL, _WINDOW_MAX_REL)
     dense = np.unique(np.concatenate([f * np.linspace(1 - r, 1 + r, _DENSE_WINDOW_LINES)
@@ -396,7 +411,7 @@ def modal_model_from_assembly(spec: AssemblySpec, *, modes_per_direction: int = 
         raise InputError("assembly", "the tool-point modes could not be fitted with positive residues")
     model = ModalModel(np.concatenate([f_k, f_k]), np.concatenate([z_k, z_k]), np.concatenate([r_k, r_k]),
                        np.repeat(np.array([0, 1], dtype=np.int64), f_k.size), source="exact_modes",
-                       same_in_y=True)
+                       same_in_y=True, omitted=omitted)
     if frequency_hz is None or h is None:
         return model
     return model.with_quality(np.asarray(frequency_hz, dtype=float), (np.asarray(h), np.asarray(h)))

@@ -25,6 +25,7 @@ __all__ = [
     "DEFAULT_MODES_PER_DIRECTION",
     "DEFAULT_STEPS_PER_PERIOD",
     "MAX_MODES_PER_DIRECTION",
+    "MAX_SDM_SPEED_COUNT",
     "MAX_STEPS_PER_PERIOD",
     "METHODS",
     "MIN_MODES_PER_DIRECTION",
@@ -38,6 +39,8 @@ __all__ = [
 Method = Literal["zoa", "semi_discretization"]
 METHODS: tuple[Method, ...] = ("zoa", "semi_discretization")
 MIN_MODES_PER_DIRECTION = 1
+#: Largest speed grid with ``"semi_discretization"`` (about 6 ms a speed: 30 s).
+MAX_SDM_SPEED_COUNT = 5000
 #: Request fields read here.
 OPTION_KEYS = ("method", "steps_per_period", "modes_per_direction")
 _SDM_ONLY = ("steps_per_period", "modes_per_direction")

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from rcsa.analysis.lobes.modal_model import ModalModel, fit_modal_model
-from rcsa.analysis.lobes.options import OPTION_KEYS, LobesMethod, parse_method
+from rcsa.analysis.lobes.options import MAX_SDM_SPEED_COUNT, OPTION_KEYS, LobesMethod, parse_method
 from rcsa.analysis.lobes.semi_discretization import semi_discretization_lobes
 from rcsa.analysis.lobes.zoa import (
     MAX_SPEED_COUNT,
@@ -246,6 +246,10 @@ def parse_lobes_request(body: object) -> LobesRequest:
             "spindle_speed_rpm.stop", f"must be greater than start ({start}), got {stop}"
         )
     count = _count(speed["count"], "spindle_speed_rpm.count", 2, MAX_SPEED_COUNT)
+    method = parse_method(body)
+    if method.name == "semi_discretization" and count > MAX_SDM_SPEED_COUNT:
+        raise InputError("spindle_speed_rpm.count",
+                         f"at most {MAX_SDM_SPEED_COUNT} speeds with method 'semi_discretization', got {count}")
     grid = np.linspace(start, stop, count)
     grid.flags.writeable = False
 
@@ -260,5 +264,5 @@ def parse_lobes_request(body: object) -> LobesRequest:
         radial_immersion=immersion,
         milling=milling,
         spindle_speed_rpm=grid,
-        method=parse_method(body),
+        method=method,
     )

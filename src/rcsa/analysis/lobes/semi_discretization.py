@@ -88,6 +88,8 @@ _SCAN_MIN_RATIO = 1.1
 _SCAN_MAX_RATIO = 1.6
 _SCAN_CEILING = 64.0
 _MAX_REFINE = 40
+# Speeds per batch of period maps: bounds the memory (~50 MB for 12 states and k = 40).
+_CHUNK = 256
 
 Instability = str  # "hopf" | "flip" | "fold" | "" (none below the ceiling)
 
@@ -197,7 +199,11 @@ class _Evaluator:
 
     def __call__(self, idx: np.ndarray, depth_m: np.ndarray) -> np.ndarray:
         self.evaluations += idx.size
-        return md.critical_multipliers(self.system, self.plan, self.maps(idx, depth_m))[0]
+        mu = np.empty(idx.size, dtype=complex)
+        for lo in range(0, idx.size, _CHUNK):
+            part = slice(lo, lo + _CHUNK)
+            mu[part] = md.critical_multipliers(self.system, self.plan, self.maps(idx[part], depth_m[part]))[0]
+        return mu
 
 
 def _log_modulus(mu: np.ndarray) -> np.ndarray:
@@ -271,6 +277,13 @@ def _reference_depth(model: ModalModel, teeth: int, kt: float, alpha: np.ndarray
 def _chatter(evaluate: _Evaluator, idx: np.ndarray, depth_m: np.ndarray, period_s: np.ndarray
              ) -> tuple[np.ndarray, np.ndarray]:
     """Critical multiplier and dominant vibration frequency (Hz) at the given depths."""
+    parts = [_chatter_chunk(evaluate, idx[lo : lo + _CHUNK], depth_m[lo : lo + _CHUNK], period_s[lo : lo + _CHUNK])
+             for lo in range(0, idx.size, _CHUNK)]
+    return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
+
+
+def _chatter_chunk(evaluate: _Evaluator, idx: np.ndarray, depth_m: np.ndarray, period_s: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray]:
     maps = evaluate.maps(idx, depth_m)
     mu, vec = md.critical_multipliers(evaluate.system, evaluate.plan, maps, vectors=True)
     assert vec is not None
