@@ -461,3 +461,23 @@ def test_depth_search_scale_is_the_zoa_absolute_limit():
     z = stability_lobes(f, XY.receptance(f, 0), XY.receptance(f, 1), teeth=4, tangential_coefficient_n_m2=KT,
                         radial_ratio=KR, radial_immersion=0.5, milling="down", spindle_speed_rpm=[10000.0])
     assert math.isclose(b_ref, z.min_depth_limit_m, rel_tol=2e-3)
+
+
+@pytest.mark.parametrize(("change", "field"), [
+    ({"teeth": 0}, "teeth"), ({"teeth": 2.0}, "teeth"), ({"steps_per_period": 7}, "steps_per_period"),
+    ({"tangential_coefficient_n_m2": -1.0}, "tangential_coefficient_n_m2"), ({"radial_ratio": np.nan}, "radial_ratio"),
+    ({"spindle_speed_rpm": [0.0, 1000.0]}, "spindle_speed_rpm"), ({"radial_immersion": 1.5}, "radial_immersion"),
+    ({"milling": "climb"}, "milling"),
+])
+def test_python_api_checks_its_arguments(change, field):
+    args = {"teeth": 2, "tangential_coefficient_n_m2": KT, "radial_ratio": KR, "radial_immersion": 0.5,
+            "milling": "down", "spindle_speed_rpm": [10000.0], **change}
+    with pytest.raises(InputError) as err:
+        sdm.semi_discretization_lobes(XY, **args)
+    assert err.value.field == field
+
+
+def test_the_callers_speed_array_stays_writable():
+    speeds = np.array([10000.0, 12000.0])
+    lobes(speeds=speeds)
+    speeds[0] = 1.0

@@ -64,6 +64,7 @@ from rcsa.analysis.lobes.zoa import (
     engagement_angles_rad,
     zoa_depth_limit,
 )
+from rcsa.errors import InputError
 
 __all__ = [
     "DEFAULT_STEPS_PER_PERIOD",
@@ -73,10 +74,12 @@ __all__ = [
     "semi_discretization_lobes",
 ]
 
-#: Steps per tooth period (Insperger & Stépán use 40); accepted range.
+#: Steps per tooth period (Insperger & Stépán use 40); range accepted in requests (the
+#: Python API takes up to ``4000`` for convergence studies).
 DEFAULT_STEPS_PER_PERIOD = 40
 MIN_STEPS_PER_PERIOD = 8
 MAX_STEPS_PER_PERIOD = 200
+_API_MAX_STEPS = 4000
 #: Relative width of the final depth bracket.
 DEPTH_RTOL = 1e-3
 #: Fewer steps than this per chatter cycle flag a speed as under-resolved (first-order SDM
@@ -90,9 +93,6 @@ _SCAN_CEILING = 64.0
 _MAX_REFINE = 40
 # Speeds per batch of period maps: bounds the memory (~50 MB for 12 states and k = 40).
 _CHUNK = 256
-
-Instability = str  # "hopf" | "flip" | "fold" | "" (none below the ceiling)
-
 
 # --------------------------------------------------------------------------- result
 
@@ -317,6 +317,22 @@ def _segments(speed: np.ndarray, depth: np.ndarray, kind: np.ndarray, lobe: np.n
     return lobes, kinds, np.array(lowest)
 
 
+def _check_arguments(teeth: object, kt: float, kr: float, steps: object, speed: np.ndarray) -> None:
+    """The scalar rules of :func:`semi_discretization_lobes` (the request parser checks them first)."""
+    for field, value, low, high in (("teeth", teeth, 1, None),
+                                    ("steps_per_period", steps, MIN_STEPS_PER_PERIOD, _API_MAX_STEPS)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low or (
+                high is not None and value > high):
+            raise InputError(field, f"must be an integer >= {low}" + (f" and <= {high}" if high else "")
+                             + f", got {value!r}")
+    if not (math.isfinite(kt) and kt > 0):
+        raise InputError("tangential_coefficient_n_m2", f"must be finite and > 0, got {kt}")
+    if not (math.isfinite(float(kr)) and kr >= 0):
+        raise InputError("radial_ratio", f"must be finite and >= 0 (Kr = Kn/Kt), got {kr}")
+    if speed.ndim != 1 or speed.size == 0 or not np.all(np.isfinite(speed) & (speed > 0)):
+        raise InputError("spindle_speed_rpm", "must be a non-empty 1-D grid of finite speeds > 0 rpm")
+
+
 def semi_discretization_lobes(
     model: ModalModel,
     *,
@@ -347,13 +363,18 @@ def semi_discretization_lobes(
     spindle_speed_rpm : numpy.ndarray, shape (nspeed,)
         Validated speed grid, rpm.
     steps_per_period : int
-        ``k``: steps per tooth period (accuracy ~ 1/k²).
+        ``k``: steps per tooth period (error ∝ 1/k²); 8 … 4000 here, 8 … 200 in requests.
     depth_rtol : float
         Relative width of the final depth bracket.
 
     Returns
     -------
     SemiDiscretizationResult
+
+    Raises
+    ------
+    InputError
+        An argument out of its range (named as in the request: ``teeth``, ``steps_per_period``, …).
 
     References
     ----------
@@ -371,8 +392,9 @@ def semi_discretization_lobes(
     >>> str(r.instability[0]), round(float(r.depth_limit_m[0]) * 1e3, 2), round(float(r.chatter_frequency_hz[0]), 6)
     ('flip', 1.31, 900.0)
     """
-    speed = np.asarray(spindle_speed_rpm, dtype=float)
+    speed = np.array(spindle_speed_rpm, dtype=float)  # a copy: the result freezes its arrays
     kt = float(tangential_coefficient_n_m2)
+    _check_arguments(teeth, kt, radial_ratio, steps_per_period, speed)
     phi_st, phi_ex = engagement_angles_rad(radial_immersion, milling)
     plan = md.cutting_plan(teeth, steps_per_period, phi_st, phi_ex, radial_ratio)
     period = 60.0 / (teeth * speed)
