@@ -119,6 +119,9 @@ class ModalModel:
     omitted: tuple[tuple[int, float, float], ...] = ()
 
     def __post_init__(self) -> None:
+        for name, dtype in (("frequency_hz", float), ("damping_ratio", float), ("residue_1_kg", float),
+                            ("direction", np.int64), ("relative_rms_error", float)):
+            object.__setattr__(self, name, np.array(getattr(self, name), dtype=dtype))  # own copies
         n = self.frequency_hz.shape
         if len(n) != 1 or n[0] == 0:
             raise InputError("modal_model", "needs at least one mode")
@@ -131,8 +134,8 @@ class ModalModel:
         for name, arr, rule, text in checks:
             if arr.shape != n or not np.all(np.isfinite(arr)) or not np.all(rule(arr)):
                 raise InputError(f"modal_model.{name}", f"one finite value {text} per mode")
-        if self.peak_relative_error is None:
-            object.__setattr__(self, "peak_relative_error", np.full(n, np.nan))
+        peak = np.full(n, np.nan) if self.peak_relative_error is None else self.peak_relative_error
+        object.__setattr__(self, "peak_relative_error", np.array(peak, dtype=float))
         for name in ("frequency_hz", "damping_ratio", "residue_1_kg", "direction",
                      "relative_rms_error", "peak_relative_error"):
             getattr(self, name).flags.writeable = False
@@ -140,9 +143,8 @@ class ModalModel:
     @classmethod
     def of(cls, frequency_hz: Any, damping_ratio: Any, residue_1_kg: Any, direction: Any,
            **kwargs: Any) -> ModalModel:
-        """Build from sequences (copied to float/int arrays)."""
-        return cls(np.array(frequency_hz, dtype=float), np.array(damping_ratio, dtype=float),
-                   np.array(residue_1_kg, dtype=float), np.array(direction, dtype=np.int64), **kwargs)
+        """Build from sequences (the model keeps read-only copies, as the constructor does)."""
+        return cls(frequency_hz, damping_ratio, residue_1_kg, direction, **kwargs)
 
     @property
     def n_modes(self) -> int:
