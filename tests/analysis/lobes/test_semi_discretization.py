@@ -226,6 +226,26 @@ def test_flip_lobes_at_low_immersion_where_zoa_says_stable():
     assert np.all(z.depth_limit_m[flip] > 1.2 * r.depth_limit_m[flip])  # ZOA: stable at the flip limit
 
 
+@pytest.mark.parametrize(("model", "teeth", "immersion", "milling"), [
+    (BENCHMARK, 2, 0.05, "down"), (XY, 2, 0.05, "down"), (XY, 3, 0.1, "up")], ids=["1dof", "xy-down", "xy-up"])
+def test_the_depth_search_finds_the_first_crossing_of_a_fine_grid(model, teeth, immersion, milling):
+    """Islands and flip lenses: the scan-and-refine must not step over an unstable band that a
+    400-point depth grid (0 … ceiling) sees first (checked with dense eigenvalues)."""
+    speeds = np.linspace(5000, 40000, 36)
+    r = lobes(model, teeth=teeth, immersion=immersion, milling=milling, speeds=speeds)
+    system = md.state_space(model)
+    plan = md.cutting_plan(teeth, 40, *engagement_angles_rad(immersion, milling), KR)
+    depths = np.linspace(0.0, r.depth_search_max_m, 401)[1:]
+    for n, limit in zip(speeds, r.depth_limit_m, strict=True):  # a loop over speeds (an oracle)
+        h = np.full(depths.size, 60.0 / (n * teeth) / 40)
+        maps = md.period_maps(system, plan, KT, h, depths, md.free_maps(system, plan, h))
+        rho = np.abs(np.linalg.eigvals(md.monodromy_matrix(system, plan, maps))).max(axis=1)
+        unstable = np.flatnonzero(rho >= 1.0)
+        assert unstable.size, n
+        first = depths[unstable[0]]
+        assert first - (depths[1] - depths[0]) <= limit <= first * (1 + 1e-3), (n, first, limit)
+
+
 # --------------------------------------------------------------------------- convergence
 
 CONVERGENCE_SPEEDS = (8500.0, 12000.0, 23000.0)  # Hopf limits of the single-mode benchmark
