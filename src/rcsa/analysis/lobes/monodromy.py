@@ -402,7 +402,7 @@ def critical_multipliers(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps
     """The multiplier of largest modulus of each map in the batch (and its eigenvector).
 
     Reduced sizes ``N <= DENSE_MAX_SIZE`` are solved densely. Larger ones use
-    ``max(KRYLOV_DIM, n + 8)`` steps of Arnoldi on the implicit map (Gram–Schmidt twice,
+    ``max(KRYLOV_DIM, n + 12)`` steps of Arnoldi on the implicit map (Gram–Schmidt twice,
     fixed seeded start). A batch member is accepted when its leading Ritz value has a
     residual below ``RITZ_TOL`` and no other Ritz value ``θ`` with residual ``ρ`` could hide
     a larger eigenvalue (``|θ| + ρ`` not above the leading modulus); otherwise it falls back
@@ -446,7 +446,7 @@ def _take(maps: PeriodMaps, idx: np.ndarray) -> PeriodMaps:
 def _arnoldi(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps, size: int,
              vectors: bool) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
     """Batched Arnoldi: leading Ritz value (and vector) and whether it converged."""
-    nb, p = maps.batch, min(max(KRYLOV_DIM, system.n + 8), size)
+    nb, p = maps.batch, min(max(KRYLOV_DIM, system.n + 12), size)
     basis = np.zeros((nb, size, p + 1))
     hess = np.zeros((nb, p + 1, p))
     start = np.random.default_rng(_KRYLOV_SEED).standard_normal(size)
