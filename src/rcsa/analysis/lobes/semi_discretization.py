@@ -417,6 +417,8 @@ def semi_discretization_lobes(
         kind[found] = np.where(real, np.where(mu[found].real < 0, "flip", "fold"), "hopf")
     lobe = np.where(np.isfinite(freq), np.floor(freq * period + 1e-9), -1).astype(np.int64)
     lobes, kinds, lowest = _segments(speed, depth, kind, lobe)
+    with np.errstate(divide="ignore"):  # a fold at 0 Hz is resolved by any step
+        steps_per_cycle = steps_per_period / (freq * period)
     best = int(np.nanargmin(depth)) if found.size else -1
     return SemiDiscretizationResult(
         spindle_speed_rpm=speed,
@@ -432,7 +434,7 @@ def semi_discretization_lobes(
         critical_multiplier=mu,
         lobe_kinds=tuple(kinds),
         steps_per_period=int(steps_per_period),
-        steps_per_chatter_cycle=steps_per_period / (freq * period),
+        steps_per_chatter_cycle=steps_per_cycle,
         depth_search_max_m=ceiling,
         modal_model=model,
     )
