@@ -31,6 +31,13 @@ chatter (the dominant mode, unless another mode governs that lobe). The lobe num
 ``floor(f_c T)`` (whole waves between teeth, as in ZOA); flip lobes sit at
 ``f_c T = k + ½``.
 
+Limitations: the modes are real (proportional damping) and act in x or y only (no cross
+receptance); the cutting force is linear (no process damping, no helix, no run-out); an
+unstable band thinner than one scan step (1.1–1.6×) that lies below the first bracket would
+be stepped over (a 400-point depth grid finds none on the test cases); the accuracy needs
+several steps per chatter cycle (``steps_per_chatter_cycle`` flags the speeds with fewer
+than ``MIN_STEPS_PER_CHATTER_CYCLE``).
+
 References
 ----------
 .. [1] T. Insperger, G. Stépán, "Updated semi-discretization method for periodic
