@@ -48,8 +48,20 @@ import numpy as np
 from rcsa.analysis.lobes.modal_model import ModalModel
 from rcsa.analysis.lobes.zoa import directional_factors
 
-__all__ = ["CuttingPlan", "PeriodMaps", "StateSpace", "critical_multipliers", "cutting_plan",
-           "monodromy_matrix", "period_maps", "state_space", "step_exponentials", "trajectory"]
+__all__ = [
+    "CuttingPlan",
+    "PeriodMaps",
+    "StateSpace",
+    "apply_period",
+    "critical_multipliers",
+    "cutting_plan",
+    "free_maps",
+    "monodromy_matrix",
+    "period_maps",
+    "state_space",
+    "step_exponentials",
+    "trajectory",
+]
 
 _TWO_PI = 2.0 * np.pi
 # Taylor degree of the step exponentials on arguments scaled to ‖Z‖₁ <= 1: tail < 1/13! ≈ 2e-10.
