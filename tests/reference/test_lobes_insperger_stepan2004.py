@@ -235,7 +235,7 @@ def test_flip_lobes_between_the_hopf_lobes_that_zoa_misses(ours):
     assert flips[-1][1] <= 14000 and flips[-1][2] >= 18000  # the widest, 13 700–18 250 rpm
     flip = r.instability == "flip"
     mu = r.critical_multiplier[flip]
-    assert np.all(mu.imag == 0) and np.allclose(mu.real, -1.0, atol=2e-3)
+    assert np.all(mu.imag == 0) and np.all((mu.real <= -1.0) & (mu.real > -1.01))  # just past −1
     waves = r.chatter_frequency_hz[flip] * 60 / (TEETH * r.spindle_speed_rpm[flip])
     np.testing.assert_allclose(waves % 1.0, 0.5, atol=1e-6)
     # the zero-order solution (x flexible only, as the model) puts the limit far higher there

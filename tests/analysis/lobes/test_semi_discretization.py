@@ -219,7 +219,8 @@ def test_flip_lobes_at_low_immersion_where_zoa_says_stable():
     r = lobes(teeth=2, immersion=0.05, speeds=speeds)
     flip = r.instability == "flip"
     assert flip.sum() >= 10
-    assert np.all(r.critical_multiplier[flip].imag == 0) and np.allclose(r.critical_multiplier[flip].real, -1, atol=3e-3)
+    mu = r.critical_multiplier[flip]  # at the unstable end of a 1e-3-wide depth bracket
+    assert np.all(mu.imag == 0) and np.all((mu.real <= -1.0) & (mu.real > -1.01))
     f = np.arange(200.0, 3000.0, 0.1)
     z = stability_lobes(f, XY.receptance(f, 0), XY.receptance(f, 1), teeth=2, tangential_coefficient_n_m2=KT,
                         radial_ratio=KR, radial_immersion=0.05, milling="down", spindle_speed_rpm=speeds)

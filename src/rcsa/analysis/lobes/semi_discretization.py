@@ -12,7 +12,7 @@ multiplier reaches modulus 1:
 
 1. *Scan* upwards from ``b_ref/4`` (``b_ref``: the ZOA absolute limit of the same modal
    model): each step goes to just past the depth where ``log|μ|`` extrapolates to 0,
-   between 1.1× and 1.6× the last depth, until ``|μ| >= 1`` (bracket found) or the search
+   between 1.1× and 2× the last depth, until ``|μ| >= 1`` (bracket found) or the search
    ceiling ``64 b_ref`` is passed (then the speed has no limit below the ceiling: NaN).
 2. *Refine* the bracket by regula falsi on ``log|μ|`` with the Illinois safeguard to a
    relative width ``DEPTH_RTOL``; the stable end is reported (never optimistic by more
@@ -33,7 +33,7 @@ chatter (the dominant mode, unless another mode governs that lobe). The lobe num
 
 Limitations: the modes are real (proportional damping) and act in x or y only (no cross
 receptance); the cutting force is linear (no process damping, no helix, no run-out); an
-unstable band thinner than one scan step (1.1–1.6×) that lies below the first bracket would
+unstable band thinner than one scan step (1.1–2×) that lies below the first bracket would
 be stepped over (a 400-point depth grid finds none on the test cases); the accuracy needs
 several steps per chatter cycle (``steps_per_chatter_cycle`` flags the speeds with fewer
 than ``MIN_STEPS_PER_CHATTER_CYCLE``).
@@ -95,7 +95,7 @@ MIN_STEPS_PER_CHATTER_CYCLE = 8.0
 # Scan: start at this fraction of b_ref, steps between these ratios, ceiling at this multiple.
 _SCAN_START = 0.25
 _SCAN_MIN_RATIO = 1.1
-_SCAN_MAX_RATIO = 1.6
+_SCAN_MAX_RATIO = 2.0
 _SCAN_CEILING = 64.0
 _MAX_REFINE = 40
 # Speeds per batch of period maps: bounds the memory (~50 MB for 12 states and k = 40).
