@@ -63,6 +63,12 @@ from rcsa.app.bounds import (
     MIN_SHEAR_COEFFICIENT,
     MIN_SPEED_COUNT,
     MIN_SPEED_RPM,
+    SDM_DEFAULT_MODES_PER_DIRECTION,
+    SDM_DEFAULT_STEPS_PER_PERIOD,
+    SDM_MAX_MODES_PER_DIRECTION,
+    SDM_MAX_STEPS_PER_PERIOD,
+    SDM_MIN_MODES_PER_DIRECTION,
+    SDM_MIN_STEPS_PER_PERIOD,
 )
 from rcsa.app.examples import ra1
 
@@ -671,6 +677,14 @@ class LobesRequest(_Request):
                                                                                 "(dimensionless).")
     milling: Literal["up", "down"]
     spindle_speed_rpm: SpeedRange
+    method: Literal["zoa", "semi_discretization"] = Field(
+        "zoa", description="zoa: zero-order (Altintas–Budak); semi_discretization: first-order SDM "
+                           "(time-periodic force, flip lobes; slower).")
+    steps_per_period: int | None = Field(None, ge=SDM_MIN_STEPS_PER_PERIOD, le=SDM_MAX_STEPS_PER_PERIOD,
+                                         description=f"SDM only: steps per tooth period (default {SDM_DEFAULT_STEPS_PER_PERIOD}).")
+    modes_per_direction: int | None = Field(None, ge=SDM_MIN_MODES_PER_DIRECTION, le=SDM_MAX_MODES_PER_DIRECTION,
+                                            description=f"SDM only: at most this many modes in x and in y (default "
+                                                        f"{SDM_DEFAULT_MODES_PER_DIRECTION}).")
 
 
 class Lobe(_Response):

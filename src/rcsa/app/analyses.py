@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from rcsa.analysis.lobes.modal_model import modal_model_from_assembly
 from rcsa.analysis.lobes.request import parse_lobes_request
 from rcsa.analysis.lobes.zoa import LobeResult
 from rcsa.analysis.sensitivity import effects as _effects
@@ -12,6 +13,7 @@ from rcsa.app.predictions import predict
 from rcsa.app.stores import MeasurementSource, resolver
 from rcsa.measured.store import MeasurementStore
 from rcsa.model.bounds import MAX_FREQUENCY_LINES
+from rcsa.model.contract import SpindleSpec, parse_assembly
 
 __all__ = ["diagnose", "effects", "identify", "stability_lobes", "stability_lobes_result"]
 
@@ -21,7 +23,9 @@ def stability_lobes_result(request: Mapping[str, Any], *, store: MeasurementStor
     """Stability lobes (``contract.md`` "Stability lobes") from inline FRFs or an assembly.
 
     With an ``assembly``, its tool-point ``h`` is predicted first and used in x and y (the
-    result says so: ``same_frf_in_y``).
+    result says so: ``same_frf_in_y``). With ``"method": "semi_discretization"`` an
+    analytical assembly gives its exact modes (:func:`~rcsa.analysis.lobes.modal_model.
+    modal_model_from_assembly`); a measured spindle's predicted ``h`` is fitted instead.
 
     Returns
     -------
@@ -30,8 +34,14 @@ def stability_lobes_result(request: Mapping[str, Any], *, store: MeasurementStor
     parsed = parse_lobes_request(request)
     if parsed.assembly is None:
         return parsed.solve()
-    prediction = predict(parsed.assembly, store=store, max_lines=max_lines)
-    return parsed.solve(prediction.frequency_hz, prediction.tool_point.h)
+    spec = parse_assembly(parsed.assembly, max_lines)
+    prediction = predict(spec, store=store, max_lines=max_lines)
+    frequency_hz, h = prediction.frequency_hz, prediction.tool_point.h
+    modes = None
+    if parsed.method.name == "semi_discretization" and isinstance(spec.spindle, SpindleSpec):
+        modes = modal_model_from_assembly(spec, modes_per_direction=parsed.method.modes_per_direction,
+                                          frequency_hz=frequency_hz, h=h)
+    return parsed.solve(frequency_hz, h, modal_model=modes)
 
 
 def stability_lobes(request: Mapping[str, Any], *, store: MeasurementStore | None = None,

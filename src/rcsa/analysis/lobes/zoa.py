@@ -65,6 +65,8 @@ __all__ = [
     "Milling",
     "check_cut",
     "check_frf",
+    "json_float",
+    "json_list",
     "directional_factors",
     "engagement_angles_rad",
     "stability_lobes",
@@ -425,30 +427,42 @@ class LobeResult:
         ``min_depth_spindle_speed_rpm`` and ``governing_lobe``.
         """
         return {
-            "spindle_speed_rpm": _json_list(self.spindle_speed_rpm),
-            "depth_limit_m": _json_list(self.depth_limit_m),
-            "chatter_frequency_hz": _json_list(self.chatter_frequency_hz),
+            "spindle_speed_rpm": json_list(self.spindle_speed_rpm),
+            "depth_limit_m": json_list(self.depth_limit_m),
+            "chatter_frequency_hz": json_list(self.chatter_frequency_hz),
             "lobes": [
                 {
                     "index": lobe.index,
-                    "spindle_speed_rpm": _json_list(lobe.spindle_speed_rpm),
-                    "depth_limit_m": _json_list(lobe.depth_limit_m),
+                    "spindle_speed_rpm": json_list(lobe.spindle_speed_rpm),
+                    "depth_limit_m": json_list(lobe.depth_limit_m),
                 }
                 for lobe in self.lobes
             ],
             "frf_y_source": "same_as_x" if self.same_frf_in_y else "given",
-            "min_depth_limit_m": _json_float(self.min_depth_limit_m),
-            "min_depth_chatter_frequency_hz": _json_float(self.min_depth_chatter_frequency_hz),
-            "min_depth_spindle_speed_rpm": _json_list(self.min_depth_spindle_speed_rpm),
+            "min_depth_limit_m": json_float(self.min_depth_limit_m),
+            "min_depth_chatter_frequency_hz": json_float(self.min_depth_chatter_frequency_hz),
+            "min_depth_spindle_speed_rpm": json_list(self.min_depth_spindle_speed_rpm),
             "governing_lobe": [int(k) for k in self.governing_lobe],
         }
 
 
-def _json_float(x: float) -> float | None:
+def json_float(x: float) -> float | None:
+    """``x`` for JSON: a float, or None where it is not finite (no depth limit, no frequency).
+
+    Parameters
+    ----------
+    x : float
+    """
     return float(x) if math.isfinite(x) else None
 
 
-def _json_list(a: np.ndarray) -> list[float | None]:
+def json_list(a: np.ndarray) -> list[float | None]:
+    """An array for JSON, non-finite entries as None (see :func:`json_float`).
+
+    Parameters
+    ----------
+    a : numpy.ndarray
+    """
     return [float(x) if math.isfinite(x) else None for x in a.tolist()]
 
 
