@@ -26,7 +26,8 @@ _DESCRIPTIONS = {
     401: "No API key, or an unknown or revoked one, where one is needed.",
     403: "The API key's scope does not allow this (writes need scope write).",
     404: "No such resource.",
-    409: "The job has not succeeded (still running, or failed).",
+    409: "Conflict with the stored state: the job has not succeeded (still running, or failed), or the stored "
+         "object is damaged (its id and the reason are given; retrying does not help).",
     413: "The request body or an uploaded file is too large.",
     415: "Unsupported Content-Type.",
     422: "Invalid input; errors[] names each offending field.",

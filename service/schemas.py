@@ -598,6 +598,8 @@ class MeasurementPage(_Response):
 
     items: list[MeasurementInfo]
     next_cursor: str | None = Field(description="Pass as ?cursor= for the next page; null on the last page.")
+    damaged: list[str] | None = Field(None, description="Ids of stored measurement files that cannot be read "
+                                      "(left out of items; GET one for the reason, `rcsa store check` for all).")
 
 
 class MeasurementDocument(MeasurementInfo):

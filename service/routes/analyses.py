@@ -15,9 +15,10 @@ from rcsa.app import analyses
 from ..bodies import require_json
 from ..deps import StateDep
 from ..responses import json_response, problems
+from ..routing import ServiceRoute
 from ..security import ReadAccess
 
-router = APIRouter(prefix="/v1", tags=["analyses"])
+router = APIRouter(prefix="/v1", tags=["analyses"], route_class=ServiceRoute)
 
 _OPERATIONS = {
     "diagnose": ("/diagnoses", "Sim-to-real gap diagnosis (contract \"Diagnosis\")"),

@@ -10,10 +10,11 @@ from rcsa.app.analyses import stability_lobes as lobes
 from ..bodies import require_json
 from ..deps import StateDep
 from ..responses import json_response, problems
+from ..routing import ServiceRoute
 from ..schemas import LobesRequest, LobesResult
 from ..security import ReadAccess
 
-router = APIRouter(prefix="/v1", tags=["stability lobes"])
+router = APIRouter(prefix="/v1", tags=["stability lobes"], route_class=ServiceRoute)
 
 
 @router.post("/stability-lobes", dependencies=[Depends(require_json)], response_model=LobesResult, responses=problems(401, 413, 415, 422),

@@ -36,10 +36,11 @@ from rcsa.app.predictions import predict
 from ..bodies import require_json
 from ..deps import StateDep
 from ..responses import problems
+from ..routing import ServiceRoute
 from ..schemas import Assembly, FrfIn, LobesRequest
 from ..security import ReadAccess
 
-router = APIRouter(prefix="/v1", tags=["plots and exports"])
+router = APIRouter(prefix="/v1", tags=["plots and exports"], route_class=ServiceRoute)
 
 PNG = "image/png"
 SVG = "image/svg+xml"

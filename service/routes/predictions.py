@@ -11,11 +11,12 @@ from rcsa.app.predictions import predict
 from ..bodies import require_json
 from ..deps import StateDep
 from ..responses import json_response, problems
+from ..routing import ServiceRoute
 from ..schemas import Assembly, PredictionResult
 from ..security import ReadAccess
 from .batches import ToolPointQuery
 
-router = APIRouter(prefix="/v1", tags=["predictions"])
+router = APIRouter(prefix="/v1", tags=["predictions"], route_class=ServiceRoute)
 
 
 @router.post("/tool-point-frf", dependencies=[Depends(require_json)], response_model=PredictionResult, responses=problems(401, 413, 415, 422),

@@ -33,10 +33,11 @@ from ..bodies import form_text, read_body, read_upload, validate_json
 from ..deps import StateDep
 from ..errors import ProblemError
 from ..responses import json_response, problems
+from ..routing import ServiceRoute
 from ..schemas import Assembly, LibraryOptions
 from ..security import ReadAccess
 
-router = APIRouter()
+router = APIRouter(route_class=ServiceRoute)
 
 WEB_DIR = Path(__file__).resolve().parent.parent / "web"
 #: The page's files and their media types (nothing else under /ui/ is served).

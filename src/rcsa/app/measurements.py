@@ -12,14 +12,14 @@ from __future__ import annotations
 import base64
 import binascii
 import json
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import filelock
 import numpy as np
 
-from rcsa.errors import InputError, NotFoundError, StoreError
+from rcsa.errors import ConflictError, InputError, NotFoundError, StoreError
 from rcsa.infra.atomic_files import atomic_write_bytes
 from rcsa.measured.importers import (
     measurement_from_contract,
@@ -55,6 +55,8 @@ __all__ = [
     "parse_points",
     "parse_roles",
     "seed_demo",
+    "store_measurement",
+    "store_measurement_once",
 ]
 
 #: Import formats: UFF 58, CSV/TSV table, CutPro ``.frf``, the contract's JSON, raw tap.
@@ -339,7 +341,12 @@ def list_measurements(store: Any, *, limit: int = 100, cursor: str | None = None
         infos = [i for i in infos if (i.created_utc or "", i.id or "") > after]
     page = infos[:limit]
     more = len(infos) > limit
-    return {"items": [i.to_dict() for i in page], "next_cursor": _encode_cursor(page[-1]) if more else None}
+    out: dict[str, Any] = {"items": [i.to_dict() for i in page], "next_cursor": _encode_cursor(page[-1]) if more
+                           else None}
+    damaged = store.damaged() if hasattr(store, "damaged") else []
+    if damaged:  # left out of the items: unreadable files, so that a listing never fails on one
+        out["damaged"] = damaged
+    return out
 
 
 def delete_measurement(store: Any, measurement_id: str) -> dict[str, str]:
@@ -356,6 +363,48 @@ def delete_measurement(store: Any, measurement_id: str) -> dict[str, str]:
 def store_measurement(store: Any, measurement: Any) -> dict[str, Any]:
     """Put a measurement in the store; return its metadata (with the new ``id``)."""
     return store.info(store.put(measurement)).to_dict()
+
+
+def store_measurement_once(store: Any, measurement: Any, *, recorded_id: str | None,
+                           record: Callable[[str], None]) -> dict[str, Any]:
+    """Store a measurement at most once across retries of one request (crash consistency).
+
+    The id is chosen first and made durable by ``record`` (e.g. with the request's
+    idempotency key) before the file is written under it. A retry whose earlier attempt
+    died passes the id it recorded (``recorded_id``): if that attempt's file was committed,
+    its metadata is the answer (no second copy); if not, the measurement is written under
+    that id now (nothing lost).
+
+    Parameters
+    ----------
+    store : MeasurementStore
+    measurement : Measurement
+    recorded_id : str or None
+        The id an earlier attempt of the same request recorded, if any.
+    record : callable
+        ``record(id)``: durably note the id before the write (raises to stop).
+
+    Returns
+    -------
+    dict
+        The stored measurement's metadata.
+
+    Raises
+    ------
+    ConflictError
+        The measurement an earlier attempt stored was deleted since.
+    """
+    if recorded_id is not None:
+        if recorded_id in store:
+            return store.info(recorded_id).to_dict()
+        if store.was_deleted(recorded_id):
+            raise ConflictError("measurement", recorded_id, "was stored by an earlier attempt of this request and "
+                                                            "deleted since; send the upload with a new key")
+        mid = recorded_id
+    else:
+        mid = store.new_id()
+        record(mid)
+    return store.info(store.put(measurement, measurement_id=mid)).to_dict()
 
 
 def demo_measurement(frequency: Mapping[str, float] | None = None):
