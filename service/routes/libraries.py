@@ -26,13 +26,13 @@ policy):
 
 from __future__ import annotations
 
-import json
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Header, Path, Query, Request
 from fastapi.concurrency import run_in_threadpool
 from starlette.responses import Response
 
+from rcsa.app.inputs import decode_json
 from rcsa.app.libraries import LIBRARY_ID_PATTERN, export_file, prepare_library, prepare_sync
 from rcsa.errors import InputError
 
@@ -121,12 +121,12 @@ async def _from_form(form: Any, limit_bytes: int) -> tuple[bytes, dict[str, Any]
             continue
         if name in _JSON_FIELDS:
             try:
-                doc[name] = json.loads(text)
-            except ValueError as exc:
+                doc[name] = decode_json(text, path=name, what=f"form field {name}")
+            except InputError:
                 if name == "shear_coefficient":
                     doc[name] = text
                     continue
-                raise InputError(name, f"must be JSON ({exc})") from None
+                raise
         elif name == "natural_frequencies":
             if text.lower() not in ("true", "false"):
                 raise InputError(name, "must be true or false")

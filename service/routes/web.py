@@ -15,7 +15,6 @@ The page is served with a Content-Security-Policy that allows only this origin.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
@@ -26,6 +25,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from starlette.responses import FileResponse, RedirectResponse, Response
 
 from rcsa.app.examples import ra1
+from rcsa.app.inputs import decode_json
 from rcsa.app.libraries import library_entries as read_entries
 from rcsa.errors import InputError
 
@@ -175,7 +175,7 @@ async def _entries_form(form: Any, limit_bytes: int) -> tuple[bytes, str, Librar
     if not text:
         return data, name, None
     try:
-        return data, name, LibraryOptions.model_validate(json.loads(text))
+        return data, name, LibraryOptions.model_validate(decode_json(text, path="options", what="form field options"))
     except ValueError as exc:
         if isinstance(exc, ValidationError):
             raise RequestValidationError([{**e, "loc": ("body", "options", *e["loc"])}

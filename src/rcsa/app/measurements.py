@@ -19,6 +19,7 @@ from typing import Any
 import filelock
 import numpy as np
 
+from rcsa.app.inputs import decode_json
 from rcsa.errors import ConflictError, InputError, NotFoundError, StoreError
 from rcsa.infra.atomic_files import atomic_write_bytes
 from rcsa.measured.importers import (
@@ -133,7 +134,7 @@ def parse_points(value: str | Sequence[float] | None) -> tuple[float, ...] | Non
     if isinstance(value, str):
         text = value.strip()
         try:
-            items = json.loads(text) if text.startswith("[") else text.split(",")
+            items = decode_json(text, path="points_m") if text.startswith("[") else text.split(",")
             if not isinstance(items, list):
                 raise ValueError
             return tuple(float(x) for x in items)
@@ -149,10 +150,9 @@ def _parse_artifact(value: str | Mapping[str, Any] | None) -> Mapping[str, Any] 
         return None
     if isinstance(value, Mapping):
         return value
-    try:
-        doc = json.loads(value)
-    except (TypeError, ValueError) as e:
-        raise InputError("artifact", f"must be a JSON object ({e})") from None
+    if not isinstance(value, str):
+        raise InputError("artifact", "must be a JSON object")
+    doc = decode_json(value, path="artifact", what="artifact")
     if not isinstance(doc, dict):
         raise InputError("artifact", "must be a JSON object")
     return doc
