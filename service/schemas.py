@@ -33,6 +33,7 @@ from pydantic import (
 from pydantic_core import PydanticCustomError
 
 from rcsa.app.bounds import (
+    MAX_BEARINGS,
     MAX_COHERENCE,
     MAX_CUTTING_COEFFICIENT_N_M2,
     MAX_DAMPING,
@@ -45,6 +46,7 @@ from rcsa.app.bounds import (
     MAX_MODULUS_PA,
     MAX_POISSON_RATIO,
     MAX_RADIAL_RATIO,
+    MAX_SEGMENTS,
     MAX_SHEAR_COEFFICIENT,
     MAX_SPEED_COUNT,
     MAX_SPEED_RPM,
@@ -177,8 +179,9 @@ class Bearing(_Request):
 class AnalyticalSpindle(_Request):
     """A modelled spindle: segments from the nose toward the rear, and bearings."""
 
-    segments: list[Segment] = Field(min_length=1, description="Shaft segments, nose → rear.")
-    bearings: list[Bearing] = Field(default_factory=list, description="Bearings (positions from the nose).")
+    segments: list[Segment] = Field(min_length=1, max_length=MAX_SEGMENTS, description="Shaft segments, nose → rear.")
+    bearings: list[Bearing] = Field(default_factory=list, max_length=MAX_BEARINGS,
+                                    description="Bearings (positions from the nose).")
 
 
 class MeasuredSpindle(_Request):
@@ -212,8 +215,8 @@ Spindle = Annotated[
 class Holder(_Request):
     """Tool holder: segments from the gauge line toward the tool end."""
 
-    segments: list[Segment] = Field(min_length=1, description="Holder segments, gauge line → tool end; "
-                                                              "inner_diameter_m is the bore.")
+    segments: list[Segment] = Field(min_length=1, max_length=MAX_SEGMENTS,
+                                    description="Holder segments, gauge line → tool end; inner_diameter_m is the bore.")
 
 
 class Tool(_Request):
