@@ -27,6 +27,7 @@ from fastapi.exceptions import RequestValidationError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.responses import Response
 
+from rcsa.app.budget import BudgetExceeded
 from rcsa.errors import ConflictError, DamagedError, InputError, NotFoundError, StoreError
 
 from .field_errors import pydantic_errors
@@ -174,6 +175,14 @@ _NOT_FOUND_HINTS = {
 }
 
 
+async def _on_budget(request: Request, exc: BudgetExceeded) -> Response:
+    limits = {"estimated_seconds": exc.limits.seconds, "estimated_memory_bytes": int(exc.limits.memory_bytes)}
+    return problem_response(request, 422, exc.rule, slug="compute-budget-exceeded", title="Compute budget exceeded",
+                            errors=[{"field": exc.field, "detail": "the request asks for more work than allowed"}],
+                            extra={"budget": {"mode": exc.mode, "limit": limits, "cost": exc.cost.to_dict(),
+                                              "shrink": list(exc.cost.shrink)}})
+
+
 async def _on_not_found(request: Request, exc: NotFoundError) -> Response:
     hint = _NOT_FOUND_HINTS.get(exc.what, "check the id")
     return problem_response(request, 404, f"{exc}; {hint}", extra={"resource": exc.what, "id": exc.ident})
@@ -224,6 +233,7 @@ def install_error_handlers(app: FastAPI) -> None:
     """Register the problem handlers on ``app`` (the 500 one lives in the middleware)."""
     app.add_exception_handler(RequestValidationError, _on_validation)
     app.add_exception_handler(InputError, _on_input)
+    app.add_exception_handler(BudgetExceeded, _on_budget)
     app.add_exception_handler(NotFoundError, _on_not_found)
     app.add_exception_handler(StoreError, _on_store)
     app.add_exception_handler(DamagedError, _on_damaged)

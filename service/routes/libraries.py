@@ -41,7 +41,7 @@ from ..deps import StateDep
 from ..errors import ProblemError
 from ..idempotency import IDEMPOTENCY_PROBLEMS, IdempotencyKeyHeader, IdempotentRoute
 from ..jobs import answer
-from ..responses import json_response, problems
+from ..responses import body_limit, json_response, problems
 from ..schemas import (
     Deleted,
     JobStatus,
@@ -95,7 +95,7 @@ async def _library_inputs(request: Request, state: AppState) -> tuple[Any, dict[
             await body.close()
 
 
-@router.post("/tool-libraries:predict", response_model=LibraryResult, openapi_extra=_BODY, responses={
+@router.post("/tool-libraries:predict", response_model=LibraryResult, openapi_extra=body_limit("library", _BODY), responses={
     202: {"model": JobStatus, "description": "Queued as a job; poll Location."},
     **problems(400, 401, 413, 415, 422), **IDEMPOTENCY_PROBLEMS}, summary="Tool-point FRFs of a Fusion tool library")
 async def predict_library(request: Request, state: StateDep, _: ReadAccess, prefer: PreferHeader = None,
@@ -152,7 +152,7 @@ LibraryId = Annotated[str, Path(pattern=LIBRARY_ID_PATTERN.pattern, description=
 HDF5, ZIP, JSON = "application/x-hdf5", "application/zip", "application/json"
 
 
-@router.post("/libraries/{library_id}:sync", response_model=SyncReport, openapi_extra=_BODY, responses={
+@router.post("/libraries/{library_id}:sync", response_model=SyncReport, openapi_extra=body_limit("library", _BODY), responses={
     202: {"model": JobStatus, "description": "Queued as a library-sync job; poll Location (its result is the "
                                              "sync report)."},
     **problems(400, 401, 403, 413, 415, 422), **IDEMPOTENCY_PROBLEMS},

@@ -15,7 +15,7 @@ from ..bodies import form_text, read_body, read_upload, validate_json
 from ..deps import StateDep
 from ..errors import ProblemError
 from ..idempotency import IDEMPOTENCY_PROBLEMS, IdempotencyKeyHeader, IdempotentRoute, reservation
-from ..responses import json_response, problems
+from ..responses import body_limit, json_response, problems
 from ..schemas import (
     Deleted,
     MeasurementDocument,
@@ -68,7 +68,7 @@ _UPLOAD_BODY = {"requestBody": {"required": True, "content": {
         "additionalProperties": False}}}}}
 
 
-@router.post("", status_code=201, response_model=MeasurementInfo, openapi_extra=_UPLOAD_BODY,
+@router.post("", status_code=201, response_model=MeasurementInfo, openapi_extra=body_limit("measurement", _UPLOAD_BODY),
              responses={**problems(400, 401, 403, 413, 415, 422), **IDEMPOTENCY_PROBLEMS},
              summary="Store a measurement (write key)")
 async def upload_measurement(request: Request, state: StateDep, _: WriteAccess,

@@ -32,7 +32,7 @@ from rcsa.errors import InputError
 from ..bodies import form_text, read_body, read_upload, validate_json
 from ..deps import StateDep
 from ..errors import ProblemError
-from ..responses import json_response, problems
+from ..responses import body_limit, json_response, problems
 from ..routing import ServiceRoute
 from ..schemas import Assembly, LibraryOptions
 from ..security import ReadAccess
@@ -140,7 +140,7 @@ _ENTRIES_BODY = {"requestBody": {"required": True, "content": {
 
 
 @router.post("/v1/tool-libraries:entries", tags=["tool libraries"], response_model=LibraryEntries,
-             openapi_extra=_ENTRIES_BODY, responses=problems(400, 401, 413, 415, 422),
+             openapi_extra=body_limit("library", _ENTRIES_BODY), responses=problems(400, 401, 413, 415, 422),
              summary="List a Fusion tool library's entries (no computation)")
 async def library_entries(request: Request, state: StateDep, _: ReadAccess) -> Response:
     """Read a Fusion tool library and list every item: its id, description, status (ok,
