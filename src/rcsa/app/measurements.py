@@ -45,6 +45,7 @@ __all__ = [
     "FORMATS",
     "IMPORT_OPTIONS",
     "META_FIELDS",
+    "check_store",
     "delete_measurement",
     "demo_measurement",
     "format_from_name",
@@ -55,6 +56,7 @@ __all__ = [
     "measurement_summary",
     "parse_points",
     "parse_roles",
+    "rebuild_catalogue",
     "seed_demo",
     "store_measurement",
     "store_measurement_once",
@@ -405,6 +407,30 @@ def store_measurement_once(store: Any, measurement: Any, *, recorded_id: str | N
         mid = store.new_id()
         record(mid)
     return store.info(store.put(measurement, measurement_id=mid)).to_dict()
+
+
+def check_store(store: Any) -> dict[str, Any]:
+    """Verify every measurement file and the catalogue (``rcsa store check``); changes nothing.
+
+    See :meth:`rcsa.measured.store.MeasurementStore.verify` for the report.
+    """
+    report: dict[str, Any] = store.verify()
+    return report
+
+
+def rebuild_catalogue(store: Any) -> dict[str, Any]:
+    """Make the catalogue again from the files (``rcsa store rebuild``).
+
+    Returns
+    -------
+    dict
+        ``store``, ``ok`` (no damaged file), ``measurements`` (listed after the rebuild) and
+        ``damaged`` (ids of files that cannot be read completely, checksums included; those
+        whose metadata cannot be read are left out of the catalogue; see :func:`check_store`).
+    """
+    n = store.rebuild_index()
+    damaged = sorted({str(p["id"]) for p in store.verify()["problems"] if p["problem"] in ("damaged", "misnamed")})
+    return {"store": str(store.path), "ok": not damaged, "measurements": n, "damaged": damaged}
 
 
 def demo_measurement(frequency: Mapping[str, float] | None = None):

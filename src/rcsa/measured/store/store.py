@@ -348,6 +348,52 @@ class MeasurementStore:
                 problems.append(str(e))
         return problems
 
+    def verify(self) -> dict[str, object]:
+        """Verify the whole store without changing it: every file read completely (schema
+        of every object, Fletcher-32 checksums of every dataset, metadata, its id against its
+        name) and the catalogue against the files.
+
+        Returns
+        -------
+        dict
+            ``store``, ``ok``, ``measurements`` (files), ``readable``, ``problems`` (each
+            ``{"id", "problem", "detail"}``, problem one of ``damaged``, ``misnamed``,
+            ``catalogue-missing``, ``catalogue-stale``, ``catalogue-unreadable``) and
+            ``notes`` (harmless findings, e.g. leftovers of an interrupted write in ``tmp/``).
+        """
+        problems: builtins.list[dict[str, str | None]] = []
+        on_disk = self._ids_on_disk()
+        readable: set[str] = set()
+        for mid in sorted(on_disk):
+            try:
+                m = read_measurement_file(self._file(mid))
+            except FileNotFoundError:  # deleted meanwhile
+                continue
+            except StoreError as e:
+                problems.append({"id": mid, "problem": "damaged", "detail": str(e)})
+                continue
+            if m.id != mid:
+                problems.append({"id": mid, "problem": "misnamed", "detail": f"the file carries id {m.id!r}"})
+            else:
+                readable.add(mid)
+        try:
+            known: set[str] | None = self._catalogue.ids()
+        except (sqlite3.Error, OSError) as e:
+            known = None
+            problems.append({"id": None, "problem": "catalogue-unreadable",
+                             "detail": f"{P.INDEX}: {e}; `rcsa store rebuild` makes it again from the files"})
+        if known is not None:
+            problems += [{"id": mid, "problem": "catalogue-missing", "detail": "readable file without a catalogue row "
+                          "(the next listing or `rcsa store rebuild` adds it)"} for mid in sorted(readable - known)]
+            problems += [{"id": mid, "problem": "catalogue-stale", "detail": "catalogue row without a file"}
+                         for mid in sorted(known - on_disk)]
+        with os.scandir(self._tmp) as it:
+            leftovers = sorted(e.name for e in it)
+        notes = [f"tmp/ holds {len(leftovers)} leftover(s) of interrupted writes or deletes (removed by the next "
+                 f"write): {', '.join(leftovers[:5])}"] if leftovers else []
+        return {"store": str(self.path), "ok": not problems, "measurements": len(on_disk), "readable": len(readable),
+                "problems": problems, "notes": notes}
+
     def rebuild_index(self) -> int:
         """Recreate ``index.sqlite`` from the files; returns the number of measurements."""
         with self._lock():
