@@ -301,28 +301,36 @@ def _count(value: object) -> int:
     return len(value) if isinstance(value, list) else 0
 
 
+def _holder_segments(combo: object) -> int:
+    holder = combo.get("holder") if isinstance(combo, Mapping) else None
+    return _count(holder.get("segments")) if isinstance(holder, Mapping) else 0
+
+
 @cost_model("batch")
 def _batch(request: Mapping[str, Any]) -> Cost:
     """Every combination costs a prediction; the one with the most holder segments stands
-    for the natural-frequency search of all (they share the spindle and the band)."""
+    for all (they share the spindle and the band)."""
     combos = request.get("combinations")
     combos = combos if isinstance(combos, list) else []
     if not combos:
         return Cost("batch", 0.0, MEM_BASE_BYTES, {"combinations": 0.0})
-    worst = max(range(len(combos)), key=lambda i: _count(((combos[i] or {}).get("holder") or {}).get("segments"))
-                if isinstance(combos[i], Mapping) and isinstance(combos[i].get("holder"), Mapping) else 0)
-    base = {k: v for k, v in request.items() if k not in ("combinations", "options")}
+    worst = max(range(len(combos)), key=lambda i: _holder_segments(combos[i]))
+    base = {k: v for k, v in request.items() if k not in ("combinations", "options", "natural_frequencies")}
+    combo = combos[worst]
+    n = float(len(combos))
+    shrink = ("fewer combinations (split the batch)", *_ASSEMBLY_SHRINK)
     try:
-        spec = parse_assembly({**base, **combos[worst]})
-    except (InputError, TypeError):  # the bad combination is reported by the batch itself
-        lines = float(parse_frequency(request.get("frequency")).size) if "frequency" in request else 1.0
-        return Cost("batch", K_LINE_S * 50.0 * lines * len(combos), MEM_BASE_BYTES + MEM_LINE_BYTES * lines,
-                    {"combinations": float(len(combos)), "lines": lines})
+        spec = parse_assembly({**base, **{k: v for k, v in combo.items() if k not in ("id", "name")}})
+    except (InputError, TypeError, AttributeError):  # that combination is refused by the batch itself
+        lines = float(parse_frequency(request.get("frequency")).size)
+        elements = 30.0 + _holder_segments(combo)
+        seconds = n * (K_LINE_S * elements * lines + natural_frequency_seconds(elements))
+        return Cost("batch", seconds, MEM_BASE_BYTES + n * MEM_LINE_BYTES * lines / 8.0,
+                    {"combinations": n, "lines": lines, "elements": elements}, shrink)
     seconds, memory, terms = _assembly_cost(spec, natural_frequencies=request.get("natural_frequencies", True)
                                             is not False)
-    n = float(len(combos))
     return Cost("batch", seconds * n, memory + n * MEM_LINE_BYTES * terms["lines"] / 8.0,
-                {"combinations": n, **terms}, ("fewer combinations (split the batch)", *_ASSEMBLY_SHRINK))
+                {"combinations": n, **terms}, shrink)
 
 
 @cost_model("library")
@@ -460,9 +468,10 @@ def _diagnosis(request: Mapping[str, Any]) -> Cost:
 
 def check_work(kind: str, request: Mapping[str, Any], size: int, *, mode: Mode) -> Cost:
     """:func:`check` for prepared batch, library and sync work (:class:`rcsa.app.jobs.Work`):
-    a library's or a sync's combinations form a batch (``request["batch"]``), of which
-    ``size`` are computed (a sync computes only tools not in its cache)."""
-    batch = request.get("batch") if kind in ("library", "library-sync") else request
+    its combinations form a batch (``request["batch"]``), of which ``size`` are computed (a
+    sync computes only tools not in its cache)."""
+    inner = request.get("batch")
+    batch = inner if isinstance(inner, Mapping) else request  # prepared work: {"entries", "batch"}
     if not isinstance(batch, Mapping):
         return Cost(kind, 0.0, MEM_BASE_BYTES)
     cost = estimate("batch", batch)
