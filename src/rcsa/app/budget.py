@@ -418,7 +418,7 @@ def _analysis_spec(request: Mapping[str, Any]) -> AssemblySpec:
 
 
 #: Estimated seconds of an identification per measurement and beam element.
-K_IDENT_S = 0.06
+K_IDENT_S = 0.05
 
 
 @cost_model("identification")
@@ -434,19 +434,34 @@ def _identification(request: Mapping[str, Any]) -> Cost:
                 ("fewer measurements", "fewer segments"))
 
 
-#: Diagnosis: seconds per beam element, configuration, grid line and (draw + fit equivalent).
-K_DIAG_S = 6.5e-8
+#: Diagnosis, per beam element, configuration and (draw + fit equivalent): seconds per line
+#: of the union grid, and seconds that do not grow with the grid; plus a fixed part.
+K_DIAG_LINE_S = 2.5e-8
+K_DIAG_CONFIG_S = 4.0e-5
+K_DIAG_FIXED_S = 0.5
 #: The candidate fits cost about as much as this many Monte-Carlo draws.
 DIAG_FIT_DRAWS = 300.0
-#: Memory per draw, configuration and grid line, bytes (features and draws kept).
+#: Memory per draw, configuration and line of the union grid, bytes (draws and features kept).
 MEM_DIAG_BYTES = 100.0
+
+
+def _union_lines(taps: list[Mapping[str, Any]], max_lines: float) -> float:
+    """Lines of the grid a diagnosis solves on: the union of the lines picked from each
+    measurement (at most ``max_lines`` each), bounded by the distinct frequencies given."""
+    picked = sum(min(_tap_lines(t), max_lines) for t in taps)
+    values = [t.get("frequency_hz") for t in taps]
+    try:
+        distinct = float(np.unique(np.concatenate([np.asarray(v, dtype=float) for v in values
+                                                   if isinstance(v, list) and v])).size)
+    except (ValueError, TypeError):  # not numbers: the parser says so
+        return picked
+    return min(picked, distinct)
 
 
 @cost_model("diagnosis")
 def _diagnosis(request: Mapping[str, Any]) -> Cost:
     """Every Monte-Carlo draw and every candidate fit solves each configuration (one per
-    measurement) on the union of the lines picked from each measurement (at most
-    ``options.max_lines`` each)."""
+    measurement) on the union of the lines picked from the measurements."""
     spec = _analysis_spec(request)
     taps = _taps(request)
     options = request.get("options") if isinstance(request.get("options"), Mapping) else {}
@@ -456,9 +471,9 @@ def _diagnosis(request: Mapping[str, Any]) -> Cost:
     max_lines = options.get("max_lines", 1200)
     max_lines = float(max_lines) if isinstance(max_lines, int | float) and not isinstance(max_lines, bool) else 1200.0
     configs = float(len(taps))
-    grid = sum(min(_tap_lines(t), max_lines) for t in taps)
+    grid = _union_lines(taps, max_lines)
     elements = float(len(_chain(spec)))
-    seconds = K_DIAG_S * elements * configs * grid * (draws + DIAG_FIT_DRAWS)
+    seconds = K_DIAG_FIXED_S + elements * configs * (draws + DIAG_FIT_DRAWS) * (K_DIAG_LINE_S * grid + K_DIAG_CONFIG_S)
     memory = MEM_BASE_BYTES + MEM_DIAG_BYTES * draws * configs * grid
     return Cost("diagnosis", seconds, memory,
                 {"measurements": configs, "grid_lines": grid, "draws": draws, "elements": elements},
