@@ -23,8 +23,9 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from rcsa.app import budget  # noqa: E402
 from tests.service.budget_cases import worst_cases  # noqa: E402
+
+from rcsa.app import budget  # noqa: E402
 
 
 def main() -> None:
