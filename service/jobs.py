@@ -70,7 +70,7 @@ def compute(state: AppState, kind: str, request: Mapping[str, Any], *, prefer: s
     budget.check(kind, request, mode="job" if asked else "sync")
     if not asked:
         return run()
-    validate(kind, request)
+    validate(kind, request, store=state.reader)
     return answer(state, Work(kind, dict(request), 1), prefer=prefer, idempotency_key=None)  # type: ignore[arg-type]
 
 

@@ -187,7 +187,12 @@ def test_killed_sync_resumes_from_the_cache(libs, tmp_path, computed):
     tools = libs.get("shop")["tools"]
     assert [t["id"] for t in tools] == [tool_id(i) for i in range(5)]  # each tool exactly once
     assert report.added == tuple(tool_id(i) for i in range(5)) and report.revision == 1
-    assert all(not p.name.endswith(".tmp") for p in (libs.directory / "results").rglob("*"))
+    # the cache holds exactly the five complete results under their final names, each readable
+    # (temporaries are written under tmp/, so a half-written file would show as a missing key)
+    keys = {t["result_sha256"] for t in tools}
+    files = sorted(p.name for p in (libs.directory / "results").rglob("*") if p.is_file())
+    assert len(keys) == 5 and files == sorted(f"{k}.npz" for k in keys)
+    assert all(libs.cache.get(k)["status"] == "ok" for k in keys)
 
 
 def test_concurrent_syncs_commit_one_after_the_other(libs):

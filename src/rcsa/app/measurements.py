@@ -323,6 +323,8 @@ def list_measurements(store: Any, *, limit: int = 100, cursor: str | None = None
 
     Parameters
     ----------
+    store : MeasurementStore
+        The store to list.
     limit : int
         Items per page, 1…1000.
     cursor : str, optional

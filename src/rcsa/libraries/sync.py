@@ -55,6 +55,7 @@ from rcsa._version import __version__
 from rcsa.errors import InputError, NotFoundError, StoreError
 from rcsa.infra.clock import utc_now_iso
 from rcsa.infra.sqlite import connect, transaction
+from rcsa.libraries.formats import LibrarySource
 from rcsa.libraries.library_prediction import library_request, resolver_of, select_tool_point
 from rcsa.libraries.results_cache import (
     ResultCache,
@@ -509,7 +510,7 @@ def _tool_rows(request: Mapping[str, Any], keys: tuple[str, ...]) -> list[dict[s
 
 def sync_request(
     library_id: str,
-    library: str | os.PathLike[str] | bytes | Mapping[str, Any],
+    library: LibrarySource,
     *,
     spindle: Mapping[str, Any],
     frequency: Mapping[str, Any],
