@@ -36,6 +36,16 @@ CHECKS = [check for check in REGISTRY.get_all() if check not in (positive_data_a
 EXAMPLES = 50
 
 
+def _by_contract(path: str, exc: BaseException) -> bool:
+    """Whether every failure is the contract's behaviour, not a bug: a batch answers 200
+    with ``status: error`` for an invalid combination ("one bad combination never fails the
+    others"), so schema-violating combinations are accepted on purpose."""
+    subs = getattr(exc, "exceptions", None) or [exc]
+    texts = [" ".join(str(x) for x in (e, getattr(e, "title", ""), getattr(e, "message", ""))) for e in subs]
+    return path == "/v1/tool-point-frf/batch" and all(
+        "Schema-violating request accepted" in t and "/properties/combinations/items/" in t for t in texts)
+
+
 def _fuzz(operation, mode: GenerationMode, failures: list[str]) -> Callable[[], None]:
     label = f"{operation.label} [{mode.value}]"
 
@@ -47,6 +57,8 @@ def _fuzz(operation, mode: GenerationMode, failures: list[str]) -> Callable[[], 
         try:
             case.validate_response(response, checks=CHECKS)
         except (AssertionError, FailureGroup) as exc:
+            if _by_contract(operation.path, exc):
+                return
             text = str(exc)
             failures.append(f"{label}: {text[:600]}\n... {text[-600:]}")
 
@@ -69,6 +81,9 @@ def test_openapi_fuzzing_finds_no_server_error_and_no_schema_violation(tmp_path)
                     _fuzz(operation, mode, failures)()
                 except Unsatisfiable:  # nothing to negate (an operation without parameters)
                     assert mode is GenerationMode.NEGATIVE, operation.label
+                except ValueError as exc:  # schemathesis cannot negate some multipart binary parts
+                    if "Unsupported type: 'Binary'" not in str(exc) or mode is not GenerationMode.NEGATIVE:
+                        raise
     finally:
         shutdown_lifespans()
     assert not failures, "\n\n".join(failures[:10])
