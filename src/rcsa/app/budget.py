@@ -258,7 +258,8 @@ def _effective_elements(chain: Chain, top_hz: float) -> float:
 
 
 def _chain(spec: AssemblySpec) -> Chain:
-    return build_model(spec).chain()
+    # a measured spindle without a holder is a holder_tip measurement (its holder is inside it)
+    return build_model(spec, base_plane="holder_tip" if spec.holder is None else None).chain()
 
 
 def _assembly_cost(spec: AssemblySpec, *, natural_frequencies: bool = True) -> tuple[float, float, dict[str, float]]:
