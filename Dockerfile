@@ -33,4 +33,4 @@ EXPOSE 8000
 HEALTHCHECK --interval=30s --timeout=5s --start-period=30s \
     CMD python -c "import sys, urllib.request; sys.exit(urllib.request.urlopen('http://127.0.0.1:8000/readyz', timeout=4).status != 200)"
 # A fresh metrics directory per start (Prometheus multi-process mode across the workers).
-CMD ["sh", "-c", "rm -rf \"$PROMETHEUS_MULTIPROC_DIR\" && mkdir -p \"$PROMETHEUS_MULTIPROC_DIR\" && exec uvicorn service.main:create_app --factory --host 0.0.0.0 --port 8000 --workers \"$RCSA_WORKERS\" --proxy-headers"]
+CMD ["sh", "-c", "rm -rf \"$PROMETHEUS_MULTIPROC_DIR\" && mkdir -p \"$PROMETHEUS_MULTIPROC_DIR\" && exec uvicorn service.main:create_app --factory --host 0.0.0.0 --port 8000 --workers \"$RCSA_WORKERS\" --http service.http:NoDelayHTTPProtocol --proxy-headers"]

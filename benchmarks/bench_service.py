@@ -7,6 +7,9 @@ a ``point_receptance`` measurement (5 000 lines, 1–5 000 Hz), then measures
 * single hybrid predictions of RA-1's holder and tool on that stored spindle at 5 000 lines:
   p50 and p99 latency and requests per second, from 1, 2 and 4 concurrent client threads
   (targets: p50 <= 30 ms, >= 50 requests/s), without and with gzip;
+* keep-alive latency: ``GET /healthz`` 300 times on one HTTP/1.1 connection, p50 and p99
+  (target: p50 <= 3 ms with 2 workers; without ``--http service.http:NoDelayHTTPProtocol``,
+  Nagle + delayed ACK made it ~44 ms), and the same from 8 concurrent connections;
 * a 1 000-combination batch on the same spindle at 1 000 lines (a job: 202, poll, GET
   result), wall time from the POST to the last byte of the result (target <= 5 s), with the
   full tool_point (h, l, n, p) and with ``?tool_point=h``.
@@ -18,6 +21,7 @@ on the machine and on whatever else runs on it; the client threads share its cor
 from __future__ import annotations
 
 import argparse
+import http.client
 import json
 import os
 import platform
@@ -54,7 +58,7 @@ def _start(store: Path, workers: int) -> tuple[subprocess.Popen, str]:
     prom = Path(tempfile.mkdtemp(prefix="rcsa-prom-"))
     env = {**os.environ, "RCSA_STORE": str(store), "RCSA_API_KEYS": f"{KEY}:write", "RCSA_SEED_DEMO": "false",
            "RCSA_ACCESS_LOG": "false", "PROMETHEUS_MULTIPROC_DIR": str(prom), "RCSA_JOB_POLL_S": "0.05"}
-    proc = subprocess.Popen([sys.executable, "-m", "uvicorn", "service.main:create_app", "--factory", "--workers",
+    proc = subprocess.Popen([sys.executable, "-m", "uvicorn", "service.main:create_app", "--factory", "--http", "service.http:NoDelayHTTPProtocol", "--workers",
                              str(workers), "--host", "127.0.0.1", "--port", str(port), "--log-level", "warning"],
                             cwd=REPO, env=env)
     base = f"http://127.0.0.1:{port}"
@@ -112,6 +116,35 @@ def load(base: str, body: bytes, *, threads: int, requests: int, headers: dict[s
             "requests_per_s": len(latencies) / wall}
 
 
+def keepalive(base: str, *, requests: int = 300, connections: int = 1) -> dict[str, float]:
+    """``GET /healthz`` ``requests`` times on each of ``connections`` keep-alive connections; ms."""
+    host, port = base.removeprefix("http://").split(":")
+    latencies: list[float] = []
+    lock = threading.Lock()
+
+    def one() -> None:
+        conn = http.client.HTTPConnection(host, int(port), timeout=30)
+        mine = []
+        for _ in range(requests):
+            t0 = time.perf_counter()
+            conn.request("GET", "/healthz")
+            response = conn.getresponse()
+            response.read()
+            mine.append((time.perf_counter() - t0) * 1e3)
+            assert response.status == 200
+        conn.close()
+        with lock:
+            latencies.extend(mine[1:])  # the first request also opens the connection
+
+    pool = [threading.Thread(target=one) for _ in range(connections)]
+    for t in pool:
+        t.start()
+    for t in pool:
+        t.join()
+    return {"connections": connections, "requests": len(latencies), "p50_ms": statistics.median(latencies),
+            "p99_ms": _percentile(latencies, 99), "max_ms": max(latencies)}
+
+
 def batch(base: str, mid: str, n: int, grid: dict[str, float], *, tool_point: str | None,
           accept_encoding: str) -> dict[str, float]:
     doc = ra1(grid)
@@ -164,6 +197,7 @@ def main() -> None:
     parser.add_argument("--threads", type=int, nargs="+", default=[1, 2, 4])
     parser.add_argument("--requests", type=int, default=400)
     parser.add_argument("--batch", type=int, default=1000)
+    parser.add_argument("--keepalive-only", action="store_true", help="Measure only the keep-alive latency.")
     parser.add_argument("--out", type=Path, default=REPO / "benchmarks" / "results" / "service.json")
     args = parser.parse_args()
 
@@ -173,6 +207,12 @@ def main() -> None:
                                               "platform": platform.platform()},
                                   "uvicorn_workers": args.workers}
     try:
+        results["keepalive_healthz"] = [keepalive(base), keepalive(base, requests=100, connections=8)]
+        for row in results["keepalive_healthz"]:
+            print(f"keep-alive GET /healthz, {row['connections']} connection(s): p50 {row['p50_ms']:.2f} ms, "
+                  f"p99 {row['p99_ms']:.2f} ms, max {row['max_ms']:.1f} ms ({row['requests']} requests)")
+        if args.keepalive_only:
+            return
         spindle = measurement_to_contract(demo_measurement(GRID_5000))
         spindle = {k: v for k, v in spindle.items() if k not in ("id", "source", "created_utc")}
         r = httpx.post(base + "/v1/measurements", json=spindle, headers={"X-API-Key": KEY}, timeout=60)

@@ -8,7 +8,9 @@ offending field as a dotted path into the request (form fields and query paramet
 name).
 
 Mapping: pydantic's ``RequestValidationError`` and :class:`rcsa.errors.InputError` → 422;
-:class:`rcsa.errors.NotFoundError` → 404; :class:`rcsa.errors.StoreError` → 503; HTTP
+:class:`rcsa.errors.NotFoundError` → 404; :class:`rcsa.errors.DamagedError` (one stored
+object cannot be read) and :class:`rcsa.errors.ConflictError` → 409;
+:class:`rcsa.errors.StoreError` (the store as a whole) → 503; HTTP
 errors keep their status; anything else is a bug → 500 with a generic detail, its traceback
 logged with the request id (see :mod:`service.middleware`).
 """
@@ -25,7 +27,8 @@ from fastapi.exceptions import RequestValidationError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.responses import Response
 
-from rcsa.errors import InputError, NotFoundError, StoreError
+from rcsa.app.budget import BudgetExceeded
+from rcsa.errors import ConflictError, DamagedError, InputError, NotFoundError, StoreError
 
 from .field_errors import pydantic_errors
 
@@ -98,10 +101,15 @@ class ProblemError(Exception):
 class BodyTooLarge(StarletteHTTPException):
     """The request body exceeds the configured limit (raised while it is being read)."""
 
-    def __init__(self, limit_bytes: int) -> None:
-        super().__init__(413, f"the request body exceeds the limit of {limit_bytes} bytes "
-                              f"({limit_bytes / 2**20:g} MiB); send less (e.g. split a batch) or ask "
-                              "the operator to raise RCSA_MAX_BODY_BYTES")
+    def __init__(self, limit_bytes: int, where: str | None = None) -> None:
+        if where is None:
+            detail = (f"the request body exceeds the limit of {limit_bytes} bytes ({limit_bytes / 2**20:g} MiB); "
+                      "send less (e.g. split a batch) or ask the operator to raise RCSA_MAX_BODY_BYTES")
+        else:
+            detail = (f"the request body exceeds the limit of {where}, {limit_bytes} bytes "
+                      f"({limit_bytes / 2**20:g} MiB, stated in the OpenAPI as x-max-body-bytes); send less "
+                      "(fewer lines or measurements, split a batch)")
+        super().__init__(413, detail)
         self.limit_bytes = limit_bytes
 
 
@@ -167,6 +175,14 @@ _NOT_FOUND_HINTS = {
 }
 
 
+async def _on_budget(request: Request, exc: BudgetExceeded) -> Response:
+    limits = {"estimated_seconds": exc.limits.seconds, "estimated_memory_bytes": int(exc.limits.memory_bytes)}
+    return problem_response(request, 422, exc.rule, slug="compute-budget-exceeded", title="Compute budget exceeded",
+                            errors=[{"field": exc.field, "detail": "the request asks for more work than allowed"}],
+                            extra={"budget": {"mode": exc.mode, "limit": limits, "cost": exc.cost.to_dict(),
+                                              "shrink": list(exc.cost.shrink)}})
+
+
 async def _on_not_found(request: Request, exc: NotFoundError) -> Response:
     hint = _NOT_FOUND_HINTS.get(exc.what, "check the id")
     return problem_response(request, 404, f"{exc}; {hint}", extra={"resource": exc.what, "id": exc.ident})
@@ -176,6 +192,20 @@ async def _on_store(request: Request, exc: StoreError) -> Response:
     log.error("store error: %s", exc)
     return problem_response(request, 503, f"the measurement store is unavailable: {exc}",
                             slug="store-unavailable", headers={"Retry-After": "5"})
+
+
+async def _on_damaged(request: Request, exc: DamagedError) -> Response:
+    log.error("damaged %s %s: %s", exc.what, exc.ident, exc.reason)
+    return problem_response(request, 409, f"{exc.what} {exc.ident} is damaged and cannot be read ({exc.reason}); "
+                                          "retrying will not help. The operator can run `rcsa store check` and "
+                                          f"delete it (DELETE /v1/measurements/{exc.ident}); upload it again",
+                            slug="damaged", title="Stored object damaged",
+                            extra={"resource": exc.what, "id": exc.ident, "reason": exc.reason})
+
+
+async def _on_conflict(request: Request, exc: ConflictError) -> Response:
+    return problem_response(request, 409, f"{exc.what} {exc.ident} {exc.reason}", slug="conflict",
+                            extra={"resource": exc.what, "id": exc.ident})
 
 
 async def _on_problem(request: Request, exc: ProblemError) -> Response:
@@ -203,7 +233,10 @@ def install_error_handlers(app: FastAPI) -> None:
     """Register the problem handlers on ``app`` (the 500 one lives in the middleware)."""
     app.add_exception_handler(RequestValidationError, _on_validation)
     app.add_exception_handler(InputError, _on_input)
+    app.add_exception_handler(BudgetExceeded, _on_budget)
     app.add_exception_handler(NotFoundError, _on_not_found)
     app.add_exception_handler(StoreError, _on_store)
+    app.add_exception_handler(DamagedError, _on_damaged)
+    app.add_exception_handler(ConflictError, _on_conflict)
     app.add_exception_handler(ProblemError, _on_problem)
     app.add_exception_handler(StarletteHTTPException, _on_http)

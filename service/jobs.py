@@ -9,17 +9,19 @@ and the public JSON of a job.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 from starlette.responses import Response
 
+from rcsa.app import budget
+from rcsa.app.analyses import validate
 from rcsa.app.jobs import Job, Outcome, Work, answer_or_queue
 
 from .responses import json_response
 from .state import AppState
 
-__all__ = ["accepted", "answer", "job_document", "present", "wants_async"]
+__all__ = ["accepted", "answer", "compute", "job_document", "present", "wants_async"]
 
 
 def wants_async(prefer: str | None) -> bool:
@@ -44,12 +46,32 @@ def answer(state: AppState, work: Work, *, prefer: str | None, idempotency_key: 
     submission reuses the unfinished job of the same request instead of queuing it twice.
     """
     asked = wants_async(prefer)
+    queued = work.should_queue(respond_async=asked, async_threshold=state.settings.async_batch_threshold)
+    if work.kind in ("batch", "library", "library-sync"):  # the compute budget, before any work
+        budget.check_work(work.kind, work.request, work.size, mode="job" if queued else "sync")
     result = answer_or_queue(state.bench, state.jobs, work, respond_async=asked,
                              async_threshold=state.settings.async_batch_threshold,
                              reuse_unfinished=idempotency_key is not None)
     if isinstance(result, Job):
         return accepted(state, result, preference_applied=asked)
     return json_response(present(result), headers=headers)
+
+
+def compute(state: AppState, kind: str, request: Mapping[str, Any], *, prefer: str | None,
+            run: Callable[[], Response]) -> Response:
+    """One computation (:data:`rcsa.app.analyses.ANALYSIS_KINDS`) under the compute budget.
+
+    The request's estimated cost (:func:`rcsa.app.budget.check`) must fit the limits of a
+    synchronous request, unless ``Prefer: respond-async`` asks for a job: then the job
+    limits apply, the request is validated and queued (``202``, :func:`accepted`), and the
+    job's result is what ``run`` would have answered. Otherwise ``run()`` answers now.
+    """
+    asked = wants_async(prefer)
+    budget.check(kind, request, mode="job" if asked else "sync")
+    if not asked:
+        return run()
+    validate(kind, request, store=state.reader)
+    return answer(state, Work(kind, dict(request), 1), prefer=prefer, idempotency_key=None)  # type: ignore[arg-type]
 
 
 def job_document(job: Job) -> dict[str, Any]:

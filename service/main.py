@@ -22,7 +22,7 @@ from pydantic.json_schema import models_json_schema
 from starlette.middleware.gzip import GZipMiddleware
 
 from rcsa._version import __version__
-from rcsa.app.jobs import Job, JobRunner, Workbench, job_handlers, job_store
+from rcsa.app.jobs import Job, JobRunner, Workbench, analysis_job_handlers, job_handlers, job_store
 from rcsa.app.keys import key_ring
 from rcsa.app.measurements import seed_demo
 from rcsa.app.stores import CachedMeasurements, open_store
@@ -95,7 +95,7 @@ def _startup(settings: Settings, metrics: Metrics) -> AppState:
     def finished(job: Job, seconds: float) -> None:
         metrics.jobs.labels(job.kind, job.status).inc()
 
-    table = job_handlers(bench, present)
+    table = {**job_handlers(bench, present), **analysis_job_handlers(bench)}
     for _ in range(settings.job_workers):
         runner = JobRunner(jobs, table, poll_s=settings.job_poll_s, heartbeat_s=settings.job_heartbeat_s,
                            on_finish=finished, retention_s=settings.job_retention_s)

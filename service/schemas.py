@@ -33,6 +33,7 @@ from pydantic import (
 from pydantic_core import PydanticCustomError
 
 from rcsa.app.bounds import (
+    MAX_BEARINGS,
     MAX_COHERENCE,
     MAX_CUTTING_COEFFICIENT_N_M2,
     MAX_DAMPING,
@@ -46,6 +47,7 @@ from rcsa.app.bounds import (
     MAX_NECK_SEGMENTS,
     MAX_POISSON_RATIO,
     MAX_RADIAL_RATIO,
+    MAX_SEGMENTS,
     MAX_SHEAR_COEFFICIENT,
     MAX_SPEED_COUNT,
     MAX_SPEED_RPM,
@@ -184,8 +186,9 @@ class Bearing(_Request):
 class AnalyticalSpindle(_Request):
     """A modelled spindle: segments from the nose toward the rear, and bearings."""
 
-    segments: list[Segment] = Field(min_length=1, description="Shaft segments, nose → rear.")
-    bearings: list[Bearing] = Field(default_factory=list, description="Bearings (positions from the nose).")
+    segments: list[Segment] = Field(min_length=1, max_length=MAX_SEGMENTS, description="Shaft segments, nose → rear.")
+    bearings: list[Bearing] = Field(default_factory=list, max_length=MAX_BEARINGS,
+                                    description="Bearings (positions from the nose).")
 
 
 class MeasuredSpindle(_Request):
@@ -219,8 +222,8 @@ Spindle = Annotated[
 class Holder(_Request):
     """Tool holder: segments from the gauge line toward the tool end."""
 
-    segments: list[Segment] = Field(min_length=1, description="Holder segments, gauge line → tool end; "
-                                                              "inner_diameter_m is the bore.")
+    segments: list[Segment] = Field(min_length=1, max_length=MAX_SEGMENTS,
+                                    description="Holder segments, gauge line → tool end; inner_diameter_m is the bore.")
 
 
 class NeckSegment(_Request):
@@ -625,6 +628,8 @@ class MeasurementPage(_Response):
 
     items: list[MeasurementInfo]
     next_cursor: str | None = Field(description="Pass as ?cursor= for the next page; null on the last page.")
+    damaged: list[str] | None = Field(None, description="Ids of stored measurement files that cannot be read "
+                                      "(left out of items; GET one for the reason, `rcsa store check` for all).")
 
 
 class MeasurementDocument(MeasurementInfo):

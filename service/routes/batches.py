@@ -19,7 +19,7 @@ from ..deps import StateDep
 from ..errors import ProblemError
 from ..idempotency import IDEMPOTENCY_PROBLEMS, IdempotencyKeyHeader, IdempotentRoute
 from ..jobs import answer, job_document
-from ..responses import json_response, problems
+from ..responses import body_limit, json_response, problems
 from ..schemas import BatchRequest, BatchResult, JobStatus
 from ..security import ReadAccess
 
@@ -32,7 +32,8 @@ ToolPointQuery = Annotated[str | None, Query(pattern=r"^[hlnp](,[hlnp]){0,3}$", 
     "Receptances to return in each result's tool_point, e.g. h (a third of the size); default h,l,n,p."))]
 
 
-@router.post("/tool-point-frf/batch", dependencies=[Depends(require_json)], response_model=BatchResult, responses={
+@router.post("/tool-point-frf/batch", dependencies=[Depends(require_json)], response_model=BatchResult,
+             openapi_extra=body_limit("batch"), responses={
     202: {"model": JobStatus, "description": "Queued as a job; poll Location."}, **problems(401, 413, 415, 422),
     **IDEMPOTENCY_PROBLEMS}, summary="Tool-point FRFs of many combinations")
 def predict_batch(body: BatchRequest, state: StateDep, _: ReadAccess, prefer: PreferHeader = None,

@@ -31,13 +31,13 @@ policy):
 
 from __future__ import annotations
 
-import json
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Header, Path, Query, Request
 from fastapi.concurrency import run_in_threadpool
 from starlette.responses import Response
 
+from rcsa.app.inputs import decode_json
 from rcsa.app.libraries import (
     LIBRARY_ID_PATTERN,
     export_file,
@@ -52,7 +52,7 @@ from ..deps import StateDep
 from ..errors import ProblemError
 from ..idempotency import IDEMPOTENCY_PROBLEMS, IdempotencyKeyHeader, IdempotentRoute
 from ..jobs import answer
-from ..responses import json_response, problems
+from ..responses import body_limit, json_response, problems
 from ..schemas import (
     Deleted,
     JobStatus,
@@ -109,7 +109,7 @@ async def _library_inputs(request: Request, state: AppState) -> tuple[dict[str, 
             await body.close()
 
 
-@router.post("/tool-libraries:predict", response_model=LibraryResult, openapi_extra=_BODY, responses={
+@router.post("/tool-libraries:predict", response_model=LibraryResult, openapi_extra=body_limit("library", _BODY), responses={
     202: {"model": JobStatus, "description": "Queued as a job; poll Location."},
     **problems(400, 401, 413, 415, 422), **IDEMPOTENCY_PROBLEMS}, summary="Tool-point FRFs of a Fusion tool library")
 async def predict_library(request: Request, state: StateDep, _: ReadAccess, prefer: PreferHeader = None,
@@ -143,12 +143,12 @@ async def _from_form(form: Any, limit_bytes: int) -> tuple[dict[str, Any], dict[
             continue
         if name in _JSON_FIELDS:
             try:
-                doc[name] = json.loads(text)
-            except ValueError as exc:
+                doc[name] = decode_json(text, path=name, what=f"form field {name}")
+            except InputError:
                 if name == "shear_coefficient":
                     doc[name] = text
                     continue
-                raise InputError(name, f"must be JSON ({exc})") from None
+                raise
         elif name == "natural_frequencies":
             if text.lower() not in ("true", "false"):
                 raise InputError(name, "must be true or false")
@@ -174,7 +174,7 @@ LibraryId = Annotated[str, Path(pattern=LIBRARY_ID_PATTERN.pattern, description=
 HDF5, ZIP, JSON = "application/x-hdf5", "application/zip", "application/json"
 
 
-@router.post("/libraries/{library_id}:sync", response_model=SyncReport, openapi_extra=_BODY, responses={
+@router.post("/libraries/{library_id}:sync", response_model=SyncReport, openapi_extra=body_limit("library", _BODY), responses={
     202: {"model": JobStatus, "description": "Queued as a library-sync job; poll Location (its result is the "
                                              "sync report)."},
     **problems(400, 401, 403, 413, 415, 422), **IDEMPOTENCY_PROBLEMS},

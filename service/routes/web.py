@@ -15,7 +15,6 @@ The page is served with a Content-Security-Policy that allows only this origin.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
@@ -26,17 +25,19 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from starlette.responses import FileResponse, RedirectResponse, Response
 
 from rcsa.app.examples import ra1
+from rcsa.app.inputs import decode_json
 from rcsa.app.libraries import library_entries as read_entries
 from rcsa.errors import InputError
 
 from ..bodies import form_text, read_body, read_upload, validate_json
 from ..deps import StateDep
 from ..errors import ProblemError
-from ..responses import json_response, problems
+from ..responses import body_limit, json_response, problems
+from ..routing import ServiceRoute
 from ..schemas import Assembly, LibraryOptions
 from ..security import ReadAccess
 
-router = APIRouter()
+router = APIRouter(route_class=ServiceRoute)
 
 WEB_DIR = Path(__file__).resolve().parent.parent / "web"
 #: The page's files and their media types (nothing else under /ui/ is served).
@@ -139,7 +140,7 @@ _ENTRIES_BODY = {"requestBody": {"required": True, "content": {
 
 
 @router.post("/v1/tool-libraries:entries", tags=["tool libraries"], response_model=LibraryEntries,
-             openapi_extra=_ENTRIES_BODY, responses=problems(400, 401, 413, 415, 422),
+             openapi_extra=body_limit("library", _ENTRIES_BODY), responses=problems(400, 401, 413, 415, 422),
              summary="List a Fusion tool library's entries (no computation)")
 async def library_entries(request: Request, state: StateDep, _: ReadAccess) -> Response:
     """Read a Fusion tool library and list every item: its id, description, status (ok,
@@ -174,7 +175,7 @@ async def _entries_form(form: Any, limit_bytes: int) -> tuple[bytes, str, Librar
     if not text:
         return data, name, None
     try:
-        return data, name, LibraryOptions.model_validate(json.loads(text))
+        return data, name, LibraryOptions.model_validate(decode_json(text, path="options", what="form field options"))
     except ValueError as exc:
         if isinstance(exc, ValidationError):
             raise RequestValidationError([{**e, "loc": ("body", "options", *e["loc"])}

@@ -11,11 +11,17 @@ from rcsa.analysis.lobes.zoa import LobeResult
 from rcsa.analysis.sensitivity import effects as _effects
 from rcsa.app.predictions import predict
 from rcsa.app.stores import MeasurementSource, resolver
+from rcsa.errors import InputError
 from rcsa.measured.store import MeasurementStore
 from rcsa.model.bounds import MAX_FREQUENCY_LINES
 from rcsa.model.contract import SpindleSpec, parse_assembly
 
-__all__ = ["diagnose", "effects", "identify", "stability_lobes", "stability_lobes_result"]
+__all__ = ["ANALYSIS_KINDS", "diagnose", "effects", "identify", "run_analysis", "stability_lobes",
+           "stability_lobes_result", "validate"]
+
+#: Single computations that may also run as jobs (``Prefer: respond-async``), by the name of
+#: their cost model in :mod:`rcsa.app.budget`.
+ANALYSIS_KINDS = ("prediction", "lobes", "effects", "identification", "diagnosis")
 
 
 def stability_lobes_result(request: Mapping[str, Any], *, store: MeasurementStore | None = None,
@@ -107,3 +113,41 @@ def diagnose(request: Mapping[str, Any], **kwargs: Any) -> dict[str, Any]:
     from rcsa.analysis.diagnosis.diagnose import diagnose as run
 
     return run(request, **kwargs)
+
+
+def validate(kind: str, request: Mapping[str, Any], *, store: MeasurementSource | None = None) -> None:
+    """Refuse an invalid request before it is queued as a job (the checks its run makes
+    first), so that a bad request is a 422 at once instead of a failed job."""
+    if kind == "diagnosis":
+        from rcsa.analysis.diagnosis.request import parse_request
+
+        parse_request(request)
+    elif kind == "identification":
+        from rcsa.analysis.joint_identification.request import parse_identification_request
+
+        parse_identification_request(request, resolver(store))
+    elif kind == "lobes":
+        parse_lobes_request(request)
+    # prediction and effects: the budget's estimate already parsed the assembly
+
+
+def run_analysis(kind: str, request: Mapping[str, Any], *, store: MeasurementStore | None = None,
+                 max_lines: int = MAX_FREQUENCY_LINES) -> dict[str, Any]:
+    """Run one of :data:`ANALYSIS_KINDS` and return its result document (a job's result).
+
+    Raises
+    ------
+    InputError
+        An unknown kind, or an invalid request.
+    """
+    if kind == "prediction":
+        return predict(request, store=store, max_lines=max_lines).to_dict()
+    if kind == "lobes":
+        return stability_lobes(request, store=store, max_lines=max_lines)
+    if kind == "effects":
+        return effects(request, store=store)
+    if kind == "identification":
+        return identify(request, store=store)
+    if kind == "diagnosis":
+        return diagnose(request)
+    raise InputError("kind", f"no analysis {kind!r} (known: {', '.join(ANALYSIS_KINDS)})")

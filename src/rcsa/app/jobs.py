@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal, Protocol
 
+from rcsa.app.analyses import ANALYSIS_KINDS, run_analysis
 from rcsa.app.stores import library_store
 from rcsa.errors import InputError
 from rcsa.infra.job_queue import Handler, Job, JobRunner, JobStore
@@ -42,14 +43,17 @@ __all__ = [
     "Outcome",
     "Work",
     "Workbench",
+    "analysis_job_handlers",
     "answer_or_queue",
     "job_handlers",
     "job_store",
     "run_work",
 ]
 
-#: What may run as a job.
-Kind = Literal["batch", "library", "library-sync"]
+#: What may run as a job: batches, libraries and syncs (:data:`JOB_KINDS`), and single
+#: computations a caller asked to run in the background (:data:`rcsa.app.analyses.ANALYSIS_KINDS`,
+#: handlers from :func:`analysis_job_handlers`).
+Kind = Literal["batch", "library", "library-sync", "prediction", "lobes", "effects", "identification", "diagnosis"]
 JOB_KINDS: tuple[Kind, ...] = ("batch", "library", "library-sync")
 #: Sub-directory of the store holding the job queue.
 JOBS_DIRECTORY = "jobs"
@@ -141,6 +145,8 @@ class Work:
         """
         if self.kind == "library" and self.size == 0:
             return False
+        if self.kind in ANALYSIS_KINDS:  # one computation: a job only when asked for
+            return respond_async
         return respond_async or self.size > async_threshold
 
 
@@ -198,6 +204,9 @@ def run_work(bench: Workbench, kind: str, request: Mapping[str, Any], *,
             document = report.to_dict()
             summary = {**document["counts"], **report.summary, "computed": report.computed}
             computed = report.computed
+        elif kind in ANALYSIS_KINDS:
+            document = run_analysis(kind, request, store=bench.store, max_lines=bench.max_lines)  # type: ignore[arg-type]
+            summary, computed = {}, 1
         else:
             raise InputError("kind", f"no work of kind {kind!r} (known: {', '.join(JOB_KINDS)})")
     bench.observer.computed(kind, computed)
@@ -257,6 +266,19 @@ def job_handlers(bench: Workbench, present: Callable[[Outcome], dict[str, Any]] 
         return run
 
     return {kind: handler(kind) for kind in JOB_KINDS}
+
+
+def analysis_job_handlers(bench: Workbench) -> dict[str, Handler]:
+    """The job runner's handlers of single computations queued on request
+    (:data:`rcsa.app.analyses.ANALYSIS_KINDS`), all :func:`run_work`."""
+    def handler(kind: str) -> Handler:
+        def run(request: dict[str, Any], progress: Callable[[int, int], None]) -> tuple[Any, dict[str, Any]]:
+            outcome = run_work(bench, kind, request, progress=progress)
+            return outcome.document, outcome.summary
+
+        return run
+
+    return {kind: handler(kind) for kind in ANALYSIS_KINDS}
 
 
 def job_store(store_path: str | os.PathLike[str], *, stale_after_s: float = 60.0, max_attempts: int = 3) -> JobStore:

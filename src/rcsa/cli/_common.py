@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -11,6 +10,7 @@ from typing import Any, TypeVar
 import orjson
 import typer
 
+from rcsa.app.inputs import decode_json
 from rcsa.errors import InputError, NotFoundError, RcsaError
 
 __all__ = ["fail", "read_json", "run_guarded", "write_json"]
@@ -30,10 +30,10 @@ def read_json(path: Path) -> Any:
         text = sys.stdin.read() if str(path) == "-" else path.read_text(encoding="utf-8")
     except OSError as exc:
         raise fail(f"cannot read {path}: {exc.strerror or exc}") from None
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise fail(f"{path} is not valid JSON: {exc.msg} at line {exc.lineno} column {exc.colno}") from None
+    try:  # the service's JSON policy: no NaN/Infinity, numbers within range, nesting bounded
+        return decode_json(text, what=str(path))
+    except InputError as exc:
+        raise fail(f"{path}: {exc}") from None
 
 
 def write_json(document: Any, out: Path | None) -> None:

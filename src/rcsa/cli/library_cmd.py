@@ -22,12 +22,12 @@ writes its results (HDF5, zip of UFF 58 files, or JSON).
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
 
+from rcsa.app.inputs import decode_json
 from rcsa.app.jobs import Workbench, run_work
 from rcsa.app.libraries import (
     EXPORT_FORMATS,
@@ -52,10 +52,7 @@ def parse_frequency_option(text: str) -> dict[str, Any]:
     """``START:STOP:STEP`` (Hz, stop included) or a JSON frequency object."""
     text = text.strip()
     if text.startswith("{"):
-        try:
-            doc = json.loads(text)
-        except ValueError as exc:
-            raise InputError("frequency", f"not valid JSON ({exc})") from None
+        doc: dict[str, Any] = decode_json(text, path="frequency", what="--frequency")
         return doc
     parts = text.split(":")
     try:
@@ -81,10 +78,8 @@ def _spindle_document(path: Path) -> dict[str, Any]:
 def _options_json(options: str | None) -> dict[str, Any] | None:
     if options is None:
         return None
-    try:
-        return json.loads(options)
-    except ValueError as exc:
-        raise InputError("options", f"not valid JSON ({exc})") from None
+    doc: dict[str, Any] | None = decode_json(options, path="options", what="--options")
+    return doc
 
 
 def _settings(base: dict[str, Any], frequency: str | None, joints: Path | None, store: Any) -> dict[str, Any]:

@@ -16,6 +16,7 @@ import numpy as np
 
 from rcsa.errors import InputError
 from rcsa.model.bounds import (
+    MAX_BEARINGS,
     MAX_DAMPING,
     MAX_DENSITY_KG_M3,
     MAX_FREQUENCY_HZ,
@@ -25,6 +26,7 @@ from rcsa.model.bounds import (
     MAX_MODULUS_PA,
     MAX_NECK_SEGMENTS,
     MAX_POISSON_RATIO,
+    MAX_SEGMENTS,
     MAX_SHEAR_COEFFICIENT,
     MAX_STIFFNESS,
     MIN_DENSITY_KG_M3,
@@ -374,6 +376,9 @@ def _material(o: Fields, materials: Mapping[str, Material], default: str) -> str
 def _segments(value: object, path: str, materials: Mapping[str, Material]) -> tuple[SegmentSpec, ...]:
     if not isinstance(value, list) or not value:
         raise InputError(path, "must be a non-empty list of segments")
+    if len(value) > MAX_SEGMENTS:
+        raise InputError(path, f"at most {MAX_SEGMENTS} segments, got {len(value)}; merge neighbouring segments "
+                               "of equal section (each costs a condensation per frequency line)")
     out = []
     for i, raw in enumerate(value):
         o = Fields(raw, f"{path}[{i}]")
@@ -404,6 +409,8 @@ def parse_spindle(value: object, materials: Mapping[str, Material], path: str = 
     raw_bearings = o.value.get("bearings", [])
     if not isinstance(raw_bearings, list):
         raise InputError(o.at("bearings"), "must be a list")
+    if len(raw_bearings) > MAX_BEARINGS:
+        raise InputError(o.at("bearings"), f"at most {MAX_BEARINGS} bearings, got {len(raw_bearings)}")
     bearings = []
     for i, raw in enumerate(raw_bearings):
         b = Fields(raw, f"{o.at('bearings')}[{i}]")
