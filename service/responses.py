@@ -27,6 +27,8 @@ _DESCRIPTIONS = {
     403: "The API key's scope does not allow this (writes need scope write).",
     404: "No such resource.",
     409: "The job has not succeeded (still running, or failed).",
+    410: "The job's result was deleted (disk budget of kept results); submit the job again.",
+    429: "Too many unfinished jobs for this caller; retry after Retry-After.",
     413: "The request body or an uploaded file is too large.",
     415: "Unsupported Content-Type.",
     422: "Invalid input; errors[] names each offending field.",

@@ -56,9 +56,16 @@ ChunkFunction = Callable[[Any, Any], Any]
 class ComputeUnavailable(RcsaError):
     """The compute cluster cannot be reached, or went away while work was running on it."""
 
+    #: How a job that fails with it is reported (problem ``title`` and ``status``).
+    title = "Compute cluster unavailable"
+    http_status = 503
+
 
 class ChunkFailed(RcsaError):
     """A chunk could not be computed on the cluster (it killed its workers again and again)."""
+
+    title = "Job failed on the compute cluster"
+    http_status = 500
 
 
 class Backend(Protocol):
