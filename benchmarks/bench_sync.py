@@ -34,9 +34,9 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from rcsa._version import __version__  # noqa: E402
+from rcsa.cli.library_cmd import parse_frequency_option  # noqa: E402
 from rcsa.libraries import exports  # noqa: E402
 from rcsa.libraries import sync as library_sync  # noqa: E402
-from rcsa.cli.library_cmd import parse_frequency_option  # noqa: E402
 from rcsa.reference import ra1  # noqa: E402
 
 SAMPLE = ROOT / "tests" / "data" / "tool-libraries" / "fusion-synthetic" / "synthetic_library.json"

@@ -120,6 +120,9 @@ QuietOption = Annotated[bool, typer.Option("--quiet", "-q", help="No progress ba
 DaskOption = Annotated[str | None, typer.Option(
     "--dask-scheduler", envvar="RCSA_DASK_SCHEDULER",
     help="Compute on this Dask cluster (tcp://HOST:8786; needs pip install 'rcsa[dask]') instead of here.")]
+DaskTimeoutOption = Annotated[float, typer.Option(
+    "--dask-connect-timeout", envvar="RCSA_DASK_CONNECT_TIMEOUT_S", min=0.1,
+    help="Seconds to try to reach the Dask scheduler before giving up.")]
 
 
 @library_app.command("predict")
@@ -139,6 +142,7 @@ def predict(
                                                                "the per-user store).")] = None,
     quiet: QuietOption = False,
     dask_scheduler: DaskOption = None,
+    dask_connect_timeout: DaskTimeoutOption = 10.0,
 ) -> None:
     """Predict the tool-point FRF of every tool in a Fusion library on one spindle."""
     if (spindle is None) == (measurement is None):
@@ -155,7 +159,7 @@ def predict(
         return bench, work
 
     bench, work = run_guarded(build)
-    backend = run_guarded(lambda: compute_backend(dask_scheduler))
+    backend = run_guarded(lambda: compute_backend(dask_scheduler, connect_timeout_s=dask_connect_timeout))
     with _progress_bar(quiet) as bar:
         task = bar.add_task("tools", total=max(work.size, 1))
 
@@ -198,6 +202,7 @@ def sync(
     store: StoreOption = None,
     quiet: QuietOption = False,
     dask_scheduler: DaskOption = None,
+    dask_connect_timeout: DaskTimeoutOption = 10.0,
 ) -> None:
     """Keep a Fusion library's tool-point FRFs in the store, computing only new or changed tools."""
     measurement = spindle if is_measurement_id(spindle) else None
@@ -215,7 +220,8 @@ def sync(
         return bench, work
 
     bench, work = run_guarded(build)
-    backend = run_guarded(lambda: compute_backend(dask_scheduler if work.size else None))
+    backend = run_guarded(lambda: compute_backend(dask_scheduler if work.size else None,
+                                                        connect_timeout_s=dask_connect_timeout))
     with _progress_bar(quiet) as bar:
         task = bar.add_task(f"{ident}: computing", total=max(work.size, 1))
 

@@ -511,11 +511,6 @@ class JobStore:
         """Mark the job succeeded with the result ``runner`` wrote (and fsynced) to ``tmp``
         (:meth:`result_tmp`); then evict old results beyond the disk budget."""
         self._finish(job_id, runner, "succeeded", summary=summary, rename=(tmp, self.results / f"{job_id}.json"))
-        if self.max_result_bytes is not None:
-            try:
-                self.evict(self.max_result_bytes)
-            except Exception:  # the job succeeded; eviction is tried again after the next one
-                log.exception("job results: could not evict old results")
 
     def fail(self, job_id: str, runner: str, error: Mapping[str, Any]) -> None:
         """Mark the job failed with a problem document."""
@@ -540,11 +535,15 @@ class JobStore:
                     (status, status, utc_now_iso(), rename[1].name if rename else None,
                      json.dumps(error) if error is not None else None,
                      json.dumps(summary) if summary is not None else None, size, job_id))
+                # in the same transaction: nobody sees the new result before the old ones are evicted
+                evicted = self._evict(con, self.max_result_bytes) if rename and self.max_result_bytes is not None \
+                    else []
         except BaseException:
             if rename is not None:
                 with contextlib.suppress(OSError):
                     rename[0].unlink()
             raise
+        self._unlink_evicted(evicted)
 
     def evict(self, max_bytes: int) -> list[str]:
         """Delete the oldest kept results until the rest take at most ``max_bytes``; return their job ids.
@@ -553,28 +552,36 @@ class JobStore:
         its row: ``status`` stays ``succeeded``, ``result_evicted_utc`` says when.
         """
         with closing(self._connect()) as con, transaction(con):
-            rows = con.execute("SELECT id, result_bytes FROM jobs WHERE status = 'succeeded' AND result_file IS NOT "
-                               "NULL ORDER BY finished_utc DESC, id DESC").fetchall()
-            total, evicted = 0, []
-            for k, (job_id, size) in enumerate(rows):
-                if size is None:  # a result of an earlier version: measure it once
-                    with contextlib.suppress(OSError):
-                        size = (self.results / f"{job_id}.json").stat().st_size
-                        con.execute("UPDATE jobs SET result_bytes = ? WHERE id = ?", (size, job_id))
-                total += int(size or 0)
-                if k > 0 and total > max_bytes:
-                    evicted.append(job_id)
-            if evicted:
-                now = utc_now_iso()
-                con.executemany("UPDATE jobs SET result_file = NULL, result_evicted_utc = ? WHERE id = ?",
-                                [(now, i) for i in evicted])
+            evicted = self._evict(con, max_bytes)
+        self._unlink_evicted(evicted)
+        return evicted
+
+    def _evict(self, con: sqlite3.Connection, max_bytes: int) -> list[str]:
+        """Mark the results to evict (inside the caller's transaction); :meth:`_unlink_evicted` after it."""
+        rows = con.execute("SELECT id, result_bytes FROM jobs WHERE status = 'succeeded' AND result_file IS NOT "
+                           "NULL ORDER BY finished_utc DESC, id DESC").fetchall()
+        total, evicted = 0, []
+        for k, (job_id, size) in enumerate(rows):
+            if size is None:  # a result of an earlier version: measure it once
+                with contextlib.suppress(OSError):
+                    size = (self.results / f"{job_id}.json").stat().st_size
+                    con.execute("UPDATE jobs SET result_bytes = ? WHERE id = ?", (size, job_id))
+            total += int(size or 0)
+            if k > 0 and total > max_bytes:
+                evicted.append(job_id)
+        if evicted:
+            now = utc_now_iso()
+            con.executemany("UPDATE jobs SET result_file = NULL, result_evicted_utc = ? WHERE id = ?",
+                            [(now, i) for i in evicted])
+        return evicted
+
+    def _unlink_evicted(self, evicted: list[str]) -> None:
         for i in evicted:
             with contextlib.suppress(FileNotFoundError):
                 (self.results / f"{i}.json").unlink()
         if evicted:
-            log.warning("job results: evicted %d oldest result(s) to keep the kept results within %d bytes: %s",
-                        len(evicted), max_bytes, ", ".join(evicted))
-        return evicted
+            log.warning("job results: evicted %d oldest result(s) to keep the kept results within %s bytes: %s",
+                        len(evicted), self.max_result_bytes, ", ".join(evicted))
 
     def purge(self, older_than_s: float) -> int:
         """Delete finished jobs (rows and result files) finished more than ``older_than_s`` ago."""
