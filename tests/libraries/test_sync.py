@@ -140,6 +140,18 @@ def test_result_key_is_content_not_spelling(libs):
     assert results_cache.canonical_json({"x": [1, -0.0]}) == results_cache.canonical_json({"x": [1.0, 0.0]})
 
 
+def test_keys_made_in_bulk_are_the_keys_made_one_by_one(libs):
+    request = library_sync.sync_request("a", make_library(7), **{**SETTINGS, "materials": {"x": {
+        "youngs_modulus_pa": 2.1e11, "density_kg_m3": 7850, "poisson_ratio": 0.29}}})
+    batch = request["batch"]
+    shared = results_cache.shared_part(batch, None)
+    fsha = results_cache.frequency_sha256(np.arange(5.0, 1000.0 + 1, 5.0))
+    one_by_one = [results_cache.result_key(c, shared, fsha) for c in batch["combinations"]]
+    assert results_cache.result_keys(batch["combinations"], shared, fsha) == one_by_one
+    assert library_sync.plan_sync(libs, request).keys == tuple(one_by_one)
+    assert len(set(one_by_one)) == 7
+
+
 def test_model_version_is_part_of_the_key(libs, monkeypatch):
     request = library_sync.sync_request("a", make_library(1), **SETTINGS)
     key = library_sync.plan_sync(libs, request).keys[0]

@@ -127,13 +127,17 @@ def library_request(
     imported = library_combinations(library, **opts)
     entries, combos = [], []
     for c in imported:
-        entry = {k: v for k, v in c.to_dict().items() if k in (*_ENTRY_FIELDS, "status", "reason")}
+        # the entry's own fields (not to_dict(): its copies of holder and tool would be thrown away)
+        entry = {"id": c.id, "index": c.index, "status": c.status, "description": c.description, "number": c.number,
+                 "teeth": c.teeth, "tool_type": c.tool_type, "reason": c.reason, "warnings": list(c.warnings)}
         if c.status == "error":
             field, sep, detail = (c.reason or "").partition(": ")
             entry["error"] = {"field": field, "detail": detail} if sep else {"field": "", "detail": c.reason}
         entries.append(entry)
         if c.status == "ok":
-            item = c.batch_item()
+            # the import's own holder and tool dicts (batch_item() would copy them): the import is
+            # dropped when this returns, and nothing downstream modifies a request
+            item = {"id": c.id, "holder": c.holder, "tool": c.tool}
             if joints:
                 item["joints"] = dict(joints)
             combos.append(item)

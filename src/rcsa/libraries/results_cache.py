@@ -66,6 +66,7 @@ __all__ = [
     "measurement_sha256",
     "model_fingerprint",
     "result_key",
+    "result_keys",
     "shared_part",
 ]
 
@@ -240,6 +241,39 @@ def result_key(combination: Mapping[str, Any], shared: Mapping[str, Any], freque
            "combination": {k: v for k, v in combination.items() if k != "id"},
            "shared": shared, "frequency_sha256": frequency_sha}
     return hashlib.sha256(canonical_json(doc)).hexdigest()
+
+
+def result_keys(combinations: Iterable[Mapping[str, Any]], shared: Mapping[str, Any], frequency_sha: str
+                ) -> list[str]:
+    """:func:`result_key` of many combinations sharing ``shared`` (the same keys, faster).
+
+    The canonical JSON of the shared part is written once and spliced into each key's
+    document (sorted keys: ``combination`` comes first, ``shared`` last), and the canonical
+    JSON of each value of a combination (its holder, tool, joints) is remembered by its
+    exact JSON text, so a holder shared by a thousand tools is normalised once.
+    """
+    doc = {"schema": RESULT_KEY_SCHEMA, "model_fingerprint": model_fingerprint(), "rcsa_version": __version__,
+           "frequency_sha256": frequency_sha}
+    middle = canonical_json(doc)[1:-1]  # "frequency_sha256":...,"schema":...: between combination and shared
+    tail = b',' + middle + b',"shared":' + canonical_json(shared) + b'}'
+    memo: dict[bytes, bytes] = {}
+
+    def value_json(value: Any) -> bytes:
+        try:
+            text = orjson.dumps(value, option=orjson.OPT_SORT_KEYS)
+        except TypeError:  # numpy values and the like: no shortcut
+            return canonical_json(value)
+        found = memo.get(text)
+        if found is None:
+            found = memo[text] = canonical_json(value)
+        return found
+
+    keys = []
+    for combination in combinations:
+        parts = sorted((str(k), v) for k, v in combination.items() if k != "id")
+        body = b",".join(canonical_json(k) + b":" + value_json(v) for k, v in parts)
+        keys.append(hashlib.sha256(b'{"combination":{' + body + b'}' + tail).hexdigest())
+    return keys
 
 
 class ResultCache:

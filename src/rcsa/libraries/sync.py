@@ -65,7 +65,7 @@ from rcsa.libraries.results_cache import (
     frequency_sha256,
     measurement_sha256,
     model_fingerprint,
-    result_key,
+    result_keys,
     shared_part,
 )
 from rcsa.measured.hybrid import MeasurementSource
@@ -576,7 +576,7 @@ def plan_sync(libraries: LibraryStore, request: Mapping[str, Any], *, store: Mea
     shared = shared_part(batch, msha)
     fsha = frequency_sha256(common.frequency_hz)
     combos = batch.get("combinations") or []
-    keys = tuple(result_key(c, shared, fsha) for c in combos)
+    keys = tuple(result_keys(combos, shared, fsha))
     absent = libraries.cache.missing(keys)
     pending, seen = [], set()
     for i, key in enumerate(keys):
