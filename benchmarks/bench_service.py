@@ -29,6 +29,7 @@ import argparse
 import json
 import os
 import platform
+import shutil
 import signal
 import socket
 import statistics
@@ -284,6 +285,7 @@ def main_largest(args: argparse.Namespace) -> None:
     finally:
         proc.send_signal(signal.SIGINT)
         proc.wait(timeout=120)
+        shutil.rmtree(store.parent, ignore_errors=True)  # 4 GB of result
     figures = {"machine": {"cpus": os.cpu_count(), "python": platform.python_version(),
                            "platform": platform.platform()}, "uvicorn_workers": args.workers,
                "load_average_start": load, **figures}

@@ -724,6 +724,9 @@ class JobRunner:
         beater = threading.Thread(target=beat, name=f"rcsa-job-heartbeat-{job.id}", daemon=True)
         beater.start()
         tmp = self.jobs.result_tmp(job.id, self.runner_id)
+        for stale in self.jobs.results.glob(f".{job.id}.*.tmp"):  # a half-written result of an interrupted run
+            with contextlib.suppress(OSError):
+                stale.unlink()
         try:
             handler = self.handlers.get(job.kind)
             if handler is None:
