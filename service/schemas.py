@@ -43,6 +43,7 @@ from rcsa.app.bounds import (
     MAX_LENGTH_M,
     MAX_LOSS_FACTOR,
     MAX_MODULUS_PA,
+    MAX_NECK_SEGMENTS,
     MAX_POISSON_RATIO,
     MAX_RADIAL_RATIO,
     MAX_SHEAR_COEFFICIENT,
@@ -216,6 +217,14 @@ class Holder(_Request):
                                                               "inner_diameter_m is the bore.")
 
 
+class NeckSegment(_Request):
+    """One piece of a stepped (or stepped-conical) neck."""
+
+    length_m: float = Field(ge=MIN_LENGTH_M, description="Length of the piece, m (all pieces together at most "
+                                                         "stickout_m − flute_length_m).")
+    diameter_m: float = Field(ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Its diameter, m.")
+
+
 class Tool(_Request):
     """Parametric cutting tool (ISO 13399 / Fusion meaning)."""
 
@@ -232,6 +241,9 @@ class Tool(_Request):
     shoulder_length_m: float | None = Field(None, ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Reduced neck: from the tip to the neck's end, "
                                             "m (with shoulder_diameter_m).")
     shoulder_diameter_m: float | None = Field(None, ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Reduced neck diameter, m.")
+    neck_segments: list[NeckSegment] | None = Field(None, max_length=MAX_NECK_SEGMENTS, description=(
+        "Instead of shoulder_length_m/shoulder_diameter_m: a stepped neck, pieces listed from the flute end toward "
+        "the holder (a conical neck as steps); together at most stickout_m − flute_length_m long."))
 
 
 class Joint(_Request):
@@ -372,7 +384,12 @@ class PredictionResult(_Response):
                                                 "(exact for a modelled spindle; modal-fit estimates for a "
                                                 "hybrid one, see natural_frequencies_method).")
     natural_frequencies_method: str = Field(description="wittrick_williams (exact) or modal_fit.")
-    peaks: list[Peak] = Field(description="Peaks of |h|.")
+    natural_frequencies_sd_hz: list[float] | None = Field(None, description="Hybrid only: the standard "
+                                                          "uncertainty of each modal-fit natural frequency, Hz.")
+    modal_fit: list[dict[str, Any]] | None = Field(None, description="Hybrid only: each fitted mode (frequency_hz, "
+                                                   "damping_ratio, sd_hz, damping_ratio_sd, band_hz, modes_in_band, "
+                                                   "residual_rel, significance, peak).")
+    peaks: list[Peak] = Field(description="Peaks of |h| (hybrid: those above the noise, one per mode).")
     static_stiffness_n_m: float | None = Field(description="Static stiffness 1/h(0), N/m; null when it cannot "
                                                "be given (hybrid, ungrounded).")
     min_real_m_n: float = Field(description="Most negative real part of h, m/N.")
@@ -436,25 +453,29 @@ class JobStatus(_Response):
 # --------------------------------------------------------------------------- libraries
 
 class LibraryOptions(_Request):
-    """How a Fusion library is mapped to combinations."""
+    """How a library is mapped to combinations (shaft_origin, default_holder: Fusion; stickout_m: FreeCAD)."""
 
     holder_material: str | None = Field(None, description="Material of every holder segment (default steel).")
     tool_material_default: str | None = Field(None, description="Tool material when BMC is missing (default "
                                               "carbide).")
     holder_segments_per_cone: int | None = Field(None, ge=1, le=MAX_HOLDER_SEGMENTS_PER_CONE, description="Cylinders per conical holder "
-                                                 "segment (default 4).")
+                                                 "segment (default: from each cone's taper, within 0.5 % of the cone).")
     fluted_diameter_ratio: float | None = Field(None, ge=MIN_FLUTED_DIAMETER_RATIO, le=1,
                                                 description="Equivalent fluted diameter / DC.")
     shaft_origin: Literal["shoulder", "flute_end"] | None = Field(None, description="Where shaft.segments start.")
     default_holder: str | dict[str, Any] | None = Field(None, description="Holder for tools without one: the guid "
                                                         "of a standalone holder in the library, or a Fusion "
                                                         "holder object.")
+    stickout_m: float | dict[str, float] | None = Field(None, description="FreeCAD (required there): the "
+                                                        "stickout of every toolbit, m, or {toolbit id: m}.")
 
 
 class LibraryPredictionRequest(_Request):
     """JSON form of POST /v1/tool-libraries:predict (the multipart form carries the same fields)."""
 
-    library: dict[str, Any] = Field(description='The Fusion tool library document {"data": [...], "version": n}.')
+    library: dict[str, Any] = Field(description='The Fusion tool library document {"data": [...], "version": n}, '
+                                                'or FreeCAD toolbits {"format": "freecad", "toolbits": {"<id>": '
+                                                '{.fctb}}, "holder": {"<id>": {.fcholder}}, "library": {.fctl}}.')
     spindle: Spindle
     frequency: Frequency
     joints: Joints | None = Field(None, description="Joints applied to every tool (the library has none); "

@@ -1,6 +1,7 @@
 """Diagnoses, joint identifications and effect analyses: thin doors onto ``rcsa.app.analyses``.
 
-Each route passes the JSON body to ``rcsa.app.analyses.diagnose`` / ``identify`` / ``effects``.
+Each route passes the JSON body to ``rcsa.app.analyses.diagnose`` / ``identify`` / ``effects``;
+identifications and effect analyses also get the service's measurement store (measured spindles).
 """
 
 from __future__ import annotations
@@ -27,9 +28,14 @@ _OPERATIONS = {
 _Request = Annotated[dict[str, Any], Body(description="The request document (see the contract).")]
 
 
+#: Operations that read measured spindles from the service's store.
+_WITH_STORE = {"identify", "effects"}
+
+
 def _call(name: str, body: dict[str, Any], state: Any) -> Any:
+    kwargs = {"store": state.reader} if name in _WITH_STORE else {}
     with state.metrics.timed(name):
-        return getattr(analyses, name)(body)
+        return getattr(analyses, name)(body, **kwargs)
 
 
 def _route(name: str, path: str, summary: str) -> None:

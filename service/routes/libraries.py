@@ -1,8 +1,13 @@
-"""Whole Fusion tool libraries on one spindle: predicted once, or kept and synced.
+"""Whole CAM tool libraries (Fusion, FreeCAD) on one spindle: predicted once, or kept and synced.
 
-``POST /v1/tool-libraries:predict``: upload the library (``.json`` or ``.tools``) as
-multipart with the spindle and the frequency grid as form fields (JSON text), or send
-everything as one JSON document. Every library item gets one result in library order:
+``POST /v1/tool-libraries:predict``: upload the library as multipart with the spindle and the
+frequency grid as form fields (JSON text), or send everything as one JSON document. The
+library is a Fusion ``.json``/``.tools``, or FreeCAD toolbits: a ``.fctb``, or a zip of
+``.fctb`` files (with their ``.fctl`` and ``.fcholder``), the holder also as the ``holder``
+file field, and ``options.stickout_m`` (FreeCAD stores none). The format follows the file
+name and the part's Content-Type, checked against the content
+(:mod:`rcsa.libraries.formats`); the JSON form takes a Fusion document or
+``{"format": "freecad", "toolbits": {...}, "holder": {...}}``. Every library item gets one result in library order:
 ``ok`` (its tool-point FRF), ``skipped`` (e.g. no holder, a probe) with the reason, or
 ``error`` naming the field. Libraries with more tools than ``RCSA_ASYNC_BATCH_THRESHOLD`` (or
 ``Prefer: respond-async``) run as a job.
@@ -33,7 +38,13 @@ from fastapi import APIRouter, Header, Path, Query, Request
 from fastapi.concurrency import run_in_threadpool
 from starlette.responses import Response
 
-from rcsa.app.libraries import LIBRARY_ID_PATTERN, export_file, prepare_library, prepare_sync
+from rcsa.app.libraries import (
+    LIBRARY_ID_PATTERN,
+    export_file,
+    prepare_library,
+    prepare_sync,
+    read_library,
+)
 from rcsa.errors import InputError
 
 from ..bodies import form_text, read_body, read_upload, validate_json
@@ -58,7 +69,9 @@ router = APIRouter(prefix="/v1", tags=["tool libraries"], route_class=Idempotent
 
 _JSON_FIELDS = ("spindle", "frequency", "joints", "materials", "options", "shear_coefficient")
 _FORM_FIELDS = {
-    "library": "The Fusion tool library: .json, or .tools (zip holding tools.json).",
+    "library": "The tool library: Fusion .json or .tools (zip holding tools.json); FreeCAD .fctb, or a zip of "
+               ".fctb files (with their .fctl and .fcholder).",
+    "holder": "FreeCAD only: the holder (.fcholder) of the toolbits, when the library has none.",
     "spindle": 'JSON: the spindle, {"segments": [...], "bearings": [...]} or {"measurement_id": "m-..."}.',
     "measurement_id": "Instead of spindle: a stored measurement's id (hybrid).",
     "frequency": 'JSON: {"start_hz", "stop_hz", "step_hz"} or {"values_hz": [...]}, Hz.',
@@ -67,13 +80,14 @@ _FORM_FIELDS = {
     "beam_theory": "timoshenko | euler_bernoulli.",
     "shear_coefficient": "hutchinson | cowper | a number.",
     "natural_frequencies": "true | false: compute exact natural frequencies (default true).",
-    "options": "JSON: holder_material, tool_material_default, holder_segments_per_cone, fluted_diameter_ratio, "
-               "shaft_origin, default_holder.",
+    "options": "JSON: holder_material, tool_material_default, holder_segments_per_cone, fluted_diameter_ratio; "
+               "Fusion: shaft_origin, default_holder; FreeCAD: stickout_m (required; m, or {toolbit id: m}).",
 }
 _BODY = {"requestBody": {"required": True, "content": {
     "multipart/form-data": {"schema": {
         "type": "object", "required": ["library", "frequency"],
-        "properties": {name: ({"type": "string", "format": "binary", "description": text} if name == "library"
+        "properties": {name: ({"type": "string", "format": "binary", "description": text}
+                              if name in ("library", "holder")
                               else {"type": "string", "description": text}) for name, text in _FORM_FIELDS.items()},
         "additionalProperties": False}},
     "application/json": {"schema": {"$ref": "#/components/schemas/LibraryPredictionRequest"}}}}}
@@ -82,13 +96,13 @@ _BODY = {"requestBody": {"required": True, "content": {
 PreferHeader = Annotated[str | None, Header(description="respond-async: always a job.")]
 
 
-async def _library_inputs(request: Request, state: AppState) -> tuple[Any, dict[str, Any]]:
-    """The library (bytes or document) and the other fields of a multipart or JSON body."""
+async def _library_inputs(request: Request, state: AppState) -> tuple[dict[str, Any], dict[str, Any]]:
+    """What :func:`read_library` takes (the library and what the upload says it is), and the other fields."""
     kind, body = await read_body(request)
     try:
         if kind == "json":
             doc = validate_json(LibraryPredictionRequest, body).model_dump(exclude_unset=True)
-            return doc.pop("library"), doc
+            return {"source": doc.pop("library")}, doc
         return await _from_form(body, state.settings.max_upload_bytes)
     finally:
         if kind == "form":
@@ -101,23 +115,31 @@ async def _library_inputs(request: Request, state: AppState) -> tuple[Any, dict[
 async def predict_library(request: Request, state: StateDep, who: ReadAccess, prefer: PreferHeader = None,
                           idempotency_key: IdempotencyKeyHeader = None) -> Response:
     """One tool-point FRF per library tool that has a holder; the others skipped with a reason."""
-    library, doc = await _library_inputs(request, state)
-    work = await run_in_threadpool(lambda: prepare_library(state.bench, library, **doc))
+    source, doc = await _library_inputs(request, state)
+    work = await run_in_threadpool(lambda: prepare_library(state.bench, read_library(**source), **doc))
     return await run_in_threadpool(lambda: answer(state, work, prefer=prefer, idempotency_key=idempotency_key,
                                                   owner=caller(who, request)))
 
 
-async def _from_form(form: Any, limit_bytes: int) -> tuple[bytes, dict[str, Any]]:
+async def _from_form(form: Any, limit_bytes: int) -> tuple[dict[str, Any], dict[str, Any]]:
     unknown = sorted(set(form.keys()) - set(_FORM_FIELDS))
     if unknown:
         raise InputError(unknown[0], f"unknown form field (allowed: {', '.join(_FORM_FIELDS)})")
     files = form.getlist("library")
     if len(files) != 1:
-        raise InputError("library", "send exactly one library file (.json or .tools)")
-    data, _ = await read_upload(files[0], "library", limit_bytes)
+        raise InputError("library", "send exactly one library file (.json, .tools, .fctb or a zip)")
+    data, name = await read_upload(files[0], "library", limit_bytes)
+    source: dict[str, Any] = {"source": data, "file_name": name or None,
+                              "content_type": getattr(files[0], "content_type", None)}
+    holders = form.getlist("holder")
+    if len(holders) > 1:
+        raise InputError("holder", "send at most one holder file (.fcholder)")
+    if holders:
+        source["holder"], holder_name = await read_upload(holders[0], "holder", limit_bytes)
+        source["holder_name"] = holder_name or None
     doc: dict[str, Any] = {}
     for name in _FORM_FIELDS:
-        text = form_text(form, name) if name != "library" else None
+        text = form_text(form, name) if name not in ("library", "holder") else None
         if text is None or text == "":
             continue
         if name in _JSON_FIELDS:
@@ -142,7 +164,7 @@ async def _from_form(form: Any, limit_bytes: int) -> tuple[bytes, dict[str, Any]
     for required in ("spindle", "frequency"):
         if required not in doc:
             raise InputError(required, "is required" + (" (or measurement_id)" if required == "spindle" else ""))
-    return data, doc
+    return source, doc
 
 
 # --------------------------------------------------------------------------- stored libraries
@@ -167,8 +189,8 @@ async def sync_library(library_id: LibraryId, request: Request, state: StateDep,
     ``changed``, ``unchanged`` and ``removed`` since the previous sync of this id. Send an
     ``Idempotency-Key`` from automated (retrying) callers.
     """
-    library, doc = await _library_inputs(request, state)
-    work = await run_in_threadpool(lambda: prepare_sync(state.bench, library_id, library, **doc))
+    source, doc = await _library_inputs(request, state)
+    work = await run_in_threadpool(lambda: prepare_sync(state.bench, library_id, read_library(**source), **doc))
     return await run_in_threadpool(lambda: answer(state, work, prefer=prefer, idempotency_key=idempotency_key,
                                                   headers={"Location": f"/v1/libraries/{library_id}"},
                                                   owner=caller(who, request)))

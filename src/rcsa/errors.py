@@ -39,11 +39,25 @@ class InputError(RcsaError, ValueError):
 
 
 class FrequencyMismatch(InputError):
-    """Two receptances that must share a frequency axis do not (never interpolated silently)."""
+    """Two receptances that must share a frequency axis do not (never interpolated silently).
+
+    Parameters
+    ----------
+    field, rule : str
+        As for :class:`InputError`.
+    """
 
 
 class NotFoundError(RcsaError, KeyError):
-    """A stored object (measurement, job, library) does not exist."""
+    """A stored object (measurement, job, library) does not exist.
+
+    Parameters
+    ----------
+    what : str
+        What was looked for, e.g. ``"measurement"``.
+    ident : str
+        The id that was not found.
+    """
 
     def __init__(self, what: str, ident: str) -> None:
         self.what = what

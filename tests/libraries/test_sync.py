@@ -9,6 +9,7 @@ import subprocess
 import sys
 import threading
 import zipfile
+from contextlib import closing
 
 import h5py
 import numpy as np
@@ -199,7 +200,14 @@ def test_killed_sync_resumes_from_the_cache(libs, tmp_path, computed):
     tools = libs.get("shop")["tools"]
     assert [t["id"] for t in tools] == [tool_id(i) for i in range(5)]  # each tool exactly once
     assert report.added == tuple(tool_id(i) for i in range(5)) and report.revision == 1
-    assert all(not p.name.endswith(".tmp") for p in (libs.directory / "results").rglob("*"))
+    # the cache holds exactly the five complete results under their keys, each readable (a chunk
+    # is one transaction of the cache's database: a killed writer leaves all of it or none)
+    keys = {t["result_sha256"] for t in tools}
+    with closing(libs.cache._connect()) as con:
+        stored = sorted(r[0] for r in con.execute("SELECT key FROM results"))
+    assert len(keys) == 5 and stored == sorted(keys)
+    assert all(libs.cache.get(k)["status"] == "ok" for k in keys)
+    assert all(not p.name.endswith(".tmp") for p in libs.directory.rglob("*"))
 
 
 def test_concurrent_syncs_commit_one_after_the_other(libs):

@@ -96,6 +96,10 @@ def _document(path: Path, value: float) -> dict[str, Any]:
         doc["spindle"]["bearings"][0][field] = value
     elif head == "joints":
         doc["joints"][path[1]][field] = value
+    elif head == "tool" and path[1] == "neck_segments":
+        doc["tool"].pop("shoulder_length_m", None)
+        doc["tool"].pop("shoulder_diameter_m", None)
+        doc["tool"]["neck_segments"] = [{"length_m": 0.001, "diameter_m": 0.01, field: value}]
     elif head == "tool":
         _tool(doc["tool"], field, value)
     else:

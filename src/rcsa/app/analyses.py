@@ -9,6 +9,7 @@ from rcsa.analysis.lobes.request import parse_lobes_request
 from rcsa.analysis.lobes.zoa import LobeResult
 from rcsa.analysis.sensitivity import effects as _effects
 from rcsa.app.predictions import predict
+from rcsa.app.stores import MeasurementSource, resolver
 from rcsa.measured.store import MeasurementStore
 from rcsa.model.bounds import MAX_FREQUENCY_LINES
 
@@ -37,6 +38,15 @@ def stability_lobes(request: Mapping[str, Any], *, store: MeasurementStore | Non
                     max_lines: int = MAX_FREQUENCY_LINES) -> dict[str, Any]:
     """The contract's stability-lobes response (see :func:`stability_lobes_result`).
 
+    Parameters
+    ----------
+    request : dict
+        Inline FRFs or an ``assembly``, with the cutting parameters (contract "Stability lobes").
+    store : MeasurementStore, optional
+        Where a measured spindle of the assembly is looked up (the default store when omitted).
+    max_lines : int
+        Largest accepted number of frequency lines.
+
     Returns
     -------
     dict
@@ -46,30 +56,42 @@ def stability_lobes(request: Mapping[str, Any], *, store: MeasurementStore | Non
     return stability_lobes_result(request, store=store, max_lines=max_lines).to_dict()
 
 
-def effects(request: Mapping[str, Any]) -> dict[str, Any]:
+def effects(request: Mapping[str, Any], *, store: MeasurementSource | None = None) -> dict[str, Any]:
     """Effect analysis: sensitivity of each mode to every bearing and joint parameter.
 
     See :func:`rcsa.analysis.sensitivity.effects` (request: an assembly, or ``{"assembly",
-    "parameters", "relative_step", "band_hz"}``).
+    "parameters", "relative_step", "band_hz"}``). ``store`` is where a measured spindle
+    (``"spindle": {"measurement_id": ...}``) is looked up (the default store when omitted).
     """
-    return _effects(request)
+    return _effects(request, resolver(store))
 
 
-def identify(request: Mapping[str, Any]) -> dict[str, Any]:
+def identify(request: Mapping[str, Any], *, store: MeasurementSource | None = None) -> dict[str, Any]:
     """Joint identification from measured tool-point FRFs (``contract.md`` "Joint identification").
 
-    See :func:`rcsa.analysis.joint_identification.identify.identify`.
+    See :func:`rcsa.analysis.joint_identification.identify.identify`; ``store`` is where a
+    measured spindle is looked up (the default store when omitted).
     """
     # scipy.optimize (~0.4 s to import): only when an identification is asked for
     from rcsa.analysis.joint_identification.identify import identify as run
 
-    return run(request)
+    return run(request, resolver(store))
 
 
 def diagnose(request: Mapping[str, Any], **kwargs: Any) -> dict[str, Any]:
     """Sim-to-real gap diagnosis (``contract.md`` "Diagnosis").
 
-    See :func:`rcsa.analysis.diagnosis.diagnose.diagnose`.
+    Parameters
+    ----------
+    request : dict
+        The diagnosis request: ``{"assembly", "measurements", "tolerances"?, "options"?}``.
+    **kwargs
+        Passed on to :func:`rcsa.analysis.diagnosis.diagnose.diagnose`.
+
+    Returns
+    -------
+    dict
+        The contract's diagnosis response (see :func:`rcsa.analysis.diagnosis.diagnose.diagnose`).
     """
     # scipy.stats and scipy.optimize (~0.9 s to import): only when a diagnosis is asked for
     from rcsa.analysis.diagnosis.diagnose import diagnose as run

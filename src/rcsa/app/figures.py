@@ -20,6 +20,7 @@ from rcsa.analysis.lobes.zoa import LobeResult
 from rcsa.analysis.sensitivity import effects_figure, effects_report
 from rcsa.app.analyses import stability_lobes_result
 from rcsa.app.predictions import predict
+from rcsa.app.stores import resolver
 from rcsa.errors import InputError
 from rcsa.measured.hybrid import MeasurementSource
 from rcsa.model.bounds import MAX_FREQUENCY_LINES
@@ -176,11 +177,11 @@ def document_figure(doc: object, *, layout: str = "full", store: MeasurementSour
     raise InputError("", "not a prediction result, measurement, assembly or stability-lobes request")
 
 
-def effects_with_figure(request: Mapping[str, Any], picture: str | os.PathLike[str] | None = None
-                        ) -> dict[str, Any]:
+def effects_with_figure(request: Mapping[str, Any], picture: str | os.PathLike[str] | None = None, *,
+                        store: MeasurementSource | None = None) -> dict[str, Any]:
     """Effect analysis (:func:`rcsa.app.analyses.effects`), its heat map drawn to ``picture``
-    (.png or .svg) when given."""
-    report = effects_report(request)
+    (.png or .svg) when given; ``store`` is where a measured spindle is looked up."""
+    report = effects_report(request, resolver(store))
     if picture is not None:
         save_figure(effects_figure(report), picture)
     return report.to_dict()

@@ -69,6 +69,7 @@ IMPORT_OPTIONS: dict[str, tuple[str, ...]] = {
     "frequency_unit": ("csv",),
     "phase_unit": ("csv",),
     "roles": ("uff",),
+    "scalar_direction": ("uff",),
     "drop_nonpositive": ("uff", "csv", "frf", "json"),
     "sensor_mass_kg": FORMATS,
     "force_unit": ("tap",),
@@ -185,7 +186,8 @@ def import_measurement(
     options : mapping, optional
         :data:`IMPORT_OPTIONS`, strings accepted (form fields): ``units`` (e.g. ``"um/N"``),
         ``columns``, ``frequency_unit``, ``phase_unit``, ``roles`` (``"h11=1:1,..."``),
-        ``drop_nonpositive``, ``sensor_mass_kg`` and the tap options.
+        ``scalar_direction`` (UFF), ``drop_nonpositive``, ``sensor_mass_kg`` and the tap
+        options. UFF files may leave ``direction`` out: the file's is used.
     extra_taps : sequence of bytes
         Further tap files averaged with ``data`` (format ``tap`` only).
 
@@ -222,19 +224,19 @@ def import_measurement(
         overrides = {k: (list(v) if isinstance(v, tuple) else v) for k, v in given.items()}
         return read_contract_json(data, overrides=overrides, drop_nonpositive=drop, **common)
     for key in ("spindle_id", "direction", "plane"):
-        if key not in given:
+        if key not in given and not (key == "direction" and form == "uff"):  # UFF: the file says
             raise InputError(key, f"is required for format {form!r}")
     given.setdefault("kind", "direct_frf")
+    if form == "uff":
+        return read_uff(data, given, roles=parse_roles(opts.get("roles")), units=opts.get("units"),
+                        scalar_direction=opts.get("scalar_direction"), drop_nonpositive=drop, **common)
     meta = MeasurementMeta(**given)
     if form == "csv":
-        return read_csv(data, meta, units=opts.get("units"), columns=opts.get("columns") or "f,re,im",
-                        frequency_unit=opts.get("frequency_unit") or "Hz", phase_unit=opts.get("phase_unit"),
+        return read_csv(data, meta, units=opts.get("units"), columns=opts.get("columns"),  # default: the header
+                        frequency_unit=opts.get("frequency_unit"), phase_unit=opts.get("phase_unit"),
                         drop_nonpositive=drop, **common)
     if form == "frf":
         return read_cutpro(data, meta, units=opts.get("units"), drop_nonpositive=drop, **common)
-    if form == "uff":
-        return read_uff(data, meta, roles=parse_roles(opts.get("roles")), units=opts.get("units"),
-                        drop_nonpositive=drop, **common)
     if drop:
         raise InputError("drop_nonpositive", "a tap FFT always drops its 0 Hz bin; leave the option out")
     for key in ("force_unit", "response_unit"):
@@ -317,6 +319,8 @@ def list_measurements(store: Any, *, limit: int = 100, cursor: str | None = None
 
     Parameters
     ----------
+    store : MeasurementStore
+        The store to list.
     limit : int
         Items per page, 1…1000.
     cursor : str, optional

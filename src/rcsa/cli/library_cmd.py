@@ -1,7 +1,12 @@
-"""``rcsa library predict|sync|show|export``: whole Autodesk Fusion tool libraries.
+"""``rcsa library predict|sync|show|export``: whole CAM tool libraries (Autodesk Fusion, FreeCAD).
+
+LIBRARY is a Fusion library (``.json`` or ``.tools``) or a FreeCAD one: a toolbit ``.fctb``, a
+library ``.fctl`` (its toolbits next to it or in ``../Bit``), a folder or a zip of toolbits;
+its holder is the one ``.fcholder`` in the folder or zip, or ``--holder H.fcholder``, and
+FreeCAD stores no stickout: ``--options '{"stickout_m": 0.04}'`` (or per toolbit id).
 
 ``rcsa library predict LIBRARY --spindle SPINDLE.json | --measurement ID``: tool-point FRFs
-of every tool of a Fusion tool library (``.json`` or ``.tools``) on one spindle, computed
+of every tool of the library on one spindle, computed
 here (no service needed), with a progress bar on stderr. The result JSON (one entry per
 library item: ``ok``, ``skipped`` with a reason, or ``error``) goes to stdout or ``-o
 OUT.json``; the exit status is 1 when any tool errored.
@@ -31,6 +36,7 @@ from rcsa.app.libraries import (
     library_id_from_name,
     prepare_library,
     prepare_sync,
+    read_library,
     spindle_settings,
     write_export,
 )
@@ -123,11 +129,15 @@ DaskOption = Annotated[str | None, typer.Option(
 DaskTimeoutOption = Annotated[float, typer.Option(
     "--dask-connect-timeout", envvar="RCSA_DASK_CONNECT_TIMEOUT_S", min=0.1,
     help="Seconds to try to reach the Dask scheduler before giving up.")]
+LibraryArgument = Annotated[Path, typer.Argument(help="Fusion tool library (.json, .tools) or FreeCAD toolbits "
+                                                      "(.fctb, .fctl, a folder or a zip of them).")]
+HolderOption = Annotated[Path | None, typer.Option(help="FreeCAD holder (.fcholder) for the toolbits, when the "
+                                                       "library has none.")]
 
 
 @library_app.command("predict")
 def predict(
-    library: Annotated[Path, typer.Argument(help="Fusion tool library: .json, or .tools (zip).")],
+    library: LibraryArgument,
     spindle: Annotated[Path | None, typer.Option(help="Spindle JSON (segments + bearings), or an assembly "
                                                       "JSON whose spindle, frequency, joints and materials "
                                                       "are used.")] = None,
@@ -143,8 +153,9 @@ def predict(
     quiet: QuietOption = False,
     dask_scheduler: DaskOption = None,
     dask_connect_timeout: DaskTimeoutOption = 10.0,
+    holder: HolderOption = None,
 ) -> None:
-    """Predict the tool-point FRF of every tool in a Fusion library on one spindle."""
+    """Predict the tool-point FRF of every tool in a Fusion or FreeCAD library on one spindle."""
     if (spindle is None) == (measurement is None):
         raise fail("give exactly one of --spindle SPINDLE.json or --measurement ID")
     base = _spindle_document(spindle) if spindle is not None else {"spindle": {"measurement_id": measurement}}
@@ -152,8 +163,8 @@ def predict(
     def build() -> tuple[Workbench, Any]:
         bench = Workbench(open_store(store) if (store is not None or measurement is not None) else None)
         settings = _settings(base, frequency, joints, bench.store if measurement is not None else None)
-        work = prepare_library(bench, library, **settings, natural_frequencies=natural_frequencies,
-                               options=_options_json(options))
+        work = prepare_library(bench, read_library(library, holder=holder), **settings,
+                               natural_frequencies=natural_frequencies, options=_options_json(options))
         if work.check is not None:
             work.check()  # before the progress bar starts
         return bench, work
@@ -187,7 +198,7 @@ StoreOption = Annotated[Path | None, typer.Option("--store", help="Store directo
 
 @library_app.command("sync")
 def sync(
-    library: Annotated[Path, typer.Argument(help="Fusion tool library: .json, or .tools (zip).")],
+    library: LibraryArgument,
     spindle: Annotated[str, typer.Option(help="A stored measurement id (m-..., hybrid), or a spindle JSON "
                                               "(segments + bearings) or assembly JSON whose spindle, frequency, "
                                               "joints and materials are used.")],
@@ -203,8 +214,9 @@ def sync(
     quiet: QuietOption = False,
     dask_scheduler: DaskOption = None,
     dask_connect_timeout: DaskTimeoutOption = 10.0,
+    holder: HolderOption = None,
 ) -> None:
-    """Keep a Fusion library's tool-point FRFs in the store, computing only new or changed tools."""
+    """Keep a library's tool-point FRFs in the store, computing only new or changed tools."""
     measurement = spindle if is_measurement_id(spindle) else None
     base = {"spindle": {"measurement_id": measurement}} if measurement else _spindle_document(Path(spindle))
     ident = library_id if library_id is not None else library_id_from_name(library)
@@ -213,8 +225,8 @@ def sync(
         st = open_store(store)
         bench = Workbench(st, st.path)
         settings = _settings(base, frequency, joints, st if measurement is not None else None)
-        work = prepare_sync(bench, ident, library, **settings, natural_frequencies=natural_frequencies,
-                            options=_options_json(options))
+        work = prepare_sync(bench, ident, read_library(library, holder=holder), **settings,
+                            natural_frequencies=natural_frequencies, options=_options_json(options))
         if work.size and work.check is not None:
             work.check()  # before the progress bar starts
         return bench, work

@@ -85,7 +85,9 @@ def import_(
     spindle_id: Annotated[
         str | None, typer.Option("--spindle-id", help="Spindle identifier.")
     ] = None,
-    direction: Annotated[str | None, typer.Option(help="x | y")] = None,
+    direction: Annotated[
+        str | None, typer.Option(help="x | y (UFF: default from the file's response direction).")
+    ] = None,
     plane: Annotated[str | None, typer.Option(help="spindle_nose | holder_tip")] = None,
     kind: Annotated[
         str | None,
@@ -94,21 +96,31 @@ def import_(
     machine: Annotated[str | None, typer.Option(help="Machine name.")] = None,
     notes: Annotated[str | None, typer.Option(help="Free text.")] = None,
     units: Annotated[
-        str | None, typer.Option(help="FRF unit, e.g. m/N, um/N, in/lbf, m/s^2/N, g/N.")
+        str | None,
+        typer.Option(help="FRF unit, e.g. m/N, um/N, in/lbf, m/s^2/N, g/N, dB re 1 m/N."),
     ] = None,
     columns: Annotated[
         str | None,
         typer.Option(
-            help="CSV: e.g. f,re,im | f,mag,phase | f,h11.re,h11.im,...; tap: t,force,response."
+            help="CSV: e.g. f,re,im | f,mag,phase | f,h11.re,h11.im,... (default: from the "
+            "file's header); tap: t,force,response."
         ),
     ] = None,
     frequency_unit: Annotated[
-        str, typer.Option(help="CSV frequency unit: Hz | kHz | rad/s.")
-    ] = "Hz",
+        str | None,
+        typer.Option(help="CSV frequency unit: Hz | kHz | rad/s (default: the header's, else Hz)."),
+    ] = None,
     phase_unit: Annotated[str | None, typer.Option(help="CSV phase unit: deg | rad.")] = None,
     roles: Annotated[
         str | None,
         typer.Option(help="UFF: NAME=RSP_NODE:REF_NODE,... e.g. h11=1:1,h21=2:1,h22=2:2."),
+    ] = None,
+    scalar_direction: Annotated[
+        str | None,
+        typer.Option(
+            "--scalar-direction",
+            help="UFF: direction x | y of scalar FRFs (direction code 0), which the file does not say.",
+        ),
     ] = None,
     points_m: Annotated[
         str | None,
@@ -156,6 +168,7 @@ def import_(
                     "machine": machine, "notes": notes, "points_m": points_m,
                     "artifact": _artifact_text(artifact)}
         options = {"units": units, "columns": columns, "phase_unit": phase_unit, "roles": roles,
+                   "scalar_direction": scalar_direction,
                    "sensor_mass_kg": sensor_mass_kg, "force_unit": force_unit,
                    "response_unit": response_unit, "sample_rate_hz": sample_rate_hz,
                    "force_window_s": force_window_s, "exponential_tau_s": exponential_tau_s,
@@ -163,7 +176,7 @@ def import_(
         form = M.format_from_name(file.name, fmt)
         if form != "json":
             for key in ("spindle_id", "direction", "plane"):
-                if metadata[key] is None:
+                if metadata[key] is None and not (key == "direction" and form == "uff"):
                     flag = "--" + key.replace("_", "-")
                     raise InputError(key, f"{flag} is required for --format {form}")
         if drop_nonpositive:

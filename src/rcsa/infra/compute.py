@@ -94,13 +94,35 @@ class LocalBackend:
 
     def map(self, fn: ChunkFunction, chunks: Sequence[Any], *, shared: Any = None, ordered: bool = True,
             on_wait: Callable[[], None] | None = None) -> Iterator[tuple[int, Any]]:
+        """``(i, fn(chunks[i], shared))`` for every chunk, computed here one after the other.
+
+        Parameters
+        ----------
+        fn : callable
+            ``fn(chunk, shared) -> result``, importable by name where it runs.
+        chunks : sequence
+            The chunks.
+        shared : object, optional
+            What every chunk needs besides itself (sent once).
+        ordered : bool
+            Yield in chunk order (else as chunks finish).
+        on_wait : callable, optional
+            Called while waiting for results; whatever it raises stops the map.
+
+        Yields
+        ------
+        tuple of (int, object)
+            A chunk's index and ``fn``'s result for it.
+        """
         for i, chunk in enumerate(chunks):
             yield i, fn(chunk, shared)
 
     def describe(self) -> dict[str, Any]:
+        """``{"backend": "local"}``."""
         return {"backend": "local"}
 
     def close(self) -> None:
+        """Nothing to release."""
         return None
 
     def __repr__(self) -> str:
@@ -179,6 +201,7 @@ class DaskBackend:
         return self._connect()
 
     def describe(self) -> dict[str, Any]:
+        """The scheduler's address and its workers and threads (or the error reaching it)."""
         try:
             threads = self.client.nthreads()
         except Exception as exc:  # a health check must not raise
@@ -187,6 +210,7 @@ class DaskBackend:
                 "threads": int(sum(threads.values()))}
 
     def close(self) -> None:
+        """Close the connection to the scheduler (idempotent; the cluster keeps running)."""
         with self._lock:
             if self._client is not None:
                 with contextlib.suppress(Exception):
@@ -195,6 +219,26 @@ class DaskBackend:
 
     def map(self, fn: ChunkFunction, chunks: Sequence[Any], *, shared: Any = None, ordered: bool = True,
             on_wait: Callable[[], None] | None = None) -> Iterator[tuple[int, Any]]:
+        """``(i, fn(chunks[i], shared))`` for every chunk, computed as tasks on the cluster.
+
+        Parameters
+        ----------
+        fn : callable
+            ``fn(chunk, shared) -> result``, importable by name where it runs.
+        chunks : sequence
+            The chunks.
+        shared : object, optional
+            What every chunk needs besides itself (sent once).
+        ordered : bool
+            Yield in chunk order (else as chunks finish).
+        on_wait : callable, optional
+            Called while waiting for results; whatever it raises stops the map.
+
+        Yields
+        ------
+        tuple of (int, object)
+            A chunk's index and ``fn``'s result for it.
+        """
         from distributed.client import FutureCancelledError
         from distributed.scheduler import KilledWorker
 

@@ -1,6 +1,7 @@
 """Tool-point FRFs of a whole CAM tool library, or a checked batch, on one spindle (REST and CLI).
 
-A Fusion library (``.json`` or ``.tools``) becomes a *library request*: the import report of
+A Fusion library (``.json`` or ``.tools``) or a FreeCAD one (``.fctb``/``.fctl``/a folder or
+zip of them with an ``.fcholder``, :mod:`rcsa.libraries.formats`) becomes a *library request*: the import report of
 every item (``ok`` / ``skipped`` with a reason / ``error``) and one batch request holding
 the ``ok`` tool–holder combinations on the given spindle and frequency grid. Running it
 computes the combinations in chunks (:mod:`rcsa.libraries.chunks`: one
@@ -12,7 +13,6 @@ results over one by one, so a job writes them as they come instead of holding th
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from functools import partial
@@ -31,7 +31,7 @@ from rcsa.libraries.chunks import (
     resolver_of,
     run_chunk,
 )
-from rcsa.libraries.fusion import library_combinations
+from rcsa.libraries.formats import FREECAD_OPTIONS, FUSION_OPTIONS, LibrarySource, import_library
 from rcsa.measured.hybrid import MeasurementSource
 from rcsa.model.bounds import MAX_BATCH_COMBINATIONS, MAX_FREQUENCY_LINES
 from rcsa.model.contract import MeasuredSpindleSpec, parse_common
@@ -49,9 +49,8 @@ __all__ = [
     "select_tool_point",
 ]
 
-#: Options of :func:`rcsa.libraries.library_combinations` a caller may set.
-LIBRARY_OPTIONS = ("holder_material", "tool_material_default", "holder_segments_per_cone",
-                   "fluted_diameter_ratio", "shaft_origin", "default_holder")
+#: Import options a caller may set (each format takes its own: :mod:`rcsa.libraries.formats`).
+LIBRARY_OPTIONS = tuple(dict.fromkeys((*FUSION_OPTIONS, *FREECAD_OPTIONS)))
 _COMMON = ("frequency", "spindle", "materials", "beam_theory", "shear_coefficient")
 _ENTRY_FIELDS = ("id", "index", "description", "number", "teeth", "tool_type", "warnings")
 
@@ -76,7 +75,7 @@ def check_common(request: Mapping[str, Any], *, store: MeasurementSource | None 
 
 
 def library_request(
-    library: str | os.PathLike[str] | bytes | Mapping[str, Any],
+    library: LibrarySource,
     *,
     spindle: Mapping[str, Any],
     frequency: Mapping[str, Any],
@@ -87,12 +86,12 @@ def library_request(
     natural_frequencies: bool | None = None,
     options: Mapping[str, Any] | None = None,
 ) -> dict[str, Any]:
-    """Turn a Fusion tool library into a library request (JSON-ready).
+    """Turn a Fusion or FreeCAD tool library into a library request (JSON-ready).
 
     Parameters
     ----------
-    library : path, bytes or mapping
-        The ``.json``/``.tools`` file, its bytes, or the parsed document.
+    library : path, bytes, mapping or a library read by :func:`rcsa.libraries.formats.read_library`
+        The Fusion ``.json``/``.tools`` file, a FreeCAD library, their bytes, or the parsed document.
     spindle : mapping
         The contract's spindle: segments and bearings, or ``{"measurement_id": ...}``.
     frequency : mapping
@@ -124,7 +123,7 @@ def library_request(
         raise InputError(f"options.{unknown[0]}", f"unknown option (allowed: {', '.join(LIBRARY_OPTIONS)})")
     if joints is not None and not isinstance(joints, Mapping):
         raise InputError("joints", "must be an object {spindle_holder, holder_tool}")
-    imported = library_combinations(library, **opts)
+    imported = import_library(library, **opts)
     entries, combos = [], []
     for c in imported:
         # the entry's own fields (not to_dict(): its copies of holder and tool would be thrown away)
@@ -229,11 +228,23 @@ def iter_entries(
 
     Parameters
     ----------
+    request : mapping
+        An entries request.
+    store : MeasurementSource, optional
+        Where a measured spindle is read (once, here; chunks receive its receptance).
+    max_lines, max_combinations : int
+        Largest accepted number of frequency lines and of combinations.
     progress : callable, optional
         ``progress(done, total)`` after each chunk (over the combinations to compute), and
         while waiting for a cluster: whatever it raises stops the computation.
+    backend : Backend, optional
+        Where the chunks run (default: here).
     chunk_tools : int, optional
         Tools per chunk; default :func:`rcsa.libraries.chunks.chunk_size` of the grid.
+
+    Returns
+    -------
+    EntryResults
     """
     if not isinstance(request, Mapping) or not {"entries", "batch"} <= set(request):
         raise InputError("", "not an entries request (see rcsa.libraries.library_prediction.library_request)")
@@ -358,7 +369,7 @@ def _rebase(error: Mapping[str, Any], position: int, path: str) -> dict[str, Any
     return {**error, "field": field}
 
 
-def predict_library(library: str | os.PathLike[str] | bytes | Mapping[str, Any], *, store: MeasurementSource | None = None,
+def predict_library(library: LibrarySource, *, store: MeasurementSource | None = None,
                     max_lines: int = MAX_FREQUENCY_LINES,
                     max_combinations: int = MAX_BATCH_COMBINATIONS,
                     progress: Callable[[int, int], None] | None = None, arrays: str = "list",

@@ -58,6 +58,7 @@ from rcsa.infra.clock import utc_now_iso
 from rcsa.infra.compute import Backend, LocalBackend
 from rcsa.infra.sqlite import connect, transaction
 from rcsa.libraries.chunks import chunk_ranges, chunk_size, compute_chunk, prepare_shared, run_chunk
+from rcsa.libraries.formats import LibrarySource
 from rcsa.libraries.library_prediction import library_request, select_tool_point
 from rcsa.libraries.results_cache import (
     ResultCache,
@@ -508,7 +509,7 @@ def _tool_rows(request: Mapping[str, Any], keys: tuple[str, ...]) -> list[dict[s
 
 def sync_request(
     library_id: str,
-    library: str | os.PathLike[str] | bytes | Mapping[str, Any],
+    library: LibrarySource,
     *,
     spindle: Mapping[str, Any],
     frequency: Mapping[str, Any],

@@ -57,6 +57,13 @@ def parse_batch(request: Mapping[str, Any], *, max_lines: int = MAX_FREQUENCY_LI
                 max_combinations: int = MAX_BATCH_COMBINATIONS) -> tuple[list[Any], bool, CommonSpec]:
     """What :func:`predict_batch` checks before computing anything (its errors, exactly).
 
+    Parameters
+    ----------
+    request : mapping
+        A batch request (see :func:`predict_batch`).
+    max_lines, max_combinations : int
+        Largest accepted number of frequency lines and of combinations.
+
     Returns
     -------
     combinations : list

@@ -25,6 +25,7 @@ __all__ = [
     "MAX_LENGTH_M",
     "MAX_LOSS_FACTOR",
     "MAX_MODULUS_PA",
+    "MAX_NECK_SEGMENTS",
     "MAX_POISSON_RATIO",
     "MAX_RADIAL_RATIO",
     "MAX_SHEAR_COEFFICIENT",
@@ -73,6 +74,8 @@ MAX_STIFFNESS = 1.0e15
 MIN_JOINT_STIFFNESS = 1.0e-3
 #: Largest viscous damping, N·s/m or N·m·s/rad.
 MAX_DAMPING = 1.0e12
+#: Pieces of a tool's stepped neck (``tool.neck_segments``).
+MAX_NECK_SEGMENTS = 200
 #: Smallest equivalent fluted diameter over the cutting diameter (the largest is 1).
 MIN_FLUTED_DIAMETER_RATIO = 0.01
 #: A numeric shear coefficient κ (dimensionless).

@@ -14,7 +14,8 @@ from typing import Any, Literal
 import numpy as np
 
 from rcsa.model.assembly import AssemblyModel
-from rcsa.model.peaks import find_frf_peaks, modal_fit_peaks
+from rcsa.model.modal_fit import modal_fit
+from rcsa.model.peaks import find_frf_peaks
 from rcsa.model.wire import complex_to_wire
 from rcsa.physics.algebra2x2 import inv2
 from rcsa.physics.arrays import ComplexArray, FloatArray
@@ -36,9 +37,12 @@ class Prediction(Mapping[str, Any]):
         ``[[h, l], [n, p]]`` at the tool tip, shape (nfreq, 2, 2).
     natural_frequencies_hz : numpy.ndarray, shape (nmodes,)
         Exact undamped natural frequencies in the band (analytical), or modal-fit estimates
-        (hybrid; ``natural_frequencies_method == "modal_fit"``).
+        (hybrid; ``natural_frequencies_method == "modal_fit"``, :func:`rcsa.model.modal_fit.modal_fit`:
+        sorted, distinct, each with its standard uncertainty in ``extra["natural_frequencies_sd_hz"]``
+        and its fit in ``extra["modal_fit"]``).
     peaks : list of dict
-        ``{"frequency_hz", "magnitude_m_n"}`` local maxima of ``|h|``.
+        ``{"frequency_hz", "magnitude_m_n"}`` local maxima of ``|h|`` (hybrid: those that
+        stand out of the noise of the predicted ``h``).
     static_stiffness_n_m : float or None
         1 / h at 0 Hz of the undamped model; ``None`` when it cannot be given.
     min_real_m_n, min_real_frequency_hz : float
@@ -111,6 +115,13 @@ class SubassemblyCache:
 
     Keys are the (hashable, immutable) chains themselves, so two tools with the same
     holder, shank and insertion share the spindle + holder condensation exactly.
+
+    Parameters
+    ----------
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies of the grid, rad/s.
+    base_receptance : numpy.ndarray, shape (nfreq, 2, 2), optional
+        A measured spindle-side receptance the cached chains start from (hybrid).
     """
 
     def __init__(self, omega_rad_s: FloatArray, base_receptance: ComplexArray | None = None) -> None:
@@ -140,6 +151,12 @@ def tool_point_receptance(model: AssemblyModel, cache: SubassemblyCache) -> Comp
 
     The spindle + holder condensation comes from (and stays in) ``cache``; a measured spindle
     at the holder tip couples only the tool, straight onto its receptance.
+
+    Parameters
+    ----------
+    model : AssemblyModel
+    cache : SubassemblyCache
+        Grid, base receptance and the cached condensations.
     """
     prefix, rest = model.to_holder_tip(), model.tool_side()
     if any(isinstance(item, Beam) for item in prefix):
@@ -167,6 +184,10 @@ def predict_model(model: AssemblyModel, frequency_hz: FloatArray, *,
         Reuse of the spindle + holder condensation across calls on the same grid.
     natural_frequencies : bool
         Compute the exact natural frequencies (analytical models).
+    notes : tuple of str
+        Notes passed on to the result (e.g. how a measured base was obtained).
+    extra : mapping, optional
+        Further JSON fields of the result.
 
     Returns
     -------
@@ -185,21 +206,27 @@ def predict_model(model: AssemblyModel, frequency_hz: FloatArray, *,
         nat = natural_frequencies_batch(prefix, [rest], float(f[0]), float(f[-1]))[0] if natural_frequencies \
             else np.empty(0)
         method = "wittrick_williams"
+        peaks = find_frf_peaks(f, h)
         static = static_tip_receptance(rest, cache.static(prefix))
         static_k = None if static is None else float(1.0 / static[0, 0])
         if static is None:
             notes_out.append("static_stiffness_n_m is null: the assembly is not grounded (no bearings)")
     else:
-        fits = modal_fit_peaks(f, h)
-        nat = np.array([m["frequency_hz"] for m in fits])
+        fit = modal_fit(f, h)
+        nat = fit.frequency_hz
         method = "modal_fit"
         static_k = None
-        notes_out.append("hybrid assembly: natural_frequencies_hz are single-mode fits to the predicted "
-                         "tool-point h around its peaks, not exact eigenvalues; static stiffness is not "
+        peaks = [{"frequency_hz": float(f[i]), "magnitude_m_n": float(abs(h[i]))} for i in fit.peak_lines]
+        notes_out.append("hybrid assembly: natural_frequencies_hz are modal-fit estimates from the predicted "
+                         "tool-point h (one pole per peak that stands out of the noise, fitted with residual "
+                         "terms on ±2.5 half-power half-widths), not exact eigenvalues; natural_frequencies_sd_hz "
+                         "gives each one's standard uncertainty (fit covariance and spread over band choices), "
+                         "modal_fit the details; peaks lists only peaks above the noise; static stiffness is not "
                          "available from a measured spindle")
-        extra = {**(extra or {}), "modal_fit": fits}
+        extra = {**(extra or {}), "natural_frequencies_sd_hz": fit.sd_hz.tolist(),
+                 "modal_fit": [m.to_dict() for m in fit.modes]}
     i_min = int(np.argmin(h.real))
     return Prediction(tool_point=tool_point, natural_frequencies_hz=np.asarray(nat, dtype=float),
-                      natural_frequencies_method=method, peaks=find_frf_peaks(f, h),
+                      natural_frequencies_method=method, peaks=peaks,
                       static_stiffness_n_m=static_k, min_real_m_n=float(h.real[i_min]),
                       min_real_frequency_hz=float(f[i_min]), notes=tuple(notes_out), extra=dict(extra or {}))

@@ -45,6 +45,12 @@ def free_free_nodes(beams: list[Beam], omega_rad_s: FloatArray) -> ComplexArray:
     end 1 of the next, ``G = Y − Y Bᵀ (B Y Bᵀ)⁻¹ B Y`` (``domain.md`` §3.1–3.2), then one
     representative of each node kept.
 
+    Parameters
+    ----------
+    beams : list of Beam
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies, rad/s.
+
     Returns
     -------
     numpy.ndarray, shape (nfreq, 2(m+1), 2(m+1))
@@ -70,6 +76,13 @@ def spindle_nose_receptance(spindle: Chain, omega_rad_s: FloatArray) -> ComplexA
 
     The beams are coupled rigidly with every node retained (:func:`free_free_nodes`); the
     grounds then modify their nodes (Özgüven, :func:`rcsa.physics.coupling.modify`).
+
+    Parameters
+    ----------
+    spindle : Chain
+        Beams and grounds, from the rear to the nose.
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies, rad/s.
 
     Returns
     -------

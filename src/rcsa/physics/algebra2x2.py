@@ -36,6 +36,11 @@ def negative_count_sym(a11: ComplexArray | FloatArray, a12: ComplexArray | Float
 
     Sylvester's criterion: det < 0 → one negative; det > 0 and trace < 0 → two; det = 0 and
     trace < 0 → one (the other eigenvalue is zero). Imaginary parts are ignored.
+
+    Parameters
+    ----------
+    a11, a12, a22 : numpy.ndarray, shape (...)
+        Entries ``[[a11, a12], [a12, a22]]``, broadcast together.
     """
     a11, a12, a22 = np.real(a11), np.real(a12), np.real(a22)
     d = a11 * a22 - a12 * a12

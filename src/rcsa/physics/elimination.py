@@ -144,6 +144,15 @@ def wittrick_williams_count(chain: Chain, omega_rad_s: FloatArray, start: Comple
     largest ω, so that no beam has a clamped–clamped natural frequency below it (J₀ = 0).
     ``start`` is the condensed stiffness of a prefix whose own negative pivots the caller adds.
 
+    Parameters
+    ----------
+    chain : Chain
+        Undamped and subdivided (see above).
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies, rad/s.
+    start : numpy.ndarray, shape (nfreq, 2, 2), optional
+        Condensed stiffness of a prefix (see above).
+
     Returns
     -------
     numpy.ndarray of int, shape (nfreq,)
@@ -167,6 +176,12 @@ def static_condense(chain: Chain, start: FloatArray | None = None) -> FloatArray
     Uses the exact static Timoshenko stiffness of each beam
     (:meth:`rcsa.physics.chain.ChainItem.eliminate_static`); ``start`` continues a
     condensation (e.g. a cached spindle + holder).
+
+    Parameters
+    ----------
+    chain : Chain
+    start : numpy.ndarray, shape (2, 2), optional
+        Static stiffness already condensed onto the first node; zero (free end) by default.
     """
     if start is None:
         k: Sym = (np.array([0.0j]), np.array([0.0j]), np.array([0.0j]))
@@ -182,6 +197,12 @@ def static_tip_receptance(chain: Chain, start: FloatArray | None = None) -> Floa
     """Static (ω = 0) undamped point receptance at the last node, shape (2, 2).
 
     ``None`` when the chain is not grounded (a free body has no static stiffness).
+
+    Parameters
+    ----------
+    chain : Chain
+    start : numpy.ndarray, shape (2, 2), optional
+        Static stiffness already condensed onto the first node (as for :func:`static_condense`).
     """
     k = static_condense(chain, start)
     det = k[0, 0] * k[1, 1] - k[0, 1] ** 2

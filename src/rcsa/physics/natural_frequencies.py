@@ -55,6 +55,19 @@ def natural_frequencies_batch(prefix: Chain, tails: Sequence[Chain], start_hz: f
     pass, the tails stacked into one chain with per-row parameters (:func:`stack_chains`).
     This is how a batch of tools on one spindle + holder gets exact modes cheaply.
 
+    Parameters
+    ----------
+    prefix : Chain
+        The part every assembly shares (e.g. spindle and holder), from the first node.
+    tails : sequence of Chain
+        What follows the prefix in each assembly (e.g. each tool); ``()`` for the prefix alone.
+    start_hz, stop_hz : float
+        The band searched, Hz.
+    rtol : float
+        Relative width of the final bracket of every frequency.
+    scan_points : int
+        Points of the first vectorised count over the band (brackets all modes at once).
+
     Returns
     -------
     list of numpy.ndarray

@@ -215,6 +215,16 @@ def stiffness_terms(omega_rad_s: FloatArray, section: Section, length_m: RealPar
     Accurate for pieces whose decay exponent ``|Im √s| L`` is at most ``MAX_DECAY_PER_PIECE``;
     longer segments are split by the callers (:func:`rcsa.physics.elimination.march`, :func:`dynamic_stiffness`).
 
+    Parameters
+    ----------
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies, rad/s.
+    section : Section
+    length_m : float
+        Segment length, m.
+    waves : _Waves, optional
+        The section's wavenumbers on this grid, when the caller already has them.
+
     Returns
     -------
     tuple of numpy.ndarray, each shape (nfreq,), complex
@@ -260,6 +270,17 @@ def segment_terms(omega_rad_s: FloatArray, section: Section, length_m: RealParam
     A segment whose decay exponent exceeds ``MAX_DECAY_PER_PIECE`` is computed as ``2^m``
     equal pieces joined by :func:`_double`, which is exact and keeps full precision for long,
     strongly evanescent segments.
+
+    Parameters
+    ----------
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies, rad/s.
+    section : Section
+    length_m : float
+        Segment length, m.
+    waves : _Waves, optional
+        The section's wavenumbers on this grid, when the caller already has them (they depend
+        on the section and ω only, not on the length).
     """
     wv = waves if waves is not None else Waves(omega_rad_s, section)
     m = math.ceil(math.log2(wv.pieces(length_m)))
@@ -274,6 +295,14 @@ def dynamic_stiffness(omega_rad_s: FloatArray, section: Section, length_m: RealP
 
     Assembled from :func:`stiffness_terms`; a segment too long for one piece (strongly
     evanescent waves) is condensed from equal pieces.
+
+    Parameters
+    ----------
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies, rad/s.
+    section : Section
+    length_m : float
+        Segment length, m.
 
     Returns
     -------
@@ -292,6 +321,14 @@ def free_free_receptance(omega_rad_s: FloatArray, section: Section, length_m: fl
     reciprocity. At frequencies where the segment is too long for one piece (strongly
     evanescent waves, where that form cancels catastrophically) ``R = D⁻¹`` is used instead;
     there the free-free rigid-body singularity of ``D`` is far away.
+
+    Parameters
+    ----------
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies, rad/s.
+    section : Section
+    length_m : float
+        Segment length, m.
 
     Returns
     -------
@@ -319,6 +356,12 @@ def static_stiffness(section: Section, length_m: RealParam) -> ComplexArray:
 
     ``EI/((1+Φ)L³) [[12, 6L, −12, 6L], [6L, (4+Φ)L², −6L, (2−Φ)L²], …]``, Φ = 12EI/(κGA L²)
     (``domain.md`` §2.4), with the section's complex moduli.
+
+    Parameters
+    ----------
+    section : Section
+    length_m : float
+        Segment length, m.
 
     Returns
     -------

@@ -22,7 +22,13 @@ def chain_signature(chain: Chain) -> tuple[tuple[object, ...], ...]:
 
 
 def stack_chains(chains: Sequence[Chain]) -> Chain:
-    """One chain whose parameters are arrays over ``chains`` (which share one signature)."""
+    """One chain whose parameters are arrays over ``chains`` (which share one signature).
+
+    Parameters
+    ----------
+    chains : sequence of Chain
+        Chains with one :func:`chain_signature` (none, or empty ones, give an empty chain).
+    """
     if not chains or not chains[0]:
         return ()
     return tuple(items[0].stack(items) for items in zip(*chains, strict=True))
@@ -32,5 +38,12 @@ def take_rows(chain: Chain, rows: IntArray) -> Chain:
     """The stacked chain with its parameter arrays indexed by ``rows`` (one row per frequency).
 
     Scalar parameters (shared by all rows, e.g. a damping set to zero) are kept as they are.
+
+    Parameters
+    ----------
+    chain : Chain
+        A chain made by :func:`stack_chains`.
+    rows : numpy.ndarray of int, shape (nfreq,)
+        Which stacked chain each frequency line uses.
     """
     return tuple(item.take_rows(rows) for item in chain)
