@@ -45,7 +45,8 @@ class Settings(BaseSettings):
     job_time_limit_s: float = Field(3600.0, gt=0, description="A job running longer than this is failed "
                                     "(\"Job time limit exceeded\"), s.")
     job_results_max_bytes: int = Field(20 * 1024**3, ge=0, description="Disk budget of the kept job results: "
-                                       "beyond it the oldest results are deleted (their jobs say when), bytes.")
+                                       "beyond it the oldest results are deleted (their jobs say when), bytes; "
+                                       "0: no budget.")
     job_max_unfinished_per_caller: int = Field(10, ge=1, description="Queued or running jobs one caller (API key, "
                                                "or anonymous client address) may have; more answer 429.")
     job_max_running_per_caller: int = Field(0, ge=0, description="Jobs of one caller running at once (0: no cap; "

@@ -83,10 +83,12 @@ def _startup(settings: Settings, metrics: Metrics) -> AppState:
             log.warning("could not seed the store with the demo measurement: %s", exc)
     keys = key_ring(store.path, settings.api_keys.get_secret_value())
     jobs = job_store(store.path, stale_after_s=settings.job_stale_s, max_attempts=settings.job_max_attempts,
-                     max_result_bytes=settings.job_results_max_bytes)
+                     max_result_bytes=settings.job_results_max_bytes or None)
     purged = jobs.purge(settings.job_retention_s)  # and hourly by the runners
     if purged:
         log.info("purged %d finished jobs older than %g s", purged, settings.job_retention_s)
+    if settings.job_results_max_bytes:  # a budget lowered since the last start applies at once
+        jobs.evict(settings.job_results_max_bytes)
     reader = CachedMeasurements(store, settings.measurement_cache)
     # a Dask scheduler that cannot be reached stops the start-up with its address and reason
     backend = compute_backend(settings.dask_scheduler, connect_timeout_s=settings.dask_connect_timeout_s,
