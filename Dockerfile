@@ -6,14 +6,18 @@
 #
 # The store (measurements, jobs, hashed API keys) lives in the volume /data; the service runs
 # as an unprivileged user with two uvicorn workers (RCSA_WORKERS) sharing it safely.
+# docker-compose.yml builds it with RCSA_EXTRAS=dask and runs it as the service, a Dask
+# scheduler and two Dask workers.
 
 FROM python:3.11-slim AS build
+# extras to install, e.g. --build-arg RCSA_EXTRAS=dask for a Dask cluster (docker-compose.yml)
+ARG RCSA_EXTRAS=""
 ENV PIP_NO_CACHE_DIR=1 PIP_DISABLE_PIP_VERSION_CHECK=1
 WORKDIR /src
 COPY pyproject.toml README.md ./
 COPY src ./src
 COPY service ./service
-RUN pip install --prefix=/install .
+RUN pip install --prefix=/install ".${RCSA_EXTRAS:+[$RCSA_EXTRAS]}"
 
 FROM python:3.11-slim
 ENV PYTHONDONTWRITEBYTECODE=1 \

@@ -43,6 +43,8 @@ _DESCRIPTIONS = {
     409: "Conflict with the stored state: the job has not succeeded (still running, or failed), or the stored "
          "object is damaged (its id and the reason are given; retrying does not help).",
     413: "The request body (above the endpoint's x-max-body-bytes) or an uploaded file is too large.",
+    410: "The job's result was deleted (disk budget of kept results); submit the job again.",
+    429: "Too many unfinished jobs for this caller; retry after Retry-After.",
     415: "Unsupported Content-Type.",
     422: "Invalid input (errors[] names each offending field), or more work than allowed: type "
          "urn:rcsa:problem:compute-budget-exceeded with budget.cost (estimated seconds and memory, and their terms), "

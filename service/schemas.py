@@ -452,8 +452,11 @@ class JobStatus(_Response):
     attempts: int = Field(description="Runs started (a run interrupted by a restart is resumed).")
     error: dict[str, Any] | None = Field(description="Problem document when failed.")
     summary: dict[str, Any] | None = Field(description="Counts by status when succeeded.")
+    result_bytes: int | None = Field(None, description="Size of the result (JSON), bytes, once succeeded.")
+    result_evicted_utc: str | None = Field(None, description="When the result was deleted to keep the kept "
+                                           "results within their disk budget (RCSA_JOB_RESULTS_MAX_BYTES).")
     status_url: str = Field(description="Poll here.")
-    result_url: str | None = Field(description="The result, once succeeded.")
+    result_url: str | None = Field(description="The result, once succeeded (and while it is kept).")
 
 
 # --------------------------------------------------------------------------- libraries

@@ -9,13 +9,14 @@ from __future__ import annotations
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Body, Depends
+from starlette.requests import Request
 from starlette.responses import Response
 
 from rcsa.app import analyses
 
 from ..bodies import require_json
 from ..deps import StateDep
-from ..jobs import compute
+from ..jobs import caller, compute
 from ..responses import ASYNC_ACCEPTED, body_limit, json_response, problems
 from ..routing import ServiceRoute
 from ..security import ReadAccess
@@ -42,8 +43,10 @@ def _call(name: str, body: dict[str, Any], state: Any) -> Any:
 
 
 def _route(name: str, path: str, operation: str, summary: str) -> None:
-    def endpoint(state: StateDep, _: ReadAccess, body: _Request, prefer: PreferHeader = None) -> Response:
-        return compute(state, operation, body, prefer=prefer, run=lambda: json_response(_call(name, body, state)))
+    def endpoint(request: Request, state: StateDep, who: ReadAccess, body: _Request,
+                 prefer: PreferHeader = None) -> Response:
+        return compute(state, operation, body, prefer=prefer, run=lambda: json_response(_call(name, body, state)),
+                       owner=caller(who, request))
 
     endpoint.__name__ = f"post_{name}"
     endpoint.__doc__ = (f"{summary}: the body goes to ``rcsa.app.analyses.{name}``.\n\nUnder the compute budget "

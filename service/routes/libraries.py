@@ -51,7 +51,7 @@ from ..bodies import form_text, read_body, read_upload, validate_json
 from ..deps import StateDep
 from ..errors import ProblemError
 from ..idempotency import IDEMPOTENCY_PROBLEMS, IdempotencyKeyHeader, IdempotentRoute
-from ..jobs import answer
+from ..jobs import answer, caller
 from ..responses import body_limit, json_response, problems
 from ..schemas import (
     Deleted,
@@ -111,13 +111,14 @@ async def _library_inputs(request: Request, state: AppState) -> tuple[dict[str, 
 
 @router.post("/tool-libraries:predict", response_model=LibraryResult, openapi_extra=body_limit("library", _BODY), responses={
     202: {"model": JobStatus, "description": "Queued as a job; poll Location."},
-    **problems(400, 401, 413, 415, 422), **IDEMPOTENCY_PROBLEMS}, summary="Tool-point FRFs of a Fusion tool library")
-async def predict_library(request: Request, state: StateDep, _: ReadAccess, prefer: PreferHeader = None,
+    **problems(400, 401, 413, 415, 422, 429), **IDEMPOTENCY_PROBLEMS}, summary="Tool-point FRFs of a Fusion tool library")
+async def predict_library(request: Request, state: StateDep, who: ReadAccess, prefer: PreferHeader = None,
                           idempotency_key: IdempotencyKeyHeader = None) -> Response:
     """One tool-point FRF per library tool that has a holder; the others skipped with a reason."""
     source, doc = await _library_inputs(request, state)
     work = await run_in_threadpool(lambda: prepare_library(state.bench, read_library(**source), **doc))
-    return await run_in_threadpool(lambda: answer(state, work, prefer=prefer, idempotency_key=idempotency_key))
+    return await run_in_threadpool(lambda: answer(state, work, prefer=prefer, idempotency_key=idempotency_key,
+                                                  owner=caller(who, request)))
 
 
 async def _from_form(form: Any, limit_bytes: int) -> tuple[dict[str, Any], dict[str, Any]]:
@@ -177,9 +178,9 @@ HDF5, ZIP, JSON = "application/x-hdf5", "application/zip", "application/json"
 @router.post("/libraries/{library_id}:sync", response_model=SyncReport, openapi_extra=body_limit("library", _BODY), responses={
     202: {"model": JobStatus, "description": "Queued as a library-sync job; poll Location (its result is the "
                                              "sync report)."},
-    **problems(400, 401, 403, 413, 415, 422), **IDEMPOTENCY_PROBLEMS},
+    **problems(400, 401, 403, 413, 415, 422, 429), **IDEMPOTENCY_PROBLEMS},
     summary="Sync a stored library with a new export (write key)")
-async def sync_library(library_id: LibraryId, request: Request, state: StateDep, _: WriteAccess,
+async def sync_library(library_id: LibraryId, request: Request, state: StateDep, who: WriteAccess,
                        prefer: PreferHeader = None, idempotency_key: IdempotencyKeyHeader = None) -> Response:
     """Bring the stored library ``library_id`` up to date with this export of the tool library.
 
@@ -191,7 +192,8 @@ async def sync_library(library_id: LibraryId, request: Request, state: StateDep,
     source, doc = await _library_inputs(request, state)
     work = await run_in_threadpool(lambda: prepare_sync(state.bench, library_id, read_library(**source), **doc))
     return await run_in_threadpool(lambda: answer(state, work, prefer=prefer, idempotency_key=idempotency_key,
-                                                  headers={"Location": f"/v1/libraries/{library_id}"}))
+                                                  headers={"Location": f"/v1/libraries/{library_id}"},
+                                                  owner=caller(who, request)))
 
 
 @router.get("/libraries", response_model=LibraryList, responses=problems(401), summary="List stored libraries")

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 from fastapi import APIRouter, Depends
+from starlette.requests import Request
 from starlette.responses import Response
 
 from rcsa.app.analyses import stability_lobes as lobes
 
 from ..bodies import require_json
 from ..deps import StateDep
-from ..jobs import compute
+from ..jobs import caller, compute
 from ..responses import ASYNC_ACCEPTED, body_limit, json_response, problems
 from ..routing import ServiceRoute
 from ..schemas import LobesRequest, LobesResult
@@ -22,7 +23,7 @@ router = APIRouter(prefix="/v1", tags=["stability lobes"], route_class=ServiceRo
 @router.post("/stability-lobes", dependencies=[Depends(require_json)], response_model=LobesResult,
              responses={**problems(401, 413, 415, 422), **ASYNC_ACCEPTED}, openapi_extra=body_limit("lobes"),
              summary="Stability lobes (zero-order Altintas–Budak)")
-def stability_lobes(body: LobesRequest, state: StateDep, _: ReadAccess, prefer: PreferHeader = None) -> Response:
+def stability_lobes(body: LobesRequest, request: Request, state: StateDep, who: ReadAccess, prefer: PreferHeader = None) -> Response:
     """Axial depth limit (m) versus spindle speed (rpm), its chatter frequency (Hz) and every
     lobe, from inline tool-point FRFs (``frf_x``, optional ``frf_y``) or an ``assembly``.
 
@@ -35,4 +36,4 @@ def stability_lobes(body: LobesRequest, state: StateDep, _: ReadAccess, prefer: 
             result = lobes(doc, store=state.reader, max_lines=state.settings.max_frequency_lines)
         return json_response(result)
 
-    return compute(state, "lobes", doc, prefer=prefer, run=run)
+    return compute(state, "lobes", doc, prefer=prefer, run=run, owner=caller(who, request))

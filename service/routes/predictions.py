@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from fastapi import APIRouter, Depends
+from starlette.requests import Request
 from starlette.responses import Response
 
 from rcsa.app.libraries import select_tool_point
@@ -10,7 +11,7 @@ from rcsa.app.predictions import predict
 
 from ..bodies import require_json
 from ..deps import StateDep
-from ..jobs import compute
+from ..jobs import caller, compute
 from ..responses import ASYNC_ACCEPTED, body_limit, json_response, problems
 from ..routing import ServiceRoute
 from ..schemas import Assembly, PredictionResult
@@ -23,7 +24,7 @@ router = APIRouter(prefix="/v1", tags=["predictions"], route_class=ServiceRoute)
 @router.post("/tool-point-frf", dependencies=[Depends(require_json)], response_model=PredictionResult,
              responses={**problems(401, 413, 415, 422), **ASYNC_ACCEPTED}, openapi_extra=body_limit("prediction"),
              summary="Tool-point FRF of one assembly")
-def predict_tool_point_frf(body: Assembly, state: StateDep, _: ReadAccess,
+def predict_tool_point_frf(body: Assembly, request: Request, state: StateDep, who: ReadAccess,
                            tool_point: ToolPointQuery = None, prefer: PreferHeader = None) -> Response:
     """Predict the tool-point receptance of a spindle–holder–tool assembly (contract "Assembly").
 
@@ -44,4 +45,4 @@ def predict_tool_point_frf(body: Assembly, state: StateDep, _: ReadAccess,
         out = result.to_dict(arrays="numpy")
         return json_response(select_tool_point(out, tool_point.split(",")) if tool_point else out)
 
-    return compute(state, "prediction", doc, prefer=prefer, run=run)
+    return compute(state, "prediction", doc, prefer=prefer, run=run, owner=caller(who, request))

@@ -15,7 +15,9 @@ OUT.json``; the exit status is 1 when any tool errored.
 library in the store (:func:`rcsa.app.libraries.prepare_sync`, the same code as ``POST
 /v1/libraries/{id}:sync``): only tools whose result is not stored yet are computed; the
 added / changed / unchanged / removed summary goes to stderr, the sync report (JSON) to
-stdout; exit status 1 when any tool failed. ``rcsa library show ID`` prints a stored
+stdout; exit status 1 when any tool failed. ``--dask-scheduler tcp://HOST:8786`` (or
+``RCSA_DASK_SCHEDULER``) computes on that Dask cluster instead of here; the results are
+written here, the same bytes either way. ``rcsa library show ID`` prints a stored
 library's summary and per-tool status; ``rcsa library export ID -o FILE.h5|.zip|.json``
 writes its results (HDF5, zip of UFF 58 files, or JSON).
 """
@@ -28,7 +30,7 @@ from typing import Annotated, Any
 import typer
 
 from rcsa.app.inputs import decode_json
-from rcsa.app.jobs import Workbench, run_work
+from rcsa.app.jobs import Workbench, compute_backend, run_work
 from rcsa.app.libraries import (
     EXPORT_FORMATS,
     library_id_from_name,
@@ -116,6 +118,12 @@ ImportOptions = Annotated[str | None, typer.Option(
     help='Import options as JSON, e.g. \'{"holder_segments_per_cone": 6}\'.')]
 NaturalFrequenciesOption = Annotated[bool, typer.Option(help="Compute exact natural frequencies.")]
 QuietOption = Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")]
+DaskOption = Annotated[str | None, typer.Option(
+    "--dask-scheduler", envvar="RCSA_DASK_SCHEDULER",
+    help="Compute on this Dask cluster (tcp://HOST:8786; needs pip install 'rcsa[dask]') instead of here.")]
+DaskTimeoutOption = Annotated[float, typer.Option(
+    "--dask-connect-timeout", envvar="RCSA_DASK_CONNECT_TIMEOUT_S", min=0.1,
+    help="Seconds to try to reach the Dask scheduler before giving up.")]
 LibraryArgument = Annotated[Path, typer.Argument(help="Fusion tool library (.json, .tools) or FreeCAD toolbits "
                                                       "(.fctb, .fctl, a folder or a zip of them).")]
 HolderOption = Annotated[Path | None, typer.Option(help="FreeCAD holder (.fcholder) for the toolbits, when the "
@@ -138,6 +146,8 @@ def predict(
     store: Annotated[Path | None, typer.Option("--store", help="Measurement store (default: RCSA_STORE or "
                                                                "the per-user store).")] = None,
     quiet: QuietOption = False,
+    dask_scheduler: DaskOption = None,
+    dask_connect_timeout: DaskTimeoutOption = 10.0,
     holder: HolderOption = None,
 ) -> None:
     """Predict the tool-point FRF of every tool in a Fusion or FreeCAD library on one spindle."""
@@ -155,13 +165,18 @@ def predict(
         return bench, work
 
     bench, work = run_guarded(build)
+    backend = run_guarded(lambda: compute_backend(dask_scheduler, connect_timeout_s=dask_connect_timeout))
     with _progress_bar(quiet) as bar:
         task = bar.add_task("tools", total=max(work.size, 1))
 
         def progress(done: int, total: int) -> None:
             bar.update(task, completed=done, total=max(total, 1))
 
-        result = run_guarded(lambda: run_work(bench, work.kind, work.request, progress=progress)).document
+        try:
+            result = run_guarded(lambda: run_work(bench, work.kind, work.request, progress=progress,
+                                                  backend=backend)).document
+        finally:
+            backend.close()
     write_json(result, out)
     s = result["summary"]
     typer.echo(f"{s['ok']} ok, {s['skipped']} skipped, {s['error']} error", err=True)
@@ -192,6 +207,8 @@ def sync(
                                                                  "stdout.")] = None,
     store: StoreOption = None,
     quiet: QuietOption = False,
+    dask_scheduler: DaskOption = None,
+    dask_connect_timeout: DaskTimeoutOption = 10.0,
     holder: HolderOption = None,
 ) -> None:
     """Keep a library's tool-point FRFs in the store, computing only new or changed tools."""
@@ -210,14 +227,19 @@ def sync(
         return bench, work
 
     bench, work = run_guarded(build)
+    backend = run_guarded(lambda: compute_backend(dask_scheduler if work.size else None,
+                                                        connect_timeout_s=dask_connect_timeout))
     with _progress_bar(quiet) as bar:
         task = bar.add_task(f"{ident}: computing", total=max(work.size, 1))
 
         def progress(done: int, total: int) -> None:
             bar.update(task, completed=done, total=max(total, 1))
 
-        report = run_guarded(lambda: run_work(bench, work.kind, work.request, progress=progress,
-                                              plan=work.plan)).document
+        try:
+            report = run_guarded(lambda: run_work(bench, work.kind, work.request, progress=progress,
+                                                  plan=work.plan, backend=backend)).document
+        finally:
+            backend.close()
     write_json(report, out)
     c, s = report["counts"], report["summary"]
     typer.echo(f"{ident} revision {report['revision']}: {c['added']} added, {c['changed']} changed, "
