@@ -132,7 +132,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
                 await run_in_threadpool(runner.stop, 30.0)
 
     app = FastAPI(title="rcsa — tool-point FRF service", version=__version__, description=DESCRIPTION,
-                  lifespan=lifespan, separate_input_output_schemas=False)
+                  lifespan=lifespan, separate_input_output_schemas=False,
+                  # /docs and /redoc with local assets (service.routes.docs): they work offline
+                  docs_url=None, redoc_url=None)
     # the state is built by the lifespan, or on the first request when the app is served
     # without one (e.g. a TestClient used outside a ``with`` block)
     app.state.rcsa_factory = lambda: _startup(settings, metrics)
