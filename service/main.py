@@ -34,6 +34,7 @@ from .errors import install_error_handlers
 from .jobs import present
 from .metrics import Metrics
 from .middleware import RequestContextMiddleware, configure_logging
+from .openapi_doc import mark_anonymous_operations
 from .routes import ROUTERS
 from .state import AppState, ensure_state
 
@@ -155,6 +156,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             components = doc.setdefault("components", {}).setdefault("schemas", {})
             for name, schema in defs.get("$defs", {}).items():
                 components.setdefault(name, schema)
+            mark_anonymous_operations(doc, app.routes, settings.anonymous_read)
             app.openapi_schema = doc
         return app.openapi_schema
 

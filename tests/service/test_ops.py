@@ -146,3 +146,14 @@ def test_docs_pages_name_only_local_assets(client):
     assert client.get("/favicon.ico").headers["content-type"] == "image/png"
     assert_problem(client.get("/docs-assets/../main.py"), 404)
     assert_problem(client.get("/docs-assets/index.html"), 404)
+
+
+def test_405_allow_names_every_method_of_the_path(client):
+    """A path served by several routes (GET and POST /v1/measurements) allows all their methods."""
+    for method, path, allow in (("PUT", "/v1/measurements", "GET, POST"),
+                                ("PATCH", "/v1/measurements/m-0123456789ab", "DELETE, GET"),
+                                ("GET", "/v1/tool-point-frf", "POST"), ("POST", "/healthz", "GET")):
+        r = client.request(method, path)
+        body = assert_problem(r, 405)
+        assert r.headers["allow"] == allow, (method, path, r.headers)
+        assert allow in body["detail"] and method in body["detail"]
