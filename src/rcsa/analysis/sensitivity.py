@@ -58,6 +58,7 @@ from rcsa.analysis.tool_point_model import MeasuredSpindle, ToolPointModel
 from rcsa.errors import InputError
 from rcsa.model import fields
 from rcsa.model.assembly import build_model
+from rcsa.model.bounds import MIN_FREQUENCY_HZ
 from rcsa.model.contract import AssemblySpec, MeasuredSpindleSpec, SpindleSpec, parse_assembly
 from rcsa.model.parameters import get_parameter, is_damping, parameter_names, set_parameter
 from rcsa.model.spindle_side import BaseResolver
@@ -131,8 +132,9 @@ def _features_at(spec: AssemblySpec, base: ModeFeatures, band_hz: tuple[float, f
 def _band_of(spec: AssemblySpec, band_hz: Sequence[float] | None) -> tuple[float, float]:
     if band_hz is None:
         return float(spec.frequency_hz[0]), float(spec.frequency_hz[-1])
-    if len(band_hz) != 2 or not 0 < band_hz[0] < band_hz[1]:
-        raise InputError("band_hz", f"must be [start_hz, stop_hz] with 0 < start < stop, got {list(band_hz)}")
+    if len(band_hz) != 2 or not MIN_FREQUENCY_HZ <= band_hz[0] < band_hz[1]:
+        raise InputError("band_hz", f"must be [start_hz, stop_hz] with {MIN_FREQUENCY_HZ:g} <= start < stop "
+                                    f"(0 Hz is singular), got {list(band_hz)}")
     return float(band_hz[0]), float(band_hz[1])
 
 
