@@ -156,7 +156,8 @@ def document_figure(doc: object, *, layout: str = "full", store: MeasurementSour
     """The figure that fits a JSON document, recognised by its content.
 
     A prediction result (``tool_point``), a measurement in the contract's JSON form
-    (``h`` and ``frequency_hz``), a stability-lobes request (solved first) or an assembly
+    (``h`` and ``frequency_hz``), a stability-lobes result (``spindle_speed_rpm`` as a list
+    and ``depth_limit_m``), a stability-lobes request (solved first) or an assembly
     (predicted first).
     """
     if not isinstance(doc, dict):
@@ -169,12 +170,15 @@ def document_figure(doc: object, *, layout: str = "full", store: MeasurementSour
     if "h" in doc and "frequency_hz" in doc:
         return frf_figure(doc["frequency_hz"], complex_from_wire(doc["h"], "h", finite=False),
                           labels=["measured h"], layout=layout)
+    if isinstance(doc.get("spindle_speed_rpm"), list) and "depth_limit_m" in doc:
+        return lobes_figure(LobeResult.from_dict(doc))  # a stability-lobes result
     if "tangential_coefficient_n_m2" in doc:
         return lobes_figure(stability_lobes_result(doc, store=store))
     if "tool" in doc and "spindle" in doc:
         result = predict(doc, store=store)
         return frf_figure(result.frequency_hz, result.tool_point.h, labels=["tool point h"], layout=layout)
-    raise InputError("", "not a prediction result, measurement, assembly or stability-lobes request")
+    raise InputError("", "not a prediction result, measurement, assembly, stability-lobes request or "
+                         "stability-lobes result")
 
 
 def effects_with_figure(request: Mapping[str, Any], picture: str | os.PathLike[str] | None = None, *,
