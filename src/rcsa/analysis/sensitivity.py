@@ -323,7 +323,7 @@ def effects_figure(report: EffectReport, features: Sequence[str] = ("frequency_h
     import matplotlib
     from matplotlib.colors import TwoSlopeNorm
 
-    from rcsa.analysis.figures import freeze_layout, new_figure
+    from rcsa.analysis.figures import freeze_layout, new_figure, percent_label
 
     nm, npar = report.frequency_hz.size, len(report.parameters)
     if nm == 0 or npar == 0:
@@ -331,7 +331,7 @@ def effects_figure(report: EffectReport, features: Sequence[str] = ("frequency_h
     fig = new_figure(max(6.0, 0.5 * npar + 2.5), 2.2 + len(features) * max(1.6, 0.3 * nm + 0.8))
     axes = fig.subplots(len(features), 1, squeeze=False, sharex=True)[:, 0]
     part = report.tip_participation
-    ylabels = [f"{f:.0f} Hz ({100 * p:.2g} %)" for f, p in zip(report.frequency_hz, part, strict=True)]
+    ylabels = [f"{f:.0f} Hz ({percent_label(p)})" for f, p in zip(report.frequency_hz, part, strict=True)]
     titles = {"frequency_hz": "natural frequency", "peak_magnitude_m_n": "peak |h|",
               "damping_ratio": "damping ratio", "peak_frequency_hz": "peak frequency"}
     cmap = matplotlib.colormaps["RdBu_r"].with_extremes(bad="0.85")
