@@ -17,6 +17,7 @@ from typing import Any, Literal
 import numpy as np
 
 from rcsa.analysis.lobes.zoa import LobeResult
+from rcsa.analysis.progress import Progress
 from rcsa.analysis.sensitivity import effects_figure, effects_report
 from rcsa.app.analyses import stability_lobes_result
 from rcsa.app.predictions import predict
@@ -182,19 +183,21 @@ def document_figure(doc: object, *, layout: str = "full", store: MeasurementSour
 
 
 def effects_with_figure(request: Mapping[str, Any], picture: str | os.PathLike[str] | None = None, *,
-                        store: MeasurementSource | None = None) -> dict[str, Any]:
+                        store: MeasurementSource | None = None, progress: Progress | None = None) -> dict[str, Any]:
     """Effect analysis (:func:`rcsa.app.analyses.effects`), its heat map drawn to ``picture``
-    (.png or .svg) when given; ``store`` is where a measured spindle is looked up."""
-    report = effects_report(request, resolver(store))
+    (.png or .svg) when given; ``store`` is where a measured spindle is looked up;
+    ``progress(done, total)`` is called at each step."""
+    report = effects_report(request, resolver(store), progress)
     if picture is not None:
         save_figure(effects_figure(report), picture)
     return report.to_dict()
 
 
-def diagnosis_with_figure(request: Mapping[str, Any], picture: str | os.PathLike[str] | None = None
-                          ) -> dict[str, Any]:
+def diagnosis_with_figure(request: Mapping[str, Any], picture: str | os.PathLike[str] | None = None, *,
+                          progress: Progress | None = None) -> dict[str, Any]:
     """Diagnosis (:func:`rcsa.app.analyses.diagnose`), its figure (measured, base and corrected
-    FRFs, and the gap map) drawn to ``picture`` (.png or .svg) when given.
+    FRFs, and the gap map) drawn to ``picture`` (.png or .svg) when given; ``progress(done,
+    total)`` is called at each step.
 
     Raises
     ------
@@ -205,7 +208,7 @@ def diagnosis_with_figure(request: Mapping[str, Any], picture: str | os.PathLike
     from rcsa.analysis.diagnosis.report import build_response, diagnosis_figure
     from rcsa.analysis.diagnosis.state import analyse
 
-    analysis = analyse(request)
+    analysis = analyse(request, progress)
     response = build_response(analysis)
     if picture is not None:
         save_figure(diagnosis_figure(analysis, response), picture)
