@@ -11,6 +11,7 @@ the demo measurement; server and browser are always shut down.
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import signal
@@ -280,3 +281,40 @@ def test_swagger_ui_and_redoc_render_offline(server, browser):
     loaded = browser.execute_script("return performance.getEntriesByType('resource').map(e => e.name)")
     assert all(u.startswith(server) for u in loaded if u != logo), loaded
     assert [m for m in _severe_console(browser) if logo not in m] == []
+
+
+# --------------------------------------------------------------------------- diagnosis in the page
+
+def _tap_files(folder: Path) -> list[tuple[float, Path]]:
+    """The tap tests of examples/diagnosis.json as CSV files (µm/N, a header naming the units)."""
+    doc = json.loads((REPO / "examples" / "diagnosis.json").read_text())
+    out = []
+    for m in doc["measurements"]:
+        mm = 1000 * m["tool"]["stickout_m"]
+        rows = ["frequency [Hz],real [um/N],imag [um/N]"]
+        rows += [f"{f:g},{re * 1e6:.6e},{im * 1e6:.6e}"
+                 for f, re, im in zip(m["frequency_hz"], m["h"]["real"], m["h"]["imag"], strict=True)]
+        path = folder / f"tap-{mm:.0f}mm.csv"
+        path.write_text("\n".join(rows) + "\n")
+        out.append((mm, path))
+    return out
+
+
+def test_diagnosis_of_uploaded_tap_tests(server, browser, tmp_path):
+    _open(browser, server)
+    browser.get_log("browser")
+    for i, (mm, path) in enumerate(_tap_files(tmp_path)):
+        browser.find_element(By.ID, f"tap-stickout-{i}").send_keys(f"{mm:g}")
+        browser.find_element(By.ID, f"tap-file-{i}").send_keys(str(path))
+    Select(browser.find_element(By.ID, "diag-effort")).select_by_value("quick")
+    browser.find_element(By.ID, "diagnose").click()
+    _wait_state(browser, "diagnosis")
+    title = browser.find_element(By.ID, "diag-verdict-title").text
+    assert "holder_tool_joint" in title and "identified" in title, title
+    assert "dB" in browser.find_element(By.ID, "diag-shrink").text
+    cells = browser.find_elements(By.CSS_SELECTOR, "#gap-plot rect.gap-cell")
+    assert len(cells) >= 3 and browser.find_elements(By.CSS_SELECTOR, "#gap-plot rect.gap-cell.flagged")
+    for i in range(3):
+        for kind in ("measured", "base", "corrected"):
+            assert _points(browser, f"diag-{kind}-{i}") > 400, (kind, i)  # 561 lines each
+    assert _severe_console(browser) == []
