@@ -18,7 +18,7 @@ logged with the request id (see :mod:`service.middleware`).
 from __future__ import annotations
 
 import logging
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from typing import Any
 
 import orjson
@@ -26,6 +26,7 @@ from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.responses import Response
+from starlette.routing import BaseRoute, Match
 
 from rcsa.app.budget import BudgetExceeded
 from rcsa.errors import ConflictError, DamagedError, InputError, NotFoundError, StoreError
@@ -36,7 +37,9 @@ __all__ = [
     "PROBLEM_MEDIA_TYPE",
     "BodyTooLarge",
     "ProblemError",
+    "allowed_methods",
     "install_error_handlers",
+    "iter_routes",
     "problem_body",
     "problem_response",
     "pydantic_errors",
@@ -221,12 +224,45 @@ _HTTP_DETAILS = {
 }
 
 
+def iter_routes(routes: Iterable[Any]) -> Iterator[BaseRoute]:
+    """Every route, with included routers opened (newer FastAPI versions wrap them)."""
+    for route in routes:
+        inner = getattr(route, "original_router", None)
+        if inner is not None:
+            yield from iter_routes(inner.routes)
+        elif isinstance(route, BaseRoute):
+            yield route
+
+
+def allowed_methods(request: Request) -> list[str]:
+    """Every method some route accepts at the request's path (the ``Allow`` of a 405).
+
+    Starlette answers a 405 with the methods of the first route whose path matched, so a
+    path served by several routes (``GET`` and ``POST /v1/measurements``) named only one.
+    """
+    scope = {**request.scope, "type": "http"}
+    methods: set[str] = set()
+    for route in iter_routes(request.app.router.routes):
+        match, _ = route.matches(scope)
+        if match != Match.NONE:
+            methods |= set(getattr(route, "methods", None) or ())
+    return sorted(methods)
+
+
 async def _on_http(request: Request, exc: StarletteHTTPException) -> Response:
     detail = exc.detail if isinstance(exc.detail, str) else str(exc.detail)
     if exc.status_code in _HTTP_DETAILS and detail in ("Not Found", "Method Not Allowed",
                                                        "There was an error parsing the body"):
         detail = _HTTP_DETAILS[exc.status_code]
-    return problem_response(request, exc.status_code, detail, headers=getattr(exc, "headers", None))
+    headers = dict(getattr(exc, "headers", None) or {})
+    if exc.status_code == 405:
+        allow = allowed_methods(request)
+        if allow:
+            headers["Allow"] = ", ".join(allow)
+            if detail == _HTTP_DETAILS[405]:
+                detail = (f"{request.method} is not accepted at {request.url.path}, which accepts {', '.join(allow)}; "
+                          "see /docs")
+    return problem_response(request, exc.status_code, detail, headers=headers or None)
 
 
 def install_error_handlers(app: FastAPI) -> None:

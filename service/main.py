@@ -42,6 +42,7 @@ from .errors import install_error_handlers
 from .jobs import present
 from .metrics import Metrics
 from .middleware import RequestContextMiddleware, configure_logging
+from .openapi_doc import mark_anonymous_operations
 from .routes import ROUTERS
 from .state import AppState, ensure_state
 
@@ -149,7 +150,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             await run_in_threadpool(state.bench.backend.close)
 
     app = FastAPI(title="rcsa — tool-point FRF service", version=__version__, description=DESCRIPTION,
-                  lifespan=lifespan, separate_input_output_schemas=False)
+                  lifespan=lifespan, separate_input_output_schemas=False,
+                  # /docs and /redoc with local assets (service.routes.docs): they work offline
+                  docs_url=None, redoc_url=None)
     # the state is built by the lifespan, or on the first request when the app is served
     # without one (e.g. a TestClient used outside a ``with`` block)
     app.state.rcsa_factory = lambda: _startup(settings, metrics)
@@ -170,6 +173,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             components = doc.setdefault("components", {}).setdefault("schemas", {})
             for name, schema in defs.get("$defs", {}).items():
                 components.setdefault(name, schema)
+            mark_anonymous_operations(doc, app.routes, settings.anonymous_read)
             app.openapi_schema = doc
         return app.openapi_schema
 

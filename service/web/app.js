@@ -743,6 +743,14 @@
     };
   }
 
+  // ------------------------------------------------------------------ shared with diagnosis.js
+
+  /** What the page's other script (diagnosis.js) uses: API access, messages, the assembly, SVG drawing. */
+  window.rcsaWeb = {
+    ApiError, call, showError, clearError, setStatus, numberFrom, fmt, assemblyToSend, describeSelection,
+    svgEl, clearPlot, axes, line, legend, UM_PER_M, MM_PER_M,
+  };
+
   // ------------------------------------------------------------------ start
 
   function wire() {

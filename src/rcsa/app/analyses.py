@@ -8,6 +8,7 @@ from typing import Any
 from rcsa.analysis.lobes.modal_model import modal_model_from_assembly
 from rcsa.analysis.lobes.request import parse_lobes_request
 from rcsa.analysis.lobes.zoa import LobeResult
+from rcsa.analysis.progress import Progress
 from rcsa.analysis.sensitivity import effects as _effects
 from rcsa.app.predictions import predict
 from rcsa.app.stores import MeasurementSource, resolver
@@ -16,7 +17,7 @@ from rcsa.measured.store import MeasurementStore
 from rcsa.model.bounds import MAX_FREQUENCY_LINES
 from rcsa.model.contract import SpindleSpec, parse_assembly
 
-__all__ = ["ANALYSIS_KINDS", "diagnose", "effects", "identify", "run_analysis", "stability_lobes",
+__all__ = ["ANALYSIS_KINDS", "Progress", "diagnose", "effects", "identify", "run_analysis", "stability_lobes",
            "stability_lobes_result", "validate"]
 
 #: Single computations that may also run as jobs (``Prefer: respond-async``), by the name of
@@ -72,35 +73,41 @@ def stability_lobes(request: Mapping[str, Any], *, store: MeasurementStore | Non
     return stability_lobes_result(request, store=store, max_lines=max_lines).to_dict()
 
 
-def effects(request: Mapping[str, Any], *, store: MeasurementSource | None = None) -> dict[str, Any]:
+def effects(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
+            progress: Progress | None = None) -> dict[str, Any]:
     """Effect analysis: sensitivity of each mode to every bearing and joint parameter.
 
     See :func:`rcsa.analysis.sensitivity.effects` (request: an assembly, or ``{"assembly",
     "parameters", "relative_step", "band_hz"}``). ``store`` is where a measured spindle
-    (``"spindle": {"measurement_id": ...}``) is looked up (the default store when omitted).
+    (``"spindle": {"measurement_id": ...}``) is looked up (the default store when omitted);
+    ``progress(done, total)`` is called at each step (:mod:`rcsa.analysis.progress`).
     """
-    return _effects(request, resolver(store))
+    return _effects(request, resolver(store), progress)
 
 
-def identify(request: Mapping[str, Any], *, store: MeasurementSource | None = None) -> dict[str, Any]:
+def identify(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
+             progress: Progress | None = None) -> dict[str, Any]:
     """Joint identification from measured tool-point FRFs (``contract.md`` "Joint identification").
 
     See :func:`rcsa.analysis.joint_identification.identify.identify`; ``store`` is where a
-    measured spindle is looked up (the default store when omitted).
+    measured spindle is looked up (the default store when omitted); ``progress(done, total)``
+    is called at each step (:mod:`rcsa.analysis.progress`).
     """
     # scipy.optimize (~0.4 s to import): only when an identification is asked for
     from rcsa.analysis.joint_identification.identify import identify as run
 
-    return run(request, resolver(store))
+    return run(request, resolver(store), progress)
 
 
-def diagnose(request: Mapping[str, Any], **kwargs: Any) -> dict[str, Any]:
+def diagnose(request: Mapping[str, Any], *, progress: Progress | None = None, **kwargs: Any) -> dict[str, Any]:
     """Sim-to-real gap diagnosis (``contract.md`` "Diagnosis").
 
     Parameters
     ----------
     request : dict
         The diagnosis request: ``{"assembly", "measurements", "tolerances"?, "options"?}``.
+    progress : callable, optional
+        ``progress(done, total)`` at each step (:mod:`rcsa.analysis.progress`).
     **kwargs
         Passed on to :func:`rcsa.analysis.diagnosis.diagnose.diagnose`.
 
@@ -112,7 +119,7 @@ def diagnose(request: Mapping[str, Any], **kwargs: Any) -> dict[str, Any]:
     # scipy.stats and scipy.optimize (~0.9 s to import): only when a diagnosis is asked for
     from rcsa.analysis.diagnosis.diagnose import diagnose as run
 
-    return run(request, **kwargs)
+    return run(request, progress=progress, **kwargs)
 
 
 def validate(kind: str, request: Mapping[str, Any], *, store: MeasurementSource | None = None) -> None:

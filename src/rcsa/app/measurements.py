@@ -54,6 +54,7 @@ __all__ = [
     "measurement_document",
     "measurement_hdf5",
     "measurement_summary",
+    "read_measurement",
     "parse_points",
     "parse_roles",
     "rebuild_catalogue",
@@ -253,6 +254,58 @@ def import_measurement(
         force_window_s=_float(opts.get("force_window_s"), "force_window_s"),
         exponential_tau_s=_float(opts.get("exponential_tau_s"), "exponential_tau_s"),
         max_frequency_hz=_float(opts.get("max_frequency_hz"), "max_frequency_hz"), **common)
+
+
+#: Metadata of a file read only for its data (a tool-point tap test has no spindle to name).
+_READ_DEFAULTS = {"spindle_id": "tap-test", "direction": "x", "plane": "spindle_nose"}
+
+
+def read_measurement(data: bytes, *, file_name: str = "", fmt: str | None = None,
+                     metadata: Mapping[str, Any] | None = None, options: Mapping[str, Any] | None = None,
+                     extra_taps: Sequence[bytes] = ()) -> dict[str, Any]:
+    """Read a measurement file into the contract's JSON form, without storing it.
+
+    The same importers, units and checks as :func:`import_measurement` (what ``rcsa store
+    import`` and ``POST /v1/measurements`` store); for files read only for their data, such
+    as a tool point's tap tests sent on to a diagnosis. ``spindle_id``, ``direction`` and
+    ``plane`` may be left out (``tap-test``, ``x``, ``spindle_nose``; a UFF file's own
+    direction is kept).
+
+    Parameters
+    ----------
+    data : bytes
+        The file's content.
+    file_name : str
+        Its name (its suffix gives the format unless ``fmt``).
+    fmt : {"uff", "csv", "frf", "json", "tap"}, optional
+    metadata : mapping, optional
+        As for :func:`import_measurement`.
+    options : mapping, optional
+        As for :func:`import_measurement` (``units``, ``columns``, ...).
+    extra_taps : sequence of bytes
+        Further tap files averaged with ``data`` (format ``tap`` only).
+
+    Returns
+    -------
+    dict
+        ``frequency_hz``, ``h`` (and the other receptances), ``coherence`` when the file has
+        one, ``units``, ``source`` (format, conversions), ``summary`` and the metadata.
+
+    Raises
+    ------
+    InputError
+        As :func:`import_measurement`.
+    """
+    form = format_from_name(file_name, fmt)
+    given = {k: v for k, v in (metadata or {}).items() if v is not None and v != ""}
+    defaults = {k: v for k, v in _READ_DEFAULTS.items() if not (k == "direction" and form == "uff")}
+    if form != "json":
+        given = {**defaults, **given}
+    m = import_measurement(data, file_name=file_name, fmt=form, metadata=given, options=options,
+                           extra_taps=extra_taps)
+    out = {k: v for k, v in measurement_to_contract(m).items() if k not in ("id", "created_utc", "software_version")}
+    out["summary"] = measurement_summary(m)
+    return out
 
 
 def measurement_from_document(doc: Mapping[str, Any], *, drop_nonpositive: bool = False,
