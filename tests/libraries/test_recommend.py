@@ -15,7 +15,8 @@ from rcsa.app.presets import recommend_predicted, recommend_stored
 from rcsa.errors import InputError
 from rcsa.libraries.formats import read_library
 from rcsa.libraries.fusion import library_combinations
-from rcsa.libraries.recommend import parse_recommend_options
+from rcsa.libraries.fusion_presets import read_fusion_file
+from rcsa.libraries.recommend import FrfFailure, parse_recommend_options, recommend_presets
 from rcsa.libraries.recommend_sources import predicted_frfs
 from rcsa.libraries.sync import sync_library
 from rcsa.reference import ra1
@@ -191,3 +192,14 @@ def test_stored_results_give_the_same_presets_and_changed_tools_are_skipped(tmp_
                              OPTIONS)
     t0, t1 = moved.report["tools"][:2]
     assert t0["status"] == "skipped" and "changed since the last sync" in t0["reason"] and t1["status"] == "written"
+
+
+def test_a_failed_frf_fails_the_tool_and_a_missing_one_skips_it():
+    source = predicted_frfs(read_library(SAMPLE, file_name="shop.json"), **SETTINGS)
+    ids = [e["id"] for e in source.entries]
+    frfs = {ids[0]: FrfFailure("its tool-point FRF failed: tool.x: broken")}
+    result = recommend_presets(read_fusion_file(SAMPLE), source.entries, frfs, parse_recommend_options(OPTIONS))
+    t0, t1 = result.report["tools"][:2]
+    assert t0["status"] == "failed" and "broken" in t0["reason"]
+    assert t1["status"] == "skipped" and t1["reason"] == "no tool-point FRF for this tool"
+    assert result.data == SAMPLE and result.report["summary"] == {"written": 0, "skipped": 3, "failed": 1}

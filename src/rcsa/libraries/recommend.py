@@ -75,6 +75,7 @@ __all__ = [
     "OPTION_FIELDS",
     "PRESET_PREFIX",
     "Frf",
+    "FrfFailure",
     "Recommendation",
     "RecommendOptions",
     "parse_recommend_options",
@@ -109,6 +110,12 @@ class Frf:
 
     frequency_hz: np.ndarray
     h: np.ndarray
+
+
+class FrfFailure(str):
+    """Why a tool has no FRF when computing it failed (the tool is reported ``failed``, not skipped)."""
+
+    __slots__ = ()
 
 
 @dataclass(frozen=True, slots=True)
@@ -310,7 +317,8 @@ def recommend_presets(file: FusionFile, entries: list[Mapping[str, Any]], frfs: 
         The library's import entries (``id``, ``index``, ``status``, ``reason`` or ``error``,
         ``teeth``, ``tool_type``, ``description``, ``number``), one per ``data`` item.
     frfs : mapping of str to Frf or str
-        Tool id → its tool-point FRF, or why there is none.
+        Tool id → its tool-point FRF, or why there is none (a :class:`FrfFailure` when
+        computing it failed: the tool is then ``failed``; else ``skipped``).
     options : RecommendOptions
 
     Returns
@@ -368,6 +376,8 @@ def _one_tool(item: Any, entry: Mapping[str, Any], frf: Frf | str | None,
     lo, hi, limits, warnings = _speed_range(item, diameter_m, options)
     if frf is None:
         raise _Skip("no tool-point FRF for this tool")
+    if isinstance(frf, FrfFailure):
+        raise InputError("tool_point", str(frf))
     if isinstance(frf, str):
         raise _Skip(frf)
     grid = pocket_speed_grid(lo, hi, options.speed_tolerance)

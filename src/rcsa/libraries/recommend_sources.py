@@ -25,7 +25,7 @@ import numpy as np
 from rcsa.errors import InputError
 from rcsa.libraries.fusion import FusionLibrary
 from rcsa.libraries.library_prediction import library_request, run_entries
-from rcsa.libraries.recommend import Frf
+from rcsa.libraries.recommend import Frf, FrfFailure
 from rcsa.libraries.sync import LibraryStore, plan_sync, sync_request
 from rcsa.measured.hybrid import MeasurementSource
 from rcsa.model.bounds import MAX_BATCH_COMBINATIONS, MAX_FREQUENCY_LINES
@@ -81,7 +81,7 @@ def frfs_from_results(results: list[Mapping[str, Any]]) -> dict[str, Frf | str]:
                              np.asarray(h["real"], dtype=float) + 1j * np.asarray(h["imag"], dtype=float))
         elif r.get("status") == "error":
             error = r.get("error") or {}
-            out[ident] = f"its tool-point FRF failed: {error.get('field', '')}: {error.get('detail', '')}"
+            out[ident] = FrfFailure(f"its tool-point FRF failed: {error.get('field', '')}: {error.get('detail', '')}")
         else:
             out[ident] = str(r.get("reason") or "no tool-point FRF")
     return out
