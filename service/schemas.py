@@ -108,6 +108,7 @@ __all__ = [
     "MeasurementUpload",
     "PredictionResult",
     "Problem",
+    "RecommendReport",
 ]
 
 _EXAMPLE_GRID = {"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 5.0}
@@ -1216,6 +1217,51 @@ class LibrarySummary(_Response):
     summary: dict[str, int] = Field(description="Tools by status: ok, skipped, error.")
     last_sync: SyncReport
     tools: list[LibraryTool] | None = Field(None, description="Every tool, in library order (GET by id only).")
+
+
+class RecommendedFile(_Response):
+    """The library with the presets written in (same format and name as uploaded)."""
+
+    file_name: str
+    media_type: str = Field(description="application/json (.json) or application/zip (.tools).")
+    size_bytes: int
+    sha256: str
+    content_base64: str = Field(description="The file's bytes, base64.")
+
+
+class RecommendedTool(_Response):
+    """One library item: the preset written (speed, depth, pocket), or why not."""
+
+    id: str | None = None
+    index: int | None = None
+    description: str | None = None
+    number: int | None = None
+    tool_type: str | None = None
+    status: Literal["written", "skipped", "failed"]
+    reason: str | None = Field(None, description="Why skipped or failed.")
+    spindle_speed_rpm: int | None = Field(None, description="The preset's n, rpm.")
+    stepdown_m: float | None = Field(None, description="The axial depth allowed, m (the preset's stepdown, in the "
+                                                        "tool's unit, rounds it down).")
+    depth_limit_m: float | None = Field(None, description="The smallest depth limit within the speed window, m.")
+    safety_factor: float | None = None
+    robust_depth_limit_m: float | None = Field(None, description="The robust limit used, when uncertainty is given.")
+    pocket: dict[str, float] | None = Field(None, description="low_rpm, high_rpm, width_rpm of the stable pocket.")
+    lobe_method: str | None = None
+
+
+class RecommendReport(_Response):
+    """Chatter-safe presets written into a Fusion library, and how each was chosen."""
+
+    library_id: str
+    library: dict[str, Any] = Field(description="file_name, format, sha256_before, sha256_after.")
+    frf_source: dict[str, Any] = Field(description="Where the tool-point FRFs came from (the stored sync).")
+    options: dict[str, Any] = Field(description="Material, cutting coefficients and their source, speed range, "
+                                                "rule parameters.")
+    rule: dict[str, Any] = Field(description="The pocket rule.")
+    preset_name: str
+    summary: dict[str, int] = Field(description="Tools by status: written, skipped, failed.")
+    tools: list[RecommendedTool]
+    file: RecommendedFile
 
 
 class LibraryList(_Response):

@@ -100,5 +100,6 @@ def test_openapi_security_says_which_operations_need_a_key(make_client, anonymou
             assert {"APIKey": []} in security, (method, path)
             r = client.request(method, path, json={})  # no key
             assert (r.status_code != 401) == optional, (method, path, security, r.status_code)
-            write = method == "DELETE" or (method, path) == ("POST", "/v1/measurements") or ":sync" in path
+            write = (method == "DELETE" or (method, path) == ("POST", "/v1/measurements") or ":sync" in path
+                     or ":recommend" in path)
             assert optional == (anonymous_read and not write), (method, path)
