@@ -22,10 +22,13 @@ router = APIRouter(prefix="/v1", tags=["stability lobes"], route_class=ServiceRo
 
 @router.post("/stability-lobes", dependencies=[Depends(require_json)], response_model=LobesResult,
              responses={**problems(401, 413, 415, 422), **ASYNC_ACCEPTED}, openapi_extra=body_limit("lobes"),
-             summary="Stability lobes (zero-order Altintas–Budak)")
-def stability_lobes(body: LobesRequest, request: Request, state: StateDep, who: ReadAccess, prefer: PreferHeader = None) -> Response:
+             summary="Stability lobes (zero-order or semi-discretization)")
+def stability_lobes(body: LobesRequest, request: Request, state: StateDep, who: ReadAccess,
+                    prefer: PreferHeader = None) -> Response:
     """Axial depth limit (m) versus spindle speed (rpm), its chatter frequency (Hz) and every
     lobe, from inline tool-point FRFs (``frf_x``, optional ``frf_y``) or an ``assembly``.
+    ``"method"``: ``zoa`` (zero-order, Altintas–Budak; the default) or ``semi_discretization``
+    (first-order, Insperger–Stépán: right at low radial immersion, and it finds the flip lobes).
 
     Under the compute budget (speeds × lines, and the assembly's prediction); ``Prefer:
     respond-async`` runs it as a job."""
