@@ -395,7 +395,26 @@ def _segments(value: object, path: str, materials: Mapping[str, Material]) -> tu
 
 def parse_spindle(value: object, materials: Mapping[str, Material], path: str = "spindle"
                   ) -> SpindleSpec | MeasuredSpindleSpec:
-    """An analytical spindle (segments nose → rear, bearings) or a stored measurement id."""
+    """An analytical spindle (segments nose → rear, bearings) or a stored measurement id.
+
+    Parameters
+    ----------
+    value : object
+        The parsed JSON of ``spindle``.
+    materials : mapping of str to Material
+        The materials a segment may name (built-in and the request's own).
+    path : str
+        The value's path in the request, named in errors.
+
+    Returns
+    -------
+    SpindleSpec or MeasuredSpindleSpec
+
+    Raises
+    ------
+    InputError
+        A missing, mistyped or out-of-bounds field, named by its path.
+    """
     o = Fields(value, path)
     if "measurement_id" in o.value:
         o.only("measurement_id", "artifact_method", "effective_length_m")
@@ -429,7 +448,26 @@ def parse_spindle(value: object, materials: Mapping[str, Material], path: str = 
 
 
 def parse_holder(value: object, materials: Mapping[str, Material], path: str = "holder") -> HolderSpec:
-    """Holder segments from the gauge line toward the tool end."""
+    """Holder segments from the gauge line toward the tool end.
+
+    Parameters
+    ----------
+    value : object
+        The parsed JSON of ``holder``.
+    materials : mapping of str to Material
+        The materials a segment may name (built-in and the request's own).
+    path : str
+        The value's path in the request, named in errors.
+
+    Returns
+    -------
+    HolderSpec
+
+    Raises
+    ------
+    InputError
+        A missing, mistyped or out-of-bounds field, named by its path.
+    """
     o = Fields(value, path)
     o.only("segments")
     return HolderSpec(_segments(o.value.get("segments"), o.at("segments"), materials))
@@ -441,7 +479,27 @@ _TOOL_FIELDS = ("material", "diameter_m", "shank_diameter_m", "overall_length_m"
 
 
 def parse_tool(value: object, materials: Mapping[str, Material], path: str = "tool") -> ToolSpec:
-    """The parametric tool, with the geometric rules of the contract checked."""
+    """The parametric tool, with the geometric rules of the contract checked.
+
+    Parameters
+    ----------
+    value : object
+        The parsed JSON of ``tool``.
+    materials : mapping of str to Material
+        The materials a segment may name (built-in and the request's own).
+    path : str
+        The value's path in the request, named in errors.
+
+    Returns
+    -------
+    ToolSpec
+
+    Raises
+    ------
+    InputError
+        A missing, mistyped or out-of-bounds field, or a broken geometric rule
+        (flute ≤ stickout ≤ overall length, shoulder between flute and stickout, …).
+    """
     o = Fields(value, path)
     o.only(*_TOOL_FIELDS)
     diameter = o.number("diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
@@ -578,7 +636,26 @@ _COMMON_FIELDS = ("frequency", "beam_theory", "shear_coefficient", "materials", 
 
 
 def parse_common(document: object, path: str = "", max_lines: int = MAX_FREQUENCY_LINES) -> CommonSpec:
-    """Frequency grid, beam theory, shear coefficient, materials and spindle of a document."""
+    """Frequency grid, beam theory, shear coefficient, materials and spindle of a document.
+
+    Parameters
+    ----------
+    document : object
+        A parsed request (an assembly, or the shared part of a batch).
+    path : str
+        Its path in the request (``""`` for the request itself).
+    max_lines : int
+        Largest accepted number of frequency lines.
+
+    Returns
+    -------
+    CommonSpec
+
+    Raises
+    ------
+    InputError
+        A missing, mistyped or out-of-bounds field, named by its path.
+    """
     o = Fields(document, path)
     if "frequency" not in o.value:
         raise InputError(o.at("frequency"), "is required")
