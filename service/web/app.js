@@ -352,6 +352,7 @@
       radial_ratio: numberFrom("kr", "Kr"),
       radial_immersion: numberFrom("immersion", "Radial immersion"),
       milling: $("milling").value,
+      method: $("lobes-method").value,
       spindle_speed_rpm: {
         start: numberFrom("speed-start", "Speed from"),
         stop: numberFrom("speed-stop", "Speed to"),

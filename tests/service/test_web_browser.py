@@ -199,6 +199,15 @@ def test_predict_ra1_draw_frf_and_lobes_and_download(server, browser, downloads)
     assert " mm (chatter at " in browser.find_element(By.ID, "lobes-min-depth").text
     assert " rpm" in browser.find_element(By.ID, "lobes-pockets").text
 
+    # the semi-discretization at a thin radial cut: the same drawing from the other method
+    Select(browser.find_element(By.ID, "lobes-method")).select_by_value("semi_discretization")
+    for field, value in (("immersion", "0.05"), ("speed-count", "120")):
+        browser.find_element(By.ID, field).clear()
+        browser.find_element(By.ID, field).send_keys(value)
+    browser.find_element(By.ID, "lobes").click()
+    _wait_state(browser, "lobes")
+    assert 60 < _points(browser, "lobes-envelope-path") <= 120  # 120 speeds
+
     browser.find_element(By.ID, "download-lobes-png").click()
     png = _wait_download(downloads, ".png")
     WebDriverWait(browser, WAIT_S).until(lambda d: png.stat().st_size > 1000)
