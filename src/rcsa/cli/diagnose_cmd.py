@@ -9,7 +9,14 @@ import typer
 
 from rcsa.app.figures import FIGURE_SUFFIXES, diagnosis_with_figure
 from rcsa.app.stores import open_store
-from rcsa.cli._common import fail, read_json, run_guarded, write_json
+from rcsa.cli._common import (
+    QuietOption,
+    fail,
+    progress_callback,
+    read_json,
+    run_guarded,
+    write_json,
+)
 from rcsa.cli.predict_cmd import StoreOption
 
 
@@ -23,6 +30,7 @@ def register(app: typer.Typer) -> None:
         plot: Annotated[Path | None, typer.Option("--plot", help="Also draw measured/base/corrected FRFs and the "
                                                                   "gap map to this .png or .svg file.")] = None,
         store: StoreOption = None,
+        quiet: QuietOption = False,
     ) -> None:
         """Where model and measurement part, which unmodelled effect explains it, and how far the gap shrinks.
 
@@ -33,7 +41,9 @@ def register(app: typer.Typer) -> None:
             raise fail(f"--plot: the file must end in .png or .svg, got {plot.name!r}")
         doc = read_json(request)
         try:
-            response = run_guarded(lambda: diagnosis_with_figure(doc, plot, store=open_store(store) if store else None))
+            with progress_callback("diagnosis", quiet) as progress:
+                response = run_guarded(lambda: diagnosis_with_figure(
+                    doc, plot, store=open_store(store) if store else None, progress=progress))
         except OSError as exc:
             raise fail(f"cannot write {plot}: {exc.strerror or exc}") from None
         write_json(response, out)

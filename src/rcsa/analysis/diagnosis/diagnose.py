@@ -11,12 +11,14 @@ from typing import Any
 
 from rcsa.analysis.diagnosis.report import build_response
 from rcsa.analysis.diagnosis.state import Analysis, analyse
+from rcsa.analysis.progress import Progress
 from rcsa.model.spindle_side import BaseResolver
 
 __all__ = ["Analysis", "analyse", "diagnose"]
 
 
-def diagnose(request: Mapping[str, Any], resolve_base: BaseResolver | None = None) -> dict[str, Any]:
+def diagnose(request: Mapping[str, Any], resolve_base: BaseResolver | None = None,
+             progress: Progress | None = None) -> dict[str, Any]:
     """Diagnose the gap between a base model and tap-test measurements.
 
     Parameters
@@ -29,6 +31,8 @@ def diagnose(request: Mapping[str, Any], resolve_base: BaseResolver | None = Non
         Looks a measured spindle (``assembly.spindle = {"measurement_id": ...}``) up
         (:data:`rcsa.model.spindle_side.BaseResolver`; the application layer passes one on its
         store). Without it only analytical spindles are accepted.
+    progress : callable, optional
+        ``progress(done, total)`` at each step (:mod:`rcsa.analysis.progress`).
 
     Returns
     -------
@@ -42,6 +46,6 @@ def diagnose(request: Mapping[str, Any], resolve_base: BaseResolver | None = Non
     rcsa.errors.InputError
         For an invalid request (the field and the rule are named).
     """
-    a = analyse(request, resolve_base)
+    a = analyse(request, resolve_base, progress)
     return build_response(a)
 

@@ -28,6 +28,7 @@ from rcsa.analysis.diagnosis.perturbed_model import BaseReceptance, Knobs, Parts
 from rcsa.analysis.diagnosis.problem import Problem
 from rcsa.analysis.diagnosis.request import parse_request
 from rcsa.analysis.diagnosis.validation import HeldOut, folds, held_out
+from rcsa.analysis.progress import Progress, report
 from rcsa.errors import InputError
 from rcsa.model.spindle_side import BaseResolver
 
@@ -87,9 +88,13 @@ class Analysis:
     resolve_base : callable, optional
         Looks a measured spindle up (:data:`rcsa.model.spindle_side.BaseResolver`); needed
         when ``assembly.spindle`` is ``{"measurement_id": ...}``.
+    progress : callable, optional
+        ``progress(done, total)`` after the base model, after each candidate effect's fit,
+        after the held-out validation and at the end (:mod:`rcsa.analysis.progress`).
     """
 
-    def __init__(self, request: Mapping[str, Any], resolve_base: BaseResolver | None = None) -> None:
+    def __init__(self, request: Mapping[str, Any], resolve_base: BaseResolver | None = None,
+                 progress: Progress | None = None) -> None:
         self.started = t0 = time.perf_counter()
         clock = _Phases()
         self.request = parse_request(request, resolve_base)
@@ -112,7 +117,12 @@ class Analysis:
         n_feat = p.base_features.size
         self.like = Likelihood(p.measured_features, self.disc, np.arange(n_feat), opts.likelihood)
         self.log_z0 = float(self.like(p.base_features))
-        self.fits = [fit_candidate(c, self.features_at, self.like, self.log_z0) for c in self.candidates]
+        steps = len(self.candidates) + 3  # base model and discrepancy, each candidate, held-out, second effect
+        report(progress, 1, steps)
+        self.fits = []
+        for c in self.candidates:
+            self.fits.append(fit_candidate(c, self.features_at, self.like, self.log_z0))
+            report(progress, len(self.fits) + 1, steps)
         self.decision: Decision = decide(self.fits, opts.claim_threshold, opts.ambiguity_window)
         clock.mark("candidates")
         self.folds = folds([m.tool.stickout_m for m in self.request.measurements], opts.held_out)
@@ -122,10 +132,12 @@ class Analysis:
             if f.candidate.name in shown:
                 self.held[f.candidate.name] = self._held_out([f.candidate], [f.map])
         clock.mark("held_out")
+        report(progress, steps - 1, steps)
         self.second: tuple[Fit, HeldOut | None, float] | None = None
         if self.decision.status == "identified" and opts.max_effects >= 2:
             self.second = self._greedy_second()
         clock.mark("second_effect")
+        report(progress, steps, steps)
         self.timings_s = clock.phases
         self.runtime_s = time.perf_counter() - t0
 
@@ -359,7 +371,8 @@ class Analysis:
         return out
 
 
-def analyse(request: Mapping[str, Any], resolve_base: BaseResolver | None = None) -> Analysis:
+def analyse(request: Mapping[str, Any], resolve_base: BaseResolver | None = None,
+            progress: Progress | None = None) -> Analysis:
     """Run a diagnosis and keep its full state (see :class:`Analysis`).
 
     Parameters
@@ -368,5 +381,8 @@ def analyse(request: Mapping[str, Any], resolve_base: BaseResolver | None = None
     resolve_base : callable, optional
         Looks a measured spindle up (needed for ``assembly.spindle = {"measurement_id": ...}``);
         the application layer passes one on its store.
+    progress : callable, optional
+        ``progress(done, total)``, called after the base model, after each candidate effect's
+        fit, after the held-out validation and at the end.
     """
-    return Analysis(request, resolve_base)
+    return Analysis(request, resolve_base, progress)
