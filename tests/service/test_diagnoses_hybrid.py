@@ -78,6 +78,18 @@ def test_rest_refuses_meaningless_hybrid_combinations_with_a_422_naming_the_fiel
             assert words in body["detail"], (field, body["detail"])
 
 
+def test_an_async_request_is_refused_at_once_not_as_a_failed_job(make_client, ids):
+    """``Prefer: respond-async`` validates what the run would check first, the measured spindle included."""
+    async_read = {**READ, "Prefer": "respond-async"}
+    with make_client() as client:
+        for req, field, words in _refusals(ids)[:2]:
+            body = assert_problem(client.post("/v1/diagnoses", json=req, headers=async_read), 422, field)
+            assert words in body["detail"], body["detail"]
+        r = client.post("/v1/diagnoses", json=_request(ids, "holder_tip", effects=["sensor_mass"]),
+                        headers=async_read)
+        assert r.status_code == 202, r.text[:300]
+
+
 def test_cli_refuses_meaningless_hybrid_combinations_naming_the_field(store_path, ids, tmp_path):
     from rcsa.cli import app
 
@@ -93,6 +105,7 @@ def test_cli_refuses_meaningless_hybrid_combinations_naming_the_field(store_path
 def test_rest_hybrid_diagnosis_reports_bearings_and_the_joint_not_applicable(make_client, ids):
     """At holder_tip the answer runs and says what it did not consider, and why."""
     req = _request(ids, "holder_tip", effects=["sensor_mass", "spindle_rotational_receptance"])
+    req["tolerances"] = {"spindle_noise_rel": 0.002}  # the spindle's own tolerances pass the typed schema
     with make_client() as client:
         r = client.post("/v1/diagnoses", json=copy.deepcopy(req), headers=READ)
     assert r.status_code == 200, r.text
@@ -101,4 +114,6 @@ def test_rest_hybrid_diagnosis_reports_bearings_and_the_joint_not_applicable(mak
     assert "measured" in na["bearings"] and "inside" in na["spindle_holder_joint"]
     assert {e["effect"] for e in body["ranking"]} == {"sensor_mass", "spindle_rotational_receptance"}
     assert body["spindle_measurement"]["plane"] == "holder_tip"
+    noise = body["spindle_measurement"]["uncertainty_in_expected_scatter"]["noise"]
+    assert noise["default_relative_sd"] == 0.002
     assert body["verdict"]["effect"] == "none"  # the taps are the model itself

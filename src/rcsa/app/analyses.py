@@ -128,9 +128,9 @@ def validate(kind: str, request: Mapping[str, Any], *, store: MeasurementSource 
     """Refuse an invalid request before it is queued as a job (the checks its run makes
     first), so that a bad request is a 422 at once instead of a failed job."""
     if kind == "diagnosis":
-        from rcsa.analysis.diagnosis.request import parse_request
+        from rcsa.analysis.diagnosis.state import validate as validate_diagnosis
 
-        parse_request(request, resolver(store))
+        validate_diagnosis(request, resolver(store))
     elif kind == "identification":
         from rcsa.analysis.joint_identification.request import parse_identification_request
 

@@ -26,13 +26,13 @@ from rcsa.analysis.diagnosis.candidates import Candidate, catalogue, not_applica
 from rcsa.analysis.diagnosis.discrepancy import Discrepancy
 from rcsa.analysis.diagnosis.perturbed_model import BaseReceptance, Knobs, PartsBuilder, Solver
 from rcsa.analysis.diagnosis.problem import Problem
-from rcsa.analysis.diagnosis.request import parse_request
+from rcsa.analysis.diagnosis.request import Request, parse_request
 from rcsa.analysis.diagnosis.validation import HeldOut, folds, held_out
 from rcsa.analysis.progress import Progress, report
 from rcsa.errors import InputError
 from rcsa.model.spindle_side import BaseResolver
 
-__all__ = ["Analysis", "analyse"]
+__all__ = ["Analysis", "analyse", "validate"]
 
 # Signatures more collinear than this cannot be told apart: a second effect along the first
 # one's direction is refused (``diagnosis.md`` §4.7).
@@ -97,15 +97,8 @@ class Analysis:
                  progress: Progress | None = None) -> None:
         self.started = t0 = time.perf_counter()
         clock = _Phases()
-        self.request = parse_request(request, resolve_base)
-        opts = self.request.options
-        self.problem = p = Problem(self.request)
-        self.not_applicable = not_applicable(p.spec, p.tools, p.measured)
-        impossible = [e for e in opts.effects if e in self.not_applicable and self.not_applicable[e][1]]
-        if opts.effects_requested and impossible:
-            raise InputError("options.effects", "; ".join(
-                f"{e} is not applicable here ({self.not_applicable[e][0]})" for e in impossible)
-                + ": leave it out")
+        self.request, self.problem, self.not_applicable = _set_up(request, resolve_base)
+        opts, p = self.request.options, self.problem
         clock.mark("setup")
         self.disc = p.discrepancy()
         clock.mark("monte_carlo")
@@ -369,6 +362,39 @@ class Analysis:
                 hit = solvers[key] = (Solver(m.frequency_hz, cache_size=4), PartsBuilder(p.spec, p.plane, base))
             out.append(hit[0].tip_h(hit[1].parts(m.tool, k)))
         return out
+
+
+def _set_up(request: Mapping[str, Any], resolve_base: BaseResolver | None
+            ) -> tuple[Request, Problem, dict[str, tuple[str, bool]]]:
+    """Parse, look the measured spindle up, and refuse effects that cannot exist on it."""
+    parsed = parse_request(request, resolve_base)
+    p = Problem(parsed)
+    na = not_applicable(p.spec, p.tools, p.measured)
+    opts = parsed.options
+    impossible = [e for e in opts.effects if e in na and na[e][1]]
+    if opts.effects_requested and impossible:
+        raise InputError("options.effects", "; ".join(
+            f"{e} is not applicable here ({na[e][0]})" for e in impossible) + ": leave it out")
+    return parsed, p, na
+
+
+def validate(request: Mapping[str, Any], resolve_base: BaseResolver | None = None) -> None:
+    """Every check a diagnosis makes before it computes (fields, the measured spindle and its
+    band, combinations that mean nothing), without computing it (milliseconds).
+
+    Parameters
+    ----------
+    request : dict
+        The diagnosis request.
+    resolve_base : callable, optional
+        Looks a measured spindle up.
+
+    Raises
+    ------
+    rcsa.errors.InputError
+        Naming the field and the rule, as :func:`analyse` would.
+    """
+    _set_up(request, resolve_base)
 
 
 def analyse(request: Mapping[str, Any], resolve_base: BaseResolver | None = None,
