@@ -426,11 +426,16 @@ def main() -> None:
     plan = [plan[i] for i in plan_rng.permutation(len(plan))]
     t0 = time.perf_counter()
     records: list[dict] = []
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    partial = args.out.with_suffix(".partial.jsonl")  # as in run_hybrid: a run cut short can still be scored
+    partial.write_text("")
     with ProcessPoolExecutor(max_workers=args.workers) as pool:
         futures = [pool.submit(run_trial, i, e, args.seed, args.tolerance_scale) for i, e in enumerate(plan)]
         for k, fut in enumerate(futures):
             rec = fut.result()
             records.append(rec)
+            with partial.open("a") as fh:
+                fh.write(json.dumps(rec) + "\n")
             print(f"[{k + 1}/{len(plan)}] {rec['effect']:29s} -> {rec['status']:10s} {rec['verdict']:29s} "
                   f"SNR {rec['snr_true']:5.1f} lnBF {rec['log_bayes_factor'] or 0:7.1f} {rec['runtime_s']:.1f} s",
                   flush=True)
@@ -442,8 +447,8 @@ def main() -> None:
                            "tolerance_scale": args.tolerance_scale, "workers": args.workers,
                            "machine": machine()}
     print_summary(summary)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps({"summary": summary, "trials": records}, indent=1))
+    partial.unlink()
     print(f"wrote {args.out}")
 
 
