@@ -387,6 +387,8 @@ def main() -> None:
     ap.add_argument("--length-log-sd", type=float, default=truth_hybrid.LENGTH_LOG_SD,
                     help="hybrid: how well the cantilever length of a direct_frf spindle is known (ln sd; "
                          "the estimate scatters by it and the request states it)")
+    ap.add_argument("--score-partial", type=Path, metavar="JSONL",
+                    help="hybrid: only score the records a cut-short run wrote (with that run's settings)")
     ap.add_argument("--check-mesh", action="store_true", help="only print the FE truth's discretisation error")
     ap.add_argument("--calibrate", choices=["holder_tool", "spindle_holder"],
                     help="only refit the distributed contact closest to the base joint")
@@ -417,6 +419,9 @@ def main() -> None:
         return
     if args.calibrate:
         calibrate(args.calibrate)
+        return
+    if args.score_partial:
+        score_partial(args)
         return
     if args.hybrid:
         run_hybrid(args)
@@ -465,6 +470,47 @@ def machine() -> str:
     return f"{model}, {os.cpu_count()} cores (shared)"
 
 
+def hybrid_summary(records: list[dict], args: argparse.Namespace, planned: int) -> dict:
+    """Scores of hybrid trials per kind of spindle and pooled, printed; ``planned`` trials were asked for."""
+    kinds = [k for k in args.kinds if any(r["kind"] == k for r in records)]
+    summary = {"pooled": summarise(records), "by_kind": {k: summarise([r for r in records if r["kind"] == k])
+                                                         for k in kinds}}
+    rot = [r for r in records if r["kind"] == "direct_frf" and r["effect"] == "spindle_rotational_receptance"]
+    strong = [r for r in rot if r["snr_true"] >= 10]
+    summary["direct_frf_rotation_named"] = {
+        "n": len(rot), "identified": float(np.mean([r["top1"] for r in rot])) if rot else None,
+        "named_in_verdict": float(np.mean([r["in_set"] for r in rot])) if rot else None,
+        "n_snr_ge_10": len(strong),
+        "identified_snr_ge_10": float(np.mean([r["top1"] for r in strong])) if strong else None}
+    summary["trials_done"], summary["trials_planned"] = len(records), planned
+    summary["command"] = " ".join(["benchmarks/bench_diagnosis.py", *sys.argv[1:]])
+    summary["settings"] = {"stickouts_m": list(truth_hybrid.STICKOUTS_M), "band_hz": [50.0, 8000.0],
+                           "line_step_hz": 2.0, "noise": "taps 1 % + floor -50 dB of peak, 5 averages; "
+                           "stored spindle FRFs 0.3 %", "plane": "spindle_nose", "kinds": list(args.kinds),
+                           "trials_per_class_and_kind": args.trials_per_class, "seed": args.seed,
+                           "direct_frf_length_log_sd": args.length_log_sd,
+                           "workers": args.workers, "machine": machine()}
+    for k in kinds:
+        print(f"===== {k}")
+        print_summary(summary["by_kind"][k])
+    print("===== pooled")
+    print_summary(summary["pooled"])
+    print(f"direct_frf rotation errors named: {summary['direct_frf_rotation_named']}")
+    print(f"trials: {len(records)} of {planned} planned")
+    return summary
+
+
+def score_partial(args: argparse.Namespace) -> None:
+    """Score the records a cut-short hybrid run wrote (``--score-partial``) as the full run would."""
+    records = [json.loads(line) for line in args.score_partial.read_text().splitlines() if line.strip()]
+    classes = [c for c in truth_hybrid.HYBRID_EFFECTS if c in args.classes or args.classes == list(truth.EFFECTS)]
+    summary = hybrid_summary(records, args, planned=len(classes) * len(args.kinds) * args.trials_per_class)
+    summary["cut_short"] = True
+    out = args.out if args.out != DEFAULT_OUT else DEFAULT_OUT.with_name("diagnosis_hybrid.json")
+    out.write_text(json.dumps({"summary": summary, "trials": records}, indent=1))
+    print(f"wrote {out}")
+
+
 def run_hybrid(args: argparse.Namespace) -> None:
     """The hybrid benchmark: every kind of measured spindle × every class it admits."""
     classes = [c for c in truth_hybrid.HYBRID_EFFECTS if c in args.classes or args.classes == list(truth.EFFECTS)]
@@ -487,26 +533,8 @@ def run_hybrid(args: argparse.Namespace) -> None:
             print(f"[{n + 1}/{len(plan)}] {rec['kind']:16s} {rec['effect']:29s} -> {rec['status']:10s} "
                   f"{rec['verdict']:29s} SNR {rec['snr_true']:5.1f} lnBF {rec['log_bayes_factor'] or 0:7.1f} "
                   f"{rec['runtime_s']:.1f} s", flush=True)
-    summary = {"pooled": summarise(records),
-               "by_kind": {k: summarise([r for r in records if r["kind"] == k]) for k in args.kinds}}
-    rot = [r for r in records if r["kind"] == "direct_frf" and r["effect"] == "spindle_rotational_receptance"]
-    summary["direct_frf_rotation_named"] = {
-        "n": len(rot), "identified": float(np.mean([r["top1"] for r in rot])) if rot else None,
-        "named_in_verdict": float(np.mean([r["in_set"] for r in rot])) if rot else None}
+    summary = hybrid_summary(records, args, planned=len(plan))
     summary["wall_time_s"] = time.perf_counter() - t0
-    summary["command"] = " ".join(["benchmarks/bench_diagnosis.py", *sys.argv[1:]])
-    summary["settings"] = {"stickouts_m": list(truth_hybrid.STICKOUTS_M), "band_hz": [50.0, 8000.0],
-                           "line_step_hz": 2.0, "noise": "taps 1 % + floor -50 dB of peak, 5 averages; "
-                           "stored spindle FRFs 0.3 %", "plane": "spindle_nose", "kinds": list(args.kinds),
-                           "trials_per_class_and_kind": args.trials_per_class, "seed": args.seed,
-                           "direct_frf_length_log_sd": args.length_log_sd,
-                           "workers": args.workers, "machine": machine()}
-    for k in args.kinds:
-        print(f"===== {k}")
-        print_summary(summary["by_kind"][k])
-    print("===== pooled")
-    print_summary(summary["pooled"])
-    print(f"direct_frf rotation errors named: {summary['direct_frf_rotation_named']}")
     out.write_text(json.dumps({"summary": summary, "trials": records}, indent=1))
     partial.unlink()
     print(f"wrote {out}")
