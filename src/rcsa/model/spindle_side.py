@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -23,7 +23,28 @@ from rcsa.model.prediction import Prediction, SubassemblyCache, predict_model, t
 from rcsa.model.wire import complex_to_wire
 from rcsa.physics.arrays import ComplexArray, FloatArray
 
-__all__ = ["BaseResolver", "MeasuredBase", "SpindleSide", "spread_of_bounds"]
+__all__ = ["BaseResolver", "BaseUncertainty", "MeasuredBase", "SpindleSide", "spread_of_bounds"]
+
+
+class BaseUncertainty(Protocol):
+    """How uncertain a measured spindle-side receptance is: draws of it, and what was assumed.
+
+    Implemented by the measured layer per kind of measurement (:mod:`rcsa.measured.hybrid`):
+    measurement noise from the stored coherence (or a default), propagated through the
+    artifact identification where there is one.
+    """
+
+    def draw(self, rng: np.random.Generator, n: int, default_noise_rel: float) -> ComplexArray:
+        """``n`` equally likely receptances, shape (n, nfreq, 2, 2), on the base's grid.
+
+        ``default_noise_rel`` (relative sd of |H| and of its phase, per real and imaginary
+        part) is used for FRFs stored without coherence.
+        """
+        ...
+
+    def summary(self, default_noise_rel: float) -> dict[str, Any]:
+        """What the draws assume (noise source and level, conditioning), JSON-ready."""
+        ...
 
 
 @dataclass(frozen=True)
@@ -41,6 +62,11 @@ class MeasuredBase:
         What was done (kind, method, conditioning, interpolation), JSON-ready.
     artifact_diameter_m : float or None
         Shank diameter a holder-tip measurement was taken with (to check the tool's shank).
+    uncertainty : BaseUncertainty or None
+        Draws of the receptance under the measurement's own noise (used by analyses that
+        propagate it, e.g. the diagnosis's expected scatter); None when unknown.
+    effective_length_m : float or None
+        ``direct_frf``: the equivalent-cantilever length of the rotation estimate, m.
     """
 
     plane: str
@@ -49,6 +75,8 @@ class MeasuredBase:
     notes: tuple[str, ...] = ()
     report: dict[str, Any] = field(default_factory=dict)
     artifact_diameter_m: float | None = None
+    uncertainty: BaseUncertainty | None = None
+    effective_length_m: float | None = None
 
 
 #: Turns a measured spindle of a request into its base receptance on a grid (Hz).
