@@ -13,9 +13,10 @@ from rcsa.app.stores import resolver
 from rcsa.measured.store import MeasurementStore
 from rcsa.model import batch
 from rcsa.model.bounds import MAX_BATCH_COMBINATIONS, MAX_FREQUENCY_LINES
-from rcsa.model.contract import AssemblySpec, CommonSpec, parse_assembly
+from rcsa.model.contract import AssemblySpec, CommonSpec
 from rcsa.model.prediction import Prediction
 from rcsa.model.spindle_side import SpindleSide
+from rcsa.model.uncertainty import parse_prediction_request
 
 __all__ = ["predict", "predict_batch"]
 
@@ -27,7 +28,9 @@ def predict(assembly: Mapping[str, Any] | AssemblySpec, *, store: MeasurementSto
     Parameters
     ----------
     assembly : dict or AssemblySpec
-        The contract's assembly document (SI units), or an already parsed spec.
+        The contract's assembly document (SI units), or an already parsed spec. The document
+        may carry ``"uncertainty": {"draws", "seed", "tolerances"}`` (each optional): the
+        result then gains the band of :mod:`rcsa.model.uncertainty`.
     store : MeasurementStore, optional
         Where ``"spindle": {"measurement_id": ...}`` is looked up; the default store
         (``RCSA_STORE`` or the per-user location) when omitted.
@@ -47,10 +50,11 @@ def predict(assembly: Mapping[str, Any] | AssemblySpec, *, store: MeasurementSto
     >>> [round(f, 2) for f in result["natural_frequencies_hz"]]
     [599.85, 921.69, 1115.51, 1383.61, 1444.68]
     """
-    spec = assembly if isinstance(assembly, AssemblySpec) else parse_assembly(assembly, max_lines)
+    spec, uncertainty = (assembly, None) if isinstance(assembly, AssemblySpec) else \
+        parse_prediction_request(assembly, max_lines)
     common = CommonSpec(spec.frequency_hz, spec.beam_theory, spec.shear_coefficient, spec.materials,
                         spec.spindle)
-    return SpindleSide(common, resolver(store)).predict(spec)
+    return SpindleSide(common, resolver(store)).predict(spec, uncertainty=uncertainty)
 
 
 def predict_batch(request: Mapping[str, Any], *, store: MeasurementStore | None = None,
