@@ -23,6 +23,13 @@ policy):
   a ``library-sync`` job (``202``), whose result is the report. ``Idempotency-Key`` makes
   retries safe; a job interrupted by a dead worker is resumed and takes the tools computed
   before the interruption from the cache.
+* ``POST /v1/libraries/{library_id}:recommend`` — chatter-safe presets: multipart with the Fusion
+  library (``.json``/``.tools``) as the file field ``library`` and the options (``material``,
+  ``max_rpm``, ...) as text fields. From the stored results of this library's last sync, each
+  milling tool's best stable pocket is written into the file as a preset. ``Accept:
+  application/json`` (default): the report, with the updated file in it (``file.content_base64``);
+  ``Accept: application/octet-stream`` (or ``?format=file``): the updated file itself, as a
+  download. Write key.
 * ``GET /v1/libraries`` · ``GET /v1/libraries/{library_id}`` (summary, per-tool status) ·
   ``GET /v1/libraries/{library_id}/results`` (``Accept: application/json`` — the shape of a
   library prediction —, ``application/x-hdf5`` or ``application/zip`` — one UFF 58 file per
@@ -31,13 +38,15 @@ policy):
 
 from __future__ import annotations
 
-import json
+import base64
+import hashlib
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Header, Path, Query, Request
 from fastapi.concurrency import run_in_threadpool
 from starlette.responses import Response
 
+from rcsa.app.inputs import decode_json
 from rcsa.app.libraries import (
     LIBRARY_ID_PATTERN,
     export_file,
@@ -45,14 +54,15 @@ from rcsa.app.libraries import (
     prepare_sync,
     read_library,
 )
+from rcsa.app.presets import OPTION_FIELDS, recommend_stored
 from rcsa.errors import InputError
 
 from ..bodies import form_text, read_body, read_upload, validate_json
 from ..deps import StateDep
 from ..errors import ProblemError
 from ..idempotency import IDEMPOTENCY_PROBLEMS, IdempotencyKeyHeader, IdempotentRoute
-from ..jobs import answer
-from ..responses import json_response, problems
+from ..jobs import answer, caller
+from ..responses import body_limit, json_response, problems
 from ..schemas import (
     Deleted,
     JobStatus,
@@ -60,6 +70,7 @@ from ..schemas import (
     LibraryPredictionRequest,
     LibraryResult,
     LibrarySummary,
+    RecommendReport,
     SyncReport,
 )
 from ..security import ReadAccess, WriteAccess
@@ -109,15 +120,16 @@ async def _library_inputs(request: Request, state: AppState) -> tuple[dict[str, 
             await body.close()
 
 
-@router.post("/tool-libraries:predict", response_model=LibraryResult, openapi_extra=_BODY, responses={
+@router.post("/tool-libraries:predict", response_model=LibraryResult, openapi_extra=body_limit("library", _BODY), responses={
     202: {"model": JobStatus, "description": "Queued as a job; poll Location."},
-    **problems(400, 401, 413, 415, 422), **IDEMPOTENCY_PROBLEMS}, summary="Tool-point FRFs of a Fusion tool library")
-async def predict_library(request: Request, state: StateDep, _: ReadAccess, prefer: PreferHeader = None,
+    **problems(400, 401, 413, 415, 422, 429), **IDEMPOTENCY_PROBLEMS}, summary="Tool-point FRFs of a Fusion tool library")
+async def predict_library(request: Request, state: StateDep, who: ReadAccess, prefer: PreferHeader = None,
                           idempotency_key: IdempotencyKeyHeader = None) -> Response:
     """One tool-point FRF per library tool that has a holder; the others skipped with a reason."""
     source, doc = await _library_inputs(request, state)
     work = await run_in_threadpool(lambda: prepare_library(state.bench, read_library(**source), **doc))
-    return await run_in_threadpool(lambda: answer(state, work, prefer=prefer, idempotency_key=idempotency_key))
+    return await run_in_threadpool(lambda: answer(state, work, prefer=prefer, idempotency_key=idempotency_key,
+                                                  owner=caller(who, request)))
 
 
 async def _from_form(form: Any, limit_bytes: int) -> tuple[dict[str, Any], dict[str, Any]]:
@@ -143,12 +155,12 @@ async def _from_form(form: Any, limit_bytes: int) -> tuple[dict[str, Any], dict[
             continue
         if name in _JSON_FIELDS:
             try:
-                doc[name] = json.loads(text)
-            except ValueError as exc:
+                doc[name] = decode_json(text, path=name, what=f"form field {name}")
+            except InputError:
                 if name == "shear_coefficient":
                     doc[name] = text
                     continue
-                raise InputError(name, f"must be JSON ({exc})") from None
+                raise
         elif name == "natural_frequencies":
             if text.lower() not in ("true", "false"):
                 raise InputError(name, "must be true or false")
@@ -174,12 +186,12 @@ LibraryId = Annotated[str, Path(pattern=LIBRARY_ID_PATTERN.pattern, description=
 HDF5, ZIP, JSON = "application/x-hdf5", "application/zip", "application/json"
 
 
-@router.post("/libraries/{library_id}:sync", response_model=SyncReport, openapi_extra=_BODY, responses={
+@router.post("/libraries/{library_id}:sync", response_model=SyncReport, openapi_extra=body_limit("library", _BODY), responses={
     202: {"model": JobStatus, "description": "Queued as a library-sync job; poll Location (its result is the "
                                              "sync report)."},
-    **problems(400, 401, 403, 413, 415, 422), **IDEMPOTENCY_PROBLEMS},
+    **problems(400, 401, 403, 413, 415, 422, 429), **IDEMPOTENCY_PROBLEMS},
     summary="Sync a stored library with a new export (write key)")
-async def sync_library(library_id: LibraryId, request: Request, state: StateDep, _: WriteAccess,
+async def sync_library(library_id: LibraryId, request: Request, state: StateDep, who: WriteAccess,
                        prefer: PreferHeader = None, idempotency_key: IdempotencyKeyHeader = None) -> Response:
     """Bring the stored library ``library_id`` up to date with this export of the tool library.
 
@@ -191,7 +203,8 @@ async def sync_library(library_id: LibraryId, request: Request, state: StateDep,
     source, doc = await _library_inputs(request, state)
     work = await run_in_threadpool(lambda: prepare_sync(state.bench, library_id, read_library(**source), **doc))
     return await run_in_threadpool(lambda: answer(state, work, prefer=prefer, idempotency_key=idempotency_key,
-                                                  headers={"Location": f"/v1/libraries/{library_id}"}))
+                                                  headers={"Location": f"/v1/libraries/{library_id}"},
+                                                  owner=caller(who, request)))
 
 
 @router.get("/libraries", response_model=LibraryList, responses=problems(401), summary="List stored libraries")
@@ -240,10 +253,10 @@ def delete_library(library_id: LibraryId, state: StateDep, _: WriteAccess) -> Re
     return json_response(state.bench.libraries.delete(library_id))
 
 
-def _negotiate(accept: str | None) -> str:
-    """The best of JSON, HDF5 and zip for an Accept header (JSON when it says nothing)."""
+def _negotiate(accept: str | None, offered: tuple[str, ...] = (JSON, HDF5, ZIP), what: str = "results") -> str:
+    """The best of ``offered`` for an Accept header (the first when it says nothing); 406 when none."""
     if not accept or not accept.strip():
-        return JSON
+        return offered[0]
     q: dict[str, float] = {}
     for part in accept.split(","):
         media, *params = [p.strip().lower() for p in part.split(";")]
@@ -256,9 +269,112 @@ def _negotiate(accept: str | None) -> str:
                     weight = 0.0
         q[media] = max(q.get(media, 0.0), weight)
     wildcard = max(q.get("*/*", 0.0), q.get("application/*", 0.0))
-    ranked = [(q.get(m, wildcard), -i, m) for i, m in enumerate((JSON, HDF5, ZIP))]
+    ranked = [(q.get(m, wildcard), -i, m) for i, m in enumerate(offered)]
     best = max(ranked)
     if best[0] <= 0:
-        raise ProblemError(406, "results are available as application/json, application/x-hdf5 or application/zip; "
-                                f"the Accept header {accept!r} allows none of them")
+        raise ProblemError(406, f"{what} are available as {' or '.join(offered)}; the Accept header {accept!r} "
+                                "allows none of them")
     return best[2]
+
+
+# --------------------------------------------------------------------------- chatter-safe presets
+
+OCTET = "application/octet-stream"
+_TEXT_OPTIONS = ("material", "milling", "method")
+_RECOMMEND_FIELDS = {
+    "library": "The Autodesk Fusion tool library (.json, or .tools: a zip holding tools.json) to write the presets "
+               "into; its tools are matched to the stored library by id.",
+    "material": "Workpiece material: a table entry (aluminium-7075, aluminium-6082, carbon-steel, alloy-steel, "
+                "stainless-steel, cast-iron, titanium-alloy, hardened-steel, or an alias such as 7075) or your own "
+                "name with tangential_coefficient_n_m2 and radial_ratio.",
+    "max_rpm": "The machine's highest spindle speed, rpm (required).",
+    "min_rpm": "The lowest spindle speed to consider, rpm (default 1000).",
+    "tangential_coefficient_n_m2": "K_tc of the linear edge-force model, N/m² (with radial_ratio; default: the "
+                                   "table's).",
+    "radial_ratio": "K_rc / K_tc.",
+    "radial_immersion": "Radial depth of cut / diameter, a_e/D (default 0.5).",
+    "milling": "down (default) or up.",
+    "safety_factor": "Stepdown = the smallest depth limit within the speed window / safety_factor (default 1.25).",
+    "speed_tolerance": "Relative half-width of the speed window that must stay stable (default 0.03).",
+    "max_surface_speed_m_min": "Surface-speed limit, m/min (default: the table's, for carbide tools).",
+    "feed_per_tooth_m": "Feed per tooth for the preset's feeds, m (default: f_z of the tool's own first preset).",
+    "method": "Stability-lobe method: zoa.",
+    "confidence": "Robust limit at this confidence (not available in this version).",
+}
+assert set(_RECOMMEND_FIELDS) - {"library"} == set(OPTION_FIELDS)
+_RECOMMEND_BODY = {"requestBody": {"required": True, "content": {
+    "multipart/form-data": {"schema": {
+        "type": "object", "required": ["library", "material", "max_rpm"],
+        "properties": {name: ({"type": "string", "format": "binary", "description": text} if name == "library"
+                              else {"type": "string", "description": text})
+                       for name, text in _RECOMMEND_FIELDS.items()},
+        "additionalProperties": False}}}}}
+
+
+async def _recommend_inputs(request: Request, limit_bytes: int) -> tuple[bytes, str | None, str | None, dict[str, Any]]:
+    kind, form = await read_body(request)
+    if kind != "form":
+        raise ProblemError(415, "send multipart/form-data: the Fusion library as the file field 'library' and the "
+                                "options as text fields (the file's bytes are kept exactly, so it cannot travel "
+                                "inside JSON)")
+    try:
+        unknown = sorted(set(form.keys()) - set(_RECOMMEND_FIELDS))
+        if unknown:
+            raise InputError(unknown[0], f"unknown form field (allowed: {', '.join(_RECOMMEND_FIELDS)})")
+        files = form.getlist("library")
+        if len(files) != 1:
+            raise InputError("library", "send exactly one Fusion library file (.json or .tools)")
+        data, name = await read_upload(files[0], "library", limit_bytes)
+        options: dict[str, Any] = {}
+        for field in OPTION_FIELDS:
+            text = form_text(form, field)
+            if text is None or text.strip() == "":
+                continue
+            if field in _TEXT_OPTIONS:
+                options[field] = text.strip()
+                continue
+            try:
+                options[field] = float(text)
+            except ValueError:
+                raise InputError(field, f"must be a number, got {text!r}") from None
+        return data, name or None, getattr(files[0], "content_type", None), options
+    finally:
+        await form.close()
+
+
+@router.post("/libraries/{library_id}:recommend", response_model=RecommendReport,
+             openapi_extra=body_limit("library", _RECOMMEND_BODY),
+             responses={200: {"description": "application/json: the report, with the updated library in "
+                                             "file.content_base64. application/octet-stream: the updated library "
+                                             "file (same format and name as uploaded).",
+                              "content": {OCTET: {"schema": {"type": "string", "format": "binary"}}}},
+                        **problems(400, 401, 403, 404, 406, 413, 415, 422), **IDEMPOTENCY_PROBLEMS},
+             summary="Write chatter-safe presets into a Fusion library from a stored library's results (write key)")
+async def recommend_presets(
+    library_id: LibraryId, request: Request, state: StateDep, _: WriteAccess,
+    accept: Annotated[str | None, Header(description="application/json (default: the report with the file in "
+                                                     "it) or application/octet-stream (the file).")] = None,
+    format: Annotated[Literal["report", "file"] | None, Query(
+        description="Instead of Accept: report (JSON) or file (the updated library).")] = None,
+    idempotency_key: IdempotencyKeyHeader = None,
+) -> Response:
+    """Per milling tool, the best stable pocket (speed, stepdown at the safety factor) as a Fusion preset.
+
+    The FRFs are the stored results of this library's last sync; a tool whose geometry changed
+    since (or that the sync does not know) is skipped with the reason. The preset is named
+    ``rcsa chatter-safe: <material>`` and its guid is fixed by the tool and the material, so that
+    sending the returned file again replaces it; nothing else in the file changes.
+    """
+    media = {"report": JSON, "file": OCTET}[format] if format else _negotiate(accept, (JSON, OCTET),
+                                                                                "a recommendation's report and file")
+    data, name, content_type, options = await _recommend_inputs(request, state.settings.max_upload_bytes)
+    result = await run_in_threadpool(lambda: recommend_stored(state.bench, library_id, data, options,
+                                                              file_name=name, content_type=content_type))
+    written = result.report["summary"]["written"]
+    if media == OCTET:
+        return Response(result.data, media_type=OCTET, headers={
+            "Content-Disposition": f'attachment; filename="{result.file_name}"', "X-RCSA-Presets-Written": str(written)})
+    return json_response({"library_id": library_id, **result.report, "file": {
+        "file_name": result.file_name, "media_type": result.media_type, "size_bytes": len(result.data),
+        "sha256": hashlib.sha256(result.data).hexdigest(),
+        "content_base64": base64.b64encode(result.data).decode("ascii")}})

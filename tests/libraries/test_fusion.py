@@ -588,3 +588,19 @@ def test_property_valid_tools_give_positive_lengths_and_stickout_within_oal(item
         assert math.fsum(s["length_m"] for s in segs) == pytest.approx(gauge * scale, rel=1e-9)
     parse_holder(combo.holder, BUILTIN_MATERIALS)
     parse_tool(tool, BUILTIN_MATERIALS)
+
+
+@pytest.mark.parametrize("per_cone", [None, 6])
+def test_a_gauge_line_a_sliver_inside_a_cone_gives_no_segment_below_the_shortest_beam(per_cone):
+    """Found by the property test: a gauge line 0.6 um into a cone, split in 6, gave 0.1 um
+    cylinders that the contract refuses (length >= 1 um). The last kept segment takes the sliver."""
+    item = {"type": "flat end mill", "unit": "millimeters", "BMC": "carbide",
+            "geometry": {"DC": 10.0, "SFDM": 10.0, "LCF": 20.0, "LB": 30.0, "OAL": 70.0, "NOF": 3},
+            "holder": {"type": "holder", "unit": "millimeters", "gaugeLength": 40.0006,
+                       "segments": [{"height": 40.0, "lower-diameter": 20.0, "upper-diameter": 30.0},
+                                    {"height": 20.0, "lower-diameter": 30.0, "upper-diameter": 50.0}]}}
+    combo = one(item, holder_segments_per_cone=per_cone)
+    assert combo.status == "ok", combo.reason
+    lengths = [s["length_m"] for s in combo.holder["segments"]]
+    assert min(lengths) >= 1e-6
+    assert math.fsum(lengths) == pytest.approx(0.0400006, rel=1e-12)

@@ -25,6 +25,7 @@ import numpy as np
 
 from rcsa.analysis.effect_report import FEATURES, EffectReport
 from rcsa.analysis.mode_features import ModeFeatures
+from rcsa.analysis.progress import Progress, report
 from rcsa.analysis.tool_point_model import ToolPointModel
 from rcsa.errors import InputError
 from rcsa.model.contract import AssemblySpec
@@ -78,7 +79,8 @@ def _features(modes: Sequence[FittedMode | None], window_rel: np.ndarray) -> Mod
 
 
 def hybrid_effect_analysis(model: ToolPointModel, names: Sequence[str], not_applicable: dict[str, str],
-                           relative_step: float, band_hz: tuple[float, float]) -> EffectReport:
+                           relative_step: float, band_hz: tuple[float, float],
+                           progress: Progress | None = None) -> EffectReport:
     """Sensitivities of the modal-fit modes of a hybrid model (see the module docstring).
 
     Parameters
@@ -93,6 +95,8 @@ def hybrid_effect_analysis(model: ToolPointModel, names: Sequence[str], not_appl
         δ in ln(parameter).
     band_hz : (float, float)
         Modes whose fitted natural frequency lies here.
+    progress : callable, optional
+        ``progress(done, total)`` after the nominal fit and after each parameter.
 
     Returns
     -------
@@ -112,6 +116,7 @@ def hybrid_effect_analysis(model: ToolPointModel, names: Sequence[str], not_appl
              f"prediction); each is refitted on its own band ({len(nominal)} modes in the band)"]
     lines = np.unique(np.concatenate([np.flatnonzero((f >= m.band_hz[0]) & (f <= m.band_hz[1]))
                                       for m in nominal])) if nominal else np.empty(0, dtype=int)
+    report(progress, 1, len(names) + 1)
     for j, name in enumerate(names):
         if not nominal:
             break
@@ -123,6 +128,8 @@ def hybrid_effect_analysis(model: ToolPointModel, names: Sequence[str], not_appl
         for q in FEATURES:
             with np.errstate(invalid="ignore", divide="ignore"):
                 sens[q][:, j] = (np.log(runs[0].feature(q)) - np.log(runs[1].feature(q))) / (2 * relative_step)
+        report(progress, j + 2, len(names) + 1)
+    report(progress, len(names) + 1, len(names) + 1)
     if not nominal:
         notes.append(f"the modal fit finds no mode in the band {band_hz[0]:g}–{band_hz[1]:g} Hz: nothing to analyse")
     notes.extend(f"{k}: {v}" for k, v in not_applicable.items())

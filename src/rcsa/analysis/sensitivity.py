@@ -54,10 +54,12 @@ from rcsa.analysis.mode_features import (
     ModeFeatures,
     mode_features,
 )
+from rcsa.analysis.progress import Progress, report
 from rcsa.analysis.tool_point_model import MeasuredSpindle, ToolPointModel
 from rcsa.errors import InputError
 from rcsa.model import fields
 from rcsa.model.assembly import build_model
+from rcsa.model.bounds import MAX_FREQUENCY_HZ, MIN_FREQUENCY_HZ
 from rcsa.model.contract import AssemblySpec, MeasuredSpindleSpec, SpindleSpec, parse_assembly
 from rcsa.model.parameters import get_parameter, is_damping, parameter_names, set_parameter
 from rcsa.model.spindle_side import BaseResolver
@@ -131,8 +133,9 @@ def _features_at(spec: AssemblySpec, base: ModeFeatures, band_hz: tuple[float, f
 def _band_of(spec: AssemblySpec, band_hz: Sequence[float] | None) -> tuple[float, float]:
     if band_hz is None:
         return float(spec.frequency_hz[0]), float(spec.frequency_hz[-1])
-    if len(band_hz) != 2 or not 0 < band_hz[0] < band_hz[1]:
-        raise InputError("band_hz", f"must be [start_hz, stop_hz] with 0 < start < stop, got {list(band_hz)}")
+    if len(band_hz) != 2 or not MIN_FREQUENCY_HZ <= band_hz[0] < band_hz[1] <= MAX_FREQUENCY_HZ:
+        raise InputError("band_hz", f"must be [start_hz, stop_hz] with {MIN_FREQUENCY_HZ:g} <= start < stop <= "
+                                    f"{MAX_FREQUENCY_HZ:g} (0 Hz is singular), got {list(band_hz)}")
     return float(band_hz[0]), float(band_hz[1])
 
 
@@ -156,7 +159,7 @@ def nominal_features(spec: AssemblySpec, band_hz: Sequence[float] | None = None)
 def effect_analysis(assembly: Mapping[str, Any] | AssemblySpec, *, parameters: Sequence[str] | None = None,
                     relative_step: float = DEFAULT_RELATIVE_STEP,
                     band_hz: Sequence[float] | None = None,
-                    resolve_base: BaseResolver | None = None) -> EffectReport:
+                    resolve_base: BaseResolver | None = None, progress: Progress | None = None) -> EffectReport:
     """Normalised sensitivities of every mode in a band to bearing, joint and tool parameters.
 
     On a measured spindle (``"spindle": {"measurement_id": ...}``, with ``resolve_base``)
@@ -175,6 +178,9 @@ def effect_analysis(assembly: Mapping[str, Any] | AssemblySpec, *, parameters: S
         Modes whose undamped natural frequency lies here (default: the assembly's grid range).
     resolve_base : BaseResolver, optional
         Looks a measured spindle up (the application layer passes the store's).
+    progress : callable, optional
+        ``progress(done, total)`` after the nominal modes and after each parameter
+        (:mod:`rcsa.analysis.progress`).
 
     Returns
     -------
@@ -195,7 +201,7 @@ def effect_analysis(assembly: Mapping[str, Any] | AssemblySpec, *, parameters: S
         tpm = ToolPointModel(spec, spindle)
         tpm.model_at({})  # the assembly's shape on this spindle's plane (holder present or not) is checked here
         names, not_applicable = split_parameters(spec, spindle.plane, parameters)
-        return hybrid_effect_analysis(tpm, names, not_applicable, relative_step, _band_of(spec, band_hz))
+        return hybrid_effect_analysis(tpm, names, not_applicable, relative_step, _band_of(spec, band_hz), progress)
     available = parameter_names(spec)
     if parameters is None:
         names = available
@@ -210,6 +216,7 @@ def effect_analysis(assembly: Mapping[str, Any] | AssemblySpec, *, parameters: S
             raise InputError("parameters", "names must be unique")
     band = _band_of(spec, band_hz)
     base = nominal_features(spec, band)
+    report(progress, 1, len(names) + 1)
     values = np.array([get_parameter(spec, n) for n in names], dtype=float)
     nm = base.frequency_hz.size
     sens = {q: np.full((nm, len(names)), np.nan) for q in FEATURES}
@@ -225,6 +232,7 @@ def effect_analysis(assembly: Mapping[str, Any] | AssemblySpec, *, parameters: S
         for q in FEATURES:
             with np.errstate(invalid="ignore", divide="ignore"):
                 sens[q][:, j] = (np.log(runs[0].feature(q)) - np.log(runs[1].feature(q))) / (2 * relative_step)
+        report(progress, j + 2, len(names) + 1)
     if nm == 0:
         notes.append(f"no natural frequency lies in the band {band[0]:g}–{band[1]:g} Hz: nothing to analyse")
     hidden = [f"{f:.1f}" for f, p in zip(base.frequency_hz, base.peak_magnitude_m_n, strict=True)
@@ -241,8 +249,11 @@ def effect_analysis(assembly: Mapping[str, Any] | AssemblySpec, *, parameters: S
 _REQUEST_FIELDS = ("assembly", "parameters", "relative_step", "band_hz")
 
 
-def effects_report(request: Mapping[str, Any], resolve_base: BaseResolver | None = None) -> EffectReport:
+def effects_report(request: Mapping[str, Any], resolve_base: BaseResolver | None = None,
+                   progress: Progress | None = None) -> EffectReport:
     """Parse an effect-analysis request and run it (see :func:`effects` for the request).
+
+    ``progress(done, total)``, when given, reports each step (:func:`effect_analysis`).
 
     Returns
     -------
@@ -251,12 +262,12 @@ def effects_report(request: Mapping[str, Any], resolve_base: BaseResolver | None
     if not isinstance(request, Mapping):
         raise InputError("", "the request must be a JSON object")
     if "assembly" not in request:
-        return effect_analysis(request, resolve_base=resolve_base)
+        return effect_analysis(request, resolve_base=resolve_base, progress=progress)
     o = fields.Fields(request, "", _REQUEST_FIELDS)
     params = request.get("parameters")
     if params is not None and (not isinstance(params, list) or not all(isinstance(p, str) for p in params)):
         raise InputError("parameters", "must be a list of parameter names")
-    step = o.number("relative_step", default=DEFAULT_RELATIVE_STEP)  # its range is effect_analysis's rule
+    step = o.number("relative_step", gt=0.0, le=0.1, default=DEFAULT_RELATIVE_STEP)
     band = request.get("band_hz")
     if band is not None and (not isinstance(band, list) or len(band) != 2
                              or not all(isinstance(b, int | float) and not isinstance(b, bool) for b in band)):
@@ -265,10 +276,12 @@ def effects_report(request: Mapping[str, Any], resolve_base: BaseResolver | None
         spec = parse_assembly(request["assembly"])
     except InputError as exc:
         raise InputError(f"assembly.{exc.field}".rstrip("."), exc.rule) from None
-    return effect_analysis(spec, parameters=params, relative_step=step, band_hz=band, resolve_base=resolve_base)
+    return effect_analysis(spec, parameters=params, relative_step=step, band_hz=band, resolve_base=resolve_base,
+                           progress=progress)
 
 
-def effects(request: Mapping[str, Any], resolve_base: BaseResolver | None = None) -> dict[str, Any]:
+def effects(request: Mapping[str, Any], resolve_base: BaseResolver | None = None,
+            progress: Progress | None = None) -> dict[str, Any]:
     """Effect analysis as a JSON document (the CLI's and the REST route's entry point).
 
     Parameters
@@ -282,6 +295,8 @@ def effects(request: Mapping[str, Any], resolve_base: BaseResolver | None = None
         ``resolve_base`` is given (modal-fit modes; bearings not applicable).
     resolve_base : BaseResolver, optional
         Looks a measured spindle up (the application layer passes the store's).
+    progress : callable, optional
+        ``progress(done, total)`` at each step (:mod:`rcsa.analysis.progress`).
 
     Returns
     -------
@@ -296,7 +311,7 @@ def effects(request: Mapping[str, Any], resolve_base: BaseResolver | None = None
     InputError
         For a malformed request.
     """
-    return effects_report(request, resolve_base).to_dict()
+    return effects_report(request, resolve_base, progress).to_dict()
 
 
 # ---------------------------------------------------------------------------- figure
@@ -321,7 +336,7 @@ def effects_figure(report: EffectReport, features: Sequence[str] = ("frequency_h
     import matplotlib
     from matplotlib.colors import TwoSlopeNorm
 
-    from rcsa.analysis.figures import freeze_layout, new_figure
+    from rcsa.analysis.figures import freeze_layout, new_figure, percent_label
 
     nm, npar = report.frequency_hz.size, len(report.parameters)
     if nm == 0 or npar == 0:
@@ -329,7 +344,7 @@ def effects_figure(report: EffectReport, features: Sequence[str] = ("frequency_h
     fig = new_figure(max(6.0, 0.5 * npar + 2.5), 2.2 + len(features) * max(1.6, 0.3 * nm + 0.8))
     axes = fig.subplots(len(features), 1, squeeze=False, sharex=True)[:, 0]
     part = report.tip_participation
-    ylabels = [f"{f:.0f} Hz ({100 * p:.2g} %)" for f, p in zip(report.frequency_hz, part, strict=True)]
+    ylabels = [f"{f:.0f} Hz ({percent_label(p)})" for f, p in zip(report.frequency_hz, part, strict=True)]
     titles = {"frequency_hz": "natural frequency", "peak_magnitude_m_n": "peak |h|",
               "damping_ratio": "damping ratio", "peak_frequency_hz": "peak frequency"}
     cmap = matplotlib.colormaps["RdBu_r"].with_extremes(bad="0.85")

@@ -8,7 +8,14 @@ from typing import Annotated
 import typer
 
 from rcsa.app.figures import FIGURE_SUFFIXES, diagnosis_with_figure
-from rcsa.cli._common import fail, read_json, run_guarded, write_json
+from rcsa.cli._common import (
+    QuietOption,
+    fail,
+    progress_callback,
+    read_json,
+    run_guarded,
+    write_json,
+)
 
 
 def register(app: typer.Typer) -> None:
@@ -20,13 +27,15 @@ def register(app: typer.Typer) -> None:
         out: Annotated[Path | None, typer.Option("-o", "--out", help="Write the result here instead of stdout.")] = None,
         plot: Annotated[Path | None, typer.Option("--plot", help="Also draw measured/base/corrected FRFs and the "
                                                                   "gap map to this .png or .svg file.")] = None,
+        quiet: QuietOption = False,
     ) -> None:
         """Where model and measurement part, which unmodelled effect explains it, and how far the gap shrinks."""
         if plot is not None and plot.suffix.lower() not in FIGURE_SUFFIXES:
             raise fail(f"--plot: the file must end in .png or .svg, got {plot.name!r}")
         doc = read_json(request)
         try:
-            response = run_guarded(lambda: diagnosis_with_figure(doc, plot))
+            with progress_callback("diagnosis", quiet) as progress:
+                response = run_guarded(lambda: diagnosis_with_figure(doc, plot, progress=progress))
         except OSError as exc:
             raise fail(f"cannot write {plot}: {exc.strerror or exc}") from None
         write_json(response, out)

@@ -9,7 +9,7 @@ import typer
 
 from rcsa.app.figures import check_picture_path, effects_with_figure
 from rcsa.app.stores import open_store
-from rcsa.cli._common import read_json, run_guarded, write_json
+from rcsa.cli._common import QuietOption, progress_callback, read_json, run_guarded, write_json
 
 
 def register(app: typer.Typer) -> None:
@@ -24,6 +24,7 @@ def register(app: typer.Typer) -> None:
         plot: Annotated[Path | None, typer.Option("--plot", help="Also draw the sensitivity heat map (.png or .svg).")] = None,
         store: Annotated[Path | None, typer.Option("--store", help="Measurement store for a measured spindle (default: "
                                                                    "RCSA_STORE or the per-user store).")] = None,
+        quiet: QuietOption = False,
     ) -> None:
         """Effect analysis: normalised sensitivities of every mode to bearing, joint and tool parameters.
 
@@ -32,5 +33,7 @@ def register(app: typer.Typer) -> None:
         """
         doc = read_json(assembly)
         picture = None if plot is None else run_guarded(lambda: check_picture_path(plot, "--plot"))
-        write_json(run_guarded(lambda: effects_with_figure(doc, picture,
-                                                           store=open_store(store) if store else None)), out)
+        with progress_callback("effect analysis", quiet) as progress:
+            result = run_guarded(lambda: effects_with_figure(doc, picture, store=open_store(store) if store else None,
+                                                             progress=progress))
+        write_json(result, out)

@@ -9,7 +9,7 @@ import typer
 
 from rcsa.app.analyses import identify as identify_joints
 from rcsa.app.stores import open_store
-from rcsa.cli._common import read_json, run_guarded, write_json
+from rcsa.cli._common import QuietOption, progress_callback, read_json, run_guarded, write_json
 
 
 def register(app: typer.Typer) -> None:
@@ -22,6 +22,7 @@ def register(app: typer.Typer) -> None:
         out: Annotated[Path | None, typer.Option("-o", "--out", help="Write the result here instead of stdout.")] = None,
         store: Annotated[Path | None, typer.Option("--store", help="Measurement store for a measured spindle (default: "
                                                                    "RCSA_STORE or the per-user store).")] = None,
+        quiet: QuietOption = False,
     ) -> None:
         """Identify the joints' translational stiffness and damping from measured tool-point FRFs.
 
@@ -30,4 +31,7 @@ def register(app: typer.Typer) -> None:
         may be a stored measurement ({"measurement_id": ...}).
         """
         doc = read_json(request)
-        write_json(run_guarded(lambda: identify_joints(doc, store=open_store(store) if store else None)), out)
+        with progress_callback("joint identification", quiet) as progress:
+            result = run_guarded(lambda: identify_joints(doc, store=open_store(store) if store else None,
+                                                         progress=progress))
+        write_json(result, out)

@@ -23,7 +23,8 @@ def register(app: typer.Typer) -> None:
         plot: Annotated[Path | None, typer.Option("--plot", help="Also draw the lobe diagram (.png or .svg).")] = None,
         store: Annotated[Path | None, typer.Option("--store", help="Measurement store for hybrid assemblies.")] = None,
     ) -> None:
-        """Stability lobes (Altintas–Budak zero-order) from inline FRFs or an assembly."""
+        """Stability lobes from inline FRFs or an assembly: zero-order (Altintas–Budak, the default) or
+        "method": "semi_discretization" in the request (Insperger–Stépán, for low radial immersion)."""
         doc = read_json(request)
         result = run_guarded(lambda: stability_lobes_result(doc, store=open_store(store) if store else None))
         if plot is not None:

@@ -1,8 +1,9 @@
-"""``rcsa store import | list | show | delete``: the measured-spindle FRF store from the shell.
+"""``rcsa store import | list | show | delete | check | rebuild``: the measured-spindle FRF store from the shell.
 
 The store is ``--store DIR``, else ``$RCSA_STORE``, else the per-user default
 (:func:`rcsa.measured.store.default_store_path`). Output is JSON on stdout (``list`` prints a table
-unless ``--json``); a failure prints one line ``error: ...`` on stderr and exits 1.
+unless ``--json``); a failure prints one line ``error: ...`` on stderr and exits 1. ``check`` and
+``rebuild`` print their JSON report and exit 1 when it lists problems.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ __all__ = ["store_app"]
 T = TypeVar("T")
 
 store_app = typer.Typer(
-    help="Import, list, show and delete measured spindle FRFs.",
+    help="Import, list, show, delete measured spindle FRFs; check and rebuild the store.",
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
@@ -265,3 +266,23 @@ def delete(
 ) -> None:
     """Delete a measurement (its id is never reused)."""
     write_json(_guard(lambda: M.delete_measurement(open_store(store), measurement_id)), None)
+
+
+@store_app.command("check")
+def check(store: StoreOpt = None) -> None:
+    """Verify every measurement file (schema, checksums, readability, id) and the catalogue;
+    print a JSON report; exit 1 when it lists problems. Changes nothing."""
+    report = _guard(lambda: M.check_store(open_store(store)))
+    write_json(report, None)
+    if not report["ok"]:
+        raise typer.Exit(1)
+
+
+@store_app.command("rebuild")
+def rebuild(store: StoreOpt = None) -> None:
+    """Make the catalogue (index.sqlite) again from the measurement files; print a JSON
+    report; exit 1 when some files cannot be read (listed as damaged, left out)."""
+    report = _guard(lambda: M.rebuild_catalogue(open_store(store)))
+    write_json(report, None)
+    if not report["ok"]:
+        raise typer.Exit(1)

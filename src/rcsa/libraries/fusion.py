@@ -90,6 +90,7 @@ __all__ = [
     "cone_cylinders",
     "library_combinations",
     "load_fusion_library",
+    "tools_json_member",
     "unit_to_metres",
 ]
 
@@ -191,21 +192,34 @@ def _reject_constant(name: str) -> float:
     raise InputError("", f"not valid JSON: {name} is not a number")
 
 
+def tools_json_member(zf: zipfile.ZipFile) -> zipfile.ZipInfo:
+    """The member of a ``.tools`` zip that holds the library: ``tools.json``.
+
+    The one at the root when there is one, else the only ``tools.json`` in a folder.
+
+    Raises
+    ------
+    InputError
+        None or several, or larger than :data:`MAX_LIBRARY_BYTES`.
+    """
+    infos = [i for i in zf.infolist()
+             if not i.is_dir() and PurePosixPath(i.filename).name.lower() == "tools.json"]
+    root = [i for i in infos if i.filename.lower() == "tools.json"]
+    if root:
+        infos = root
+    if len(infos) != 1:
+        names = ", ".join(zf.namelist()[:10]) or "none"
+        what = "no tools.json" if not infos else "several tools.json"
+        raise InputError("", f".tools archive has {what} (members: {names})")
+    if infos[0].file_size > MAX_LIBRARY_BYTES:
+        raise InputError("", f"tools.json is larger than {MAX_LIBRARY_BYTES} bytes")
+    return infos[0]
+
+
 def _tools_json_from_zip(raw: bytes) -> bytes:
     try:
         with zipfile.ZipFile(io.BytesIO(raw)) as zf:
-            infos = [i for i in zf.infolist()
-                     if not i.is_dir() and PurePosixPath(i.filename).name.lower() == "tools.json"]
-            root = [i for i in infos if i.filename.lower() == "tools.json"]
-            if root:
-                infos = root
-            if len(infos) != 1:
-                names = ", ".join(zf.namelist()[:10]) or "none"
-                what = "no tools.json" if not infos else "several tools.json"
-                raise InputError("", f".tools archive has {what} (members: {names})")
-            if infos[0].file_size > MAX_LIBRARY_BYTES:
-                raise InputError("", f"tools.json is larger than {MAX_LIBRARY_BYTES} bytes")
-            with zf.open(infos[0]) as fh:
+            with zf.open(tools_json_member(zf)) as fh:
                 data = fh.read(MAX_LIBRARY_BYTES + 1)
     except (zipfile.BadZipFile, RuntimeError, NotImplementedError, OSError) as exc:
         raise InputError("", f"not a readable .tools zip archive ({exc})") from exc

@@ -180,7 +180,11 @@ def holder_geometry(holder: Mapping[str, Any], warnings: list[str]) -> HolderGeo
             continue
         if gauge - z > tol:
             part = gauge - z
-            kept.append(Segment(part, s.lower, s.lower + (s.upper - s.lower) * part / s.height))
+            if kept and _si(part, unit) < MIN_LENGTH_M:  # a sliver below the shortest beam: the last segment takes it
+                last = kept.pop()
+                kept.append(Segment(last.height + part, last.lower, last.upper))
+            else:
+                kept.append(Segment(part, s.lower, s.lower + (s.upper - s.lower) * part / s.height))
             z = gauge
             warnings.append("holder.gaugeLength falls inside a segment; it is cut at the gauge line")
         break
@@ -197,6 +201,9 @@ def holder_segments(h: HolderGeometry, bore_m: float, per_cone: int | None, mate
                              f"outer diameter {mm(_si(min(s.lower, s.upper), h.unit))} is not "
                              f"larger than the bore SFDM {mm(bore_m)}")
         pieces = cone_cylinders(s.height, s.lower, s.upper, per_cone)
+        most = max(1, int(_si(s.height, h.unit) / MIN_LENGTH_M))  # no cylinder below the shortest beam
+        if len(pieces) > most:
+            pieces = cone_cylinders(s.height, s.lower, s.upper, most)
         for _, d in pieces:
             out.append({"length_m": _si(s.height, h.unit, len(pieces)), "outer_diameter_m": _si(d, h.unit),
                         "inner_diameter_m": bore_m, "material": material})

@@ -19,15 +19,21 @@ from typing import Any, Literal
 from rcsa.errors import InputError
 from rcsa.model.assembly import AssemblyModel
 from rcsa.model.bounds import MAX_BATCH_COMBINATIONS, MAX_FREQUENCY_LINES
-from rcsa.model.contract import MeasuredSpindleSpec, assemble, parse_combination, parse_common
+from rcsa.model.contract import (
+    CommonSpec,
+    MeasuredSpindleSpec,
+    assemble,
+    parse_combination,
+    parse_common,
+)
 from rcsa.model.prediction import Prediction
 from rcsa.model.spindle_side import BaseResolver, SpindleSide
-from rcsa.model.uncertainty import parse_uncertainty
+from rcsa.model.uncertainty import UncertaintyOptions, parse_uncertainty
 from rcsa.physics.arrays import FloatArray
 from rcsa.physics.chain import Chain
 from rcsa.physics.natural_frequencies import natural_frequencies_batch
 
-__all__ = ["BATCH_FIELDS", "Progress", "predict_batch"]
+__all__ = ["BATCH_FIELDS", "Progress", "parse_batch", "predict_batch"]
 
 #: Called as ``progress(done, total)``.
 Progress = Callable[[int, int], None]
@@ -58,6 +64,56 @@ def _fill_natural_frequencies(slots: list[_Slot], frequency_hz: FloatArray) -> N
             slots[i] = (ident, model, replace(prediction, natural_frequencies_hz=nat))
 
 
+def parse_batch(request: Mapping[str, Any], *, max_lines: int = MAX_FREQUENCY_LINES,
+                max_combinations: int = MAX_BATCH_COMBINATIONS) -> tuple[list[Any], bool, CommonSpec]:
+    """What :func:`predict_batch` checks before computing anything (its errors, exactly).
+
+    Parameters
+    ----------
+    request : mapping
+        A batch request (see :func:`predict_batch`).
+    max_lines, max_combinations : int
+        Largest accepted number of frequency lines and of combinations.
+
+    Returns
+    -------
+    combinations : list
+        As given (each is parsed when it is computed).
+    natural_frequencies : bool
+    common : CommonSpec
+        The grid, spindle, materials and beam theory the combinations share.
+
+    Raises
+    ------
+    InputError
+        Not an object, an unknown field, no or too many combinations, or an invalid shared part.
+    """
+    if not isinstance(request, Mapping):
+        raise InputError("", "the batch request must be a JSON object")
+    unknown = sorted(set(request) - set(BATCH_FIELDS))
+    if unknown:
+        raise InputError(unknown[0], f"unknown field (allowed: {', '.join(BATCH_FIELDS)})")
+    combos = request.get("combinations")
+    if not isinstance(combos, list) or not combos:
+        raise InputError("combinations", "must be a non-empty list")
+    if len(combos) > max_combinations:
+        raise InputError("combinations", f"at most {max_combinations} combinations per request, got {len(combos)}")
+    with_modes = request.get("natural_frequencies", True)
+    if not isinstance(with_modes, bool):
+        raise InputError("natural_frequencies", "must be true or false")
+    common = parse_common({k: v for k, v in request.items()
+                           if k not in ("combinations", "natural_frequencies", "uncertainty")}, max_lines=max_lines)
+    _batch_uncertainty(request, common)
+    return combos, with_modes, common
+
+
+def _batch_uncertainty(request: Mapping[str, Any], common: CommonSpec) -> UncertaintyOptions | None:
+    """The batch's ``uncertainty`` option, checked against its spindle and grid."""
+    return parse_uncertainty(request.get("uncertainty"), measured_spindle=isinstance(common.spindle,
+                                                                                   MeasuredSpindleSpec),
+                             lines=int(common.frequency_hz.size))
+
+
 def predict_batch(request: Mapping[str, Any], *, resolve_base: BaseResolver | None = None,
                   max_lines: int = MAX_FREQUENCY_LINES, max_combinations: int = MAX_BATCH_COMBINATIONS,
                   progress: Progress | None = None, arrays: Literal["list", "numpy"] = "list") -> dict[str, Any]:
@@ -86,24 +142,8 @@ def predict_batch(request: Mapping[str, Any], *, resolve_base: BaseResolver | No
         ``{"results": [{"id", "status": "ok", ...prediction} | {"id", "status": "error",
         "error": {"field", "detail"}}], "summary": {"ok", "error"}}``
     """
-    if not isinstance(request, Mapping):
-        raise InputError("", "the batch request must be a JSON object")
-    unknown = sorted(set(request) - set(BATCH_FIELDS))
-    if unknown:
-        raise InputError(unknown[0], f"unknown field (allowed: {', '.join(BATCH_FIELDS)})")
-    combos = request.get("combinations")
-    if not isinstance(combos, list) or not combos:
-        raise InputError("combinations", "must be a non-empty list")
-    if len(combos) > max_combinations:
-        raise InputError("combinations", f"at most {max_combinations} combinations per request, got {len(combos)}")
-    with_modes = request.get("natural_frequencies", True)
-    if not isinstance(with_modes, bool):
-        raise InputError("natural_frequencies", "must be true or false")
-    common = parse_common({k: v for k, v in request.items()
-                           if k not in ("combinations", "natural_frequencies", "uncertainty")}, max_lines=max_lines)
-    uncertainty = parse_uncertainty(request.get("uncertainty"), measured_spindle=isinstance(common.spindle,
-                                                                                           MeasuredSpindleSpec),
-                                    lines=int(common.frequency_hz.size))
+    combos, with_modes, common = parse_batch(request, max_lines=max_lines, max_combinations=max_combinations)
+    uncertainty = _batch_uncertainty(request, common)
     side = SpindleSide(common, resolve_base)
     slots: list[_Slot] = []
     for i, raw in enumerate(combos):

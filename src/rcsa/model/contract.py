@@ -16,6 +16,7 @@ import numpy as np
 
 from rcsa.errors import InputError
 from rcsa.model.bounds import (
+    MAX_BEARINGS,
     MAX_DAMPING,
     MAX_DENSITY_KG_M3,
     MAX_FREQUENCY_HZ,
@@ -25,6 +26,7 @@ from rcsa.model.bounds import (
     MAX_MODULUS_PA,
     MAX_NECK_SEGMENTS,
     MAX_POISSON_RATIO,
+    MAX_SEGMENTS,
     MAX_SHEAR_COEFFICIENT,
     MAX_STIFFNESS,
     MIN_DENSITY_KG_M3,
@@ -374,6 +376,9 @@ def _material(o: Fields, materials: Mapping[str, Material], default: str) -> str
 def _segments(value: object, path: str, materials: Mapping[str, Material]) -> tuple[SegmentSpec, ...]:
     if not isinstance(value, list) or not value:
         raise InputError(path, "must be a non-empty list of segments")
+    if len(value) > MAX_SEGMENTS:
+        raise InputError(path, f"at most {MAX_SEGMENTS} segments, got {len(value)}; merge neighbouring segments "
+                               "of equal section (each costs a condensation per frequency line)")
     out = []
     for i, raw in enumerate(value):
         o = Fields(raw, f"{path}[{i}]")
@@ -390,7 +395,26 @@ def _segments(value: object, path: str, materials: Mapping[str, Material]) -> tu
 
 def parse_spindle(value: object, materials: Mapping[str, Material], path: str = "spindle"
                   ) -> SpindleSpec | MeasuredSpindleSpec:
-    """An analytical spindle (segments nose → rear, bearings) or a stored measurement id."""
+    """An analytical spindle (segments nose → rear, bearings) or a stored measurement id.
+
+    Parameters
+    ----------
+    value : object
+        The parsed JSON of ``spindle``.
+    materials : mapping of str to Material
+        The materials a segment may name (built-in and the request's own).
+    path : str
+        The value's path in the request, named in errors.
+
+    Returns
+    -------
+    SpindleSpec or MeasuredSpindleSpec
+
+    Raises
+    ------
+    InputError
+        A missing, mistyped or out-of-bounds field, named by its path.
+    """
     o = Fields(value, path)
     if "measurement_id" in o.value:
         o.only("measurement_id", "artifact_method", "effective_length_m")
@@ -404,6 +428,8 @@ def parse_spindle(value: object, materials: Mapping[str, Material], path: str = 
     raw_bearings = o.value.get("bearings", [])
     if not isinstance(raw_bearings, list):
         raise InputError(o.at("bearings"), "must be a list")
+    if len(raw_bearings) > MAX_BEARINGS:
+        raise InputError(o.at("bearings"), f"at most {MAX_BEARINGS} bearings, got {len(raw_bearings)}")
     bearings = []
     for i, raw in enumerate(raw_bearings):
         b = Fields(raw, f"{o.at('bearings')}[{i}]")
@@ -422,7 +448,26 @@ def parse_spindle(value: object, materials: Mapping[str, Material], path: str = 
 
 
 def parse_holder(value: object, materials: Mapping[str, Material], path: str = "holder") -> HolderSpec:
-    """Holder segments from the gauge line toward the tool end."""
+    """Holder segments from the gauge line toward the tool end.
+
+    Parameters
+    ----------
+    value : object
+        The parsed JSON of ``holder``.
+    materials : mapping of str to Material
+        The materials a segment may name (built-in and the request's own).
+    path : str
+        The value's path in the request, named in errors.
+
+    Returns
+    -------
+    HolderSpec
+
+    Raises
+    ------
+    InputError
+        A missing, mistyped or out-of-bounds field, named by its path.
+    """
     o = Fields(value, path)
     o.only("segments")
     return HolderSpec(_segments(o.value.get("segments"), o.at("segments"), materials))
@@ -434,7 +479,27 @@ _TOOL_FIELDS = ("material", "diameter_m", "shank_diameter_m", "overall_length_m"
 
 
 def parse_tool(value: object, materials: Mapping[str, Material], path: str = "tool") -> ToolSpec:
-    """The parametric tool, with the geometric rules of the contract checked."""
+    """The parametric tool, with the geometric rules of the contract checked.
+
+    Parameters
+    ----------
+    value : object
+        The parsed JSON of ``tool``.
+    materials : mapping of str to Material
+        The materials a segment may name (built-in and the request's own).
+    path : str
+        The value's path in the request, named in errors.
+
+    Returns
+    -------
+    ToolSpec
+
+    Raises
+    ------
+    InputError
+        A missing, mistyped or out-of-bounds field, or a broken geometric rule
+        (flute ≤ stickout ≤ overall length, shoulder between flute and stickout, …).
+    """
     o = Fields(value, path)
     o.only(*_TOOL_FIELDS)
     diameter = o.number("diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
@@ -571,7 +636,26 @@ _COMMON_FIELDS = ("frequency", "beam_theory", "shear_coefficient", "materials", 
 
 
 def parse_common(document: object, path: str = "", max_lines: int = MAX_FREQUENCY_LINES) -> CommonSpec:
-    """Frequency grid, beam theory, shear coefficient, materials and spindle of a document."""
+    """Frequency grid, beam theory, shear coefficient, materials and spindle of a document.
+
+    Parameters
+    ----------
+    document : object
+        A parsed request (an assembly, or the shared part of a batch).
+    path : str
+        Its path in the request (``""`` for the request itself).
+    max_lines : int
+        Largest accepted number of frequency lines.
+
+    Returns
+    -------
+    CommonSpec
+
+    Raises
+    ------
+    InputError
+        A missing, mistyped or out-of-bounds field, named by its path.
+    """
     o = Fields(document, path)
     if "frequency" not in o.value:
         raise InputError(o.at("frequency"), "is required")

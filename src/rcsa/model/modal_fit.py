@@ -195,7 +195,18 @@ class RationalFit:
         return out
 
     def evaluate(self, frequency_hz: FloatArray) -> ComplexArray:
-        """The fitted ``h`` at any frequencies (Hz) near the band, m/N, same shape."""
+        """The fitted ``h`` at any frequencies (Hz) near the band, m/N, same shape.
+
+        Parameters
+        ----------
+        frequency_hz : numpy.ndarray
+            Frequencies, Hz, any shape (the fit is meaningful near its band only).
+
+        Returns
+        -------
+        numpy.ndarray of complex
+            The fitted receptance, m/N, shape of ``frequency_hz``.
+        """
         return _ratio(self.num, self.den, self._x(frequency_hz))
 
     def modes(self) -> dict[str, FloatArray]:
@@ -226,7 +237,18 @@ class RationalFit:
     def peak(self, near_hz: float | None = None) -> tuple[float, float]:
         """``(frequency_hz, magnitude_m_n)`` of an interior maximum of the fitted ``|h|`` on the
         band (parabola-refined): the largest, or the one nearest ``near_hz``; NaN when ``|h|``
-        has none there."""
+        has none there.
+
+        Parameters
+        ----------
+        near_hz : float, optional
+            Pick the maximum nearest this frequency, Hz, instead of the largest.
+
+        Returns
+        -------
+        tuple of (float, float)
+            Frequency, Hz, and ``|h|``, m/N.
+        """
         f = np.linspace(*self.band_hz, _PEAK_POINTS)
         mag = np.abs(self.evaluate(f))
         inner = np.flatnonzero((mag[1:-1] > mag[:-2]) & (mag[1:-1] >= mag[2:])) + 1

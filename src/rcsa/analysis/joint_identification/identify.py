@@ -108,11 +108,14 @@ from rcsa.analysis.joint_identification.request import (
     IdentificationRequest,
     parse_identification_request,
 )
+from rcsa.analysis.progress import Progress, report
 from rcsa.model.contract import AssemblySpec
 from rcsa.model.spindle_side import BaseResolver
 
 __all__ = ["Identification", "identify", "identify_joints"]
 
+#: Steps reported to a progress callback: peaks located, stiffness fit, damping fit, FRF fit, uncertainty.
+_STEPS = 5
 #: Correlation of two fitted parameters above which both are reported as confounded.
 _MAX_CORRELATION = 0.98
 #: Half-width of the polishing window around a peak: 2 ζ, at least 0.5 %.
@@ -419,13 +422,16 @@ def _hybrid_notes(req: IdentificationRequest) -> list[str]:
     return notes
 
 
-def identify_joints(req: IdentificationRequest) -> Identification:
+def identify_joints(req: IdentificationRequest, progress: Progress | None = None) -> Identification:
     """Identify the joints' translational stiffness and damping (see the module docstring).
 
     Parameters
     ----------
     req : IdentificationRequest
         From :func:`rcsa.analysis.joint_identification.request.parse_identification_request`.
+    progress : callable, optional
+        ``progress(done, total)`` after the peaks are located, after each fit and at the
+        end (:mod:`rcsa.analysis.progress`).
 
     Returns
     -------
@@ -448,6 +454,7 @@ def identify_joints(req: IdentificationRequest) -> Identification:
             raise NotIdentifiable(f"no resonance peak stands out of the noise in the measured band "
                                    f"{band[0]:g}–{band[1]:g} Hz, so no mode controlled by a joint is seen")
         values, uses, flags = locate(problem, peaks)
+        report(progress, 1, _STEPS)
         if not uses:
             raise NotIdentifiable(
                 f"the measured band {band[0]:g}–{band[1]:g} Hz holds no peak of a mode controlled by a joint "
@@ -461,9 +468,11 @@ def identify_joints(req: IdentificationRequest) -> Identification:
                 fun, check = _peak_residual(problem, uses_, magnitude)
                 values, _ = _fit(fun, names_, values, problem)
                 check(values)
+            report(progress, 3 if magnitude else 2, _STEPS)
         lines = _window_lines(problem, uses)
         names = k_names + c_names
         values, res = _fit(_frf_residual(problem, lines), names, values, problem)
+        report(progress, 4, _STEPS)
         raw = _frf_residual(problem, lines, weighted=False)([values])[0]
         m_res, p = res.fun.size, len(names)
         s2 = float(res.fun @ res.fun) / max(m_res - p, 1)
@@ -517,6 +526,7 @@ def identify_joints(req: IdentificationRequest) -> Identification:
         result.values, result.uncertainty, result.uncertainty_components = dict(start), {}, {}
     result.flags = flags
     result.runtime_s = time.perf_counter() - t0
+    report(progress, _STEPS, _STEPS)
     return result
 
 
@@ -531,7 +541,8 @@ def _db(raw: np.ndarray, lines: list[np.ndarray]) -> float:
     return float(np.sqrt(np.mean(db**2)))
 
 
-def identify(request: Mapping[str, Any], resolve_base: BaseResolver | None = None) -> dict[str, Any]:
+def identify(request: Mapping[str, Any], resolve_base: BaseResolver | None = None,
+             progress: Progress | None = None) -> dict[str, Any]:
     """Joint identification as JSON (the CLI's and the REST route's entry point).
 
     Parameters
@@ -544,6 +555,8 @@ def identify(request: Mapping[str, Any], resolve_base: BaseResolver | None = Non
         ``{"measurement_id": ...}`` when ``resolve_base`` is given.
     resolve_base : BaseResolver, optional
         Looks a measured spindle up (the application layer passes the store's).
+    progress : callable, optional
+        ``progress(done, total)`` at each step (:func:`identify_joints`).
 
     Returns
     -------
@@ -558,4 +571,4 @@ def identify(request: Mapping[str, Any], resolve_base: BaseResolver | None = Non
     InputError
         For a malformed request.
     """
-    return identify_joints(parse_identification_request(request, resolve_base)).to_dict()
+    return identify_joints(parse_identification_request(request, resolve_base), progress).to_dict()

@@ -34,6 +34,7 @@ from rcsa.analysis.tool_point_model import MeasuredSpindle
 from rcsa.errors import InputError
 from rcsa.model import fields
 from rcsa.model.assembly import build_model
+from rcsa.model.bounds import MAX_STIFFNESS
 from rcsa.model.contract import AssemblySpec, MeasuredSpindleSpec, parse_assembly
 from rcsa.model.parameters import get_parameter
 from rcsa.model.spindle_side import BaseResolver
@@ -137,8 +138,9 @@ def _bounds(raw: object, base: AssemblySpec, names: tuple[str, ...], holder_tip:
                     or any(isinstance(v, bool) or not isinstance(v, int | float) for v in pair)):
                 raise InputError(f"bounds.{name}", "must be [low, high]")
             lo, hi = float(pair[0]), float(pair[1])
-            if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo < hi):
-                raise InputError(f"bounds.{name}", f"must satisfy 0 < low < high, got [{lo:g}, {hi:g}]")
+            if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo < hi <= MAX_STIFFNESS):
+                raise InputError(f"bounds.{name}", f"must satisfy 0 < low < high <= {MAX_STIFFNESS:g}, got "
+                                                   f"[{lo:g}, {hi:g}]")
             if not lo <= start <= hi:
                 raise InputError(f"bounds.{name}",
                                  f"must contain the starting value {start:g} from the assembly's joints")
@@ -229,6 +231,6 @@ def parse_identification_request(request: object, resolve_base: BaseResolver | N
                              "the identification")
     measurements = tuple(MeasurementData(replace(base, tool=t.tool, frequency_hz=t.frequency_hz), t.frequency_hz,
                                          t.h, t.coherence, t.overrides) for t in tests)
-    ratio = o.number("max_residual_to_noise", gt=1.0, default=DEFAULT_MAX_RESIDUAL_TO_NOISE)
+    ratio = o.number("max_residual_to_noise", gt=1.0, le=1.0e6, default=DEFAULT_MAX_RESIDUAL_TO_NOISE)
     return IdentificationRequest(base, measurements, names, _bounds(request.get("bounds"), base, names, holder_tip),
                                  ratio, spindle, not_applicable)
