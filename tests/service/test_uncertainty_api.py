@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import csv
+import io
+
 import numpy as np
 
 from rcsa import app
@@ -52,3 +55,35 @@ def test_bad_options_are_422_naming_the_field(client, assembly):
     r = client.post("/v1/stability-lobes", json={"assembly": assembly, **CUT, "uncertainty": OPTION,
                                                  "method": "semi_discretization"})
     assert_problem(r, 422, "uncertainty")
+
+
+def _csv(response) -> tuple[list[str], list[list[str]]]:
+    assert response.status_code == 200, response.text
+    rows = list(csv.reader(io.StringIO(response.text)))
+    return rows[0], rows[1:]
+
+
+def test_frf_csv_with_uncertainty_has_the_bands_percentiles(client, assembly):
+    body = {**assembly, "uncertainty": OPTION}
+    header, rows = _csv(client.post("/v1/exports/frf.csv", json=body))
+    assert header[-3:] == ["h_magnitude_p05_m_n", "h_magnitude_p50_m_n", "h_magnitude_p95_m_n"]
+    band = client.post("/v1/tool-point-frf", json=body).json()["uncertainty"]["h_magnitude_m_n"]
+    columns = list(zip(*rows, strict=True))
+    for k, p in enumerate(("p05", "p50", "p95")):
+        assert [float(v) for v in columns[len(header) - 3 + k]] == band[p]
+
+
+def test_lobes_csv_and_picture_carry_the_robust_limit(client, assembly):
+    request = {"assembly": assembly, **CUT, "uncertainty": OPTION}
+    header, rows = _csv(client.post("/v1/exports/lobes.csv", json=request))
+    assert header[-1] == "depth_limit_robust_m"
+    robust = client.post("/v1/stability-lobes", json=request).json()["depth_limit_robust_m"]
+    assert [None if v == "" else float(v) for v in list(zip(*rows, strict=True))[-1]] == robust
+    svg = client.post("/v1/plots/lobes?format=svg", json=request)
+    assert svg.status_code == 200 and 'id="robust' in svg.text
+
+
+def test_the_page_asks_for_draws_and_draws_the_band_and_the_robust_limit(client):
+    page, script = client.get("/ui/").text, client.get("/ui/app.js").text
+    assert 'id="draws"' in page
+    assert "frf-band" in script and "lobes-robust-path" in script and "uncertainty:" in script
