@@ -87,3 +87,11 @@ def test_the_page_asks_for_draws_and_draws_the_band_and_the_robust_limit(client)
     page, script = client.get("/ui/").text, client.get("/ui/app.js").text
     assert 'id="draws"' in page
     assert "frf-band" in script and "lobes-robust-path" in script and "uncertainty:" in script
+
+
+def test_a_bad_option_is_refused_before_it_is_queued(client, assembly):
+    async_ = {"Prefer": "respond-async"}
+    body = {**assembly, "uncertainty": {"draws": 2, "tolerances": {"stickout_m": 1.0}}}
+    assert_problem(client.post("/v1/tool-point-frf", json=body, headers=async_), 422, "uncertainty.tolerances.stickout_m")
+    lobes = {"assembly": assembly, **CUT, "robust": {"confidence": 0.9}}
+    assert_problem(client.post("/v1/stability-lobes", json=lobes, headers=async_), 422, "robust")

@@ -22,6 +22,7 @@ from rcsa.errors import InputError
 from rcsa.measured.store import MeasurementStore
 from rcsa.model.bounds import MAX_FREQUENCY_LINES
 from rcsa.model.contract import SpindleSpec, parse_assembly
+from rcsa.model.uncertainty import parse_prediction_request
 
 __all__ = ["ANALYSIS_KINDS", "Progress", "diagnose", "effects", "identify", "run_analysis", "stability_lobes",
            "stability_lobes_result", "stability_lobes_results", "validate"]
@@ -176,6 +177,8 @@ def validate(kind: str, request: Mapping[str, Any], *, store: MeasurementSource 
         parse_identification_request(request, resolver(store))
     elif kind == "lobes":
         _parse_lobes(request)
+    elif kind == "prediction" and isinstance(request, Mapping) and "uncertainty" in request:
+        parse_prediction_request(request)  # the option is checked against the spindle and the grid
     # prediction and effects: the budget's estimate already parsed the assembly
 
 
