@@ -99,6 +99,13 @@ def _options_json(options: str | None) -> dict[str, Any] | None:
     return doc
 
 
+def _uncertainty_json(option: str | None) -> dict[str, Any] | None:
+    if option is None:
+        return None
+    doc: dict[str, Any] | None = decode_json(option, path="uncertainty", what="--uncertainty")
+    return doc
+
+
 def _settings(base: dict[str, Any], frequency: str | None, joints: Path | None, store: Any) -> dict[str, Any]:
     """Keyword arguments of :func:`rcsa.app.libraries.prepare_library` from the command's options.
 
@@ -132,6 +139,8 @@ JointsOption = Annotated[Path | None, typer.Option(
 ImportOptions = Annotated[str | None, typer.Option(
     help='Import options as JSON, e.g. \'{"holder_segments_per_cone": 6}\'.')]
 NaturalFrequenciesOption = Annotated[bool, typer.Option(help="Compute exact natural frequencies.")]
+UncertaintyOption = Annotated[str | None, typer.Option(
+    help='Every tool\'s uncertainty band as JSON, e.g. \'{"draws": 200, "seed": 1}\' (p05/p50/p95 of |h|).')]
 QuietOption = Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")]
 DaskOption = Annotated[str | None, typer.Option(
     "--dask-scheduler", envvar="RCSA_DASK_SCHEDULER",
@@ -157,6 +166,7 @@ def predict(
     joints: JointsOption = None,
     options: ImportOptions = None,
     natural_frequencies: NaturalFrequenciesOption = True,
+    uncertainty: UncertaintyOption = None,
     out: Annotated[Path | None, typer.Option("-o", "--out", help="Write the result here instead of stdout.")] = None,
     store: Annotated[Path | None, typer.Option("--store", help="Measurement store (default: RCSA_STORE or "
                                                                "the per-user store).")] = None,
@@ -174,7 +184,8 @@ def predict(
         bench = Workbench(open_store(store) if (store is not None or measurement is not None) else None)
         settings = _settings(base, frequency, joints, bench.store if measurement is not None else None)
         work = prepare_library(bench, read_library(library, holder=holder), **settings,
-                               natural_frequencies=natural_frequencies, options=_options_json(options))
+                               natural_frequencies=natural_frequencies, options=_options_json(options),
+                               uncertainty=_uncertainty_json(uncertainty))
         if work.check is not None:
             work.check()  # before the progress bar starts
         return bench, work
@@ -218,6 +229,7 @@ def sync(
     joints: JointsOption = None,
     options: ImportOptions = None,
     natural_frequencies: NaturalFrequenciesOption = True,
+    uncertainty: UncertaintyOption = None,
     out: Annotated[Path | None, typer.Option("-o", "--out", help="Write the sync report here instead of "
                                                                  "stdout.")] = None,
     store: StoreOption = None,
@@ -236,7 +248,8 @@ def sync(
         bench = Workbench(st, st.path)
         settings = _settings(base, frequency, joints, st if measurement is not None else None)
         work = prepare_sync(bench, ident, read_library(library, holder=holder), **settings,
-                            natural_frequencies=natural_frequencies, options=_options_json(options))
+                            natural_frequencies=natural_frequencies, options=_options_json(options),
+                               uncertainty=_uncertainty_json(uncertainty))
         if work.size and work.check is not None:
             work.check()  # before the progress bar starts
         return bench, work

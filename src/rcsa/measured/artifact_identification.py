@@ -34,6 +34,7 @@ __all__ = [
     "artifact_from_meta",
     "finite_difference_slope_weights",
     "identify_exact",
+    "identify_exact_many",
     "identify_finite_difference",
 ]
 
@@ -110,6 +111,32 @@ def _rows(r: np.ndarray, a: int, e: int) -> tuple[np.ndarray, np.ndarray]:
     return coef, r[:, wa, we]
 
 
+def _exact_system(geometry: ArtifactGeometry, points_m: tuple[float, ...], frequency_hz: np.ndarray
+                  ) -> tuple[np.ndarray, list[int], np.ndarray, np.ndarray]:
+    """Artifact receptance, point nodes, column-scaled 3×3 coefficient matrices and their column norms."""
+    omega = 2 * np.pi * np.asarray(frequency_hz, dtype=float)
+    r, nodes = geometry.receptance(omega, points_m)
+    coef_rows = [_rows(r, nodes[a], nodes[e])[0] for a, e in _PAIRS]
+    a_mat = np.stack(coef_rows, axis=1)  # (nfreq, 3, 3)
+    scale = np.linalg.norm(a_mat, axis=1, keepdims=True)
+    return r, nodes, a_mat / scale, scale
+
+
+def _solve_exact(r: np.ndarray, nodes: list[int], scaled: np.ndarray, scale: np.ndarray,
+                 frfs: Mapping[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """``S`` and ``x = (x11, x12, x22)`` from FRFs of shape (..., nfreq) (leading axes broadcast)."""
+    rhs = [r[:, 2 * nodes[a], 2 * nodes[e]] - np.asarray(frfs[name]) for name, (a, e) in zip(_NAMES, _PAIRS, strict=True)]
+    b_vec = np.stack(np.broadcast_arrays(*rhs), axis=-1)  # (..., nfreq, 3)
+    x = np.linalg.solve(scaled, b_vec[..., None])[..., 0] / scale[:, 0, :]
+    xm = np.empty((*x.shape[:-1], 2, 2), dtype=complex)
+    xm[..., 0, 0], xm[..., 0, 1], xm[..., 1, 0], xm[..., 1, 1] = x[..., 0], x[..., 1], x[..., 1], x[..., 2]
+    return inv2(xm) - r[:, :2, :2], x
+
+
+_NAMES = ("h11", "h21", "h22")
+_PAIRS = ((0, 0), (1, 0), (1, 1))  # (1,1), (2,1), (2,2) as zero-based point indices
+
+
 def identify_exact(geometry: ArtifactGeometry, points_m: tuple[float, ...], frequency_hz: np.ndarray,
                    frfs: Mapping[str, np.ndarray]) -> tuple[np.ndarray, dict[str, Any]]:
     """Spindle-side receptance at the artifact base by the exact three-FRF method.
@@ -133,22 +160,8 @@ def identify_exact(geometry: ArtifactGeometry, points_m: tuple[float, ...], freq
         (``condition_number``), their median and maximum, and the relative residual of each
         redundant FRF re-predicted from ``s``.
     """
-    omega = 2 * np.pi * np.asarray(frequency_hz, dtype=float)
-    r, nodes = geometry.receptance(omega, points_m)
-    pairs = [(0, 0), (1, 0), (1, 1)]  # (1,1), (2,1), (2,2) as zero-based point indices
-    coef_rows, rhs = [], []
-    for name, (a, e) in zip(("h11", "h21", "h22"), pairs, strict=True):
-        c, r_ae = _rows(r, nodes[a], nodes[e])
-        coef_rows.append(c)
-        rhs.append(r_ae - np.asarray(frfs[name]))
-    a_mat = np.stack(coef_rows, axis=1)  # (nfreq, 3, 3)
-    b_vec = np.stack(rhs, axis=1)
-    scale = np.linalg.norm(a_mat, axis=1, keepdims=True)
-    scaled = a_mat / scale
-    x = np.linalg.solve(scaled, b_vec[..., None])[..., 0] / scale[:, 0, :]
-    xm = np.empty((omega.size, 2, 2), dtype=complex)
-    xm[:, 0, 0], xm[:, 0, 1], xm[:, 1, 0], xm[:, 1, 1] = x[:, 0], x[:, 1], x[:, 1], x[:, 2]
-    s = inv2(xm) - r[:, :2, :2]
+    r, nodes, scaled, scale = _exact_system(geometry, points_m, frequency_hz)
+    s, x = _solve_exact(r, nodes, scaled, scale, frfs)
     cond = np.linalg.cond(scaled)
     checks = {}
     for name, values in frfs.items():
@@ -167,6 +180,29 @@ def identify_exact(geometry: ArtifactGeometry, points_m: tuple[float, ...], freq
         "redundant_frf_error_of_peak": checks,
     }
     return s, report
+
+
+def identify_exact_many(geometry: ArtifactGeometry, points_m: tuple[float, ...], frequency_hz: np.ndarray,
+                        frfs: Mapping[str, np.ndarray]) -> np.ndarray:
+    """:func:`identify_exact` of many sets of FRFs at once (e.g. noise draws), without the report.
+
+    The artifact's receptance and the 3×3 systems are formed once; only the right-hand sides
+    differ between the sets.
+
+    Parameters
+    ----------
+    geometry : ArtifactGeometry
+    points_m : tuple of float
+    frequency_hz : numpy.ndarray, shape (nfreq,)
+    frfs : mapping
+        ``h11``, ``h21``, ``h22``, each shape (n, nfreq) (or broadcastable to it), m/N.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, nfreq, 2, 2)
+    """
+    r, nodes, scaled, scale = _exact_system(geometry, points_m, frequency_hz)
+    return _solve_exact(r, nodes, scaled, scale, frfs)[0]
 
 
 def finite_difference_slope_weights(points_m: tuple[float, ...], order: int = 1) -> np.ndarray:

@@ -23,23 +23,33 @@ real and imaginary part; exact where grid lines coincide), never extrapolated.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any, Protocol
 
 import numpy as np
 
 from rcsa.errors import DamagedError, InputError, NotFoundError
 from rcsa.measured.artifact_identification import (
+    ArtifactGeometry,
     artifact_from_meta,
     identify_exact,
+    identify_exact_many,
     identify_finite_difference,
 )
 from rcsa.measured.store import Measurement
 from rcsa.model.contract import MeasuredSpindleSpec
 from rcsa.model.spindle_side import BaseResolver, MeasuredBase
 
-__all__ = ["DEFAULT_EFFECTIVE_LENGTH_M", "MeasurementSource", "base_resolver", "cantilever_rotations", "measured_base"]
+__all__ = ["ASSUMED_N_AVERAGES", "DEFAULT_EFFECTIVE_LENGTH_M", "MeasurementSource", "base_resolver",
+           "cantilever_rotations", "measured_base"]
 
 DEFAULT_EFFECTIVE_LENGTH_M = 0.2
+#: Impacts assumed averaged when a stored coherence is turned into a noise level (the store
+#: keeps no count of averages): σ = √(1−γ²)/(|γ|√(2·5)), Bendat & Piersol 2010, Table 9.6.
+ASSUMED_N_AVERAGES = 5.0
+# Relative noise floor: a coherence of exactly 1 must not make a line infinitely precise.
+_MIN_NOISE_REL = 1e-4
 
 
 class MeasurementSource(Protocol):
@@ -69,6 +79,95 @@ def _interpolate(f_from: np.ndarray, values: np.ndarray, f_to: np.ndarray) -> np
     for j in range(flat.shape[1]):  # a loop over the four entries, not over frequency
         out[:, j] = np.interp(f_to, f_from, flat[:, j].real) + 1j * np.interp(f_to, f_from, flat[:, j].imag)
     return out.reshape((f_to.size, *values.shape[1:]))
+
+
+def _noise_rel(m: Measurement, name: str, f: np.ndarray) -> np.ndarray | None:
+    """Relative noise sd per line (per real and imaginary part) of FRF ``name`` from its coherence."""
+    c = m.coherence.get(name)
+    if c is None:
+        return None
+    g2 = np.clip(np.interp(f, m.frequency_hz, c), 1e-3, 1.0)
+    return np.maximum(np.sqrt(1.0 - g2) / (np.sqrt(g2) * np.sqrt(2.0 * ASSUMED_N_AVERAGES)), _MIN_NOISE_REL)
+
+
+def _noise_summary(sd: Mapping[str, np.ndarray | None], default_noise_rel: float) -> dict[str, Any]:
+    known = {k: float(np.median(v)) for k, v in sd.items() if v is not None}
+    unknown = sorted(k for k, v in sd.items() if v is None)
+    return {"from_coherence": sorted(known), "median_relative_sd": known,
+            "n_averages_assumed": ASSUMED_N_AVERAGES if known else None,
+            "default_relative_sd": default_noise_rel if unknown else None, "without_coherence": unknown}
+
+
+def _complex_noise(rng: np.random.Generator, shape: tuple[int, ...]) -> np.ndarray:
+    e = rng.standard_normal((2, *shape))
+    return e[0] + 1j * e[1]
+
+
+@dataclass(frozen=True)
+class _EntryNoise:
+    """Independent relative noise on the stored FRFs of a point receptance (h; l = n; p) or of h alone.
+
+    ``direct_frf``: one draw of h's noise scales the whole estimated 2×2 (its rotations are
+    h times fixed factors).
+    """
+
+    receptance: np.ndarray              # (nfreq, 2, 2)
+    sd: Mapping[str, np.ndarray | None]  # per stored FRF, (nfreq,) or None (no coherence)
+
+    def draw(self, rng: np.random.Generator, n: int, default_noise_rel: float) -> np.ndarray:
+        nf = self.receptance.shape[0]
+
+        def sd(name: str) -> np.ndarray:
+            v = self.sd[name]
+            return np.full(nf, default_noise_rel) if v is None else v
+
+        if set(self.sd) == {"h"}:
+            return self.receptance * (1.0 + sd("h")[:, None, None] * _complex_noise(rng, (n, nf))[..., None, None])
+        out = np.array(np.broadcast_to(self.receptance, (n, *self.receptance.shape)))
+        ln = 0.5 * (sd("l") + sd("n"))
+        out[..., 0, 0] *= 1.0 + sd("h") * _complex_noise(rng, (n, nf))
+        cross = 1.0 + ln * _complex_noise(rng, (n, nf))
+        out[..., 0, 1] *= cross
+        out[..., 1, 0] *= cross
+        out[..., 1, 1] *= 1.0 + sd("p") * _complex_noise(rng, (n, nf))
+        return out
+
+    def summary(self, default_noise_rel: float) -> dict[str, Any]:
+        return {"propagation": "relative noise on each stored FRF" if len(self.sd) > 1 else
+                "relative noise on h, carried by the estimated rotations",
+                **_noise_summary(self.sd, default_noise_rel)}
+
+
+@dataclass(frozen=True)
+class _ArtifactNoise:
+    """Noise on the artifact FRFs pushed through the exact identification (its conditioning included)."""
+
+    receptance: np.ndarray               # (nfreq, 2, 2), the identified base receptance
+    geometry: ArtifactGeometry
+    points_m: tuple[float, ...]
+    frequency_hz: np.ndarray
+    frfs: Mapping[str, np.ndarray]       # h11, h21, h22 on frequency_hz
+    sd: Mapping[str, np.ndarray | None]
+    condition_number: np.ndarray         # (nfreq,)
+
+    def draw(self, rng: np.random.Generator, n: int, default_noise_rel: float) -> np.ndarray:
+        nf = self.frequency_hz.size
+        noisy = {}
+        for name, v in self.frfs.items():
+            s = self.sd[name]
+            sd = np.full(nf, default_noise_rel) if s is None else s
+            noisy[name] = v * (1.0 + sd * _complex_noise(rng, (n, nf)))
+        centre = identify_exact_many(self.geometry, self.points_m, self.frequency_hz, self.frfs)
+        drawn = identify_exact_many(self.geometry, self.points_m, self.frequency_hz, noisy)
+        return self.receptance + (drawn - centre)
+
+    def summary(self, default_noise_rel: float) -> dict[str, Any]:
+        c = self.condition_number
+        return {"propagation": "noise on h11, h21, h22 re-identified by the exact three-FRF method",
+                **_noise_summary(self.sd, default_noise_rel),
+                "condition_number": {"median": float(np.median(c)), "p90": float(np.quantile(c, 0.9)),
+                                     "max": float(np.max(c)),
+                                     "at_frequency_hz": float(self.frequency_hz[int(np.argmax(c))])}}
 
 
 def measured_base(measurement_id: str, frequency_hz: np.ndarray, store: MeasurementSource, *,
@@ -146,8 +245,29 @@ def measured_base(measurement_id: str, frequency_hz: np.ndarray, store: Measurem
     report["interpolated"] = interpolated
     if interpolated:
         notes.append(f"measured spindle interpolated from its own grid ({m.frequency_hz.size} lines) to the request")
-    return MeasuredBase(plane=plane, receptance=_interpolate(m.frequency_hz, s, f), alternatives=alternatives,
-                        notes=tuple(notes), report=report, artifact_diameter_m=artifact_d)
+    receptance = _interpolate(m.frequency_hz, s, f)
+    return MeasuredBase(plane=plane, receptance=receptance, alternatives=alternatives,
+                        notes=tuple(notes), report=report, artifact_diameter_m=artifact_d,
+                        uncertainty=_uncertainty(m, f, receptance, artifact_method),
+                        effective_length_m=effective_length_m if kind == "direct_frf" else None)
+
+
+def _uncertainty(m: Measurement, f: np.ndarray, receptance: np.ndarray, artifact_method: str
+                 ) -> _EntryNoise | _ArtifactNoise | None:
+    """The measurement's own noise model on the grid ``f`` (None for the finite-difference fallback)."""
+    kind = m.meta.kind
+    if kind == "point_receptance":
+        return _EntryNoise(receptance, {k: _noise_rel(m, k, f) for k in ("h", "l", "n", "p")})
+    if kind == "direct_frf":
+        return _EntryNoise(receptance, {"h": _noise_rel(m, "h", f)})
+    if artifact_method != "exact":
+        return None
+    geometry = artifact_from_meta(m.meta.artifact)
+    assert m.meta.points_m is not None
+    frfs = {k: _interpolate(m.frequency_hz, np.asarray(m.frfs[k]), f) for k in ("h11", "h21", "h22")}
+    _, info = identify_exact(geometry, m.meta.points_m, f, frfs)
+    return _ArtifactNoise(receptance, geometry, m.meta.points_m, f, frfs, {k: _noise_rel(m, k, f) for k in frfs},
+                          np.asarray(info["condition_number"]))
 
 
 def base_resolver(store: MeasurementSource) -> BaseResolver:

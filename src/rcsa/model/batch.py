@@ -4,6 +4,10 @@ The spindle (and each distinct spindle + holder + insertion) is condensed once a
 the exact natural frequencies of all tools are found together afterwards (one lockstep
 bisection, :func:`rcsa.physics.natural_frequencies.natural_frequencies_batch`). Results come
 in input order, each with its own ``status``; a bad combination never fails the others.
+
+An ``uncertainty`` option (:mod:`rcsa.model.uncertainty`) applies to every combination: each
+gets its own band, drawn from the same seed (common random numbers: two tools' bands differ
+by their geometry, not by the luck of their draws).
 """
 
 from __future__ import annotations
@@ -15,9 +19,16 @@ from typing import Any, Literal
 from rcsa.errors import InputError
 from rcsa.model.assembly import AssemblyModel
 from rcsa.model.bounds import MAX_BATCH_COMBINATIONS, MAX_FREQUENCY_LINES
-from rcsa.model.contract import CommonSpec, assemble, parse_combination, parse_common
+from rcsa.model.contract import (
+    CommonSpec,
+    MeasuredSpindleSpec,
+    assemble,
+    parse_combination,
+    parse_common,
+)
 from rcsa.model.prediction import Prediction
 from rcsa.model.spindle_side import BaseResolver, SpindleSide
+from rcsa.model.uncertainty import UncertaintyOptions, parse_uncertainty
 from rcsa.physics.arrays import FloatArray
 from rcsa.physics.chain import Chain
 from rcsa.physics.natural_frequencies import natural_frequencies_batch
@@ -29,7 +40,7 @@ Progress = Callable[[int, int], None]
 
 #: Fields of a batch request.
 BATCH_FIELDS = ("frequency", "beam_theory", "shear_coefficient", "materials", "spindle", "combinations",
-                "natural_frequencies")
+                "natural_frequencies", "uncertainty")
 
 _Slot = dict[str, Any] | tuple[str, AssemblyModel, Prediction]
 
@@ -90,9 +101,17 @@ def parse_batch(request: Mapping[str, Any], *, max_lines: int = MAX_FREQUENCY_LI
     with_modes = request.get("natural_frequencies", True)
     if not isinstance(with_modes, bool):
         raise InputError("natural_frequencies", "must be true or false")
-    common = parse_common({k: v for k, v in request.items() if k not in ("combinations", "natural_frequencies")},
-                          max_lines=max_lines)
+    common = parse_common({k: v for k, v in request.items()
+                           if k not in ("combinations", "natural_frequencies", "uncertainty")}, max_lines=max_lines)
+    _batch_uncertainty(request, common)
     return combos, with_modes, common
+
+
+def _batch_uncertainty(request: Mapping[str, Any], common: CommonSpec) -> UncertaintyOptions | None:
+    """The batch's ``uncertainty`` option, checked against its spindle and grid."""
+    return parse_uncertainty(request.get("uncertainty"), measured_spindle=isinstance(common.spindle,
+                                                                                   MeasuredSpindleSpec),
+                             lines=int(common.frequency_hz.size))
 
 
 def predict_batch(request: Mapping[str, Any], *, resolve_base: BaseResolver | None = None,
@@ -104,8 +123,9 @@ def predict_batch(request: Mapping[str, Any], *, resolve_base: BaseResolver | No
     ----------
     request : dict
         ``{"spindle", "frequency", "combinations": [{"id", "holder", "tool", "joints"}]}``,
-        optionally ``materials``, ``beam_theory``, ``shear_coefficient`` and
-        ``natural_frequencies`` (bool, default true).
+        optionally ``materials``, ``beam_theory``, ``shear_coefficient``,
+        ``natural_frequencies`` (bool, default true) and ``uncertainty`` (every combination's
+        band, :mod:`rcsa.model.uncertainty`).
     resolve_base : callable, optional
         Turns a measured spindle into its base receptance
         (:func:`rcsa.measured.hybrid.base_resolver`); needed for ``{"measurement_id"}``.
@@ -123,6 +143,7 @@ def predict_batch(request: Mapping[str, Any], *, resolve_base: BaseResolver | No
         "error": {"field", "detail"}}], "summary": {"ok", "error"}}``
     """
     combos, with_modes, common = parse_batch(request, max_lines=max_lines, max_combinations=max_combinations)
+    uncertainty = _batch_uncertainty(request, common)
     side = SpindleSide(common, resolve_base)
     slots: list[_Slot] = []
     for i, raw in enumerate(combos):
@@ -134,6 +155,9 @@ def predict_batch(request: Mapping[str, Any], *, resolve_base: BaseResolver | No
             spec = assemble(common, parse_combination(raw, common.materials, path, extra_fields=("id",)))
             # exact modes come afterwards for all tools at once (natural_frequencies_batch)
             model, prediction = side.predict_with_model(spec, natural_frequencies=False)
+            if uncertainty is not None:
+                band = side.uncertainty_band(spec, model, prediction, uncertainty, natural_frequencies=with_modes)
+                prediction = replace(prediction, uncertainty=band)
             slots.append((ident, model, prediction))
         except InputError as exc:
             field = exc.field if exc.field.startswith(path) else f"{path}.{exc.field}".rstrip(".")

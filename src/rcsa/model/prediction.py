@@ -16,6 +16,7 @@ import numpy as np
 from rcsa.model.assembly import AssemblyModel
 from rcsa.model.modal_fit import modal_fit
 from rcsa.model.peaks import find_frf_peaks
+from rcsa.model.uncertainty import UncertaintyBand
 from rcsa.model.wire import complex_to_wire
 from rcsa.physics.algebra2x2 import inv2
 from rcsa.physics.arrays import ComplexArray, FloatArray
@@ -51,6 +52,10 @@ class Prediction(Mapping[str, Any]):
         What the numbers mean where it is not obvious (hybrid estimates, uncertainty).
     extra : dict
         Further JSON fields (e.g. the hybrid identification report).
+    uncertainty : UncertaintyBand or None
+        The band over the draws of an ``uncertainty`` option (:mod:`rcsa.model.uncertainty`);
+        written as the result's ``uncertainty`` (merged with a ``direct_frf`` spindle's
+        bounds, which ``extra`` may already hold under that name).
     """
 
     tool_point: Receptance
@@ -62,6 +67,7 @@ class Prediction(Mapping[str, Any]):
     min_real_frequency_hz: float
     notes: tuple[str, ...] = ()
     extra: Mapping[str, Any] = field(default_factory=dict)
+    uncertainty: UncertaintyBand | None = None
 
     @property
     def frequency_hz(self) -> FloatArray:
@@ -91,6 +97,8 @@ class Prediction(Mapping[str, Any]):
             "notes": list(self.notes),
         }
         out.update(self.extra)
+        if self.uncertainty is not None:
+            out["uncertainty"] = {**out.get("uncertainty", {}), **self.uncertainty.to_dict(arrays)}
         return out
 
     def _dict(self) -> dict[str, Any]:

@@ -15,7 +15,8 @@ never blamed on an effect. Noise is complex Gaussian with the Bendat & Piersol r
 |H| (and of its phase, rad) ``σ = √(1−γ²) / (|γ| √(2 n_avg))`` from the measured coherence γ².
 
 Default tolerances (one standard deviation; overridable per request, ``tolerances``) follow
-``diagnosis.md`` §2 and §5.1:
+``diagnosis.md`` §2 and §5.1; they and their draws are defined once, in
+:mod:`rcsa.model.tolerances` (predictions with uncertainty bands use the same):
 
 ==================================  =======  =============================================
 key                                 default  meaning
@@ -38,29 +39,16 @@ stickout_m                          0.0003   per measurement, m
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
 from rcsa.analysis.diagnosis.perturbed_model import Knobs
+from rcsa.model.tolerances import DEFAULT_TOLERANCES, apply_nuisance, draw_nuisance
 
 __all__ = ["DEFAULT_TOLERANCES", "Discrepancy", "build_discrepancy", "draw_knobs", "noise_sd_rel",
            "shrink"]
 
-DEFAULT_TOLERANCES: dict[str, float] = {
-    "tool_youngs_modulus_rel": 0.03,
-    "tool_density_rel": 0.01,
-    "structure_youngs_modulus_rel": 0.02,
-    "structure_density_rel": 0.01,
-    "loss_factor_log": 0.25,
-    "bearing_stiffness_log": 0.08,
-    "bearing_damping_log": 0.25,
-    "spindle_holder_stiffness_log": 0.15,
-    "spindle_holder_damping_log": 0.25,
-    "holder_tool_stiffness_log": 0.15,
-    "holder_tool_damping_log": 0.25,
-    "stickout_m": 0.0003,
-}
 # Shrinkage towards the diagonal (Ledoit–Wolf style, fixed weight as in the prototype): with
 # ~40-60 features and a few hundred draws the sample covariance is invertible but noisy.
 SHRINKAGE = 0.1
@@ -90,33 +78,13 @@ def noise_sd_rel(coherence: np.ndarray, n_averages: float) -> np.ndarray:
 
 def draw_knobs(rng: np.random.Generator, tol: Mapping[str, float], n_configs: int,
                base: Knobs | None = None) -> list[Knobs]:
-    """One nuisance draw: the shared part once, the per-measurement part per configuration."""
+    """One nuisance draw: the shared part once, the per-measurement part per configuration.
+
+    The draw itself is the one every model user shares (:func:`rcsa.model.tolerances.draw_nuisance`).
+    """
+    draw = draw_nuisance(rng, tol, 1, n_configs)
     base = Knobs() if base is None else base
-    n = rng.standard_normal
-    shared = {
-        "tool_youngs_scale": 1.0 + tol["tool_youngs_modulus_rel"] * n(),
-        "tool_density_scale": 1.0 + tol["tool_density_rel"] * n(),
-        "structure_youngs_scale": 1.0 + tol["structure_youngs_modulus_rel"] * n(),
-        "structure_density_scale": 1.0 + tol["structure_density_rel"] * n(),
-        "loss_factor_scale": float(np.exp(tol["loss_factor_log"] * n())),
-        "bearing_stiffness_scale": float(np.exp(tol["bearing_stiffness_log"] * n())),
-        "bearing_damping_scale": float(np.exp(tol["bearing_damping_log"] * n())),
-        "sh_translational_scale": float(np.exp(tol["spindle_holder_stiffness_log"] * n())),
-        "sh_rotational_scale": float(np.exp(tol["spindle_holder_stiffness_log"] * n())),
-        "sh_damping_scale": float(np.exp(tol["spindle_holder_damping_log"] * n())),
-    }
-    out = []
-    for _ in range(n_configs):
-        per = {
-            "ht_translational_scale": float(np.exp(tol["holder_tool_stiffness_log"] * n())),
-            "ht_rotational_scale": float(np.exp(tol["holder_tool_stiffness_log"] * n())),
-            "ht_damping_scale": float(np.exp(tol["holder_tool_damping_log"] * n())),
-            "stickout_offset_m": tol["stickout_m"] * n(),
-        }
-        fields = {**shared, **per}
-        out.append(replace(base, **{k: (getattr(base, k) + v if k == "stickout_offset_m" else getattr(base, k) * v)
-                                    for k, v in fields.items()}))
-    return out
+    return [apply_nuisance(base, draw.fields(0, c)) for c in range(n_configs)]
 
 
 def shrink(cov: np.ndarray, weight: float = SHRINKAGE) -> np.ndarray:
