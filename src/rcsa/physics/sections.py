@@ -64,7 +64,9 @@ class Section:
     rho_i: RealParam
 
     def undamped(self) -> Section:
-        """The section with real moduli (damping removed); works on stacked (array) sections too."""
+        """The section with real moduli: damping removed, or itself when they are real; stacked too."""
+        if not np.any(np.imag(self.ei)) and not np.any(np.imag(self.shear_flexibility)):
+            return self
         flex = np.asarray(self.shear_flexibility)
         with np.errstate(divide="ignore"):
             real_flex = np.where(flex == 0, 0.0, 1.0 / np.real(1.0 / np.where(flex == 0, 1.0, flex)))
