@@ -23,7 +23,32 @@ from rcsa.physics.elimination import march, static_condense, static_tip_receptan
 from rcsa.physics.natural_frequencies import natural_frequencies_batch
 from rcsa.physics.receptance import Receptance
 
-__all__ = ["Prediction", "SubassemblyCache", "predict_model", "tool_point_receptance"]
+__all__ = ["COUNT_LINES", "Prediction", "SubassemblyCache", "count_lines_hz", "predict_model",
+           "tool_point_receptance"]
+
+#: Most lines of the requested grid counted (Wittrick–Williams) before the natural frequencies
+#: are refined: counting costs a real elimination per line, a refinement step a fixed ~0.5 ms;
+#: every k-th line up to this many keeps both small (see ``benchmarks/bench_engine.py``).
+COUNT_LINES = 256
+
+
+def count_lines_hz(frequency_hz: FloatArray, most: int = COUNT_LINES) -> FloatArray:
+    """Lines of the requested grid at which the modes are first counted: every k-th, at most ``most``.
+
+    Parameters
+    ----------
+    frequency_hz : numpy.ndarray, shape (nfreq,)
+        The requested grid, Hz, increasing.
+    most : int
+        Largest number of lines returned (the first and last are always among them).
+
+    Returns
+    -------
+    numpy.ndarray, shape (ncount,)
+    """
+    f = np.asarray(frequency_hz, dtype=float)
+    step = max(1, -(-(f.size - 1) // max(most - 1, 1)))
+    return np.unique(np.concatenate([f[::step], f[-1:]]))
 
 
 @dataclass(frozen=True)
@@ -182,8 +207,8 @@ def predict_model(model: AssemblyModel, frequency_hz: FloatArray, *,
     h = g[:, 0, 0]
     notes_out = list(notes)
     if base_receptance is None:
-        nat = natural_frequencies_batch(prefix, [rest], float(f[0]), float(f[-1]))[0] if natural_frequencies \
-            else np.empty(0)
+        nat = natural_frequencies_batch(prefix, [rest], float(f[0]), float(f[-1]), grid_hz=count_lines_hz(f))[0] \
+            if natural_frequencies else np.empty(0)
         method = "wittrick_williams"
         static = static_tip_receptance(rest, cache.static(prefix))
         static_k = None if static is None else float(1.0 / static[0, 0])
