@@ -41,7 +41,7 @@ import numpy as np
 
 from rcsa.physics.algebra2x2 import Pivots, inv2, negative_count_sym
 from rcsa.physics.arrays import ComplexArray, FloatArray, IntArray, RealParam
-from rcsa.physics.elementwise import WORK, Scratch
+from rcsa.physics.elementwise import WORK, Scratch, local_scratch
 from rcsa.physics.sections import Section
 from rcsa.physics.segments import (
     MAX_DECAY_PER_PIECE,
@@ -53,12 +53,12 @@ from rcsa.physics.segments import (
     dynamic_stiffness,
     segment_terms,
     six_terms,
-    static_stiffness,
+    static_terms,
     undamped_segment_terms,
 )
 
-__all__ = ["Beam", "Chain", "ChainItem", "Grid", "Ground", "Lumped", "Spring", "Sym", "beam_step", "joint_step",
-           "undamped"]
+__all__ = ["Beam", "Chain", "ChainItem", "Grid", "Ground", "Lumped", "Spring", "Sym", "Tiling", "beam_step",
+           "joint_step", "undamped"]
 
 #: A symmetric 2×2 stiffness carried as its three entries ``(k11, k12, k22)``, each shape (nfreq,),
 #: complex; units N/m, N/rad, N·m/rad.
@@ -85,6 +85,9 @@ class Grid:
     pivots : Pivots, optional
         Given, the undamped steps (:meth:`ChainItem.eliminate_undamped`) report the pivots
         they eliminate to it (Wittrick–Williams count and determinant).
+    tiling : Tiling, optional
+        When the lines are one grid repeated (tools × lines of a stacked solve), the waves
+        of a section shared by all rows are computed on the grid once and repeated.
 
     Attributes
     ----------
@@ -93,9 +96,10 @@ class Grid:
     pivots : Pivots or None
     """
 
-    def __init__(self, omega_rad_s: FloatArray, scratch: Scratch | None = None, pivots: Pivots | None = None
-                 ) -> None:
+    def __init__(self, omega_rad_s: FloatArray, scratch: Scratch | None = None, pivots: Pivots | None = None,
+                 tiling: Tiling | None = None) -> None:
         self.omega_rad_s: FloatArray = np.asarray(omega_rad_s, dtype=float)
+        self._tiling = tiling
         self.scratch = Scratch() if scratch is None else scratch
         self.pivots = pivots
         self._waves: dict[Section, Waves] = {}
@@ -117,8 +121,8 @@ class Grid:
     def _from_table(self, beam: Beam, real: bool) -> SixTerms | RealTerms | None:
         """The row of ``beam`` in the table of announced beams (computing it on first use), or None."""
         if self._table is None or self._table[0] != real:
-            n_beams = len(self._expected)
-            if n_beams < 2 or n_beams * self.omega_rad_s.size > _TABLE_MAX:
+            n_beams, n = len(self._expected), self.omega_rad_s.size
+            if n_beams < 2 or n > _TABLE_LINES or n_beams * n > _TABLE_MAX:
                 return None
             self._table = (real, *_terms_table(list(self._expected.values()), self.omega_rad_s, self.scratch,
                                                 real, self.pivots))
@@ -135,20 +139,24 @@ class Grid:
         spindle segments split at bearings, the pieces of a subdivided beam), so the work
         arrays stay few and in cache; stacked (array) sections are not cached.
         """
-        hit = self._find(self._waves, section)
+        hit: Waves | None = self._find(self._waves, section)
         if hit is None:
             slot = self._slot(self._waves, section)
-            hit = Waves(self.omega_rad_s, section, self.scratch, slot)
+            t = self._tiling
+            hit = Waves(self.omega_rad_s, section, self.scratch, slot) if t is None or slot == "wv.x." \
+                else Waves.tiled(t.waves(section), t.reps, self.scratch, slot)
             if slot != "wv.x.":
                 self._waves[section] = hit
         return hit
 
     def real_waves(self, section: Section) -> RealWaves:
         """:meth:`waves` of an undamped section in real arithmetic (:class:`RealWaves`)."""
-        hit = self._find(self._real_waves, section)
+        hit: RealWaves | None = self._find(self._real_waves, section)
         if hit is None:
             slot = self._slot(self._real_waves, section)
-            hit = RealWaves(self.omega_rad_s, section, self.scratch, slot)
+            t = self._tiling
+            hit = RealWaves(self.omega_rad_s, section, self.scratch, slot) if t is None or slot == "wv.x." \
+                else RealWaves.tiled(t.real_waves(section), t.reps, self.scratch, slot)
             if slot != "wv.x.":
                 self._real_waves[section] = hit
         return hit
@@ -199,7 +207,7 @@ class Grid:
         """
         hit = self._from_table(beam, real=True)
         if hit is not None:
-            return hit
+            return hit  # type: ignore[return-value]
         wv = self.real_waves(beam.section)
         last, terms = self._last
         if last is beam and terms is not None and np.isrealobj(terms[0]) and \
@@ -227,9 +235,50 @@ class Grid:
 
 _CARRIED = (("k0.11", "k0.12", "k0.22"), ("k1.11", "k1.12", "k1.22"))
 
-#: Largest beams × lines of a terms table (beyond it each beam is computed on its own, its
-#: work arrays staying in cache).
-_TABLE_MAX = 8192
+class Tiling:
+    """Waves on one grid, for grids that repeat it (:class:`Grid` ``tiling``).
+
+    Parameters
+    ----------
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        The repeated grid, rad/s.
+    reps : int
+        How many times a grid using this repeats it.
+    """
+
+    def __init__(self, omega_rad_s: FloatArray, reps: int = 1) -> None:
+        self.omega_rad_s, self.reps = omega_rad_s, reps
+        self._scratch = Scratch()
+        self._waves: dict[Section, Waves] = {}
+        self._real: dict[Section, RealWaves] = {}
+
+    def repeated(self, reps: int) -> Tiling:
+        """The same waves for a grid repeating this one ``reps`` times."""
+        out = Tiling.__new__(Tiling)
+        out.omega_rad_s, out.reps, out._scratch, out._waves, out._real = \
+            self.omega_rad_s, reps, self._scratch, self._waves, self._real
+        return out
+
+    def waves(self, section: Section) -> Waves:
+        """:class:`Waves` of ``section`` on the grid (computed once)."""
+        hit = self._waves.get(section)
+        if hit is None:
+            hit = self._waves[section] = Waves(self.omega_rad_s, section, self._scratch, f"t{len(self._waves)}.")
+        return hit
+
+    def real_waves(self, section: Section) -> RealWaves:
+        """:class:`RealWaves` of ``section`` on the grid (computed once)."""
+        hit = self._real.get(section)
+        if hit is None:
+            hit = self._real[section] = RealWaves(self.omega_rad_s, section, self._scratch, f"r{len(self._real)}.")
+        return hit
+
+
+#: A terms table for at most this many lines (few lines: the per-item overhead dominates) ...
+_TABLE_LINES = 512
+#: ... and beams × lines (beyond it each beam is computed on its own, its work arrays
+#: staying in cache).
+_TABLE_MAX = 16384
 
 
 def _stacked(values: Sequence[Any], n: int) -> np.ndarray:
@@ -278,7 +327,7 @@ def beam_step(k: Sym, terms: SixTerms, *, scratch: Scratch | None = None, out: S
     terms : SixTerms
         The beam's six-term dynamic stiffness (:func:`rcsa.physics.segments.stiffness_terms`).
     scratch : Scratch, optional
-        Work arrays (fresh ones by default); the pivot is returned in them.
+        Work arrays (this thread's by default); the pivot is returned in them.
     out : Sym, optional
         Where to write the new stiffness (not ``k`` or ``terms``; fresh arrays by default).
 
@@ -289,7 +338,7 @@ def beam_step(k: Sym, terms: SixTerms, *, scratch: Scratch | None = None, out: S
     pivot : Sym
         ``P`` (its negative eigenvalues enter the Wittrick–Williams count).
     """
-    new, pivot, _ = _beam_step(k, terms, Scratch() if scratch is None else scratch, out)
+    new, pivot, _ = _beam_step(k, terms, local_scratch("step") if scratch is None else scratch, out)
     return new, pivot
 
 
@@ -545,7 +594,7 @@ class Beam:
         internal pivots when it is computed from pieces, :func:`rcsa.physics.segments.undamped_segment_terms`)."""
         k, pivot, det = _beam_step(k, grid.undamped_beam_terms(self), grid.scratch, grid.carried(real=True))
         if grid.pivots is not None:
-            grid.pivots.add_sym(pivot[0], pivot[2], det)
+            grid.pivots.add_sym(pivot[0].real, pivot[2].real, det.real)  # real already: no copies
         return k
 
     def announce(self, grid: Grid) -> None:
@@ -553,10 +602,13 @@ class Beam:
         grid.expect(self)
 
     def eliminate_static(self, k: Sym) -> Sym:
-        """With the exact static Timoshenko stiffness; ``P = K + D11`` is positive definite."""
-        d = static_stiffness(self.section.undamped(), self.length_m)
-        a, b, c, e, f, g = (np.array([d[i, j]]) for i, j in ((0, 0), (0, 1), (1, 1), (0, 2), (0, 3), (1, 3)))
-        return beam_step(k, (a, b, c, e, f, g))[0]
+        """With the exact static Timoshenko stiffness; ``P = K + D11`` is positive definite.
+
+        The six terms of :func:`rcsa.physics.segments.static_terms`, per row for a stacked beam.
+        """
+        shape = k[0].shape
+        terms = tuple(np.broadcast_to(x, shape) for x in static_terms(self.section.undamped(), self.length_m))
+        return _beam_step(k, terms, local_scratch("static"), None)[0]  # type: ignore[arg-type]
 
     def absorb_compliance(self, compliance: ComplexArray, grid: Grid) -> tuple[ComplexArray, bool]:
         """``D22 − D21 S (I + D11 S)⁻¹ D12``: the stiffness at the beam's end, never inverting ``S``."""

@@ -103,15 +103,19 @@ class Scratch:
 _LOCAL = threading.local()
 
 
-def local_scratch() -> Scratch:
-    """This thread's reusable :class:`Scratch` (its arrays are mapped once, not on every solve).
+def local_scratch(purpose: str = "solve") -> Scratch:
+    """This thread's reusable :class:`Scratch` for ``purpose`` (its arrays are mapped once, not per solve).
 
-    For solvers that finish with it before returning (:func:`rcsa.physics.elimination.march`);
-    threads (the service's workers) each have their own.
+    For solvers that are done with it when they return (:func:`rcsa.physics.elimination.march`
+    uses ``"solve"``; a solver that may run while another is under way picks its own
+    ``purpose``); threads (the service's workers) each have their own.
     """
-    sc: Scratch | None = getattr(_LOCAL, "scratch", None)
+    pool: dict[str, Scratch] | None = getattr(_LOCAL, "pool", None)
+    if pool is None:
+        pool = _LOCAL.pool = {}
+    sc = pool.get(purpose)
     if sc is None:
-        sc = _LOCAL.scratch = Scratch()
+        sc = pool[purpose] = Scratch()
     return sc
 
 

@@ -26,10 +26,11 @@ import numpy as np
 
 from rcsa.physics.algebra2x2 import Pivots, inv2
 from rcsa.physics.arrays import ComplexArray, FloatArray, IntArray
-from rcsa.physics.chain import Chain, ChainItem, Grid, Sym
+from rcsa.physics.chain import Chain, ChainItem, Grid, Sym, Tiling
 from rcsa.physics.elementwise import Scratch, local_scratch
 
-__all__ = ["close", "march", "march_undamped", "static_condense", "static_tip_receptance", "subdivide", "tip_receptance",
+__all__ = ["close", "march", "march_tools", "march_undamped", "static_condense", "static_condense_rows",
+           "static_tip_receptance", "static_tip_receptance_rows", "subdivide", "tip_receptance",
            "wittrick_williams_count"]
 
 
@@ -183,6 +184,59 @@ def march_undamped(chain: Chain, omega_rad_s: FloatArray, start: FloatArray | No
     return out, pivots
 
 
+def march_tools(stacked: Chain, omega_rad_s: FloatArray, n_tools: int, start: ComplexArray | None = None
+                ) -> ComplexArray:
+    """:func:`march` of a chain stacked over tools, every tool on the whole grid.
+
+    Line ``t·nfreq + i`` is tool ``t`` (row ``t`` of the stacked parameters) at
+    ``omega_rad_s[i]`` with ``start[i]``; the rows of each block are taken as it is solved,
+    so memory stays that of one block.
+
+    Parameters
+    ----------
+    stacked : Chain
+        Stacked over ``n_tools`` tools (:func:`rcsa.physics.stacking.stack_chains`).
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies, rad/s.
+    n_tools : int
+    start : numpy.ndarray, shape (nfreq, 2, 2), optional
+        Stiffness at the first node, the same for every tool (a condensed spindle + holder).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_tools, nfreq, 2, 2), complex
+    """
+    w = np.asarray(omega_rad_s, dtype=float)
+    nf = w.size
+    n = n_tools * nf
+    s0 = None if start is None else np.asarray(start)
+    real = _is_undamped(stacked) and (s0 is None or not np.any(np.imag(s0)))
+    out = np.empty((n, 2, 2), dtype=complex)
+    scratch = local_scratch()
+    per_block = _BLOCK // nf  # whole tools per block: the waves of shared sections are the grid's, repeated
+    tiling = Tiling(w) if per_block >= 1 else None
+    blocks = [(t * nf, min(t + per_block, n_tools) * nf) for t in range(0, n_tools, per_block)] \
+        if per_block >= 1 else _blocks(n)
+    for i0, i1 in blocks:
+        tool, line = np.divmod(np.arange(i0, i1), nf)
+        g = Grid(w[line], scratch, tiling=None if tiling is None else tiling.repeated((i1 - i0) // nf))
+        part = tuple(item.take_rows(tool) if item.is_stacked else item for item in stacked)
+        if s0 is None:
+            k = _start_sym(None, 0, i1 - i0, real)
+        else:
+            k = _start_sym(s0[line], 0, i1 - i0, real)
+        for item in part:
+            item.announce(g)
+        if real:
+            for item in part:
+                k = item.eliminate_undamped(k, g)
+        else:
+            for item in part:
+                k = item.eliminate(k, g)[0]
+        _put_sym(out[i0:i1], k)
+    return out.reshape(n_tools, nf, 2, 2)
+
+
 def _start_sym(start: ComplexArray | FloatArray | None, i0: int, i1: int, real: bool) -> Sym:
     """Rows ``i0:i1`` of a start stiffness (symmetrised), or zeros (a free end)."""
     if start is None:
@@ -261,14 +315,27 @@ def static_condense(chain: Chain, start: FloatArray | None = None) -> FloatArray
     (:meth:`rcsa.physics.chain.ChainItem.eliminate_static`); ``start`` continues a
     condensation (e.g. a cached spindle + holder).
     """
+    out: FloatArray = static_condense_rows(chain, 1, start)[0]
+    return out
+
+
+def static_condense_rows(chain: Chain, rows: int, start: FloatArray | None = None) -> FloatArray:
+    """:func:`static_condense` of a chain stacked over ``rows`` rows (or of one chain, repeated).
+
+    Returns
+    -------
+    numpy.ndarray, shape (rows, 2, 2)
+    """
     if start is None:
-        k: Sym = (np.array([0.0j]), np.array([0.0j]), np.array([0.0j]))
+        k: Sym = (np.zeros(rows, dtype=complex), np.zeros(rows, dtype=complex), np.zeros(rows, dtype=complex))
     else:
-        k = (np.array([complex(start[0, 0])]), np.array([complex(start[0, 1])]), np.array([complex(start[1, 1])]))
+        k = tuple(np.full(rows, complex(start[i, j])) for i, j in ((0, 0), (0, 1), (1, 1)))  # type: ignore[assignment]
     for item in chain:
         k = item.eliminate_static(k)
-    k11, k12, k22 = (float(x[0].real) for x in k)
-    return np.array([[k11, k12], [k12, k22]])
+    out = np.empty((rows, 2, 2))
+    k11, k12, k22 = (np.broadcast_to(np.real(x), (rows,)) for x in k)
+    out[:, 0, 0], out[:, 0, 1], out[:, 1, 0], out[:, 1, 1] = k11, k12, k12, k22
+    return out
 
 
 def static_tip_receptance(chain: Chain, start: FloatArray | None = None) -> FloatArray | None:
@@ -276,9 +343,16 @@ def static_tip_receptance(chain: Chain, start: FloatArray | None = None) -> Floa
 
     ``None`` when the chain is not grounded (a free body has no static stiffness).
     """
-    k = static_condense(chain, start)
-    det = k[0, 0] * k[1, 1] - k[0, 1] ** 2
-    if abs(det) <= 1e-12 * max(abs(k[0, 0] * k[1, 1]), 1e-300):
-        return None
-    out: FloatArray = np.array([[k[1, 1], -k[0, 1]], [-k[0, 1], k[0, 0]]]) / det
+    return static_tip_receptance_rows(static_condense(chain, start)[None])[0]
+
+
+def static_tip_receptance_rows(k: FloatArray) -> list[FloatArray | None]:
+    """Static point receptances from condensed static stiffnesses ``k`` (rows, 2, 2); ``None`` if singular."""
+    det = k[:, 0, 0] * k[:, 1, 1] - k[:, 0, 1] ** 2
+    out: list[FloatArray | None] = []
+    for i in range(k.shape[0]):
+        if abs(det[i]) <= 1e-12 * max(abs(k[i, 0, 0] * k[i, 1, 1]), 1e-300):
+            out.append(None)
+        else:
+            out.append(np.array([[k[i, 1, 1], -k[i, 0, 1]], [-k[i, 0, 1], k[i, 0, 0]]]) / det[i])
     return out

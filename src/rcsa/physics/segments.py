@@ -18,7 +18,7 @@ from typing import TypeAlias
 import numpy as np
 
 from rcsa.physics.algebra2x2 import Pivots, inv2
-from rcsa.physics.arrays import ComplexArray, FloatArray, RealParam
+from rcsa.physics.arrays import BoolArray, ComplexArray, FloatArray, RealParam
 from rcsa.physics.elementwise import WORK, Scratch, sqrt_any, vers_sin
 from rcsa.physics.sections import Section
 
@@ -32,6 +32,7 @@ __all__ = [
     "free_free_receptance",
     "segment_terms",
     "static_stiffness",
+    "static_terms",
     "stiffness_terms",
     "double",
     "six_terms",
@@ -212,6 +213,19 @@ class Waves:
 
     __slots__ = ("d", "decay_per_m", "decay_rows", "ei", "inv_k", "k", "n", "q", "qq", "ra", "s", "slot")
 
+    slot: str
+    n: tuple[int, ...]
+    ei: complex | ComplexArray
+    ra: FloatArray
+    s: ComplexArray
+    q: ComplexArray
+    qq: ComplexArray
+    d: ComplexArray
+    k: ComplexArray
+    inv_k: ComplexArray
+    decay_rows: FloatArray | None
+    decay_per_m: float
+
     def __init__(self, omega_rad_s: FloatArray, section: Section, scratch: Scratch | None = None,
                  slot: str = "") -> None:
         sc = Scratch() if scratch is None else scratch
@@ -267,25 +281,36 @@ class Waves:
         self.decay_rows = ms.max(axis=(0, ms.ndim - 1), initial=0.0) if ms.ndim == 3 else None
         self.decay_per_m = float(ms.max(initial=0.0))
 
+    @classmethod
+    def tiled(cls, base: Waves, reps: int, scratch: Scratch, slot: str) -> Waves:
+        """``base`` repeated ``reps`` times along the lines (every tool of a stacked solve on one grid)."""
+        out = cls.__new__(cls)
+        _tile_into(base, out, reps, scratch, slot, ("ra", "s", "q", "qq", "d", "k", "inv_k"))
+        return out
+
     @property
     def s1(self) -> ComplexArray:
         """``s₁`` (propagating), shape (nfreq,)."""
-        return self.s[0]
+        out: ComplexArray = self.s[0]
+        return out
 
     @property
     def s2(self) -> ComplexArray:
         """``s₂`` (evanescent below the shear cut-off), shape (nfreq,)."""
-        return self.s[1]
+        out: ComplexArray = self.s[1]
+        return out
 
     @property
     def k1(self) -> ComplexArray:
         """A square root of ``s₁``, shape (nfreq,)."""
-        return self.k[0]
+        out: ComplexArray = self.k[0]
+        return out
 
     @property
     def k2(self) -> ComplexArray:
         """A square root of ``s₂``, shape (nfreq,)."""
-        return self.k[1]
+        out: ComplexArray = self.k[1]
+        return out
 
     def pieces(self, length_m: RealParam) -> int:
         """Number of equal pieces keeping each piece's decay exponent ≤ MAX_DECAY_PER_PIECE."""
@@ -344,13 +369,28 @@ class RealWaves:
     __slots__ = ("below", "d", "decay_per_m", "decay_rows", "ei", "inv_k", "k", "n", "q", "qq", "ra", "s", "slot",
                  "split")
 
+    slot: str
+    n: tuple[int, ...]
+    ei: float | FloatArray
+    ra: FloatArray
+    s: FloatArray
+    q: FloatArray
+    qq: FloatArray
+    d: FloatArray
+    k: FloatArray
+    inv_k: FloatArray
+    below: BoolArray
+    split: int
+    decay_rows: FloatArray | None
+    decay_per_m: float
+
     def __init__(self, omega_rad_s: FloatArray, section: Section, scratch: Scratch | None = None,
                  slot: str = "") -> None:
         sc = Scratch() if scratch is None else scratch
         self.slot = slot
         w = np.asarray(omega_rad_s, dtype=float)
         n = self.n = _shape(w, section)
-        ei, fs = np.real(_param(section.ei)), np.real(_param(section.shear_flexibility))
+        ei, fs = _real_param(section.ei), _real_param(section.shear_flexibility)
         self.ei = ei
         ra = self.ra = sc.real(slot + "ra", n)
         ri, b, c, t = sc.real("wv.ri", n), sc.real("wv.b", n), sc.real("wv.c", n), sc.real("wv.t", n)
@@ -395,6 +435,14 @@ class RealWaves:
         """Number of equal pieces keeping each piece's decay exponent ≤ MAX_DECAY_PER_PIECE."""
         return max(1, math.ceil(self.decay_per_m * float(np.max(length_m)) / MAX_DECAY_PER_PIECE))
 
+    @classmethod
+    def tiled(cls, base: RealWaves, reps: int, scratch: Scratch, slot: str) -> RealWaves:
+        """``base`` repeated ``reps`` times along the lines (see :meth:`Waves.tiled`)."""
+        out = cls.__new__(cls)
+        _tile_into(base, out, reps, scratch, slot, ("ra", "s", "q", "qq", "d", "k", "inv_k", "below"))
+        out.split = base.split
+        return out
+
     def functions(self, length_m: RealParam, scratch: Scratch) -> tuple[FloatArray, FloatArray, FloatArray]:
         """``V = 1 − cos kL``, ``S = sin(kL)/k`` and ``k sin kL = s S`` of both waves, each (2, nfreq).
 
@@ -432,11 +480,35 @@ class RealWaves:
         return v, sf, ss
 
 
+def _tile_into(base: Waves | RealWaves, out: Waves | RealWaves, reps: int, scratch: Scratch, slot: str,
+               names: tuple[str, ...]) -> None:
+    """Fill ``out`` with ``base``'s arrays repeated ``reps`` times along the last (line) axis."""
+    for name in names:
+        src = getattr(base, name)
+        if src.dtype == bool:
+            dst = np.tile(src, reps)
+        else:
+            get = scratch.complex if np.iscomplexobj(src) else scratch.real
+            dst = get(slot + name, (*src.shape[:-1], reps * src.shape[-1]))
+            dst.reshape(*src.shape[:-1], reps, src.shape[-1])[...] = src[..., None, :]
+        setattr(out, name, dst)
+    out.n = (reps * base.n[-1],) if isinstance(base.n, tuple) else reps * base.n
+    out.ei, out.decay_per_m, out.decay_rows, out.slot = base.ei, base.decay_per_m, base.decay_rows, slot
+
+
 def _shape(omega_rad_s: FloatArray, section: Section) -> tuple[int, ...]:
     """Shape of the wave arrays: ω broadcast against the section's parameters (one per row, or
     a column of sections of a terms table)."""
     return np.broadcast_shapes(omega_rad_s.shape, np.shape(section.ei), np.shape(section.shear_flexibility),
                                np.shape(section.rho_a), np.shape(section.rho_i))
+
+
+def _real_param(value: complex | ComplexArray) -> float | FloatArray:
+    """The real part of a section parameter: a Python float (one value) or an array (one per row)."""
+    if np.ndim(value) == 0:
+        return complex(value).real
+    out: FloatArray = np.real(np.asarray(value))
+    return out
 
 
 def _param(value: complex | ComplexArray) -> complex | ComplexArray:
@@ -447,7 +519,7 @@ def _param(value: complex | ComplexArray) -> complex | ComplexArray:
 
 
 def six_terms(waves: Waves | RealWaves, funcs: tuple[np.ndarray, np.ndarray, np.ndarray],
-               out: SixTerms, scratch: Scratch) -> None:
+               out: SixTerms | RealTerms, scratch: Scratch) -> None:
     """Assemble ``(A, B, C, E, F, G)`` from the wave functions (complex or real alike).
 
     With ``V_j = 1 − C_j`` the transfer-matrix entries of §2.3 times ``(s₁ − s₂)`` are::
@@ -518,7 +590,7 @@ def six_terms(waves: Waves | RealWaves, funcs: tuple[np.ndarray, np.ndarray, np.
     np.negative(g, out=g)
 
 
-def double(terms: SixTerms, scratch: Scratch, pivots: Pivots | None = None, multiplicity: int = 1) -> None:
+def double(terms: SixTerms | RealTerms, scratch: Scratch, pivots: Pivots | None = None, multiplicity: int = 1) -> None:
     """Six-term stiffness of two equal pieces in a row, the middle node condensed, in place.
 
     For equal pieces the middle pivot is ``P = D22 + D11 = diag(2A, 2C)``, so
@@ -535,9 +607,9 @@ def double(terms: SixTerms, scratch: Scratch, pivots: Pivots | None = None, mult
     u, v, w, z, t1, t2, t3 = (get(f"dbl.{i}", n) for i in range(7))
     if pivots is not None:
         np.multiply(a, 2.0, out=t1)
-        pivots.add_scalar(t1, multiplicity)
+        pivots.add_scalar(t1.real, multiplicity)                  # real when counting: no copy
         np.multiply(c, 2.0, out=t1)
-        pivots.add_scalar(t1, multiplicity)
+        pivots.add_scalar(t1.real, multiplicity)
     np.divide(0.5, a, out=w)                              # α
     np.divide(0.5, c, out=z)                              # γ
     np.multiply(e, w, out=u)                              # αE
@@ -564,10 +636,13 @@ def double(terms: SixTerms, scratch: Scratch, pivots: Pivots | None = None, mult
     np.copyto(e, t1)
 
 
-def _fresh_out(n: tuple[int, ...], real: bool) -> SixTerms:
-    dtype = float if real else complex
-    return (np.empty(n, dtype), np.empty(n, dtype), np.empty(n, dtype), np.empty(n, dtype), np.empty(n, dtype),
-            np.empty(n, dtype))
+def _fresh_real(n: tuple[int, ...]) -> RealTerms:
+    return (np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n))
+
+
+def _fresh_out(n: tuple[int, ...]) -> SixTerms:
+    c = complex
+    return (np.empty(n, c), np.empty(n, c), np.empty(n, c), np.empty(n, c), np.empty(n, c), np.empty(n, c))
 
 
 def stiffness_terms(omega_rad_s: FloatArray, section: Section, length_m: RealParam,
@@ -609,7 +684,7 @@ def stiffness_terms(omega_rad_s: FloatArray, section: Section, length_m: RealPar
     """
     sc = Scratch() if scratch is None else scratch
     wv = waves if waves is not None else Waves(omega_rad_s, section, sc, "st.")
-    res = out if out is not None else _fresh_out(wv.n, real=False)
+    res = out if out is not None else _fresh_out(wv.n)
     six_terms(wv, wv.functions(length_m, sc), res, sc)
     return res
 
@@ -648,7 +723,7 @@ def undamped_segment_terms(omega_rad_s: FloatArray, section: Section, length_m: 
     sc = Scratch() if scratch is None else scratch
     wv = waves if waves is not None else RealWaves(omega_rad_s, section, sc, "st.")
     m = _doublings(wv.decay_per_m, length_m)
-    res = out if out is not None else _fresh_out(wv.n, real=True)
+    res: RealTerms = out if out is not None else _fresh_real(wv.n)
     six_terms(wv, wv.functions(length_m / 2**m, sc), res, sc)
     for level in range(m):
         double(res, sc, pivots, 2 ** (m - 1 - level))
@@ -729,22 +804,29 @@ def free_free_receptance(omega_rad_s: FloatArray, section: Section, length_m: fl
     return out
 
 
+def static_terms(section: Section, length_m: RealParam) -> SixTerms:
+    """The six distinct entries ``(A, B, C, E, F, G)`` of :func:`static_stiffness`.
+
+    ``EI/((1+Φ)L³) · (12, 6L, (4+Φ)L², −12, 6L, (2−Φ)L²)``; each is a scalar, or an array
+    over rows for a stacked section or length (complex either way).
+    """
+    ei, lm = section.ei, length_m
+    phi = 12.0 * ei * section.shear_flexibility / lm**2
+    scale = ei / ((1 + phi) * lm**3)
+    a, b, c, e, f, g = (np.asarray(x * scale, dtype=complex)
+                        for x in (12.0, 6 * lm, (4 + phi) * lm**2, -12.0, 6 * lm, (2 - phi) * lm**2))
+    return a, b, c, e, f, g
+
+
 def static_stiffness(section: Section, length_m: RealParam) -> ComplexArray:
     """Exact static Timoshenko stiffness matrix (the ω → 0 limit of :func:`dynamic_stiffness`).
 
     ``EI/((1+Φ)L³) [[12, 6L, −12, 6L], [6L, (4+Φ)L², −6L, (2−Φ)L²], …]``, Φ = 12EI/(κGA L²)
-    (``domain.md`` §2.4), with the section's complex moduli.
+    (``domain.md`` §2.4), with the section's complex moduli (entries :func:`static_terms`).
 
     Returns
     -------
     numpy.ndarray, shape (4, 4), complex
     """
-    ei, lm = section.ei, length_m
-    phi = 12.0 * ei * section.shear_flexibility / lm**2
-    k = np.array([
-        [12.0, 6 * lm, -12.0, 6 * lm],
-        [6 * lm, (4 + phi) * lm**2, -6 * lm, (2 - phi) * lm**2],
-        [-12.0, -6 * lm, 12.0, -6 * lm],
-        [6 * lm, (2 - phi) * lm**2, -6 * lm, (4 + phi) * lm**2],
-    ], dtype=complex)
-    return ei / ((1 + phi) * lm**3) * k
+    a, b, c, e, f, g = (complex(x) for x in static_terms(section, length_m))
+    return np.array([[a, b, e, f], [b, c, -b, g], [e, -b, a, -f], [f, g, -f, c]], dtype=complex)
