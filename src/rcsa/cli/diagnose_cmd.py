@@ -7,7 +7,6 @@ from typing import Annotated
 
 import typer
 
-from rcsa.app.figures import FIGURE_SUFFIXES, diagnosis_with_figure
 from rcsa.cli._common import fail, read_json, run_guarded, write_json
 
 
@@ -22,6 +21,8 @@ def register(app: typer.Typer) -> None:
                                                                   "gap map to this .png or .svg file.")] = None,
     ) -> None:
         """Where model and measurement part, which unmodelled effect explains it, and how far the gap shrinks."""
+        # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+        from rcsa.app.figures import FIGURE_SUFFIXES, diagnosis_with_figure
         if plot is not None and plot.suffix.lower() not in FIGURE_SUFFIXES:
             raise fail(f"--plot: the file must end in .png or .svg, got {plot.name!r}")
         doc = read_json(request)

@@ -7,7 +7,6 @@ from typing import Annotated
 
 import typer
 
-from rcsa.app.figures import check_picture_path, effects_with_figure
 from rcsa.cli._common import read_json, run_guarded, write_json
 
 
@@ -23,6 +22,8 @@ def register(app: typer.Typer) -> None:
         plot: Annotated[Path | None, typer.Option("--plot", help="Also draw the sensitivity heat map (.png or .svg).")] = None,
     ) -> None:
         """Effect analysis: normalised sensitivities of every mode to bearing, joint and tool parameters."""
+        # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+        from rcsa.app.figures import check_picture_path, effects_with_figure
         doc = read_json(assembly)
         picture = None if plot is None else run_guarded(lambda: check_picture_path(plot, "--plot"))
         write_json(run_guarded(lambda: effects_with_figure(doc, picture)), out)

@@ -7,7 +7,6 @@ from typing import Annotated
 
 import typer
 
-from rcsa.app.analyses import identify as identify_joints
 from rcsa.cli._common import read_json, run_guarded, write_json
 
 
@@ -25,5 +24,7 @@ def register(app: typer.Typer) -> None:
         Prints the result JSON; ``status`` is ``identified`` or ``not_identifiable`` (with a
         ``detail``), and both exit 0: only a malformed request fails.
         """
+        # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+        from rcsa.app.analyses import identify as identify_joints
         doc = read_json(request)
         write_json(run_guarded(lambda: identify_joints(doc)), out)

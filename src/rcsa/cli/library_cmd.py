@@ -23,16 +23,6 @@ from typing import Annotated, Any
 
 import typer
 
-from rcsa.app.jobs import Workbench, run_work
-from rcsa.app.libraries import (
-    EXPORT_FORMATS,
-    library_id_from_name,
-    prepare_library,
-    prepare_sync,
-    spindle_settings,
-    write_export,
-)
-from rcsa.app.stores import is_measurement_id, library_store, open_store
 from rcsa.cli._common import fail, read_json, run_guarded, write_json
 from rcsa.errors import InputError
 
@@ -87,6 +77,8 @@ def _settings(base: dict[str, Any], frequency: str | None, joints: Path | None, 
     ``store`` is given when the spindle is a stored measurement named on the command line;
     its lines are then the default grid.
     """
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app.libraries import spindle_settings
     return spindle_settings(base, frequency=parse_frequency_option(frequency) if frequency is not None else None,
                             joints=read_json(joints) if joints is not None else None, store=store)
 
@@ -135,6 +127,10 @@ def predict(
     quiet: QuietOption = False,
 ) -> None:
     """Predict the tool-point FRF of every tool in a Fusion library on one spindle."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app.jobs import Workbench, run_work
+    from rcsa.app.libraries import prepare_library
+    from rcsa.app.stores import open_store
     if (spindle is None) == (measurement is None):
         raise fail("give exactly one of --spindle SPINDLE.json or --measurement ID")
     base = _spindle_document(spindle) if spindle is not None else {"spindle": {"measurement_id": measurement}}
@@ -188,6 +184,10 @@ def sync(
     quiet: QuietOption = False,
 ) -> None:
     """Keep a Fusion library's tool-point FRFs in the store, computing only new or changed tools."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app.jobs import Workbench, run_work
+    from rcsa.app.libraries import library_id_from_name, prepare_sync
+    from rcsa.app.stores import is_measurement_id, open_store
     measurement = spindle if is_measurement_id(spindle) else None
     base = {"spindle": {"measurement_id": measurement}} if measurement else _spindle_document(Path(spindle))
     ident = library_id if library_id is not None else library_id_from_name(library)
@@ -231,6 +231,8 @@ def show(
     out: Annotated[Path | None, typer.Option("-o", "--out", help="Write here instead of stdout.")] = None,
 ) -> None:
     """Print a stored library's summary and every tool's status (JSON)."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app.stores import library_store
     write_json(run_guarded(lambda: library_store(store).get(library_id)), out)
 
 
@@ -242,6 +244,9 @@ def export(
     store: StoreOption = None,
 ) -> None:
     """Write a stored library's results to a file; the format follows its suffix."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app.libraries import EXPORT_FORMATS, write_export
+    from rcsa.app.stores import library_store
     if out.suffix.lower() not in EXPORT_FORMATS:
         raise fail(f"{out}: the file name must end in .h5, .hdf5, .zip or .json")
     try:

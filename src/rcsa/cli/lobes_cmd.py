@@ -7,9 +7,6 @@ from typing import Annotated
 
 import typer
 
-from rcsa.app.analyses import stability_lobes_result
-from rcsa.app.figures import check_picture_path, lobes_figure, save_figure
-from rcsa.app.stores import open_store
 from rcsa.cli._common import read_json, run_guarded, write_json
 
 
@@ -24,6 +21,10 @@ def register(app: typer.Typer) -> None:
         store: Annotated[Path | None, typer.Option("--store", help="Measurement store for hybrid assemblies.")] = None,
     ) -> None:
         """Stability lobes (Altintas–Budak zero-order) from inline FRFs or an assembly."""
+        # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+        from rcsa.app.analyses import stability_lobes_result
+        from rcsa.app.figures import check_picture_path, lobes_figure, save_figure
+        from rcsa.app.stores import open_store
         doc = read_json(request)
         result = run_guarded(lambda: stability_lobes_result(doc, store=open_store(store) if store else None))
         if plot is not None:

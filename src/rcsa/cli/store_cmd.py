@@ -14,8 +14,6 @@ from typing import Annotated, Any, TypeVar
 
 import typer
 
-from rcsa.app import measurements as M
-from rcsa.app.stores import open_store
 from rcsa.cli._common import fail, write_json
 from rcsa.errors import InputError, RcsaError
 
@@ -150,6 +148,9 @@ def import_(
     store: StoreOpt = None,
 ) -> None:
     """Import a measurement file and print the new measurement's metadata JSON (with its id)."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app import measurements as M
+    from rcsa.app.stores import open_store
 
     def run() -> dict[str, Any]:
         metadata = {"spindle_id": spindle_id, "direction": direction, "plane": plane, "kind": kind,
@@ -194,6 +195,8 @@ def list_(
     store: StoreOpt = None,
 ) -> None:
     """List stored measurements (metadata only), oldest first."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app.stores import open_store
     infos = _guard(
         lambda: open_store(store).list(
             spindle_id, machine=machine, direction=direction, plane=plane, kind=kind
@@ -238,6 +241,9 @@ def show(
     store: StoreOpt = None,
 ) -> None:
     """Print a measurement's metadata and a summary (peak of each FRF) as JSON."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app import measurements as M
+    from rcsa.app.stores import open_store
 
     def run() -> dict[str, Any]:
         return M.measurement_document(open_store(store), measurement_id, include_data=data)
@@ -251,4 +257,7 @@ def delete(
     store: StoreOpt = None,
 ) -> None:
     """Delete a measurement (its id is never reused)."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app import measurements as M
+    from rcsa.app.stores import open_store
     write_json(_guard(lambda: M.delete_measurement(open_store(store), measurement_id)), None)
