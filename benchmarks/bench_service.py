@@ -7,9 +7,20 @@ a ``point_receptance`` measurement (5 000 lines, 1–5 000 Hz), then measures
 * single hybrid predictions of RA-1's holder and tool on that stored spindle at 5 000 lines:
   p50 and p99 latency and requests per second, from 1, 2 and 4 concurrent client threads
   (targets: p50 <= 30 ms, >= 50 requests/s), without and with gzip;
+* keep-alive latency: ``GET /healthz`` 300 times on one HTTP/1.1 connection, p50 and p99
+  (target: p50 <= 3 ms with 2 workers; without ``--http service.http:NoDelayHTTPProtocol``,
+  Nagle + delayed ACK made it ~44 ms), and the same from 8 concurrent connections;
 * a 1 000-combination batch on the same spindle at 1 000 lines (a job: 202, poll, GET
   result), wall time from the POST to the last byte of the result (target <= 5 s), with the
   full tool_point (h, l, n, p) and with ``?tool_point=h``.
+
+``--largest``: only the largest batch the default limits allow per request in lines, 1 000
+combinations at 20 000 lines (``RCSA_MAX_FREQUENCY_LINES``; a 3.7 GB JSON result), as a job on
+the 2-worker service: it must complete in one attempt (no worker killed for missing uvicorn's
+health ping while its result is written, as happened when the result was serialised in one
+piece), streamed back to the client in pieces; reported with the peak resident memory of each
+uvicorn worker process (``VmHWM``). Figures go to ``benchmarks/results/service-largest.json``.
+(A benchmark, not a CI test: it takes minutes and 4 GB of disk.)
 
 Results are printed and written to ``benchmarks/results/service.json``. The numbers depend
 on the machine and on whatever else runs on it; the client threads share its cores.
@@ -18,9 +29,11 @@ on the machine and on whatever else runs on it; the client threads share its cor
 from __future__ import annotations
 
 import argparse
+import http.client
 import json
 import os
 import platform
+import shutil
 import signal
 import socket
 import statistics
@@ -54,7 +67,7 @@ def _start(store: Path, workers: int) -> tuple[subprocess.Popen, str]:
     prom = Path(tempfile.mkdtemp(prefix="rcsa-prom-"))
     env = {**os.environ, "RCSA_STORE": str(store), "RCSA_API_KEYS": f"{KEY}:write", "RCSA_SEED_DEMO": "false",
            "RCSA_ACCESS_LOG": "false", "PROMETHEUS_MULTIPROC_DIR": str(prom), "RCSA_JOB_POLL_S": "0.05"}
-    proc = subprocess.Popen([sys.executable, "-m", "uvicorn", "service.main:create_app", "--factory", "--workers",
+    proc = subprocess.Popen([sys.executable, "-m", "uvicorn", "service.main:create_app", "--factory", "--http", "service.http:NoDelayHTTPProtocol", "--workers",
                              str(workers), "--host", "127.0.0.1", "--port", str(port), "--log-level", "warning"],
                             cwd=REPO, env=env)
     base = f"http://127.0.0.1:{port}"
@@ -112,6 +125,35 @@ def load(base: str, body: bytes, *, threads: int, requests: int, headers: dict[s
             "requests_per_s": len(latencies) / wall}
 
 
+def keepalive(base: str, *, requests: int = 300, connections: int = 1) -> dict[str, float]:
+    """``GET /healthz`` ``requests`` times on each of ``connections`` keep-alive connections; ms."""
+    host, port = base.removeprefix("http://").split(":")
+    latencies: list[float] = []
+    lock = threading.Lock()
+
+    def one() -> None:
+        conn = http.client.HTTPConnection(host, int(port), timeout=30)
+        mine = []
+        for _ in range(requests):
+            t0 = time.perf_counter()
+            conn.request("GET", "/healthz")
+            response = conn.getresponse()
+            response.read()
+            mine.append((time.perf_counter() - t0) * 1e3)
+            assert response.status == 200
+        conn.close()
+        with lock:
+            latencies.extend(mine[1:])  # the first request also opens the connection
+
+    pool = [threading.Thread(target=one) for _ in range(connections)]
+    for t in pool:
+        t.start()
+    for t in pool:
+        t.join()
+    return {"connections": connections, "requests": len(latencies), "p50_ms": statistics.median(latencies),
+            "p99_ms": _percentile(latencies, 99), "max_ms": max(latencies)}
+
+
 def batch(base: str, mid: str, n: int, grid: dict[str, float], *, tool_point: str | None,
           accept_encoding: str) -> dict[str, float]:
     doc = ra1(grid)
@@ -154,6 +196,50 @@ def _server_side(base: str) -> dict[str, float]:
             "mean_predict_ms": 1e3 * values["rcsa_compute_seconds_sum"] / values["rcsa_compute_seconds_count"]}
 
 
+def _worker_peaks(parent: int) -> dict[int, float]:
+    """Peak resident memory (VmHWM, MB) of the child processes of ``parent`` (Linux /proc)."""
+    peaks = {}
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            status = (entry / "status").read_text()
+        except OSError:
+            continue
+        fields = dict(line.split(":", 1) for line in status.splitlines() if ":" in line)
+        if fields.get("PPid", "").strip() == str(parent) and "VmHWM" in fields:
+            peaks[int(entry.name)] = int(fields["VmHWM"].split()[0]) / 1024
+    return peaks
+
+
+def largest(base: str, mid: str, n: int, grid: dict[str, float], proc: subprocess.Popen) -> dict[str, object]:
+    """The largest batch the limits allow, as a job; its result streamed and counted, not parsed."""
+    doc = ra1(grid)
+    combos = [{"id": f"T{i:04d}", "holder": doc["holder"], "joints": doc["joints"],
+               "tool": {**doc["tool"], "stickout_m": 0.040 + 0.05 * i / n}} for i in range(n)]
+    request = {"frequency": grid, "spindle": {"measurement_id": mid}, "combinations": combos}
+    with httpx.Client(base_url=base, timeout=600) as client:
+        t0 = time.perf_counter()
+        r = client.post("/v1/tool-point-frf/batch", json=request, headers={"Accept-Encoding": "identity"})
+        assert r.status_code == 202, r.text
+        location = r.headers["location"]
+        while (job := client.get(location).json())["status"] not in ("succeeded", "failed"):
+            time.sleep(0.5)
+        t_done = time.perf_counter()
+        assert job["status"] == "succeeded", job
+        received, tail = 0, b""
+        with client.stream("GET", job["result_url"], headers={"Accept-Encoding": "identity"}) as result:
+            for piece in result.iter_bytes():
+                received += len(piece)
+                tail = (tail + piece)[-200:]
+        t_bytes = time.perf_counter()
+    summary = orjson.loads(tail[tail.rindex(b'"summary":') + 10:-1])
+    assert summary == {"ok": n, "error": 0}, summary
+    return {"combinations": n, "lines": _lines(grid), "attempts": job["attempts"], "job_done_s": t_done - t0,
+            "result_received_s": t_bytes - t0, "result_gb": received / 1e9, "result_bytes": job["result_bytes"],
+            "worker_peak_rss_mb": _worker_peaks(proc.pid)}
+
+
 def _lines(grid: dict[str, float]) -> int:
     return int(round((grid["stop_hz"] - grid["start_hz"]) / grid["step_hz"])) + 1
 
@@ -164,8 +250,14 @@ def main() -> None:
     parser.add_argument("--threads", type=int, nargs="+", default=[1, 2, 4])
     parser.add_argument("--requests", type=int, default=400)
     parser.add_argument("--batch", type=int, default=1000)
-    parser.add_argument("--out", type=Path, default=REPO / "benchmarks" / "results" / "service.json")
+    parser.add_argument("--keepalive-only", action="store_true", help="Measure only the keep-alive latency.")
+    parser.add_argument("--largest", action="store_true", help="only the largest batch the limits allow")
+    parser.add_argument("--out", type=Path, default=None)
     args = parser.parse_args()
+    if args.largest:
+        main_largest(args)
+        return
+    args.out = args.out or REPO / "benchmarks" / "results" / "service.json"
 
     store = Path(tempfile.mkdtemp(prefix="rcsa-bench-")) / "store"
     proc, base = _start(store, args.workers)
@@ -173,6 +265,12 @@ def main() -> None:
                                               "platform": platform.platform()},
                                   "uvicorn_workers": args.workers}
     try:
+        results["keepalive_healthz"] = [keepalive(base), keepalive(base, requests=100, connections=8)]
+        for row in results["keepalive_healthz"]:
+            print(f"keep-alive GET /healthz, {row['connections']} connection(s): p50 {row['p50_ms']:.2f} ms, "
+                  f"p99 {row['p99_ms']:.2f} ms, max {row['max_ms']:.1f} ms ({row['requests']} requests)")
+        if args.keepalive_only:
+            return
         spindle = measurement_to_contract(demo_measurement(GRID_5000))
         spindle = {k: v for k, v in spindle.items() if k not in ("id", "source", "created_utc")}
         r = httpx.post(base + "/v1/measurements", json=spindle, headers={"X-API-Key": KEY}, timeout=60)
@@ -210,6 +308,35 @@ def main() -> None:
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(results, indent=1) + "\n")
     print(f"written to {args.out}")
+
+
+def main_largest(args: argparse.Namespace) -> None:
+    out = args.out or REPO / "benchmarks" / "results" / "service-largest.json"
+    store = Path(tempfile.mkdtemp(prefix="rcsa-bench-")) / "store"
+    proc, base = _start(store, args.workers)
+    try:
+        grid = {"start_hz": 0.25, "stop_hz": 5000.0, "step_hz": 0.25}  # 20 000 lines
+        spindle = measurement_to_contract(demo_measurement(grid))
+        spindle = {k: v for k, v in spindle.items() if k not in ("id", "source", "created_utc")}
+        r = httpx.post(base + "/v1/measurements", json=spindle, headers={"X-API-Key": KEY}, timeout=120)
+        assert r.status_code == 201, r.text
+        load = os.getloadavg()[0]
+        figures = largest(base, r.json()["id"], args.batch, grid, proc)
+    finally:
+        proc.send_signal(signal.SIGINT)
+        proc.wait(timeout=120)
+        shutil.rmtree(store.parent, ignore_errors=True)  # 4 GB of result
+    figures = {"machine": {"cpus": os.cpu_count(), "python": platform.python_version(),
+                           "platform": platform.platform()}, "uvicorn_workers": args.workers,
+               "load_average_start": load, **figures}
+    peaks = ", ".join(f"{mb:.0f} MB" for mb in figures["worker_peak_rss_mb"].values())
+    print(f"largest batch: {figures['combinations']} combinations x {figures['lines']} lines on {args.workers} uvicorn "
+          f"workers (load average {load:.1f} on {os.cpu_count()} cores): job done in {figures['job_done_s']:.0f} s "
+          f"(attempt {figures['attempts']}), {figures['result_gb']:.2f} GB received by "
+          f"{figures['result_received_s']:.0f} s; peak RSS of the workers {peaks}")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(figures, indent=1) + "\n")
+    print(f"written to {out}")
 
 
 if __name__ == "__main__":

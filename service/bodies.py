@@ -9,17 +9,18 @@ from __future__ import annotations
 
 from typing import Any, TypeVar
 
-import orjson
 from fastapi import Request
 from fastapi.exceptions import RequestValidationError
 from pydantic import BaseModel, ValidationError
 from starlette.datastructures import FormData, UploadFile
 
+from rcsa.app.inputs import decode_json
 from rcsa.errors import InputError
 
 from .errors import ProblemError
+from .routing import ServiceRequest, is_json_media
 
-__all__ = ["form_text", "read_body", "read_upload", "require_json", "validate_json"]
+__all__ = ["form_text", "json_document", "read_body", "read_upload", "require_json", "validate_json"]
 
 M = TypeVar("M", bound=BaseModel)
 
@@ -28,11 +29,12 @@ _MAX_FORM_FILES = 64
 
 
 async def read_body(request: Request) -> tuple[str, Any]:
-    """``("json", bytes)`` or ``("form", FormData)`` by Content-Type; 415 otherwise."""
+    """``("json", document)`` (decoded under the JSON policy) or ``("form", FormData)`` by
+    Content-Type; 415 otherwise."""
     ctype = request.headers.get("content-type", "")
     media = ctype.split(";")[0].strip().lower()
-    if _is_json(media):
-        return "json", await request.body()
+    if is_json_media(media):
+        return "json", await json_document(request)
     if media == "multipart/form-data":
         form = await request.form(max_files=_MAX_FORM_FILES, max_fields=_MAX_FORM_FIELDS)
         return "form", form
@@ -40,13 +42,18 @@ async def read_body(request: Request) -> tuple[str, Any]:
                             "multipart/form-data with the file and the metadata as form fields")
 
 
-def validate_json(model: type[M], data: bytes) -> M:
-    """Parse and validate a JSON body; errors become the usual 422 problem."""
-    try:
-        doc = orjson.loads(data)
-    except orjson.JSONDecodeError as exc:
-        raise RequestValidationError([{"type": "json_invalid", "loc": ("body", exc.pos), "msg": "JSON decode error",
-                                       "input": {}, "ctx": {"error": exc.msg}}]) from None
+async def json_document(request: Request) -> Any:
+    """The request's JSON body under the JSON policy (:func:`rcsa.app.inputs.decode_json`),
+    decoded once per request."""
+    if isinstance(request, ServiceRequest):
+        return await request.json()  # decoded (and cached) under the policy
+    return decode_json(await request.body())
+
+
+def validate_json(model: type[M], data: bytes | Any) -> M:
+    """Validate a JSON body (bytes, decoded under the JSON policy, or the decoded
+    document); errors become the usual 422 problem."""
+    doc = decode_json(data) if isinstance(data, bytes | bytearray) else data
     try:
         return model.model_validate(doc)
     except ValidationError as exc:
@@ -76,14 +83,10 @@ def form_text(form: FormData, name: str) -> str | None:
     return values[0]
 
 
-def _is_json(media: str) -> bool:
-    return media == "application/json" or (media.startswith("application/") and media.endswith("+json"))
-
-
 def require_json(request: Request) -> None:
     """Dependency of JSON-body routes: any other Content-Type is a 415 problem."""
     media = request.headers.get("content-type", "").split(";")[0].strip().lower()
-    if _is_json(media):
+    if is_json_media(media):
         return
     if not media and request.headers.get("content-length", "0") == "0" and "transfer-encoding" not in request.headers:
         return  # no body at all: validation says what is required

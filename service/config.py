@@ -42,6 +42,20 @@ class Settings(BaseSettings):
     job_max_attempts: int = Field(3, ge=1, description="Interrupted runs after which a job fails.")
     job_retention_s: float = Field(7 * 86400.0, gt=0, description="Finished jobs older than this are "
                                    "purged at startup, s.")
+    job_time_limit_s: float = Field(3600.0, gt=0, description="A job running longer than this is failed "
+                                    "(\"Job time limit exceeded\"), s.")
+    job_results_max_bytes: int = Field(20 * 1024**3, ge=0, description="Disk budget of the kept job results: "
+                                       "beyond it the oldest results are deleted (their jobs say when), bytes; "
+                                       "0: no budget.")
+    job_max_unfinished_per_caller: int = Field(10, ge=1, description="Queued or running jobs one caller (API key, "
+                                               "or anonymous client address) may have; more answer 429.")
+    job_max_running_per_caller: int = Field(0, ge=0, description="Jobs of one caller running at once (0: no cap; "
+                                            "queued jobs are claimed round-robin across callers either way).")
+    dask_scheduler: str | None = Field(None, description="Dask scheduler address (tcp://host:8786): jobs compute "
+                                       "on that cluster (pip install 'rcsa[dask]'); unset, in this process.")
+    dask_connect_timeout_s: float = Field(10.0, gt=0, description="How long to try to reach the Dask scheduler "
+                                          "at start-up (and when reconnecting), s.")
+    dask_retries: int = Field(3, ge=0, description="Retries of a chunk that fails on a Dask worker.")
     retry_after_s: int = Field(1, ge=1, description="Retry-After sent with 202 and job status, s.")
     seed_demo: bool = Field(True, description="Seed an empty store once with the demo-ra1 measurement.")
     measurement_cache: int = Field(32, ge=0, description="Measurements kept in memory per process.")

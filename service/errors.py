@@ -8,7 +8,9 @@ offending field as a dotted path into the request (form fields and query paramet
 name).
 
 Mapping: pydantic's ``RequestValidationError`` and :class:`rcsa.errors.InputError` → 422;
-:class:`rcsa.errors.NotFoundError` → 404; :class:`rcsa.errors.StoreError` → 503; HTTP
+:class:`rcsa.errors.NotFoundError` → 404; :class:`rcsa.errors.DamagedError` (one stored
+object cannot be read) and :class:`rcsa.errors.ConflictError` → 409;
+:class:`rcsa.errors.StoreError` (the store as a whole) → 503; HTTP
 errors keep their status; anything else is a bug → 500 with a generic detail, its traceback
 logged with the request id (see :mod:`service.middleware`).
 """
@@ -16,7 +18,7 @@ logged with the request id (see :mod:`service.middleware`).
 from __future__ import annotations
 
 import logging
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from typing import Any
 
 import orjson
@@ -24,8 +26,10 @@ from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.responses import Response
+from starlette.routing import BaseRoute, Match
 
-from rcsa.errors import InputError, NotFoundError, StoreError
+from rcsa.app.budget import BudgetExceeded
+from rcsa.errors import ConflictError, DamagedError, InputError, NotFoundError, StoreError
 
 from .field_errors import pydantic_errors
 
@@ -33,7 +37,9 @@ __all__ = [
     "PROBLEM_MEDIA_TYPE",
     "BodyTooLarge",
     "ProblemError",
+    "allowed_methods",
     "install_error_handlers",
+    "iter_routes",
     "problem_body",
     "problem_response",
     "pydantic_errors",
@@ -98,10 +104,15 @@ class ProblemError(Exception):
 class BodyTooLarge(StarletteHTTPException):
     """The request body exceeds the configured limit (raised while it is being read)."""
 
-    def __init__(self, limit_bytes: int) -> None:
-        super().__init__(413, f"the request body exceeds the limit of {limit_bytes} bytes "
-                              f"({limit_bytes / 2**20:g} MiB); send less (e.g. split a batch) or ask "
-                              "the operator to raise RCSA_MAX_BODY_BYTES")
+    def __init__(self, limit_bytes: int, where: str | None = None) -> None:
+        if where is None:
+            detail = (f"the request body exceeds the limit of {limit_bytes} bytes ({limit_bytes / 2**20:g} MiB); "
+                      "send less (e.g. split a batch) or ask the operator to raise RCSA_MAX_BODY_BYTES")
+        else:
+            detail = (f"the request body exceeds the limit of {where}, {limit_bytes} bytes "
+                      f"({limit_bytes / 2**20:g} MiB, stated in the OpenAPI as x-max-body-bytes); send less "
+                      "(fewer lines or measurements, split a batch)")
+        super().__init__(413, detail)
         self.limit_bytes = limit_bytes
 
 
@@ -167,6 +178,14 @@ _NOT_FOUND_HINTS = {
 }
 
 
+async def _on_budget(request: Request, exc: BudgetExceeded) -> Response:
+    limits = {"estimated_seconds": exc.limits.seconds, "estimated_memory_bytes": int(exc.limits.memory_bytes)}
+    return problem_response(request, 422, exc.rule, slug="compute-budget-exceeded", title="Compute budget exceeded",
+                            errors=[{"field": exc.field, "detail": "the request asks for more work than allowed"}],
+                            extra={"budget": {"mode": exc.mode, "limit": limits, "cost": exc.cost.to_dict(),
+                                              "shrink": list(exc.cost.shrink)}})
+
+
 async def _on_not_found(request: Request, exc: NotFoundError) -> Response:
     hint = _NOT_FOUND_HINTS.get(exc.what, "check the id")
     return problem_response(request, 404, f"{exc}; {hint}", extra={"resource": exc.what, "id": exc.ident})
@@ -176,6 +195,20 @@ async def _on_store(request: Request, exc: StoreError) -> Response:
     log.error("store error: %s", exc)
     return problem_response(request, 503, f"the measurement store is unavailable: {exc}",
                             slug="store-unavailable", headers={"Retry-After": "5"})
+
+
+async def _on_damaged(request: Request, exc: DamagedError) -> Response:
+    log.error("damaged %s %s: %s", exc.what, exc.ident, exc.reason)
+    return problem_response(request, 409, f"{exc.what} {exc.ident} is damaged and cannot be read ({exc.reason}); "
+                                          "retrying will not help. The operator can run `rcsa store check` and "
+                                          f"delete it (DELETE /v1/measurements/{exc.ident}); upload it again",
+                            slug="damaged", title="Stored object damaged",
+                            extra={"resource": exc.what, "id": exc.ident, "reason": exc.reason})
+
+
+async def _on_conflict(request: Request, exc: ConflictError) -> Response:
+    return problem_response(request, 409, f"{exc.what} {exc.ident} {exc.reason}", slug="conflict",
+                            extra={"resource": exc.what, "id": exc.ident})
 
 
 async def _on_problem(request: Request, exc: ProblemError) -> Response:
@@ -191,19 +224,55 @@ _HTTP_DETAILS = {
 }
 
 
+def iter_routes(routes: Iterable[Any]) -> Iterator[BaseRoute]:
+    """Every route, with included routers opened (newer FastAPI versions wrap them)."""
+    for route in routes:
+        inner = getattr(route, "original_router", None)
+        if inner is not None:
+            yield from iter_routes(inner.routes)
+        elif isinstance(route, BaseRoute):
+            yield route
+
+
+def allowed_methods(request: Request) -> list[str]:
+    """Every method some route accepts at the request's path (the ``Allow`` of a 405).
+
+    Starlette answers a 405 with the methods of the first route whose path matched, so a
+    path served by several routes (``GET`` and ``POST /v1/measurements``) named only one.
+    """
+    scope = {**request.scope, "type": "http"}
+    methods: set[str] = set()
+    for route in iter_routes(request.app.router.routes):
+        match, _ = route.matches(scope)
+        if match != Match.NONE:
+            methods |= set(getattr(route, "methods", None) or ())
+    return sorted(methods)
+
+
 async def _on_http(request: Request, exc: StarletteHTTPException) -> Response:
     detail = exc.detail if isinstance(exc.detail, str) else str(exc.detail)
     if exc.status_code in _HTTP_DETAILS and detail in ("Not Found", "Method Not Allowed",
                                                        "There was an error parsing the body"):
         detail = _HTTP_DETAILS[exc.status_code]
-    return problem_response(request, exc.status_code, detail, headers=getattr(exc, "headers", None))
+    headers = dict(getattr(exc, "headers", None) or {})
+    if exc.status_code == 405:
+        allow = allowed_methods(request)
+        if allow:
+            headers["Allow"] = ", ".join(allow)
+            if detail == _HTTP_DETAILS[405]:
+                detail = (f"{request.method} is not accepted at {request.url.path}, which accepts {', '.join(allow)}; "
+                          "see /docs")
+    return problem_response(request, exc.status_code, detail, headers=headers or None)
 
 
 def install_error_handlers(app: FastAPI) -> None:
     """Register the problem handlers on ``app`` (the 500 one lives in the middleware)."""
     app.add_exception_handler(RequestValidationError, _on_validation)
     app.add_exception_handler(InputError, _on_input)
+    app.add_exception_handler(BudgetExceeded, _on_budget)
     app.add_exception_handler(NotFoundError, _on_not_found)
     app.add_exception_handler(StoreError, _on_store)
+    app.add_exception_handler(DamagedError, _on_damaged)
+    app.add_exception_handler(ConflictError, _on_conflict)
     app.add_exception_handler(ProblemError, _on_problem)
     app.add_exception_handler(StarletteHTTPException, _on_http)

@@ -16,15 +16,27 @@ router built with ``route_class=IdempotentRoute`` honour the header on ``POST``:
   ``409`` (``urn:rcsa:problem:idempotent-request-in-progress``) with ``Retry-After``.
 * **Same key, different request**: ``422`` naming the ``Idempotency-Key`` header
   (``urn:rcsa:problem:idempotency-key-reused``).
-* A malformed key (empty, longer than 255 characters, not printable ASCII): ``400``. The key
-  may be sent bare or as a structured-field string (``"..."``).
+* A malformed key (empty, longer than 200 characters, anything but visible ASCII ``!``…``~``):
+  ``400``. The key may be sent bare or as a structured-field string (``"..."``).
+* **Crash consistency of effects.** A handler whose effect is a new stored object (a
+  measurement upload) records the object's id with the key (:meth:`Reservation.record`,
+  durable) *before* it writes the object under that id. If the process dies after the write
+  but before the answer is kept, the retry takes the dead process's reservation over, finds
+  the recorded id and answers with the object that was written: no second copy, nothing lost.
 
 "Same request" means the same method, path, query, media type, ``Prefer`` header and body;
 JSON bodies are compared after parsing (key order and spacing do not matter), multipart bodies
 with the boundary taken out (a retry with a new boundary is the same request).
 
-Keys are scoped per API key (the owner is the key id; ``anonymous`` for callers without a
-key) and kept in ``<store>/idempotency/keys.sqlite`` (WAL; shared by every service process,
+Keys are scoped per caller: the owner is the API key's id, and for anonymous callers the
+client's network address (``anonymous@<address>``), so that anonymous callers never share
+replays: one client's key cannot fetch another client's answer. (Behind a reverse proxy,
+run uvicorn with ``--proxy-headers`` and ``--forwarded-allow-ips`` so that the address is the
+client's; clients behind one NAT still share an address: they should use unguessable keys
+such as UUIDs, or an API key.) Idempotent writes need a write key anyway; anonymous callers
+reach only batches and library predictions, which are computations. The route class
+(:class:`service.routing.ServiceRoute`) authenticates the caller *before* the body is read,
+so a request refused for its key never has its body parsed or fingerprinted. Keys are kept in ``<store>/idempotency/keys.sqlite`` (WAL; shared by every service process,
 kept across restarts) for ``RCSA_JOB_RETENTION_S`` (the same retention as finished jobs, 7
 days by default), purged at startup and hourly. A reservation whose process died (same
 host, pid gone) or that is older than 5 minutes is taken over by the next request.
@@ -58,14 +70,15 @@ from typing import Annotated, Any
 import orjson
 from fastapi import Header, Request
 from fastapi.concurrency import run_in_threadpool
-from fastapi.routing import APIRoute
 from starlette.responses import Response
 
 from rcsa.app.runtime import connect_sqlite, runner_is_dead, transaction
 from rcsa.errors import NotFoundError
 
+from .bodies import json_document
 from .errors import PROBLEM_MEDIA_TYPE, ProblemError
 from .jobs import job_document
+from .routing import ServiceRoute, caller, is_json_media
 from .state import ensure_state
 
 __all__ = [
@@ -74,8 +87,10 @@ __all__ = [
     "IdempotencyKeyHeader",
     "IdempotencyStore",
     "IdempotentRoute",
+    "Reservation",
     "Stored",
     "parse_key",
+    "reservation",
     "request_fingerprint",
     "store_for",
 ]
@@ -84,7 +99,10 @@ log = logging.getLogger("service.idempotency")
 
 KEY_HEADER = "Idempotency-Key"
 DIRECTORY = "idempotency"
-MAX_KEY_LENGTH = 255
+MAX_KEY_LENGTH = 200
+#: What a key may hold: visible ASCII (``!`` to ``~``), bare or as a quoted sf-string.
+KEY_PATTERN = r'^(?:[!#-~][!-~]{0,199}|"[!-~]{1,200}")$'
+_RELEASED = "released"
 LEASE_S = 300.0
 MAX_STORED_BYTES = 32 * 1024 * 1024
 _PURGE_EVERY_S = 3600.0
@@ -106,15 +124,18 @@ CREATE TABLE IF NOT EXISTS idempotency (
     status         INTEGER,
     headers        TEXT,
     body           BLOB,
+    effect         TEXT,
     PRIMARY KEY (owner, key)
 );
 CREATE INDEX IF NOT EXISTS idempotency_age ON idempotency (created_unix);
 """
 
 IdempotencyKeyHeader = Annotated[str | None, Header(
-    alias=KEY_HEADER, description="Any unique string (≤ 255 printable ASCII characters, e.g. a UUID) for this "
-                                  "request: a retry with the same key and request gets the first answer again "
-                                  "instead of acting twice. Kept per API key for RCSA_JOB_RETENTION_S (7 days).",
+    alias=KEY_HEADER, max_length=MAX_KEY_LENGTH + 2, pattern=KEY_PATTERN,
+    description="Any unique string of 1 to 200 visible ASCII characters (! to ~, e.g. a UUID), bare or quoted, "
+                "for this request: a retry with the same key and request gets the first answer again instead of "
+                "acting twice (a malformed key is a 400). Kept per API key (anonymous callers: per client address) "
+                "for RCSA_JOB_RETENTION_S (7 days).",
     examples=["8e03978e-40d5-43e8-bc93-6894a57f9324"])]
 
 #: OpenAPI ``responses`` entries of an idempotent route (merge after :func:`service.responses.problems`).
@@ -141,10 +162,11 @@ def parse_key(raw: str) -> str:
     key = raw.strip()
     if len(key) >= 2 and key[0] == key[-1] == '"':
         key = key[1:-1].replace('\\"', '"').replace("\\\\", "\\")
-    if not key or len(key) > MAX_KEY_LENGTH or any(not (32 <= ord(c) < 127) for c in key):
-        raise ProblemError(400, f"the {KEY_HEADER} header must be 1 to {MAX_KEY_LENGTH} printable ASCII characters "
-                                "(e.g. a UUID)", slug="invalid-idempotency-key",
-                           errors=[{"field": KEY_HEADER, "detail": "1 to 255 printable ASCII characters"}])
+    if not key or len(key) > MAX_KEY_LENGTH or any(not (33 <= ord(c) < 127) for c in key):
+        raise ProblemError(400, f"the {KEY_HEADER} header must be 1 to {MAX_KEY_LENGTH} visible ASCII characters "
+                                "(! to ~, no spaces; e.g. a UUID)", slug="invalid-idempotency-key",
+                           errors=[{"field": KEY_HEADER,
+                                    "detail": f"1 to {MAX_KEY_LENGTH} visible ASCII characters"}])
     return key
 
 
@@ -161,9 +183,8 @@ async def request_fingerprint(request: Request) -> str:
     body = await request.body()
     ctype = request.headers.get("content-type", "")
     media = ctype.split(";")[0].strip().lower()
-    if media == "application/json" or (media.startswith("application/") and media.endswith("+json")):
-        with contextlib.suppress(orjson.JSONDecodeError):
-            body = b"json:" + orjson.dumps(orjson.loads(body), option=orjson.OPT_SORT_KEYS)
+    if is_json_media(media):  # decoded once, under the JSON policy, by the route class
+        body = b"json:" + orjson.dumps(await json_document(request), option=orjson.OPT_SORT_KEYS)
     elif media == "multipart/form-data":
         boundary = _boundary(ctype)
         if boundary:
@@ -215,6 +236,10 @@ class IdempotencyStore:
         self.directory.mkdir(parents=True, exist_ok=True)
         with closing(self._connect()) as con:
             con.executescript(_SCHEMA)
+            columns = {row[1] for row in con.execute("PRAGMA table_info(idempotency)")}
+            if "effect" not in columns:  # a store written by an older rcsa
+                with contextlib.suppress(sqlite3.OperationalError):  # another process added it first
+                    con.execute("ALTER TABLE idempotency ADD COLUMN effect TEXT")
         self._next_purge = 0.0
         self._maybe_purge()
 
@@ -267,7 +292,7 @@ class IdempotencyStore:
                 outcome = ("mismatch", None)
             elif row[1] == "done":
                 outcome = ("replay", Stored(int(row[4]), orjson.loads(row[5]), bytes(row[6])))
-            elif now - row[3] > self.lease_s or runner_is_dead(row[2]):
+            elif now - row[3] > self.lease_s or row[2] in (None, _RELEASED) or runner_is_dead(row[2]):
                 con.execute("UPDATE idempotency SET holder = ?, created_unix = ? WHERE owner = ? AND key = ?",
                             (holder, now, owner, key))
                 outcome = ("new", holder)
@@ -285,10 +310,64 @@ class IdempotencyStore:
         return cur.rowcount == 1
 
     def release(self, owner: str, key: str, holder: str) -> None:
-        """Free a reserved key (its request was not answered with a kept answer)."""
+        """Free a reserved key (its request was not answered with a kept answer).
+
+        A reservation that recorded an effect (:meth:`record_effect`) is kept, released to
+        the next request with the same key, which then finds that effect: the effect may
+        have been committed before the failure.
+        """
+        with closing(self._connect()) as con, transaction(con):
+            con.execute("DELETE FROM idempotency WHERE owner = ? AND key = ? AND holder = ? AND state = 'running' "
+                        "AND effect IS NULL", (owner, key, holder))
+            con.execute("UPDATE idempotency SET holder = ? WHERE owner = ? AND key = ? AND holder = ? "
+                        "AND state = 'running'", (_RELEASED, owner, key, holder))
+
+    def record_effect(self, owner: str, key: str, holder: str, effect: str) -> bool:
+        """Durably note, before acting, what the reserved request is about to create (an id).
+
+        Returns False when the reservation was lost (taken over): the caller must not act.
+        """
         with closing(self._connect()) as con:
-            con.execute("DELETE FROM idempotency WHERE owner = ? AND key = ? AND holder = ? AND state = 'running'",
-                        (owner, key, holder))
+            cur = con.execute("UPDATE idempotency SET effect = ? WHERE owner = ? AND key = ? AND holder = ? "
+                              "AND state = 'running'", (effect, owner, key, holder))
+        return cur.rowcount == 1
+
+    def effect_of(self, owner: str, key: str) -> str | None:
+        """The effect recorded for a key (by an earlier, interrupted attempt), if any."""
+        with closing(self._connect()) as con:
+            row = con.execute("SELECT effect FROM idempotency WHERE owner = ? AND key = ?", (owner, key)).fetchone()
+        return None if row is None else row[0]
+
+
+@dataclass(frozen=True, slots=True)
+class Reservation:
+    """The key a request runs under, for handlers whose effect must be crash-consistent.
+
+    Attributes
+    ----------
+    effect : str or None
+        What an earlier, interrupted attempt of the same request recorded it would create
+        (e.g. a measurement id); the handler must look for it before creating anything.
+    """
+
+    store: IdempotencyStore
+    owner: str
+    key: str
+    holder: str
+    effect: str | None
+
+    def record(self, effect: str) -> None:
+        """Durably record the effect before acting (raises if the reservation was lost)."""
+        if not self.store.record_effect(self.owner, self.key, self.holder, effect):
+            raise ProblemError(409, f"the reservation of this {KEY_HEADER} was taken over by a retry; retry after "
+                                    "Retry-After to get its answer", slug="idempotent-request-in-progress",
+                               title="Request in progress", headers={"Retry-After": "1"})
+
+
+def reservation(request: Request) -> Reservation | None:
+    """The request's :class:`Reservation` (None without a key, or for anonymous callers)."""
+    found = getattr(request.state, "idempotency", None)
+    return found if isinstance(found, Reservation) else None
 
 
 _STORES: dict[str, IdempotencyStore] = {}
@@ -307,12 +386,19 @@ def store_for(state: Any) -> IdempotencyStore:
 
 
 def _owner(request: Request, state: Any) -> str | None:
-    """The key id of the caller (``anonymous`` without a key); None for an invalid key."""
-    api_key = request.headers.get("x-api-key")
-    if not api_key:
-        return "anonymous"
-    who = state.keys.authenticate(api_key)
-    return None if who is None else who.key_id
+    """The key id of the caller, ``anonymous@<client address>`` without a key; None for an
+    unknown key (the route refuses it)."""
+    who = caller(request)
+    if who is None:  # a route without access checks: authenticate here
+        api_key = request.headers.get("x-api-key")
+        if api_key:
+            who = state.keys.authenticate(api_key)
+            if who is None:
+                return None
+    if who is None or who.scope is None:
+        client = request.client.host if request.client is not None else "unknown"
+        return f"anonymous@{client}"
+    return str(who.key_id)
 
 
 def _replayed(stored: Stored) -> Response:
@@ -342,7 +428,7 @@ async def run_idempotent(request: Request, raw_key: str, handler: Callable[[Requ
     key = parse_key(raw_key)
     state = await run_in_threadpool(ensure_state, request.app)
     owner = _owner(request, state)
-    if owner is None:  # an unknown key: the route answers 401 and nothing is kept
+    if owner is None:  # an unknown key, which the route refuses: nothing is kept
         return await handler(request)
     fingerprint = await request_fingerprint(request)
     store = await run_in_threadpool(store_for, state)
@@ -369,6 +455,8 @@ async def run_idempotent(request: Request, raw_key: str, handler: Callable[[Requ
                                extra={"job": job_document(job)})
         return _replayed(found)
     holder = str(found)
+    effect = await run_in_threadpool(store.effect_of, owner, key)
+    request.state.idempotency = Reservation(store, owner, key, holder, effect)
     try:
         response = await handler(request)
     except BaseException:
@@ -388,12 +476,12 @@ async def run_idempotent(request: Request, raw_key: str, handler: Callable[[Requ
     return response
 
 
-class IdempotentRoute(APIRoute):
+class IdempotentRoute(ServiceRoute):
     """A route that honours ``Idempotency-Key`` on ``POST`` (see the module docstring)."""
 
-    def get_route_handler(self) -> Callable[[Request], Awaitable[Response]]:
-        """The route's handler, wrapped for ``POST``."""
-        handler = super().get_route_handler()
+    def wrap_handler(self, handler: Callable[[Request], Awaitable[Response]]
+                     ) -> Callable[[Request], Awaitable[Response]]:
+        """The route's handler, wrapped for ``POST`` (after the checks of ServiceRoute)."""
         if "POST" not in (self.methods or set()):
             return handler
 

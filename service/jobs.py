@@ -4,22 +4,38 @@ Whether a batch, library or sync is answered at once or queued is decided by
 :func:`rcsa.app.jobs.answer_or_queue` (size against ``RCSA_ASYNC_BATCH_THRESHOLD``, or
 ``Prefer: respond-async``); the job runners run the same :func:`rcsa.app.jobs.run_work`.
 Here: the ``Prefer`` header, the ``202 Accepted`` answer, the links a sync report carries,
-and the public JSON of a job.
+who a job belongs to (:func:`caller`: its API key, or an anonymous client's address — jobs
+are claimed round-robin across callers, and one caller may have at most
+``RCSA_JOB_MAX_UNFINISHED_PER_CALLER`` unfinished jobs: ``429`` beyond), and the public JSON
+of a job.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
+from starlette.requests import Request
 from starlette.responses import Response
 
-from rcsa.app.jobs import Job, Outcome, Work, answer_or_queue
+from rcsa.app import budget
+from rcsa.app.analyses import validate
+from rcsa.app.jobs import Job, Outcome, QuotaExceeded, Work, answer_or_queue
+from rcsa.app.keys import Principal
 
+from .errors import ProblemError
 from .responses import json_response
 from .state import AppState
 
-__all__ = ["accepted", "answer", "job_document", "present", "wants_async"]
+__all__ = ["accepted", "answer", "caller", "compute", "job_document", "present", "wants_async"]
+
+
+def caller(who: Principal, request: Request) -> str:
+    """Whose job it is: the API key's id, or ``anonymous@<client address>``."""
+    if who.scope is not None:
+        return who.key_id
+    host = request.client.host if request.client is not None else "unknown"
+    return f"anonymous@{host}"
 
 
 def wants_async(prefer: str | None) -> bool:
@@ -37,25 +53,54 @@ def present(outcome: Outcome) -> dict[str, Any]:
 
 
 def answer(state: AppState, work: Work, *, prefer: str | None, idempotency_key: str | None,
-           headers: Mapping[str, str] | None = None) -> Response:
-    """Run ``work`` now (``200`` with its document) or queue it (``202``, :func:`accepted`).
+           headers: Mapping[str, str] | None = None, owner: str | None = None) -> Response:
+    """Run ``work`` now (``200`` with its document) or queue it for ``owner`` (``202``, :func:`accepted`).
 
     A request with an ``Idempotency-Key`` may be a retry whose first answer was lost: its
     submission reuses the unfinished job of the same request instead of queuing it twice.
+    An owner with too many unfinished jobs gets ``429`` with ``Retry-After``.
     """
     asked = wants_async(prefer)
-    result = answer_or_queue(state.bench, state.jobs, work, respond_async=asked,
-                             async_threshold=state.settings.async_batch_threshold,
-                             reuse_unfinished=idempotency_key is not None)
+    queued = work.should_queue(respond_async=asked, async_threshold=state.settings.async_batch_threshold)
+    if work.kind in ("batch", "library", "library-sync"):  # the compute budget, before any work
+        budget.check_work(work.kind, work.request, work.size, mode="job" if queued else "sync")
+    try:
+        result = answer_or_queue(state.bench, state.jobs, work, respond_async=asked,
+                                 async_threshold=state.settings.async_batch_threshold,
+                                 reuse_unfinished=idempotency_key is not None, owner=owner,
+                                 max_unfinished=state.settings.job_max_unfinished_per_caller)
+    except QuotaExceeded as exc:
+        raise ProblemError(429, f"{exc}; poll the jobs you have (GET /v1/jobs/{{id}}) and submit again when one has "
+                                "finished", slug="too-many-jobs", title="Too many unfinished jobs",
+                           headers={"Retry-After": str(max(state.settings.retry_after_s, 5))}) from None
     if isinstance(result, Job):
         return accepted(state, result, preference_applied=asked)
     return json_response(present(result), headers=headers)
 
 
+def compute(state: AppState, kind: str, request: Mapping[str, Any], *, prefer: str | None,
+            run: Callable[[], Response], owner: str | None = None) -> Response:
+    """One computation (:data:`rcsa.app.analyses.ANALYSIS_KINDS`) under the compute budget.
+
+    The request's estimated cost (:func:`rcsa.app.budget.check`) must fit the limits of a
+    synchronous request, unless ``Prefer: respond-async`` asks for a job: then the job
+    limits apply, the request is validated and queued (``202``, :func:`accepted`), and the
+    job's result is what ``run`` would have answered, queued for ``owner`` (:func:`caller`,
+    for per-caller quotas). Otherwise ``run()`` answers now.
+    """
+    asked = wants_async(prefer)
+    budget.check(kind, request, mode="job" if asked else "sync")
+    if not asked:
+        return run()
+    validate(kind, request, store=state.reader)
+    return answer(state, Work(kind, dict(request), 1), prefer=prefer, idempotency_key=None,  # type: ignore[arg-type]
+                  owner=owner)
+
+
 def job_document(job: Job) -> dict[str, Any]:
     """The public JSON of a job, with its status and result URLs."""
     return {**job.to_dict(), "status_url": f"/v1/jobs/{job.id}",
-            "result_url": f"/v1/jobs/{job.id}/result" if job.status == "succeeded" else None}
+            "result_url": f"/v1/jobs/{job.id}/result" if job.has_result else None}
 
 
 def accepted(state: AppState, job: Job, *, preference_applied: bool) -> Response:

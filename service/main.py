@@ -22,7 +22,15 @@ from pydantic.json_schema import models_json_schema
 from starlette.middleware.gzip import GZipMiddleware
 
 from rcsa._version import __version__
-from rcsa.app.jobs import Job, JobRunner, Workbench, job_handlers, job_store
+from rcsa.app.jobs import (
+    Job,
+    JobRunner,
+    Workbench,
+    analysis_job_handlers,
+    compute_backend,
+    job_handlers,
+    job_store,
+)
 from rcsa.app.keys import key_ring
 from rcsa.app.measurements import seed_demo
 from rcsa.app.stores import CachedMeasurements, open_store
@@ -34,6 +42,7 @@ from .errors import install_error_handlers
 from .jobs import present
 from .metrics import Metrics
 from .middleware import RequestContextMiddleware, configure_logging
+from .openapi_doc import mark_anonymous_operations
 from .routes import ROUTERS
 from .state import AppState, ensure_state
 
@@ -82,23 +91,31 @@ def _startup(settings: Settings, metrics: Metrics) -> AppState:
         except (RcsaError, OSError) as exc:
             log.warning("could not seed the store with the demo measurement: %s", exc)
     keys = key_ring(store.path, settings.api_keys.get_secret_value())
-    jobs = job_store(store.path, stale_after_s=settings.job_stale_s, max_attempts=settings.job_max_attempts)
+    jobs = job_store(store.path, stale_after_s=settings.job_stale_s, max_attempts=settings.job_max_attempts,
+                     max_result_bytes=settings.job_results_max_bytes or None)
     purged = jobs.purge(settings.job_retention_s)  # and hourly by the runners
     if purged:
         log.info("purged %d finished jobs older than %g s", purged, settings.job_retention_s)
+    if settings.job_results_max_bytes:  # a budget lowered since the last start applies at once
+        jobs.evict(settings.job_results_max_bytes)
     reader = CachedMeasurements(store, settings.measurement_cache)
+    # a Dask scheduler that cannot be reached stops the start-up with its address and reason
+    backend = compute_backend(settings.dask_scheduler, connect_timeout_s=settings.dask_connect_timeout_s,
+                              retries=settings.dask_retries)
     bench = Workbench(reader, store.path, max_lines=settings.max_frequency_lines,
-                      max_combinations=settings.max_batch_combinations, observer=metrics)
+                      max_combinations=settings.max_batch_combinations, observer=metrics, backend=backend)
     state = AppState(settings=settings, store=store, reader=reader, keys=keys, jobs=jobs, metrics=metrics,
                      bench=bench, runners=[])
 
     def finished(job: Job, seconds: float) -> None:
         metrics.jobs.labels(job.kind, job.status).inc()
 
-    table = job_handlers(bench, present)
+    table = {**job_handlers(bench, present), **analysis_job_handlers(bench)}
     for _ in range(settings.job_workers):
         runner = JobRunner(jobs, table, poll_s=settings.job_poll_s, heartbeat_s=settings.job_heartbeat_s,
-                           on_finish=finished, retention_s=settings.job_retention_s)
+                           on_finish=finished, retention_s=settings.job_retention_s,
+                           time_limit_s=settings.job_time_limit_s,
+                           max_running_per_owner=settings.job_max_running_per_caller or None)
         runner.start()
         state.runners.append(runner)
     if not keys.configured:
@@ -130,9 +147,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         finally:
             for runner in state.runners:
                 await run_in_threadpool(runner.stop, 30.0)
+            await run_in_threadpool(state.bench.backend.close)
 
     app = FastAPI(title="rcsa — tool-point FRF service", version=__version__, description=DESCRIPTION,
-                  lifespan=lifespan, separate_input_output_schemas=False)
+                  lifespan=lifespan, separate_input_output_schemas=False,
+                  # /docs and /redoc with local assets (service.routes.docs): they work offline
+                  docs_url=None, redoc_url=None)
     # the state is built by the lifespan, or on the first request when the app is served
     # without one (e.g. a TestClient used outside a ``with`` block)
     app.state.rcsa_factory = lambda: _startup(settings, metrics)
@@ -153,6 +173,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             components = doc.setdefault("components", {}).setdefault("schemas", {})
             for name, schema in defs.get("$defs", {}).items():
                 components.setdefault(name, schema)
+            mark_anonymous_operations(doc, app.routes, settings.anonymous_read)
             app.openapi_schema = doc
         return app.openapi_schema
 

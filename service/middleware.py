@@ -28,10 +28,14 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 from .errors import PROBLEM_MEDIA_TYPE, BodyTooLarge, problem_body
 from .metrics import Metrics
 
-__all__ = ["RequestContextMiddleware", "RequestIdFilter", "configure_logging", "request_id_var"]
+__all__ = ["BODY_LIMIT_KEY", "RequestContextMiddleware", "RequestIdFilter", "configure_logging", "request_id_var"]
 
 log = logging.getLogger("service")
 access_log = logging.getLogger("service.access")
+
+#: Scope key through which a route lowers the body limit for its own requests
+#: (:class:`service.routing.ServiceRoute`).
+BODY_LIMIT_KEY = "rcsa.max_body_bytes"
 
 request_id_var: ContextVar[str] = ContextVar("rcsa_request_id", default="-")
 _REQUEST_ID = re.compile(r"^[A-Za-z0-9._:\-]{1,128}$")
@@ -130,8 +134,10 @@ class RequestContextMiddleware:
             message = await receive()
             if message["type"] == "http.request":
                 received += len(message.get("body", b""))
-                if received > limit:
-                    raise BodyTooLarge(limit)
+                own = scope.get(BODY_LIMIT_KEY)  # set by the route before it reads the body
+                if received > limit or (own is not None and received > own):
+                    raise BodyTooLarge(limit if own is None else min(limit, int(own)),
+                                       where=None if own is None else f"{scope.get('method')} {scope.get('path')}")
             return message
 
         async def send_with_id(message: Message) -> None:

@@ -28,23 +28,36 @@ from pydantic import (
     ValidationError,
     ValidatorFunctionWrapHandler,
     WrapValidator,
+    create_model,
     model_validator,
 )
 from pydantic_core import PydanticCustomError
 
 from rcsa.app.bounds import (
+    ANALYSIS_MAX_MEASUREMENTS,
+    DIAGNOSIS_EFFECTS,
+    DIAGNOSIS_LIKELIHOODS,
+    DIAGNOSIS_OPTION_BOUNDS,
+    DIAGNOSIS_TOLERANCES,
+    EFFECTS_MAX_RELATIVE_STEP,
+    IDENTIFIABLE_PARAMETERS,
+    IDENTIFICATION_MIN_LINES,
+    MAX_BEARINGS,
     MAX_COHERENCE,
     MAX_CUTTING_COEFFICIENT_N_M2,
     MAX_DAMPING,
     MAX_DENSITY_KG_M3,
     MAX_FREQUENCY_HZ,
+    MAX_FREQUENCY_LINES,
     MAX_FRF_VALUE,
     MAX_HOLDER_SEGMENTS_PER_CONE,
     MAX_LENGTH_M,
     MAX_LOSS_FACTOR,
     MAX_MODULUS_PA,
+    MAX_NECK_SEGMENTS,
     MAX_POISSON_RATIO,
     MAX_RADIAL_RATIO,
+    MAX_SEGMENTS,
     MAX_SHEAR_COEFFICIENT,
     MAX_SPEED_COUNT,
     MAX_SPEED_RPM,
@@ -62,6 +75,13 @@ from rcsa.app.bounds import (
     MIN_SHEAR_COEFFICIENT,
     MIN_SPEED_COUNT,
     MIN_SPEED_RPM,
+    SDM_DEFAULT_MODES_PER_DIRECTION,
+    SDM_DEFAULT_STEPS_PER_PERIOD,
+    SDM_MAX_MODES_PER_DIRECTION,
+    SDM_MAX_STEPS_PER_PERIOD,
+    SDM_MIN_MODES_PER_DIRECTION,
+    SDM_MIN_STEPS_PER_PERIOD,
+    TOOL_OVERRIDES,
 )
 from rcsa.app.examples import ra1
 
@@ -71,6 +91,12 @@ __all__ = [
     "Assembly",
     "BatchRequest",
     "BatchResult",
+    "DiagnosisRequest",
+    "DiagnosisResult",
+    "EffectsRequest",
+    "EffectsResult",
+    "IdentificationRequest",
+    "IdentificationResult",
     "JobStatus",
     "LibraryPredictionRequest",
     "LibraryResult",
@@ -82,6 +108,7 @@ __all__ = [
     "MeasurementUpload",
     "PredictionResult",
     "Problem",
+    "RecommendReport",
 ]
 
 _EXAMPLE_GRID = {"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 5.0}
@@ -177,8 +204,9 @@ class Bearing(_Request):
 class AnalyticalSpindle(_Request):
     """A modelled spindle: segments from the nose toward the rear, and bearings."""
 
-    segments: list[Segment] = Field(min_length=1, description="Shaft segments, nose → rear.")
-    bearings: list[Bearing] = Field(default_factory=list, description="Bearings (positions from the nose).")
+    segments: list[Segment] = Field(min_length=1, max_length=MAX_SEGMENTS, description="Shaft segments, nose → rear.")
+    bearings: list[Bearing] = Field(default_factory=list, max_length=MAX_BEARINGS,
+                                    description="Bearings (positions from the nose).")
 
 
 class MeasuredSpindle(_Request):
@@ -212,8 +240,16 @@ Spindle = Annotated[
 class Holder(_Request):
     """Tool holder: segments from the gauge line toward the tool end."""
 
-    segments: list[Segment] = Field(min_length=1, description="Holder segments, gauge line → tool end; "
-                                                              "inner_diameter_m is the bore.")
+    segments: list[Segment] = Field(min_length=1, max_length=MAX_SEGMENTS,
+                                    description="Holder segments, gauge line → tool end; inner_diameter_m is the bore.")
+
+
+class NeckSegment(_Request):
+    """One piece of a stepped (or stepped-conical) neck."""
+
+    length_m: float = Field(ge=MIN_LENGTH_M, description="Length of the piece, m (all pieces together at most "
+                                                         "stickout_m − flute_length_m).")
+    diameter_m: float = Field(ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Its diameter, m.")
 
 
 class Tool(_Request):
@@ -232,6 +268,9 @@ class Tool(_Request):
     shoulder_length_m: float | None = Field(None, ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Reduced neck: from the tip to the neck's end, "
                                             "m (with shoulder_diameter_m).")
     shoulder_diameter_m: float | None = Field(None, ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Reduced neck diameter, m.")
+    neck_segments: list[NeckSegment] | None = Field(None, max_length=MAX_NECK_SEGMENTS, description=(
+        "Instead of shoulder_length_m/shoulder_diameter_m: a stepped neck, pieces listed from the flute end toward "
+        "the holder (a conical neck as steps); together at most stickout_m − flute_length_m long."))
 
 
 class Joint(_Request):
@@ -372,7 +411,12 @@ class PredictionResult(_Response):
                                                 "(exact for a modelled spindle; modal-fit estimates for a "
                                                 "hybrid one, see natural_frequencies_method).")
     natural_frequencies_method: str = Field(description="wittrick_williams (exact) or modal_fit.")
-    peaks: list[Peak] = Field(description="Peaks of |h|.")
+    natural_frequencies_sd_hz: list[float] | None = Field(None, description="Hybrid only: the standard "
+                                                          "uncertainty of each modal-fit natural frequency, Hz.")
+    modal_fit: list[dict[str, Any]] | None = Field(None, description="Hybrid only: each fitted mode (frequency_hz, "
+                                                   "damping_ratio, sd_hz, damping_ratio_sd, band_hz, modes_in_band, "
+                                                   "residual_rel, significance, peak).")
+    peaks: list[Peak] = Field(description="Peaks of |h| (hybrid: those above the noise, one per mode).")
     static_stiffness_n_m: float | None = Field(description="Static stiffness 1/h(0), N/m; null when it cannot "
                                                "be given (hybrid, ungrounded).")
     min_real_m_n: float = Field(description="Most negative real part of h, m/N.")
@@ -426,32 +470,39 @@ class JobStatus(_Response):
     attempts: int = Field(description="Runs started (a run interrupted by a restart is resumed).")
     error: dict[str, Any] | None = Field(description="Problem document when failed.")
     summary: dict[str, Any] | None = Field(description="Counts by status when succeeded.")
+    result_bytes: int | None = Field(None, description="Size of the result (JSON), bytes, once succeeded.")
+    result_evicted_utc: str | None = Field(None, description="When the result was deleted to keep the kept "
+                                           "results within their disk budget (RCSA_JOB_RESULTS_MAX_BYTES).")
     status_url: str = Field(description="Poll here.")
-    result_url: str | None = Field(description="The result, once succeeded.")
+    result_url: str | None = Field(description="The result, once succeeded (and while it is kept).")
 
 
 # --------------------------------------------------------------------------- libraries
 
 class LibraryOptions(_Request):
-    """How a Fusion library is mapped to combinations."""
+    """How a library is mapped to combinations (shaft_origin, default_holder: Fusion; stickout_m: FreeCAD)."""
 
     holder_material: str | None = Field(None, description="Material of every holder segment (default steel).")
     tool_material_default: str | None = Field(None, description="Tool material when BMC is missing (default "
                                               "carbide).")
     holder_segments_per_cone: int | None = Field(None, ge=1, le=MAX_HOLDER_SEGMENTS_PER_CONE, description="Cylinders per conical holder "
-                                                 "segment (default 4).")
+                                                 "segment (default: from each cone's taper, within 0.5 % of the cone).")
     fluted_diameter_ratio: float | None = Field(None, ge=MIN_FLUTED_DIAMETER_RATIO, le=1,
                                                 description="Equivalent fluted diameter / DC.")
     shaft_origin: Literal["shoulder", "flute_end"] | None = Field(None, description="Where shaft.segments start.")
     default_holder: str | dict[str, Any] | None = Field(None, description="Holder for tools without one: the guid "
                                                         "of a standalone holder in the library, or a Fusion "
                                                         "holder object.")
+    stickout_m: float | dict[str, float] | None = Field(None, description="FreeCAD (required there): the "
+                                                        "stickout of every toolbit, m, or {toolbit id: m}.")
 
 
 class LibraryPredictionRequest(_Request):
     """JSON form of POST /v1/tool-libraries:predict (the multipart form carries the same fields)."""
 
-    library: dict[str, Any] = Field(description='The Fusion tool library document {"data": [...], "version": n}.')
+    library: dict[str, Any] = Field(description='The Fusion tool library document {"data": [...], "version": n}, '
+                                                'or FreeCAD toolbits {"format": "freecad", "toolbits": {"<id>": '
+                                                '{.fctb}}, "holder": {"<id>": {.fcholder}}, "library": {.fctl}}.')
     spindle: Spindle
     frequency: Frequency
     joints: Joints | None = Field(None, description="Joints applied to every tool (the library has none); "
@@ -598,6 +649,8 @@ class MeasurementPage(_Response):
 
     items: list[MeasurementInfo]
     next_cursor: str | None = Field(description="Pass as ?cursor= for the next page; null on the last page.")
+    damaged: list[str] | None = Field(None, description="Ids of stored measurement files that cannot be read "
+                                      "(left out of items; GET one for the reason, `rcsa store check` for all).")
 
 
 class MeasurementDocument(MeasurementInfo):
@@ -650,6 +703,14 @@ class LobesRequest(_Request):
                                                                                 "(dimensionless).")
     milling: Literal["up", "down"]
     spindle_speed_rpm: SpeedRange
+    method: Literal["zoa", "semi_discretization"] = Field(
+        "zoa", description="zoa: zero-order (Altintas–Budak); semi_discretization: first-order SDM "
+                           "(time-periodic force, flip lobes; slower).")
+    steps_per_period: int | None = Field(None, ge=SDM_MIN_STEPS_PER_PERIOD, le=SDM_MAX_STEPS_PER_PERIOD,
+                                         description=f"SDM only: steps per tooth period (default {SDM_DEFAULT_STEPS_PER_PERIOD}).")
+    modes_per_direction: int | None = Field(None, ge=SDM_MIN_MODES_PER_DIRECTION, le=SDM_MAX_MODES_PER_DIRECTION,
+                                            description=f"SDM only: at most this many modes in x and in y (default "
+                                                        f"{SDM_DEFAULT_MODES_PER_DIRECTION}).")
 
 
 class Lobe(_Response):
@@ -665,6 +726,421 @@ class LobesResult(_Response):
     depth_limit_m: list[float | None] = Field(description="Axial depth limit (lower envelope), m.")
     chatter_frequency_hz: list[float | None] = Field(description="Chatter frequency at the limit, Hz.")
     lobes: list[Lobe]
+
+
+# --------------------------------------------------------------------------- analyses (diagnoses, identifications, effects)
+
+def _no_null_default(schema: dict[str, Any]) -> None:
+    """Leave out ``"default": null`` where null is not allowed (the field is optional, not nullable)."""
+    for prop in schema.get("properties", {}).values():
+        nullable = prop.get("type") == "null" or any(b.get("type") == "null" for b in prop.get("anyOf", ()))
+        if "default" in prop and prop["default"] is None and not nullable:
+            del prop["default"]
+
+
+class _AnalysisRequest(_Request):
+    model_config = ConfigDict(json_schema_extra=_no_null_default)
+
+
+def _tool_override_fields() -> dict[str, Any]:
+    """The tool fields a tap test may override: as in :class:`Tool`, each optional."""
+    out: dict[str, Any] = {}
+    for name in TOOL_OVERRIDES:
+        info = Tool.model_fields[name]
+        out[name] = (info.annotation, Field(None, description=info.description, json_schema_extra=None,
+                                            **_constraints(info)))
+    return out
+
+
+def _constraints(info: Any) -> dict[str, Any]:
+    """The numeric and length constraints of a pydantic field, as ``Field`` keyword arguments."""
+    keys = ("ge", "gt", "le", "lt", "min_length", "max_length")
+    return {k: getattr(m, k) for m in info.metadata for k in keys if getattr(m, k, None) is not None}
+
+
+ToolOverrides = create_model(  # type: ignore[call-overload]
+    "ToolOverrides", __base__=_AnalysisRequest,
+    __doc__="The base assembly's tool fields that differ in this measurement (typically stickout_m); "
+            "the same meaning, units and bounds as in Tool.",
+    **_tool_override_fields())
+
+
+class TapTest(_AnalysisRequest):
+    """A measured tool-point receptance of the base assembly with some tool fields overridden."""
+
+    tool: ToolOverrides | None = Field(None, description="Overrides of assembly.tool for this measurement, "
+                                       "e.g. {\"stickout_m\": 0.05}; left out: the base tool.")
+    frequency_hz: list[FrequencyValue] = Field(min_length=1, max_length=MAX_FREQUENCY_LINES,
+                                               description="Frequency lines, Hz: strictly increasing, > 0.")
+    h: ComplexArrayIn = Field(description="Measured tool-point receptance h, m/N (non-zero on every line; "
+                                          "convert accelerance or mobility first, e.g. with rcsa store import).")
+    coherence: list[Annotated[float, Field(ge=0, le=1)]] | None = Field(
+        None, description="Ordinary coherence γ² per line (0…1).")
+
+
+class DiagnosisMeasurement(TapTest):
+    """One tap test of a diagnosis."""
+
+    n_averages: float = Field(5.0, ge=1, description="Impacts averaged (sets the noise from the coherence).")
+    sensor_mass_kg: float | None = Field(None, ge=0, le=1, description="Accelerometer mass, kg (bounds the "
+                                         "sensor_mass effect).")
+    label: str = Field(None, description="Name in the report and figure (default #<index>).")  # type: ignore[assignment]
+
+
+class DiagnosisTolerances(_AnalysisRequest):
+    """Known imperfections of the base model (one standard deviation); left out: the defaults."""
+
+    tool_youngs_modulus_rel: float = Field(None, ge=0, le=DIAGNOSIS_TOLERANCES["tool_youngs_modulus_rel"],
+                                           description="Tool Young's modulus, relative (default 0.03).")
+    tool_density_rel: float = Field(None, ge=0, le=DIAGNOSIS_TOLERANCES["tool_density_rel"],
+                                    description="Tool density, relative (default 0.01).")
+    structure_youngs_modulus_rel: float = Field(None, ge=0, le=DIAGNOSIS_TOLERANCES["structure_youngs_modulus_rel"],
+                                                description="Young's modulus of spindle and holder, relative "
+                                                            "(default 0.02).")
+    structure_density_rel: float = Field(None, ge=0, le=DIAGNOSIS_TOLERANCES["structure_density_rel"],
+                                         description="Density of spindle and holder, relative (default 0.01).")
+    loss_factor_log: float = Field(None, ge=0, le=DIAGNOSIS_TOLERANCES["loss_factor_log"],
+                                   description="Every material loss factor, on a ln scale (default 0.25).")
+    bearing_stiffness_log: float = Field(None, ge=0, le=DIAGNOSIS_TOLERANCES["bearing_stiffness_log"],
+                                         description="All bearing stiffnesses, ln scale (default 0.08).")
+    bearing_damping_log: float = Field(None, ge=0, le=DIAGNOSIS_TOLERANCES["bearing_damping_log"],
+                                       description="All bearing dampers, ln scale (default 0.25).")
+    spindle_holder_stiffness_log: float = Field(None, ge=0, le=DIAGNOSIS_TOLERANCES["spindle_holder_stiffness_log"],
+                                                description="Spindle–holder k_t and k_r, ln scale (default 0.15).")
+    spindle_holder_damping_log: float = Field(None, ge=0, le=DIAGNOSIS_TOLERANCES["spindle_holder_damping_log"],
+                                              description="Spindle–holder dampers, ln scale (default 0.25).")
+    holder_tool_stiffness_log: float = Field(None, ge=0, le=DIAGNOSIS_TOLERANCES["holder_tool_stiffness_log"],
+                                             description="Holder–tool k_t and k_r, ln scale, drawn per measurement "
+                                                         "(re-clamping; default 0.15).")
+    holder_tool_damping_log: float = Field(None, ge=0, le=DIAGNOSIS_TOLERANCES["holder_tool_damping_log"],
+                                           description="Holder–tool dampers, ln scale, per measurement "
+                                                       "(default 0.25).")
+    stickout_m: float = Field(None, ge=0, le=DIAGNOSIS_TOLERANCES["stickout_m"],
+                              description="Stickout setting, m, per measurement (default 0.0003).")
+
+
+def _option(name: str, default: float, description: str) -> Any:
+    low, high = DIAGNOSIS_OPTION_BOUNDS[name]
+    return Field(default, ge=low, le=high, description=description)
+
+
+class DiagnosisOptions(_AnalysisRequest):
+    """Decision and effort settings of a diagnosis (counts may carry a fraction: it is dropped)."""
+
+    effects: list[Literal[DIAGNOSIS_EFFECTS]] = Field(  # type: ignore[valid-type]
+        None, min_length=1, description="Candidate effects to consider (default: all).")
+    held_out: list[Annotated[int, Field(ge=0)]] | None = Field(
+        None, description="Indices of the measurements held out for validation (default: chosen by stickout).")
+    seed: int = Field(0, ge=0, description="Seed of the Monte-Carlo draws.")
+    monte_carlo_draws: float = _option("monte_carlo_draws", 200, "Draws of the tolerance Monte Carlo.")
+    likelihood: Literal[DIAGNOSIS_LIKELIHOODS] = Field(  # type: ignore[valid-type]
+        "student_t", description="Likelihood of the feature residuals.")
+    claim_threshold: float = _option("claim_threshold", 3.0, "ln Bayes factor an effect needs to be named.")
+    ambiguity_window: float = _option("ambiguity_window", 2.3, "Effects within this ln Bayes factor of the best "
+                                                               "are reported as ambiguous.")
+    max_effects: float = _option("max_effects", 2, "At most this many effects (1 or 2) in the verdict.")
+    max_lines: float = _option("max_lines", 1200, "Analysis lines per measurement (the FRFs are decimated).")
+
+
+class AnalysisAssembly(Assembly):
+    """The base assembly of a diagnosis; its frequency grid is not used (each measurement has its own)."""
+
+    model_config = ConfigDict(json_schema_extra={"examples": [{k: v for k, v in _RA1.items() if k != "frequency"}]})
+
+    frequency: Frequency | None = None  # type: ignore[assignment]
+
+
+class DiagnosisRequest(_AnalysisRequest):
+    """Body of POST /v1/diagnoses (contract "Diagnosis"): a base model and tap tests of it."""
+
+    assembly: AnalysisAssembly = Field(description="The base model (contract \"Assembly\"; frequency not used).")
+    measurements: list[DiagnosisMeasurement] = Field(min_length=1, max_length=ANALYSIS_MAX_MEASUREMENTS,
+                                                     description="Tap tests, typically at several stickouts.")
+    tolerances: DiagnosisTolerances | None = Field(None, description="Overrides of the default tolerances.")
+    options: DiagnosisOptions | None = None
+
+
+class IdentificationMeasurement(TapTest):
+    """One tap test of a joint identification."""
+
+    frequency_hz: list[FrequencyValue] = Field(min_length=IDENTIFICATION_MIN_LINES, max_length=MAX_FREQUENCY_LINES,
+                                               description="Frequency lines, Hz: strictly increasing, > 0.")
+    id: Any = Field(None, description="Caller's label (not used by the computation).")
+
+
+IdentifiableParameter = Literal[IDENTIFIABLE_PARAMETERS]  # type: ignore[valid-type]
+SearchRange = Annotated[list[Annotated[float, Field(gt=0)]], Field(min_length=2, max_length=2)]
+
+
+class IdentificationRequest(_AnalysisRequest):
+    """Body of POST /v1/identifications (contract "Joint identification")."""
+
+    assembly: Assembly = Field(description="The base assembly; its joints are the starting guess (elastic "
+                                           "joints only are identified).")
+    measurements: list[IdentificationMeasurement] = Field(min_length=1, max_length=ANALYSIS_MAX_MEASUREMENTS,
+                                                          description="Measured tool-point FRFs with tool overrides.")
+    bounds: dict[IdentifiableParameter, SearchRange] | None = Field(
+        None, description="Search range [low, high] of a parameter (SI; must contain its start); default: "
+                          "the start ÷ and × 100.")
+    max_residual_to_noise: float = Field(4.0, gt=1, description="Largest accepted ratio of the fit's RMS residual "
+                                                                "to the measurement noise.")
+
+
+class EffectAnalysisRequest(_AnalysisRequest):
+    """An effect analysis with its settings (POST /v1/effects also takes a bare assembly)."""
+
+    assembly: Assembly
+    parameters: list[str] | None = Field(None, description="Parameter names, e.g. holder_tool.stiffness_n_m, "
+                                         "bearings[0].damping_ns_m, tool.stickout_m (default: every non-zero one).")
+    relative_step: float = Field(0.001, gt=0, le=EFFECTS_MAX_RELATIVE_STEP,
+                                 description="Finite-difference step δ in ln(parameter).")
+    band_hz: Annotated[list[Annotated[float, Field(ge=MIN_FREQUENCY_HZ)]], Field(
+        min_length=2, max_length=2)] | None = Field(None, description="[start, stop] Hz: the modes analysed "
+                                                                      "(default: the assembly's grid).")
+
+
+def _effects_tag(value: Any) -> str | None:
+    if isinstance(value, dict):
+        return "effects-request" if "assembly" in value else "effects-assembly"
+    if isinstance(value, EffectAnalysisRequest):
+        return "effects-request"
+    return "effects-assembly" if isinstance(value, Assembly) else None
+
+
+EffectsRequest = Annotated[
+    Annotated[EffectAnalysisRequest, Tag("effects-request")] | Annotated[Assembly, Tag("effects-assembly")],
+    Discriminator(_effects_tag, custom_error_type="effects_request",
+                  custom_error_message="must be an assembly, or an object {assembly, parameters, relative_step, "
+                                       "band_hz}"),
+    Field(description="An assembly (all parameters, its grid's band, δ = 1e-3), or {assembly, parameters, "
+                      "relative_step, band_hz}."),
+]
+
+
+class NotApplicable(_Response):
+    """Something that cannot exist on this spindle (e.g. bearings of a measured one), and why."""
+
+    parameter: str | None = Field(None, description="The parameter (effects, identifications).")
+    effect: str | None = Field(None, description="The effect (diagnoses).")
+    reason: str
+
+
+class GapFeature(_Response):
+    """One feature of one measurement in the gap map, judged against tolerances and noise."""
+
+    measurement: int = Field(description="Index of the measurement.")
+    label: str
+    stickout_m: float
+    kind: str = Field(description="static, peak, antiresonance, ...")
+    feature: str = Field(description="frequency, amplitude, level or compliance.")
+    mode: int | None = Field(None, description="Mode number within the measurement.")
+    z: float = Field(description="Departure in standard deviations of what tolerances and noise explain.")
+    flagged: bool = Field(description="|z| > 3.")
+    model_frequency_hz: float | None = None
+    measured_frequency_hz: float | None = None
+    shift_pct: float | None = Field(None, description="Measured/model frequency − 1, %.")
+    peak_ratio: float | None = None
+    level_ratio: float | None = None
+    compliance_ratio: float | None = None
+
+
+class GapBand(_Response):
+    """RMS gap (dB) of one band of one measurement."""
+
+    measurement: int
+    label: str
+    band: int
+    start_hz: float
+    stop_hz: float
+    rms_db: float
+    expected_rms_db: float = Field(description="What tolerances and noise explain, dB.")
+    z: float
+    flagged: bool
+
+
+class Gap(_Response):
+    """Where the measurements depart from the base model."""
+
+    modes: list[GapFeature]
+    bands: list[GapBand]
+    chi2: float
+    n_features: int
+    chi2_per_feature: float
+    p_value: float
+    significant: bool
+    max_abs_z: float
+    worst: GapFeature
+    db_rms: float = Field(description="RMS of 20 log10|h_model/h_measured| over all lines, dB.")
+    summary: str
+
+
+class Verdict(_Response):
+    """Which unmodelled effect explains the gap."""
+
+    effect: str = Field(description="An effect name of the contract, or none.")
+    status: Literal["identified", "ambiguous", "none"]
+    ambiguous_with: list[str]
+    log_bayes_factor: float | None = None
+    snr: float | None = None
+    confirmed_on_held_out: bool | None = None
+    collinear_rivals: list[dict[str, Any]] = Field(default_factory=list)
+    residual_p_value: float | None = None
+    sentence: str
+
+
+class FittedParameter(_Response):
+    """One fitted parameter of an effect (SI, see unit)."""
+
+    value: float
+    sd: float
+    lo: float
+    hi: float
+    null: float | None = Field(None, description="The value that means 'no effect'.")
+    unit: str | None = None
+    at_bound: bool
+
+
+class DiagnosedEffect(_Response):
+    """One candidate effect: fit, evidence and gaps before and after."""
+
+    effect: str
+    log_bayes_factor: float
+    posterior_probability: float | None = None
+    parameters: dict[str, FittedParameter]
+    physical: dict[str, float] = Field(default_factory=dict, description="The fit in physical terms.")
+    snr: float | None = None
+    gap_before_db: float
+    gap_after_db: float
+    chi2_before: float | None = None
+    chi2_after: float | None = None
+    held_out_gap_before_db: float | None = None
+    held_out_gap_after_db: float | None = None
+    held_out_gap_ratio: float | None = None
+    held_out_chi2_before: float | None = None
+    held_out_chi2_after: float | None = None
+    confirmed_on_held_out: bool | None = None
+    evidence_method: str | None = None
+    residual_p_value: float | None = None
+    given: str | None = Field(None, description="A second effect: the first, held at its fit.")
+    corrected_h: list[ComplexArray] | None = Field(None, description="Per measurement, in request order: the "
+                                                   "prediction with this effect added, m/N.")
+
+
+class DiagnosisResult(_Response):
+    """The diagnosis (contract "Diagnosis"): gap map, verdict, effects and ranking."""
+
+    gap: Gap
+    verdict: Verdict
+    effects: list[DiagnosedEffect] = Field(description="The verdict's effect(s), with corrected_h.")
+    ranking: list[DiagnosedEffect] = Field(default_factory=list, description="Every candidate, best first "
+                                                                             "(without FRFs).")
+    not_observable_at_standstill: list[str] = Field(default_factory=list)
+    not_observable_sentence: str | None = None
+    not_applicable: list[NotApplicable] | None = Field(None, description="Effects that cannot exist on this "
+                                                       "spindle, and why (measured spindles).")
+    spindle_measurement: dict[str, Any] | None = Field(None, description="What the measured spindle is.")
+    held_out: dict[str, Any] | None = None
+    analysis: dict[str, Any] | None = None
+    notes: list[str] = Field(default_factory=list)
+    runtime_s: float | None = None
+
+
+class JointUncertainty(_Response):
+    stiffness_n_m: float | None = Field(None, description="Standard uncertainty, N/m.")
+    damping_ns_m: float | None = Field(None, description="Standard uncertainty, N·s/m.")
+
+
+class IdentifiedJoint(_Response):
+    """A joint's parameters (identified, or unchanged from the start) and their uncertainty."""
+
+    stiffness_n_m: float | None = None
+    damping_ns_m: float | None = None
+    rotational_stiffness_nm_rad: float | None = None
+    rotational_damping_nms_rad: float | None = None
+    uncertainty: JointUncertainty
+    status: Literal["not_applicable"] | None = Field(None, description="Set when the joint cannot exist on this "
+                                                     "spindle.")
+    reason: str | None = None
+
+
+class IdentifiedJoints(_Response):
+    spindle_holder: IdentifiedJoint | None = None
+    holder_tool: IdentifiedJoint | None = None
+
+
+class ModeUsed(_Response):
+    frequency_hz: float
+    controls: str = Field(description="The parameter this peak informs.")
+    measurement: int | None = None
+    sensitivity: float | None = None
+
+
+class Flag(_Response):
+    parameter: str
+    reason: str
+
+
+class IdentificationResult(_Response):
+    """Joint identification (contract "Joint identification")."""
+
+    joints: IdentifiedJoints
+    status: Literal["identified", "not_identifiable"]
+    detail: str | None = Field(None, description="Why not identifiable.")
+    modes_used: list[ModeUsed]
+    residual_db: float | None = None
+    residual_rel: float | None = None
+    noise_rel: float | None = None
+    flags: list[Flag] = Field(default_factory=list, description="Parameters the data do not inform well.")
+    start: dict[str, float | None] = Field(default_factory=dict, description="The starting values.")
+    band_hz: list[float | None] = Field(default_factory=list)
+    windows_hz: list[Any] = Field(default_factory=list)
+    runtime_s: float | None = None
+    not_applicable: list[NotApplicable] | None = None
+    spindle_measurement: dict[str, Any] | None = None
+    notes: list[str] | None = None
+
+
+class EffectMode(_Response):
+    """A mode in the band and which parameter controls each of its features."""
+
+    index: int
+    frequency_hz: float = Field(description="Natural frequency, Hz.")
+    frequency_sd_hz: float | None = Field(None, description="Its standard uncertainty (modal fit), Hz.")
+    tip_residue_1_kg: float | None = None
+    tip_participation: float | None = Field(None, description="Tip residue / the band's largest (0…1).")
+    peak_frequency_hz: float | None = None
+    peak_magnitude_m_n: float | None = None
+    damping_ratio: float | None = None
+    controlled_by: dict[str, str | None] = Field(description="Per feature, the parameter with the largest |S|.")
+    controlled_by_interface: dict[str, str | None] = Field(description="The same among joints and bearings.")
+
+
+class EffectParameterRow(_Response):
+    """One parameter: its value and d ln(feature)/d ln(parameter) per mode, per feature."""
+
+    parameter: str
+    value: float = Field(description="Nominal value, SI.")
+    frequency_hz: list[float | None]
+    peak_magnitude_m_n: list[float | None]
+    damping_ratio: list[float | None]
+    peak_frequency_hz: list[float | None]
+    controls_mode: int | None = None
+    controls_frequency_hz: float | None = None
+
+
+class EffectsResult(_Response):
+    """Effect analysis: modes × parameters sensitivity table."""
+
+    band_hz: list[float]
+    relative_step: float
+    sensitivity: str = Field(description="What the numbers are.")
+    modes_method: str = Field(description="wittrick_williams (exact) or modal_fit (measured spindle).")
+    features: list[str]
+    modes: list[EffectMode]
+    parameters: list[EffectParameterRow]
+    notes: list[str]
+    not_applicable: list[NotApplicable] | None = None
+    spindle_measurement: dict[str, Any] | None = None
 
 
 # --------------------------------------------------------------------------- problems, health
@@ -741,6 +1217,51 @@ class LibrarySummary(_Response):
     summary: dict[str, int] = Field(description="Tools by status: ok, skipped, error.")
     last_sync: SyncReport
     tools: list[LibraryTool] | None = Field(None, description="Every tool, in library order (GET by id only).")
+
+
+class RecommendedFile(_Response):
+    """The library with the presets written in (same format and name as uploaded)."""
+
+    file_name: str
+    media_type: str = Field(description="application/json (.json) or application/zip (.tools).")
+    size_bytes: int
+    sha256: str
+    content_base64: str = Field(description="The file's bytes, base64.")
+
+
+class RecommendedTool(_Response):
+    """One library item: the preset written (speed, depth, pocket), or why not."""
+
+    id: str | None = None
+    index: int | None = None
+    description: str | None = None
+    number: int | None = None
+    tool_type: str | None = None
+    status: Literal["written", "skipped", "failed"]
+    reason: str | None = Field(None, description="Why skipped or failed.")
+    spindle_speed_rpm: int | None = Field(None, description="The preset's n, rpm.")
+    stepdown_m: float | None = Field(None, description="The axial depth allowed, m (the preset's stepdown, in the "
+                                                        "tool's unit, rounds it down).")
+    depth_limit_m: float | None = Field(None, description="The smallest depth limit within the speed window, m.")
+    safety_factor: float | None = None
+    robust_depth_limit_m: float | None = Field(None, description="The robust limit used, when uncertainty is given.")
+    pocket: dict[str, float] | None = Field(None, description="low_rpm, high_rpm, width_rpm of the stable pocket.")
+    lobe_method: str | None = None
+
+
+class RecommendReport(_Response):
+    """Chatter-safe presets written into a Fusion library, and how each was chosen."""
+
+    library_id: str
+    library: dict[str, Any] = Field(description="file_name, format, sha256_before, sha256_after.")
+    frf_source: dict[str, Any] = Field(description="Where the tool-point FRFs came from (the stored sync).")
+    options: dict[str, Any] = Field(description="Material, cutting coefficients and their source, speed range, "
+                                                "rule parameters.")
+    rule: dict[str, Any] = Field(description="The pocket rule.")
+    preset_name: str
+    summary: dict[str, int] = Field(description="Tools by status: written, skipped, failed.")
+    tools: list[RecommendedTool]
+    file: RecommendedFile
 
 
 class LibraryList(_Response):

@@ -6,12 +6,15 @@ absolute floor scaled to the magnitude of the expected data (never numpy's defau
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
-SHARED_DATA = REPO.parent / "shared" / "data"
+#: The shared data beside the repository (CI's layout); ``RCSA_SHARED_DATA`` points elsewhere
+#: (e.g. a work tree whose shared directory is not its sibling). Never copied into the repo.
+SHARED_DATA = Path(os.environ.get("RCSA_SHARED_DATA") or REPO.parent / "shared" / "data")
 
 #: algebraic identities evaluated in double precision (a few hundred flops per entry)
 RTOL_ALGEBRA = 1e-10

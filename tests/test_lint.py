@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import shutil
 import subprocess
-import sys
 
 import pytest
 
@@ -18,7 +17,3 @@ def test_ruff_finds_nothing():
     out = subprocess.run([ruff, "check", "src", "service", "tests", "benchmarks"], cwd=REPO,
                          capture_output=True, text=True, check=False)
     assert out.returncode == 0, out.stdout + out.stderr
-
-
-def test_python_is_supported():
-    assert sys.version_info >= (3, 11)

@@ -6,9 +6,20 @@ template in metrics and logs.
 
 from __future__ import annotations
 
-from . import analyses, batches, health, libraries, lobes, measurements, plots, predictions, web
+from . import (
+           analyses,
+           batches,
+           docs,
+           health,
+           libraries,
+           lobes,
+           measurements,
+           plots,
+           predictions,
+           web,
+)
 
 __all__ = ["ROUTERS"]
 
 ROUTERS = (health.router, predictions.router, batches.router, measurements.router, libraries.router,
-           lobes.router, analyses.router, plots.router, web.router)
+           lobes.router, analyses.router, plots.router, web.router, docs.router)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import APIRouter, Depends, Header, Path, Query
+from fastapi import APIRouter, Depends, Header, Path, Query, Request
 from starlette.responses import FileResponse, Response
 
 from rcsa.app.libraries import prepare_batch
@@ -18,8 +18,8 @@ from ..bodies import require_json
 from ..deps import StateDep
 from ..errors import ProblemError
 from ..idempotency import IDEMPOTENCY_PROBLEMS, IdempotencyKeyHeader, IdempotentRoute
-from ..jobs import answer, job_document
-from ..responses import json_response, problems
+from ..jobs import answer, caller, job_document
+from ..responses import body_limit, json_response, problems
 from ..schemas import BatchRequest, BatchResult, JobStatus
 from ..security import ReadAccess
 
@@ -32,10 +32,11 @@ ToolPointQuery = Annotated[str | None, Query(pattern=r"^[hlnp](,[hlnp]){0,3}$", 
     "Receptances to return in each result's tool_point, e.g. h (a third of the size); default h,l,n,p."))]
 
 
-@router.post("/tool-point-frf/batch", dependencies=[Depends(require_json)], response_model=BatchResult, responses={
+@router.post("/tool-point-frf/batch", dependencies=[Depends(require_json)], response_model=BatchResult,
+             openapi_extra=body_limit("batch"), responses={
     202: {"model": JobStatus, "description": "Queued as a job; poll Location."}, **problems(401, 413, 415, 422),
-    **IDEMPOTENCY_PROBLEMS}, summary="Tool-point FRFs of many combinations")
-def predict_batch(body: BatchRequest, state: StateDep, _: ReadAccess, prefer: PreferHeader = None,
+    **problems(429), **IDEMPOTENCY_PROBLEMS}, summary="Tool-point FRFs of many combinations")
+def predict_batch(body: BatchRequest, request: Request, state: StateDep, who: ReadAccess, prefer: PreferHeader = None,
                   tool_point: ToolPointQuery = None, idempotency_key: IdempotencyKeyHeader = None) -> Response:
     """One result per combination, in input order, each with its own ``status``.
 
@@ -43,9 +44,9 @@ def predict_batch(body: BatchRequest, state: StateDep, _: ReadAccess, prefer: Pr
     combination gets ``status: error`` with the offending field and never fails the others.
     With ``Idempotency-Key``, a retry gets the first answer (the same job, for a large batch).
     """
-    request, refused = body.to_request()
-    work = prepare_batch(state.bench, request, refused, tool_point.split(",") if tool_point else None)
-    return answer(state, work, prefer=prefer, idempotency_key=idempotency_key)
+    batch, refused = body.to_request()
+    work = prepare_batch(state.bench, batch, refused, tool_point.split(",") if tool_point else None)
+    return answer(state, work, prefer=prefer, idempotency_key=idempotency_key, owner=caller(who, request))
 
 
 @router.get("/jobs/{job_id}", response_model=JobStatus, responses=problems(401, 404), summary="Job status")
@@ -60,10 +61,18 @@ def get_job(job_id: JobId, state: StateDep, _: ReadAccess) -> Response:
     200: {"description": "The job's result: a batch result (BatchResult) or a library result (LibraryResult).",
           "content": {"application/json": {"schema": {"oneOf": [{"$ref": "#/components/schemas/BatchResult"},
                                                                 {"$ref": "#/components/schemas/LibraryResult"}]}}}},
-    **problems(401, 404, 409)}, summary="Result of a finished job")
+    **problems(401, 404, 409, 410)}, summary="Result of a finished job")
 def get_job_result(job_id: JobId, state: StateDep, _: ReadAccess) -> Response:
-    """The result document of a succeeded job (``409`` while it runs or when it failed)."""
+    """The result document of a succeeded job (``409`` while it runs or when it failed; ``410``
+    once it was deleted to keep the kept results within their disk budget).
+
+    The file is sent in pieces as it is read (and ranges of it on request), never loaded whole.
+    """
     job = state.jobs.get(job_id)
+    if job.status == "succeeded" and job.result_evicted_utc is not None:
+        raise ProblemError(410, f"the result of job {job_id} was deleted on {job.result_evicted_utc} to keep the kept "
+                                "job results within their disk budget (oldest first); submit the job again",
+                           slug="job-result-evicted", title="Job result deleted", extra={"job": job_document(job)})
     if job.status == "succeeded":
         return FileResponse(state.jobs.result_path(job_id), media_type="application/json")
     if job.status == "failed":

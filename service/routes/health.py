@@ -13,9 +13,10 @@ from starlette.responses import Response
 from ..deps import StateDep
 from ..metrics import CONTENT_TYPE_LATEST
 from ..responses import json_response
+from ..routing import ServiceRoute
 from ..schemas import Health, Ready
 
-router = APIRouter(tags=["operations"])
+router = APIRouter(tags=["operations"], route_class=ServiceRoute)
 
 
 @router.get("/healthz", response_model=Health, summary="Liveness")

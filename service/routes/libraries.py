@@ -1,8 +1,13 @@
-"""Whole Fusion tool libraries on one spindle: predicted once, or kept and synced.
+"""Whole CAM tool libraries (Fusion, FreeCAD) on one spindle: predicted once, or kept and synced.
 
-``POST /v1/tool-libraries:predict``: upload the library (``.json`` or ``.tools``) as
-multipart with the spindle and the frequency grid as form fields (JSON text), or send
-everything as one JSON document. Every library item gets one result in library order:
+``POST /v1/tool-libraries:predict``: upload the library as multipart with the spindle and the
+frequency grid as form fields (JSON text), or send everything as one JSON document. The
+library is a Fusion ``.json``/``.tools``, or FreeCAD toolbits: a ``.fctb``, or a zip of
+``.fctb`` files (with their ``.fctl`` and ``.fcholder``), the holder also as the ``holder``
+file field, and ``options.stickout_m`` (FreeCAD stores none). The format follows the file
+name and the part's Content-Type, checked against the content
+(:mod:`rcsa.libraries.formats`); the JSON form takes a Fusion document or
+``{"format": "freecad", "toolbits": {...}, "holder": {...}}``. Every library item gets one result in library order:
 ``ok`` (its tool-point FRF), ``skipped`` (e.g. no holder, a probe) with the reason, or
 ``error`` naming the field. Libraries with more tools than ``RCSA_ASYNC_BATCH_THRESHOLD`` (or
 ``Prefer: respond-async``) run as a job.
@@ -18,6 +23,13 @@ policy):
   a ``library-sync`` job (``202``), whose result is the report. ``Idempotency-Key`` makes
   retries safe; a job interrupted by a dead worker is resumed and takes the tools computed
   before the interruption from the cache.
+* ``POST /v1/libraries/{library_id}:recommend`` — chatter-safe presets: multipart with the Fusion
+  library (``.json``/``.tools``) as the file field ``library`` and the options (``material``,
+  ``max_rpm``, ...) as text fields. From the stored results of this library's last sync, each
+  milling tool's best stable pocket is written into the file as a preset. ``Accept:
+  application/json`` (default): the report, with the updated file in it (``file.content_base64``);
+  ``Accept: application/octet-stream`` (or ``?format=file``): the updated file itself, as a
+  download. Write key.
 * ``GET /v1/libraries`` · ``GET /v1/libraries/{library_id}`` (summary, per-tool status) ·
   ``GET /v1/libraries/{library_id}/results`` (``Accept: application/json`` — the shape of a
   library prediction —, ``application/x-hdf5`` or ``application/zip`` — one UFF 58 file per
@@ -26,22 +38,31 @@ policy):
 
 from __future__ import annotations
 
-import json
+import base64
+import hashlib
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Header, Path, Query, Request
 from fastapi.concurrency import run_in_threadpool
 from starlette.responses import Response
 
-from rcsa.app.libraries import LIBRARY_ID_PATTERN, export_file, prepare_library, prepare_sync
+from rcsa.app.inputs import decode_json
+from rcsa.app.libraries import (
+    LIBRARY_ID_PATTERN,
+    export_file,
+    prepare_library,
+    prepare_sync,
+    read_library,
+)
+from rcsa.app.presets import OPTION_FIELDS, recommend_stored
 from rcsa.errors import InputError
 
 from ..bodies import form_text, read_body, read_upload, validate_json
 from ..deps import StateDep
 from ..errors import ProblemError
 from ..idempotency import IDEMPOTENCY_PROBLEMS, IdempotencyKeyHeader, IdempotentRoute
-from ..jobs import answer
-from ..responses import json_response, problems
+from ..jobs import answer, caller
+from ..responses import body_limit, json_response, problems
 from ..schemas import (
     Deleted,
     JobStatus,
@@ -49,6 +70,7 @@ from ..schemas import (
     LibraryPredictionRequest,
     LibraryResult,
     LibrarySummary,
+    RecommendReport,
     SyncReport,
 )
 from ..security import ReadAccess, WriteAccess
@@ -58,7 +80,9 @@ router = APIRouter(prefix="/v1", tags=["tool libraries"], route_class=Idempotent
 
 _JSON_FIELDS = ("spindle", "frequency", "joints", "materials", "options", "shear_coefficient")
 _FORM_FIELDS = {
-    "library": "The Fusion tool library: .json, or .tools (zip holding tools.json).",
+    "library": "The tool library: Fusion .json or .tools (zip holding tools.json); FreeCAD .fctb, or a zip of "
+               ".fctb files (with their .fctl and .fcholder).",
+    "holder": "FreeCAD only: the holder (.fcholder) of the toolbits, when the library has none.",
     "spindle": 'JSON: the spindle, {"segments": [...], "bearings": [...]} or {"measurement_id": "m-..."}.',
     "measurement_id": "Instead of spindle: a stored measurement's id (hybrid).",
     "frequency": 'JSON: {"start_hz", "stop_hz", "step_hz"} or {"values_hz": [...]}, Hz.',
@@ -67,13 +91,14 @@ _FORM_FIELDS = {
     "beam_theory": "timoshenko | euler_bernoulli.",
     "shear_coefficient": "hutchinson | cowper | a number.",
     "natural_frequencies": "true | false: compute exact natural frequencies (default true).",
-    "options": "JSON: holder_material, tool_material_default, holder_segments_per_cone, fluted_diameter_ratio, "
-               "shaft_origin, default_holder.",
+    "options": "JSON: holder_material, tool_material_default, holder_segments_per_cone, fluted_diameter_ratio; "
+               "Fusion: shaft_origin, default_holder; FreeCAD: stickout_m (required; m, or {toolbit id: m}).",
 }
 _BODY = {"requestBody": {"required": True, "content": {
     "multipart/form-data": {"schema": {
         "type": "object", "required": ["library", "frequency"],
-        "properties": {name: ({"type": "string", "format": "binary", "description": text} if name == "library"
+        "properties": {name: ({"type": "string", "format": "binary", "description": text}
+                              if name in ("library", "holder")
                               else {"type": "string", "description": text}) for name, text in _FORM_FIELDS.items()},
         "additionalProperties": False}},
     "application/json": {"schema": {"$ref": "#/components/schemas/LibraryPredictionRequest"}}}}}
@@ -82,51 +107,60 @@ _BODY = {"requestBody": {"required": True, "content": {
 PreferHeader = Annotated[str | None, Header(description="respond-async: always a job.")]
 
 
-async def _library_inputs(request: Request, state: AppState) -> tuple[Any, dict[str, Any]]:
-    """The library (bytes or document) and the other fields of a multipart or JSON body."""
+async def _library_inputs(request: Request, state: AppState) -> tuple[dict[str, Any], dict[str, Any]]:
+    """What :func:`read_library` takes (the library and what the upload says it is), and the other fields."""
     kind, body = await read_body(request)
     try:
         if kind == "json":
             doc = validate_json(LibraryPredictionRequest, body).model_dump(exclude_unset=True)
-            return doc.pop("library"), doc
+            return {"source": doc.pop("library")}, doc
         return await _from_form(body, state.settings.max_upload_bytes)
     finally:
         if kind == "form":
             await body.close()
 
 
-@router.post("/tool-libraries:predict", response_model=LibraryResult, openapi_extra=_BODY, responses={
+@router.post("/tool-libraries:predict", response_model=LibraryResult, openapi_extra=body_limit("library", _BODY), responses={
     202: {"model": JobStatus, "description": "Queued as a job; poll Location."},
-    **problems(400, 401, 413, 415, 422), **IDEMPOTENCY_PROBLEMS}, summary="Tool-point FRFs of a Fusion tool library")
-async def predict_library(request: Request, state: StateDep, _: ReadAccess, prefer: PreferHeader = None,
+    **problems(400, 401, 413, 415, 422, 429), **IDEMPOTENCY_PROBLEMS}, summary="Tool-point FRFs of a Fusion tool library")
+async def predict_library(request: Request, state: StateDep, who: ReadAccess, prefer: PreferHeader = None,
                           idempotency_key: IdempotencyKeyHeader = None) -> Response:
     """One tool-point FRF per library tool that has a holder; the others skipped with a reason."""
-    library, doc = await _library_inputs(request, state)
-    work = await run_in_threadpool(lambda: prepare_library(state.bench, library, **doc))
-    return await run_in_threadpool(lambda: answer(state, work, prefer=prefer, idempotency_key=idempotency_key))
+    source, doc = await _library_inputs(request, state)
+    work = await run_in_threadpool(lambda: prepare_library(state.bench, read_library(**source), **doc))
+    return await run_in_threadpool(lambda: answer(state, work, prefer=prefer, idempotency_key=idempotency_key,
+                                                  owner=caller(who, request)))
 
 
-async def _from_form(form: Any, limit_bytes: int) -> tuple[bytes, dict[str, Any]]:
+async def _from_form(form: Any, limit_bytes: int) -> tuple[dict[str, Any], dict[str, Any]]:
     unknown = sorted(set(form.keys()) - set(_FORM_FIELDS))
     if unknown:
         raise InputError(unknown[0], f"unknown form field (allowed: {', '.join(_FORM_FIELDS)})")
     files = form.getlist("library")
     if len(files) != 1:
-        raise InputError("library", "send exactly one library file (.json or .tools)")
-    data, _ = await read_upload(files[0], "library", limit_bytes)
+        raise InputError("library", "send exactly one library file (.json, .tools, .fctb or a zip)")
+    data, name = await read_upload(files[0], "library", limit_bytes)
+    source: dict[str, Any] = {"source": data, "file_name": name or None,
+                              "content_type": getattr(files[0], "content_type", None)}
+    holders = form.getlist("holder")
+    if len(holders) > 1:
+        raise InputError("holder", "send at most one holder file (.fcholder)")
+    if holders:
+        source["holder"], holder_name = await read_upload(holders[0], "holder", limit_bytes)
+        source["holder_name"] = holder_name or None
     doc: dict[str, Any] = {}
     for name in _FORM_FIELDS:
-        text = form_text(form, name) if name != "library" else None
+        text = form_text(form, name) if name not in ("library", "holder") else None
         if text is None or text == "":
             continue
         if name in _JSON_FIELDS:
             try:
-                doc[name] = json.loads(text)
-            except ValueError as exc:
+                doc[name] = decode_json(text, path=name, what=f"form field {name}")
+            except InputError:
                 if name == "shear_coefficient":
                     doc[name] = text
                     continue
-                raise InputError(name, f"must be JSON ({exc})") from None
+                raise
         elif name == "natural_frequencies":
             if text.lower() not in ("true", "false"):
                 raise InputError(name, "must be true or false")
@@ -141,7 +175,7 @@ async def _from_form(form: Any, limit_bytes: int) -> tuple[bytes, dict[str, Any]
     for required in ("spindle", "frequency"):
         if required not in doc:
             raise InputError(required, "is required" + (" (or measurement_id)" if required == "spindle" else ""))
-    return data, doc
+    return source, doc
 
 
 # --------------------------------------------------------------------------- stored libraries
@@ -152,12 +186,12 @@ LibraryId = Annotated[str, Path(pattern=LIBRARY_ID_PATTERN.pattern, description=
 HDF5, ZIP, JSON = "application/x-hdf5", "application/zip", "application/json"
 
 
-@router.post("/libraries/{library_id}:sync", response_model=SyncReport, openapi_extra=_BODY, responses={
+@router.post("/libraries/{library_id}:sync", response_model=SyncReport, openapi_extra=body_limit("library", _BODY), responses={
     202: {"model": JobStatus, "description": "Queued as a library-sync job; poll Location (its result is the "
                                              "sync report)."},
-    **problems(400, 401, 403, 413, 415, 422), **IDEMPOTENCY_PROBLEMS},
+    **problems(400, 401, 403, 413, 415, 422, 429), **IDEMPOTENCY_PROBLEMS},
     summary="Sync a stored library with a new export (write key)")
-async def sync_library(library_id: LibraryId, request: Request, state: StateDep, _: WriteAccess,
+async def sync_library(library_id: LibraryId, request: Request, state: StateDep, who: WriteAccess,
                        prefer: PreferHeader = None, idempotency_key: IdempotencyKeyHeader = None) -> Response:
     """Bring the stored library ``library_id`` up to date with this export of the tool library.
 
@@ -166,10 +200,11 @@ async def sync_library(library_id: LibraryId, request: Request, state: StateDep,
     ``changed``, ``unchanged`` and ``removed`` since the previous sync of this id. Send an
     ``Idempotency-Key`` from automated (retrying) callers.
     """
-    library, doc = await _library_inputs(request, state)
-    work = await run_in_threadpool(lambda: prepare_sync(state.bench, library_id, library, **doc))
+    source, doc = await _library_inputs(request, state)
+    work = await run_in_threadpool(lambda: prepare_sync(state.bench, library_id, read_library(**source), **doc))
     return await run_in_threadpool(lambda: answer(state, work, prefer=prefer, idempotency_key=idempotency_key,
-                                                  headers={"Location": f"/v1/libraries/{library_id}"}))
+                                                  headers={"Location": f"/v1/libraries/{library_id}"},
+                                                  owner=caller(who, request)))
 
 
 @router.get("/libraries", response_model=LibraryList, responses=problems(401), summary="List stored libraries")
@@ -218,10 +253,10 @@ def delete_library(library_id: LibraryId, state: StateDep, _: WriteAccess) -> Re
     return json_response(state.bench.libraries.delete(library_id))
 
 
-def _negotiate(accept: str | None) -> str:
-    """The best of JSON, HDF5 and zip for an Accept header (JSON when it says nothing)."""
+def _negotiate(accept: str | None, offered: tuple[str, ...] = (JSON, HDF5, ZIP), what: str = "results") -> str:
+    """The best of ``offered`` for an Accept header (the first when it says nothing); 406 when none."""
     if not accept or not accept.strip():
-        return JSON
+        return offered[0]
     q: dict[str, float] = {}
     for part in accept.split(","):
         media, *params = [p.strip().lower() for p in part.split(";")]
@@ -234,9 +269,112 @@ def _negotiate(accept: str | None) -> str:
                     weight = 0.0
         q[media] = max(q.get(media, 0.0), weight)
     wildcard = max(q.get("*/*", 0.0), q.get("application/*", 0.0))
-    ranked = [(q.get(m, wildcard), -i, m) for i, m in enumerate((JSON, HDF5, ZIP))]
+    ranked = [(q.get(m, wildcard), -i, m) for i, m in enumerate(offered)]
     best = max(ranked)
     if best[0] <= 0:
-        raise ProblemError(406, "results are available as application/json, application/x-hdf5 or application/zip; "
-                                f"the Accept header {accept!r} allows none of them")
+        raise ProblemError(406, f"{what} are available as {' or '.join(offered)}; the Accept header {accept!r} "
+                                "allows none of them")
     return best[2]
+
+
+# --------------------------------------------------------------------------- chatter-safe presets
+
+OCTET = "application/octet-stream"
+_TEXT_OPTIONS = ("material", "milling", "method")
+_RECOMMEND_FIELDS = {
+    "library": "The Autodesk Fusion tool library (.json, or .tools: a zip holding tools.json) to write the presets "
+               "into; its tools are matched to the stored library by id.",
+    "material": "Workpiece material: a table entry (aluminium-7075, aluminium-6082, carbon-steel, alloy-steel, "
+                "stainless-steel, cast-iron, titanium-alloy, hardened-steel, or an alias such as 7075) or your own "
+                "name with tangential_coefficient_n_m2 and radial_ratio.",
+    "max_rpm": "The machine's highest spindle speed, rpm (required).",
+    "min_rpm": "The lowest spindle speed to consider, rpm (default 1000).",
+    "tangential_coefficient_n_m2": "K_tc of the linear edge-force model, N/m² (with radial_ratio; default: the "
+                                   "table's).",
+    "radial_ratio": "K_rc / K_tc.",
+    "radial_immersion": "Radial depth of cut / diameter, a_e/D (default 0.5).",
+    "milling": "down (default) or up.",
+    "safety_factor": "Stepdown = the smallest depth limit within the speed window / safety_factor (default 1.25).",
+    "speed_tolerance": "Relative half-width of the speed window that must stay stable (default 0.03).",
+    "max_surface_speed_m_min": "Surface-speed limit, m/min (default: the table's, for carbide tools).",
+    "feed_per_tooth_m": "Feed per tooth for the preset's feeds, m (default: f_z of the tool's own first preset).",
+    "method": "Stability-lobe method: zoa.",
+    "confidence": "Robust limit at this confidence (not available in this version).",
+}
+assert set(_RECOMMEND_FIELDS) - {"library"} == set(OPTION_FIELDS)
+_RECOMMEND_BODY = {"requestBody": {"required": True, "content": {
+    "multipart/form-data": {"schema": {
+        "type": "object", "required": ["library", "material", "max_rpm"],
+        "properties": {name: ({"type": "string", "format": "binary", "description": text} if name == "library"
+                              else {"type": "string", "description": text})
+                       for name, text in _RECOMMEND_FIELDS.items()},
+        "additionalProperties": False}}}}}
+
+
+async def _recommend_inputs(request: Request, limit_bytes: int) -> tuple[bytes, str | None, str | None, dict[str, Any]]:
+    kind, form = await read_body(request)
+    if kind != "form":
+        raise ProblemError(415, "send multipart/form-data: the Fusion library as the file field 'library' and the "
+                                "options as text fields (the file's bytes are kept exactly, so it cannot travel "
+                                "inside JSON)")
+    try:
+        unknown = sorted(set(form.keys()) - set(_RECOMMEND_FIELDS))
+        if unknown:
+            raise InputError(unknown[0], f"unknown form field (allowed: {', '.join(_RECOMMEND_FIELDS)})")
+        files = form.getlist("library")
+        if len(files) != 1:
+            raise InputError("library", "send exactly one Fusion library file (.json or .tools)")
+        data, name = await read_upload(files[0], "library", limit_bytes)
+        options: dict[str, Any] = {}
+        for field in OPTION_FIELDS:
+            text = form_text(form, field)
+            if text is None or text.strip() == "":
+                continue
+            if field in _TEXT_OPTIONS:
+                options[field] = text.strip()
+                continue
+            try:
+                options[field] = float(text)
+            except ValueError:
+                raise InputError(field, f"must be a number, got {text!r}") from None
+        return data, name or None, getattr(files[0], "content_type", None), options
+    finally:
+        await form.close()
+
+
+@router.post("/libraries/{library_id}:recommend", response_model=RecommendReport,
+             openapi_extra=body_limit("library", _RECOMMEND_BODY),
+             responses={200: {"description": "application/json: the report, with the updated library in "
+                                             "file.content_base64. application/octet-stream: the updated library "
+                                             "file (same format and name as uploaded).",
+                              "content": {OCTET: {"schema": {"type": "string", "format": "binary"}}}},
+                        **problems(400, 401, 403, 404, 406, 413, 415, 422), **IDEMPOTENCY_PROBLEMS},
+             summary="Write chatter-safe presets into a Fusion library from a stored library's results (write key)")
+async def recommend_presets(
+    library_id: LibraryId, request: Request, state: StateDep, _: WriteAccess,
+    accept: Annotated[str | None, Header(description="application/json (default: the report with the file in "
+                                                     "it) or application/octet-stream (the file).")] = None,
+    format: Annotated[Literal["report", "file"] | None, Query(
+        description="Instead of Accept: report (JSON) or file (the updated library).")] = None,
+    idempotency_key: IdempotencyKeyHeader = None,
+) -> Response:
+    """Per milling tool, the best stable pocket (speed, stepdown at the safety factor) as a Fusion preset.
+
+    The FRFs are the stored results of this library's last sync; a tool whose geometry changed
+    since (or that the sync does not know) is skipped with the reason. The preset is named
+    ``rcsa chatter-safe: <material>`` and its guid is fixed by the tool and the material, so that
+    sending the returned file again replaces it; nothing else in the file changes.
+    """
+    media = {"report": JSON, "file": OCTET}[format] if format else _negotiate(accept, (JSON, OCTET),
+                                                                                "a recommendation's report and file")
+    data, name, content_type, options = await _recommend_inputs(request, state.settings.max_upload_bytes)
+    result = await run_in_threadpool(lambda: recommend_stored(state.bench, library_id, data, options,
+                                                              file_name=name, content_type=content_type))
+    written = result.report["summary"]["written"]
+    if media == OCTET:
+        return Response(result.data, media_type=OCTET, headers={
+            "Content-Disposition": f'attachment; filename="{result.file_name}"', "X-RCSA-Presets-Written": str(written)})
+    return json_response({"library_id": library_id, **result.report, "file": {
+        "file_name": result.file_name, "media_type": result.media_type, "size_bytes": len(result.data),
+        "sha256": hashlib.sha256(result.data).hexdigest(),
+        "content_base64": base64.b64encode(result.data).decode("ascii")}})

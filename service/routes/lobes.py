@@ -3,25 +3,40 @@
 from __future__ import annotations
 
 from fastapi import APIRouter, Depends
+from starlette.requests import Request
 from starlette.responses import Response
 
 from rcsa.app.analyses import stability_lobes as lobes
 
 from ..bodies import require_json
 from ..deps import StateDep
-from ..responses import json_response, problems
+from ..jobs import caller, compute
+from ..responses import ASYNC_ACCEPTED, body_limit, json_response, problems
+from ..routing import ServiceRoute
 from ..schemas import LobesRequest, LobesResult
 from ..security import ReadAccess
+from .batches import PreferHeader
 
-router = APIRouter(prefix="/v1", tags=["stability lobes"])
+router = APIRouter(prefix="/v1", tags=["stability lobes"], route_class=ServiceRoute)
 
 
-@router.post("/stability-lobes", dependencies=[Depends(require_json)], response_model=LobesResult, responses=problems(401, 413, 415, 422),
-             summary="Stability lobes (zero-order Altintas–Budak)")
-def stability_lobes(body: LobesRequest, state: StateDep, _: ReadAccess) -> Response:
+@router.post("/stability-lobes", dependencies=[Depends(require_json)], response_model=LobesResult,
+             responses={**problems(401, 413, 415, 422), **ASYNC_ACCEPTED}, openapi_extra=body_limit("lobes"),
+             summary="Stability lobes (zero-order or semi-discretization)")
+def stability_lobes(body: LobesRequest, request: Request, state: StateDep, who: ReadAccess,
+                    prefer: PreferHeader = None) -> Response:
     """Axial depth limit (m) versus spindle speed (rpm), its chatter frequency (Hz) and every
-    lobe, from inline tool-point FRFs (``frf_x``, optional ``frf_y``) or an ``assembly``."""
-    with state.metrics.timed("lobes"):
-        result = lobes(body.model_dump(exclude_unset=True), store=state.reader,
-                       max_lines=state.settings.max_frequency_lines)
-    return json_response(result)
+    lobe, from inline tool-point FRFs (``frf_x``, optional ``frf_y``) or an ``assembly``.
+    ``"method"``: ``zoa`` (zero-order, Altintas–Budak; the default) or ``semi_discretization``
+    (first-order, Insperger–Stépán: right at low radial immersion, and it finds the flip lobes).
+
+    Under the compute budget (speeds × lines, and the assembly's prediction); ``Prefer:
+    respond-async`` runs it as a job."""
+    doc = body.model_dump(exclude_unset=True)
+
+    def run() -> Response:
+        with state.metrics.timed("lobes"):
+            result = lobes(doc, store=state.reader, max_lines=state.settings.max_frequency_lines)
+        return json_response(result)
+
+    return compute(state, "lobes", doc, prefer=prefer, run=run, owner=caller(who, request))

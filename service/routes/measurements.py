@@ -14,8 +14,8 @@ from rcsa.errors import InputError
 from ..bodies import form_text, read_body, read_upload, validate_json
 from ..deps import StateDep
 from ..errors import ProblemError
-from ..idempotency import IDEMPOTENCY_PROBLEMS, IdempotencyKeyHeader, IdempotentRoute
-from ..responses import json_response, problems
+from ..idempotency import IDEMPOTENCY_PROBLEMS, IdempotencyKeyHeader, IdempotentRoute, reservation
+from ..responses import body_limit, json_response, problems
 from ..schemas import (
     Deleted,
     MeasurementDocument,
@@ -35,18 +35,21 @@ _FORM_FIELDS = {
     "file": "The measurement file (repeat for several taps of format tap).",
     "format": "uff | csv | frf | json | tap (default: from the file name: .uff/.unv, .csv/.tsv, .frf, .json).",
     "spindle_id": "Spindle id (required except for JSON files that carry it).",
-    "direction": "x | y.",
+    "direction": "x | y (UFF: default from the file's response direction).",
     "plane": "spindle_nose | holder_tip.",
     "kind": "point_receptance | artifact_frfs | direct_frf (default direct_frf).",
     "machine": "Machine name.",
     "notes": "Free text.",
     "points_m": "artifact_frfs: point positions from the tip, m, e.g. 0,0.025.",
     "artifact": "artifact_frfs: JSON object (diameter_m, stickout_m, ...).",
-    "units": "FRF unit of the file, e.g. m/N, um/N, in/lbf, m/s^2/N, g/N (never guessed).",
-    "columns": "CSV: f,re,im | f,mag,phase | f,h11.re,h11.im,...; tap: t,force,response.",
-    "frequency_unit": "CSV frequency unit: Hz | kHz | rad/s.",
+    "units": "FRF unit of the file, e.g. m/N, um/N, in/lbf, m/s^2/N, g/N, dB re 1 m/N (never guessed; "
+             "default: the one the file's header or UFF datasets state).",
+    "columns": "CSV: f,re,im | f,mag,phase | f,h11.re,h11.im,... (default: from the file's header); "
+               "tap: t,force,response.",
+    "frequency_unit": "CSV frequency unit: Hz | kHz | rad/s (default: the header's, else Hz).",
     "phase_unit": "CSV phase unit: deg | rad.",
     "roles": "UFF: NAME=RSP_NODE:REF_NODE,..., e.g. h11=1:1,h21=2:1,h22=2:2.",
+    "scalar_direction": "UFF: direction x | y of scalar FRFs (direction code 0), which the file does not say.",
     "sensor_mass_kg": "Remove this accelerometer mass from the driving-point FRF, kg.",
     "drop_nonpositive": "true: drop rows at f <= 0 Hz instead of refusing the file.",
     "force_unit": "tap: force unit, e.g. N.",
@@ -65,7 +68,7 @@ _UPLOAD_BODY = {"requestBody": {"required": True, "content": {
         "additionalProperties": False}}}}}
 
 
-@router.post("", status_code=201, response_model=MeasurementInfo, openapi_extra=_UPLOAD_BODY,
+@router.post("", status_code=201, response_model=MeasurementInfo, openapi_extra=body_limit("measurement", _UPLOAD_BODY),
              responses={**problems(400, 401, 403, 413, 415, 422), **IDEMPOTENCY_PROBLEMS},
              summary="Store a measurement (write key)")
 async def upload_measurement(request: Request, state: StateDep, _: WriteAccess,
@@ -84,14 +87,14 @@ async def upload_measurement(request: Request, state: StateDep, _: WriteAccess,
     kind, body = await read_body(request)
     fmt = "json-body"
     try:
-        info = await _import(kind, body, fmt, state)
+        info = await _import(request, kind, body, fmt, state)
     finally:
         if kind == "form":
             await body.close()
     return json_response(info, status_code=201, headers={"Location": f"/v1/measurements/{info['id']}"})
 
 
-async def _import(kind: str, body: Any, fmt: str, state: AppState) -> dict[str, Any]:
+async def _import(request: Request, kind: str, body: Any, fmt: str, state: AppState) -> dict[str, Any]:
     try:
         if kind == "json":
             upload = validate_json(MeasurementUpload, body)
@@ -113,7 +116,12 @@ async def _import(kind: str, body: Any, fmt: str, state: AppState) -> dict[str, 
     except (InputError, ProblemError):
         state.metrics.import_failures.labels(fmt if fmt in M.FORMATS or fmt == "json-body" else "unknown").inc()
         raise
-    info = await run_in_threadpool(M.store_measurement, state.store, measurement)
+    held = reservation(request)
+    if held is None:
+        info = await run_in_threadpool(M.store_measurement, state.store, measurement)
+    else:  # the id is recorded with the key before the write: a retry after a crash finds the file
+        info = await run_in_threadpool(lambda: M.store_measurement_once(state.store, measurement,
+                                                                        recorded_id=held.effect, record=held.record))
     state.metrics.imports.labels(fmt).inc()
     return info
 
@@ -138,7 +146,7 @@ def list_measurements(
 @router.get("/{measurement_id}", response_model=MeasurementDocument, responses={
     200: {"content": {HDF5: {"schema": {"type": "string", "format": "binary"}}},
           "description": "The measurement in the contract's JSON form, or its HDF5 file (Accept: application/x-hdf5)."},
-    **problems(401, 404)}, summary="Get a measurement (JSON or HDF5)")
+    **problems(401, 404, 409)}, summary="Get a measurement (JSON or HDF5)")
 def get_measurement(
     measurement_id: MeasurementId, state: StateDep, _: ReadAccess,
     data: Annotated[bool, Query(description="Include the arrays (false: metadata and summary only).")] = True,

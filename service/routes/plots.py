@@ -27,7 +27,7 @@ from fastapi import APIRouter, Depends, Header, Query
 from pydantic import BaseModel, ConfigDict, Field
 from starlette.responses import Response
 
-from rcsa.app import exports, figures
+from rcsa.app import budget, exports, figures
 from rcsa.app.analyses import stability_lobes, stability_lobes_result
 from rcsa.app.bounds import MAX_LENGTH_M, MAX_SPEED_RPM, MIN_SPEED_RPM
 from rcsa.app.examples import ra1
@@ -35,11 +35,12 @@ from rcsa.app.predictions import predict
 
 from ..bodies import require_json
 from ..deps import StateDep
-from ..responses import problems
+from ..responses import body_limit, problems
+from ..routing import ServiceRoute
 from ..schemas import Assembly, FrfIn, LobesRequest
 from ..security import ReadAccess
 
-router = APIRouter(prefix="/v1", tags=["plots and exports"])
+router = APIRouter(prefix="/v1", tags=["plots and exports"], route_class=ServiceRoute)
 
 PNG = "image/png"
 SVG = "image/svg+xml"
@@ -103,7 +104,7 @@ class LobesPlotRequest(LobesRequest):
     title: str | None = Field(None, max_length=200, description="Figure title.")
 
 
-@router.post("/plots/frf", dependencies=[Depends(require_json)], response_class=Response,
+@router.post("/plots/frf", dependencies=[Depends(require_json)], response_class=Response, openapi_extra=body_limit("plot"),
              responses={**_IMAGE, **problems(401, 413, 415, 422)}, summary="Figure of a tool-point FRF (PNG/SVG)")
 def plot_frf(body: FrfPlotRequest, state: StateDep, _: ReadAccess, format: FormatQuery = None,  # noqa: A002
              accept: AcceptHeader = None) -> Response:
@@ -114,6 +115,8 @@ def plot_frf(body: FrfPlotRequest, state: StateDep, _: ReadAccess, format: Forma
     an ``assembly``, which is predicted first (as ``POST /v1/tool-point-frf``).
     """
     doc = body.model_dump(exclude_unset=True, include={"frf", "assembly"})
+    if body.assembly is not None:
+        budget.check("prediction", doc["assembly"], mode="sync")
     with state.metrics.timed("predict") if body.assembly is not None else nullcontext():
         curve = figures.tool_point_curve(**doc, store=state.reader, max_lines=state.settings.max_frequency_lines)
     fmt = _image_format(format, accept)
@@ -122,7 +125,7 @@ def plot_frf(body: FrfPlotRequest, state: StateDep, _: ReadAccess, format: Forma
     return _image(image, fmt, "tool-point-frf")
 
 
-@router.post("/plots/lobes", dependencies=[Depends(require_json)], response_class=Response,
+@router.post("/plots/lobes", dependencies=[Depends(require_json)], response_class=Response, openapi_extra=body_limit("plot"),
              responses={**_IMAGE, **problems(401, 413, 415, 422)},
              summary="Stability lobe diagram (PNG/SVG)")
 def plot_lobes(body: LobesPlotRequest, state: StateDep, _: ReadAccess, format: FormatQuery = None,  # noqa: A002
@@ -132,6 +135,7 @@ def plot_lobes(body: LobesPlotRequest, state: StateDep, _: ReadAccess, format: F
     point. The body is a ``POST /v1/stability-lobes`` request plus the drawing options."""
     request = body.model_dump(exclude_unset=True,
                               exclude={"show_lobes", "operating_point", "depth_max_mm", "title"})
+    budget.check("lobes", request, mode="sync")
     with state.metrics.timed("lobes"):
         result = stability_lobes_result(request, store=state.reader, max_lines=state.settings.max_frequency_lines)
     point = body.operating_point
@@ -143,7 +147,7 @@ def plot_lobes(body: LobesPlotRequest, state: StateDep, _: ReadAccess, format: F
     return _image(image, fmt, "stability-lobes")
 
 
-@router.post("/exports/frf.csv", dependencies=[Depends(require_json)], response_class=Response,
+@router.post("/exports/frf.csv", dependencies=[Depends(require_json)], response_class=Response, openapi_extra=body_limit("plot"),
              responses={**_csv_response(
                  "Header row frequency_hz, h_real_m_n, h_imag_m_n, l_real_1_n, l_imag_1_n, n_real_rad_n, "
                  "n_imag_rad_n, p_real_rad_n_m, p_imag_rad_n_m; one row per frequency line."),
@@ -153,14 +157,15 @@ def export_frf_csv(body: Assembly, state: StateDep, _: ReadAccess) -> Response:
     """Predict the assembly (exactly as ``POST /v1/tool-point-frf``) and answer its tool-point
     receptances as CSV: frequency in Hz, then real and imaginary parts of h (m/N), l (1/N),
     n (rad/N) and p (rad/(N·m)). The numbers equal the JSON result's."""
+    doc = body.model_dump(exclude_unset=True)
+    budget.check("prediction", doc, mode="sync")
     with state.metrics.timed("predict"):
-        result = predict(body.model_dump(exclude_unset=True), store=state.reader,
-                         max_lines=state.settings.max_frequency_lines)
+        result = predict(doc, store=state.reader, max_lines=state.settings.max_frequency_lines)
     state.metrics.computed("predict", 1)
     return _csv(exports.frf_csv(result.to_dict()), "tool-point-frf")
 
 
-@router.post("/exports/lobes.csv", dependencies=[Depends(require_json)], response_class=Response,
+@router.post("/exports/lobes.csv", dependencies=[Depends(require_json)], response_class=Response, openapi_extra=body_limit("plot"),
              responses={**_csv_response(
                  "Header row spindle_speed_rpm, depth_limit_m, chatter_frequency_hz, governing_lobe; one row per "
                  "speed; empty cells where no lobe reaches the speed (governing_lobe -1)."),
@@ -170,9 +175,10 @@ def export_lobes_csv(body: LobesRequest, state: StateDep, _: ReadAccess) -> Resp
     """Compute the lobes (exactly as ``POST /v1/stability-lobes``) and answer the lower
     envelope as CSV: spindle speed in rpm, depth limit in m, chatter frequency in Hz and the
     index k of the governing lobe."""
+    request = body.model_dump(exclude_unset=True)
+    budget.check("lobes", request, mode="sync")
     with state.metrics.timed("lobes"):
-        doc = stability_lobes(body.model_dump(exclude_unset=True), store=state.reader,
-                              max_lines=state.settings.max_frequency_lines)
+        doc = stability_lobes(request, store=state.reader, max_lines=state.settings.max_frequency_lines)
     return _csv(exports.lobes_csv(doc), "stability-lobes")
 
 

@@ -5,17 +5,20 @@
   it works on a network without internet). It calls the ``/v1`` API like any client: pick a
   stored spindle or RA-1's modelled one, a tool from an uploaded Fusion library or RA-1's,
   predict, read the tool-point FRF and its key numbers, compute stability lobes, download
-  CSV and PNG/SVG.
+  CSV and PNG/SVG; and diagnose tap tests of the tool point at a few stickouts against the
+  model (``diagnosis.js``: the verdict, the gap map and the corrected FRFs).
 * ``GET /v1/examples/ra1`` — the reference assembly RA-1 (the page's defaults).
 * ``POST /v1/tool-libraries:entries`` — the entries of a Fusion tool library (``.json`` or
   ``.tools``) mapped to holders and tools, without computing anything.
+* ``POST /v1/measurements:read`` — a measurement file (UFF 58, CSV, CutPro, contract JSON,
+  raw tap) read into the contract's JSON form with the store's importers, without storing
+  it: the page's diagnosis sends tap tests of the tool point on to ``POST /v1/diagnoses``.
 
 The page is served with a Content-Security-Policy that allows only this origin.
 """
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
@@ -25,23 +28,26 @@ from fastapi.exceptions import RequestValidationError
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from starlette.responses import FileResponse, RedirectResponse, Response
 
+from rcsa.app import measurements as M
 from rcsa.app.examples import ra1
+from rcsa.app.inputs import decode_json
 from rcsa.app.libraries import library_entries as read_entries
 from rcsa.errors import InputError
 
 from ..bodies import form_text, read_body, read_upload, validate_json
 from ..deps import StateDep
 from ..errors import ProblemError
-from ..responses import json_response, problems
-from ..schemas import Assembly, LibraryOptions
+from ..responses import body_limit, json_response, problems
+from ..routing import ServiceRoute
+from ..schemas import Assembly, ComplexArray, LibraryOptions, MeasurementSource
 from ..security import ReadAccess
 
-router = APIRouter()
+router = APIRouter(route_class=ServiceRoute)
 
 WEB_DIR = Path(__file__).resolve().parent.parent / "web"
 #: The page's files and their media types (nothing else under /ui/ is served).
 ASSETS = {"index.html": "text/html; charset=utf-8", "app.js": "text/javascript; charset=utf-8",
-          "app.css": "text/css; charset=utf-8"}
+          "diagnosis.js": "text/javascript; charset=utf-8", "app.css": "text/css; charset=utf-8"}
 CSP = ("default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self' data: blob:; "
        "connect-src 'self'; base-uri 'none'; form-action 'none'; frame-ancestors 'none'")
 _PAGE_HEADERS = {"Cache-Control": "no-cache", "Content-Security-Policy": CSP, "X-Content-Type-Options": "nosniff",
@@ -139,7 +145,7 @@ _ENTRIES_BODY = {"requestBody": {"required": True, "content": {
 
 
 @router.post("/v1/tool-libraries:entries", tags=["tool libraries"], response_model=LibraryEntries,
-             openapi_extra=_ENTRIES_BODY, responses=problems(400, 401, 413, 415, 422),
+             openapi_extra=body_limit("library", _ENTRIES_BODY), responses=problems(400, 401, 413, 415, 422),
              summary="List a Fusion tool library's entries (no computation)")
 async def library_entries(request: Request, state: StateDep, _: ReadAccess) -> Response:
     """Read a Fusion tool library and list every item: its id, description, status (ok,
@@ -174,9 +180,72 @@ async def _entries_form(form: Any, limit_bytes: int) -> tuple[bytes, str, Librar
     if not text:
         return data, name, None
     try:
-        return data, name, LibraryOptions.model_validate(json.loads(text))
+        return data, name, LibraryOptions.model_validate(decode_json(text, path="options", what="form field options"))
     except ValueError as exc:
         if isinstance(exc, ValidationError):
             raise RequestValidationError([{**e, "loc": ("body", "options", *e["loc"])}
                                           for e in exc.errors()]) from None
         raise InputError("options", f"must be a JSON object ({exc})") from None
+
+
+# --------------------------------------------------------------------------- measurement files, not stored
+
+class MeasurementRead(BaseModel):
+    """A measurement file in the contract's JSON form (SI units), not stored."""
+
+    model_config = ConfigDict(extra="allow")
+
+    kind: str = Field(description="direct_frf, point_receptance or artifact_frfs.")
+    frequency_hz: list[float] = Field(description="Frequency lines, Hz.")
+    h: ComplexArray | None = Field(None, description="Receptance h, m/N (converted from the file's quantity and "
+                                                     "units).")
+    coherence: list[float] | dict[str, list[float]] | None = Field(None, description="Coherence, when the file "
+                                                                                     "has it.")
+    units: dict[str, str] = Field(description="Unit of every array.")
+    source: MeasurementSource
+    summary: dict[str, Any] = Field(description="Peak magnitude and frequency of every FRF.")
+
+
+_READ_FIELDS = {"file": "The measurement file (repeat for several taps of format tap).",
+                "format": "uff | csv | frf | json | tap (default: from the file name).",
+                **{k: f"As for POST /v1/measurements (optional here; default {v})." for k, v in
+                   (("spindle_id", "tap-test"), ("direction", "x, or a UFF file's own"),
+                    ("plane", "spindle_nose"), ("kind", "direct_frf"))},
+                **{k: "As for POST /v1/measurements." for k in M.META_FIELDS
+                   if k not in ("spindle_id", "direction", "plane", "kind")},
+                **dict.fromkeys(M.IMPORT_OPTIONS, "Importer option, as for POST /v1/measurements.")}
+_READ_BODY = {"requestBody": {"required": True, "content": {"multipart/form-data": {"schema": {
+    "type": "object", "required": ["file"],
+    "properties": {name: ({"type": "string", "format": "binary", "description": text} if name == "file"
+                          else {"type": "string", "description": text}) for name, text in _READ_FIELDS.items()},
+    "additionalProperties": False}}}}}
+
+
+@router.post("/v1/measurements:read", tags=["measurements"], response_model=MeasurementRead,
+             openapi_extra=body_limit("measurement", _READ_BODY), responses=problems(400, 401, 413, 415, 422),
+             summary="Read a measurement file without storing it")
+async def read_measurement_file(request: Request, state: StateDep, _: ReadAccess) -> Response:
+    """Read a measurement file with the store's importers (UFF 58, CSV/TSV, CutPro ``.frf``,
+    contract JSON, raw tap; units never guessed) and answer it in the contract's JSON form,
+    SI units, without storing anything: e.g. tap tests of a tool point, sent on inline to
+    ``POST /v1/diagnoses`` or ``POST /v1/identifications``. A read key is enough."""
+    kind, form = await read_body(request)
+    if kind != "form":
+        raise ProblemError(415, "send the file as multipart/form-data (field file, and the importer options as "
+                                "form fields)")
+    try:
+        unknown = sorted(set(form.keys()) - set(_READ_FIELDS))
+        if unknown:
+            raise InputError(unknown[0], f"unknown form field (allowed: {', '.join(_READ_FIELDS)})")
+        files = form.getlist("file")
+        if not files:
+            raise InputError("file", "is required: the measurement file as a multipart part")
+        uploads = [await read_upload(f, "file", state.settings.max_upload_bytes) for f in files]
+        (data, name), extra = uploads[0], [d for d, _ in uploads[1:]]
+        fmt = form_text(form, "format")
+        metadata = {k: form_text(form, k) for k in M.META_FIELDS}
+        options = {k: form_text(form, k) for k in M.IMPORT_OPTIONS}
+    finally:
+        await form.close()
+    return json_response(await run_in_threadpool(lambda: M.read_measurement(
+        data, file_name=name, fmt=fmt, metadata=metadata, options=options, extra_taps=extra)))

@@ -352,6 +352,7 @@
       radial_ratio: numberFrom("kr", "Kr"),
       radial_immersion: numberFrom("immersion", "Radial immersion"),
       milling: $("milling").value,
+      method: $("lobes-method").value,
       spindle_speed_rpm: {
         start: numberFrom("speed-start", "Speed from"),
         stop: numberFrom("speed-stop", "Speed to"),
@@ -742,6 +743,14 @@
       $(readoutId).textContent = text(i);
     };
   }
+
+  // ------------------------------------------------------------------ shared with diagnosis.js
+
+  /** What the page's other script (diagnosis.js) uses: API access, messages, the assembly, SVG drawing. */
+  window.rcsaWeb = {
+    ApiError, call, showError, clearError, setStatus, numberFrom, fmt, assemblyToSend, describeSelection,
+    svgEl, clearPlot, axes, line, legend, UM_PER_M, MM_PER_M,
+  };
 
   // ------------------------------------------------------------------ start
 

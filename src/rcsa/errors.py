@@ -8,6 +8,8 @@ print one line and the service can answer ``422`` with ``application/problem+jso
 from __future__ import annotations
 
 __all__ = [
+    "ConflictError",
+    "DamagedError",
     "FrequencyMismatch",
     "InputError",
     "NotFoundError",
@@ -39,11 +41,25 @@ class InputError(RcsaError, ValueError):
 
 
 class FrequencyMismatch(InputError):
-    """Two receptances that must share a frequency axis do not (never interpolated silently)."""
+    """Two receptances that must share a frequency axis do not (never interpolated silently).
+
+    Parameters
+    ----------
+    field, rule : str
+        As for :class:`InputError`.
+    """
 
 
 class NotFoundError(RcsaError, KeyError):
-    """A stored object (measurement, job, library) does not exist."""
+    """A stored object (measurement, job, library) does not exist.
+
+    Parameters
+    ----------
+    what : str
+        What was looked for, e.g. ``"measurement"``.
+    ident : str
+        The id that was not found.
+    """
 
     def __init__(self, what: str, ident: str) -> None:
         self.what = what
@@ -54,5 +70,30 @@ class NotFoundError(RcsaError, KeyError):
         return f"{self.what} {self.ident!r} not found"
 
 
+class ConflictError(RcsaError):
+    """The request conflicts with the stored state (e.g. the object a retried request created
+    was deleted since), so it cannot be answered as asked."""
+
+    def __init__(self, what: str, ident: str, reason: str) -> None:
+        self.what = what
+        self.ident = ident
+        self.reason = reason
+        super().__init__(f"{what} {ident}: {reason}")
+
+
 class StoreError(RcsaError):
     """The store is unreadable, has a foreign schema, or a write could not be committed."""
+
+
+class DamagedError(StoreError):
+    """A stored object exists but cannot be read (corrupt file, foreign schema, bad checksum).
+
+    A :class:`StoreError` about one object, not the store as a whole: retrying does not help
+    (the service answers 409, not 503).
+    """
+
+    def __init__(self, what: str, ident: str, reason: str) -> None:
+        self.what = what
+        self.ident = ident
+        self.reason = reason
+        super().__init__(f"{what} {ident} is damaged: {reason}")

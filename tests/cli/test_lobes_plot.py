@@ -54,3 +54,25 @@ def test_plot_refuses_unknown_documents_and_formats(tmp_path):
     assert result.exit_code == 1 and "not a prediction result" in result.stderr
     result = runner.invoke(app, ["plot", str(source), "-o", str(tmp_path / "x.jpg")])
     assert result.exit_code == 1 and ".png or .svg" in result.stderr
+
+
+def test_plot_a_lobes_result_as_it_is(tmp_path):
+    """`rcsa lobes ... -o out.json` then `rcsa plot out.json`: the result is drawn, not re-solved."""
+    request = tmp_path / "lobes.json"
+    request.write_text(json.dumps({"assembly": ra1(GRID), **LOBES}))
+    out = tmp_path / "result.json"
+    assert runner.invoke(app, ["lobes", str(request), "-o", str(out)]).exit_code == 0
+    picture = tmp_path / "lobes.svg"
+    result = runner.invoke(app, ["plot", str(out), "-o", str(picture)])
+    assert result.exit_code == 0, result.stderr
+    svg = picture.read_text()
+    assert 'id="envelope"' in svg and 'id="lobe-0"' in svg
+    # the contract's fields alone (another program's result) are enough
+    doc = json.loads(out.read_text())
+    minimal = {k: doc[k] for k in ("spindle_speed_rpm", "depth_limit_m", "chatter_frequency_hz", "lobes")}
+    source = tmp_path / "minimal.json"
+    source.write_text(json.dumps(minimal))
+    assert runner.invoke(app, ["plot", str(source), "-o", str(tmp_path / "m.png")]).exit_code == 0
+    source.write_text(json.dumps({**minimal, "depth_limit_m": minimal["depth_limit_m"][:-1]}))
+    result = runner.invoke(app, ["plot", str(source), "-o", str(tmp_path / "m.png")])
+    assert result.exit_code == 1 and result.stderr.startswith("error: depth_limit_m: must have one value per speed")

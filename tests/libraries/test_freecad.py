@@ -20,9 +20,10 @@ ER32 = DATA / "ER32_Standard.fcholder"
 RTOL = 1e-12
 
 # ER32 nut outline (mm): (0,0) (23,0) (25,2) (25,22.5) (0,22.5): a 23→25 mm radius chamfer
-# over z 0..2, then r 25 up to 22.5. From the top down: 20.5 mm at Ø50, then the chamfer in
-# four 0.5 mm pieces at the mid-piece diameters 49.5, 48.5, 47.5, 46.5 mm.
-ER32_MM = [(20.5, 50), (0.5, 49.5), (0.5, 48.5), (0.5, 47.5), (0.5, 46.5)]
+# over z 0..2, then r 25 up to 22.5. From the top down: 20.5 mm at Ø50, then the chamfer
+# (taper 4/46, ⌈√(0.087/0.005)⌉ = 5 steps) in five 0.4 mm pieces at the mid-piece
+# diameters 49.6, 48.8, 48.0, 47.2, 46.4 mm.
+ER32_MM = [(20.5, 50), (0.4, 49.6), (0.4, 48.8), (0.4, 48.0), (0.4, 47.2), (0.4, 46.4)]
 
 
 def toolbit(**params: str | None) -> dict:

@@ -34,11 +34,12 @@ INCH_M = 0.0254
 
 # The sample holder, in Fusion order (tool end first), mm: (height, lower-, upper-diameter).
 # Cumulative heights 8, 22, 44, 54, 70 | 135.4; gaugeLength 70 keeps the first five.
-# Expected contract segments, from the gauge line toward the tool end, mm: cones split in 4
-# equal pieces at the mid-piece diameters (42→46 over 22: 42.5, 43.5, 44.5, 45.5;
-# 42→50 over 8: 43, 45, 47, 49), then reversed.
-HOLDER_MM = [(16, 63), (10, 46), (5.5, 45.5), (5.5, 44.5), (5.5, 43.5), (5.5, 42.5),
-             (14, 50), (2, 49), (2, 47), (2, 45), (2, 43)]
+# Expected contract segments, from the gauge line toward the tool end, mm: each cone in
+# cone_steps pieces of equal length at the mid-piece diameters — 42→46 over 22: taper
+# 4/42, ⌈√(0.0952/0.005)⌉ = 5 pieces of 4.4 at 42.4, 43.2, 44.0, 44.8, 45.6; 42→50 over 8:
+# taper 8/42, ⌈√(0.1905/0.005)⌉ = 7 pieces of 8/7 at 42 + 8(2k+1)/14 — then reversed.
+HOLDER_MM = [(16, 63), (10, 46), (4.4, 45.6), (4.4, 44.8), (4.4, 44.0), (4.4, 43.2), (4.4, 42.4),
+             (14, 50), *[(8 / 7, 42 + 8 * (2 * k + 1) / 14) for k in reversed(range(7))]]
 
 
 def sample() -> dict:
@@ -119,12 +120,16 @@ def test_inch_tool_in_mm_holder_with_shaft_neck():
     assert len(combo.warnings) == 1 and "continues into the holder" in combo.warnings[0]
 
 
-def test_shaft_from_flute_end_gives_the_shorter_neck_with_a_warning():
+def test_shaft_from_flute_end_gives_the_shorter_neck_its_cone_stepped():
     combo = library_combinations(JSON_PATH, shaft_origin="flute_end").combinations[1]
-    # shaft from LCF: 0.375 + 0.525 = 0.9 in at 0.23 in, then a 0.05 in cone to 0.25 in
-    assert combo.tool["shoulder_length_m"] == pytest.approx(0.95 * INCH_M, rel=RTOL)
-    assert combo.tool["shoulder_diameter_m"] == pytest.approx(0.23 * INCH_M, rel=RTOL)
-    assert any("modelled as one neck" in w for w in combo.warnings)
+    # shaft from LCF: 0.375 + 0.525 = 0.9 in at 0.23 in, then a 0.05 in cone to 0.25 in (SFDM):
+    # taper 0.02/0.23, ⌈√(0.087/0.005)⌉ = 5 steps of 0.01 in at 0.232 ... 0.248 in
+    assert "shoulder_length_m" not in combo.tool
+    assert combo.tool["neck_segments"] == [
+        {"length_m": pytest.approx(0.525 * INCH_M, rel=1e-9), "diameter_m": pytest.approx(0.23 * INCH_M, rel=RTOL)},
+        *[{"length_m": pytest.approx(0.01 * INCH_M, rel=1e-9), "diameter_m": pytest.approx(d * INCH_M, rel=1e-9)}
+          for d in (0.232, 0.236, 0.240, 0.244, 0.248)]]
+    assert not any("one neck" in w for w in combo.warnings)
 
 
 def test_json_tools_bytes_and_dict_give_the_same_result():
@@ -158,11 +163,12 @@ def test_every_ok_entry_is_accepted_by_the_assembly_parser():
     materials["hss"] = Material(youngs_modulus_pa=2.15e11, poisson_ratio=0.29,
                                 density_kg_m3=8100.0, loss_factor=0.004)
     for options in ({}, {"shaft_origin": "flute_end"}, {"holder_segments_per_cone": 1}):
-        for combo in library_combinations(JSON_PATH, **options):
-            if combo.status == "ok":
-                parse_holder(combo.holder, materials)
-                tool = parse_tool(combo.tool, materials)
-                assert tool.stickout_m <= tool.overall_length_m
+        ok = [combo for combo in library_combinations(JSON_PATH, **options) if combo.status == "ok"]
+        assert ok, options  # the checks below run on something
+        for combo in ok:
+            parse_holder(combo.holder, materials)
+            tool = parse_tool(combo.tool, materials)
+            assert tool.stickout_m <= tool.overall_length_m
 
 
 # --------------------------------------------------------------------------- holder rules
@@ -230,7 +236,8 @@ def test_without_gauge_length_all_segments_are_used_with_a_warning():
     combo = one(item)
     assert combo.status == "ok"
     assert math.fsum(s["length_m"] for s in combo.holder["segments"]) == pytest.approx(0.1354, rel=RTOL)
-    assert combo.holder["segments"][0]["outer_diameter_m"] == pytest.approx(0.025 + 19.45e-3 / 8, rel=RTOL)
+    # the 44.45 → 25 mm taper (r = 0.778) in ⌈√(0.778/0.005)⌉ = 13 pieces; the first at 25 + 19.45/26
+    assert combo.holder["segments"][0]["outer_diameter_m"] == pytest.approx(0.025 + 19.45e-3 / 26, rel=RTOL)
     assert any("gaugeLength missing" in w for w in combo.warnings)
 
 
@@ -376,7 +383,8 @@ def test_default_holder_by_guid_for_tools_without_one():
     ({"DC": None}, "geometry.DC"),
     ({"OAL": None}, "geometry.OAL"),
     ({"SFDM": -10}, "geometry.SFDM"),
-    ({"DC": "10 mm"}, "geometry.DC"),
+    ({"DC": "10 in"}, "geometry.DC"),                  # a unit contradicting the tool's (mm)
+    ({"DC": "10,5"}, "geometry.DC"),
     ({"DC": True}, "geometry.DC"),
     ({"DC": float("nan")}, "geometry.DC"),
 ])
@@ -408,8 +416,8 @@ def test_stickout_mismatch_is_a_warning_and_lb_wins():
 
 
 @pytest.mark.parametrize(("bmc", "material", "warns"), [
-    ("carbide", "carbide", False), ("Carbide", "carbide", False), ("hss", "hss", True),
-    ("ceramics", "carbide", True), (None, "carbide", True),
+    ("carbide", "carbide", False), ("Carbide", "carbide", False), ("hss", "hss", False),
+    ("ceramics", "ceramic", True), (None, "carbide", True),
 ])
 def test_material_from_bmc(bmc, material, warns):
     item = tool_item()
@@ -454,15 +462,16 @@ def test_body_thicker_than_the_shank_is_not_a_neck():
     assert any("thicker than the shank" in w for w in combo.warnings)
 
 
-def test_stepped_shaft_uses_the_smallest_diameter_and_warns():
+def test_stepped_shaft_is_modelled_step_by_step():
     item = tool_item(DC=6, SFDM=10, LCF=10, LB=40, **{"shoulder-length": None,
                                                          "shoulder-diameter": None})
     item["shaft"] = {"segments": [{"height": 10, "lower-diameter": 5.5, "upper-diameter": 5.5},
                                   {"height": 5, "lower-diameter": 7, "upper-diameter": 7}]}
     combo = one(item)
-    assert combo.tool["shoulder_length_m"] == 0.025  # 10 + 10 + 5 mm from the tip
-    assert combo.tool["shoulder_diameter_m"] == 0.0055
-    assert any("modelled as one neck" in w for w in combo.warnings)
+    # from the flute end (10 mm from the tip): 10 mm at 5.5, 5 mm at 7, then the shank
+    assert combo.tool["neck_segments"] == [{"length_m": pytest.approx(0.010, rel=1e-9), "diameter_m": 0.0055},
+                                           {"length_m": pytest.approx(0.005, rel=1e-9), "diameter_m": 0.007}]
+    assert "shoulder_length_m" not in combo.tool and combo.warnings == ()
 
 
 # --------------------------------------------------------------------------- malformed input
@@ -566,6 +575,10 @@ def test_property_valid_tools_give_positive_lengths_and_stickout_within_oal(item
     if "shoulder_length_m" in tool:
         assert tool["flute_length_m"] < tool["shoulder_length_m"] <= tool["stickout_m"]
         assert tool["shoulder_diameter_m"] < tool["shank_diameter_m"]
+    if "neck_segments" in tool:
+        reach = math.fsum(s["length_m"] for s in tool["neck_segments"])
+        assert reach <= (tool["stickout_m"] - tool["flute_length_m"]) * (1 + 1e-9)
+        assert all(s["diameter_m"] <= tool["shank_diameter_m"] for s in tool["neck_segments"])
     segs = combo.holder["segments"]
     assert segs and all(s["length_m"] > 0 and s["outer_diameter_m"] > s["inner_diameter_m"] > 0
                         for s in segs)
@@ -575,3 +588,19 @@ def test_property_valid_tools_give_positive_lengths_and_stickout_within_oal(item
         assert math.fsum(s["length_m"] for s in segs) == pytest.approx(gauge * scale, rel=1e-9)
     parse_holder(combo.holder, BUILTIN_MATERIALS)
     parse_tool(tool, BUILTIN_MATERIALS)
+
+
+@pytest.mark.parametrize("per_cone", [None, 6])
+def test_a_gauge_line_a_sliver_inside_a_cone_gives_no_segment_below_the_shortest_beam(per_cone):
+    """Found by the property test: a gauge line 0.6 um into a cone, split in 6, gave 0.1 um
+    cylinders that the contract refuses (length >= 1 um). The last kept segment takes the sliver."""
+    item = {"type": "flat end mill", "unit": "millimeters", "BMC": "carbide",
+            "geometry": {"DC": 10.0, "SFDM": 10.0, "LCF": 20.0, "LB": 30.0, "OAL": 70.0, "NOF": 3},
+            "holder": {"type": "holder", "unit": "millimeters", "gaugeLength": 40.0006,
+                       "segments": [{"height": 40.0, "lower-diameter": 20.0, "upper-diameter": 30.0},
+                                    {"height": 20.0, "lower-diameter": 30.0, "upper-diameter": 50.0}]}}
+    combo = one(item, holder_segments_per_cone=per_cone)
+    assert combo.status == "ok", combo.reason
+    lengths = [s["length_m"] for s in combo.holder["segments"]]
+    assert min(lengths) >= 1e-6
+    assert math.fsum(lengths) == pytest.approx(0.0400006, rel=1e-12)

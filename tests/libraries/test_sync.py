@@ -9,6 +9,7 @@ import subprocess
 import sys
 import threading
 import zipfile
+from contextlib import closing
 
 import h5py
 import numpy as np
@@ -140,6 +141,18 @@ def test_result_key_is_content_not_spelling(libs):
     assert results_cache.canonical_json({"x": [1, -0.0]}) == results_cache.canonical_json({"x": [1.0, 0.0]})
 
 
+def test_keys_made_in_bulk_are_the_keys_made_one_by_one(libs):
+    request = library_sync.sync_request("a", make_library(7), **{**SETTINGS, "materials": {"x": {
+        "youngs_modulus_pa": 2.1e11, "density_kg_m3": 7850, "poisson_ratio": 0.29}}})
+    batch = request["batch"]
+    shared = results_cache.shared_part(batch, None)
+    fsha = results_cache.frequency_sha256(np.arange(5.0, 1000.0 + 1, 5.0))
+    one_by_one = [results_cache.result_key(c, shared, fsha) for c in batch["combinations"]]
+    assert results_cache.result_keys(batch["combinations"], shared, fsha) == one_by_one
+    assert library_sync.plan_sync(libs, request).keys == tuple(one_by_one)
+    assert len(set(one_by_one)) == 7
+
+
 def test_model_version_is_part_of_the_key(libs, monkeypatch):
     request = library_sync.sync_request("a", make_library(1), **SETTINGS)
     key = library_sync.plan_sync(libs, request).keys[0]
@@ -187,7 +200,14 @@ def test_killed_sync_resumes_from_the_cache(libs, tmp_path, computed):
     tools = libs.get("shop")["tools"]
     assert [t["id"] for t in tools] == [tool_id(i) for i in range(5)]  # each tool exactly once
     assert report.added == tuple(tool_id(i) for i in range(5)) and report.revision == 1
-    assert all(not p.name.endswith(".tmp") for p in (libs.directory / "results").rglob("*"))
+    # the cache holds exactly the five complete results under their keys, each readable (a chunk
+    # is one transaction of the cache's database: a killed writer leaves all of it or none)
+    keys = {t["result_sha256"] for t in tools}
+    with closing(libs.cache._connect()) as con:
+        stored = sorted(r[0] for r in con.execute("SELECT key FROM results"))
+    assert len(keys) == 5 and stored == sorted(keys)
+    assert all(libs.cache.get(k)["status"] == "ok" for k in keys)
+    assert all(not p.name.endswith(".tmp") for p in libs.directory.rglob("*"))
 
 
 def test_concurrent_syncs_commit_one_after_the_other(libs):

@@ -55,6 +55,7 @@ def test_stacked_batch_equals_tools_predicted_one_by_one(monkeypatch, per_pass, 
         assert nat.size == nat0.size > 0
         np.testing.assert_allclose(nat, nat0, rtol=2e-11)
         assert result["static_stiffness_n_m"] == pytest.approx(alone["static_stiffness_n_m"], rel=1e-12)
+        assert result["notes"] == alone["notes"]
         assert [p["frequency_hz"] for p in result["peaks"]] == pytest.approx(
             [p["frequency_hz"] for p in alone["peaks"]], rel=1e-9)
 

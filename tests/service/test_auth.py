@@ -79,3 +79,27 @@ def test_key_parsing_and_ring():
     for bad in ("short:write", "abcdefghijklmnop:admin", "abcdefghijklmnop", "sha256:12:read"):
         with pytest.raises(ValueError, match="RCSA_API_KEYS"):
             parse_key_list(bad)
+
+
+def _operations(spec):
+    for path, ops in spec["paths"].items():
+        for method, op in ops.items():
+            if "security" in op:
+                yield method.upper(), path.replace("{measurement_id}", "m-0123456789ab").replace(
+                    "{job_id}", "j-0").replace("{library_id}", "lib-x"), op["security"]
+
+
+@pytest.mark.parametrize("anonymous_read", [True, False])
+def test_openapi_security_says_which_operations_need_a_key(make_client, anonymous_read):
+    """Optional security ([{}, {"APIKey": []}]) exactly where an anonymous call gets past the key check."""
+    with make_client(anonymous_read=anonymous_read) as client:
+        operations = list(_operations(client.get("/openapi.json").json()))
+        assert len(operations) > 20
+        for method, path, security in operations:
+            optional = {} in security
+            assert {"APIKey": []} in security, (method, path)
+            r = client.request(method, path, json={})  # no key
+            assert (r.status_code != 401) == optional, (method, path, security, r.status_code)
+            write = (method == "DELETE" or (method, path) == ("POST", "/v1/measurements") or ":sync" in path
+                     or ":recommend" in path)
+            assert optional == (anonymous_read and not write), (method, path)

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from rcsa import app
+from rcsa.errors import NotFoundError
 from rcsa.infra.job_queue import JobRunner, JobStore
 from rcsa.libraries import library_prediction as library_api
 
@@ -194,7 +195,7 @@ def test_runner_takes_over_only_what_it_owns(store_path):
     a = JobRunner(jobs, {"slow": slow}, heartbeat_s=0.05)
     assert a.run_one() and jobs.get(job.id).status == "succeeded"
     assert jobs.result_path(job.id).read_bytes() == b'{"ok":true}'
-    with pytest.raises(Exception, match="not found"):
+    with pytest.raises(NotFoundError, match="not found"):
         jobs.result_path("j-" + "0" * 32)
 
 

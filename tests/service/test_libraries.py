@@ -116,3 +116,100 @@ def test_cli_library_predict(tmp_path, monkeypatch):
     r = runner.invoke(_cli(), ["library", "predict", str(LIBS / "synthetic_library.json"), "--spindle", str(spindle),
                                "--frequency", "5-5000"])
     assert r.exit_code == 1 and r.stderr.startswith("error: frequency")
+
+
+# --------------------------------------------------------------------------- FreeCAD
+
+FREECAD = REPO / "tests" / "data" / "tool-libraries" / "freecad"
+FC_BITS = ("5mm_Endmill", "6mm_Ball_End")
+
+
+def _freecad_zip(with_holder: bool = True) -> bytes:
+    import io
+    import zipfile
+
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w") as zf:
+        for name in FC_BITS:
+            zf.writestr(f"Bit/{name}.fctb", (FREECAD / f"{name}.fctb").read_bytes())
+        if with_holder:
+            zf.writestr("Holder/ER32_Standard.fcholder", (FREECAD / "ER32_Standard.fcholder").read_bytes())
+    return buf.getvalue()
+
+
+def test_freecad_zip_upload_has_the_fusion_result_shape(client):
+    form = {**FORM, "options": json.dumps({"stickout_m": 0.040})}
+    r = client.post("/v1/tool-libraries:predict", files={"library": ("Tools.zip", _freecad_zip(), "application/zip")},
+                    data=form)
+    assert r.status_code == 200, r.text
+    out = r.json()
+    assert out["summary"] == {"ok": 2, "skipped": 0, "error": 0}
+    assert [x["id"] for x in out["results"]] == ["5mm_Endmill@ER32_Standard", "6mm_Ball_End@ER32_Standard"]
+    assert set(out["results"][0]) >= {"id", "index", "status", "warnings", "tool_point", "frequency_hz",
+                                      "natural_frequencies_hz", "notes"}
+    # one toolbit file and the holder as its own field: the same first result
+    r = client.post("/v1/tool-libraries:predict", data=form, files=[
+        ("library", ("5mm_Endmill.fctb", (FREECAD / "5mm_Endmill.fctb").read_bytes(), "application/octet-stream")),
+        ("holder", ("ER32_Standard.fcholder", (FREECAD / "ER32_Standard.fcholder").read_bytes()))])
+    assert r.status_code == 200, r.text
+    assert r.json()["results"][0]["tool_point"] == out["results"][0]["tool_point"]
+
+
+def test_freecad_json_body_and_refusals(client):
+    doc = {"format": "freecad", "toolbits": {n: json.loads((FREECAD / f"{n}.fctb").read_text()) for n in FC_BITS},
+           "holder": {"ER32": json.loads((FREECAD / "ER32_Standard.fcholder").read_text())}}
+    body = {"library": doc, "spindle": RA1["spindle"], "frequency": GRID,
+            "options": {"stickout_m": {"5mm_Endmill": 0.04, "6mm_Ball_End": 0.045}}}
+    r = client.post("/v1/tool-libraries:predict", json=body)
+    assert r.status_code == 200, r.text
+    assert [x["status"] for x in r.json()["results"]] == ["ok", "ok"]
+    r = client.post("/v1/tool-libraries:predict", json={**body, "options": {}})
+    assert_problem(r, 422, "stickout_m")
+    r = client.post("/v1/tool-libraries:predict", data=FORM,
+                    files={"library": ("renamed.fctb", (LIBS / "synthetic_library.json").read_bytes())})
+    assert_problem(r, 422, "library")
+    r = client.post("/v1/tool-libraries:predict", data=FORM, files=[
+        ("library", ("synthetic_library.json", (LIBS / "synthetic_library.json").read_bytes())),
+        ("holder", ("ER32.fcholder", (FREECAD / "ER32_Standard.fcholder").read_bytes()))])
+    assert_problem(r, 422, "holder")
+
+
+def test_freecad_sync_keeps_ids_across_syncs(client):
+    from .conftest import WRITE
+
+    form = {**FORM, "options": json.dumps({"stickout_m": 0.040})}
+    files = {"library": ("Tools.zip", _freecad_zip())}
+    first = client.post("/v1/libraries/fc-shop:sync", files=files, data=form, headers=WRITE)
+    assert first.status_code == 200, first.text
+    assert first.json()["counts"] == {"added": 2, "changed": 0, "unchanged": 0, "removed": 0}
+    again = client.post("/v1/libraries/fc-shop:sync", files={"library": ("Tools.zip", _freecad_zip())}, data=form,
+                        headers=WRITE)
+    assert again.json()["counts"] == {"added": 0, "changed": 0, "unchanged": 2, "removed": 0}
+    assert again.json()["computed"] == 0
+
+
+def test_cli_freecad_predict_and_sync(tmp_path, monkeypatch):
+    import shutil
+
+    monkeypatch.setenv("RCSA_STORE", str(tmp_path / "store"))
+    spindle = tmp_path / "ra1.json"
+    spindle.write_text(json.dumps(RA1))
+    bits = tmp_path / "Tools" / "Bit"
+    bits.mkdir(parents=True)
+    for name in FC_BITS:
+        shutil.copy(FREECAD / f"{name}.fctb", bits)
+    (tmp_path / "Tools" / "Library").mkdir()
+    fctl = tmp_path / "Tools" / "Library" / "Shop.fctl"
+    fctl.write_text(json.dumps({"version": 1, "tools": [{"nr": 4, "path": "5mm_Endmill.fctb"}]}))
+    runner = CliRunner()
+    common = ["--spindle", str(spindle), "--frequency", "5:2000:5", "--holder", str(FREECAD / "ER32_Standard.fcholder"),
+              "--options", '{"stickout_m": 0.04}', "-q"]
+    r = runner.invoke(_cli(), ["library", "predict", str(fctl), *common])
+    assert r.exit_code == 0, r.stderr
+    out = json.loads(r.stdout)
+    assert [(x["id"], x["number"], x["status"]) for x in out["results"]] == [("5mm_Endmill@ER32_Standard", 4, "ok")]
+    r = runner.invoke(_cli(), ["library", "sync", str(bits), *common])
+    assert r.exit_code == 0, r.stderr
+    assert json.loads(r.stdout)["counts"]["added"] == 2
+    r = runner.invoke(_cli(), ["library", "predict", str(bits), *common[:-3], "-q"])
+    assert r.exit_code == 1 and "stickout_m" in r.stderr

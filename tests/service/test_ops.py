@@ -127,3 +127,33 @@ def test_module_level_app_for_uvicorn_without_factory(tmp_path, monkeypatch):
     app = service.main.app
     assert app is service.main.app  # built once, on first access
     assert "/v1/tool-point-frf" in app.openapi()["paths"]
+
+
+def test_docs_pages_name_only_local_assets(client):
+    """/docs and /redoc work on a network without internet: every asset they name is served here."""
+    import re
+
+    for page in ("/docs", "/redoc"):
+        r = client.get(page)
+        assert r.status_code == 200 and r.headers["content-type"].startswith("text/html")
+        urls = re.findall(r'(?:src|href)="([^"]+)"', r.text)
+        assert urls and not [u for u in urls if "//" in u], (page, urls)
+        for url in urls:
+            asset = client.get(url)
+            assert asset.status_code == 200 and len(asset.content) > 1000, url
+        assert "fonts.googleapis" not in r.text
+    assert '"validatorUrl": null' in client.get("/docs").text  # no badge from validator.swagger.io
+    assert client.get("/favicon.ico").headers["content-type"] == "image/png"
+    assert_problem(client.get("/docs-assets/../main.py"), 404)
+    assert_problem(client.get("/docs-assets/index.html"), 404)
+
+
+def test_405_allow_names_every_method_of_the_path(client):
+    """A path served by several routes (GET and POST /v1/measurements) allows all their methods."""
+    for method, path, allow in (("PUT", "/v1/measurements", "GET, POST"),
+                                ("PATCH", "/v1/measurements/m-0123456789ab", "DELETE, GET"),
+                                ("GET", "/v1/tool-point-frf", "POST"), ("POST", "/healthz", "GET")):
+        r = client.request(method, path)
+        body = assert_problem(r, 405)
+        assert r.headers["allow"] == allow, (method, path, r.headers)
+        assert allow in body["detail"] and method in body["detail"]

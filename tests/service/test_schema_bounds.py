@@ -96,6 +96,10 @@ def _document(path: Path, value: float) -> dict[str, Any]:
         doc["spindle"]["bearings"][0][field] = value
     elif head == "joints":
         doc["joints"][path[1]][field] = value
+    elif head == "tool" and path[1] == "neck_segments":
+        doc["tool"].pop("shoulder_length_m", None)
+        doc["tool"].pop("shoulder_diameter_m", None)
+        doc["tool"]["neck_segments"] = [{"length_m": 0.001, "diameter_m": 0.01, field: value}]
     elif head == "tool":
         _tool(doc["tool"], field, value)
     else:
@@ -175,6 +179,10 @@ def test_a_modulus_the_library_refuses_is_refused_by_the_schema_too():
     assert info.value.field == "materials.steel.youngs_modulus_pa"
 
 
+_SDM_OPTIONS = ("steps_per_period", "modes_per_direction")
+_INTEGERS = ("teeth", "count", *_SDM_OPTIONS)
+
+
 def _lobes_document(path: Path, value: float) -> dict[str, Any]:
     doc = {"frf_x": {"frequency_hz": [100.0, 200.0], "h": {"real": [1e-7, -1e-7], "imag": [-1e-8, -2e-7]}},
            "teeth": 4, "tangential_coefficient_n_m2": 6e8, "radial_ratio": 0.3, "radial_immersion": 0.5,
@@ -188,7 +196,9 @@ def _lobes_document(path: Path, value: float) -> dict[str, Any]:
         node.update(start=value, stop=math.nextafter(value, math.inf)) if field == "start" else \
             node.update(start=math.nextafter(value, 0.0), stop=value)
         return doc
-    node[field] = int(value) if field in ("teeth", "count") else value
+    node[field] = int(value) if field in _INTEGERS else value
+    if field in _SDM_OPTIONS:  # options of the semi-discretization method only
+        doc["method"] = "semi_discretization"
     return doc
 
 
@@ -202,7 +212,7 @@ def test_schema_and_library_agree_on_the_stability_lobes_bounds(openapi):
     disagreements = []
     for path, keyword, bound in bounds:
         inside, outside = _probe(keyword, bound)
-        if path[-1] in ("teeth", "count"):  # integers: one step, not one ulp
+        if path[-1] in _INTEGERS:  # integers: one step, not one ulp
             step = 1 if keyword.endswith("inimum") else -1
             inside, outside = bound + (step if keyword.startswith("exclusive") else 0), bound - step
         for value, expected in ((inside, True), (outside, False)):

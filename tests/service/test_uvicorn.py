@@ -35,7 +35,7 @@ def test_two_workers_upload_predict_batch_delete_and_shutdown(tmp_path):
     env = {**os.environ, "RCSA_STORE": str(tmp_path / "store"), "RCSA_API_KEYS": f"{WRITE_KEY}:write",
            "RCSA_JOB_POLL_S": "0.1", "PROMETHEUS_MULTIPROC_DIR": str(prom), "RCSA_SEED_DEMO": "true"}
     log = (tmp_path / "uvicorn.log").open("w")
-    proc = subprocess.Popen([sys.executable, "-m", "uvicorn", "service.main:create_app", "--factory", "--workers", "2",
+    proc = subprocess.Popen([sys.executable, "-m", "uvicorn", "service.main:create_app", "--factory", "--http", "service.http:NoDelayHTTPProtocol", "--workers", "2",
                              "--host", "127.0.0.1", "--port", str(port)], cwd=REPO, env=env, stdout=log,
                             stderr=subprocess.STDOUT)
     base = f"http://127.0.0.1:{port}"

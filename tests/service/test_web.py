@@ -342,3 +342,45 @@ def test_new_endpoints_are_documented(client):
     assert set(entries["requestBody"]["content"]) == {"multipart/form-data", "application/json"}
     assert "/v1/examples/ra1" in paths
     assert "/" not in paths and "/ui/" not in paths
+
+
+# --------------------------------------------------------------------------- the diagnosis part of the page
+
+def test_diagnosis_script_is_served_and_calls_only_documented_endpoints(client):
+    page = _page(client)
+    assert "diagnosis.js" in page.refs
+    for ident in ("tap-rows", "tap-add", "tap-units", "diag-effort", "diagnose", "diag-verdict", "gap-plot",
+                  "diag-frf-plot"):
+        assert ident in page.ids, ident
+    r = client.get("/ui/diagnosis.js")
+    assert r.status_code == 200 and r.headers["content-type"].startswith("text/javascript")
+    assert "default-src 'none'" in r.headers["content-security-policy"]
+    text = r.text.replace('"http://www.w3.org/2000/svg"', "")
+    assert "http://" not in text and "https://" not in text
+    paths = client.get("/openapi.json").json()["paths"]
+    called = set(re.findall(r'"(v1/[^"?]+)', r.text))
+    assert called == {"v1/measurements:read", "v1/diagnoses", "v1/tool-point-frf"}, called
+    for path in called:
+        assert "/" + path in paths, path
+
+
+def test_measurement_file_is_read_not_stored(client):
+    csv_text = "frequency [Hz],real [um/N],imag [um/N]\n100,0.1,-0.01\n200,0.12,-0.05\n300,-0.3,-0.2\n"
+    r = client.post("/v1/measurements:read", files={"file": ("tap-60mm.csv", csv_text.encode(), "text/csv")})
+    assert r.status_code == 200, r.text
+    doc = r.json()
+    assert doc["frequency_hz"] == [100.0, 200.0, 300.0] and doc["kind"] == "direct_frf"
+    assert doc["h"]["real"] == pytest.approx([1e-7, 1.2e-7, -3e-7]) and doc["units"]["h"] == "m/N"
+    assert doc["source"]["original_units"] == "um/N" and "id" not in doc
+    assert client.get("/v1/measurements").json()["items"] == []  # nothing stored
+    # the importer's rules and names, as for POST /v1/measurements
+    r = client.post("/v1/measurements:read", files={"file": ("x.csv", b"1,2,3\n", "text/csv")})
+    assert_problem(r, 422, "columns")
+    r = client.post("/v1/measurements:read", files={"file": ("x.csv", csv_text.encode(), "text/csv")},
+                    data={"units": "m/N"})
+    assert_problem(r, 422)  # a declaration that contradicts the header is refused
+    r = client.post("/v1/measurements:read", files={"file": ("x.csv", csv_text.encode(), "text/csv")},
+                    data={"colour": "red"})
+    assert_problem(r, 422, "colour")
+    assert_problem(client.post("/v1/measurements:read", json={"frequency_hz": [1.0]}), 415)
+    assert_problem(client.post("/v1/measurements:read", files={"units": (None, "m/N")}), 422, "file")

@@ -1,4 +1,8 @@
-"""The web view in a real headless Chromium (selenium) against a real uvicorn on loopback.
+"""The web view and the API docs in a real headless Chromium (selenium) against a real uvicorn on loopback.
+
+The browser is offline: every host name but 127.0.0.1 resolves to nothing and no proxy is
+used (``OFFLINE_ARGS``), as on a shop network without internet, so a page that needed a CDN
+would break here (``test_the_browser_is_offline`` shows that it would).
 
 Skipped, with the reason, when selenium, ``chromium`` or ``chromedriver`` is missing (CI
 installs the Debian packages in ``.ci/run``). The server gets a temporary store seeded with
@@ -7,6 +11,7 @@ the demo measurement; server and browser are always shut down.
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import signal
@@ -28,6 +33,9 @@ from selenium.webdriver.chrome.service import Service  # noqa: E402
 from selenium.webdriver.common.by import By  # noqa: E402
 from selenium.webdriver.support.ui import Select, WebDriverWait  # noqa: E402
 
+#: Chromium as on a network without internet: no proxy, and no host name but 127.0.0.1 resolves
+#: (nothing is sent anywhere: the name lookup itself fails inside the browser).
+OFFLINE_ARGS = ("--no-proxy-server", "--host-resolver-rules=MAP * ~NOTFOUND , EXCLUDE 127.0.0.1")
 LIBRARY = REPO / "tests" / "data" / "tool-libraries" / "fusion-synthetic" / "synthetic_library.tools"
 WAIT_S = 30.0
 
@@ -98,13 +106,13 @@ def downloads(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="module")
 def browser(tmp_path_factory, downloads) -> Iterator[webdriver.Chrome]:
-    """Headless Chromium with a fresh profile."""
+    """Headless Chromium with a fresh profile, offline (``OFFLINE_ARGS``)."""
     options = webdriver.ChromeOptions()
     options.binary_location = CHROMIUM
     for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
                 "--disable-background-networking", "--disable-component-update", "--disable-sync",
                 "--no-first-run", "--window-size=1280,1800",
-                f"--user-data-dir={tmp_path_factory.mktemp('chromium-profile')}"):
+                f"--user-data-dir={tmp_path_factory.mktemp('chromium-profile')}", *OFFLINE_ARGS):
         options.add_argument(arg)
     options.add_experimental_option("prefs", {"download.default_directory": str(downloads),
                                               "download.prompt_for_download": False})
@@ -191,6 +199,15 @@ def test_predict_ra1_draw_frf_and_lobes_and_download(server, browser, downloads)
     assert " mm (chatter at " in browser.find_element(By.ID, "lobes-min-depth").text
     assert " rpm" in browser.find_element(By.ID, "lobes-pockets").text
 
+    # the semi-discretization at a thin radial cut: the same drawing from the other method
+    Select(browser.find_element(By.ID, "lobes-method")).select_by_value("semi_discretization")
+    for field, value in (("immersion", "0.05"), ("speed-count", "120")):
+        browser.find_element(By.ID, field).clear()
+        browser.find_element(By.ID, field).send_keys(value)
+    browser.find_element(By.ID, "lobes").click()
+    _wait_state(browser, "lobes")
+    assert 60 < _points(browser, "lobes-envelope-path") <= 120  # 120 speeds
+
     browser.find_element(By.ID, "download-lobes-png").click()
     png = _wait_download(downloads, ".png")
     WebDriverWait(browser, WAIT_S).until(lambda d: png.stat().st_size > 1000)
@@ -231,3 +248,82 @@ def test_library_entry_on_measured_spindle_and_errors_shown(server, browser):
     WebDriverWait(browser, WAIT_S).until(lambda d: d.find_element(By.ID, "error").is_displayed())
     text = browser.find_element(By.ID, "error").text
     assert "Prediction failed" in text and "frequency.step_hz" in text, text
+
+
+# --------------------------------------------------------------------------- API docs, offline
+
+_CDN_ASSET = "https://cdn.jsdelivr.net/npm/swagger-ui-dist@5/swagger-ui.css"
+
+
+def test_the_browser_is_offline(server, browser):
+    """The control: in this browser a CDN asset cannot be had (FastAPI's default /docs would be blank)."""
+    browser.get(server + "/healthz")
+    outcome = browser.execute_async_script(
+        "const done = arguments[arguments.length - 1];"
+        "fetch(arguments[0], {mode: 'no-cors'}).then(() => done('loaded'), e => done('failed: ' + e));",
+        _CDN_ASSET)
+    assert outcome.startswith("failed"), outcome
+
+
+def test_swagger_ui_and_redoc_render_offline(server, browser):
+    browser.get_log("browser")  # what earlier tests left
+    browser.get(server + "/docs")
+    # Swagger UI rendered the OpenAPI document: its title and an operation block are in the DOM
+    WebDriverWait(browser, WAIT_S).until(
+        lambda d: d.find_elements(By.CSS_SELECTOR, "#swagger-ui .opblock-summary-path"))
+    title = browser.find_element(By.CSS_SELECTOR, "#swagger-ui .info .title").text
+    assert title.startswith("rcsa"), title
+    paths = {e.get_attribute("data-path") for e in browser.find_elements(By.CSS_SELECTOR, ".opblock-summary-path")}
+    assert {"/v1/tool-point-frf", "/v1/diagnoses"} <= paths, paths
+    assert browser.find_elements(By.CSS_SELECTOR, "#swagger-ui .btn.authorize")  # X-API-Key box
+    loaded = browser.execute_script("return performance.getEntriesByType('resource').map(e => e.name)")
+    assert loaded and all(u.startswith(server) for u in loaded), loaded
+    assert _severe_console(browser) == []
+
+    browser.get(server + "/redoc")
+    WebDriverWait(browser, WAIT_S).until(lambda d: d.find_elements(By.CSS_SELECTOR, ".api-content h1"))
+    assert browser.find_element(By.CSS_SELECTOR, ".api-content h1").text.startswith("rcsa")
+    assert browser.find_elements(By.CSS_SELECTOR, ".menu-content li")  # the side menu of operations
+    # ReDoc's bundle links its maker's logo (sidebar footer) from its CDN; offline the image
+    # hides itself. Everything the page needs came from this service.
+    logo = "https://cdn.redoc.ly/redoc/logo-mini.svg"
+    loaded = browser.execute_script("return performance.getEntriesByType('resource').map(e => e.name)")
+    assert all(u.startswith(server) for u in loaded if u != logo), loaded
+    assert [m for m in _severe_console(browser) if logo not in m] == []
+
+
+# --------------------------------------------------------------------------- diagnosis in the page
+
+def _tap_files(folder: Path) -> list[tuple[float, Path]]:
+    """The tap tests of examples/diagnosis.json as CSV files (µm/N, a header naming the units)."""
+    doc = json.loads((REPO / "examples" / "diagnosis.json").read_text())
+    out = []
+    for m in doc["measurements"]:
+        mm = 1000 * m["tool"]["stickout_m"]
+        rows = ["frequency [Hz],real [um/N],imag [um/N]"]
+        rows += [f"{f:g},{re * 1e6:.6e},{im * 1e6:.6e}"
+                 for f, re, im in zip(m["frequency_hz"], m["h"]["real"], m["h"]["imag"], strict=True)]
+        path = folder / f"tap-{mm:.0f}mm.csv"
+        path.write_text("\n".join(rows) + "\n")
+        out.append((mm, path))
+    return out
+
+
+def test_diagnosis_of_uploaded_tap_tests(server, browser, tmp_path):
+    _open(browser, server)
+    browser.get_log("browser")
+    for i, (mm, path) in enumerate(_tap_files(tmp_path)):
+        browser.find_element(By.ID, f"tap-stickout-{i}").send_keys(f"{mm:g}")
+        browser.find_element(By.ID, f"tap-file-{i}").send_keys(str(path))
+    Select(browser.find_element(By.ID, "diag-effort")).select_by_value("quick")
+    browser.find_element(By.ID, "diagnose").click()
+    _wait_state(browser, "diagnosis")
+    title = browser.find_element(By.ID, "diag-verdict-title").text
+    assert "holder_tool_joint" in title and "identified" in title, title
+    assert "dB" in browser.find_element(By.ID, "diag-shrink").text
+    cells = browser.find_elements(By.CSS_SELECTOR, "#gap-plot rect.gap-cell")
+    assert len(cells) >= 3 and browser.find_elements(By.CSS_SELECTOR, "#gap-plot rect.gap-cell.flagged")
+    for i in range(3):
+        for kind in ("measured", "base", "corrected"):
+            assert _points(browser, f"diag-{kind}-{i}") > 400, (kind, i)  # 561 lines each
+    assert _severe_console(browser) == []

@@ -19,6 +19,7 @@ import numpy as np
 
 from rcsa.errors import InputError
 from rcsa.model import fields
+from rcsa.model.bounds import MAX_FRF_VALUE
 from rcsa.model.contract import MAX_FREQUENCY_LINES, ToolSpec, parse_tool
 from rcsa.model.wire import complex_from_wire, number_list
 from rcsa.physics.materials import Material
@@ -88,6 +89,8 @@ def _tap_test(raw: object, path: str, base_tool: Mapping[str, Any], materials: M
     if f.size < min_lines:
         raise InputError(f"{path}.frequency_hz", f"needs at least {min_lines} lines, got {f.size}")
     h = complex_from_wire(raw["h"], f"{path}.h", f.size, nonempty=True)
+    if np.any(np.abs(h.real) > MAX_FRF_VALUE) or np.any(np.abs(h.imag) > MAX_FRF_VALUE):
+        raise InputError(f"{path}.h", f"real and imaginary parts must lie within ±{MAX_FRF_VALUE:g} m/N")
     if np.any(h == 0):
         raise InputError(f"{path}.h", "must be non-zero on every line")
     coherence = None

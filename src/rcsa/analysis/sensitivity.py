@@ -44,20 +44,25 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from rcsa.analysis.effect_report import FEATURES, EffectReport
+from rcsa.analysis.hybrid_effects import hybrid_effect_analysis, split_parameters
 from rcsa.analysis.mode_features import (
     ModeFeatures,
     mode_features,
 )
+from rcsa.analysis.progress import Progress, report
+from rcsa.analysis.tool_point_model import MeasuredSpindle, ToolPointModel
 from rcsa.errors import InputError
 from rcsa.model import fields
 from rcsa.model.assembly import build_model
-from rcsa.model.contract import AssemblySpec, SpindleSpec, parse_assembly
+from rcsa.model.bounds import MAX_FREQUENCY_HZ, MIN_FREQUENCY_HZ
+from rcsa.model.contract import AssemblySpec, MeasuredSpindleSpec, SpindleSpec, parse_assembly
 from rcsa.model.parameters import get_parameter, is_damping, parameter_names, set_parameter
+from rcsa.model.spindle_side import BaseResolver
 from rcsa.physics.chain import Chain
 from rcsa.physics.natural_frequencies import natural_frequencies_hz
 
@@ -77,134 +82,9 @@ _TWO_PI = 2.0 * np.pi
 #: Relative (logarithmic) finite-difference step δ; see the module docstring.
 DEFAULT_RELATIVE_STEP = 0.001
 
-#: Mode features whose sensitivities are reported, in table order.
-FEATURES = ("frequency_hz", "peak_magnitude_m_n", "damping_ratio", "peak_frequency_hz")
 
 
 # ---------------------------------------------------------------------------- effect analysis
-
-
-@dataclass(frozen=True)
-class EffectReport:
-    """Normalised sensitivities of the modes of an assembly to its parameters.
-
-    Attributes
-    ----------
-    band_hz : tuple of float
-        Band whose modes are analysed, Hz.
-    relative_step : float
-        Finite-difference step δ in ln(parameter).
-    modes : ModeFeatures
-        Features of the nominal model, arrays (nmodes,).
-    parameters : tuple of str
-        Parameter names, in column order.
-    values : numpy.ndarray, shape (nparams,)
-        Their nominal values, SI.
-    sensitivity : dict of str to numpy.ndarray, shape (nmodes, nparams)
-        ``d ln(feature)/d ln(parameter)`` per feature of :data:`FEATURES`; NaN where the
-        feature is undefined (no peak) or the mode could not be tracked.
-    notes : tuple of str
-    """
-
-    band_hz: tuple[float, float]
-    relative_step: float
-    modes: ModeFeatures
-    parameters: tuple[str, ...]
-    values: np.ndarray
-    sensitivity: Mapping[str, np.ndarray]
-    notes: tuple[str, ...] = ()
-
-    @property
-    def frequency_hz(self) -> np.ndarray:
-        """Natural frequencies of the analysed modes, Hz, shape (nmodes,)."""
-        return self.modes.frequency_hz
-
-    @property
-    def tip_participation(self) -> np.ndarray:
-        """Tip residue relative to the largest in the band, shape (nmodes,), in [0, 1]."""
-        r = np.abs(self.modes.tip_residue_1_kg)
-        return r / r.max() if r.size and r.max() > 0 else r
-
-    def column(self, parameter: str, feature: str = "frequency_hz") -> np.ndarray:
-        """Sensitivities of all modes to one parameter, shape (nmodes,)."""
-        return self.sensitivity[feature][:, self.parameters.index(parameter)]
-
-    def controls(self, parameter: str, feature: str | None = None) -> float | None:
-        """Natural frequency (Hz) of the mode a parameter moves most.
-
-        By default a stiffness or geometry parameter is judged on ``frequency_hz`` and a
-        damping on ``peak_magnitude_m_n`` (stiffness moves frequencies, damping peaks).
-        Returns ``None`` when no mode responds.
-        """
-        i = self.controlled_mode(parameter, feature)
-        return None if i is None else float(self.frequency_hz[i])
-
-    def controlled_mode(self, parameter: str, feature: str | None = None,
-                        min_participation: float = 0.0) -> int | None:
-        """Index of the mode with the largest ``|S|`` for ``parameter`` (see :meth:`controls`).
-
-        Parameters
-        ----------
-        min_participation : float
-            Consider only modes whose :attr:`tip_participation` reaches this.
-        """
-        feature = feature or ("peak_magnitude_m_n" if is_damping(parameter) else "frequency_hz")
-        s = np.abs(self.column(parameter, feature))
-        s = np.where(self.tip_participation >= min_participation, s, np.nan)
-        if not np.any(np.isfinite(s)) or np.nanmax(s) == 0:
-            return None
-        return int(np.nanargmax(s))
-
-    def controlled_by(self, mode: int, feature: str = "frequency_hz",
-                      among: Sequence[str] | None = None) -> str | None:
-        """The parameter with the largest ``|S|`` for one mode (``among`` a subset of names)."""
-        names = list(among) if among is not None else list(self.parameters)
-        cols = [self.parameters.index(n) for n in names if n in self.parameters]
-        s = np.abs(self.sensitivity[feature][mode, cols])
-        if not np.any(np.isfinite(s)) or np.nanmax(s) == 0:
-            return None
-        return self.parameters[cols[int(np.nanargmax(s))]]
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON form: modes, parameters and the sensitivity table (NaN → null)."""
-        interface = [p for p in self.parameters if not p.startswith("tool.")]
-        part = self.tip_participation
-        modes = []
-        for i in range(self.frequency_hz.size):
-            modes.append({
-                "index": i,
-                "frequency_hz": float(self.frequency_hz[i]),
-                "tip_residue_1_kg": _num(self.modes.tip_residue_1_kg[i]),
-                "tip_participation": _num(part[i]),
-                "peak_frequency_hz": _num(self.modes.peak_frequency_hz[i]),
-                "peak_magnitude_m_n": _num(self.modes.peak_magnitude_m_n[i]),
-                "damping_ratio": _num(self.modes.damping_ratio[i]),
-                "controlled_by": {q: self.controlled_by(i, q) for q in FEATURES},
-                "controlled_by_interface": {q: self.controlled_by(i, q, interface) for q in FEATURES},
-            })
-        table = []
-        for j, name in enumerate(self.parameters):
-            row: dict[str, Any] = {"parameter": name, "value": float(self.values[j])}
-            for q in FEATURES:
-                row[q] = [_num(x) for x in self.sensitivity[q][:, j]]
-            i = self.controlled_mode(name)
-            row["controls_mode"] = i
-            row["controls_frequency_hz"] = None if i is None else float(self.frequency_hz[i])
-            table.append(row)
-        return {
-            "band_hz": list(self.band_hz),
-            "relative_step": self.relative_step,
-            "sensitivity": "d ln(feature) / d ln(parameter), central finite differences of the exact model",
-            "features": list(FEATURES),
-            "modes": modes,
-            "parameters": table,
-            "notes": list(self.notes),
-        }
-
-
-def _num(x: float) -> float | None:
-    x = float(x)
-    return x if math.isfinite(x) else None
 
 
 def _band_modes(chain: Chain, band_hz: tuple[float, float], margin: float = 0.12) -> np.ndarray:
@@ -253,8 +133,9 @@ def _features_at(spec: AssemblySpec, base: ModeFeatures, band_hz: tuple[float, f
 def _band_of(spec: AssemblySpec, band_hz: Sequence[float] | None) -> tuple[float, float]:
     if band_hz is None:
         return float(spec.frequency_hz[0]), float(spec.frequency_hz[-1])
-    if len(band_hz) != 2 or not 0 < band_hz[0] < band_hz[1]:
-        raise InputError("band_hz", f"must be [start_hz, stop_hz] with 0 < start < stop, got {list(band_hz)}")
+    if len(band_hz) != 2 or not MIN_FREQUENCY_HZ <= band_hz[0] < band_hz[1] <= MAX_FREQUENCY_HZ:
+        raise InputError("band_hz", f"must be [start_hz, stop_hz] with {MIN_FREQUENCY_HZ:g} <= start < stop <= "
+                                    f"{MAX_FREQUENCY_HZ:g} (0 Hz is singular), got {list(band_hz)}")
     return float(band_hz[0]), float(band_hz[1])
 
 
@@ -277,19 +158,29 @@ def nominal_features(spec: AssemblySpec, band_hz: Sequence[float] | None = None)
 
 def effect_analysis(assembly: Mapping[str, Any] | AssemblySpec, *, parameters: Sequence[str] | None = None,
                     relative_step: float = DEFAULT_RELATIVE_STEP,
-                    band_hz: Sequence[float] | None = None) -> EffectReport:
+                    band_hz: Sequence[float] | None = None,
+                    resolve_base: BaseResolver | None = None, progress: Progress | None = None) -> EffectReport:
     """Normalised sensitivities of every mode in a band to bearing, joint and tool parameters.
+
+    On a measured spindle (``"spindle": {"measurement_id": ...}``, with ``resolve_base``)
+    the modes come from a modal fit of the hybrid model and bearings are not applicable
+    (:mod:`rcsa.analysis.hybrid_effects`).
 
     Parameters
     ----------
     assembly : dict or AssemblySpec
-        Contract assembly document (analytical spindle).
+        Contract assembly document.
     parameters : sequence of str, optional
         Names as in :func:`parameter_names` (default: all of them).
     relative_step : float
         δ of the central difference in ln(parameter), in (0, 0.1].
     band_hz : (float, float), optional
         Modes whose undamped natural frequency lies here (default: the assembly's grid range).
+    resolve_base : BaseResolver, optional
+        Looks a measured spindle up (the application layer passes the store's).
+    progress : callable, optional
+        ``progress(done, total)`` after the nominal modes and after each parameter
+        (:mod:`rcsa.analysis.progress`).
 
     Returns
     -------
@@ -300,11 +191,17 @@ def effect_analysis(assembly: Mapping[str, Any] | AssemblySpec, *, parameters: S
     Ertürk, Özgüven, Budak, IJMTM 47 (2007) 23–32 ("effect analysis").
     """
     spec = assembly if isinstance(assembly, AssemblySpec) else parse_assembly(assembly)
-    if not isinstance(spec.spindle, SpindleSpec):
-        raise InputError("spindle", "effect analysis needs an analytical spindle (segments and bearings), "
-                         "not a measured one")
+    if not isinstance(spec.spindle, SpindleSpec) and resolve_base is None:
+        raise InputError("spindle", "an effect analysis on a measured spindle needs a measurement store: call "
+                         "rcsa.app.analyses.effects (the CLI's --store, or the service), which knows it")
     if not 0 < relative_step <= 0.1:
         raise InputError("relative_step", f"must be in (0, 0.1], got {relative_step:g}")
+    if isinstance(spec.spindle, MeasuredSpindleSpec) and resolve_base is not None:
+        spindle = MeasuredSpindle.from_base(spec.frequency_hz, resolve_base(spec.spindle, spec.frequency_hz))
+        tpm = ToolPointModel(spec, spindle)
+        tpm.model_at({})  # the assembly's shape on this spindle's plane (holder present or not) is checked here
+        names, not_applicable = split_parameters(spec, spindle.plane, parameters)
+        return hybrid_effect_analysis(tpm, names, not_applicable, relative_step, _band_of(spec, band_hz), progress)
     available = parameter_names(spec)
     if parameters is None:
         names = available
@@ -319,6 +216,7 @@ def effect_analysis(assembly: Mapping[str, Any] | AssemblySpec, *, parameters: S
             raise InputError("parameters", "names must be unique")
     band = _band_of(spec, band_hz)
     base = nominal_features(spec, band)
+    report(progress, 1, len(names) + 1)
     values = np.array([get_parameter(spec, n) for n in names], dtype=float)
     nm = base.frequency_hz.size
     sens = {q: np.full((nm, len(names)), np.nan) for q in FEATURES}
@@ -334,6 +232,7 @@ def effect_analysis(assembly: Mapping[str, Any] | AssemblySpec, *, parameters: S
         for q in FEATURES:
             with np.errstate(invalid="ignore", divide="ignore"):
                 sens[q][:, j] = (np.log(runs[0].feature(q)) - np.log(runs[1].feature(q))) / (2 * relative_step)
+        report(progress, j + 2, len(names) + 1)
     if nm == 0:
         notes.append(f"no natural frequency lies in the band {band[0]:g}–{band[1]:g} Hz: nothing to analyse")
     hidden = [f"{f:.1f}" for f, p in zip(base.frequency_hz, base.peak_magnitude_m_n, strict=True)
@@ -350,8 +249,11 @@ def effect_analysis(assembly: Mapping[str, Any] | AssemblySpec, *, parameters: S
 _REQUEST_FIELDS = ("assembly", "parameters", "relative_step", "band_hz")
 
 
-def effects_report(request: Mapping[str, Any]) -> EffectReport:
+def effects_report(request: Mapping[str, Any], resolve_base: BaseResolver | None = None,
+                   progress: Progress | None = None) -> EffectReport:
     """Parse an effect-analysis request and run it (see :func:`effects` for the request).
+
+    ``progress(done, total)``, when given, reports each step (:func:`effect_analysis`).
 
     Returns
     -------
@@ -360,12 +262,12 @@ def effects_report(request: Mapping[str, Any]) -> EffectReport:
     if not isinstance(request, Mapping):
         raise InputError("", "the request must be a JSON object")
     if "assembly" not in request:
-        return effect_analysis(request)
+        return effect_analysis(request, resolve_base=resolve_base, progress=progress)
     o = fields.Fields(request, "", _REQUEST_FIELDS)
     params = request.get("parameters")
     if params is not None and (not isinstance(params, list) or not all(isinstance(p, str) for p in params)):
         raise InputError("parameters", "must be a list of parameter names")
-    step = o.number("relative_step", default=DEFAULT_RELATIVE_STEP)  # its range is effect_analysis's rule
+    step = o.number("relative_step", gt=0.0, le=0.1, default=DEFAULT_RELATIVE_STEP)
     band = request.get("band_hz")
     if band is not None and (not isinstance(band, list) or len(band) != 2
                              or not all(isinstance(b, int | float) and not isinstance(b, bool) for b in band)):
@@ -374,10 +276,12 @@ def effects_report(request: Mapping[str, Any]) -> EffectReport:
         spec = parse_assembly(request["assembly"])
     except InputError as exc:
         raise InputError(f"assembly.{exc.field}".rstrip("."), exc.rule) from None
-    return effect_analysis(spec, parameters=params, relative_step=step, band_hz=band)
+    return effect_analysis(spec, parameters=params, relative_step=step, band_hz=band, resolve_base=resolve_base,
+                           progress=progress)
 
 
-def effects(request: Mapping[str, Any]) -> dict[str, Any]:
+def effects(request: Mapping[str, Any], resolve_base: BaseResolver | None = None,
+            progress: Progress | None = None) -> dict[str, Any]:
     """Effect analysis as a JSON document (the CLI's and the REST route's entry point).
 
     Parameters
@@ -387,7 +291,12 @@ def effects(request: Mapping[str, Any]) -> dict[str, Any]:
         range, δ = 1e-3), or ``{"assembly": {...}, "parameters": [names] (optional, default
         all, see :func:`parameter_names`), "relative_step": 0.001 (optional, in (0, 0.1]),
         "band_hz": [start, stop] (optional, default the assembly's frequency range)}``.
-        The spindle must be analytical (segments and bearings).
+        The spindle is analytical (segments and bearings), or a stored measurement when
+        ``resolve_base`` is given (modal-fit modes; bearings not applicable).
+    resolve_base : BaseResolver, optional
+        Looks a measured spindle up (the application layer passes the store's).
+    progress : callable, optional
+        ``progress(done, total)`` at each step (:mod:`rcsa.analysis.progress`).
 
     Returns
     -------
@@ -402,7 +311,7 @@ def effects(request: Mapping[str, Any]) -> dict[str, Any]:
     InputError
         For a malformed request.
     """
-    return effects_report(request).to_dict()
+    return effects_report(request, resolve_base, progress).to_dict()
 
 
 # ---------------------------------------------------------------------------- figure
@@ -427,7 +336,7 @@ def effects_figure(report: EffectReport, features: Sequence[str] = ("frequency_h
     import matplotlib
     from matplotlib.colors import TwoSlopeNorm
 
-    from rcsa.analysis.figures import freeze_layout, new_figure
+    from rcsa.analysis.figures import freeze_layout, new_figure, percent_label
 
     nm, npar = report.frequency_hz.size, len(report.parameters)
     if nm == 0 or npar == 0:
@@ -435,7 +344,7 @@ def effects_figure(report: EffectReport, features: Sequence[str] = ("frequency_h
     fig = new_figure(max(6.0, 0.5 * npar + 2.5), 2.2 + len(features) * max(1.6, 0.3 * nm + 0.8))
     axes = fig.subplots(len(features), 1, squeeze=False, sharex=True)[:, 0]
     part = report.tip_participation
-    ylabels = [f"{f:.0f} Hz ({100 * p:.2g} %)" for f, p in zip(report.frequency_hz, part, strict=True)]
+    ylabels = [f"{f:.0f} Hz ({percent_label(p)})" for f, p in zip(report.frequency_hz, part, strict=True)]
     titles = {"frequency_hz": "natural frequency", "peak_magnitude_m_n": "peak |h|",
               "damping_ratio": "damping ratio", "peak_frequency_hz": "peak frequency"}
     cmap = matplotlib.colormaps["RdBu_r"].with_extremes(bad="0.85")

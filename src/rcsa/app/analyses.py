@@ -5,14 +5,24 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from rcsa.analysis.lobes.modal_model import modal_model_from_assembly
 from rcsa.analysis.lobes.request import parse_lobes_request
 from rcsa.analysis.lobes.zoa import LobeResult
+from rcsa.analysis.progress import Progress
 from rcsa.analysis.sensitivity import effects as _effects
 from rcsa.app.predictions import predict
+from rcsa.app.stores import MeasurementSource, resolver
+from rcsa.errors import InputError
 from rcsa.measured.store import MeasurementStore
 from rcsa.model.bounds import MAX_FREQUENCY_LINES
+from rcsa.model.contract import SpindleSpec, parse_assembly
 
-__all__ = ["diagnose", "effects", "identify", "stability_lobes", "stability_lobes_result"]
+__all__ = ["ANALYSIS_KINDS", "Progress", "diagnose", "effects", "identify", "run_analysis", "stability_lobes",
+           "stability_lobes_result", "validate"]
+
+#: Single computations that may also run as jobs (``Prefer: respond-async``), by the name of
+#: their cost model in :mod:`rcsa.app.budget`.
+ANALYSIS_KINDS = ("prediction", "lobes", "effects", "identification", "diagnosis")
 
 
 def stability_lobes_result(request: Mapping[str, Any], *, store: MeasurementStore | None = None,
@@ -20,7 +30,9 @@ def stability_lobes_result(request: Mapping[str, Any], *, store: MeasurementStor
     """Stability lobes (``contract.md`` "Stability lobes") from inline FRFs or an assembly.
 
     With an ``assembly``, its tool-point ``h`` is predicted first and used in x and y (the
-    result says so: ``same_frf_in_y``).
+    result says so: ``same_frf_in_y``). With ``"method": "semi_discretization"`` an
+    analytical assembly gives its exact modes (:func:`~rcsa.analysis.lobes.modal_model.
+    modal_model_from_assembly`); a measured spindle's predicted ``h`` is fitted instead.
 
     Returns
     -------
@@ -29,13 +41,28 @@ def stability_lobes_result(request: Mapping[str, Any], *, store: MeasurementStor
     parsed = parse_lobes_request(request)
     if parsed.assembly is None:
         return parsed.solve()
-    prediction = predict(parsed.assembly, store=store, max_lines=max_lines)
-    return parsed.solve(prediction.frequency_hz, prediction.tool_point.h)
+    spec = parse_assembly(parsed.assembly, max_lines)
+    prediction = predict(spec, store=store, max_lines=max_lines)
+    frequency_hz, h = prediction.frequency_hz, prediction.tool_point.h
+    modes = None
+    if parsed.method.name == "semi_discretization" and isinstance(spec.spindle, SpindleSpec):
+        modes = modal_model_from_assembly(spec, modes_per_direction=parsed.method.modes_per_direction,
+                                          frequency_hz=frequency_hz, h=h)
+    return parsed.solve(frequency_hz, h, modal_model=modes)
 
 
 def stability_lobes(request: Mapping[str, Any], *, store: MeasurementStore | None = None,
                     max_lines: int = MAX_FREQUENCY_LINES) -> dict[str, Any]:
     """The contract's stability-lobes response (see :func:`stability_lobes_result`).
+
+    Parameters
+    ----------
+    request : dict
+        Inline FRFs or an ``assembly``, with the cutting parameters (contract "Stability lobes").
+    store : MeasurementStore, optional
+        Where a measured spindle of the assembly is looked up (the default store when omitted).
+    max_lines : int
+        Largest accepted number of frequency lines.
 
     Returns
     -------
@@ -46,32 +73,88 @@ def stability_lobes(request: Mapping[str, Any], *, store: MeasurementStore | Non
     return stability_lobes_result(request, store=store, max_lines=max_lines).to_dict()
 
 
-def effects(request: Mapping[str, Any]) -> dict[str, Any]:
+def effects(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
+            progress: Progress | None = None) -> dict[str, Any]:
     """Effect analysis: sensitivity of each mode to every bearing and joint parameter.
 
     See :func:`rcsa.analysis.sensitivity.effects` (request: an assembly, or ``{"assembly",
-    "parameters", "relative_step", "band_hz"}``).
+    "parameters", "relative_step", "band_hz"}``). ``store`` is where a measured spindle
+    (``"spindle": {"measurement_id": ...}``) is looked up (the default store when omitted);
+    ``progress(done, total)`` is called at each step (:mod:`rcsa.analysis.progress`).
     """
-    return _effects(request)
+    return _effects(request, resolver(store), progress)
 
 
-def identify(request: Mapping[str, Any]) -> dict[str, Any]:
+def identify(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
+             progress: Progress | None = None) -> dict[str, Any]:
     """Joint identification from measured tool-point FRFs (``contract.md`` "Joint identification").
 
-    See :func:`rcsa.analysis.joint_identification.identify.identify`.
+    See :func:`rcsa.analysis.joint_identification.identify.identify`; ``store`` is where a
+    measured spindle is looked up (the default store when omitted); ``progress(done, total)``
+    is called at each step (:mod:`rcsa.analysis.progress`).
     """
     # scipy.optimize (~0.4 s to import): only when an identification is asked for
     from rcsa.analysis.joint_identification.identify import identify as run
 
-    return run(request)
+    return run(request, resolver(store), progress)
 
 
-def diagnose(request: Mapping[str, Any], **kwargs: Any) -> dict[str, Any]:
+def diagnose(request: Mapping[str, Any], *, progress: Progress | None = None, **kwargs: Any) -> dict[str, Any]:
     """Sim-to-real gap diagnosis (``contract.md`` "Diagnosis").
 
-    See :func:`rcsa.analysis.diagnosis.diagnose.diagnose`.
+    Parameters
+    ----------
+    request : dict
+        The diagnosis request: ``{"assembly", "measurements", "tolerances"?, "options"?}``.
+    progress : callable, optional
+        ``progress(done, total)`` at each step (:mod:`rcsa.analysis.progress`).
+    **kwargs
+        Passed on to :func:`rcsa.analysis.diagnosis.diagnose.diagnose`.
+
+    Returns
+    -------
+    dict
+        The contract's diagnosis response (see :func:`rcsa.analysis.diagnosis.diagnose.diagnose`).
     """
     # scipy.stats and scipy.optimize (~0.9 s to import): only when a diagnosis is asked for
     from rcsa.analysis.diagnosis.diagnose import diagnose as run
 
-    return run(request, **kwargs)
+    return run(request, progress=progress, **kwargs)
+
+
+def validate(kind: str, request: Mapping[str, Any], *, store: MeasurementSource | None = None) -> None:
+    """Refuse an invalid request before it is queued as a job (the checks its run makes
+    first), so that a bad request is a 422 at once instead of a failed job."""
+    if kind == "diagnosis":
+        from rcsa.analysis.diagnosis.request import parse_request
+
+        parse_request(request)
+    elif kind == "identification":
+        from rcsa.analysis.joint_identification.request import parse_identification_request
+
+        parse_identification_request(request, resolver(store))
+    elif kind == "lobes":
+        parse_lobes_request(request)
+    # prediction and effects: the budget's estimate already parsed the assembly
+
+
+def run_analysis(kind: str, request: Mapping[str, Any], *, store: MeasurementStore | None = None,
+                 max_lines: int = MAX_FREQUENCY_LINES) -> dict[str, Any]:
+    """Run one of :data:`ANALYSIS_KINDS` and return its result document (a job's result).
+
+    Raises
+    ------
+    InputError
+        An unknown kind, or an invalid request.
+    """
+    if kind == "prediction":
+        return predict(request, store=store, max_lines=max_lines).to_dict()
+    if kind == "lobes":
+        return stability_lobes(request, store=store, max_lines=max_lines)
+    if kind == "effects":
+        return effects(request, store=store)
+    if kind == "identification":
+        return identify(request, store=store)
+    if kind == "diagnosis":
+        return diagnose(request)
+    raise InputError("kind", f"no analysis {kind!r} (known: {', '.join(ANALYSIS_KINDS)})")

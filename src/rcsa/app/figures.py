@@ -17,9 +17,11 @@ from typing import Any, Literal
 import numpy as np
 
 from rcsa.analysis.lobes.zoa import LobeResult
+from rcsa.analysis.progress import Progress
 from rcsa.analysis.sensitivity import effects_figure, effects_report
 from rcsa.app.analyses import stability_lobes_result
 from rcsa.app.predictions import predict
+from rcsa.app.stores import resolver
 from rcsa.errors import InputError
 from rcsa.measured.hybrid import MeasurementSource
 from rcsa.model.bounds import MAX_FREQUENCY_LINES
@@ -155,7 +157,8 @@ def document_figure(doc: object, *, layout: str = "full", store: MeasurementSour
     """The figure that fits a JSON document, recognised by its content.
 
     A prediction result (``tool_point``), a measurement in the contract's JSON form
-    (``h`` and ``frequency_hz``), a stability-lobes request (solved first) or an assembly
+    (``h`` and ``frequency_hz``), a stability-lobes result (``spindle_speed_rpm`` as a list
+    and ``depth_limit_m``), a stability-lobes request (solved first) or an assembly
     (predicted first).
     """
     if not isinstance(doc, dict):
@@ -168,28 +171,33 @@ def document_figure(doc: object, *, layout: str = "full", store: MeasurementSour
     if "h" in doc and "frequency_hz" in doc:
         return frf_figure(doc["frequency_hz"], complex_from_wire(doc["h"], "h", finite=False),
                           labels=["measured h"], layout=layout)
+    if isinstance(doc.get("spindle_speed_rpm"), list) and "depth_limit_m" in doc:
+        return lobes_figure(LobeResult.from_dict(doc))  # a stability-lobes result
     if "tangential_coefficient_n_m2" in doc:
         return lobes_figure(stability_lobes_result(doc, store=store))
     if "tool" in doc and "spindle" in doc:
         result = predict(doc, store=store)
         return frf_figure(result.frequency_hz, result.tool_point.h, labels=["tool point h"], layout=layout)
-    raise InputError("", "not a prediction result, measurement, assembly or stability-lobes request")
+    raise InputError("", "not a prediction result, measurement, assembly, stability-lobes request or "
+                         "stability-lobes result")
 
 
-def effects_with_figure(request: Mapping[str, Any], picture: str | os.PathLike[str] | None = None
-                        ) -> dict[str, Any]:
+def effects_with_figure(request: Mapping[str, Any], picture: str | os.PathLike[str] | None = None, *,
+                        store: MeasurementSource | None = None, progress: Progress | None = None) -> dict[str, Any]:
     """Effect analysis (:func:`rcsa.app.analyses.effects`), its heat map drawn to ``picture``
-    (.png or .svg) when given."""
-    report = effects_report(request)
+    (.png or .svg) when given; ``store`` is where a measured spindle is looked up;
+    ``progress(done, total)`` is called at each step."""
+    report = effects_report(request, resolver(store), progress)
     if picture is not None:
         save_figure(effects_figure(report), picture)
     return report.to_dict()
 
 
-def diagnosis_with_figure(request: Mapping[str, Any], picture: str | os.PathLike[str] | None = None
-                          ) -> dict[str, Any]:
+def diagnosis_with_figure(request: Mapping[str, Any], picture: str | os.PathLike[str] | None = None, *,
+                          progress: Progress | None = None) -> dict[str, Any]:
     """Diagnosis (:func:`rcsa.app.analyses.diagnose`), its figure (measured, base and corrected
-    FRFs, and the gap map) drawn to ``picture`` (.png or .svg) when given.
+    FRFs, and the gap map) drawn to ``picture`` (.png or .svg) when given; ``progress(done,
+    total)`` is called at each step.
 
     Raises
     ------
@@ -200,7 +208,7 @@ def diagnosis_with_figure(request: Mapping[str, Any], picture: str | os.PathLike
     from rcsa.analysis.diagnosis.report import build_response, diagnosis_figure
     from rcsa.analysis.diagnosis.state import analyse
 
-    analysis = analyse(request)
+    analysis = analyse(request, progress)
     response = build_response(analysis)
     if picture is not None:
         save_figure(diagnosis_figure(analysis, response), picture)

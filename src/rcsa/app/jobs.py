@@ -8,9 +8,15 @@ is big (more results to compute than the caller's threshold) or that the caller 
 in the background is queued in the durable job store (:mod:`rcsa.infra.job_queue`); the rest
 is run at once by :func:`run_work`. A job runner calls the very same :func:`run_work`
 (:func:`job_handlers`), so a job's result is exactly what the immediate answer would have been.
+A batch or library job writes its result as it is computed (:func:`stream_work`: one result
+after the other into the job's result file, never the whole document in memory); its bytes
+are those :func:`run_work`'s document would serialise to.
 
-Where the work runs — the measurement source, the library store, the size limits and who
-is told about computations (metrics) — is a :class:`Workbench`.
+Where the work runs — the measurement source, the library store, the size limits, the
+compute backend (this process, or a Dask cluster: :func:`compute_backend`) and who is told
+about computations (metrics) — is a :class:`Workbench`. Work answered at once is computed
+in the calling process; jobs and the CLI use the workbench's backend. Either way the work is
+cut into the same chunks, so the results are the same bytes.
 """
 
 from __future__ import annotations
@@ -20,12 +26,30 @@ from collections.abc import Callable, Iterator, Mapping
 from contextlib import AbstractContextManager, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal, Protocol
+from typing import Any, BinaryIO, Literal, Protocol
 
+import orjson
+
+from rcsa.app.analyses import ANALYSIS_KINDS, run_analysis
 from rcsa.app.stores import library_store
 from rcsa.errors import InputError
-from rcsa.infra.job_queue import Handler, Job, JobRunner, JobStore
-from rcsa.libraries.library_prediction import run_entries
+from rcsa.infra.compute import (
+    Backend,
+    ChunkFailed,
+    ComputeUnavailable,
+    LocalBackend,
+    compute_backend,
+)
+from rcsa.infra.job_queue import (
+    Handler,
+    Job,
+    JobRunner,
+    JobStore,
+    QuotaExceeded,
+    ResultEvicted,
+    StreamedResult,
+)
+from rcsa.libraries.library_prediction import EntryResults, iter_entries, run_entries
 from rcsa.libraries.sync import LibraryStore, SyncPlan, run_sync
 from rcsa.measured.hybrid import MeasurementSource
 from rcsa.model.bounds import MAX_BATCH_COMBINATIONS, MAX_FREQUENCY_LINES
@@ -33,23 +57,35 @@ from rcsa.model.bounds import MAX_BATCH_COMBINATIONS, MAX_FREQUENCY_LINES
 __all__ = [
     "JOBS_DIRECTORY",
     "JOB_KINDS",
+    "Backend",
+    "ChunkFailed",
+    "ComputeUnavailable",
     "Handler",
     "Job",
     "JobRunner",
     "JobStore",
     "Kind",
+    "LocalBackend",
     "Observer",
     "Outcome",
+    "QuotaExceeded",
+    "ResultEvicted",
+    "StreamedResult",
     "Work",
     "Workbench",
+    "analysis_job_handlers",
     "answer_or_queue",
+    "compute_backend",
     "job_handlers",
     "job_store",
     "run_work",
+    "stream_work",
 ]
 
-#: What may run as a job.
-Kind = Literal["batch", "library", "library-sync"]
+#: What may run as a job: batches, libraries and syncs (:data:`JOB_KINDS`), and single
+#: computations a caller asked to run in the background (:data:`rcsa.app.analyses.ANALYSIS_KINDS`,
+#: handlers from :func:`analysis_job_handlers`).
+Kind = Literal["batch", "library", "library-sync", "prediction", "lobes", "effects", "identification", "diagnosis"]
 JOB_KINDS: tuple[Kind, ...] = ("batch", "library", "library-sync")
 #: Sub-directory of the store holding the job queue.
 JOBS_DIRECTORY = "jobs"
@@ -93,6 +129,8 @@ class Workbench:
         Most combinations (tools to predict) per request.
     observer : Observer
         Told about every computation (default: nobody).
+    backend : Backend
+        Where jobs (and the CLI) compute their chunks (default: this process).
     """
 
     store: MeasurementSource | None
@@ -100,6 +138,7 @@ class Workbench:
     max_lines: int = MAX_FREQUENCY_LINES
     max_combinations: int = MAX_BATCH_COMBINATIONS
     observer: Observer = field(default_factory=_Unobserved)
+    backend: Backend = field(default_factory=LocalBackend)
 
     @property
     def libraries(self) -> LibraryStore:
@@ -141,6 +180,8 @@ class Work:
         """
         if self.kind == "library" and self.size == 0:
             return False
+        if self.kind in ANALYSIS_KINDS:  # one computation: a job only when asked for
+            return respond_async
         return respond_async or self.size > async_threshold
 
 
@@ -167,7 +208,8 @@ class Outcome:
 
 
 def run_work(bench: Workbench, kind: str, request: Mapping[str, Any], *,
-             progress: Callable[[int, int], None] | None = None, plan: SyncPlan | None = None) -> Outcome:
+             progress: Callable[[int, int], None] | None = None, plan: SyncPlan | None = None,
+             backend: Backend | None = None) -> Outcome:
     """Run a batch, library or sync request now (the immediate answer and every job).
 
     Parameters
@@ -180,32 +222,98 @@ def run_work(bench: Workbench, kind: str, request: Mapping[str, Any], *,
         ``progress(done, total)`` as results are computed.
     plan : SyncPlan, optional
         A sync's plan when the caller already has it.
+    backend : Backend, optional
+        Where the chunks are computed (default: the workbench's).
 
     Raises
     ------
     InputError
         An unknown kind, or a request the computation refuses.
+    ComputeUnavailable
+        The cluster cannot be reached or went away.
     """
+    backend = backend if backend is not None else bench.backend
     with bench.observer.timed(kind):
         if kind in ("batch", "library"):
             document = run_entries(request, store=bench.store, max_lines=bench.max_lines,
-                                   max_combinations=bench.max_combinations, progress=progress, arrays="numpy")
+                                   max_combinations=bench.max_combinations, progress=progress, arrays="numpy",
+                                   backend=backend)
             summary = dict(document["summary"])
             computed = int(summary["ok"])
         elif kind == "library-sync":
             report = run_sync(bench.libraries, request, store=bench.store, max_lines=bench.max_lines,
-                              progress=progress, plan=plan)
+                              progress=progress, plan=plan, backend=backend)
             document = report.to_dict()
             summary = {**document["counts"], **report.summary, "computed": report.computed}
             computed = report.computed
+        elif kind in ANALYSIS_KINDS:
+            document = run_analysis(kind, request, store=bench.store, max_lines=bench.max_lines)  # type: ignore[arg-type]
+            summary, computed = {}, 1
         else:
             raise InputError("kind", f"no work of kind {kind!r} (known: {', '.join(JOB_KINDS)})")
     bench.observer.computed(kind, computed)
     return Outcome(kind, document, summary, computed)
 
 
+def stream_work(bench: Workbench, kind: str, request: Mapping[str, Any], *,
+                progress: Callable[[int, int], None] | None = None,
+                backend: Backend | None = None) -> StreamedResult:
+    """A batch or library request as a result written while it is computed (for jobs).
+
+    ``write(fh)`` writes the JSON document :func:`run_work` would answer — the same bytes —
+    one result at a time, and returns the summary. At most a chunk's results (a window of
+    them on a cluster) are held in memory, and no serialisation holds the interpreter for
+    longer than one result takes.
+
+    Raises
+    ------
+    InputError
+        A kind other than ``batch`` or ``library``.
+    """
+    if kind not in ("batch", "library"):
+        raise InputError("kind", f"only batch and library results are streamed, not {kind!r}")
+    backend = backend if backend is not None else bench.backend
+
+    def write(fh: BinaryIO) -> dict[str, Any]:
+        with bench.observer.timed(kind):
+            started = iter_entries(request, store=bench.store, max_lines=bench.max_lines,
+                                   max_combinations=bench.max_combinations, progress=progress, backend=backend)
+            summary = _write_entries(fh, started)
+        bench.observer.computed(kind, int(summary.get("ok", 0)))
+        return summary
+
+    return StreamedResult(write)
+
+
+_NUMPY = orjson.OPT_SERIALIZE_NUMPY
+
+
+def _write_entries(fh: BinaryIO, started: EntryResults) -> dict[str, Any]:
+    """Write ``{**head, "results": [...], "summary": {...}}`` as orjson would, result by result."""
+    fh.write(b"{")
+    for name, value in started.head.items():
+        fh.write(orjson.dumps(name) + b":" + orjson.dumps(value, option=_NUMPY) + b",")
+    fh.write(b'"results":[')
+    counts: dict[str, int] = {}
+    results = started.results
+    try:
+        for i, result in enumerate(results):
+            if i:
+                fh.write(b",")
+            fh.write(orjson.dumps(result, option=_NUMPY))
+            counts[result["status"]] = counts.get(result["status"], 0) + 1
+    finally:
+        close = getattr(results, "close", None)
+        if close is not None:
+            close()  # stops the chunks still in flight when writing failed
+    summary = started.summary(counts)
+    fh.write(b'],"summary":' + orjson.dumps(summary) + b"}")
+    return summary
+
+
 def answer_or_queue(bench: Workbench, jobs: JobStore, work: Work, *, respond_async: bool, async_threshold: int,
-                    reuse_unfinished: bool = False) -> Job | Outcome:
+                    reuse_unfinished: bool = False, owner: str | None = None,
+                    max_unfinished: int | None = None) -> Job | Outcome:
     """Queue ``work`` as a job (:meth:`Work.should_queue`), or run it now.
 
     Parameters
@@ -220,37 +328,49 @@ def answer_or_queue(bench: Workbench, jobs: JobStore, work: Work, *, respond_asy
     reuse_unfinished : bool
         A retried submission: return the unfinished job of the same request, if any,
         instead of queuing it twice (:meth:`JobStore.submit`).
+    owner : str, optional
+        Who asks (jobs are claimed fairly across owners).
+    max_unfinished : int, optional
+        Most queued or running jobs one owner may have.
 
     Returns
     -------
     Job or Outcome
-        The queued job, or the outcome of running it now.
+        The queued job, or the outcome of running it now (computed in this process).
 
     Raises
     ------
     InputError
         The request is refused (before anything is queued).
+    QuotaExceeded
+        The owner has ``max_unfinished`` unfinished jobs already.
     """
     if work.should_queue(respond_async=respond_async, async_threshold=async_threshold):
         if work.check is not None:
             work.check()
-        return jobs.submit(work.kind, work.request, reuse_unfinished=reuse_unfinished)
-    return run_work(bench, work.kind, work.request, plan=work.plan)
+        return jobs.submit(work.kind, work.request, reuse_unfinished=reuse_unfinished, owner=owner,
+                           max_unfinished=max_unfinished)
+    return run_work(bench, work.kind, work.request, plan=work.plan, backend=LocalBackend())
 
 
 def job_handlers(bench: Workbench, present: Callable[[Outcome], dict[str, Any]] | None = None
                  ) -> dict[str, Handler]:
-    """The job runner's handlers: one per :data:`JOB_KINDS`, all :func:`run_work`.
+    """The job runner's handlers: one per :data:`JOB_KINDS`.
+
+    Batches and libraries are streamed (:func:`stream_work`); a sync runs :func:`run_work`
+    (its result is a small report). All compute on the workbench's backend.
 
     Parameters
     ----------
     bench : Workbench
     present : callable, optional
-        Turns an outcome into the result document a job stores (default: its
+        Turns a sync's outcome into the result document its job stores (default: its
         ``document``); the service adds its links there, as in its immediate answers.
     """
     def handler(kind: str) -> Handler:
-        def run(request: dict[str, Any], progress: Callable[[int, int], None]) -> tuple[Any, dict[str, Any]]:
+        def run(request: dict[str, Any], progress: Callable[[int, int], None]) -> tuple[Any, dict[str, Any] | None]:
+            if kind in ("batch", "library"):
+                return stream_work(bench, kind, request, progress=progress), None
             outcome = run_work(bench, kind, request, progress=progress)
             return (present(outcome) if present is not None else outcome.document), outcome.summary
 
@@ -259,6 +379,21 @@ def job_handlers(bench: Workbench, present: Callable[[Outcome], dict[str, Any]] 
     return {kind: handler(kind) for kind in JOB_KINDS}
 
 
-def job_store(store_path: str | os.PathLike[str], *, stale_after_s: float = 60.0, max_attempts: int = 3) -> JobStore:
+def analysis_job_handlers(bench: Workbench) -> dict[str, Handler]:
+    """The job runner's handlers of single computations queued on request
+    (:data:`rcsa.app.analyses.ANALYSIS_KINDS`), all :func:`run_work`."""
+    def handler(kind: str) -> Handler:
+        def run(request: dict[str, Any], progress: Callable[[int, int], None]) -> tuple[Any, dict[str, Any]]:
+            outcome = run_work(bench, kind, request, progress=progress)
+            return outcome.document, outcome.summary
+
+        return run
+
+    return {kind: handler(kind) for kind in ANALYSIS_KINDS}
+
+
+def job_store(store_path: str | os.PathLike[str], *, stale_after_s: float = 60.0, max_attempts: int = 3,
+              max_result_bytes: int | None = None) -> JobStore:
     """The job queue of the store at ``store_path`` (``<store>/jobs``)."""
-    return JobStore(Path(store_path) / JOBS_DIRECTORY, stale_after_s=stale_after_s, max_attempts=max_attempts)
+    return JobStore(Path(store_path) / JOBS_DIRECTORY, stale_after_s=stale_after_s, max_attempts=max_attempts,
+                    max_result_bytes=max_result_bytes)

@@ -21,7 +21,7 @@ from rcsa.app.jobs import Work, Workbench
 from rcsa.errors import InputError
 from rcsa.infra.atomic_files import atomic_write_bytes
 from rcsa.libraries.exports import library_hdf5, library_uff_zip
-from rcsa.libraries.fusion import library_combinations
+from rcsa.libraries.formats import LibrarySource, import_library, read_library
 from rcsa.libraries.library_prediction import (
     LIBRARY_OPTIONS,
     check_common,
@@ -51,6 +51,7 @@ __all__ = [
     "prepare_batch",
     "prepare_library",
     "prepare_sync",
+    "read_library",
     "select_tool_point",
     "spindle_settings",
     "write_export",
@@ -101,9 +102,11 @@ def prepare_batch(bench: Workbench, request: Mapping[str, Any],
     return Work("batch", checked, n, check=lambda: check_common(request, store=bench.store, max_lines=bench.max_lines))
 
 
-def prepare_library(bench: Workbench, library: str | os.PathLike[str] | bytes | Mapping[str, Any],
-                    **fields: Any) -> Work:
-    """A Fusion tool library on one spindle, imported and sized: work of kind ``library``.
+def prepare_library(bench: Workbench, library: LibrarySource, **fields: Any) -> Work:
+    """A Fusion or FreeCAD tool library on one spindle, imported and sized: work of kind ``library``.
+
+    ``library`` as :func:`rcsa.libraries.formats.read_library` takes it, or already read by it
+    (an upload with its file name and media type, a FreeCAD holder given apart).
 
     ``fields`` are those of :func:`rcsa.libraries.library_prediction.library_request`:
     ``spindle``, ``frequency``, ``joints``, ``materials``, ``beam_theory``,
@@ -116,8 +119,7 @@ def prepare_library(bench: Workbench, library: str | os.PathLike[str] | bytes | 
                 check=lambda: check_common(request["batch"], store=bench.store, max_lines=bench.max_lines))
 
 
-def prepare_sync(bench: Workbench, library_id: str, library: str | os.PathLike[str] | bytes | Mapping[str, Any],
-                 **fields: Any) -> Work:
+def prepare_sync(bench: Workbench, library_id: str, library: LibrarySource, **fields: Any) -> Work:
     """A sync of the stored library ``library_id`` with this export: work of kind ``library-sync``.
 
     Its size is the number of results not in the result cache yet (only those are
@@ -169,9 +171,9 @@ def spindle_settings(base: Mapping[str, Any], *, frequency: Mapping[str, Any] | 
 
 # --------------------------------------------------------------------------- reading libraries
 
-def library_entries(library: str | os.PathLike[str] | bytes | Mapping[str, Any], *,
+def library_entries(library: LibrarySource, *,
                     options: Mapping[str, Any] | None = None, file_name: str | None = None) -> dict[str, Any]:
-    """Every item of a Fusion library mapped to a holder and tool, without computing anything.
+    """Every item of a Fusion or FreeCAD library mapped to a holder and tool, without computing anything.
 
     Returns
     -------
@@ -180,7 +182,7 @@ def library_entries(library: str | os.PathLike[str] | bytes | Mapping[str, Any],
         each entry has ``id``, ``index``, ``status`` (``ok``/``skipped``/``error``), and for
         ``ok`` items the assembly's ``holder`` and ``tool``.
     """
-    out = library_combinations(library, **dict(options or {})).to_dict()
+    out = import_library(library, **dict(options or {})).to_dict()
     return {"library": {"source": out["source"], "file_name": file_name, "library_sha256": out["library_sha256"],
                         "summary": out["summary"]},
             "entries": out["combinations"]}

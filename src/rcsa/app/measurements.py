@@ -12,14 +12,15 @@ from __future__ import annotations
 import base64
 import binascii
 import json
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import filelock
 import numpy as np
 
-from rcsa.errors import InputError, NotFoundError, StoreError
+from rcsa.app.inputs import decode_json
+from rcsa.errors import ConflictError, InputError, NotFoundError, StoreError
 from rcsa.infra.atomic_files import atomic_write_bytes
 from rcsa.measured.importers import (
     measurement_from_contract,
@@ -44,6 +45,7 @@ __all__ = [
     "FORMATS",
     "IMPORT_OPTIONS",
     "META_FIELDS",
+    "check_store",
     "delete_measurement",
     "demo_measurement",
     "format_from_name",
@@ -52,9 +54,13 @@ __all__ = [
     "measurement_document",
     "measurement_hdf5",
     "measurement_summary",
+    "read_measurement",
     "parse_points",
     "parse_roles",
+    "rebuild_catalogue",
     "seed_demo",
+    "store_measurement",
+    "store_measurement_once",
 ]
 
 #: Import formats: UFF 58, CSV/TSV table, CutPro ``.frf``, the contract's JSON, raw tap.
@@ -69,6 +75,7 @@ IMPORT_OPTIONS: dict[str, tuple[str, ...]] = {
     "frequency_unit": ("csv",),
     "phase_unit": ("csv",),
     "roles": ("uff",),
+    "scalar_direction": ("uff",),
     "drop_nonpositive": ("uff", "csv", "frf", "json"),
     "sensor_mass_kg": FORMATS,
     "force_unit": ("tap",),
@@ -130,7 +137,7 @@ def parse_points(value: str | Sequence[float] | None) -> tuple[float, ...] | Non
     if isinstance(value, str):
         text = value.strip()
         try:
-            items = json.loads(text) if text.startswith("[") else text.split(",")
+            items = decode_json(text, path="points_m") if text.startswith("[") else text.split(",")
             if not isinstance(items, list):
                 raise ValueError
             return tuple(float(x) for x in items)
@@ -146,10 +153,9 @@ def _parse_artifact(value: str | Mapping[str, Any] | None) -> Mapping[str, Any] 
         return None
     if isinstance(value, Mapping):
         return value
-    try:
-        doc = json.loads(value)
-    except (TypeError, ValueError) as e:
-        raise InputError("artifact", f"must be a JSON object ({e})") from None
+    if not isinstance(value, str):
+        raise InputError("artifact", "must be a JSON object")
+    doc = decode_json(value, path="artifact", what="artifact")
     if not isinstance(doc, dict):
         raise InputError("artifact", "must be a JSON object")
     return doc
@@ -185,7 +191,8 @@ def import_measurement(
     options : mapping, optional
         :data:`IMPORT_OPTIONS`, strings accepted (form fields): ``units`` (e.g. ``"um/N"``),
         ``columns``, ``frequency_unit``, ``phase_unit``, ``roles`` (``"h11=1:1,..."``),
-        ``drop_nonpositive``, ``sensor_mass_kg`` and the tap options.
+        ``scalar_direction`` (UFF), ``drop_nonpositive``, ``sensor_mass_kg`` and the tap
+        options. UFF files may leave ``direction`` out: the file's is used.
     extra_taps : sequence of bytes
         Further tap files averaged with ``data`` (format ``tap`` only).
 
@@ -222,19 +229,19 @@ def import_measurement(
         overrides = {k: (list(v) if isinstance(v, tuple) else v) for k, v in given.items()}
         return read_contract_json(data, overrides=overrides, drop_nonpositive=drop, **common)
     for key in ("spindle_id", "direction", "plane"):
-        if key not in given:
+        if key not in given and not (key == "direction" and form == "uff"):  # UFF: the file says
             raise InputError(key, f"is required for format {form!r}")
     given.setdefault("kind", "direct_frf")
+    if form == "uff":
+        return read_uff(data, given, roles=parse_roles(opts.get("roles")), units=opts.get("units"),
+                        scalar_direction=opts.get("scalar_direction"), drop_nonpositive=drop, **common)
     meta = MeasurementMeta(**given)
     if form == "csv":
-        return read_csv(data, meta, units=opts.get("units"), columns=opts.get("columns") or "f,re,im",
-                        frequency_unit=opts.get("frequency_unit") or "Hz", phase_unit=opts.get("phase_unit"),
+        return read_csv(data, meta, units=opts.get("units"), columns=opts.get("columns"),  # default: the header
+                        frequency_unit=opts.get("frequency_unit"), phase_unit=opts.get("phase_unit"),
                         drop_nonpositive=drop, **common)
     if form == "frf":
         return read_cutpro(data, meta, units=opts.get("units"), drop_nonpositive=drop, **common)
-    if form == "uff":
-        return read_uff(data, meta, roles=parse_roles(opts.get("roles")), units=opts.get("units"),
-                        drop_nonpositive=drop, **common)
     if drop:
         raise InputError("drop_nonpositive", "a tap FFT always drops its 0 Hz bin; leave the option out")
     for key in ("force_unit", "response_unit"):
@@ -247,6 +254,58 @@ def import_measurement(
         force_window_s=_float(opts.get("force_window_s"), "force_window_s"),
         exponential_tau_s=_float(opts.get("exponential_tau_s"), "exponential_tau_s"),
         max_frequency_hz=_float(opts.get("max_frequency_hz"), "max_frequency_hz"), **common)
+
+
+#: Metadata of a file read only for its data (a tool-point tap test has no spindle to name).
+_READ_DEFAULTS = {"spindle_id": "tap-test", "direction": "x", "plane": "spindle_nose"}
+
+
+def read_measurement(data: bytes, *, file_name: str = "", fmt: str | None = None,
+                     metadata: Mapping[str, Any] | None = None, options: Mapping[str, Any] | None = None,
+                     extra_taps: Sequence[bytes] = ()) -> dict[str, Any]:
+    """Read a measurement file into the contract's JSON form, without storing it.
+
+    The same importers, units and checks as :func:`import_measurement` (what ``rcsa store
+    import`` and ``POST /v1/measurements`` store); for files read only for their data, such
+    as a tool point's tap tests sent on to a diagnosis. ``spindle_id``, ``direction`` and
+    ``plane`` may be left out (``tap-test``, ``x``, ``spindle_nose``; a UFF file's own
+    direction is kept).
+
+    Parameters
+    ----------
+    data : bytes
+        The file's content.
+    file_name : str
+        Its name (its suffix gives the format unless ``fmt``).
+    fmt : {"uff", "csv", "frf", "json", "tap"}, optional
+    metadata : mapping, optional
+        As for :func:`import_measurement`.
+    options : mapping, optional
+        As for :func:`import_measurement` (``units``, ``columns``, ...).
+    extra_taps : sequence of bytes
+        Further tap files averaged with ``data`` (format ``tap`` only).
+
+    Returns
+    -------
+    dict
+        ``frequency_hz``, ``h`` (and the other receptances), ``coherence`` when the file has
+        one, ``units``, ``source`` (format, conversions), ``summary`` and the metadata.
+
+    Raises
+    ------
+    InputError
+        As :func:`import_measurement`.
+    """
+    form = format_from_name(file_name, fmt)
+    given = {k: v for k, v in (metadata or {}).items() if v is not None and v != ""}
+    defaults = {k: v for k, v in _READ_DEFAULTS.items() if not (k == "direction" and form == "uff")}
+    if form != "json":
+        given = {**defaults, **given}
+    m = import_measurement(data, file_name=file_name, fmt=form, metadata=given, options=options,
+                           extra_taps=extra_taps)
+    out = {k: v for k, v in measurement_to_contract(m).items() if k not in ("id", "created_utc", "software_version")}
+    out["summary"] = measurement_summary(m)
+    return out
 
 
 def measurement_from_document(doc: Mapping[str, Any], *, drop_nonpositive: bool = False,
@@ -317,6 +376,8 @@ def list_measurements(store: Any, *, limit: int = 100, cursor: str | None = None
 
     Parameters
     ----------
+    store : MeasurementStore
+        The store to list.
     limit : int
         Items per page, 1…1000.
     cursor : str, optional
@@ -337,7 +398,12 @@ def list_measurements(store: Any, *, limit: int = 100, cursor: str | None = None
         infos = [i for i in infos if (i.created_utc or "", i.id or "") > after]
     page = infos[:limit]
     more = len(infos) > limit
-    return {"items": [i.to_dict() for i in page], "next_cursor": _encode_cursor(page[-1]) if more else None}
+    out: dict[str, Any] = {"items": [i.to_dict() for i in page], "next_cursor": _encode_cursor(page[-1]) if more
+                           else None}
+    damaged = store.damaged() if hasattr(store, "damaged") else []
+    if damaged:  # left out of the items: unreadable files, so that a listing never fails on one
+        out["damaged"] = damaged
+    return out
 
 
 def delete_measurement(store: Any, measurement_id: str) -> dict[str, str]:
@@ -354,6 +420,72 @@ def delete_measurement(store: Any, measurement_id: str) -> dict[str, str]:
 def store_measurement(store: Any, measurement: Any) -> dict[str, Any]:
     """Put a measurement in the store; return its metadata (with the new ``id``)."""
     return store.info(store.put(measurement)).to_dict()
+
+
+def store_measurement_once(store: Any, measurement: Any, *, recorded_id: str | None,
+                           record: Callable[[str], None]) -> dict[str, Any]:
+    """Store a measurement at most once across retries of one request (crash consistency).
+
+    The id is chosen first and made durable by ``record`` (e.g. with the request's
+    idempotency key) before the file is written under it. A retry whose earlier attempt
+    died passes the id it recorded (``recorded_id``): if that attempt's file was committed,
+    its metadata is the answer (no second copy); if not, the measurement is written under
+    that id now (nothing lost).
+
+    Parameters
+    ----------
+    store : MeasurementStore
+    measurement : Measurement
+    recorded_id : str or None
+        The id an earlier attempt of the same request recorded, if any.
+    record : callable
+        ``record(id)``: durably note the id before the write (raises to stop).
+
+    Returns
+    -------
+    dict
+        The stored measurement's metadata.
+
+    Raises
+    ------
+    ConflictError
+        The measurement an earlier attempt stored was deleted since.
+    """
+    if recorded_id is not None:
+        if recorded_id in store:
+            return store.info(recorded_id).to_dict()
+        if store.was_deleted(recorded_id):
+            raise ConflictError("measurement", recorded_id, "was stored by an earlier attempt of this request and "
+                                                            "deleted since; send the upload with a new key")
+        mid = recorded_id
+    else:
+        mid = store.new_id()
+        record(mid)
+    return store.info(store.put(measurement, measurement_id=mid)).to_dict()
+
+
+def check_store(store: Any) -> dict[str, Any]:
+    """Verify every measurement file and the catalogue (``rcsa store check``); changes nothing.
+
+    See :meth:`rcsa.measured.store.MeasurementStore.verify` for the report.
+    """
+    report: dict[str, Any] = store.verify()
+    return report
+
+
+def rebuild_catalogue(store: Any) -> dict[str, Any]:
+    """Make the catalogue again from the files (``rcsa store rebuild``).
+
+    Returns
+    -------
+    dict
+        ``store``, ``ok`` (no damaged file), ``measurements`` (listed after the rebuild) and
+        ``damaged`` (ids of files that cannot be read completely, checksums included; those
+        whose metadata cannot be read are left out of the catalogue; see :func:`check_store`).
+    """
+    n = store.rebuild_index()
+    damaged = sorted({str(p["id"]) for p in store.verify()["problems"] if p["problem"] in ("damaged", "misnamed")})
+    return {"store": str(store.path), "ok": not damaged, "measurements": n, "damaged": damaged}
 
 
 def demo_measurement(frequency: Mapping[str, float] | None = None):

@@ -59,8 +59,25 @@ def predict_batch(request: Mapping[str, Any], *, store: MeasurementStore | None 
                   arrays: Literal["list", "numpy"] = "list") -> dict[str, Any]:
     """Tool-point FRFs of many tool–holder combinations on one spindle.
 
-    See :func:`rcsa.model.batch.predict_batch`; ``store`` is where a measured spindle is
-    looked up (the default store when omitted).
+    Parameters
+    ----------
+    request : dict
+        ``{"spindle", "frequency", "combinations": [...]}`` and the optional common fields
+        (see :func:`rcsa.model.batch.predict_batch`).
+    store : MeasurementStore, optional
+        Where a measured spindle is looked up (the default store when omitted).
+    max_lines, max_combinations : int
+        Largest accepted number of frequency lines and of combinations.
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each combination.
+    arrays : {"list", "numpy"}
+        Long arrays of the results as lists (JSON-ready) or numpy arrays (for orjson).
+
+    Returns
+    -------
+    dict
+        ``{"results": [...], "summary": {"ok", "error"}}``, one result per combination in
+        input order (see :func:`rcsa.model.batch.predict_batch`).
     """
     return batch.predict_batch(request, resolve_base=resolver(store), max_lines=max_lines,
                                max_combinations=max_combinations, progress=progress, arrays=arrays)

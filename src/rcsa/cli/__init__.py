@@ -34,7 +34,8 @@ app = typer.Typer(
 for _module in (predict_cmd, library_cmd, lobes_cmd, plot_cmd, effects_cmd, identify_cmd, diagnose_cmd, serve_cmd,
                 keys_cmd):
     _module.register(app)
-app.add_typer(store_app, name="store", help="Import, list, show and delete measured spindle FRFs.")
+app.add_typer(store_app, name="store", help="Import, list, show, delete measured spindle FRFs; check and rebuild "
+                                           "the store.")
 
 
 def main() -> None:

@@ -2,18 +2,21 @@
 
 from __future__ import annotations
 
-import json
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Annotated, Any, TypeVar
 
 import orjson
 import typer
 
 from rcsa.errors import InputError, NotFoundError, RcsaError
 
-__all__ = ["fail", "read_json", "run_guarded", "write_json"]
+__all__ = ["QuietOption", "fail", "progress_callback", "read_json", "run_guarded", "write_json"]
+
+#: ``--quiet/-q`` of the commands that draw a progress bar.
+QuietOption = Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar on stderr.")]
 
 T = TypeVar("T")
 
@@ -30,10 +33,13 @@ def read_json(path: Path) -> Any:
         text = sys.stdin.read() if str(path) == "-" else path.read_text(encoding="utf-8")
     except OSError as exc:
         raise fail(f"cannot read {path}: {exc.strerror or exc}") from None
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise fail(f"{path} is not valid JSON: {exc.msg} at line {exc.lineno} column {exc.colno}") from None
+    # rcsa.app is imported when a command runs, not with the CLI: `rcsa --help` stays fast
+    from rcsa.app.inputs import decode_json
+
+    try:  # the service's JSON policy: no NaN/Infinity, numbers within range, nesting bounded
+        return decode_json(text, what=str(path))
+    except InputError as exc:
+        raise fail(f"{path}: {exc}") from None
 
 
 def write_json(document: Any, out: Path | None) -> None:
@@ -59,3 +65,24 @@ def run_guarded(fn: Callable[[], T]) -> T:
         raise fail(str(exc)) from None
     except RcsaError as exc:
         raise fail(str(exc)) from None
+
+
+@contextmanager
+def progress_callback(description: str, quiet: bool = False) -> Iterator[Callable[[int, int], None]]:
+    """A ``progress(done, total)`` callback that drives a rich progress bar on stderr.
+
+    The bar is transient (it disappears when done) and drawn only on a terminal; with
+    ``quiet`` the callback does nothing. Results go to stdout, so they stay clean.
+    """
+    # rich: only when a command computes (``rcsa --help`` and the other commands do without it)
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    with Progress(TextColumn("[progress.description]{task.description}"), BarColumn(), MofNCompleteColumn(),
+                  TimeElapsedColumn(), transient=True, disable=quiet, console=Console(stderr=True)) as bar:
+        task = bar.add_task(description, total=None)
+
+        def progress(done: int, total: int) -> None:
+            bar.update(task, completed=done, total=max(total, 1))
+
+        yield progress

@@ -7,7 +7,14 @@ from typing import Annotated
 
 import typer
 
-from rcsa.cli._common import fail, read_json, run_guarded, write_json
+from rcsa.cli._common import (
+    QuietOption,
+    fail,
+    progress_callback,
+    read_json,
+    run_guarded,
+    write_json,
+)
 
 
 def register(app: typer.Typer) -> None:
@@ -19,6 +26,7 @@ def register(app: typer.Typer) -> None:
         out: Annotated[Path | None, typer.Option("-o", "--out", help="Write the result here instead of stdout.")] = None,
         plot: Annotated[Path | None, typer.Option("--plot", help="Also draw measured/base/corrected FRFs and the "
                                                                   "gap map to this .png or .svg file.")] = None,
+        quiet: QuietOption = False,
     ) -> None:
         """Where model and measurement part, which unmodelled effect explains it, and how far the gap shrinks."""
         # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
@@ -27,7 +35,8 @@ def register(app: typer.Typer) -> None:
             raise fail(f"--plot: the file must end in .png or .svg, got {plot.name!r}")
         doc = read_json(request)
         try:
-            response = run_guarded(lambda: diagnosis_with_figure(doc, plot))
+            with progress_callback("diagnosis", quiet) as progress:
+                response = run_guarded(lambda: diagnosis_with_figure(doc, plot, progress=progress))
         except OSError as exc:
             raise fail(f"cannot write {plot}: {exc.strerror or exc}") from None
         write_json(response, out)

@@ -1,4 +1,4 @@
-"""``rcsa effects ASSEMBLY.json [-o OUT.json] [--plot FILE.png|svg]``."""
+"""``rcsa effects ASSEMBLY.json [-o OUT.json] [--plot FILE.png|svg] [--store DIR]``."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from rcsa.cli._common import read_json, run_guarded, write_json
+from rcsa.cli._common import QuietOption, progress_callback, read_json, run_guarded, write_json
 
 
 def register(app: typer.Typer) -> None:
@@ -20,10 +20,21 @@ def register(app: typer.Typer) -> None:
                  "\"band_hz\"}; '-' for stdin.")],
         out: Annotated[Path | None, typer.Option("-o", "--out", help="Write the result here instead of stdout.")] = None,
         plot: Annotated[Path | None, typer.Option("--plot", help="Also draw the sensitivity heat map (.png or .svg).")] = None,
+        store: Annotated[Path | None, typer.Option("--store", help="Measurement store for a measured spindle (default: "
+                                                                   "RCSA_STORE or the per-user store).")] = None,
+        quiet: QuietOption = False,
     ) -> None:
-        """Effect analysis: normalised sensitivities of every mode to bearing, joint and tool parameters."""
+        """Effect analysis: normalised sensitivities of every mode to bearing, joint and tool parameters.
+
+        On a measured spindle ({"measurement_id": ...}) the modes come from a modal fit of the
+        hybrid model and bearings are reported as not applicable.
+        """
         # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
         from rcsa.app.figures import check_picture_path, effects_with_figure
+        from rcsa.app.stores import open_store
         doc = read_json(assembly)
         picture = None if plot is None else run_guarded(lambda: check_picture_path(plot, "--plot"))
-        write_json(run_guarded(lambda: effects_with_figure(doc, picture)), out)
+        with progress_callback("effect analysis", quiet) as progress:
+            result = run_guarded(lambda: effects_with_figure(doc, picture, store=open_store(store) if store else None,
+                                                             progress=progress))
+        write_json(result, out)

@@ -1,7 +1,12 @@
-"""``rcsa library predict|sync|show|export``: whole Autodesk Fusion tool libraries.
+"""``rcsa library predict|sync|show|export|recommend``: whole CAM tool libraries (Autodesk Fusion, FreeCAD).
+
+LIBRARY is a Fusion library (``.json`` or ``.tools``) or a FreeCAD one: a toolbit ``.fctb``, a
+library ``.fctl`` (its toolbits next to it or in ``../Bit``), a folder or a zip of toolbits;
+its holder is the one ``.fcholder`` in the folder or zip, or ``--holder H.fcholder``, and
+FreeCAD stores no stickout: ``--options '{"stickout_m": 0.04}'`` (or per toolbit id).
 
 ``rcsa library predict LIBRARY --spindle SPINDLE.json | --measurement ID``: tool-point FRFs
-of every tool of a Fusion tool library (``.json`` or ``.tools``) on one spindle, computed
+of every tool of the library on one spindle, computed
 here (no service needed), with a progress bar on stderr. The result JSON (one entry per
 library item: ``ok``, ``skipped`` with a reason, or ``error``) goes to stdout or ``-o
 OUT.json``; the exit status is 1 when any tool errored.
@@ -10,21 +15,34 @@ OUT.json``; the exit status is 1 when any tool errored.
 library in the store (:func:`rcsa.app.libraries.prepare_sync`, the same code as ``POST
 /v1/libraries/{id}:sync``): only tools whose result is not stored yet are computed; the
 added / changed / unchanged / removed summary goes to stderr, the sync report (JSON) to
-stdout; exit status 1 when any tool failed. ``rcsa library show ID`` prints a stored
+stdout; exit status 1 when any tool failed. ``--dask-scheduler tcp://HOST:8786`` (or
+``RCSA_DASK_SCHEDULER``) computes on that Dask cluster instead of here; the results are
+written here, the same bytes either way. ``rcsa library show ID`` prints a stored
 library's summary and per-tool status; ``rcsa library export ID -o FILE.h5|.zip|.json``
 writes its results (HDF5, zip of UFF 58 files, or JSON).
+
+``rcsa library recommend LIBRARY --material M --max-rpm N (--spindle S | --measurement ID |
+--library-id ID) (-o OUT | --in-place)``: chatter-safe presets (:mod:`rcsa.app.presets`). Per
+milling tool, the best stable pocket of its stability lobes (tool-point FRF predicted now on
+the spindle, or stored by a sync of ``--library-id``) is written into the Fusion library as a
+preset named ``rcsa chatter-safe: <material>`` (re-running replaces it; nothing else in the
+file changes). The report (JSON) goes to stdout or ``--report``; a one-line summary per tool
+to stderr; exit status 1 when a tool failed.
 """
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
 from rcsa.cli._common import fail, read_json, run_guarded, write_json
 from rcsa.errors import InputError
+
+if TYPE_CHECKING:
+    from rcsa.app.jobs import Workbench
+    from rcsa.app.presets import PresetFile
 
 __all__ = ["library_app", "register"]
 
@@ -34,12 +52,11 @@ library_app = typer.Typer(help="Tool-point FRFs of whole CAM tool libraries.", n
 
 def parse_frequency_option(text: str) -> dict[str, Any]:
     """``START:STOP:STEP`` (Hz, stop included) or a JSON frequency object."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app.inputs import decode_json
     text = text.strip()
     if text.startswith("{"):
-        try:
-            doc = json.loads(text)
-        except ValueError as exc:
-            raise InputError("frequency", f"not valid JSON ({exc})") from None
+        doc: dict[str, Any] = decode_json(text, path="frequency", what="--frequency")
         return doc
     parts = text.split(":")
     try:
@@ -63,12 +80,12 @@ def _spindle_document(path: Path) -> dict[str, Any]:
 
 
 def _options_json(options: str | None) -> dict[str, Any] | None:
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app.inputs import decode_json
     if options is None:
         return None
-    try:
-        return json.loads(options)
-    except ValueError as exc:
-        raise InputError("options", f"not valid JSON ({exc})") from None
+    doc: dict[str, Any] | None = decode_json(options, path="options", what="--options")
+    return doc
 
 
 def _settings(base: dict[str, Any], frequency: str | None, joints: Path | None, store: Any) -> dict[str, Any]:
@@ -107,11 +124,21 @@ ImportOptions = Annotated[str | None, typer.Option(
     help='Import options as JSON, e.g. \'{"holder_segments_per_cone": 6}\'.')]
 NaturalFrequenciesOption = Annotated[bool, typer.Option(help="Compute exact natural frequencies.")]
 QuietOption = Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")]
+DaskOption = Annotated[str | None, typer.Option(
+    "--dask-scheduler", envvar="RCSA_DASK_SCHEDULER",
+    help="Compute on this Dask cluster (tcp://HOST:8786; needs pip install 'rcsa[dask]') instead of here.")]
+DaskTimeoutOption = Annotated[float, typer.Option(
+    "--dask-connect-timeout", envvar="RCSA_DASK_CONNECT_TIMEOUT_S", min=0.1,
+    help="Seconds to try to reach the Dask scheduler before giving up.")]
+LibraryArgument = Annotated[Path, typer.Argument(help="Fusion tool library (.json, .tools) or FreeCAD toolbits "
+                                                      "(.fctb, .fctl, a folder or a zip of them).")]
+HolderOption = Annotated[Path | None, typer.Option(help="FreeCAD holder (.fcholder) for the toolbits, when the "
+                                                       "library has none.")]
 
 
 @library_app.command("predict")
 def predict(
-    library: Annotated[Path, typer.Argument(help="Fusion tool library: .json, or .tools (zip).")],
+    library: LibraryArgument,
     spindle: Annotated[Path | None, typer.Option(help="Spindle JSON (segments + bearings), or an assembly "
                                                       "JSON whose spindle, frequency, joints and materials "
                                                       "are used.")] = None,
@@ -125,11 +152,14 @@ def predict(
     store: Annotated[Path | None, typer.Option("--store", help="Measurement store (default: RCSA_STORE or "
                                                                "the per-user store).")] = None,
     quiet: QuietOption = False,
+    dask_scheduler: DaskOption = None,
+    dask_connect_timeout: DaskTimeoutOption = 10.0,
+    holder: HolderOption = None,
 ) -> None:
-    """Predict the tool-point FRF of every tool in a Fusion library on one spindle."""
+    """Predict the tool-point FRF of every tool in a Fusion or FreeCAD library on one spindle."""
     # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
-    from rcsa.app.jobs import Workbench, run_work
-    from rcsa.app.libraries import prepare_library
+    from rcsa.app.jobs import Workbench, compute_backend, run_work
+    from rcsa.app.libraries import prepare_library, read_library
     from rcsa.app.stores import open_store
     if (spindle is None) == (measurement is None):
         raise fail("give exactly one of --spindle SPINDLE.json or --measurement ID")
@@ -138,20 +168,25 @@ def predict(
     def build() -> tuple[Workbench, Any]:
         bench = Workbench(open_store(store) if (store is not None or measurement is not None) else None)
         settings = _settings(base, frequency, joints, bench.store if measurement is not None else None)
-        work = prepare_library(bench, library, **settings, natural_frequencies=natural_frequencies,
-                               options=_options_json(options))
+        work = prepare_library(bench, read_library(library, holder=holder), **settings,
+                               natural_frequencies=natural_frequencies, options=_options_json(options))
         if work.check is not None:
             work.check()  # before the progress bar starts
         return bench, work
 
     bench, work = run_guarded(build)
+    backend = run_guarded(lambda: compute_backend(dask_scheduler, connect_timeout_s=dask_connect_timeout))
     with _progress_bar(quiet) as bar:
         task = bar.add_task("tools", total=max(work.size, 1))
 
         def progress(done: int, total: int) -> None:
             bar.update(task, completed=done, total=max(total, 1))
 
-        result = run_guarded(lambda: run_work(bench, work.kind, work.request, progress=progress)).document
+        try:
+            result = run_guarded(lambda: run_work(bench, work.kind, work.request, progress=progress,
+                                                  backend=backend)).document
+        finally:
+            backend.close()
     write_json(result, out)
     s = result["summary"]
     typer.echo(f"{s['ok']} ok, {s['skipped']} skipped, {s['error']} error", err=True)
@@ -168,7 +203,7 @@ StoreOption = Annotated[Path | None, typer.Option("--store", help="Store directo
 
 @library_app.command("sync")
 def sync(
-    library: Annotated[Path, typer.Argument(help="Fusion tool library: .json, or .tools (zip).")],
+    library: LibraryArgument,
     spindle: Annotated[str, typer.Option(help="A stored measurement id (m-..., hybrid), or a spindle JSON "
                                               "(segments + bearings) or assembly JSON whose spindle, frequency, "
                                               "joints and materials are used.")],
@@ -182,11 +217,14 @@ def sync(
                                                                  "stdout.")] = None,
     store: StoreOption = None,
     quiet: QuietOption = False,
+    dask_scheduler: DaskOption = None,
+    dask_connect_timeout: DaskTimeoutOption = 10.0,
+    holder: HolderOption = None,
 ) -> None:
-    """Keep a Fusion library's tool-point FRFs in the store, computing only new or changed tools."""
+    """Keep a library's tool-point FRFs in the store, computing only new or changed tools."""
     # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
-    from rcsa.app.jobs import Workbench, run_work
-    from rcsa.app.libraries import library_id_from_name, prepare_sync
+    from rcsa.app.jobs import Workbench, compute_backend, run_work
+    from rcsa.app.libraries import library_id_from_name, prepare_sync, read_library
     from rcsa.app.stores import is_measurement_id, open_store
     measurement = spindle if is_measurement_id(spindle) else None
     base = {"spindle": {"measurement_id": measurement}} if measurement else _spindle_document(Path(spindle))
@@ -196,21 +234,26 @@ def sync(
         st = open_store(store)
         bench = Workbench(st, st.path)
         settings = _settings(base, frequency, joints, st if measurement is not None else None)
-        work = prepare_sync(bench, ident, library, **settings, natural_frequencies=natural_frequencies,
-                            options=_options_json(options))
+        work = prepare_sync(bench, ident, read_library(library, holder=holder), **settings,
+                            natural_frequencies=natural_frequencies, options=_options_json(options))
         if work.size and work.check is not None:
             work.check()  # before the progress bar starts
         return bench, work
 
     bench, work = run_guarded(build)
+    backend = run_guarded(lambda: compute_backend(dask_scheduler if work.size else None,
+                                                        connect_timeout_s=dask_connect_timeout))
     with _progress_bar(quiet) as bar:
         task = bar.add_task(f"{ident}: computing", total=max(work.size, 1))
 
         def progress(done: int, total: int) -> None:
             bar.update(task, completed=done, total=max(total, 1))
 
-        report = run_guarded(lambda: run_work(bench, work.kind, work.request, progress=progress,
-                                              plan=work.plan)).document
+        try:
+            report = run_guarded(lambda: run_work(bench, work.kind, work.request, progress=progress,
+                                                  plan=work.plan, backend=backend)).document
+        finally:
+            backend.close()
     write_json(report, out)
     c, s = report["counts"], report["summary"]
     typer.echo(f"{ident} revision {report['revision']}: {c['added']} added, {c['changed']} changed, "
@@ -255,6 +298,108 @@ def export(
         raise fail(f"cannot write {out}: {exc.strerror or exc}") from None
     ok = export.ok
     typer.echo(f"{out}: {ok} tool{'s' if ok != 1 else ''} of {library_id} revision {export.revision}", err=True)
+
+
+@library_app.command("recommend")
+def recommend(
+    library: Annotated[Path, typer.Argument(help="Autodesk Fusion tool library (.json or .tools).")],
+    material: Annotated[str, typer.Option(help="Workpiece material: a table entry (aluminium-7075, aluminium-6082, "
+                                               "carbon-steel, ...; see the README) or your own name with "
+                                               "--tangential-coefficient-n-m2 and --radial-ratio.")],
+    max_rpm: Annotated[float, typer.Option(help="The machine's highest spindle speed, rpm.")],
+    spindle: Annotated[Path | None, typer.Option(help="Predict the FRFs now on this spindle JSON (or assembly JSON "
+                                                      "whose spindle, frequency, joints and materials are used).")
+                       ] = None,
+    measurement: Annotated[str | None, typer.Option(help="Predict the FRFs now on this stored measurement "
+                                                         "(hybrid).")] = None,
+    library_id: Annotated[str | None, typer.Option("--library-id", help="Use the FRFs stored by the last sync of "
+                                                                        "this library id.")] = None,
+    out: Annotated[Path | None, typer.Option("-o", "--out", help="Write the library with the presets here.")] = None,
+    in_place: Annotated[bool, typer.Option("--in-place", help="Write the presets into LIBRARY itself.")] = False,
+    report: Annotated[Path | None, typer.Option(help="Write the report here instead of stdout.")] = None,
+    min_rpm: Annotated[float, typer.Option(help="The machine's lowest spindle speed to consider, rpm.")] = 1000.0,
+    tangential_coefficient_n_m2: Annotated[float | None, typer.Option(
+        help="Kt (K_tc of the linear edge-force model), N/m²; with --radial-ratio, instead of the table's.")] = None,
+    radial_ratio: Annotated[float | None, typer.Option(help="Kr = K_rc / K_tc.")] = None,
+    radial_immersion: Annotated[float, typer.Option(help="Radial depth of cut / diameter, a_e/D.")] = 0.5,
+    milling: Annotated[str, typer.Option(help="down or up.")] = "down",
+    safety_factor: Annotated[float, typer.Option(help="Stepdown = depth limit / this (>= 1).")] = 1.25,
+    speed_tolerance: Annotated[float, typer.Option(help="Relative speed window that must stay stable (0.03 = "
+                                                        "±3 %).")] = 0.03,
+    max_surface_speed: Annotated[float | None, typer.Option(help="Surface-speed limit v_c, m/min (default: the "
+                                                                 "table's, carbide tools only).")] = None,
+    feed_per_tooth_mm: Annotated[float | None, typer.Option(help="Feed per tooth for the preset's feeds, mm "
+                                                                 "(default: f_z of the tool's own preset).")] = None,
+    method: Annotated[str, typer.Option(help="Lobe method.")] = "zoa",
+    frequency: FrequencyOption = None,
+    joints: JointsOption = None,
+    options: ImportOptions = None,
+    store: StoreOption = None,
+    quiet: QuietOption = False,
+) -> None:
+    """Write chatter-safe presets (spindle speed and stepdown in a stable pocket) into a Fusion library."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app.jobs import Workbench
+    from rcsa.app.presets import (
+        check_recommendation,
+        recommend_predicted,
+        recommend_stored,
+        write_preset_file,
+    )
+    from rcsa.app.stores import open_store
+    if sum(x is not None for x in (spindle, measurement, library_id)) != 1:
+        raise fail("give exactly one of --spindle SPINDLE.json, --measurement ID or --library-id ID")
+    if (out is None) == (not in_place):
+        raise fail("give exactly one of -o OUT (a new file) or --in-place (write into LIBRARY)")
+    target = library if in_place else out
+    settings = {"material": material, "max_rpm": max_rpm, "min_rpm": min_rpm,
+                "tangential_coefficient_n_m2": tangential_coefficient_n_m2, "radial_ratio": radial_ratio,
+                "radial_immersion": radial_immersion, "milling": milling, "safety_factor": safety_factor,
+                "speed_tolerance": speed_tolerance, "max_surface_speed_m_min": max_surface_speed,
+                "feed_per_tooth_m": None if feed_per_tooth_mm is None else feed_per_tooth_mm * 1e-3, "method": method}
+    settings = {k: v for k, v in settings.items() if v is not None}
+    try:
+        data = library.read_bytes()
+    except OSError as exc:
+        raise fail(f"cannot read {library}: {exc.strerror or exc}") from None
+    run_guarded(lambda: check_recommendation(data, settings, file_name=library.name))  # before any progress bar
+
+    def stored() -> PresetFile:
+        st = open_store(store)
+        return recommend_stored(Workbench(st, st.path), str(library_id), data, settings, file_name=library.name)
+
+    def predicted() -> PresetFile:
+        base = _spindle_document(spindle) if spindle is not None else {"spindle": {"measurement_id": measurement}}
+        bench = Workbench(open_store(store) if (store is not None or measurement is not None) else None)
+        fields = _settings(base, frequency, joints, bench.store if measurement is not None else None)
+        with _progress_bar(quiet) as bar:
+            task = bar.add_task("tools", total=1)
+
+            def progress(done: int, total: int) -> None:
+                bar.update(task, completed=done, total=max(total, 1))
+
+            return recommend_predicted(bench, data, settings, file_name=library.name, progress=progress,
+                                       import_options=_options_json(options), **fields)
+
+    result = run_guarded(stored if library_id is not None else predicted)
+    try:
+        write_preset_file(result, target)  # type: ignore[arg-type]
+    except OSError as exc:
+        raise fail(f"cannot write {target}: {exc.strerror or exc}") from None
+    write_json(result.report, report)
+    for t in result.report["tools"]:
+        if t["status"] == "written":
+            sd = t["stepdown"]
+            typer.echo(f"{t['id']}: {t['spindle_speed_rpm']} rpm, stepdown {sd['value']:g} {sd['unit']} "
+                       f"(limit {t['depth_limit_m'] * 1e3:.3g} mm / {t['safety_factor']:g}, pocket "
+                       f"{t['pocket']['low_rpm']:.0f}-{t['pocket']['high_rpm']:.0f} rpm)", err=True)
+        else:
+            typer.echo(f"{t['id']}: {t['status']}: {t['reason']}", err=True)
+    s = result.report["summary"]
+    typer.echo(f"{target}: {s['written']} preset{'s' if s['written'] != 1 else ''} written, {s['skipped']} "
+               f"skipped, {s['failed']} failed", err=True)
+    if s["failed"]:
+        raise typer.Exit(1)
 
 
 def register(app: typer.Typer) -> None:

@@ -20,7 +20,8 @@ def register(app: typer.Typer) -> None:
         plot: Annotated[Path | None, typer.Option("--plot", help="Also draw the lobe diagram (.png or .svg).")] = None,
         store: Annotated[Path | None, typer.Option("--store", help="Measurement store for hybrid assemblies.")] = None,
     ) -> None:
-        """Stability lobes (Altintas–Budak zero-order) from inline FRFs or an assembly."""
+        """Stability lobes from inline FRFs or an assembly: zero-order (Altintas–Budak, the default) or
+        "method": "semi_discretization" in the request (Insperger–Stépán, for low radial immersion)."""
         # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
         from rcsa.app.analyses import stability_lobes_result
         from rcsa.app.figures import check_picture_path, lobes_figure, save_figure

@@ -1,8 +1,8 @@
 """``rcsa plot INPUT.json -o OUT.png|svg``: pictures of FRFs and stability lobes.
 
 The input is recognised by its content: a prediction result (``tool_point``), a measurement
-in the contract's JSON form (``h``), an assembly (predicted first), or a stability-lobes
-request (solved first).
+in the contract's JSON form (``h``), an assembly (predicted first), a stability-lobes
+result (``rcsa lobes`` output: drawn as it is), or a stability-lobes request (solved first).
 """
 
 from __future__ import annotations
@@ -21,7 +21,8 @@ def register(app: typer.Typer) -> None:
 
     @app.command()
     def plot(
-        source: Annotated[Path, typer.Argument(help="Prediction result, measurement, assembly or lobes request (JSON).")],
+        source: Annotated[Path, typer.Argument(help="Prediction result, measurement, assembly, lobes result or lobes "
+                                                              "request (JSON).")],
         out: Annotated[Path, typer.Option("-o", "--out", help="Picture to write: .png or .svg.")],
         layout: Annotated[str, typer.Option(help="FRF layout: full, real_imag or bode.")] = "full",
         store: Annotated[Path | None, typer.Option("--store", help="Measurement store for hybrid assemblies.")] = None,

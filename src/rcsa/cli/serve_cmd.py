@@ -1,4 +1,4 @@
-"""``rcsa serve [--host HOST] [--port PORT] [--workers N]``."""
+"""``rcsa serve [--host HOST] [--port PORT] [--workers N] [--dask-scheduler tcp://HOST:8786]``."""
 
 from __future__ import annotations
 
@@ -17,8 +17,13 @@ def register(app: typer.Typer) -> None:
         host: Annotated[str, typer.Option(help="Interface to bind.")] = "127.0.0.1",
         port: Annotated[int, typer.Option(help="TCP port.")] = 8000,
         workers: Annotated[int, typer.Option(help="Worker processes (all share one store safely).")] = 1,
+        dask_scheduler: Annotated[str | None, typer.Option(
+            help="Run batch, library and sync jobs on this Dask cluster (tcp://HOST:8786; needs "
+                 "pip install 'rcsa[dask]'). Default: RCSA_DASK_SCHEDULER, else in the service.")] = None,
     ) -> None:
         """Run the REST service (uvicorn) with the store from RCSA_STORE or the default location."""
+        if dask_scheduler:
+            os.environ["RCSA_DASK_SCHEDULER"] = dask_scheduler  # read by every worker process's settings
         # uvicorn: only for this command (``rcsa --help`` and the others do without it)
         import uvicorn
 
@@ -26,5 +31,7 @@ def register(app: typer.Typer) -> None:
             # one /metrics over all worker processes (prometheus-client multi-process mode)
             os.environ["PROMETHEUS_MULTIPROC_DIR"] = tempfile.mkdtemp(prefix="rcsa-metrics-")
 
+        # service.http: uvicorn's HTTP protocol with TCP_NODELAY on every connection (a multi-worker
+        # uvicorn leaves Nagle on: ~40 ms per small response on a keep-alive connection)
         uvicorn.run("service.main:create_app", factory=True, host=host, port=port, workers=workers,
-                    log_level="info")
+                    http="service.http:NoDelayHTTPProtocol", log_level="info")

@@ -1,8 +1,9 @@
-"""``rcsa store import | list | show | delete``: the measured-spindle FRF store from the shell.
+"""``rcsa store import | list | show | delete | check | rebuild``: the measured-spindle FRF store from the shell.
 
 The store is ``--store DIR``, else ``$RCSA_STORE``, else the per-user default
 (:func:`rcsa.measured.store.default_store_path`). Output is JSON on stdout (``list`` prints a table
-unless ``--json``); a failure prints one line ``error: ...`` on stderr and exits 1.
+unless ``--json``); a failure prints one line ``error: ...`` on stderr and exits 1. ``check`` and
+``rebuild`` print their JSON report and exit 1 when it lists problems.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ __all__ = ["store_app"]
 T = TypeVar("T")
 
 store_app = typer.Typer(
-    help="Import, list, show and delete measured spindle FRFs.",
+    help="Import, list, show, delete measured spindle FRFs; check and rebuild the store.",
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
@@ -83,7 +84,9 @@ def import_(
     spindle_id: Annotated[
         str | None, typer.Option("--spindle-id", help="Spindle identifier.")
     ] = None,
-    direction: Annotated[str | None, typer.Option(help="x | y")] = None,
+    direction: Annotated[
+        str | None, typer.Option(help="x | y (UFF: default from the file's response direction).")
+    ] = None,
     plane: Annotated[str | None, typer.Option(help="spindle_nose | holder_tip")] = None,
     kind: Annotated[
         str | None,
@@ -92,21 +95,31 @@ def import_(
     machine: Annotated[str | None, typer.Option(help="Machine name.")] = None,
     notes: Annotated[str | None, typer.Option(help="Free text.")] = None,
     units: Annotated[
-        str | None, typer.Option(help="FRF unit, e.g. m/N, um/N, in/lbf, m/s^2/N, g/N.")
+        str | None,
+        typer.Option(help="FRF unit, e.g. m/N, um/N, in/lbf, m/s^2/N, g/N, dB re 1 m/N."),
     ] = None,
     columns: Annotated[
         str | None,
         typer.Option(
-            help="CSV: e.g. f,re,im | f,mag,phase | f,h11.re,h11.im,...; tap: t,force,response."
+            help="CSV: e.g. f,re,im | f,mag,phase | f,h11.re,h11.im,... (default: from the "
+            "file's header); tap: t,force,response."
         ),
     ] = None,
     frequency_unit: Annotated[
-        str, typer.Option(help="CSV frequency unit: Hz | kHz | rad/s.")
-    ] = "Hz",
+        str | None,
+        typer.Option(help="CSV frequency unit: Hz | kHz | rad/s (default: the header's, else Hz)."),
+    ] = None,
     phase_unit: Annotated[str | None, typer.Option(help="CSV phase unit: deg | rad.")] = None,
     roles: Annotated[
         str | None,
         typer.Option(help="UFF: NAME=RSP_NODE:REF_NODE,... e.g. h11=1:1,h21=2:1,h22=2:2."),
+    ] = None,
+    scalar_direction: Annotated[
+        str | None,
+        typer.Option(
+            "--scalar-direction",
+            help="UFF: direction x | y of scalar FRFs (direction code 0), which the file does not say.",
+        ),
     ] = None,
     points_m: Annotated[
         str | None,
@@ -157,6 +170,7 @@ def import_(
                     "machine": machine, "notes": notes, "points_m": points_m,
                     "artifact": _artifact_text(artifact)}
         options = {"units": units, "columns": columns, "phase_unit": phase_unit, "roles": roles,
+                   "scalar_direction": scalar_direction,
                    "sensor_mass_kg": sensor_mass_kg, "force_unit": force_unit,
                    "response_unit": response_unit, "sample_rate_hz": sample_rate_hz,
                    "force_window_s": force_window_s, "exponential_tau_s": exponential_tau_s,
@@ -164,7 +178,7 @@ def import_(
         form = M.format_from_name(file.name, fmt)
         if form != "json":
             for key in ("spindle_id", "direction", "plane"):
-                if metadata[key] is None:
+                if metadata[key] is None and not (key == "direction" and form == "uff"):
                     flag = "--" + key.replace("_", "-")
                     raise InputError(key, f"{flag} is required for --format {form}")
         if drop_nonpositive:
@@ -261,3 +275,29 @@ def delete(
     from rcsa.app import measurements as M
     from rcsa.app.stores import open_store
     write_json(_guard(lambda: M.delete_measurement(open_store(store), measurement_id)), None)
+
+
+@store_app.command("check")
+def check(store: StoreOpt = None) -> None:
+    """Verify every measurement file (schema, checksums, readability, id) and the catalogue;
+    print a JSON report; exit 1 when it lists problems. Changes nothing."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app import measurements as M
+    from rcsa.app.stores import open_store
+    report = _guard(lambda: M.check_store(open_store(store)))
+    write_json(report, None)
+    if not report["ok"]:
+        raise typer.Exit(1)
+
+
+@store_app.command("rebuild")
+def rebuild(store: StoreOpt = None) -> None:
+    """Make the catalogue (index.sqlite) again from the measurement files; print a JSON
+    report; exit 1 when some files cannot be read (listed as damaged, left out)."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app import measurements as M
+    from rcsa.app.stores import open_store
+    report = _guard(lambda: M.rebuild_catalogue(open_store(store)))
+    write_json(report, None)
+    if not report["ok"]:
+        raise typer.Exit(1)

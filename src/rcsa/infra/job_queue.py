@@ -2,9 +2,11 @@
 
 Layout (under ``<store>/jobs/``)::
 
-    jobs.sqlite          one row per job (SQLite, WAL): request, status, progress, heartbeat
-    results/<id>.json    the finished result (JSON), written atomically before the row says
-                         "succeeded"
+    jobs.sqlite          one row per job (SQLite, WAL): request, owner, status, progress,
+                         heartbeat, result size
+    results/<id>.json    the finished result (JSON), written (piece by piece for large ones,
+                         :class:`StreamedResult`) to a temporary file, fsynced and renamed
+                         before the row says "succeeded"
 
 Life of a job: :meth:`JobStore.submit` inserts it ``queued``. A :class:`JobRunner` (a
 thread in every service process, or ``run_one`` from a command) **claims** it in one
@@ -21,13 +23,29 @@ exists (runner ids are ``host:pid:token``) is recognised at once, so a restarted
 resumes its own interrupted jobs without waiting for the heartbeat to go stale. After ``max_attempts`` interrupted tries the job is
 failed instead of being retried for ever (a request that kills its worker, e.g. by memory).
 
+Limits:
+
+* **time limit** — a :class:`JobRunner` with ``time_limit_s`` fails a job that runs longer
+  (problem "Job time limit exceeded"); the job's status says so at once, and the computation
+  stops at its next progress report;
+* **per-caller quota and fair claiming** — a job is submitted for an ``owner`` (whoever asked
+  for it); ``submit(..., max_unfinished=N)`` refuses the owner's N+1st unfinished job
+  (:class:`QuotaExceeded`), and :meth:`JobStore.claim` serves owners round-robin: the queued
+  job of the owner with the fewest running jobs, then the one served least recently, then
+  the oldest — so a flood of one caller's jobs never makes another caller's job wait for the
+  flood's tail (``max_running_per_owner`` can cap an owner's running jobs outright);
+* **disk budget** — ``max_result_bytes`` caps the total size of the kept result files: after
+  each success the oldest results are evicted (file deleted, row kept with
+  ``result_evicted_utc``) until the rest fit; the newest result is always kept.
+  :meth:`JobStore.result_path` of an evicted result raises :class:`ResultEvicted`.
+
 Duplicates: every row carries ``request_sha256``, the SHA-256 of the request's canonical
 JSON (:func:`canonical_request`). ``submit(..., reuse_unfinished=True)`` returns the
 unfinished job of the same kind and request instead of queuing a copy — for callers that
 retry a submission (the REST service does so for requests with an ``Idempotency-Key``;
 the key itself, and every other HTTP rule of idempotency, live in :mod:`service.idempotency`).
-Tables created by earlier versions keep their ``idempotency_key`` and ``owner`` columns,
-which are no longer written.
+Tables created by earlier versions get the new columns on first use; their
+``idempotency_key`` column is no longer written.
 """
 
 from __future__ import annotations
@@ -46,7 +64,7 @@ from collections.abc import Callable, Mapping
 from contextlib import closing
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 import orjson
 
@@ -60,6 +78,9 @@ __all__ = [
     "JobRunner",
     "JobStore",
     "LostClaim",
+    "QuotaExceeded",
+    "ResultEvicted",
+    "StreamedResult",
     "canonical_request",
     "is_job_id",
     "runner_is_dead",
@@ -86,15 +107,36 @@ CREATE TABLE IF NOT EXISTS jobs (
     attempts         INTEGER NOT NULL DEFAULT 0,
     result_file      TEXT,
     error            TEXT,
-    summary          TEXT
+    summary          TEXT,
+    owner            TEXT,
+    result_bytes     INTEGER,
+    result_evicted_utc TEXT
 );
 CREATE INDEX IF NOT EXISTS jobs_status ON jobs (status, created_utc);
 CREATE INDEX IF NOT EXISTS jobs_request ON jobs (request_sha256, kind);
 """
+#: Columns added since the first version (``ALTER TABLE`` on tables created before them).
+_ADDED_COLUMNS = {"owner": "TEXT", "result_bytes": "INTEGER", "result_evicted_utc": "TEXT"}
+_INDEXES = """
+CREATE INDEX IF NOT EXISTS jobs_owner ON jobs (owner, status);
+CREATE INDEX IF NOT EXISTS jobs_kept ON jobs (status, finished_utc) WHERE result_file IS NOT NULL;
+"""
 _COLUMNS = ("id, kind, status, progress, created_utc, started_utc, finished_utc, attempts, "
-            "error, summary, request_sha256, heartbeat_unix")
+            "error, summary, request_sha256, heartbeat_unix, result_bytes, result_evicted_utc")
 _BUSY_TIMEOUT_S = 30.0
 _PURGE_EVERY_S = 3600.0
+#: Fair choice of a queued job: fewest running jobs of its owner, then the owner served least
+#: recently, then the oldest job. Parameters: the per-owner running cap, twice (NULL: none).
+_FAIR_CLAIM = """
+WITH running AS (SELECT owner, COUNT(*) AS n FROM jobs WHERE status = 'running' GROUP BY owner),
+     served AS (SELECT owner, MAX(started_utc) AS last FROM jobs WHERE started_utc IS NOT NULL GROUP BY owner)
+SELECT j.id, j.attempts FROM jobs AS j
+LEFT JOIN running AS r ON r.owner IS j.owner
+LEFT JOIN served AS s ON s.owner IS j.owner
+WHERE j.status = 'queued' AND (? IS NULL OR COALESCE(r.n, 0) < ?)
+ORDER BY COALESCE(r.n, 0), COALESCE(s.last, ''), j.created_utc, j.id
+LIMIT 1
+"""
 
 
 _HOST = socket.gethostname()
@@ -131,7 +173,46 @@ def canonical_request(request: Mapping[str, Any]) -> tuple[bytes, str]:
 
 
 class LostClaim(RcsaError):
-    """The runner no longer owns the job (another runner took it over as stale)."""
+    """The runner no longer owns the job (another runner took it over as stale, or it was
+    failed for running past its time limit)."""
+
+
+class QuotaExceeded(RcsaError):
+    """The owner already has as many unfinished jobs as allowed.
+
+    Attributes
+    ----------
+    owner : str
+    limit : int
+    """
+
+    def __init__(self, owner: str, limit: int) -> None:
+        super().__init__(f"{owner} already has {limit} unfinished jobs (queued or running), the most one caller "
+                         "may have; wait for some to finish")
+        self.owner = owner
+        self.limit = limit
+
+
+class ResultEvicted(RcsaError):
+    """A succeeded job's result file was deleted to keep the kept results within their disk budget."""
+
+    def __init__(self, job_id: str, evicted_utc: str) -> None:
+        super().__init__(f"the result of job {job_id} was deleted on {evicted_utc} to keep the kept job results "
+                         "within their disk budget (oldest first); submit the job again")
+        self.job_id = job_id
+        self.evicted_utc = evicted_utc
+
+
+@dataclass(frozen=True)
+class StreamedResult:
+    """A result too large to build in memory, returned by a :data:`Handler` instead of a document.
+
+    ``write(fh)`` computes and writes the result's bytes (JSON) to the binary file ``fh`` piece
+    by piece, and returns the job's summary. The runner calls it with the job's temporary
+    result file, then fsyncs and renames it as for any other result.
+    """
+
+    write: Callable[[BinaryIO], Mapping[str, Any] | None]
 
 
 @dataclass(frozen=True, slots=True)
@@ -157,6 +238,10 @@ class Job:
         SHA-256 of the request's canonical JSON (:func:`canonical_request`).
     heartbeat_unix : float or None
         Last sign of life of its runner, s since the epoch.
+    result_bytes : int or None
+        Size of the result file (succeeded jobs).
+    result_evicted_utc : str or None
+        When the result file was deleted to keep the results within their disk budget.
     """
 
     id: str
@@ -171,14 +256,21 @@ class Job:
     summary: dict[str, Any] | None
     request_sha256: str
     heartbeat_unix: float | None
+    result_bytes: int | None = None
+    result_evicted_utc: str | None = None
 
     @classmethod
     def _from_row(cls, row: tuple) -> Job:
         (jid, kind, status, progress, created, started, finished, attempts, error, summary,
-         sha, heartbeat) = row
+         sha, heartbeat, result_bytes, evicted) = row
         return cls(jid, kind, status, float(progress), created, started, finished, int(attempts),
                    json.loads(error) if error else None, json.loads(summary) if summary else None,
-                   sha, heartbeat)
+                   sha, heartbeat, None if result_bytes is None else int(result_bytes), evicted)
+
+    @property
+    def has_result(self) -> bool:
+        """Whether the job succeeded and its result file is kept."""
+        return self.status == "succeeded" and self.result_evicted_utc is None
 
     @property
     def finished(self) -> bool:
@@ -190,7 +282,8 @@ class Job:
         return {"id": self.id, "kind": self.kind, "status": self.status, "progress": self.progress,
                 "created_utc": self.created_utc, "started_utc": self.started_utc,
                 "finished_utc": self.finished_utc, "attempts": self.attempts,
-                "error": self.error, "summary": self.summary}
+                "error": self.error, "summary": self.summary, "result_bytes": self.result_bytes,
+                "result_evicted_utc": self.result_evicted_utc}
 
 
 class JobStore:
@@ -204,17 +297,26 @@ class JobStore:
         A running job whose heartbeat is older than this is considered abandoned, s.
     max_attempts : int
         Interrupted tries after which a job is failed rather than resumed.
+    max_result_bytes : int, optional
+        Disk budget of the kept result files: the oldest are evicted beyond it (None: no cap).
     """
 
     def __init__(self, directory: str | os.PathLike[str], *, stale_after_s: float = 60.0,
-                 max_attempts: int = 3) -> None:
+                 max_attempts: int = 3, max_result_bytes: int | None = None) -> None:
         self.directory = Path(directory)
         self.results = self.directory / "results"
         self.stale_after_s = float(stale_after_s)
         self.max_attempts = int(max_attempts)
+        self.max_result_bytes = None if max_result_bytes is None else int(max_result_bytes)
         self.results.mkdir(parents=True, exist_ok=True)
         with closing(self._connect()) as con:
             con.executescript(_SCHEMA)
+            have = {r[1] for r in con.execute("PRAGMA table_info(jobs)")}
+            for name, sql_type in _ADDED_COLUMNS.items():
+                if name not in have:
+                    with contextlib.suppress(sqlite3.OperationalError):  # another process added it first
+                        con.execute(f"ALTER TABLE jobs ADD COLUMN {name} {sql_type}")
+            con.executescript(_INDEXES)
 
     def __repr__(self) -> str:
         return f"JobStore({str(self.directory)!r})"
@@ -224,7 +326,8 @@ class JobStore:
         return connect(self.directory / "jobs.sqlite", synchronous="FULL", timeout_s=_BUSY_TIMEOUT_S)
 
     # ------------------------------------------------------------------ submit / read
-    def submit(self, kind: str, request: Mapping[str, Any], *, reuse_unfinished: bool = False) -> Job:
+    def submit(self, kind: str, request: Mapping[str, Any], *, reuse_unfinished: bool = False,
+               owner: str | None = None, max_unfinished: int | None = None) -> Job:
         """Queue a job; return its state.
 
         Parameters
@@ -236,6 +339,15 @@ class JobStore:
         reuse_unfinished : bool
             Return the queued or running job of this kind with the same request (same
             ``request_sha256``), if there is one, instead of queuing a copy.
+        owner : str, optional
+            Who asked for it (claims are fair across owners; quotas count per owner).
+        max_unfinished : int, optional
+            Refuse the job when ``owner`` already has this many queued or running jobs.
+
+        Raises
+        ------
+        QuotaExceeded
+            ``owner`` is at ``max_unfinished`` (checked atomically with the insert).
         """
         data, sha = canonical_request(request)
         job_id = "j-" + secrets.token_hex(16)
@@ -245,9 +357,14 @@ class JobStore:
                                   "('queued', 'running') ORDER BY created_utc, id LIMIT 1", (sha, kind)).fetchone()
                 if row is not None:
                     return self.get(row[0])
+            if max_unfinished is not None:
+                n = con.execute("SELECT COUNT(*) FROM jobs WHERE owner IS ? AND status IN ('queued', 'running')",
+                                (owner,)).fetchone()[0]
+                if n >= max_unfinished:
+                    raise QuotaExceeded(owner or "this caller", int(max_unfinished))
             con.execute(
-                "INSERT INTO jobs (id, kind, status, request, request_sha256, created_utc) "
-                "VALUES (?, ?, 'queued', ?, ?, ?)", (job_id, kind, data, sha, utc_now_iso()))
+                "INSERT INTO jobs (id, kind, status, request, request_sha256, created_utc, owner) "
+                "VALUES (?, ?, 'queued', ?, ?, ?, ?)", (job_id, kind, data, sha, utc_now_iso(), owner))
         return self.get(job_id)
 
     def get(self, job_id: str) -> Job:
@@ -282,8 +399,12 @@ class JobStore:
         ------
         NotFoundError
             No such job, or it has not succeeded (see :meth:`get` for its status).
+        ResultEvicted
+            It succeeded, but its result was evicted (disk budget).
         """
         job = self.get(job_id)
+        if job.status == "succeeded" and job.result_evicted_utc is not None:
+            raise ResultEvicted(job.id, job.result_evicted_utc)
         path = self.results / f"{job.id}.json"
         if job.status != "succeeded" or not path.is_file():
             raise NotFoundError("result of job", job_id)
@@ -306,9 +427,20 @@ class JobStore:
             found = dict(con.execute("SELECT status, COUNT(*) FROM jobs GROUP BY status").fetchall())
         return {s: int(found.get(s, 0)) for s in JOB_STATUSES}
 
+    def kept_result_bytes(self) -> int:
+        """Total size of the kept result files, bytes (what the disk budget caps)."""
+        with closing(self._connect()) as con:
+            return int(con.execute("SELECT COALESCE(SUM(result_bytes), 0) FROM jobs WHERE status = 'succeeded' "
+                                   "AND result_file IS NOT NULL").fetchone()[0])
+
     # ------------------------------------------------------------------ runner side
-    def claim(self, runner: str) -> Job | None:
-        """Atomically take the oldest queued (or abandoned running) job for ``runner``."""
+    def claim(self, runner: str, *, max_running_per_owner: int | None = None) -> Job | None:
+        """Atomically take a job for ``runner``: an abandoned running one first, else a queued one.
+
+        Queued jobs are served fairly across owners: the job of the owner with the fewest
+        running jobs, then of the owner served least recently, then the oldest. With
+        ``max_running_per_owner``, an owner's jobs wait while it has that many running.
+        """
         now = time.time()
         with closing(self._connect()) as con, transaction(con):
             dead = [(job_id,) for job_id, owner in con.execute(
@@ -318,9 +450,10 @@ class JobStore:
                 con.executemany("UPDATE jobs SET heartbeat_unix = NULL WHERE id = ?", dead)
             while True:
                 row = con.execute(
-                    "SELECT id, attempts FROM jobs WHERE status = 'queued' OR "
-                    "(status = 'running' AND (heartbeat_unix IS NULL OR heartbeat_unix < ?)) "
-                    "ORDER BY created_utc, id LIMIT 1", (now - self.stale_after_s,)).fetchone()
+                    "SELECT id, attempts FROM jobs WHERE status = 'running' AND (heartbeat_unix IS NULL OR "
+                    "heartbeat_unix < ?) ORDER BY created_utc, id LIMIT 1", (now - self.stale_after_s,)).fetchone()
+                if row is None:
+                    row = con.execute(_FAIR_CLAIM, (max_running_per_owner, max_running_per_owner)).fetchone()
                 if row is None:
                     job_id = None
                     break
@@ -359,16 +492,25 @@ class JobStore:
         if cur.rowcount != 1:
             raise LostClaim(f"job {job_id} is no longer owned by {runner}")
 
+    def result_tmp(self, job_id: str, runner: str) -> Path:
+        """Where ``runner`` writes the result of ``job_id`` before :meth:`succeed_with_file`."""
+        return self.results / f".{job_id}.{runner.replace(':', '_')}.tmp"
+
     def succeed(self, job_id: str, runner: str, result: bytes,
                 summary: Mapping[str, Any] | None = None) -> None:
         """Store the result (JSON bytes) and mark the job succeeded."""
-        final = self.results / f"{job_id}.json"
-        tmp = self.results / f".{job_id}.{runner.replace(':', '_')}.tmp"
+        tmp = self.result_tmp(job_id, runner)
         with open(tmp, "wb") as fh:
             fh.write(result)
             fh.flush()
             os.fsync(fh.fileno())
-        self._finish(job_id, runner, "succeeded", summary=summary, rename=(tmp, final))
+        self.succeed_with_file(job_id, runner, tmp, summary)
+
+    def succeed_with_file(self, job_id: str, runner: str, tmp: Path,
+                          summary: Mapping[str, Any] | None = None) -> None:
+        """Mark the job succeeded with the result ``runner`` wrote (and fsynced) to ``tmp``
+        (:meth:`result_tmp`); then evict old results beyond the disk budget."""
+        self._finish(job_id, runner, "succeeded", summary=summary, rename=(tmp, self.results / f"{job_id}.json"))
 
     def fail(self, job_id: str, runner: str, error: Mapping[str, Any]) -> None:
         """Mark the job failed with a problem document."""
@@ -382,19 +524,64 @@ class JobStore:
                                     (job_id, runner)).fetchone()
                 if owned is None:
                     raise LostClaim(f"job {job_id} is no longer owned by {runner}")
+                size = None
                 if rename is not None:
+                    size = rename[0].stat().st_size
                     os.replace(*rename)
                 con.execute(
                     "UPDATE jobs SET status = ?, progress = CASE WHEN ? = 'succeeded' THEN 1 ELSE progress END, "
-                    "finished_utc = ?, result_file = ?, error = ?, summary = ?, runner = NULL WHERE id = ?",
+                    "finished_utc = ?, result_file = ?, error = ?, summary = ?, runner = NULL, result_bytes = ? "
+                    "WHERE id = ?",
                     (status, status, utc_now_iso(), rename[1].name if rename else None,
                      json.dumps(error) if error is not None else None,
-                     json.dumps(summary) if summary is not None else None, job_id))
+                     json.dumps(summary) if summary is not None else None, size, job_id))
+                # in the same transaction: nobody sees the new result before the old ones are evicted
+                evicted = self._evict(con, self.max_result_bytes) if rename and self.max_result_bytes is not None \
+                    else []
         except BaseException:
             if rename is not None:
                 with contextlib.suppress(OSError):
                     rename[0].unlink()
             raise
+        self._unlink_evicted(evicted)
+
+    def evict(self, max_bytes: int) -> list[str]:
+        """Delete the oldest kept results until the rest take at most ``max_bytes``; return their job ids.
+
+        The newest result is always kept (even when it alone is larger). An evicted job keeps
+        its row: ``status`` stays ``succeeded``, ``result_evicted_utc`` says when.
+        """
+        with closing(self._connect()) as con, transaction(con):
+            evicted = self._evict(con, max_bytes)
+        self._unlink_evicted(evicted)
+        return evicted
+
+    def _evict(self, con: sqlite3.Connection, max_bytes: int) -> list[str]:
+        """Mark the results to evict (inside the caller's transaction); :meth:`_unlink_evicted` after it."""
+        rows = con.execute("SELECT id, result_bytes FROM jobs WHERE status = 'succeeded' AND result_file IS NOT "
+                           "NULL ORDER BY finished_utc DESC, id DESC").fetchall()
+        total, evicted = 0, []
+        for k, (job_id, size) in enumerate(rows):
+            if size is None:  # a result of an earlier version: measure it once
+                with contextlib.suppress(OSError):
+                    size = (self.results / f"{job_id}.json").stat().st_size
+                    con.execute("UPDATE jobs SET result_bytes = ? WHERE id = ?", (size, job_id))
+            total += int(size or 0)
+            if k > 0 and total > max_bytes:
+                evicted.append(job_id)
+        if evicted:
+            now = utc_now_iso()
+            con.executemany("UPDATE jobs SET result_file = NULL, result_evicted_utc = ? WHERE id = ?",
+                            [(now, i) for i in evicted])
+        return evicted
+
+    def _unlink_evicted(self, evicted: list[str]) -> None:
+        for i in evicted:
+            with contextlib.suppress(FileNotFoundError):
+                (self.results / f"{i}.json").unlink()
+        if evicted:
+            log.warning("job results: evicted %d oldest result(s) to keep the kept results within %s bytes: %s",
+                        len(evicted), self.max_result_bytes, ", ".join(evicted))
 
     def purge(self, older_than_s: float) -> int:
         """Delete finished jobs (rows and result files) finished more than ``older_than_s`` ago."""
@@ -409,8 +596,10 @@ class JobStore:
         return len(ids)
 
 
-#: A handler computes a job: ``handler(request, progress) -> (result document, summary)``,
-#: where ``progress(done, total)`` may be called as work advances.
+#: A handler computes a job: ``handler(request, progress) -> (result, summary)``, where
+#: ``progress(done, total)`` may be called as work advances (it raises :class:`LostClaim`
+#: when the run must stop: the job was taken over, or failed for its time limit) and the
+#: result is a JSON-ready document or a :class:`StreamedResult`.
 Handler = Callable[[dict[str, Any], Callable[[int, int], None]], tuple[Any, Mapping[str, Any] | None]]
 
 
@@ -432,12 +621,20 @@ class JobRunner:
         ``on_finish(job, seconds)`` after each job (for metrics).
     retention_s : float, optional
         Purge finished jobs older than this, hourly (:meth:`JobStore.purge`); None keeps them.
+    time_limit_s : float, optional
+        A run longer than this fails the job ("Job time limit exceeded", checked at every
+        heartbeat); the computation stops at its next progress report. None: no limit.
+    max_running_per_owner : int, optional
+        Passed to :meth:`JobStore.claim`.
     """
 
     def __init__(self, jobs: JobStore, handlers: Mapping[str, Handler], *, poll_s: float = 1.0,
                  heartbeat_s: float = 2.0, on_finish: Callable[[Job, float], None] | None = None,
-                 retention_s: float | None = None) -> None:
+                 retention_s: float | None = None, time_limit_s: float | None = None,
+                 max_running_per_owner: int | None = None) -> None:
         self.jobs = jobs
+        self.time_limit_s = None if time_limit_s is None else float(time_limit_s)
+        self.max_running_per_owner = max_running_per_owner
         self.handlers = dict(handlers)
         self.poll_s = float(poll_s)
         self.heartbeat_s = float(heartbeat_s)
@@ -495,7 +692,7 @@ class JobRunner:
 
     def run_one(self) -> bool:
         """Claim and run one job; return whether there was one."""
-        job = self.jobs.claim(self.runner_id)
+        job = self.jobs.claim(self.runner_id, max_running_per_owner=self.max_running_per_owner)
         if job is None:
             return False
         t0 = time.perf_counter()
@@ -503,10 +700,15 @@ class JobRunner:
         state = {"progress": 0.0}
         done = threading.Event()
         lost = threading.Event()
+        started = time.monotonic()
 
         def beat() -> None:
-            while not done.wait(self.heartbeat_s):
+            while not done.wait(min(self.heartbeat_s, self.time_limit_s or self.heartbeat_s)):
                 try:
+                    if self.time_limit_s is not None and time.monotonic() - started > self.time_limit_s:
+                        self._time_out(job)
+                        lost.set()
+                        return
                     self.jobs.heartbeat(job.id, self.runner_id, state["progress"])
                 except LostClaim:
                     lost.set()
@@ -517,27 +719,45 @@ class JobRunner:
         def progress(n_done: int, total: int) -> None:
             state["progress"] = n_done / total if total else 1.0
             if lost.is_set():
-                raise LostClaim(f"job {job.id} was taken over by another runner")
+                raise LostClaim(f"job {job.id} was taken over by another runner or stopped")
 
         beater = threading.Thread(target=beat, name=f"rcsa-job-heartbeat-{job.id}", daemon=True)
         beater.start()
+        tmp = self.jobs.result_tmp(job.id, self.runner_id)
+        for stale in self.jobs.results.glob(f".{job.id}.*.tmp"):  # a half-written result of an interrupted run
+            with contextlib.suppress(OSError):
+                stale.unlink()
         try:
             handler = self.handlers.get(job.kind)
             if handler is None:
                 raise InputError("kind", f"this service cannot run jobs of kind {job.kind!r}")
             document, summary = handler(self.jobs.request(job.id), progress)
-            result = orjson.dumps(document, option=orjson.OPT_SERIALIZE_NUMPY)
+            with open(tmp, "wb") as fh:
+                if isinstance(document, StreamedResult):
+                    written = document.write(fh)  # computed as it is written, heartbeats going on
+                    summary = written if written is not None else summary
+                else:
+                    fh.write(orjson.dumps(document, option=orjson.OPT_SERIALIZE_NUMPY))
+                fh.flush()
+                os.fsync(fh.fileno())
             done.set()
             beater.join()
-            self.jobs.succeed(job.id, self.runner_id, result, summary)
+            if lost.is_set():
+                raise LostClaim(f"job {job.id} was stopped")
+            self.jobs.succeed_with_file(job.id, self.runner_id, tmp, summary)
         except LostClaim:
-            log.warning("job %s was taken over by another runner; dropping this run", job.id)
+            log.warning("job %s was taken over by another runner or stopped; dropping this run", job.id)
             return True
         except InputError as exc:
             self._fail(job, {"title": "Invalid job request", "status": 422, "detail": str(exc),
                              "errors": [{"field": exc.field, "detail": exc.rule}]})
         except RcsaError as exc:
-            self._fail(job, {"title": "Job failed", "status": 409, "detail": str(exc)})
+            status = getattr(exc, "http_status", 409)
+            self._fail(job, {"title": getattr(exc, "title", "Job failed"), "status": status, "detail": str(exc)})
+        except OSError as exc:
+            log.exception("job %s: could not write its result", job.id)
+            self._fail(job, {"title": "Job failed", "status": 507, "detail": "the job's result could not be "
+                             f"written ({exc.strerror or exc}); the operator should check the store's disk"})
         except Exception:
             log.exception("job %s failed with an internal error", job.id)
             self._fail(job, {"title": "Internal error", "status": 500,
@@ -546,6 +766,8 @@ class JobRunner:
         finally:
             done.set()
             beater.join()
+            with contextlib.suppress(OSError):
+                tmp.unlink()
         elapsed = time.perf_counter() - t0
         with contextlib.suppress(NotFoundError):
             final = self.jobs.get(job.id)
@@ -556,6 +778,14 @@ class JobRunner:
                 except Exception:
                     log.exception("job %s: on_finish hook failed", job.id)
         return True
+
+    def _time_out(self, job: Job) -> None:
+        limit = self.time_limit_s
+        log.warning("job %s ran past its time limit of %g s: failed", job.id, limit)
+        self.jobs.fail(job.id, self.runner_id, {
+            "title": "Job time limit exceeded", "status": 504,
+            "detail": f"the job ran longer than its time limit of {limit:g} s and was stopped; split the work "
+                      "into smaller jobs, or ask the operator to raise RCSA_JOB_TIME_LIMIT_S"})
 
     def _fail(self, job: Job, error: Mapping[str, Any]) -> None:
         with contextlib.suppress(LostClaim):

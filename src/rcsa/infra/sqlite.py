@@ -1,6 +1,6 @@
 """One way to open the project's SQLite databases, and one transaction helper.
 
-Four small databases live in a store directory, each opened by a short-lived connection per
+Five databases live in a store directory, each opened by a short-lived connection per
 call (nothing is shared across threads or ``fork``), all in WAL mode so that readers never
 wait for a writer and several processes may share a file:
 
@@ -11,6 +11,8 @@ database                       ``synchronous``  why
                                                power cut must not lose it or its result row
 ``libraries/index.sqlite``     ``FULL``        a sync commits a revision its caller was told
                                                about (the sync report)
+``libraries/results/…sqlite``  ``FULL``        computed results (a chunk per transaction): a
+                                               library commit references them once written
 ``idempotency/keys.sqlite``    ``FULL``        a kept answer is what stops a retried upload
                                                or batch from acting twice
 ``index.sqlite`` (catalogue)   ``NORMAL``      a cache of the measurement files' metadata,

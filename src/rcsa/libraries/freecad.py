@@ -15,12 +15,15 @@ Mapping rules
 * Tool: ``diameter_m`` ← ``Diameter``, ``shank_diameter_m`` ← ``ShankDiameter``,
   ``overall_length_m`` ← ``Length``, ``flute_length_m`` ← ``CuttingEdgeHeight``; FreeCAD has
   no stickout, so the caller gives ``stickout_m``. ``teeth`` ← ``Flutes``; material ←
-  ``Material`` ("carbide"/"hss", any case), else the default with a warning. Neck
-  parameters are not read (a warning says so).
+  ``Material`` through :func:`~rcsa.libraries.tool_materials.tool_material` ("HSS",
+  "Carbide", legacy "HighSpeedSteel", "HighCarbonToolSteel", "Sialon", ...), else the
+  default with a warning. Neck parameters are not read (a warning says so). An inserted
+  length ``Length − stickout`` below twice ``ShankDiameter`` is a warning.
 * Holder: the outer radius R(z) of the outline (the largest radius of the outline's edges at
   that height) between consecutive vertex heights is linear; a constant stretch is one
-  cylinder, a sloped one ``holder_segments_per_cone`` equal cylinders at their mid-height
-  diameters (as for Fusion cones). FreeCAD holders carry no gauge line: the whole outline is
+  cylinder, a sloped one equal cylinders at their mid-height diameters, as many as
+  :func:`~rcsa.libraries.profiles.cone_steps` gives for its taper (as for Fusion cones;
+  ``holder_segments_per_cone`` overrides). FreeCAD holders carry no gauge line: the whole outline is
   taken as the holder below the gauge line, with a warning. Segments run from the top of
   the outline (spindle side) to z = 0 (tool face), the bore is ``ShankDiameter``.
 * Id: ``"<toolbit id>@<holder id>"``, each the file stem when read from a path, else
@@ -39,11 +42,15 @@ from pathlib import Path
 from typing import Any
 
 from rcsa.errors import InputError
-from rcsa.libraries.fusion import Combination, cone_cylinders, unit_to_metres
+from rcsa.libraries.combination import Combination
+from rcsa.libraries.profiles import cone_cylinders
+from rcsa.libraries.quantities import count_value, unit_to_metres
+from rcsa.libraries.tool_materials import tool_material
 from rcsa.model import fields
+from rcsa.model.assembly import shallow_insertion_note
 from rcsa.model.bounds import MAX_HOLDER_SEGMENTS_PER_CONE
 
-__all__ = ["freecad_combination", "load_freecad_object", "parse_length_m"]
+__all__ = ["MAX_FILE_BYTES", "freecad_combination", "load_freecad_object", "map_toolbit", "parse_length_m"]
 
 MAX_FILE_BYTES = 1024 * 1024
 """Largest accepted ``.fctb`` / ``.fcholder`` file, bytes."""
@@ -147,7 +154,7 @@ def freecad_combination(
     stickout_m: float,
     holder_material: str = "steel",
     tool_material_default: str = "carbide",
-    holder_segments_per_cone: int = 4,
+    holder_segments_per_cone: int | None = None,
     fluted_diameter_ratio: float = 0.8,
 ) -> Combination:
     """Map a FreeCAD toolbit in a FreeCAD holder to a tool–holder combination.
@@ -160,8 +167,8 @@ def freecad_combination(
         Length from the holder's tool-end face to the tip, m (FreeCAD does not store it).
     holder_material, tool_material_default : str
         As in :func:`~rcsa.libraries.library_combinations`.
-    holder_segments_per_cone : int
-        Cylinders per sloped stretch of the holder outline (≥ 1).
+    holder_segments_per_cone : int, optional
+        Cylinders per sloped stretch of the holder outline (≥ 1); default from its taper.
     fluted_diameter_ratio : float
         Equivalent fluted diameter / DC, in (0, 1].
 
@@ -178,10 +185,25 @@ def freecad_combination(
     """
     tool_obj, tool_id = load_freecad_object(toolbit)
     holder_obj, holder_id = load_freecad_object(holder)
+    return map_toolbit(tool_obj, tool_id, holder_obj, holder_id, stickout_m=stickout_m,
+                       holder_material=holder_material, tool_material_default=tool_material_default,
+                       holder_segments_per_cone=holder_segments_per_cone,
+                       fluted_diameter_ratio=fluted_diameter_ratio)
+
+
+def map_toolbit(tool_obj: Mapping[str, Any], tool_id: str, holder_obj: Mapping[str, Any] | None,
+                holder_id: str | None, *, stickout_m: float, holder_material: str = "steel",
+                tool_material_default: str = "carbide", holder_segments_per_cone: int | None = None,
+                fluted_diameter_ratio: float = 0.8, index: int = 0, number: int | None = None) -> Combination:
+    """:func:`freecad_combination` on objects already read, with their ids (``holder_obj`` None: skipped).
+
+    ``index`` and ``number`` (the ``.fctl`` tool number) are the item's place in its library.
+    """
     if isinstance(stickout_m, bool) or not isinstance(stickout_m, (int, float)) \
             or not math.isfinite(stickout_m) or stickout_m <= 0:
         raise InputError("stickout_m", f"must be a number > 0, got {stickout_m!r}")
-    fields.integer(holder_segments_per_cone, "holder_segments_per_cone", ge=1, le=MAX_HOLDER_SEGMENTS_PER_CONE)
+    if holder_segments_per_cone is not None:
+        fields.integer(holder_segments_per_cone, "holder_segments_per_cone", ge=1, le=MAX_HOLDER_SEGMENTS_PER_CONE)
     if isinstance(fluted_diameter_ratio, bool) or not isinstance(fluted_diameter_ratio, (int, float)) \
             or not 0 < fluted_diameter_ratio <= 1:
         raise InputError("fluted_diameter_ratio", f"must be a number in (0, 1], got {fluted_diameter_ratio!r}")
@@ -190,11 +212,14 @@ def freecad_combination(
     shape = _shape(tool_obj)
     name = tool_obj.get("name")
     warnings: list[str] = []
-    base = {"id": f"{tool_id}@{holder_id}", "index": 0, "description": name if isinstance(name, str) else "",
+    base = {"id": tool_id if holder_id is None else f"{tool_id}@{holder_id}", "index": index, "number": number,
+            "description": name if isinstance(name, str) else "",
             "teeth": _flutes(params.get("Flutes", attrs.get("Flutes")), warnings), "tool_type": shape}
     if shape.lower() in _SKIPPED_SHAPES:
         return Combination(status="skipped", reason=f"unsupported tool type: {_SKIPPED_SHAPES[shape.lower()]}",
                            warnings=tuple(warnings), **base)
+    if holder_obj is None:
+        return Combination(status="skipped", reason="no holder", warnings=tuple(warnings), **base)
     try:
         tool = _tool(params, attrs, float(stickout_m), tool_material_default, float(fluted_diameter_ratio),
                      warnings)
@@ -217,10 +242,9 @@ def _shape(obj: Mapping[str, Any]) -> str:
 def _flutes(value: object, warnings: list[str]) -> int | None:
     if value is None:
         return None
-    if isinstance(value, str) and value.strip().isdigit():
-        value = int(value.strip())
-    if isinstance(value, int) and not isinstance(value, bool) and value > 0:
-        return value
+    count = count_value(value)
+    if count is not None and count > 0:
+        return count
     warnings.append(f"Flutes {value!r} is not a positive integer; teeth unknown")
     return None
 
@@ -243,15 +267,15 @@ def _tool(params: Mapping[str, Any], attrs: Mapping[str, Any], stickout: float, 
     if any(k.lower().startswith("neck") for k in params):
         warnings.append("neck parameters are not modelled; the overhang above the flutes uses ShankDiameter")
     raw = params.get("Material", attrs.get("Material"))
-    key = raw.strip().lower() if isinstance(raw, str) else None
-    if key in ("carbide", "hss"):
-        material = key
-        if key == "hss":
-            warnings.append("material 'hss' is not built in: define it under 'materials'")
-    else:
+    material, note = tool_material(raw)
+    if material is None:
         material = default_material
-        what = "missing" if raw is None else f"{raw!r} is neither 'carbide' nor 'hss'"
+        what = "missing" if raw is None else f"{raw!r} names no known tool material"
         warnings.append(f"Material {what}; material {default_material!r} assumed")
+    elif note is not None:
+        warnings.append(f"Material {raw!r} {note}")
+    if (shallow := shallow_insertion_note(oal - stickout, sfdm)) is not None:
+        warnings.append(shallow)
     return {"material": material, "diameter_m": dc, "shank_diameter_m": sfdm, "overall_length_m": oal,
             "flute_length_m": lcf, "stickout_m": stickout, "fluted_diameter_ratio": ratio}
 
@@ -295,7 +319,7 @@ def _profile(holder: Mapping[str, Any]) -> tuple[list[tuple[float, float]], str]
     return pts, units
 
 
-def _holder_segments(holder: Mapping[str, Any], bore_m: float, per_cone: int, material: str,
+def _holder_segments(holder: Mapping[str, Any], bore_m: float, per_cone: int | None, material: str,
                      warnings: list[str]) -> list[dict[str, Any]]:
     try:
         pts, units = _profile(holder)
@@ -312,7 +336,7 @@ def _holder_segments(holder: Mapping[str, Any], bore_m: float, per_cone: int, ma
             raise InputError("holder.profile", f"leaves a gap between z = {z0:g} and {z1:g}")
         # R is linear over the stretch: its values at the quarter points fix the end diameters
         d0, d1 = 2 * (1.5 * r_lo - 0.5 * r_hi), 2 * (1.5 * r_hi - 0.5 * r_lo)
-        pieces.extend(cone_cylinders(h, d0, d1, 1 if r_lo == r_hi else per_cone))
+        pieces.extend(cone_cylinders(h, d0, d1, 1 if r_lo == r_hi else per_cone))  # None: from the taper
     out = []
     for length, d in reversed(pieces):
         outer, length_m = unit_to_metres(d, units), unit_to_metres(length, units)

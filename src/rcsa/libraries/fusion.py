@@ -4,7 +4,9 @@ A Fusion library is ``{"data": [...], "version": n}`` (``.json``), or the same J
 ``tools.json`` in a zip (``.tools``). Each ``data`` item is a cutting tool, possibly with its
 holder embedded under ``"holder"``, or a standalone holder (``"type": "holder"``).
 :func:`library_combinations` turns every item into one :class:`Combination` whose ``holder``
-and ``tool`` are in the contract's assembly format (SI metres, ``contract.md``).
+and ``tool`` are in the contract's assembly format (SI metres, ``contract.md``). This module
+reads the library and maps items; the geometry of one item is
+:mod:`rcsa.libraries.fusion_geometry`.
 
 Mapping rules (the choices made here)
 -------------------------------------
@@ -13,6 +15,11 @@ Units
     ``unit`` independently. Accepted spellings (case-insensitive): millimeters, millimeter,
     millimetres, millimetre, mm; inches, inch, in; meters, meter, metres, metre, m.
     Anything else is an ``error`` entry; a unit is never guessed.
+Numbers
+    A JSON number, or a string holding one number (``"44"``), in the object's unit; a
+    string with a unit (``"44 mm"``) only when that unit is the object's own; anything else
+    is an ``error`` entry naming the field (:mod:`rcsa.libraries.quantities`). ``NOF`` and
+    ``post-process.number`` may be integer strings.
 Ids
     The Fusion ``guid`` when present; else ``"T<post-process.number>"`` when that number is
     unique among the library's guid-less items; else ``"fusion-<16 hex>"``, the start of the
@@ -25,27 +32,28 @@ Holder
     end is within ``gaugeLength`` are kept (a segment straddling the gauge line is cut at it,
     with a warning); without ``gaugeLength`` all segments are kept, with a warning. The kept
     list is reversed so that it runs from the gauge line toward the tool end (contract order).
-    A cone (lower ≠ upper diameter) becomes ``holder_segments_per_cone`` cylinders of equal
-    length, each at the cone's diameter at the middle of its piece (this preserves the
-    length and the mean diameter exactly; the volume is underestimated by
-    π·h·Δd²/(48·n²), 0.03 % for a 42→50 mm, 8 mm cone with n = 4). A cylinder stays one.
+    A cone (lower ≠ upper diameter) becomes equal-length cylinders at the cone's diameter
+    at the middle of each piece, as many as :func:`~rcsa.libraries.profiles.cone_steps`
+    says for its taper (within 0.5 % of the converged cone) unless
+    ``holder_segments_per_cone`` fixes the number. A cylinder stays one.
     The bore (``inner_diameter_m``) is the tool's shank diameter SFDM everywhere.
 Tool
     ``diameter_m`` ← DC, ``shank_diameter_m`` ← SFDM, ``overall_length_m`` ← OAL,
     ``flute_length_m`` ← LCF, ``stickout_m`` ← LB (Fusion "length below holder"; when LB is
     absent it is ``assemblyGaugeLength − holder gaugeLength``, with a warning; when both are
-    present a mismatch over 0.01 mm is a warning). ``material`` ← ``BMC`` ("carbide",
-    "hss"), else ``tool_material_default`` with a warning.
+    present a mismatch over 0.01 mm is a warning). ``material`` ← ``BMC`` through
+    :func:`~rcsa.libraries.tool_materials.tool_material` ("carbide", "hss", "ti coated",
+    "ceramics", vendor spellings such as "HSS-Co"), else ``tool_material_default`` with a
+    warning. An inserted length OAL − LB below twice SFDM is a warning (shallow clamping).
 Necks
     The overhang profile from the flute end to LB is built from ``shoulder-length`` /
     ``shoulder-diameter`` (the body between the flute end and the shoulder; at DC when no
     shoulder diameter is given) and ``shaft.segments`` (same schema and order as holder
     segments, stacked from the shoulder, or from the flute end with
-    ``shaft_origin="flute_end"``), then SFDM. Where it is thinner than SFDM the tool gets the
-    contract extension fields ``shoulder_length_m`` (from the tip to the end of the thin part,
-    capped at the stickout) and ``shoulder_diameter_m`` (the smallest diameter there); a
-    profile that is not one constant neck is approximated that way with a warning.
-    A body thicker than the shank is modelled at the shank diameter, with a warning.
+    ``shaft_origin="flute_end"``), then SFDM. Where it is thinner than SFDM the tool gets
+    ``shoulder_length_m``/``shoulder_diameter_m`` (one constant neck) or ``neck_segments``
+    (steps and cones, a cone stepped like a holder cone), from the flute end toward the
+    holder. A body thicker than the shank is modelled at the shank diameter, with a warning.
 """
 
 from __future__ import annotations
@@ -54,44 +62,40 @@ import copy
 import hashlib
 import io
 import json
-import math
 import os
 import zipfile
 from collections import Counter
-from collections.abc import Iterator, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
-from typing import Any, Literal
+from typing import Any
 
 from rcsa.errors import InputError
+from rcsa.libraries import fusion_geometry as geometry
+from rcsa.libraries.combination import Combination, LibraryImport
+from rcsa.libraries.fusion_geometry import ShaftOrigin
+from rcsa.libraries.profiles import cone_cylinders
+from rcsa.libraries.quantities import count_value, unit_to_metres
+from rcsa.libraries.tool_materials import tool_material
 from rcsa.model import fields
+from rcsa.model.assembly import shallow_insertion_note
 from rcsa.model.bounds import MAX_HOLDER_SEGMENTS_PER_CONE, MIN_FLUTED_DIAMETER_RATIO
 
 __all__ = [
+    "MAX_LIBRARY_BYTES",
     "SUPPORTED_TOOL_TYPES",
     "Combination",
     "FusionLibrary",
-    "cone_cylinders",
     "LibraryImport",
+    "cone_cylinders",
     "library_combinations",
     "load_fusion_library",
+    "tools_json_member",
     "unit_to_metres",
 ]
 
-Status = Literal["ok", "skipped", "error"]
-ShaftOrigin = Literal["shoulder", "flute_end"]
-
 MAX_LIBRARY_BYTES = 64 * 1024 * 1024
 """Largest accepted library file or ``tools.json`` inside a ``.tools`` zip, bytes."""
-
-_UNIT_FRACTIONS: dict[str, tuple[int, int]] = {}
-for _names, _frac in (
-    (("millimeters", "millimeter", "millimetres", "millimetre", "mm"), (1, 1000)),
-    (("inches", "inch", "in"), (254, 10000)),
-    (("meters", "meter", "metres", "metre", "m"), (1, 1)),
-):
-    for _name in _names:
-        _UNIT_FRACTIONS[_name] = _frac
 
 SUPPORTED_TOOL_TYPES = frozenset({
     "flat end mill", "ball end mill", "bull nose end mill", "chamfer mill", "face mill",
@@ -100,9 +104,6 @@ SUPPORTED_TOOL_TYPES = frozenset({
     "bore mill", "tap right hand", "tap left hand", "form mill",
 })
 """Fusion ``type`` values imported; a ``form mill`` also needs a ``profile``."""
-
-_LENGTH_TOL_M = 1e-9   # equal lengths / diameters after conversion
-_STICKOUT_TOL_M = 1e-5  # assemblyGaugeLength - gaugeLength vs LB
 
 
 class _Skip(Exception):
@@ -133,41 +134,6 @@ class FusionLibrary:
     version: object
     sha256: str
     source: str
-
-
-def unit_to_metres(value: float, unit: str) -> float:
-    """Convert a length in a Fusion unit spelling to metres.
-
-    Parameters
-    ----------
-    value : float
-        Length in ``unit``.
-    unit : str
-        A spelling listed in the module docstring (e.g. ``"inches"``, ``"millimeters"``).
-
-    Returns
-    -------
-    float
-        Length, m (one rounding: ``value * num / den`` with an exact integer ratio).
-
-    Examples
-    --------
-    >>> unit_to_metres(0.5, "inches")
-    0.0127
-    >>> unit_to_metres(72, "millimeters")
-    0.072
-    """
-    num, den = _unit_fraction(unit, "unit")
-    return value * num / den
-
-
-def _unit_fraction(unit: object, field: str) -> tuple[int, int]:
-    if not isinstance(unit, str) or not unit.strip():
-        raise InputError(field, "missing; the length unit must be stated (millimeters or inches)")
-    key = unit.strip().strip("'\"").strip().lower()
-    if key not in _UNIT_FRACTIONS:
-        raise InputError(field, f"unknown length unit {unit!r} (use millimeters or inches)")
-    return _UNIT_FRACTIONS[key]
 
 
 def load_fusion_library(source: str | os.PathLike[str] | bytes | Mapping[str, Any] | FusionLibrary,
@@ -226,21 +192,34 @@ def _reject_constant(name: str) -> float:
     raise InputError("", f"not valid JSON: {name} is not a number")
 
 
+def tools_json_member(zf: zipfile.ZipFile) -> zipfile.ZipInfo:
+    """The member of a ``.tools`` zip that holds the library: ``tools.json``.
+
+    The one at the root when there is one, else the only ``tools.json`` in a folder.
+
+    Raises
+    ------
+    InputError
+        None or several, or larger than :data:`MAX_LIBRARY_BYTES`.
+    """
+    infos = [i for i in zf.infolist()
+             if not i.is_dir() and PurePosixPath(i.filename).name.lower() == "tools.json"]
+    root = [i for i in infos if i.filename.lower() == "tools.json"]
+    if root:
+        infos = root
+    if len(infos) != 1:
+        names = ", ".join(zf.namelist()[:10]) or "none"
+        what = "no tools.json" if not infos else "several tools.json"
+        raise InputError("", f".tools archive has {what} (members: {names})")
+    if infos[0].file_size > MAX_LIBRARY_BYTES:
+        raise InputError("", f"tools.json is larger than {MAX_LIBRARY_BYTES} bytes")
+    return infos[0]
+
+
 def _tools_json_from_zip(raw: bytes) -> bytes:
     try:
         with zipfile.ZipFile(io.BytesIO(raw)) as zf:
-            infos = [i for i in zf.infolist()
-                     if not i.is_dir() and PurePosixPath(i.filename).name.lower() == "tools.json"]
-            root = [i for i in infos if i.filename.lower() == "tools.json"]
-            if root:
-                infos = root
-            if len(infos) != 1:
-                names = ", ".join(zf.namelist()[:10]) or "none"
-                what = "no tools.json" if not infos else "several tools.json"
-                raise InputError("", f".tools archive has {what} (members: {names})")
-            if infos[0].file_size > MAX_LIBRARY_BYTES:
-                raise InputError("", f"tools.json is larger than {MAX_LIBRARY_BYTES} bytes")
-            with zf.open(infos[0]) as fh:
+            with zf.open(tools_json_member(zf)) as fh:
                 data = fh.read(MAX_LIBRARY_BYTES + 1)
     except (zipfile.BadZipFile, RuntimeError, NotImplementedError, OSError) as exc:
         raise InputError("", f"not a readable .tools zip archive ({exc})") from exc
@@ -267,106 +246,6 @@ def _canonical(obj: object) -> bytes:
                       default=str).encode()
 
 
-# --------------------------------------------------------------------------- results
-
-
-@dataclass(frozen=True, slots=True)
-class Combination:
-    """One library item mapped to a tool–holder combination.
-
-    Parameters
-    ----------
-    id : str
-        Stable identifier (module docstring, "Ids").
-    index : int
-        Position of the item in the library's ``data`` list.
-    status : {"ok", "skipped", "error"}
-    description : str
-    number : int or None
-        Fusion T number (``post-process.number``).
-    teeth : int or None
-        Number of flutes ``NOF`` (for stability lobes).
-    tool_type : str or None
-        Fusion ``type``.
-    reason : str or None
-        Why the item was skipped or rejected (``"field: rule"`` for errors).
-    holder : dict or None
-        ``{"segments": [{"length_m", "outer_diameter_m", "inner_diameter_m", "material"}]}``
-        from the gauge line toward the tool end, metres; ``ok`` entries only. Treat as read-only.
-    tool : dict or None
-        Contract tool (``material, diameter_m, shank_diameter_m, overall_length_m,
-        flute_length_m, stickout_m, fluted_diameter_ratio`` and, for necked tools,
-        ``shoulder_length_m, shoulder_diameter_m``), metres; ``ok`` entries only.
-    warnings : tuple of str
-        Approximations and inconsistencies noticed on the way.
-    """
-
-    id: str
-    index: int
-    status: Status
-    description: str = ""
-    number: int | None = None
-    teeth: int | None = None
-    tool_type: str | None = None
-    reason: str | None = None
-    holder: dict[str, Any] | None = None
-    tool: dict[str, Any] | None = None
-    warnings: tuple[str, ...] = ()
-
-    def to_dict(self) -> dict[str, Any]:
-        """Return a JSON-ready dict (fresh copies of ``holder`` and ``tool``)."""
-        return {"id": self.id, "index": self.index, "status": self.status,
-                "description": self.description, "number": self.number, "teeth": self.teeth,
-                "tool_type": self.tool_type, "reason": self.reason,
-                "warnings": list(self.warnings), "holder": copy.deepcopy(self.holder),
-                "tool": copy.deepcopy(self.tool)}
-
-    def batch_item(self) -> dict[str, Any]:
-        """Return ``{"id", "holder", "tool"}`` for the batch endpoint (``ok`` entries only).
-
-        Raises
-        ------
-        InputError
-            The entry is skipped or in error.
-        """
-        if self.status != "ok":
-            raise InputError(self.id, f"is {self.status} ({self.reason}), not a combination")
-        return {"id": self.id, "holder": copy.deepcopy(self.holder), "tool": copy.deepcopy(self.tool)}
-
-
-@dataclass(frozen=True, slots=True)
-class LibraryImport:
-    """All items of one library, in library order, with a count by status.
-
-    Parameters
-    ----------
-    combinations : tuple of Combination
-    summary : dict
-        ``{"ok": n, "skipped": n, "error": n}``.
-    source : str
-    library_sha256 : str
-    """
-
-    combinations: tuple[Combination, ...]
-    summary: dict[str, int]
-    source: str
-    library_sha256: str
-
-    def __iter__(self) -> Iterator[Combination]:
-        """Iterate over the combinations in library order."""
-        return iter(self.combinations)
-
-    def __len__(self) -> int:
-        """Return the number of library items."""
-        return len(self.combinations)
-
-    def to_dict(self) -> dict[str, Any]:
-        """Return a JSON-ready dict."""
-        return {"source": self.source, "library_sha256": self.library_sha256,
-                "summary": dict(self.summary),
-                "combinations": [c.to_dict() for c in self.combinations]}
-
-
 # --------------------------------------------------------------------------- mapping
 
 
@@ -375,7 +254,7 @@ def library_combinations(
     *,
     holder_material: str = "steel",
     tool_material_default: str = "carbide",
-    holder_segments_per_cone: int = 4,
+    holder_segments_per_cone: int | None = None,
     fluted_diameter_ratio: float = 0.8,
     shaft_origin: ShaftOrigin = "shoulder",
     default_holder: str | Mapping[str, Any] | None = None,
@@ -389,9 +268,10 @@ def library_combinations(
     holder_material : str
         Material name given to every holder segment.
     tool_material_default : str
-        Tool material when ``BMC`` is absent or neither "carbide" nor "hss".
-    holder_segments_per_cone : int
-        Cylinders per conical holder segment (≥ 1).
+        Tool material when ``BMC`` is absent or names no known material.
+    holder_segments_per_cone : int, optional
+        Cylinders per conical holder segment (≥ 1); default: from each cone's taper
+        (:func:`~rcsa.libraries.profiles.cone_steps`).
     fluted_diameter_ratio : float
         Equivalent fluted diameter / DC, in (0, 1].
     shaft_origin : {"shoulder", "flute_end"}
@@ -432,7 +312,7 @@ def library_combinations(
 class _Options:
     holder_material: str
     tool_material_default: str
-    per_cone: int
+    per_cone: int | None
     ratio: float
     shaft_origin: ShaftOrigin
     default_holder: Mapping[str, Any] | None
@@ -444,7 +324,9 @@ def _name_option(value: object, field: str) -> str:
     return value
 
 
-def _per_cone_option(value: object) -> int:
+def _per_cone_option(value: object) -> int | None:
+    if value is None:
+        return None
     return fields.integer(value, "holder_segments_per_cone", ge=1, le=MAX_HOLDER_SEGMENTS_PER_CONE)
 
 
@@ -497,15 +379,7 @@ def _assign_ids(items: tuple[Any, ...]) -> list[tuple[str, int]]:
 def _t_number(item: object) -> int | None:
     pp = item.get("post-process") if isinstance(item, dict) else None
     n = pp.get("number") if isinstance(pp, dict) else None
-    return _as_int(n)
-
-
-def _as_int(value: object) -> int | None:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        return None
-    if isinstance(value, float) and not (math.isfinite(value) and value.is_integer()):
-        return None
-    return int(value)
+    return count_value(n)
 
 
 def _combination(index: int, item: object, ident: str, occurrence: int, opts: _Options) -> Combination:
@@ -518,7 +392,7 @@ def _combination(index: int, item: object, ident: str, occurrence: int, opts: _O
     desc = item.get("description")
     tool_type = item.get("type") if isinstance(item.get("type"), str) else None
     nof = item.get("geometry", {}).get("NOF") if isinstance(item.get("geometry"), dict) else None
-    teeth = _as_int(nof)
+    teeth = count_value(nof)
     if teeth is not None and teeth < 1:
         teeth = None
     if nof is not None and teeth is None:
@@ -559,273 +433,36 @@ def _map_item(item: dict[str, Any], opts: _Options, warnings: list[str],
         own_holder = False
     else:
         own_holder = True
-    geo = _tool_geometry(item, warnings)
-    holder_si = _holder_geometry(holder_obj, warnings)
-    stickout = _stickout(geo, holder_si.gauge_length_m if own_holder else None, warnings)
-    _check_tool_lengths(geo, stickout)
+    geo = geometry.tool_geometry(item)
+    holder_si = geometry.holder_geometry(holder_obj, warnings)
+    stickout = geometry.stickout(geo, holder_si.gauge_length_m if own_holder else None, warnings)
+    geometry.check_tool_lengths(geo, stickout)
     tool = {
         "material": _tool_material(item.get("BMC"), opts.tool_material_default, warnings),
         "diameter_m": geo["DC"], "shank_diameter_m": geo["SFDM"],
         "overall_length_m": geo["OAL"], "flute_length_m": geo["LCF"], "stickout_m": stickout,
         "fluted_diameter_ratio": opts.ratio,
     }
-    neck = _neck(geo, stickout, _shaft_pieces(item, geo["unit"]), opts.shaft_origin, warnings)
-    if neck is not None:
-        tool["shoulder_length_m"], tool["shoulder_diameter_m"] = neck
-    holder = {"segments": _holder_segments(holder_si, geo["SFDM"], opts)}
+    tool.update(geometry.neck_fields(geo, stickout, geometry.shaft_pieces(item, geo["unit"]), opts.shaft_origin,
+                                     warnings))
+    holder = {"segments": geometry.holder_segments(holder_si, geo["SFDM"], opts.per_cone, opts.holder_material)}
     inserted = geo["OAL"] - stickout
-    if inserted > holder_si.length_m + _LENGTH_TOL_M:
-        warnings.append(f"inserted length {_mm(inserted)} exceeds the holder length "
-                        f"{_mm(holder_si.length_m)} below the gauge line; the excess is ignored")
+    if inserted > holder_si.length_m + geometry.LENGTH_TOL_M:
+        warnings.append(f"inserted length {geometry.mm(inserted)} exceeds the holder length "
+                        f"{geometry.mm(holder_si.length_m)} below the gauge line; the excess is ignored")
+    if (note := shallow_insertion_note(inserted, geo["SFDM"])) is not None:
+        warnings.append(note)
     return holder, tool
 
 
-def _mm(x_m: float) -> str:
-    return f"{x_m * 1e3:.6g} mm"
-
-
-def _number(obj: Mapping[str, Any], key: str, path: str, *, required: bool) -> float | None:
-    """Return ``obj[key]``, a finite number > 0 in the object's unit, or None when absent."""
-    value = obj.get(key)
-    if value is None:
-        if required:
-            raise InputError(f"{path}{key}", "missing (required)")
-        return None
-    return fields.number(value, f"{path}{key}", gt=0.0)
-
-
-def _tool_unit(item: Mapping[str, Any]) -> tuple[int, int]:
-    if item.get("unit") is None:
-        expr = item.get("expressions")
-        if isinstance(expr, dict) and isinstance(expr.get("tool_unit"), str):
-            return _unit_fraction(expr["tool_unit"], "expressions.tool_unit")
-    return _unit_fraction(item.get("unit"), "unit")
-
-
-def _tool_geometry(item: Mapping[str, Any], warnings: list[str]) -> dict[str, Any]:
-    """Tool lengths in metres (None when absent) plus ``unit`` = (num, den)."""
-    num, den = _tool_unit(item)
-    g = item.get("geometry")
-    if not isinstance(g, dict):
-        raise InputError("geometry", "missing or not a JSON object")
-    out: dict[str, Any] = {"unit": (num, den)}
-    for key, req in (("DC", True), ("SFDM", True), ("OAL", True), ("LCF", True), ("LB", False),
-                     ("shoulder-length", False), ("shoulder-diameter", False),
-                     ("assemblyGaugeLength", False)):
-        v = _number(g, key, "geometry.", required=req)
-        out[key] = None if v is None else v * num / den
-    return out
 
 
 def _tool_material(bmc: object, default: str, warnings: list[str]) -> str:
-    key = bmc.strip().lower() if isinstance(bmc, str) else None
-    if key in ("carbide", "hss"):
-        if key == "hss":
-            warnings.append("material 'hss' is not built in: define it under 'materials'")
-        return key
-    what = "missing" if bmc is None else f"{bmc!r} is neither 'carbide' nor 'hss'"
+    name, note = tool_material(bmc)
+    if name is not None:
+        if note is not None:
+            warnings.append(f"BMC {bmc!r} {note}")
+        return name
+    what = "missing" if bmc is None else f"{bmc!r} names no known tool material"
     warnings.append(f"BMC {what}; material {default!r} assumed")
     return default
-
-
-def _stickout(geo: Mapping[str, Any], gauge_length_m: float | None, warnings: list[str]) -> float:
-    agl = geo["assemblyGaugeLength"]
-    derived = None if agl is None or gauge_length_m is None else agl - gauge_length_m
-    lb = geo["LB"]
-    if lb is None:
-        if derived is None or derived <= 0:
-            raise InputError("geometry.LB", "missing, and not derivable from "
-                                            "assemblyGaugeLength − holder gaugeLength")
-        warnings.append(f"LB missing; stickout {_mm(derived)} = assemblyGaugeLength − gaugeLength")
-        return derived
-    if derived is not None and abs(derived - lb) > _STICKOUT_TOL_M:
-        warnings.append(f"LB {_mm(lb)} differs from assemblyGaugeLength − holder gaugeLength "
-                        f"= {_mm(derived)}; LB used")
-    return lb
-
-
-def _check_tool_lengths(geo: Mapping[str, Any], stickout: float) -> None:
-    if stickout >= geo["OAL"]:
-        raise InputError("geometry.LB", f"stickout {_mm(stickout)} must be less than the overall "
-                                        f"length OAL {_mm(geo['OAL'])}")
-    if geo["LCF"] > stickout:
-        raise InputError("geometry.LCF", f"flute length {_mm(geo['LCF'])} exceeds the stickout "
-                                         f"LB {_mm(stickout)}")
-
-
-# --------------------------------------------------------------------------- holder
-
-
-@dataclass(frozen=True, slots=True)
-class _Segment:
-    """A Fusion segment in its object's unit: height, tool-side and spindle-side diameters."""
-
-    height: float
-    lower: float
-    upper: float
-
-
-@dataclass(frozen=True, slots=True)
-class _HolderGeometry:
-    """Holder segments in Fusion order (tool end first), cut at the gauge line, native unit."""
-
-    segments: tuple[_Segment, ...]
-    unit: tuple[int, int]
-    gauge_length_m: float | None
-    length_m: float
-
-
-def _si(x: float, unit: tuple[int, int], divisor: int = 1) -> float:
-    """``x / divisor`` in metres with a single rounding for integer-valued ``x``."""
-    return x * unit[0] / (unit[1] * divisor)
-
-
-def _segments(obj: Mapping[str, Any], path: str) -> list[_Segment]:
-    raw = obj.get("segments")
-    if not isinstance(raw, list) or not raw:
-        raise InputError(f"{path}segments", "must be a non-empty list of segments")
-    out = []
-    for k, s in enumerate(raw):
-        p = f"{path}segments[{k}]."
-        if not isinstance(s, dict):
-            raise InputError(p[:-1], "must be a JSON object")
-        h = s.get("height")
-        if isinstance(h, (int, float)) and not isinstance(h, bool) and h == 0:
-            continue  # a zero-height segment adds nothing to a beam
-        vals = [_number(s, key, p, required=True) for key in ("height", "lower-diameter", "upper-diameter")]
-        out.append(_Segment(*vals))  # type: ignore[arg-type]
-    return out
-
-
-def _holder_geometry(holder: Mapping[str, Any], warnings: list[str]) -> _HolderGeometry:
-    unit = _unit_fraction(holder.get("unit"), "holder.unit")
-    segs = _segments(holder, "holder.")
-    tol = _LENGTH_TOL_M * unit[1] / unit[0]
-    total = sum(s.height for s in segs)
-    gauge = _number(holder, "gaugeLength", "holder.", required=False)
-    if gauge is None:
-        warnings.append("holder.gaugeLength missing; all holder segments used")
-        return _HolderGeometry(tuple(segs), unit, None, _si(total, unit))
-    if gauge > total + tol:
-        warnings.append(f"holder.gaugeLength {_mm(_si(gauge, unit))} exceeds the segments' total "
-                        f"height {_mm(_si(total, unit))}; all segments used")
-        return _HolderGeometry(tuple(segs), unit, _si(gauge, unit), _si(total, unit))
-    kept, z = [], 0.0
-    for s in segs:
-        if z + s.height <= gauge + tol:
-            kept.append(s)
-            z += s.height
-            continue
-        if gauge - z > tol:
-            part = gauge - z
-            kept.append(_Segment(part, s.lower, s.lower + (s.upper - s.lower) * part / s.height))
-            z = gauge
-            warnings.append("holder.gaugeLength falls inside a segment; it is cut at the gauge line")
-        break
-    return _HolderGeometry(tuple(kept), unit, _si(gauge, unit), _si(z, unit))
-
-
-def cone_cylinders(height: float, lower: float, upper: float, n: int) -> list[tuple[float, float]]:
-    """Approximate a cone by ``n`` equal-length cylinders at their mid-length diameters.
-
-    Parameters
-    ----------
-    height : float
-        Cone length (any length unit; the output uses the same).
-    lower, upper : float
-        Diameters at the first and the last end.
-    n : int
-        Number of cylinders; a cylinder (``lower == upper``) always gives one.
-
-    Returns
-    -------
-    list of (length, diameter)
-        From the ``lower`` end to the ``upper`` end. The lengths add up to ``height`` and the
-        mean diameter is kept; the volume is low by π·height·(upper − lower)²/(48·n²).
-
-    Examples
-    --------
-    >>> cone_cylinders(8.0, 42.0, 50.0, 4)
-    [(2.0, 43.0), (2.0, 45.0), (2.0, 47.0), (2.0, 49.0)]
-    """
-    if upper == lower:
-        return [(height, lower)]
-    return [(height / n, lower + (upper - lower) * (2 * k + 1) / (2 * n)) for k in range(n)]
-
-
-def _holder_segments(h: _HolderGeometry, bore_m: float, opts: _Options) -> list[dict[str, Any]]:
-    out = []
-    for k, s in enumerate(h.segments):
-        if _si(min(s.lower, s.upper), h.unit) <= bore_m + _LENGTH_TOL_M:
-            raise InputError(f"holder.segments[{k}]",
-                             f"outer diameter {_mm(_si(min(s.lower, s.upper), h.unit))} is not "
-                             f"larger than the bore SFDM {_mm(bore_m)}")
-        n = 1 if s.upper == s.lower else opts.per_cone
-        for _, d in cone_cylinders(s.height, s.lower, s.upper, n):
-            out.append({"length_m": _si(s.height, h.unit, n), "outer_diameter_m": _si(d, h.unit),
-                        "inner_diameter_m": bore_m, "material": opts.holder_material})
-    out.reverse()  # contract order: from the gauge line toward the tool end
-    return out
-
-
-# --------------------------------------------------------------------------- necks
-
-
-def _shaft_pieces(item: Mapping[str, Any], unit: tuple[int, int]) -> list[_Segment] | None:
-    shaft = item.get("shaft")
-    if shaft is None or (isinstance(shaft, dict) and not shaft.get("segments")):
-        return None
-    if not isinstance(shaft, dict):
-        raise InputError("shaft", "must be a JSON object")
-    return [_Segment(_si(g.height, unit), _si(g.lower, unit), _si(g.upper, unit))
-            for g in _segments(shaft, "shaft.")]
-
-
-def _neck(geo: Mapping[str, Any], stickout: float, shaft: list[_Segment] | None,
-          origin: ShaftOrigin, warnings: list[str]) -> tuple[float, float] | None:
-    """Return ``(shoulder_length_m, shoulder_diameter_m)`` or None; see the module docstring."""
-    lcf, sfdm, tol = geo["LCF"], geo["SFDM"], _LENGTH_TOL_M
-    shoulder, body_d = geo["shoulder-length"], geo["shoulder-diameter"]
-    pieces: list[tuple[float, float, float, float]] = []   # (z0, z1, d0, d1) from the tip
-    z, body_at_dc = lcf, False
-    if shoulder is not None and shoulder > lcf + tol and not (shaft and origin == "flute_end"):
-        d = body_d if body_d is not None else geo["DC"]
-        body_at_dc = body_d is None and d < sfdm - tol
-        pieces.append((lcf, shoulder, d, d))
-        z = shoulder
-    for s in shaft or ():
-        pieces.append((z, z + s.height, s.lower, s.upper))
-        z += s.height
-    pieces.append((z, math.inf, sfdm, sfdm))
-
-    def clipped(p: tuple[float, float, float, float], a: float, b: float,
-                ) -> tuple[float, float, float, float] | None:
-        z0, z1 = max(p[0], a), min(p[1], b)
-        if z1 - z0 <= tol:
-            return None
-        slope = 0.0 if math.isinf(p[1]) else (p[3] - p[2]) / (p[1] - p[0])
-        return (z0, z1, p[2] + slope * (z0 - p[0]), p[2] + slope * (z1 - p[0]))
-
-    over = [c for p in pieces if (c := clipped(p, lcf, stickout)) is not None]
-    thin = [c for c in over if min(c[2], c[3]) < sfdm - tol]
-    if any(max(c[2], c[3]) > sfdm + tol for c in over):
-        warnings.append("the tool body between the flutes and the holder is partly thicker than "
-                        "the shank; modelled at the shank diameter")
-    if not thin:
-        return None
-    end = max(c[1] for c in thin)
-    within = [c for c in over if c[0] < end - tol]
-    d_min = min(min(c[2], c[3]) for c in within)
-    d_max = max(max(c[2], c[3]) for c in within)
-    if d_max - d_min > tol:
-        warnings.append(f"neck profile between {_mm(lcf)} and {_mm(end)} from the tip varies from "
-                        f"{_mm(d_min)} to {_mm(d_max)}; modelled as one neck at {_mm(d_min)}")
-    if body_at_dc:
-        warnings.append("shoulder-diameter missing; the body up to shoulder-length taken at DC")
-    inside = [c for p in pieces if (c := clipped(p, stickout, stickout + 1.0)) is not None
-              and min(c[2], c[3]) < sfdm - tol]
-    if inside:
-        warnings.append(f"the reduced diameter continues into the holder (to "
-                        f"{_mm(max(c[1] for c in inside))} from the tip, stickout "
-                        f"{_mm(stickout)}); the clamped part is modelled at SFDM")
-    return end, d_min

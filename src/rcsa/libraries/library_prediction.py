@@ -1,30 +1,44 @@
 """Tool-point FRFs of a whole CAM tool library, or a checked batch, on one spindle (REST and CLI).
 
-A Fusion library (``.json`` or ``.tools``) becomes a *library request*: the import report of
+A Fusion library (``.json`` or ``.tools``) or a FreeCAD one (``.fctb``/``.fctl``/a folder or
+zip of them with an ``.fcholder``, :mod:`rcsa.libraries.formats`) becomes a *library request*: the import report of
 every item (``ok`` / ``skipped`` with a reason / ``error``) and one batch request holding
-the ``ok`` tool–holder combinations on the given spindle and frequency grid. Running it calls
-:func:`rcsa.model.batch.predict_batch` (the spindle and every distinct holder are condensed once)
-and merges the outcome back in library order: one result per library item, each with its
-own ``status``. The request is plain JSON, so the service can queue it as a job.
+the ``ok`` tool–holder combinations on the given spindle and frequency grid. Running it
+computes the combinations in chunks (:mod:`rcsa.libraries.chunks`: one
+:func:`rcsa.model.batch.predict_batch` per chunk, here or on a cluster) and merges the outcome
+back in library order: one result per library item, each with its own ``status``. The
+request is plain JSON, so the service can queue it as a job; :func:`iter_entries` hands the
+results over one by one, so a job writes them as they come instead of holding them all.
 """
 
 from __future__ import annotations
 
-import os
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
+from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
-import numpy as np
+import orjson
 
 from rcsa.errors import InputError
-from rcsa.libraries.fusion import library_combinations
-from rcsa.measured.hybrid import MeasurementSource, base_resolver
-from rcsa.model import batch as batches
+from rcsa.infra.compute import Backend, LocalBackend
+from rcsa.libraries.chunks import (
+    Shared,
+    chunk_ranges,
+    chunk_size,
+    compute_chunk,
+    prepare_shared,
+    resolver_of,
+    run_chunk,
+)
+from rcsa.libraries.formats import FREECAD_OPTIONS, FUSION_OPTIONS, LibrarySource, import_library
+from rcsa.measured.hybrid import MeasurementSource
 from rcsa.model.bounds import MAX_BATCH_COMBINATIONS, MAX_FREQUENCY_LINES
 from rcsa.model.contract import MeasuredSpindleSpec, parse_common
-from rcsa.model.spindle_side import BaseResolver, MeasuredBase
 
 __all__ = [
+    "EntryResults",
+    "iter_entries",
     "resolver_of",
     "LIBRARY_OPTIONS",
     "check_common",
@@ -35,9 +49,8 @@ __all__ = [
     "select_tool_point",
 ]
 
-#: Options of :func:`rcsa.libraries.library_combinations` a caller may set.
-LIBRARY_OPTIONS = ("holder_material", "tool_material_default", "holder_segments_per_cone",
-                   "fluted_diameter_ratio", "shaft_origin", "default_holder")
+#: Import options a caller may set (each format takes its own: :mod:`rcsa.libraries.formats`).
+LIBRARY_OPTIONS = tuple(dict.fromkeys((*FUSION_OPTIONS, *FREECAD_OPTIONS)))
 _COMMON = ("frequency", "spindle", "materials", "beam_theory", "shear_coefficient")
 _ENTRY_FIELDS = ("id", "index", "description", "number", "teeth", "tool_type", "warnings")
 
@@ -62,7 +75,7 @@ def check_common(request: Mapping[str, Any], *, store: MeasurementSource | None 
 
 
 def library_request(
-    library: str | os.PathLike[str] | bytes | Mapping[str, Any],
+    library: LibrarySource,
     *,
     spindle: Mapping[str, Any],
     frequency: Mapping[str, Any],
@@ -73,12 +86,12 @@ def library_request(
     natural_frequencies: bool | None = None,
     options: Mapping[str, Any] | None = None,
 ) -> dict[str, Any]:
-    """Turn a Fusion tool library into a library request (JSON-ready).
+    """Turn a Fusion or FreeCAD tool library into a library request (JSON-ready).
 
     Parameters
     ----------
-    library : path, bytes or mapping
-        The ``.json``/``.tools`` file, its bytes, or the parsed document.
+    library : path, bytes, mapping or a library read by :func:`rcsa.libraries.formats.read_library`
+        The Fusion ``.json``/``.tools`` file, a FreeCAD library, their bytes, or the parsed document.
     spindle : mapping
         The contract's spindle: segments and bearings, or ``{"measurement_id": ...}``.
     frequency : mapping
@@ -110,16 +123,20 @@ def library_request(
         raise InputError(f"options.{unknown[0]}", f"unknown option (allowed: {', '.join(LIBRARY_OPTIONS)})")
     if joints is not None and not isinstance(joints, Mapping):
         raise InputError("joints", "must be an object {spindle_holder, holder_tool}")
-    imported = library_combinations(library, **opts)
+    imported = import_library(library, **opts)
     entries, combos = [], []
     for c in imported:
-        entry = {k: v for k, v in c.to_dict().items() if k in (*_ENTRY_FIELDS, "status", "reason")}
+        # the entry's own fields (not to_dict(): its copies of holder and tool would be thrown away)
+        entry = {"id": c.id, "index": c.index, "status": c.status, "description": c.description, "number": c.number,
+                 "teeth": c.teeth, "tool_type": c.tool_type, "reason": c.reason, "warnings": list(c.warnings)}
         if c.status == "error":
             field, sep, detail = (c.reason or "").partition(": ")
             entry["error"] = {"field": field, "detail": detail} if sep else {"field": "", "detail": c.reason}
         entries.append(entry)
         if c.status == "ok":
-            item = c.batch_item()
+            # the import's own holder and tool dicts (batch_item() would copy them): the import is
+            # dropped when this returns, and nothing downstream modifies a request
+            item = {"id": c.id, "holder": c.holder, "tool": c.tool}
             if joints:
                 item["joints"] = dict(joints)
             combos.append(item)
@@ -169,6 +186,132 @@ def checked_batch(request: Mapping[str, Any], refused: Mapping[int, Mapping[str,
     return out
 
 
+@dataclass(frozen=True)
+class EntryResults:
+    """An entries request being computed: the head of its result, then one result per entry.
+
+    Attributes
+    ----------
+    head : dict
+        ``{"library": {...}}`` for a library request, else empty: what comes before
+        ``results`` in the result document.
+    results : iterator of dict
+        One result per entry, in entry order, computed chunk by chunk as it is consumed.
+    statuses : tuple of str
+        The statuses :meth:`summary` counts.
+    """
+
+    head: dict[str, Any]
+    results: Iterator[dict[str, Any]]
+    statuses: tuple[str, ...]
+
+    def summary(self, counts: Mapping[str, int]) -> dict[str, int]:
+        """The result's ``summary`` from counts of statuses."""
+        return {s: int(counts.get(s, 0)) for s in self.statuses}
+
+
+def iter_entries(
+    request: Mapping[str, Any],
+    *,
+    store: MeasurementSource | None = None,
+    max_lines: int = MAX_FREQUENCY_LINES,
+    max_combinations: int = MAX_BATCH_COMBINATIONS,
+    progress: Callable[[int, int], None] | None = None,
+    backend: Backend | None = None,
+    chunk_tools: int | None = None,
+) -> EntryResults:
+    """Start an entries request (:func:`library_request` or :func:`checked_batch`).
+
+    The ``ok`` entries are computed in chunks (:mod:`rcsa.libraries.chunks`) by ``backend``
+    (default: here, one chunk after the other); every entry gets one result in its place.
+    Everything the whole request can get wrong is raised here, before anything is computed.
+
+    Parameters
+    ----------
+    request : mapping
+        An entries request.
+    store : MeasurementSource, optional
+        Where a measured spindle is read (once, here; chunks receive its receptance).
+    max_lines, max_combinations : int
+        Largest accepted number of frequency lines and of combinations.
+    progress : callable, optional
+        ``progress(done, total)`` after each chunk (over the combinations to compute), and
+        while waiting for a cluster: whatever it raises stops the computation.
+    backend : Backend, optional
+        Where the chunks run (default: here).
+    chunk_tools : int, optional
+        Tools per chunk; default :func:`rcsa.libraries.chunks.chunk_size` of the grid.
+
+    Returns
+    -------
+    EntryResults
+    """
+    if not isinstance(request, Mapping) or not {"entries", "batch"} <= set(request):
+        raise InputError("", "not an entries request (see rcsa.libraries.library_prediction.library_request)")
+    batch = request["batch"]
+    combos: list[Any] = []
+    shared = None
+    if batch.get("combinations"):
+        combos, shared = prepare_shared(batch, store=store, max_lines=max_lines, max_combinations=max_combinations)
+    else:
+        check_common(batch, store=store, max_lines=max_lines)
+    statuses = ("ok", "skipped", "error") if "library" in request else ("ok", "error")
+    head = {"library": dict(request["library"])} if "library" in request else {}
+    return EntryResults(head, _entry_results(request, combos, shared, backend or LocalBackend(), progress,
+                                             chunk_tools), statuses)
+
+
+def _computed(combos: list[Any], shared: Shared | None, backend: Backend,
+              progress: Callable[[int, int], None] | None, chunk_tools: int | None) -> Iterator[dict[str, Any]]:
+    """Every combination's result, in order, chunk by chunk (errors' fields point into the whole batch)."""
+    total = len(combos)
+    if progress is not None:
+        progress(0, total)
+    if shared is None:
+        return
+    ranges = chunk_ranges(total, chunk_tools or chunk_size(shared.n_lines))
+    done = 0
+
+    def waiting() -> None:
+        if progress is not None:
+            progress(done, total)
+
+    for i, results in backend.map(partial(run_chunk, compute_chunk), [combos[a:b] for a, b in ranges],
+                                  shared=shared, ordered=True, on_wait=waiting):
+        start = ranges[i][0]
+        done += len(results)
+        if progress is not None:
+            progress(done, total)
+        for k, r in enumerate(results):
+            if r.get("status") == "error" and start:
+                r = {**r, "error": _rebase(r["error"], k, f"combinations[{start + k}]")}
+            yield r
+
+
+def _entry_results(request: Mapping[str, Any], combos: list[Any], shared: Shared | None, backend: Backend,
+                   progress: Callable[[int, int], None] | None, chunk_tools: int | None
+                   ) -> Iterator[dict[str, Any]]:
+    computed = _computed(combos, shared, backend, progress, chunk_tools)
+    keep = request.get("tool_point")
+    position = 0
+    for entry in request["entries"]:
+        head = {k: entry[k] for k in _ENTRY_FIELDS if k in entry}
+        if entry["status"] == "ok":
+            r = next(computed)
+            if keep is not None:
+                r = select_tool_point(r, keep)
+            if r["status"] == "error":
+                r = {**r, "error": _rebase(r["error"], position, entry.get("path", ""))}
+            position += 1
+            yield {**head, **r}
+        elif entry["status"] == "skipped":
+            yield {**head, "status": "skipped", "reason": entry.get("reason")}
+        else:
+            yield {**head, "status": "error", "error": dict(entry["error"])}
+    for _ in computed:  # a request with fewer ok entries than combinations: finish the progress
+        pass
+
+
 def run_entries(
     request: Mapping[str, Any],
     *,
@@ -177,11 +320,11 @@ def run_entries(
     max_combinations: int = MAX_BATCH_COMBINATIONS,
     progress: Callable[[int, int], None] | None = None,
     arrays: str = "list",
+    backend: Backend | None = None,
 ) -> dict[str, Any]:
-    """Run an entries request (:func:`library_request` or :func:`checked_batch`).
+    """Run an entries request (:func:`library_request` or :func:`checked_batch`) into one document.
 
-    The ``ok`` entries are computed together by :func:`rcsa.model.batch.predict_batch` (spindle and
-    holders condensed once); every entry gets one result in its place.
+    :func:`iter_entries`, collected.
 
     Returns
     -------
@@ -192,38 +335,15 @@ def run_entries(
         (the prediction fields), ``skipped`` (``reason``) or ``error`` (``error: {"field",
         "detail"}``, the field relative to the tool).
     """
-    if not isinstance(request, Mapping) or not {"entries", "batch"} <= set(request):
-        raise InputError("", "not an entries request (see rcsa.libraries.library_prediction.library_request)")
-    batch = request["batch"]
-    computed: list[dict[str, Any]] = []
-    if batch.get("combinations"):
-        computed = batches.predict_batch(batch, resolve_base=resolver_of(store), max_lines=max_lines,
-                                         max_combinations=max_combinations,
-                                     progress=progress, arrays=arrays)["results"]
-    else:
-        check_common(batch, store=store, max_lines=max_lines)
-        if progress is not None:
-            progress(0, 0)
-    keep = request.get("tool_point")
-    results, position = [], 0
-    for entry in request["entries"]:
-        head = {k: entry[k] for k in _ENTRY_FIELDS if k in entry}
-        if entry["status"] == "ok":
-            r = computed[position] if keep is None else select_tool_point(computed[position], keep)
-            if r["status"] == "error":
-                r = {**r, "error": _rebase(r["error"], position, entry.get("path", ""))}
-            position += 1
-            results.append({**head, **r})
-        elif entry["status"] == "skipped":
-            results.append({**head, "status": "skipped", "reason": entry.get("reason")})
-        else:
-            results.append({**head, "status": "error", "error": dict(entry["error"])})
-    statuses = ("ok", "skipped", "error") if "library" in request else ("ok", "error")
-    out: dict[str, Any] = {"results": results, "summary": {s: sum(r["status"] == s for r in results)
-                                                           for s in statuses}}
-    if "library" in request:
-        out = {"library": dict(request["library"]), **out}
-    return out
+    started = iter_entries(request, store=store, max_lines=max_lines, max_combinations=max_combinations,
+                           progress=progress, backend=backend)
+    results = list(started.results)
+    if arrays == "list":  # JSON-ready lists (the floats round-trip exactly)
+        results = orjson.loads(orjson.dumps(results, option=orjson.OPT_SERIALIZE_NUMPY))
+    counts: dict[str, int] = {}
+    for r in results:
+        counts[r["status"]] = counts.get(r["status"], 0) + 1
+    return {**started.head, "results": results, "summary": started.summary(counts)}
 
 
 def select_tool_point(result: Mapping[str, Any], keep: Any) -> dict[str, Any]:
@@ -249,7 +369,7 @@ def _rebase(error: Mapping[str, Any], position: int, path: str) -> dict[str, Any
     return {**error, "field": field}
 
 
-def predict_library(library: str | os.PathLike[str] | bytes | Mapping[str, Any], *, store: MeasurementSource | None = None,
+def predict_library(library: LibrarySource, *, store: MeasurementSource | None = None,
                     max_lines: int = MAX_FREQUENCY_LINES,
                     max_combinations: int = MAX_BATCH_COMBINATIONS,
                     progress: Callable[[int, int], None] | None = None, arrays: str = "list",
@@ -258,14 +378,3 @@ def predict_library(library: str | os.PathLike[str] | bytes | Mapping[str, Any],
     request = library_request(library, **kwargs)
     return run_entries(request, store=store, max_lines=max_lines, max_combinations=max_combinations,
                                progress=progress, arrays=arrays)
-
-
-def resolver_of(store: MeasurementSource | None) -> BaseResolver:
-    """Looks measured spindles up in ``store``; without one, a measured spindle is refused."""
-    if store is not None:
-        return base_resolver(store)
-
-    def refuse(spindle: MeasuredSpindleSpec, frequency_hz: np.ndarray) -> MeasuredBase:
-        raise InputError("spindle.measurement_id", "a measured spindle needs a measurement store")
-
-    return refuse

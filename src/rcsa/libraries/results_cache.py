@@ -18,14 +18,17 @@ A result is filed under the SHA-256 of everything that determines it (``ecosyste
 
 Layout (under the cache directory, normally ``<store>/libraries/results``)::
 
-    <key[:2]>/<key>.npz     one uncompressed numpy archive per result: ``frequency_hz`` and the
-                            complex128 tool-point receptances ``h, l, n, p`` (ok results), and
-                            ``meta`` (UTF-8 JSON of every other field, ``status`` included)
+    results.sqlite          one row per result (WAL, ``synchronous=FULL``): ``status``, ``meta``
+                            (UTF-8 JSON of every other field), the float64 ``frequency_hz`` and
+                            the complex128 tool-point receptances ``h, l, n, p`` as raw
+                            little-endian bytes (ok results)
+    <key[:2]>/<key>.npz     results written by earlier versions (one file each; still read)
 
-Files are written to ``tmp/`` (a sibling given to :class:`ResultCache`), fsynced and renamed
-into place, so a reader never sees half a result and a writer killed at any moment leaves at
-worst a stray temporary file. Two processes writing the same key write the same content; the
-second rename just replaces the first. Files are never modified afterwards.
+A chunk of results is written in one transaction (:meth:`ResultCache.put_many`): one durable
+write per chunk, and a writer killed at any moment leaves either the whole chunk or none of
+it. Rows are inserted ``OR IGNORE``: the same key always holds the same content, so a second
+writer (a resumed sync, a retried chunk, another process) writes nothing twice. Rows are never
+modified afterwards.
 """
 
 from __future__ import annotations
@@ -36,9 +39,10 @@ import hashlib
 import json
 import math
 import os
-import secrets
+import sqlite3
 import time
 from collections.abc import Iterable, Iterator, Mapping
+from contextlib import closing
 from importlib import resources
 from importlib.resources.abc import Traversable
 from pathlib import Path
@@ -49,7 +53,8 @@ import orjson
 
 from rcsa._version import __version__
 from rcsa.errors import StoreError
-from rcsa.infra.atomic_files import fsync_dir
+from rcsa.infra.clock import utc_now_iso
+from rcsa.infra.sqlite import connect, transaction
 from rcsa.model.wire import complex_from_wire, complex_to_wire
 
 __all__ = [
@@ -61,6 +66,7 @@ __all__ = [
     "measurement_sha256",
     "model_fingerprint",
     "result_key",
+    "result_keys",
     "shared_part",
 ]
 
@@ -237,15 +243,59 @@ def result_key(combination: Mapping[str, Any], shared: Mapping[str, Any], freque
     return hashlib.sha256(canonical_json(doc)).hexdigest()
 
 
+def result_keys(combinations: Iterable[Mapping[str, Any]], shared: Mapping[str, Any], frequency_sha: str
+                ) -> list[str]:
+    """:func:`result_key` of many combinations sharing ``shared`` (the same keys, faster).
+
+    The canonical JSON of the shared part is written once and spliced into each key's
+    document (sorted keys: ``combination`` comes first, ``shared`` last), and the canonical
+    JSON of each value of a combination (its holder, tool, joints) is remembered by its
+    exact JSON text, so a holder shared by a thousand tools is normalised once.
+    """
+    doc = {"schema": RESULT_KEY_SCHEMA, "model_fingerprint": model_fingerprint(), "rcsa_version": __version__,
+           "frequency_sha256": frequency_sha}
+    middle = canonical_json(doc)[1:-1]  # "frequency_sha256":...,"schema":...: between combination and shared
+    tail = b',' + middle + b',"shared":' + canonical_json(shared) + b'}'
+    memo: dict[bytes, bytes] = {}
+
+    def value_json(value: Any) -> bytes:
+        try:
+            text = orjson.dumps(value, option=orjson.OPT_SORT_KEYS)
+        except TypeError:  # numpy values and the like: no shortcut
+            return canonical_json(value)
+        found = memo.get(text)
+        if found is None:
+            found = memo[text] = canonical_json(value)
+        return found
+
+    keys = []
+    for combination in combinations:
+        parts = sorted((str(k), v) for k, v in combination.items() if k != "id")
+        body = b",".join(canonical_json(k) + b":" + value_json(v) for k, v in parts)
+        keys.append(hashlib.sha256(b'{"combination":{' + body + b'}' + tail).hexdigest())
+    return keys
+
+
 class ResultCache:
     """Computed results filed by :func:`result_key`; safe for several processes and crashes.
+
+    Results live as rows of one SQLite database (``results.sqlite`` in ``directory``, WAL,
+    ``synchronous=FULL``): :meth:`put_many` writes a whole chunk of results in **one
+    transaction**, so a chunk costs one durable write (one log sync) instead of one
+    ``fsync`` per result file. Rows are inserted ``OR IGNORE`` by key — a result is content,
+    so a second writer of the same key (a resumed sync, a retried chunk, another process)
+    changes nothing and nothing is ever stored twice.
+
+    Stores written by earlier versions kept one ``<key[:2]>/<key>.npz`` file per result; those
+    files are still read (:meth:`get`, :meth:`missing`), never written.
 
     Parameters
     ----------
     directory : str or os.PathLike
-        Where the result files live (created on first use).
+        Where the results live (created on first use).
     tmp : str or os.PathLike
-        Where files are written before being renamed into place (same file system).
+        Scratch directory beside it (temporary files of writers that died are removed by
+        :meth:`clean_tmp`).
     """
 
     def __init__(self, directory: str | os.PathLike[str], tmp: str | os.PathLike[str]) -> None:
@@ -253,18 +303,47 @@ class ResultCache:
         self.tmp = Path(tmp)
         self.directory.mkdir(parents=True, exist_ok=True)
         self.tmp.mkdir(parents=True, exist_ok=True)
+        self.database = self.directory / "results.sqlite"
+        with closing(self._connect()) as con:
+            con.executescript(_SCHEMA)
+        # files of earlier versions: looked up only when the directory has any
+        self._legacy = any(p.is_dir() and len(p.name) == 2 for p in self.directory.iterdir())
 
     def __repr__(self) -> str:
         return f"ResultCache({str(self.directory)!r})"
 
+    def _connect(self) -> sqlite3.Connection:
+        # FULL: a library commit references these rows as soon as put_many returns
+        try:
+            con = connect(self.database, synchronous="FULL", timeout_s=_BUSY_TIMEOUT_S)
+            con.execute(f"PRAGMA journal_size_limit={_WAL_LIMIT_BYTES}")
+        except sqlite3.Error as exc:
+            raise StoreError(f"cannot open the result cache {self.database}: {exc}") from None
+        return con
+
     def path(self, key: str) -> Path:
-        """The file of ``key`` (whether or not it exists)."""
-        if len(key) != 64 or not all(c in "0123456789abcdef" for c in key):
-            raise ValueError(f"not a result key: {key!r}")
+        """The file a result of ``key`` had in earlier versions (whether or not it exists)."""
+        _check_key(key)
         return self.directory / key[:2] / f"{key}.npz"
 
     def __contains__(self, key: object) -> bool:
-        return isinstance(key, str) and self.path(key).is_file()
+        return isinstance(key, str) and not self.missing([key])
+
+    def missing(self, keys: Iterable[str]) -> set[str]:
+        """The keys of ``keys`` that have no stored result (one query per 500 keys)."""
+        wanted = list(dict.fromkeys(keys))
+        for key in wanted:
+            _check_key(key)
+        found: set[str] = set()
+        with closing(self._connect()) as con:
+            for start in range(0, len(wanted), _KEYS_PER_QUERY):
+                part = wanted[start:start + _KEYS_PER_QUERY]
+                found.update(r[0] for r in con.execute(
+                    f"SELECT key FROM results WHERE key IN ({','.join('?' * len(part))})", part))
+        absent = {k for k in wanted if k not in found}
+        if self._legacy:
+            absent = {k for k in absent if not self.path(k).is_file()}
+        return absent
 
     def get(self, key: str) -> dict[str, Any]:
         """The stored result document (numpy arrays for the long arrays).
@@ -274,8 +353,19 @@ class ResultCache:
         KeyError
             Not in the cache.
         StoreError
-            The file is unreadable.
+            The stored result is unreadable.
         """
+        _check_key(key)
+        with closing(self._connect()) as con:
+            row = con.execute(f"SELECT {_ROW} FROM results WHERE key = ?", (key,)).fetchone()
+        if row is None:
+            return self._get_legacy(key)
+        try:
+            return _decode(row)
+        except (ValueError, orjson.JSONDecodeError) as exc:
+            raise StoreError(f"unreadable cached result {key}: {exc}") from None
+
+    def _get_legacy(self, key: str) -> dict[str, Any]:
         try:
             with np.load(self.path(key), allow_pickle=False) as npz:
                 meta = orjson.loads(npz["meta"].tobytes())
@@ -292,41 +382,50 @@ class ResultCache:
 
     def status(self, key: str) -> str:
         """``status`` of a stored result (``ok`` or ``error``) without loading its arrays."""
-        try:
-            with np.load(self.path(key), allow_pickle=False) as npz:
-                return str(orjson.loads(npz["meta"].tobytes()).get("status", "ok"))
-        except FileNotFoundError:
-            raise KeyError(key) from None
-        except (OSError, ValueError, KeyError, orjson.JSONDecodeError) as exc:
-            raise StoreError(f"unreadable cached result {key}: {exc}") from None
+        return self.statuses([key])[key]["status"]
+
+    def statuses(self, keys: Iterable[str]) -> dict[str, dict[str, Any]]:
+        """``{key: {"status", "error"}}`` of stored results, without loading their arrays.
+
+        Raises
+        ------
+        KeyError
+            One of the keys is not in the cache.
+        """
+        wanted = list(dict.fromkeys(keys))
+        out: dict[str, dict[str, Any]] = {}
+        with closing(self._connect()) as con:
+            for start in range(0, len(wanted), _KEYS_PER_QUERY):
+                part = wanted[start:start + _KEYS_PER_QUERY]
+                for key, status, meta in con.execute(
+                        f"SELECT key, status, meta FROM results WHERE key IN ({','.join('?' * len(part))})", part):
+                    out[key] = {"status": status, "error": orjson.loads(meta).get("error")}
+        for key in wanted:
+            if key not in out:
+                doc = self._get_legacy(key)
+                out[key] = {"status": doc.get("status", "ok"), "error": doc.get("error")}
+        return out
 
     def put_many(self, items: Iterable[tuple[str, Mapping[str, Any]]]) -> int:
-        """Store results (``(key, result document)`` pairs); return how many were written.
+        """Store results (``(key, result document)`` pairs) in one transaction; return how many
+        were new (a key already stored is left as it is: same key, same content).
 
-        Each file is complete and on stable storage under its final name when this returns.
+        Every result is on stable storage when this returns (one log sync for all of them).
         """
-        token = f"{os.getpid()}-{secrets.token_hex(4)}"
-        dirs: set[Path] = set()
-        n = 0
-        for key, doc in items:
-            final = self.path(key)
-            final.parent.mkdir(exist_ok=True)
-            tmp = self.tmp / f"{key}.{token}.npz.tmp"
-            try:
-                with open(tmp, "wb") as fh:
-                    np.savez(fh, **_encode(doc))
-                    fh.flush()
-                    os.fsync(fh.fileno())
-                os.replace(tmp, final)
-            except OSError as exc:
-                with contextlib.suppress(OSError):
-                    tmp.unlink()
-                raise StoreError(f"could not write a cached result to {self.directory}: {exc}") from None
-            dirs.add(final.parent)
-            n += 1
-        for d in dirs:
-            fsync_dir(d)
-        return n
+        rows = [(key, *_encode(doc)) for key, doc in items]
+        for row in rows:
+            _check_key(row[0])
+        if not rows:
+            return 0
+        now = utc_now_iso()
+        try:
+            with closing(self._connect()) as con, transaction(con):
+                before = con.total_changes
+                con.executemany(f"INSERT OR IGNORE INTO results ({_COLUMNS}) VALUES ({','.join('?' * 9)})",
+                                [(*row, now) for row in rows])
+                return con.total_changes - before
+        except sqlite3.Error as exc:
+            raise StoreError(f"could not write cached results to {self.database}: {exc}") from None
 
     def clean_tmp(self, older_than_s: float = _TMP_MAX_AGE_S) -> int:
         """Remove temporary files left by writers that died (older than ``older_than_s``)."""
@@ -340,13 +439,53 @@ class ResultCache:
         return n
 
 
-def _encode(doc: Mapping[str, Any]) -> dict[str, np.ndarray]:
-    """Split a result document into arrays and a JSON ``meta`` (see the module docstring)."""
-    meta = {k: v for k, v in doc.items() if k not in ("id", "frequency_hz", "tool_point")}
-    out: dict[str, np.ndarray] = {}
+_SCHEMA = """
+CREATE TABLE IF NOT EXISTS results (
+    key           TEXT PRIMARY KEY,
+    status        TEXT NOT NULL,
+    meta          TEXT NOT NULL,
+    frequency_hz  BLOB,
+    h             BLOB,
+    l             BLOB,
+    n             BLOB,
+    p             BLOB,
+    created_utc   TEXT NOT NULL
+);
+"""
+_COLUMNS = "key, status, meta, frequency_hz, h, l, n, p, created_utc"
+_ROW = "status, meta, frequency_hz, h, l, n, p"
+_KEYS_PER_QUERY = 500
+_BUSY_TIMEOUT_S = 60.0
+_WAL_LIMIT_BYTES = 64 * 1024 * 1024
+
+
+def _check_key(key: str) -> None:
+    if not isinstance(key, str) or len(key) != 64 or not all(c in "0123456789abcdef" for c in key):
+        raise ValueError(f"not a result key: {key!r}")
+
+
+def _encode(doc: Mapping[str, Any]) -> tuple[str, str, bytes | None, bytes | None, bytes | None, bytes | None,
+                                           bytes | None, bytes | None]:
+    """A result document as a row: status, ``meta`` (UTF-8 JSON of every other field) and the
+    float64 lines and complex128 receptances as little-endian bytes (None where absent)."""
+    meta = {k: v for k, v in doc.items() if k not in ("id", "status", "frequency_hz", "tool_point")}
+    blobs: dict[str, bytes | None] = dict.fromkeys(("frequency_hz", *_ARRAYS))
     if "frequency_hz" in doc:
-        out["frequency_hz"] = np.asarray(doc["frequency_hz"], dtype=np.float64)
+        f = np.ascontiguousarray(doc["frequency_hz"], dtype="<f8")
+        blobs["frequency_hz"] = f.tobytes()
         for k, v in (doc.get("tool_point") or {}).items():
-            out[k] = complex_from_wire(v, f"tool_point.{k}", out["frequency_hz"].size, finite=False)
-    out["meta"] = np.frombuffer(orjson.dumps(meta, option=orjson.OPT_SERIALIZE_NUMPY), dtype=np.uint8)
-    return out
+            blobs[k] = np.ascontiguousarray(complex_from_wire(v, f"tool_point.{k}", f.size, finite=False),
+                                            dtype="<c16").tobytes()
+    return (str(doc.get("status", "ok")), orjson.dumps(meta, option=orjson.OPT_SERIALIZE_NUMPY).decode(),
+            blobs["frequency_hz"], *(blobs[k] for k in _ARRAYS))
+
+
+def _decode(row: tuple[Any, ...]) -> dict[str, Any]:
+    status, meta, frequency, *arrays = row
+    doc: dict[str, Any] = {"status": status}
+    if frequency is not None:
+        doc["frequency_hz"] = np.frombuffer(frequency, dtype="<f8").copy()
+        doc["tool_point"] = {k: complex_to_wire(np.frombuffer(a, dtype="<c16"), arrays="numpy")
+                             for k, a in zip(_ARRAYS, arrays, strict=True) if a is not None}
+    doc.update(orjson.loads(meta))
+    return doc

@@ -10,9 +10,9 @@ library (Fusion ``.json``/``.tools``), computed on one spindle and frequency gri
 2. Every ``ok`` combination gets its result key (:func:`rcsa.libraries.results_cache.result_key`: the
    content of the combination, the spindle — a stored measurement by its *content* hash —,
    the grid and the model version). Only keys not yet in the result cache are computed
-   (:func:`rcsa.model.batch.predict_batch`, in chunks of tools sharing a holder; each chunk is
-   written to the cache before the next starts, so a sync killed half-way resumes where it
-   stopped).
+   in chunks of tools sharing a holder (:mod:`rcsa.libraries.chunks`; here, or on a Dask
+   cluster); each chunk is written to the cache in one transaction as it arrives, so a sync
+   killed half-way resumes where it stopped and nothing is stored twice.
 3. The new state is committed in one SQLite transaction and compared with the previous sync
    of the same library: every tool id is ``added``, ``changed`` (its result key, or its
    skip/error reason, differs), ``unchanged`` or ``removed``. Descriptions and T numbers are
@@ -25,10 +25,10 @@ or ``rcsa library sync --library-id``; the CLI's default is the library file's n
 Layout (under ``<store>/libraries/``)::
 
     index.sqlite          libraries and their tools (WAL): settings, per-tool status, result key
-    results/<kk>/<key>.npz  content-addressed results (:class:`rcsa.libraries.results_cache.ResultCache`),
-                          shared by every library; written atomically before any commit
-                          references them, never modified
-    tmp/                  in-flight result files
+    results/              content-addressed results (:class:`rcsa.libraries.results_cache.ResultCache`),
+                          shared by every library; durable before any commit references
+                          them, never modified
+    tmp/                  scratch files
 
 Safety: result files are durable before the transaction that references them commits, and
 commits are serialised by SQLite (``BEGIN IMMEDIATE``), so two service processes (or the CLI
@@ -46,6 +46,7 @@ import sqlite3
 from collections.abc import Callable, Mapping
 from contextlib import closing
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -54,19 +55,21 @@ import numpy as np
 from rcsa._version import __version__
 from rcsa.errors import InputError, NotFoundError, StoreError
 from rcsa.infra.clock import utc_now_iso
+from rcsa.infra.compute import Backend, LocalBackend
 from rcsa.infra.sqlite import connect, transaction
-from rcsa.libraries.library_prediction import library_request, resolver_of, select_tool_point
+from rcsa.libraries.chunks import chunk_ranges, chunk_size, compute_chunk, prepare_shared, run_chunk
+from rcsa.libraries.formats import LibrarySource
+from rcsa.libraries.library_prediction import library_request, select_tool_point
 from rcsa.libraries.results_cache import (
     ResultCache,
     canonical_json,
     frequency_sha256,
     measurement_sha256,
     model_fingerprint,
-    result_key,
+    result_keys,
     shared_part,
 )
 from rcsa.measured.hybrid import MeasurementSource
-from rcsa.model import batch as batches
 from rcsa.model.bounds import MAX_FREQUENCY_LINES
 from rcsa.model.contract import MeasuredSpindleSpec, parse_common
 
@@ -88,8 +91,6 @@ __all__ = [
 DIRECTORY = "libraries"
 #: Library ids: a letter or digit, then up to 127 letters, digits, ``.``, ``_`` or ``-``.
 LIBRARY_ID_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,127}$")
-#: Tools computed per call of the model (and per batch of cache writes).
-CHUNK_TOOLS = 25
 
 _COMMON = ("frequency", "spindle", "materials", "beam_theory", "shear_coefficient")
 _HEAD = ("id", "index", "description", "number", "teeth", "tool_type", "warnings")
@@ -412,17 +413,16 @@ class LibraryStore:
                     "SELECT result_key, status, entry FROM tools WHERE library_id = ? AND result_key IS NOT NULL",
                     (library_id,)):
                 known.setdefault(key, {"status": status, "error": json.loads(entry).get("error")})
+        unknown = [r["result_key"] for r in rows if r["result_key"] is not None and r["result_key"] not in known]
+        try:
+            known.update(self.cache.statuses(unknown))
+        except KeyError as exc:
+            raise StoreError(f"the result {exc.args[0]} vanished from the cache before the sync could record "
+                             "it; sync again") from None
         for r in rows:
             key = r["result_key"]
             if key is None:
                 continue
-            if key not in known:
-                try:
-                    doc = self.cache.get(key) if self.cache.status(key) == "error" else {"status": "ok"}
-                except KeyError:
-                    raise StoreError(f"the result {key} of tool {r['id']!r} vanished from the cache before "
-                                     "the sync could record it; sync again") from None
-                known[key] = {"status": doc.get("status", "ok"), "error": doc.get("error")}
             r["status"] = known[key]["status"]
             if r["status"] == "error":
                 r["entry"]["error"] = known[key].get("error")
@@ -509,7 +509,7 @@ def _tool_rows(request: Mapping[str, Any], keys: tuple[str, ...]) -> list[dict[s
 
 def sync_request(
     library_id: str,
-    library: str | os.PathLike[str] | bytes | Mapping[str, Any],
+    library: LibrarySource,
     *,
     spindle: Mapping[str, Any],
     frequency: Mapping[str, Any],
@@ -577,28 +577,20 @@ def plan_sync(libraries: LibraryStore, request: Mapping[str, Any], *, store: Mea
     shared = shared_part(batch, msha)
     fsha = frequency_sha256(common.frequency_hz)
     combos = batch.get("combinations") or []
-    keys = tuple(result_key(c, shared, fsha) for c in combos)
+    keys = tuple(result_keys(combos, shared, fsha))
+    absent = libraries.cache.missing(keys)
     pending, seen = [], set()
     for i, key in enumerate(keys):
-        if key not in seen and key not in libraries.cache:
+        if key not in seen and key in absent:
             pending.append(i)
         seen.add(key)
     return SyncPlan(request, common.frequency_hz, fsha, msha, keys, tuple(pending))
 
 
-def compute_chunk(batch: Mapping[str, Any], *, store: MeasurementSource | None, max_lines: int) -> list[dict[str, Any]]:
-    """Results of a batch request's combinations, in order (:func:`rcsa.model.batch.predict_batch`).
-
-    The one place a sync computes; tests count or stub calls here.
-    """
-    n = len(batch["combinations"])
-    return batches.predict_batch(batch, resolve_base=resolver_of(store), max_lines=max_lines,
-                                 max_combinations=max(n, 1), arrays="numpy")["results"]
-
-
 def run_sync(libraries: LibraryStore, request: Mapping[str, Any], *, store: MeasurementSource | None = None,
              max_lines: int = MAX_FREQUENCY_LINES, progress: Callable[[int, int], None] | None = None,
-             chunk_tools: int = CHUNK_TOOLS, plan: SyncPlan | None = None) -> SyncReport:
+             chunk_tools: int | None = None, plan: SyncPlan | None = None,
+             backend: Backend | None = None) -> SyncReport:
     """Compute what is missing, then record the sync (see the module docstring).
 
     Parameters
@@ -607,14 +599,19 @@ def run_sync(libraries: LibraryStore, request: Mapping[str, Any], *, store: Meas
     request : mapping
         From :func:`sync_request`.
     store : MeasurementStore, optional
-        For a measured spindle.
+        For a measured spindle (resolved here once; chunks receive its receptance).
     max_lines : int
     progress : callable, optional
-        ``progress(done, total)`` over the results to compute (``(0, 0)`` when none).
-    chunk_tools : int
-        Results computed (and cached) per model call.
+        ``progress(done, total)`` over the results to compute (``(0, 0)`` when none), after
+        each chunk is durably cached and while waiting for a cluster; whatever it raises
+        stops the sync (what was cached stays cached).
+    chunk_tools : int, optional
+        Results computed (and cached in one transaction) per chunk; default
+        :func:`rcsa.libraries.chunks.chunk_size` of the grid.
     plan : SyncPlan, optional
         :func:`plan_sync`'s answer, when the caller already has it.
+    backend : Backend, optional
+        Where the chunks run (default: here, one after the other).
 
     Returns
     -------
@@ -623,29 +620,37 @@ def run_sync(libraries: LibraryStore, request: Mapping[str, Any], *, store: Meas
     plan = plan if plan is not None else plan_sync(libraries, request, store=store, max_lines=max_lines)
     batch = plan.request["batch"]
     combos = batch["combinations"]
-    common = {k: v for k, v in batch.items() if k != "combinations"}
     # tools sharing a holder in one chunk, so that the holder is condensed once
     order = sorted(plan.pending, key=lambda i: (canonical_json(combos[i].get("holder") or {}), i))
     total, done = len(order), 0
     statuses: dict[str, dict[str, Any]] = {}
     if progress is not None:
         progress(0, total)
-    for start in range(0, total, max(int(chunk_tools), 1)):
-        chunk = order[start:start + max(int(chunk_tools), 1)]
-        results = compute_chunk({**common, "combinations": [combos[i] for i in chunk]}, store=store,
-                                max_lines=max_lines)
-        items = []
-        for k, (i, r) in enumerate(zip(chunk, results, strict=True)):
-            r = dict(r)
-            if r.get("status") == "error":
-                r["error"] = _relative(r.get("error") or {}, k)
-            key = plan.keys[i]
-            statuses[key] = {"status": r.get("status", "ok"), "error": r.get("error")}
-            items.append((key, r))
-        libraries.cache.put_many(items)
-        done += len(chunk)
-        if progress is not None:
-            progress(done, total)
+    if total:
+        _, shared = prepare_shared({**batch, "combinations": [combos[i] for i in order[:1]]}, store=store,
+                                   max_lines=max_lines)
+        ranges = chunk_ranges(total, chunk_tools or chunk_size(shared.n_lines))
+        chunks = [[combos[i] for i in order[a:b]] for a, b in ranges]
+
+        def waiting() -> None:
+            if progress is not None:
+                progress(done, total)
+
+        runner = partial(run_chunk, compute_chunk)  # looked up now: tests replace compute_chunk
+        for c, results in (backend or LocalBackend()).map(runner, chunks, shared=shared, ordered=False,
+                                                           on_wait=waiting):
+            items = []
+            for k, (i, r) in enumerate(zip(order[ranges[c][0]:ranges[c][1]], results, strict=True)):
+                r = dict(r)
+                if r.get("status") == "error":
+                    r["error"] = _relative(r.get("error") or {}, k)
+                key = plan.keys[i]
+                statuses[key] = {"status": r.get("status", "ok"), "error": r.get("error")}
+                items.append((key, r))
+            libraries.cache.put_many(items)  # one durable write per chunk
+            done += len(items)
+            if progress is not None:
+                progress(done, total)
     return libraries.commit(plan, statuses, computed=total)
 
 

@@ -63,6 +63,8 @@ class ArtifactGeometry:
 
         Parameters
         ----------
+        omega_rad_s : numpy.ndarray, shape (nfreq,)
+            Angular frequencies, rad/s.
         points_m : tuple of float
             Distances from the tip toward the base, m.
 

@@ -27,7 +27,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from rcsa.errors import InputError, NotFoundError
+from rcsa.errors import DamagedError, InputError, NotFoundError
 from rcsa.measured.artifact_identification import (
     artifact_from_meta,
     identify_exact,
@@ -96,6 +96,9 @@ def measured_base(measurement_id: str, frequency_hz: np.ndarray, store: Measurem
         m = store.get(measurement_id)
     except NotFoundError:
         raise InputError(field_name, f"no stored measurement {measurement_id!r}") from None
+    except DamagedError as exc:
+        raise InputError(field_name, f"the stored measurement {measurement_id} is damaged and cannot be used "
+                                     f"({exc.reason}); upload it again, or choose another") from None
     f = np.asarray(frequency_hz, dtype=float)
     lo, hi = float(m.frequency_hz[0]), float(m.frequency_hz[-1])
     if f[0] < lo * (1 - 1e-12) or f[-1] > hi * (1 + 1e-12):

@@ -11,8 +11,14 @@ Modelling rules (``contract.md`` "Assembly", ``domain.md`` §1.3, §5):
   shank diameter; the segment where the insertion starts is split there; inserted length
   beyond the holder is ignored.
 * The tool overhang is a shank segment (stickout − flute length, at the shank diameter, or
-  up to the shoulder for a necked tool), an optional neck, and the fluted segment at
-  ``fluted_diameter_ratio · DC`` (stiffness) and ``fluted_mass_diameter_ratio · DC`` (mass).
+  up to the shoulder for a necked tool), an optional neck — one diameter
+  (``shoulder_*``) or ``neck_segments`` (a stepped or conical neck, listed from the flute
+  end) —, and the fluted segment at ``fluted_diameter_ratio · DC`` (stiffness) and
+  ``fluted_mass_diameter_ratio · DC`` (mass).
+* An insertion shorter than :data:`MIN_INSERTION_DIAMETERS` shank diameters is modelled
+  like any other, with a note (:func:`assembly_notes`): the point joint at the holder face
+  and the composite section assume a clamped length of a few diameters; a shallow one is
+  softer than the model, and how much depends on the clamp.
 * Joints are :class:`~rcsa.physics.chain.Spring` items at the gauge line and the holder face.
 """
 
@@ -36,9 +42,56 @@ from rcsa.physics.sections import (
     tube,
 )
 
-__all__ = ["AssemblyModel", "build_model", "holder_chain", "joint_spring", "spindle_chain", "tool_chain"]
+__all__ = ["MIN_INSERTION_DIAMETERS", "AssemblyModel", "assembly_notes", "build_model", "holder_chain",
+           "joint_spring", "neck_pieces", "shallow_insertion_note", "spindle_chain", "tool_chain"]
 
 _TOL_M = 1e-12
+
+#: Inserted lengths below this many shank diameters are noted as shallow clamping.
+MIN_INSERTION_DIAMETERS = 2.0
+
+
+def shallow_insertion_note(inserted_length_m: float, shank_diameter_m: float) -> str | None:
+    """A note when the shank is clamped over less than 2 diameters, else None.
+
+    Parameters
+    ----------
+    inserted_length_m : float
+        Length of the shank inside the holder, m.
+    shank_diameter_m : float
+        Shank diameter, m.
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> shallow_insertion_note(0.003, 0.010)[:40]
+    'shallow insertion: 3 mm of the 10 mm sha'
+    >>> shallow_insertion_note(0.030, 0.010) is None
+    True
+    """
+    if inserted_length_m >= MIN_INSERTION_DIAMETERS * shank_diameter_m:
+        return None
+    return (f"shallow insertion: {inserted_length_m * 1e3:.4g} mm of the {shank_diameter_m * 1e3:.4g} mm shank is "
+            f"clamped, less than {MIN_INSERTION_DIAMETERS:g} shank diameters; the real clamping is softer than "
+            "modelled (identify the holder-tool joint, or clamp deeper)")
+
+
+def assembly_notes(spec: AssemblySpec) -> tuple[str, ...]:
+    """Notes on modelling assumptions an assembly stretches (shallow insertion).
+
+    Parameters
+    ----------
+    spec : AssemblySpec
+
+    Returns
+    -------
+    tuple of str
+    """
+    note = shallow_insertion_note(spec.tool.inserted_length_m, spec.tool.shank_diameter_m)
+    return () if note is None else (note,)
 
 
 @dataclass(frozen=True, slots=True)
@@ -86,7 +139,12 @@ def _opt(spring: Spring | None) -> Chain:
 
 
 def joint_spring(joint: JointSpec | None) -> Spring | None:
-    """The chain item of an elastic joint (``None`` = rigid)."""
+    """The chain item of an elastic joint (``None`` = rigid).
+
+    Parameters
+    ----------
+    joint : JointSpec or None
+    """
     if joint is None:
         return None
     return Spring(joint.stiffness_n_m, joint.damping_ns_m, joint.rotational_stiffness_nm_rad,
@@ -95,7 +153,18 @@ def joint_spring(joint: JointSpec | None) -> Spring | None:
 
 def spindle_chain(spindle: SpindleSpec, materials: Mapping[str, Material],
                   shear: ShearModel | float = "hutchinson", theory: BeamTheory = "timoshenko") -> Chain:
-    """Spindle shaft with bearings, from the rear end to the nose."""
+    """Spindle shaft with bearings, from the rear end to the nose.
+
+    Parameters
+    ----------
+    spindle : SpindleSpec
+    materials : mapping of str to Material
+        Materials by name (built-ins and the document's own).
+
+    shear : {"hutchinson", "cowper"} or float
+        Shear coefficient model, or the coefficient itself.
+    theory : {"timoshenko", "euler_bernoulli"}
+    """
     total = spindle.length_m
     # Bearing positions along the chain (from the rear), grouped by node.
     stations = sorted({round(total - b.position_m, 12) for b in spindle.bearings})
@@ -127,7 +196,20 @@ def spindle_chain(spindle: SpindleSpec, materials: Mapping[str, Material],
 
 def holder_chain(holder: HolderSpec, tool: ToolSpec, materials: Mapping[str, Material],
                  shear: ShearModel | float = "hutchinson", theory: BeamTheory = "timoshenko") -> Chain:
-    """Holder from the gauge line to its tool end, composite with the tool core over the insertion."""
+    """Holder from the gauge line to its tool end, composite with the tool core over the insertion.
+
+    Parameters
+    ----------
+    holder : HolderSpec
+    tool : ToolSpec
+        Its shank fills the holder's bore over the inserted length.
+    materials : mapping of str to Material
+        Materials by name (built-ins and the document's own).
+
+    shear : {"hutchinson", "cowper"} or float
+        Shear coefficient model, or the coefficient itself.
+    theory : {"timoshenko", "euler_bernoulli"}
+    """
     length = holder.length_m
     insertion_start = length - min(tool.inserted_length_m, length)
     core = (tube(tool.shank_diameter_m, 0.0, materials[tool.material], shear, theory)
@@ -169,18 +251,50 @@ def fluted_section(tool: ToolSpec, material: Material, shear: ShearModel | float
                    rho_i=stiff.rho_i)
 
 
+def neck_pieces(tool: ToolSpec) -> tuple[tuple[float, float], ...]:
+    """The neck as ``(length_m, diameter_m)`` pieces from the flute end toward the holder.
+
+    Parameters
+    ----------
+    tool : ToolSpec
+
+    Returns
+    -------
+    tuple of (float, float)
+        Lengths and diameters, m; empty when the shank runs to the flutes.
+    """
+    if tool.neck_segments:
+        return tool.neck_segments
+    if tool.shoulder_length_m is not None and tool.shoulder_diameter_m is not None:
+        return ((tool.shoulder_length_m - tool.flute_length_m, tool.shoulder_diameter_m),)
+    return ()
+
+
 def tool_chain(tool: ToolSpec, materials: Mapping[str, Material], shear: ShearModel | float = "hutchinson",
                theory: BeamTheory = "timoshenko") -> Chain:
-    """Tool overhang from the holder face to the tip: shank, optional neck, flutes."""
+    """Tool overhang from the holder face to the tip: shank, optional neck, flutes.
+
+    Parameters
+    ----------
+    tool : ToolSpec
+    materials : mapping of str to Material
+        Materials by name (built-ins and the document's own).
+
+    shear : {"hutchinson", "cowper"} or float
+        Shear coefficient model, or the coefficient itself.
+    theory : {"timoshenko", "euler_bernoulli"}
+    """
     mat = materials[tool.material]
-    shoulder = tool.shoulder_length_m if tool.shoulder_length_m is not None else tool.flute_length_m
+    necks = neck_pieces(tool)
     items: list[Beam | Spring | Ground] = []
+    shoulder = (tool.shoulder_length_m if tool.shoulder_length_m is not None and not tool.neck_segments
+                else tool.flute_length_m + sum(length for length, _ in necks))
     shank_length = tool.stickout_m - shoulder
     if shank_length > _TOL_M:
         items.append(Beam(tube(tool.shank_diameter_m, 0.0, mat, shear, theory), shank_length))
-    neck_length = shoulder - tool.flute_length_m
-    if neck_length > _TOL_M and tool.shoulder_diameter_m is not None:
-        items.append(Beam(tube(tool.shoulder_diameter_m, 0.0, mat, shear, theory), neck_length))
+    for length, diameter in reversed(necks):
+        if length > _TOL_M:
+            items.append(Beam(tube(diameter, 0.0, mat, shear, theory), length))
     items.append(Beam(fluted_section(tool, mat, shear, theory), tool.flute_length_m))
     return tuple(items)
 

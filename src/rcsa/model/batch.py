@@ -13,13 +13,13 @@ from collections.abc import Callable, Mapping
 from typing import Any, Literal
 
 from rcsa.errors import InputError
-from rcsa.model.assembly import AssemblyModel, build_model
+from rcsa.model.assembly import AssemblyModel, assembly_notes, build_model
 from rcsa.model.bounds import MAX_BATCH_COMBINATIONS, MAX_FREQUENCY_LINES
-from rcsa.model.contract import assemble, parse_combination, parse_common
+from rcsa.model.contract import CommonSpec, assemble, parse_combination, parse_common
 from rcsa.model.prediction import Prediction, predict_tools
 from rcsa.model.spindle_side import BaseResolver, SpindleSide
 
-__all__ = ["BATCH_FIELDS", "Progress", "predict_batch"]
+__all__ = ["BATCH_FIELDS", "Progress", "parse_batch", "predict_batch"]
 
 #: Called as ``progress(done, total)``.
 Progress = Callable[[int, int], None]
@@ -29,6 +29,48 @@ BATCH_FIELDS = ("frequency", "beam_theory", "shear_coefficient", "materials", "s
                 "natural_frequencies")
 
 _Slot = dict[str, Any] | tuple[str, AssemblyModel, Prediction]
+
+
+def parse_batch(request: Mapping[str, Any], *, max_lines: int = MAX_FREQUENCY_LINES,
+                max_combinations: int = MAX_BATCH_COMBINATIONS) -> tuple[list[Any], bool, CommonSpec]:
+    """What :func:`predict_batch` checks before computing anything (its errors, exactly).
+
+    Parameters
+    ----------
+    request : mapping
+        A batch request (see :func:`predict_batch`).
+    max_lines, max_combinations : int
+        Largest accepted number of frequency lines and of combinations.
+
+    Returns
+    -------
+    combinations : list
+        As given (each is parsed when it is computed).
+    natural_frequencies : bool
+    common : CommonSpec
+        The grid, spindle, materials and beam theory the combinations share.
+
+    Raises
+    ------
+    InputError
+        Not an object, an unknown field, no or too many combinations, or an invalid shared part.
+    """
+    if not isinstance(request, Mapping):
+        raise InputError("", "the batch request must be a JSON object")
+    unknown = sorted(set(request) - set(BATCH_FIELDS))
+    if unknown:
+        raise InputError(unknown[0], f"unknown field (allowed: {', '.join(BATCH_FIELDS)})")
+    combos = request.get("combinations")
+    if not isinstance(combos, list) or not combos:
+        raise InputError("combinations", "must be a non-empty list")
+    if len(combos) > max_combinations:
+        raise InputError("combinations", f"at most {max_combinations} combinations per request, got {len(combos)}")
+    with_modes = request.get("natural_frequencies", True)
+    if not isinstance(with_modes, bool):
+        raise InputError("natural_frequencies", "must be true or false")
+    common = parse_common({k: v for k, v in request.items() if k not in ("combinations", "natural_frequencies")},
+                          max_lines=max_lines)
+    return combos, with_modes, common
 
 
 def predict_batch(request: Mapping[str, Any], *, resolve_base: BaseResolver | None = None,
@@ -58,25 +100,11 @@ def predict_batch(request: Mapping[str, Any], *, resolve_base: BaseResolver | No
         ``{"results": [{"id", "status": "ok", ...prediction} | {"id", "status": "error",
         "error": {"field", "detail"}}], "summary": {"ok", "error"}}``
     """
-    if not isinstance(request, Mapping):
-        raise InputError("", "the batch request must be a JSON object")
-    unknown = sorted(set(request) - set(BATCH_FIELDS))
-    if unknown:
-        raise InputError(unknown[0], f"unknown field (allowed: {', '.join(BATCH_FIELDS)})")
-    combos = request.get("combinations")
-    if not isinstance(combos, list) or not combos:
-        raise InputError("combinations", "must be a non-empty list")
-    if len(combos) > max_combinations:
-        raise InputError("combinations", f"at most {max_combinations} combinations per request, got {len(combos)}")
-    with_modes = request.get("natural_frequencies", True)
-    if not isinstance(with_modes, bool):
-        raise InputError("natural_frequencies", "must be true or false")
-    common = parse_common({k: v for k, v in request.items() if k not in ("combinations", "natural_frequencies")},
-                          max_lines=max_lines)
+    combos, with_modes, common = parse_batch(request, max_lines=max_lines, max_combinations=max_combinations)
     side = SpindleSide(common, resolve_base)
     total = len(combos)
     slots: list[_Slot | None] = []
-    pending: dict[int, tuple[str, AssemblyModel]] = {}  # analytical: solved below, all tools together
+    pending: dict[int, tuple[str, AssemblyModel, tuple[str, ...]]] = {}  # analytical: solved below, all together
     for i, raw in enumerate(combos):
         ident = raw.get("id") if isinstance(raw, Mapping) else None
         path = f"combinations[{i}]"
@@ -85,7 +113,7 @@ def predict_batch(request: Mapping[str, Any], *, resolve_base: BaseResolver | No
                 raise InputError(f"{path}.id", "is required (a non-empty string)")
             spec = assemble(common, parse_combination(raw, common.materials, path, extra_fields=("id",)))
             if side.base is None:
-                pending[i] = (ident, build_model(spec, spindle=side.spindle))
+                pending[i] = (ident, build_model(spec, spindle=side.spindle), assembly_notes(spec))
                 slots.append(None)
             else:
                 model, prediction = side.predict_with_model(spec)
@@ -103,9 +131,10 @@ def predict_batch(request: Mapping[str, Any], *, resolve_base: BaseResolver | No
             if progress is not None:
                 progress(errors + n, total)
 
-        predictions = predict_tools([model for _, model in pending.values()], common.frequency_hz, side.cache,
-                                    natural_frequencies=with_modes, done=done)
-        for (i, (ident, model)), prediction in zip(pending.items(), predictions, strict=True):
+        predictions = predict_tools([model for _, model, _ in pending.values()], common.frequency_hz, side.cache,
+                                    natural_frequencies=with_modes, done=done,
+                                    notes=[notes for _, _, notes in pending.values()])
+        for (i, (ident, model, _)), prediction in zip(pending.items(), predictions, strict=True):
             slots[i] = (ident, model, prediction)
     elif progress is not None and side.base is None:
         progress(total, total)

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 __all__ = [
     "MAX_BATCH_COMBINATIONS",
+    "MAX_BEARINGS",
     "MAX_COHERENCE",
     "MAX_CUTTING_COEFFICIENT_N_M2",
     "MAX_DAMPING",
@@ -22,11 +23,15 @@ __all__ = [
     "MAX_FREQUENCY_LINES",
     "MAX_FRF_VALUE",
     "MAX_HOLDER_SEGMENTS_PER_CONE",
+    "MAX_JSON_DEPTH",
+    "MAX_JSON_NUMBER",
     "MAX_LENGTH_M",
     "MAX_LOSS_FACTOR",
     "MAX_MODULUS_PA",
+    "MAX_NECK_SEGMENTS",
     "MAX_POISSON_RATIO",
     "MAX_RADIAL_RATIO",
+    "MAX_SEGMENTS",
     "MAX_SHEAR_COEFFICIENT",
     "MAX_SPEED_COUNT",
     "MAX_SPEED_RPM",
@@ -46,12 +51,28 @@ __all__ = [
     "MIN_SPEED_RPM",
 ]
 
+# ---------------------------------------------------------------------------- JSON documents
+
+#: Deepest nesting of objects and lists in a JSON request (a Fusion tool library inside a
+#: request is 8 deep); deeper documents are refused before anything recurses into them.
+MAX_JSON_DEPTH = 32
+#: Largest magnitude of any number in a JSON request. No quantity of this domain comes near
+#: it in SI units (the largest bounds below are 1e15); it keeps every power a computation
+#: may take of an unchecked number (x^10 = 1e300) finite. Integers beyond 64 bits and
+#: NaN/Infinity tokens are refused by the decoder itself.
+MAX_JSON_NUMBER = 1.0e30
+
 # ---------------------------------------------------------------------------- sizes
 
 #: Frequency lines of one request.
 MAX_FREQUENCY_LINES = 200_000
 #: Tool–holder combinations of one batch.
 MAX_BATCH_COMBINATIONS = 10_000
+#: Segments of one spindle or one holder. Real spindle models have 10–60 and a CAM
+#: holder cut into cylinders a few hundred; each segment costs a 4×4 solve per line.
+MAX_SEGMENTS = 1_000
+#: Bearings of one spindle.
+MAX_BEARINGS = 100
 
 # ---------------------------------------------------------------------------- assembly
 
@@ -73,6 +94,8 @@ MAX_STIFFNESS = 1.0e15
 MIN_JOINT_STIFFNESS = 1.0e-3
 #: Largest viscous damping, N·s/m or N·m·s/rad.
 MAX_DAMPING = 1.0e12
+#: Pieces of a tool's stepped neck (``tool.neck_segments``).
+MAX_NECK_SEGMENTS = 200
 #: Smallest equivalent fluted diameter over the cutting diameter (the largest is 1).
 MIN_FLUTED_DIAMETER_RATIO = 0.01
 #: A numeric shear coefficient κ (dimensionless).

@@ -16,6 +16,7 @@ import numpy as np
 
 from rcsa.errors import InputError
 from rcsa.model.bounds import (
+    MAX_BEARINGS,
     MAX_DAMPING,
     MAX_DENSITY_KG_M3,
     MAX_FREQUENCY_HZ,
@@ -23,7 +24,9 @@ from rcsa.model.bounds import (
     MAX_LENGTH_M,
     MAX_LOSS_FACTOR,
     MAX_MODULUS_PA,
+    MAX_NECK_SEGMENTS,
     MAX_POISSON_RATIO,
+    MAX_SEGMENTS,
     MAX_SHEAR_COEFFICIENT,
     MAX_STIFFNESS,
     MIN_DENSITY_KG_M3,
@@ -73,7 +76,17 @@ _SHEAR_MODELS: tuple[ShearModel, ...] = ("hutchinson", "cowper")
 
 @dataclass(frozen=True, slots=True)
 class SegmentSpec:
-    """A uniform (hollow) circular segment; lengths and diameters in m."""
+    """A uniform (hollow) circular segment; lengths and diameters in m.
+
+    Parameters
+    ----------
+    length_m : float
+    outer_diameter_m : float
+    inner_diameter_m : float
+        0 for a solid segment.
+    material : str
+        Name of a material of the document.
+    """
 
     length_m: float
     outer_diameter_m: float
@@ -83,7 +96,21 @@ class SegmentSpec:
 
 @dataclass(frozen=True, slots=True)
 class BearingSpec:
-    """A bearing: spring/damper to rigid ground at ``position_m`` from the spindle nose."""
+    """A bearing: spring/damper to rigid ground at ``position_m`` from the spindle nose.
+
+    Parameters
+    ----------
+    position_m : float
+        Distance from the spindle nose, m.
+    stiffness_n_m : float
+        Radial stiffness, N/m.
+    damping_ns_m : float
+        Radial viscous damping, N·s/m.
+    rotational_stiffness_nm_rad : float
+        Tilting stiffness, N·m/rad.
+    rotational_damping_nms_rad : float
+        Tilting viscous damping, N·m·s/rad.
+    """
 
     position_m: float
     stiffness_n_m: float
@@ -94,7 +121,14 @@ class BearingSpec:
 
 @dataclass(frozen=True, slots=True)
 class SpindleSpec:
-    """Analytical spindle: segments listed from the nose toward the rear, bearings."""
+    """Analytical spindle: segments listed from the nose toward the rear, bearings.
+
+    Parameters
+    ----------
+    segments : tuple of SegmentSpec
+        From the nose toward the rear.
+    bearings : tuple of BearingSpec
+    """
 
     segments: tuple[SegmentSpec, ...]
     bearings: tuple[BearingSpec, ...]
@@ -109,10 +143,16 @@ class SpindleSpec:
 class MeasuredSpindleSpec:
     """A stored measured spindle (hybrid assembly).
 
-    ``artifact_method`` chooses how an ``artifact_frfs`` measurement is identified
-    (``exact`` three-FRF method, or the labelled ``finite_difference`` fallback);
-    ``effective_length_m`` is the equivalent-cantilever length used to estimate the rotations
-    of a ``direct_frf`` measurement (:mod:`rcsa.measured.hybrid`).
+    Parameters
+    ----------
+    measurement_id : str
+        Id of the stored measurement (``m-`` and 12 hex digits).
+    artifact_method : {"exact", "finite_difference"}
+        How an ``artifact_frfs`` measurement is identified: the exact three-FRF method, or the
+        labelled finite-difference fallback.
+    effective_length_m : float
+        Equivalent-cantilever length used to estimate the rotations of a ``direct_frf``
+        measurement, m (:mod:`rcsa.measured.hybrid`).
     """
 
     measurement_id: str
@@ -122,7 +162,13 @@ class MeasuredSpindleSpec:
 
 @dataclass(frozen=True, slots=True)
 class HolderSpec:
-    """Holder segments listed from the gauge line toward the tool end."""
+    """Holder segments listed from the gauge line toward the tool end.
+
+    Parameters
+    ----------
+    segments : tuple of SegmentSpec
+        From the gauge line toward the tool end.
+    """
 
     segments: tuple[SegmentSpec, ...]
 
@@ -137,9 +183,34 @@ class ToolSpec:
     """Parametric tool (ISO 13399 / Fusion meaning; ``contract.md`` "Assembly").
 
     ``shoulder_length_m``/``shoulder_diameter_m`` (extension) describe a reduced neck from
-    the flute end up to ``shoulder_length_m`` from the tip. ``fluted_mass_diameter_ratio``
+    the flute end up to ``shoulder_length_m`` from the tip; ``neck_segments`` (extension,
+    instead of them) a stepped neck as ``(length_m, diameter_m)`` pieces from the flute end
+    toward the holder (a conical neck, stepped). ``fluted_mass_diameter_ratio``
     (extension) uses a separate equivalent diameter for the flutes' mass (default: the
     stiffness one, ``domain.md`` §5.1).
+
+    Parameters
+    ----------
+    material : str
+        Name of a material of the document.
+    diameter_m : float
+        Cutting diameter DC, m.
+    shank_diameter_m : float
+        Shank diameter, m.
+    overall_length_m : float
+        Overall length OAL, m.
+    flute_length_m : float
+        Flute length LCF, m.
+    stickout_m : float
+        Length from the holder face to the tip, m.
+    fluted_diameter_ratio : float
+        Equivalent diameter of the fluted section for its stiffness, as a fraction of DC.
+    fluted_mass_diameter_ratio : float, optional
+        The same for the flutes' mass (extension).
+    shoulder_length_m, shoulder_diameter_m : float, optional
+        A reduced neck (extension, see above).
+    neck_segments : tuple of (float, float)
+        A stepped neck (extension, see above): ``(length_m, diameter_m)`` pieces, m.
     """
 
     material: str
@@ -152,6 +223,7 @@ class ToolSpec:
     fluted_mass_diameter_ratio: float | None = None
     shoulder_length_m: float | None = None
     shoulder_diameter_m: float | None = None
+    neck_segments: tuple[tuple[float, float], ...] = ()
 
     @property
     def inserted_length_m(self) -> float:
@@ -161,7 +233,19 @@ class ToolSpec:
 
 @dataclass(frozen=True, slots=True)
 class JointSpec:
-    """Elastic joint ``diag(k_t + iωc_t, k_r + iωc_r)``; ``None`` rotational stiffness = rigid."""
+    """Elastic joint ``diag(k_t + iωc_t, k_r + iωc_r)``; ``None`` rotational stiffness = rigid.
+
+    Parameters
+    ----------
+    stiffness_n_m : float
+        Translational stiffness k_t, N/m.
+    damping_ns_m : float
+        Translational viscous damping c_t, N·s/m.
+    rotational_stiffness_nm_rad : float or None
+        Rotational stiffness k_r, N·m/rad; ``None`` is rigid.
+    rotational_damping_nms_rad : float
+        Rotational viscous damping c_r, N·m·s/rad.
+    """
 
     stiffness_n_m: float
     damping_ns_m: float = 0.0
@@ -171,7 +255,23 @@ class JointSpec:
 
 @dataclass(frozen=True, slots=True)
 class AssemblySpec:
-    """A validated assembly document (``contract.md`` "Assembly")."""
+    """A validated assembly document (``contract.md`` "Assembly").
+
+    Parameters
+    ----------
+    frequency_hz : numpy.ndarray, shape (nfreq,)
+        Read-only, strictly increasing, > 0 Hz.
+    spindle : SpindleSpec or MeasuredSpindleSpec
+    holder : HolderSpec or None
+        ``None`` only on a measured spindle whose plane is the holder tip.
+    tool : ToolSpec
+    spindle_holder, holder_tool : JointSpec or None
+        The elastic joints; ``None`` is rigid.
+    beam_theory : {"timoshenko", "euler_bernoulli"}
+    shear_coefficient : {"hutchinson", "cowper"} or float
+    materials : mapping of str to Material
+        Built-in materials updated by the document's own.
+    """
 
     frequency_hz: FloatArray
     spindle: SpindleSpec | MeasuredSpindleSpec
@@ -189,6 +289,15 @@ class AssemblySpec:
 
 def parse_frequency(value: object, path: str = "frequency", max_lines: int = MAX_FREQUENCY_LINES) -> FloatArray:
     """Frequency grid from ``{start_hz, stop_hz, step_hz}`` (stop included) or ``{values_hz}``.
+
+    Parameters
+    ----------
+    value : dict
+        The document's ``frequency`` object.
+    path : str
+        Where the value sits in the document, for error messages.
+    max_lines : int
+        Largest accepted number of frequency lines.
 
     Returns
     -------
@@ -229,6 +338,13 @@ def parse_materials(value: object, path: str = "materials") -> Mapping[str, Mate
     """Built-in materials, updated by the document's ``materials`` (new names or overrides).
 
     A built-in may be overridden field by field; a new material needs E, ν and ρ.
+
+    Parameters
+    ----------
+    value : dict or None
+        The document's ``materials`` object (name → properties), or ``None``.
+    path : str
+        Where the value sits in the document, for error messages.
     """
     out = dict(BUILTIN_MATERIALS)
     if value is None:
@@ -260,6 +376,9 @@ def _material(o: Fields, materials: Mapping[str, Material], default: str) -> str
 def _segments(value: object, path: str, materials: Mapping[str, Material]) -> tuple[SegmentSpec, ...]:
     if not isinstance(value, list) or not value:
         raise InputError(path, "must be a non-empty list of segments")
+    if len(value) > MAX_SEGMENTS:
+        raise InputError(path, f"at most {MAX_SEGMENTS} segments, got {len(value)}; merge neighbouring segments "
+                               "of equal section (each costs a condensation per frequency line)")
     out = []
     for i, raw in enumerate(value):
         o = Fields(raw, f"{path}[{i}]")
@@ -276,7 +395,26 @@ def _segments(value: object, path: str, materials: Mapping[str, Material]) -> tu
 
 def parse_spindle(value: object, materials: Mapping[str, Material], path: str = "spindle"
                   ) -> SpindleSpec | MeasuredSpindleSpec:
-    """An analytical spindle (segments nose → rear, bearings) or a stored measurement id."""
+    """An analytical spindle (segments nose → rear, bearings) or a stored measurement id.
+
+    Parameters
+    ----------
+    value : object
+        The parsed JSON of ``spindle``.
+    materials : mapping of str to Material
+        The materials a segment may name (built-in and the request's own).
+    path : str
+        The value's path in the request, named in errors.
+
+    Returns
+    -------
+    SpindleSpec or MeasuredSpindleSpec
+
+    Raises
+    ------
+    InputError
+        A missing, mistyped or out-of-bounds field, named by its path.
+    """
     o = Fields(value, path)
     if "measurement_id" in o.value:
         o.only("measurement_id", "artifact_method", "effective_length_m")
@@ -290,6 +428,8 @@ def parse_spindle(value: object, materials: Mapping[str, Material], path: str = 
     raw_bearings = o.value.get("bearings", [])
     if not isinstance(raw_bearings, list):
         raise InputError(o.at("bearings"), "must be a list")
+    if len(raw_bearings) > MAX_BEARINGS:
+        raise InputError(o.at("bearings"), f"at most {MAX_BEARINGS} bearings, got {len(raw_bearings)}")
     bearings = []
     for i, raw in enumerate(raw_bearings):
         b = Fields(raw, f"{o.at('bearings')}[{i}]")
@@ -308,7 +448,26 @@ def parse_spindle(value: object, materials: Mapping[str, Material], path: str = 
 
 
 def parse_holder(value: object, materials: Mapping[str, Material], path: str = "holder") -> HolderSpec:
-    """Holder segments from the gauge line toward the tool end."""
+    """Holder segments from the gauge line toward the tool end.
+
+    Parameters
+    ----------
+    value : object
+        The parsed JSON of ``holder``.
+    materials : mapping of str to Material
+        The materials a segment may name (built-in and the request's own).
+    path : str
+        The value's path in the request, named in errors.
+
+    Returns
+    -------
+    HolderSpec
+
+    Raises
+    ------
+    InputError
+        A missing, mistyped or out-of-bounds field, named by its path.
+    """
     o = Fields(value, path)
     o.only("segments")
     return HolderSpec(_segments(o.value.get("segments"), o.at("segments"), materials))
@@ -316,11 +475,31 @@ def parse_holder(value: object, materials: Mapping[str, Material], path: str = "
 
 _TOOL_FIELDS = ("material", "diameter_m", "shank_diameter_m", "overall_length_m", "flute_length_m",
                 "stickout_m", "fluted_diameter_ratio", "fluted_mass_diameter_ratio",
-                "shoulder_length_m", "shoulder_diameter_m")
+                "shoulder_length_m", "shoulder_diameter_m", "neck_segments")
 
 
 def parse_tool(value: object, materials: Mapping[str, Material], path: str = "tool") -> ToolSpec:
-    """The parametric tool, with the geometric rules of the contract checked."""
+    """The parametric tool, with the geometric rules of the contract checked.
+
+    Parameters
+    ----------
+    value : object
+        The parsed JSON of ``tool``.
+    materials : mapping of str to Material
+        The materials a segment may name (built-in and the request's own).
+    path : str
+        The value's path in the request, named in errors.
+
+    Returns
+    -------
+    ToolSpec
+
+    Raises
+    ------
+    InputError
+        A missing, mistyped or out-of-bounds field, or a broken geometric rule
+        (flute ≤ stickout ≤ overall length, shoulder between flute and stickout, …).
+    """
     o = Fields(value, path)
     o.only(*_TOOL_FIELDS)
     diameter = o.number("diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
@@ -341,12 +520,40 @@ def parse_tool(value: object, materials: Mapping[str, Material], path: str = "to
     if shoulder_length is not None and not flute <= shoulder_length <= stickout:
         raise InputError(o.at("shoulder_length_m"),
                          f"must lie between flute_length_m ({flute:g}) and stickout_m ({stickout:g})")
+    necks = _neck_segments(o, flute, stickout) if o.has("neck_segments") else ()
+    if necks and shoulder_length is not None:
+        raise InputError(o.at("neck_segments"), "give either neck_segments or shoulder_length_m/shoulder_diameter_m")
     return ToolSpec(_material(o, materials, "carbide"), diameter, shank, overall, flute, stickout,
-                    ratio, mass_ratio, shoulder_length, shoulder_diameter)
+                    ratio, mass_ratio, shoulder_length, shoulder_diameter, necks)
+
+
+def _neck_segments(o: Fields, flute: float, stickout: float) -> tuple[tuple[float, float], ...]:
+    """``[{length_m, diameter_m}]`` from the flute end; together within stickout − flute_length."""
+    raw = o.array("neck_segments")
+    if len(raw) > MAX_NECK_SEGMENTS:
+        raise InputError(o.at("neck_segments"), f"at most {MAX_NECK_SEGMENTS} pieces, got {len(raw)}")
+    out = []
+    for i, item in enumerate(raw):
+        s = Fields(item, f"{o.at('neck_segments')}[{i}]", ("length_m", "diameter_m"))
+        out.append((s.number("length_m", gt=0.0, ge=MIN_LENGTH_M),  # at most stickout − flute, below
+                    s.number("diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)))
+    total = math.fsum(length for length, _ in out)
+    if total > (stickout - flute) * (1 + 1e-9) + 1e-12:
+        raise InputError(o.at("neck_segments"), f"reach {total:g} m beyond the flutes, more than the "
+                                                f"{stickout - flute:g} m between flute_length_m and stickout_m")
+    return tuple(out)
 
 
 def parse_joint(value: object, path: str) -> JointSpec | None:
-    """An elastic joint; ``None`` (left out) means rigid."""
+    """An elastic joint; ``None`` (left out) means rigid.
+
+    Parameters
+    ----------
+    value : dict or None
+        A joint object (``stiffness_n_m`` ...), or ``None`` when left out.
+    path : str
+        Where the value sits in the document, for error messages.
+    """
     if value is None:
         return None
     o = Fields(value, path)
@@ -360,7 +567,15 @@ def parse_joint(value: object, path: str) -> JointSpec | None:
 
 @dataclass(frozen=True, slots=True)
 class CombinationSpec:
-    """One tool–holder combination of a batch: holder, tool and joints."""
+    """One tool–holder combination of a batch: holder, tool and joints.
+
+    Parameters
+    ----------
+    holder : HolderSpec or None
+    tool : ToolSpec
+    spindle_holder, holder_tool : JointSpec or None
+        The elastic joints; ``None`` is rigid.
+    """
 
     holder: HolderSpec | None
     tool: ToolSpec
@@ -376,6 +591,8 @@ def parse_combination(value: object, materials: Mapping[str, Material], path: st
     ----------
     value : dict
         Object holding ``holder`` (optional), ``tool`` and ``joints`` (optional).
+    materials : mapping of str to Material
+        Materials by name (from :func:`parse_materials`).
     path : str
         Path prefix for error messages (``"combinations[3]"``).
     extra_fields : tuple of str
@@ -396,7 +613,17 @@ def parse_combination(value: object, materials: Mapping[str, Material], path: st
 
 @dataclass(frozen=True, slots=True)
 class CommonSpec:
-    """What every combination of an assembly or batch shares: grid, options, materials, spindle."""
+    """What every combination of an assembly or batch shares: grid, options, materials, spindle.
+
+    Parameters
+    ----------
+    frequency_hz : numpy.ndarray, shape (nfreq,)
+        Read-only, strictly increasing, > 0 Hz.
+    beam_theory : {"timoshenko", "euler_bernoulli"}
+    shear_coefficient : {"hutchinson", "cowper"} or float
+    materials : mapping of str to Material
+    spindle : SpindleSpec or MeasuredSpindleSpec
+    """
 
     frequency_hz: FloatArray
     beam_theory: BeamTheory
@@ -409,7 +636,26 @@ _COMMON_FIELDS = ("frequency", "beam_theory", "shear_coefficient", "materials", 
 
 
 def parse_common(document: object, path: str = "", max_lines: int = MAX_FREQUENCY_LINES) -> CommonSpec:
-    """Frequency grid, beam theory, shear coefficient, materials and spindle of a document."""
+    """Frequency grid, beam theory, shear coefficient, materials and spindle of a document.
+
+    Parameters
+    ----------
+    document : object
+        A parsed request (an assembly, or the shared part of a batch).
+    path : str
+        Its path in the request (``""`` for the request itself).
+    max_lines : int
+        Largest accepted number of frequency lines.
+
+    Returns
+    -------
+    CommonSpec
+
+    Raises
+    ------
+    InputError
+        A missing, mistyped or out-of-bounds field, named by its path.
+    """
     o = Fields(document, path)
     if "frequency" not in o.value:
         raise InputError(o.at("frequency"), "is required")
@@ -428,7 +674,13 @@ def parse_common(document: object, path: str = "", max_lines: int = MAX_FREQUENC
 
 
 def assemble(common: CommonSpec, combination: CombinationSpec) -> AssemblySpec:
-    """An assembly from the shared part and one combination."""
+    """An assembly from the shared part and one combination.
+
+    Parameters
+    ----------
+    common : CommonSpec
+    combination : CombinationSpec
+    """
     if combination.holder is None and isinstance(common.spindle, SpindleSpec):
         raise InputError("holder", "is required for an analytical spindle")
     return AssemblySpec(

@@ -37,7 +37,19 @@ _T = TypeVar("_T")
 __all__ = ["Fields", "boolean", "integer", "join", "json_object", "number", "only", "string"]
 
 def join(path: str, key: str | int) -> str:
-    """The path of ``key`` inside ``path``: ``tool.stickout_m``, ``segments[2]``."""
+    """The path of ``key`` inside ``path``: ``tool.stickout_m``, ``segments[2]``.
+
+    Parameters
+    ----------
+    path : str
+        The dotted path of the containing value (``""`` for the request itself).
+    key : str or int
+        A member name, or a list index.
+
+    Returns
+    -------
+    str
+    """
     if isinstance(key, int):
         return f"{path}[{key}]"
     return f"{path}.{key}" if path else key
@@ -54,6 +66,21 @@ def number(value: object, field: str, *, gt: float | None = None, ge: float | No
     The bounds are checked in the order ``gt``, ``ge``, ``le``, ``lt``, so that a value
     that is not positive hears "must be > 0" before any sanity minimum. With ``text``, a
     string holding a number is read too (form fields, command-line options).
+
+    Parameters
+    ----------
+    value : object
+        The parsed JSON value.
+    field : str
+        Its path, named in the error.
+    gt, ge, le, lt : float, optional
+        Bounds: greater than, at least, at most, less than.
+    text : bool
+        Also read a string holding a number.
+
+    Returns
+    -------
+    float
 
     Raises
     ------
@@ -81,6 +108,19 @@ def number(value: object, field: str, *, gt: float | None = None, ge: float | No
 def integer(value: object, field: str, *, ge: int | None = None, le: int | None = None) -> int:
     """An integer (not a bool, not a float) within ``[ge, le]``.
 
+    Parameters
+    ----------
+    value : object
+        The parsed JSON value.
+    field : str
+        Its path, named in the error.
+    ge, le : int, optional
+        Smallest and largest allowed value.
+
+    Returns
+    -------
+    int
+
     Raises
     ------
     InputError
@@ -104,6 +144,19 @@ def boolean(value: object, field: str, *, text: bool = False) -> bool:
     """``true`` or ``false``; with ``text`` also a string (``true``/``1``/``yes``/``on``,
     ``false``/``0``/``no``/``off``/empty, any case) from a form field.
 
+    Parameters
+    ----------
+    value : object
+        The parsed JSON value.
+    field : str
+        Its path, named in the error.
+    text : bool
+        Also read the strings above.
+
+    Returns
+    -------
+    bool
+
     Raises
     ------
     InputError
@@ -118,6 +171,19 @@ def boolean(value: object, field: str, *, text: bool = False) -> bool:
 
 def string(value: object, field: str, *, choices: Collection[str] | None = None) -> str:
     """A non-empty string, one of ``choices`` when given.
+
+    Parameters
+    ----------
+    value : object
+        The parsed JSON value.
+    field : str
+        Its path, named in the error.
+    choices : collection of str, optional
+        The allowed values.
+
+    Returns
+    -------
+    str
 
     Raises
     ------
@@ -134,6 +200,15 @@ def string(value: object, field: str, *, choices: Collection[str] | None = None)
 def only(value: Mapping[str, Any], field: str, allowed: Collection[str]) -> None:
     """Refuse keys of ``value`` that are not ``allowed`` (the first one, sorted, is named).
 
+    Parameters
+    ----------
+    value : mapping
+        A JSON object.
+    field : str
+        Its path.
+    allowed : collection of str
+        The keys it may have.
+
     Raises
     ------
     InputError
@@ -146,6 +221,19 @@ def only(value: Mapping[str, Any], field: str, allowed: Collection[str]) -> None
 
 def json_object(value: object, field: str, allowed: Collection[str] | None = None) -> Mapping[str, Any]:
     """A JSON object (a mapping), with only ``allowed`` keys when given.
+
+    Parameters
+    ----------
+    value : object
+        The parsed JSON value.
+    field : str
+        Its path, named in the error.
+    allowed : collection of str, optional
+        The keys it may have.
+
+    Returns
+    -------
+    mapping
 
     Raises
     ------
@@ -181,15 +269,33 @@ class Fields:
         self.path = path
 
     def at(self, key: str | int) -> str:
-        """The path of a member."""
+        """The path of a member.
+
+        Parameters
+        ----------
+        key : str or int
+            The member's name (or index).
+        """
         return join(self.path, key)
 
     def only(self, *allowed: str) -> None:
-        """Refuse members not in ``allowed``."""
+        """Refuse members not in ``allowed``.
+
+        Parameters
+        ----------
+        *allowed : str
+            The member names allowed.
+        """
         only(self.value, self.path, allowed)
 
     def has(self, key: str) -> bool:
-        """Whether the member is present and not null."""
+        """Whether the member is present and not null.
+
+        Parameters
+        ----------
+        key : str
+            The member's name.
+        """
         return self.value.get(key) is not None
 
     def _absent(self, key: str, default: _T | None) -> _T:
@@ -200,7 +306,17 @@ class Fields:
     def number(self, key: str, *, default: float | None = None,
                gt: float | None = None, ge: float | None = None, le: float | None = None,
                lt: float | None = None) -> float:
-        """A finite number member (:func:`number`)."""
+        """A finite number member (:func:`number`).
+
+        Parameters
+        ----------
+        key : str
+            The member's name.
+        default : float, optional
+            Returned when the member is absent or null; without it the member is required.
+        gt, ge, le, lt : float, optional
+            Bounds (:func:`number`).
+        """
         raw = self.value.get(key)
         if raw is None:
             return self._absent(key, default)
@@ -208,25 +324,61 @@ class Fields:
 
     def optional_number(self, key: str, *, gt: float | None = None, ge: float | None = None,
                         le: float | None = None, lt: float | None = None) -> float | None:
-        """:meth:`number`, or None when the member is absent or null."""
+        """:meth:`number`, or None when the member is absent or null.
+
+        Parameters
+        ----------
+        key : str
+            The member's name.
+        gt, ge, le, lt : float, optional
+            Bounds (:func:`number`).
+        """
         raw = self.value.get(key)
         return None if raw is None else number(raw, self.at(key), gt=gt, ge=ge, le=le, lt=lt)
 
     def choice(self, key: str, default: _L, choices: tuple[_L, ...]) -> _L:
-        """:meth:`string` restricted to ``choices``, typed as their ``Literal``."""
+        """:meth:`string` restricted to ``choices``, typed as their ``Literal``.
+
+        Parameters
+        ----------
+        key : str
+            The member's name.
+        default : str
+            Returned when the member is absent.
+        choices : tuple of str
+            The allowed values.
+        """
         raw = self.string(key, default, choices)
         return next(c for c in choices if c == raw)
 
     def integer(self, key: str, *, default: int | None = None,
                 ge: int | None = None, le: int | None = None) -> int:
-        """An integer member (:func:`integer`)."""
+        """An integer member (:func:`integer`).
+
+        Parameters
+        ----------
+        key : str
+            The member's name.
+        default : int, optional
+            Returned when the member is absent or null; without it the member is required.
+        ge, le : int, optional
+            Smallest and largest allowed value.
+        """
         raw = self.value.get(key)
         if raw is None:
             return self._absent(key, default)
         return integer(raw, self.at(key), ge=ge, le=le)
 
     def boolean(self, key: str, *, default: bool | None = None) -> bool:
-        """A boolean member (:func:`boolean`)."""
+        """A boolean member (:func:`boolean`).
+
+        Parameters
+        ----------
+        key : str
+            The member's name.
+        default : bool, optional
+            Returned when the member is absent or null; without it the member is required.
+        """
         raw = self.value.get(key)
         if raw is None:
             return self._absent(key, default)
@@ -234,21 +386,47 @@ class Fields:
 
     def string(self, key: str, default: str | None = None, choices: Collection[str] | None = None) -> str:
         """A non-empty string member (:func:`string`); ``default`` when absent (an explicit
-        null is "is required")."""
+        null is "is required").
+
+        Parameters
+        ----------
+        key : str
+            The member's name.
+        default : str, optional
+            Returned when the member is absent; without it the member is required.
+        choices : collection of str, optional
+            The allowed values.
+        """
         raw = self.value.get(key, default)
         if raw is None:
             raise InputError(self.at(key), "is required")
         return string(raw, self.at(key), choices=choices)
 
     def array(self, key: str) -> list[Any]:
-        """A list member (required)."""
+        """A list member (required).
+
+        Parameters
+        ----------
+        key : str
+            The member's name.
+        """
         raw = self.value.get(key)
         if not isinstance(raw, list):
             raise InputError(self.at(key), "must be a list")
         return raw
 
     def object(self, key: str, allowed: Collection[str] | None = None, *, required: bool = False) -> Fields:
-        """An object member as :class:`Fields` (an empty one when absent and not required)."""
+        """An object member as :class:`Fields` (an empty one when absent and not required).
+
+        Parameters
+        ----------
+        key : str
+            The member's name.
+        allowed : collection of str, optional
+            The keys the object may have.
+        required : bool
+            Refuse an absent member.
+        """
         raw = self.value.get(key)
         if raw is None and not required:
             raw = {}

@@ -63,6 +63,12 @@ def _split(name: str) -> tuple[str, int | None, str]:
 def get_parameter(spec: AssemblySpec, name: str) -> float | None:
     """Value of a named parameter in SI units (``None`` when rigid or absent).
 
+    Parameters
+    ----------
+    spec : AssemblySpec
+    name : str
+        A parameter name, e.g. ``"bearings[0].stiffness_n_m"`` or ``"tool.stickout_m"``.
+
     Raises
     ------
     InputError
@@ -118,5 +124,11 @@ def set_parameter(spec: AssemblySpec, name: str, value: float) -> AssemblySpec:
 
 
 def is_damping(name: str) -> bool:
-    """True for a damping parameter (``..._damping_ns_m`` or ``..._damping_nms_rad``)."""
+    """True for a damping parameter (``..._damping_ns_m`` or ``..._damping_nms_rad``).
+
+    Parameters
+    ----------
+    name : str
+        A parameter name.
+    """
     return name.endswith(("damping_ns_m", "damping_nms_rad"))

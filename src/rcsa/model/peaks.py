@@ -4,9 +4,9 @@
 peaks on a grid (predictions here, the joint identification's measured peaks, the
 diagnosis's feature windows) calls it with its own, documented prominence rule.
 
-Every prediction reports the local maxima of ``|h|`` (:func:`find_frf_peaks`); a hybrid
-prediction (measured spindle, no exact eigenvalues) also reports single-mode fits around
-them.
+Every analytical prediction reports the local maxima of ``|h|`` (:func:`find_frf_peaks`); a
+hybrid prediction (measured spindle, no exact eigenvalues) reports a modal fit instead
+(:mod:`rcsa.model.modal_fit`, which also gives the peaks that stand out of the noise).
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import numpy as np
 
 from rcsa.physics.arrays import ComplexArray, FloatArray, IntArray
 
-__all__ = ["find_frf_peaks", "modal_fit_peaks", "peak_lines", "single_mode_fit"]
+__all__ = ["find_frf_peaks", "peak_lines", "single_mode_fit"]
 
 _TWO_PI = 2.0 * np.pi
 
@@ -85,34 +85,6 @@ def find_frf_peaks(frequency_hz: FloatArray, h: ComplexArray, *, rel_prominence:
         return []
     idx, _ = peak_lines(mag, rel_prominence * float(mag.max()))
     return [{"frequency_hz": float(frequency_hz[i]), "magnitude_m_n": float(mag[i])} for i in idx]
-
-
-def modal_fit_peaks(frequency_hz: FloatArray, h: ComplexArray, *, rel_prominence: float = 0.01,
-                    half_width_lines: int = 6) -> list[dict[str, float]]:
-    """Single-mode fits around each peak of ``h`` (for FRFs without an exact model).
-
-    Around every peak, ``h ≈ (c₀ + c₁ iω + c₂ (iω)²) / (ω_n² + 2ζω_n iω + (iω)²)`` is fitted by
-    Levy's linearised least squares (one mode plus residual terms). Used for hybrid
-    predictions, where the spindle is known only through measured FRFs.
-
-    Returns
-    -------
-    list of dict
-        ``{"frequency_hz", "damping_ratio"}`` per peak whose fit is a stable mode.
-    """
-    out = []
-    for peak in find_frf_peaks(frequency_hz, h, rel_prominence=rel_prominence):
-        i = int(np.searchsorted(frequency_hz, peak["frequency_hz"]))
-        lo, hi = max(0, i - half_width_lines), min(frequency_hz.size, i + half_width_lines + 1)
-        if hi - lo < 5:
-            continue
-        fit = single_mode_fit(frequency_hz[lo:hi], h[lo:hi])
-        if fit is None:
-            continue
-        (a0, a1, *_), scale = fit
-        out.append({"frequency_hz": float(np.sqrt(a0) * scale / _TWO_PI),
-                    "damping_ratio": float(a1 / (2 * np.sqrt(a0)))})
-    return out
 
 
 def single_mode_fit(frequency_hz: FloatArray, h: ComplexArray) -> tuple[FloatArray, float] | None:

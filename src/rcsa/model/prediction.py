@@ -14,7 +14,8 @@ from typing import Any, Literal
 import numpy as np
 
 from rcsa.model.assembly import AssemblyModel
-from rcsa.model.peaks import find_frf_peaks, modal_fit_peaks
+from rcsa.model.modal_fit import modal_fit
+from rcsa.model.peaks import find_frf_peaks
 from rcsa.model.wire import complex_to_wire
 from rcsa.physics.algebra2x2 import inv2
 from rcsa.physics.arrays import ComplexArray, FloatArray
@@ -69,9 +70,12 @@ class Prediction(Mapping[str, Any]):
         ``[[h, l], [n, p]]`` at the tool tip, shape (nfreq, 2, 2).
     natural_frequencies_hz : numpy.ndarray, shape (nmodes,)
         Exact undamped natural frequencies in the band (analytical), or modal-fit estimates
-        (hybrid; ``natural_frequencies_method == "modal_fit"``).
+        (hybrid; ``natural_frequencies_method == "modal_fit"``, :func:`rcsa.model.modal_fit.modal_fit`:
+        sorted, distinct, each with its standard uncertainty in ``extra["natural_frequencies_sd_hz"]``
+        and its fit in ``extra["modal_fit"]``).
     peaks : list of dict
-        ``{"frequency_hz", "magnitude_m_n"}`` local maxima of ``|h|``.
+        ``{"frequency_hz", "magnitude_m_n"}`` local maxima of ``|h|`` (hybrid: those that
+        stand out of the noise of the predicted ``h``).
     static_stiffness_n_m : float or None
         1 / h at 0 Hz of the undamped model; ``None`` when it cannot be given.
     min_real_m_n, min_real_frequency_hz : float
@@ -144,6 +148,13 @@ class SubassemblyCache:
 
     Keys are the (hashable, immutable) chains themselves, so two tools with the same
     holder, shank and insertion share the spindle + holder condensation exactly.
+
+    Parameters
+    ----------
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies of the grid, rad/s.
+    base_receptance : numpy.ndarray, shape (nfreq, 2, 2), optional
+        A measured spindle-side receptance the cached chains start from (hybrid).
     """
 
     def __init__(self, omega_rad_s: FloatArray, base_receptance: ComplexArray | None = None) -> None:
@@ -173,6 +184,12 @@ def tool_point_receptance(model: AssemblyModel, cache: SubassemblyCache) -> Comp
 
     The spindle + holder condensation comes from (and stays in) ``cache``; a measured spindle
     at the holder tip couples only the tool, straight onto its receptance.
+
+    Parameters
+    ----------
+    model : AssemblyModel
+    cache : SubassemblyCache
+        Grid, base receptance and the cached condensations.
     """
     prefix, rest = model.to_holder_tip(), model.tool_side()
     if any(isinstance(item, Beam) for item in prefix):
@@ -200,6 +217,10 @@ def predict_model(model: AssemblyModel, frequency_hz: FloatArray, *,
         Reuse of the spindle + holder condensation across calls on the same grid.
     natural_frequencies : bool
         Compute the exact natural frequencies (analytical models).
+    notes : tuple of str
+        Notes passed on to the result (e.g. how a measured base was obtained).
+    extra : mapping, optional
+        Further JSON fields of the result.
 
     Returns
     -------
@@ -213,12 +234,17 @@ def predict_model(model: AssemblyModel, frequency_hz: FloatArray, *,
     g = tool_point_receptance(model, cache)
     if base_receptance is not None:
         h = g[:, 0, 0]
-        fits = modal_fit_peaks(f, h)
-        notes_out = (*notes, "hybrid assembly: natural_frequencies_hz are single-mode fits to the predicted "
-                     "tool-point h around its peaks, not exact eigenvalues; static stiffness is not "
+        fit = modal_fit(f, h)
+        peaks = [{"frequency_hz": float(f[i]), "magnitude_m_n": float(abs(h[i]))} for i in fit.peak_lines]
+        notes_out = (*notes, "hybrid assembly: natural_frequencies_hz are modal-fit estimates from the predicted "
+                     "tool-point h (one pole per peak that stands out of the noise, fitted with residual "
+                     "terms on ±2.5 half-power half-widths), not exact eigenvalues; natural_frequencies_sd_hz "
+                     "gives each one's standard uncertainty (fit covariance and spread over band choices), "
+                     "modal_fit the details; peaks lists only peaks above the noise; static stiffness is not "
                      "available from a measured spindle")
-        return _prediction(f, g, np.array([m["frequency_hz"] for m in fits]), "modal_fit", None, notes_out,
-                           {**(extra or {}), "modal_fit": fits})
+        return _prediction(f, g, fit.frequency_hz, "modal_fit", None, notes_out,
+                           {**(extra or {}), "natural_frequencies_sd_hz": fit.sd_hz.tolist(),
+                            "modal_fit": [m.to_dict() for m in fit.modes]}, peaks)
     nat = natural_frequencies_batch(prefix, [rest], float(f[0]), float(f[-1]), grid_hz=count_lines_hz(f))[0] \
         if natural_frequencies else np.empty(0)
     static = static_tip_receptance(rest, cache.static(prefix))
@@ -231,7 +257,8 @@ TOOLS_PER_PASS = 64
 
 
 def predict_tools(models: Sequence[AssemblyModel], frequency_hz: FloatArray, cache: SubassemblyCache, *,
-                  natural_frequencies: bool = True, done: Callable[[int], None] | None = None) -> list[Prediction]:
+                  natural_frequencies: bool = True, done: Callable[[int], None] | None = None,
+                  notes: Sequence[tuple[str, ...]] | None = None) -> list[Prediction]:
     """Predictions of many analytical models (tools) on one grid, solved together.
 
     Tools whose spindle + holder is the same chain and whose tool sides have one structure
@@ -254,6 +281,8 @@ def predict_tools(models: Sequence[AssemblyModel], frequency_hz: FloatArray, cac
         Compute the exact natural frequencies.
     done : callable, optional
         Called with the number of models finished so far, after each pass.
+    notes : sequence of tuple of str, optional
+        Notes passed on to each model's result (e.g. :func:`rcsa.model.assembly.assembly_notes`).
 
     Returns
     -------
@@ -295,13 +324,18 @@ def predict_tools(models: Sequence[AssemblyModel], frequency_hz: FloatArray, cac
     for i in range(len(models)):
         g_i = g_all[i]
         assert g_i is not None
-        out.append(_prediction(f, g_i, nat_all[i], "wittrick_williams", static_all[i], (), None))
+        out.append(_prediction(f, g_i, nat_all[i], "wittrick_williams", static_all[i],
+                               () if notes is None else notes[i], None))
     return out
 
 
 def _prediction(f: FloatArray, g: ComplexArray, nat: FloatArray, method: str, static: FloatArray | None,
-                notes: Sequence[str], extra: Mapping[str, Any] | None) -> Prediction:
-    """The :class:`Prediction` of a tool-point receptance ``g`` (nfreq, 2, 2) and what was found for it."""
+                notes: Sequence[str], extra: Mapping[str, Any] | None,
+                peaks: list[dict[str, float]] | None = None) -> Prediction:
+    """The :class:`Prediction` of a tool-point receptance ``g`` (nfreq, 2, 2) and what was found for it.
+
+    ``peaks`` defaults to every peak of ``h`` (:func:`rcsa.model.peaks.find_frf_peaks`).
+    """
     h = g[:, 0, 0]
     notes_out = list(notes)
     static_k = None
@@ -312,6 +346,6 @@ def _prediction(f: FloatArray, g: ComplexArray, nat: FloatArray, method: str, st
             static_k = float(1.0 / static[0, 0])
     i_min = int(np.argmin(h.real))
     return Prediction(tool_point=Receptance(f, g), natural_frequencies_hz=np.asarray(nat, dtype=float),
-                      natural_frequencies_method=method, peaks=find_frf_peaks(f, h),
+                      natural_frequencies_method=method, peaks=find_frf_peaks(f, h) if peaks is None else peaks,
                       static_stiffness_n_m=static_k, min_real_m_n=float(h.real[i_min]),
                       min_real_frequency_hz=float(f[i_min]), notes=tuple(notes_out), extra=dict(extra or {}))

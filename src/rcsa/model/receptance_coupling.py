@@ -30,7 +30,28 @@ __all__ = ["component_receptance", "free_free_nodes", "spindle_nose_receptance",
 
 
 def component_receptance(chain: Chain, omega_rad_s: FloatArray) -> ComplexArray:
-    """Free-free two-end receptance of a rigid chain of beams, shape (nfreq, 4, 4)."""
+    """Free-free two-end receptance of a rigid chain of beams, shape (nfreq, 4, 4).
+
+    The paper's path (``domain.md`` §3): each beam's exact free-free receptance, coupled end
+    to end rigidly.
+
+    Parameters
+    ----------
+    chain : Chain
+        Beams only (a component: the holder or the tool).
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies, rad/s.
+
+    Returns
+    -------
+    numpy.ndarray of complex, shape (nfreq, 4, 4)
+        DOFs ``(w1, ψ1, w2, ψ2)`` of the chain's two ends, m/N, 1/N, rad/N, rad/(N·m).
+
+    Raises
+    ------
+    ValueError
+        A chain holding anything but beams.
+    """
     beams = [item for item in chain if isinstance(item, Beam)]
     if len(beams) != len(chain):
         raise ValueError("a rigid component holds beams only")
@@ -44,6 +65,12 @@ def free_free_nodes(beams: list[Beam], omega_rad_s: FloatArray) -> ComplexArray:
     Block-diagonal ``Y`` of the segments, a signed Boolean ``B`` joining end 2 of each beam to
     end 1 of the next, ``G = Y − Y Bᵀ (B Y Bᵀ)⁻¹ B Y`` (``domain.md`` §3.1–3.2), then one
     representative of each node kept.
+
+    Parameters
+    ----------
+    beams : list of Beam
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies, rad/s.
 
     Returns
     -------
@@ -70,6 +97,13 @@ def spindle_nose_receptance(spindle: Chain, omega_rad_s: FloatArray) -> ComplexA
 
     The beams are coupled rigidly with every node retained (:func:`free_free_nodes`); the
     grounds then modify their nodes (Özgüven, :func:`rcsa.physics.coupling.modify`).
+
+    Parameters
+    ----------
+    spindle : Chain
+        Beams and grounds, from the rear to the nose.
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies, rad/s.
 
     Returns
     -------

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from rcsa.errors import InputError
-from rcsa.model.assembly import AssemblyModel, build_model, spindle_chain
+from rcsa.model.assembly import AssemblyModel, assembly_notes, build_model, spindle_chain
 from rcsa.model.contract import AssemblySpec, CommonSpec, MeasuredSpindleSpec, SpindleSpec
 from rcsa.model.prediction import Prediction, SubassemblyCache, predict_model, tool_point_receptance
 from rcsa.model.wire import complex_to_wire
@@ -79,17 +79,33 @@ class SpindleSide:
         self.alt_caches = [] if self.base is None else [SubassemblyCache(omega, r) for r in self.base.alternatives]
 
     def predict(self, spec: AssemblySpec, natural_frequencies: bool = True) -> Prediction:
-        """Tool-point prediction of one assembly on this spindle side."""
+        """Tool-point prediction of one assembly on this spindle side.
+
+        Parameters
+        ----------
+        spec : AssemblySpec
+            An assembly on this spindle side's grid and spindle.
+        natural_frequencies : bool
+            Compute the exact natural frequencies (analytical spindles).
+        """
         return self.predict_with_model(spec, natural_frequencies)[1]
 
     def predict_with_model(self, spec: AssemblySpec, natural_frequencies: bool = True
                            ) -> tuple[AssemblyModel, Prediction]:
-        """The solved chain model and its prediction."""
+        """The solved chain model and its prediction.
+
+        Parameters
+        ----------
+        spec : AssemblySpec
+            An assembly on this spindle side's grid and spindle.
+        natural_frequencies : bool
+            Compute the exact natural frequencies (analytical spindles).
+        """
         base = self.base
         if base is None:
             model = build_model(spec, spindle=self.spindle)
             return model, predict_model(model, spec.frequency_hz, cache=self.cache,
-                                        natural_frequencies=natural_frequencies)
+                                        natural_frequencies=natural_frequencies, notes=assembly_notes(spec))
         if base.plane == "holder_tip" and base.artifact_diameter_m is not None and \
                 abs(spec.tool.shank_diameter_m - base.artifact_diameter_m) > 1e-6 * base.artifact_diameter_m:
             raise InputError("tool.shank_diameter_m",
@@ -101,7 +117,8 @@ class SpindleSide:
             h = [tool_point_receptance(model, c)[:, 0, 0] for c in self.alt_caches]
             extra["uncertainty"] = spread_of_bounds(spec.frequency_hz, h)
         return model, predict_model(model, spec.frequency_hz, base_receptance=base.receptance, cache=self.cache,
-                                    natural_frequencies=natural_frequencies, notes=base.notes, extra=extra)
+                                    natural_frequencies=natural_frequencies, notes=(*base.notes, *assembly_notes(spec)),
+                                    extra=extra)
 
 
 def spread_of_bounds(frequency_hz: FloatArray, bounds: list[ComplexArray]) -> dict[str, Any]:

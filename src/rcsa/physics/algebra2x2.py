@@ -36,6 +36,11 @@ def negative_count_sym(a11: ComplexArray | FloatArray, a12: ComplexArray | Float
 
     Sylvester's criterion: det < 0 → one negative; det > 0 and trace < 0 → two; det = 0 and
     trace < 0 → one (the other eigenvalue is zero). Imaginary parts are ignored.
+
+    Parameters
+    ----------
+    a11, a12, a22 : numpy.ndarray, shape (...)
+        Entries ``[[a11, a12], [a12, a22]]``, broadcast together.
     """
     a11, a12, a22 = np.real(a11), np.real(a12), np.real(a22)
     d = a11 * a22 - a12 * a12
@@ -81,7 +86,13 @@ class Pivots:
         self._work = np.empty(n), np.empty(n, dtype=bool), np.empty(n, dtype=bool)
 
     def block(self, start: int, stop: int) -> Pivots:
-        """The accumulator of rows ``start:stop``, adding into this one's arrays."""
+        """The accumulator of rows ``start:stop``, adding into this one's arrays.
+
+        Parameters
+        ----------
+        start, stop : int
+            The rows, ``start:stop``.
+        """
         return Pivots(stop - start, self.negatives[start:stop], self.log_abs_det[start:stop])
 
     def add_sym(self, p11: FloatArray, p22: FloatArray, det: FloatArray) -> None:
@@ -91,6 +102,13 @@ class Pivots:
         ``[p11 < 0] + [det < 0 ≠ p11 < 0]``. (``p11 = 0``: one negative if det < 0; the
         measure-zero case ``p11 = det = 0`` counts none.) A zero ``det`` enters the log as
         1e-300.
+
+        Parameters
+        ----------
+        p11, p22 : numpy.ndarray, shape (nrows,)
+            Diagonal of the pivot.
+        det : numpy.ndarray, shape (nrows,)
+            Its determinant ``p11 p22 − p12²``.
         """
         t, f1, f2 = self._work
         np.less(p11, 0.0, out=f1)
@@ -104,7 +122,15 @@ class Pivots:
         np.add(self.log_abs_det, t, out=self.log_abs_det)
 
     def add_scalar(self, p: FloatArray, multiplicity: int = 1) -> None:
-        """A 1×1 pivot ``p`` (``multiplicity`` equal ones)."""
+        """A 1×1 pivot ``p`` (``multiplicity`` equal ones).
+
+        Parameters
+        ----------
+        p : numpy.ndarray, shape (nrows,)
+            The pivot.
+        multiplicity : int
+            How many equal pivots it stands for.
+        """
         t, flag, _ = self._work
         np.less(p, 0.0, out=flag)
         if multiplicity == 1:
@@ -119,6 +145,12 @@ class Pivots:
         np.add(self.log_abs_det, t, out=self.log_abs_det)
 
     def add_negatives(self, negatives: IntArray) -> None:
-        """A count from an item that does not report its pivot's determinant."""
+        """A count from an item that does not report its pivot's determinant.
+
+        Parameters
+        ----------
+        negatives : numpy.ndarray of int, shape (nrows,)
+            Negative pivots the item eliminated, per row.
+        """
         np.add(self.negatives, negatives, out=self.negatives)
         self.det_known = False

@@ -115,6 +115,11 @@ class Grid:
         When the announced beams are few lines each, the first request computes the terms
         of all of them in one vectorised pass (a table with one row per beam): one set of
         array operations instead of one per beam.
+
+        Parameters
+        ----------
+        beam : Beam
+            A beam whose terms will be asked for.
         """
         self._expected[id(beam)] = beam
 
@@ -150,7 +155,13 @@ class Grid:
         return hit
 
     def real_waves(self, section: Section) -> RealWaves:
-        """:meth:`waves` of an undamped section in real arithmetic (:class:`RealWaves`)."""
+        """:meth:`waves` of an undamped section in real arithmetic (:class:`RealWaves`).
+
+        Parameters
+        ----------
+        section : Section
+            Undamped section.
+        """
         hit: RealWaves | None = self._find(self._real_waves, section)
         if hit is None:
             slot = self._slot(self._real_waves, section)
@@ -204,6 +215,11 @@ class Grid:
         """Real six-term dynamic stiffness of an undamped ``beam``; reports internal pivots to :attr:`pivots`.
 
         The arrays are this grid's work arrays: valid until the next call.
+
+        Parameters
+        ----------
+        beam : Beam
+            Undamped beam.
         """
         hit = self._from_table(beam, real=True)
         if hit is not None:
@@ -227,6 +243,11 @@ class Grid:
 
         A step reads the stiffness its predecessor wrote (one set, or fresh arrays from a
         lumped item) and writes the other set, so input and output never overlap.
+
+        Parameters
+        ----------
+        real : bool
+            Real (undamped) arrays, else complex.
         """
         self._carry ^= 1
         k = self.scratch.many(_CARRIED[self._carry], self.omega_rad_s.size, real)
@@ -253,21 +274,38 @@ class Tiling:
         self._real: dict[Section, RealWaves] = {}
 
     def repeated(self, reps: int) -> Tiling:
-        """The same waves for a grid repeating this one ``reps`` times."""
+        """The same waves for a grid repeating this one ``reps`` times.
+
+        Parameters
+        ----------
+        reps : int
+            How many times the new grid repeats this one.
+        """
         out = Tiling.__new__(Tiling)
         out.omega_rad_s, out.reps, out._scratch, out._waves, out._real = \
             self.omega_rad_s, reps, self._scratch, self._waves, self._real
         return out
 
     def waves(self, section: Section) -> Waves:
-        """:class:`Waves` of ``section`` on the grid (computed once)."""
+        """:class:`Waves` of ``section`` on the grid (computed once).
+
+        Parameters
+        ----------
+        section : Section
+        """
         hit = self._waves.get(section)
         if hit is None:
             hit = self._waves[section] = Waves(self.omega_rad_s, section, self._scratch, f"t{len(self._waves)}.")
         return hit
 
     def real_waves(self, section: Section) -> RealWaves:
-        """:class:`RealWaves` of ``section`` on the grid (computed once)."""
+        """:class:`RealWaves` of ``section`` on the grid (computed once).
+
+        Parameters
+        ----------
+        section : Section
+            Undamped section.
+        """
         hit = self._real.get(section)
         if hit is None:
             hit = self._real[section] = RealWaves(self.omega_rad_s, section, self._scratch, f"r{len(self._real)}.")
@@ -517,6 +555,11 @@ class ChainItem(Protocol):
 
         A beam announces its terms (:meth:`Grid.expect`), so the grid can compute those of
         all beams at once; lumped items ask for nothing.
+
+        Parameters
+        ----------
+        grid : Grid
+            The grid the item will be eliminated on.
         """
         ...
 
@@ -526,6 +569,13 @@ class ChainItem(Protocol):
         Every pivot the step eliminates is reported to ``grid.pivots`` when it is set
         (:class:`rcsa.physics.algebra2x2.Pivots`: negatives and ``log|det|``).
         :class:`Lumped` items inherit a version built on :meth:`eliminate`.
+
+        Parameters
+        ----------
+        k : Sym
+            Stiffness at the current node, real arrays.
+        grid : Grid
+            Frequencies, work arrays and the pivot accumulator.
         """
         ...
 
@@ -591,14 +641,28 @@ class Beam:
 
     def eliminate_undamped(self, k: Sym, grid: Grid) -> Sym:
         """:meth:`eliminate` in real arithmetic; reports the pivot ``K + D11`` (and the beam's own
-        internal pivots when it is computed from pieces, :func:`rcsa.physics.segments.undamped_segment_terms`)."""
+        internal pivots when it is computed from pieces, :func:`rcsa.physics.segments.undamped_segment_terms`).
+
+        Parameters
+        ----------
+        k : Sym
+            Stiffness at the current node, real arrays.
+        grid : Grid
+            Frequencies, work arrays and the pivot accumulator.
+        """
         k, pivot, det = _beam_step(k, grid.undamped_beam_terms(self), grid.scratch, grid.carried(real=True))
         if grid.pivots is not None:
             grid.pivots.add_sym(pivot[0].real, pivot[2].real, det.real)  # real already: no copies
         return k
 
     def announce(self, grid: Grid) -> None:
-        """The beam will ask for its terms."""
+        """The beam will ask for its terms.
+
+        Parameters
+        ----------
+        grid : Grid
+            The grid the beam will be eliminated on.
+        """
         grid.expect(self)
 
     def eliminate_static(self, k: Sym) -> Sym:
@@ -709,12 +773,25 @@ class Lumped:
         return (self,)
 
     def announce(self, grid: Grid) -> None:
-        """A lumped item asks the grid for nothing in advance."""
+        """A lumped item asks the grid for nothing in advance.
+
+        Parameters
+        ----------
+        grid : Grid
+            The grid (unused).
+        """
 
     def eliminate_undamped(self, k: Sym, grid: Grid) -> Sym:
         """:meth:`~ChainItem.eliminate` (with its count, but no determinant) in real arrays.
 
         For items that define only the complex step; the built-in ones override it.
+
+        Parameters
+        ----------
+        k : Sym
+            Stiffness at the current node, real arrays.
+        grid : Grid
+            Frequencies, work arrays and the pivot accumulator.
         """
         item: Any = self  # a ChainItem: every subclass defines eliminate
         new, negatives = item.eliminate(k, grid, grid.pivots is not None)
@@ -820,7 +897,15 @@ class Spring(Lumped):
         return joint_step(k, stiff.translational(w0), stiff.rotational(w0))[0]
 
     def eliminate_undamped(self, k: Sym, grid: Grid) -> Sym:
-        """Across the joint's stiffness, real; reports the pivot ``K + K_j`` (one DOF if the other is rigid)."""
+        """Across the joint's stiffness, real; reports the pivot ``K + K_j`` (one DOF if the other is rigid).
+
+        Parameters
+        ----------
+        k : Sym
+            Stiffness at the current node, real arrays.
+        grid : Grid
+            Frequencies, work arrays and the pivot accumulator.
+        """
         return _joint_step(k, self.stiffness_n_m, self.rotational_stiffness_nm_rad, grid.scratch,
                            grid.carried(real=True), grid.pivots)
 
@@ -878,7 +963,15 @@ class Ground(Lumped):
         return self._add(k, grid, real=False), None
 
     def eliminate_undamped(self, k: Sym, grid: Grid) -> Sym:
-        """``K ← K + diag(k_t − ω²m, k_r − ω²J)``, real."""
+        """``K ← K + diag(k_t − ω²m, k_r − ω²J)``, real.
+
+        Parameters
+        ----------
+        k : Sym
+            Stiffness at the current node, real arrays.
+        grid : Grid
+            Frequencies, work arrays and the pivot accumulator.
+        """
         return self._add(k, grid, real=True)
 
     def _add(self, k: Sym, grid: Grid, real: bool) -> Sym:

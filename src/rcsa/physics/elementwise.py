@@ -75,7 +75,17 @@ class Scratch:
         return view
 
     def many(self, names: tuple[str, ...], shape: Shape, real: bool) -> tuple[np.ndarray, ...]:
-        """The work arrays ``names`` at once (one lookup when used again)."""
+        """The work arrays ``names`` at once (one lookup when used again).
+
+        Parameters
+        ----------
+        names : tuple of str
+            Names of the arrays.
+        shape : int or tuple of int
+            Their common shape.
+        real : bool
+            Real (float64) arrays, else complex.
+        """
         key = (names, shape, real)
         hit = self._sets.get(key)
         if hit is None:
@@ -84,19 +94,51 @@ class Scratch:
         return hit
 
     def real(self, name: str, shape: Shape) -> FloatArray:
-        """Real work array of the given shape."""
+        """Real work array of the given shape.
+
+        Parameters
+        ----------
+        name : str
+            Name of the array in this scratch (one storage per name).
+        shape : int or tuple of int
+            Its shape.
+        """
         return self._get(name, shape, float)
 
     def complex(self, name: str, shape: Shape) -> ComplexArray:
-        """Complex work array of the given shape (the same storage as the real array of that name)."""
+        """Complex work array of the given shape (the same storage as the real array of that name).
+
+        Parameters
+        ----------
+        name : str
+            Name of the array in this scratch (one storage per name).
+        shape : int or tuple of int
+            Its shape.
+        """
         return self._get(name, shape, complex)
 
     def real2(self, name: str, shape: Shape) -> FloatArray:
-        """Real work array of shape ``(2, *shape)`` (one row per wavenumber)."""
+        """Real work array of shape ``(2, *shape)`` (one row per wavenumber).
+
+        Parameters
+        ----------
+        name : str
+            Name of the array in this scratch (one storage per name).
+        shape : int or tuple of int
+            Its shape. (without the leading 2).
+        """
         return self._get(name, (2, shape) if isinstance(shape, int) else (2, *shape), float)
 
     def complex2(self, name: str, shape: Shape) -> ComplexArray:
-        """Complex work array of shape ``(2, *shape)`` (one row per wavenumber)."""
+        """Complex work array of shape ``(2, *shape)`` (one row per wavenumber).
+
+        Parameters
+        ----------
+        name : str
+            Name of the array in this scratch (one storage per name).
+        shape : int or tuple of int
+            Its shape. (without the leading 2).
+        """
         return self._get(name, (2, shape) if isinstance(shape, int) else (2, *shape), complex)
 
 
@@ -109,6 +151,11 @@ def local_scratch(purpose: str = "solve") -> Scratch:
     For solvers that are done with it when they return (:func:`rcsa.physics.elimination.march`
     uses ``"solve"``; a solver that may run while another is under way picks its own
     ``purpose``); threads (the service's workers) each have their own.
+
+    Parameters
+    ----------
+    purpose : str
+        Which of this thread's scratches (one per purpose).
     """
     pool: dict[str, Scratch] | None = getattr(_LOCAL, "pool", None)
     if pool is None:

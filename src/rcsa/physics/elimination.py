@@ -280,6 +280,15 @@ def wittrick_williams_count(chain: Chain, omega_rad_s: FloatArray, start: FloatA
     the largest ω, so that no beam has a clamped–clamped natural frequency below it (J₀ = 0).
     ``start`` is the condensed stiffness of a prefix whose own negative pivots the caller adds.
 
+    Parameters
+    ----------
+    chain : Chain
+        Undamped and subdivided (see above).
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies, rad/s.
+    start : numpy.ndarray, shape (nfreq, 2, 2), optional
+        Condensed stiffness of a prefix (see above).
+
     Returns
     -------
     numpy.ndarray of int, shape (nfreq,)
@@ -295,6 +304,13 @@ def close(k: FloatArray, pivots: Pivots) -> None:
 
     Then ``pivots.negatives`` is the Wittrick–Williams count of the chain and
     ``pivots.log_abs_det`` the ``log|det|`` of its whole dynamic stiffness matrix.
+
+    Parameters
+    ----------
+    k : numpy.ndarray, shape (nfreq, 2, 2), float
+        Condensed undamped stiffness at the last node.
+    pivots : Pivots
+        The pivots of the elimination that gave ``k`` (added to in place).
     """
     k11, k12, k22 = k[:, 0, 0], k[:, 0, 1], k[:, 1, 1]
     pivots.add_sym(k11, k22, k11 * k22 - k12 * k12)
@@ -314,6 +330,12 @@ def static_condense(chain: Chain, start: FloatArray | None = None) -> FloatArray
     Uses the exact static Timoshenko stiffness of each beam
     (:meth:`rcsa.physics.chain.ChainItem.eliminate_static`); ``start`` continues a
     condensation (e.g. a cached spindle + holder).
+
+    Parameters
+    ----------
+    chain : Chain
+    start : numpy.ndarray, shape (2, 2), optional
+        Static stiffness already condensed onto the first node; zero (free end) by default.
     """
     out: FloatArray = static_condense_rows(chain, 1, start)[0]
     return out
@@ -321,6 +343,15 @@ def static_condense(chain: Chain, start: FloatArray | None = None) -> FloatArray
 
 def static_condense_rows(chain: Chain, rows: int, start: FloatArray | None = None) -> FloatArray:
     """:func:`static_condense` of a chain stacked over ``rows`` rows (or of one chain, repeated).
+
+    Parameters
+    ----------
+    chain : Chain
+        Stacked over ``rows`` rows, or one chain (then every row is the same).
+    rows : int
+        Number of rows.
+    start : numpy.ndarray, shape (2, 2), optional
+        Static stiffness at the first node, shared by all rows (e.g. a cached spindle + holder).
 
     Returns
     -------
@@ -342,12 +373,24 @@ def static_tip_receptance(chain: Chain, start: FloatArray | None = None) -> Floa
     """Static (ω = 0) undamped point receptance at the last node, shape (2, 2).
 
     ``None`` when the chain is not grounded (a free body has no static stiffness).
+
+    Parameters
+    ----------
+    chain : Chain
+    start : numpy.ndarray, shape (2, 2), optional
+        Static stiffness already condensed onto the first node (as for :func:`static_condense`).
     """
     return static_tip_receptance_rows(static_condense(chain, start)[None])[0]
 
 
 def static_tip_receptance_rows(k: FloatArray) -> list[FloatArray | None]:
-    """Static point receptances from condensed static stiffnesses ``k`` (rows, 2, 2); ``None`` if singular."""
+    """Static point receptances from condensed static stiffnesses ``k`` (rows, 2, 2); ``None`` if singular.
+
+    Parameters
+    ----------
+    k : numpy.ndarray, shape (rows, 2, 2)
+        Condensed static stiffnesses (:func:`static_condense_rows`).
+    """
     det = k[:, 0, 0] * k[:, 1, 1] - k[:, 0, 1] ** 2
     out: list[FloatArray | None] = []
     for i in range(k.shape[0]):

@@ -86,6 +86,15 @@ def count_grid_hz(start_hz: float, stop_hz: float, grid_hz: FloatArray | None = 
                   ) -> FloatArray:
     """The frequencies counted at first: ``grid_hz`` within the band plus its ends, or a geometric scan.
 
+    Parameters
+    ----------
+    start_hz, stop_hz : float
+        The band, Hz.
+    grid_hz : numpy.ndarray, optional
+        Increasing frequencies, Hz (those outside the band are dropped).
+    scan_points : int
+        Points of the geometric scan used when ``grid_hz`` is not given.
+
     Returns
     -------
     numpy.ndarray, shape (ngrid,)
@@ -112,11 +121,17 @@ def natural_frequencies_batch(prefix: Chain, tails: Sequence[Chain], start_hz: f
     Parameters
     ----------
     prefix : Chain
-        Shared by all assemblies (e.g. spindle, joint and holder).
+        The part every assembly shares (e.g. spindle, joint and holder), from the first node.
     tails : sequence of Chain
-        One per assembly (may be empty chains).
-    start_hz, stop_hz, rtol, scan_points, grid_hz
-        As for :func:`natural_frequencies_hz`.
+        What follows the prefix in each assembly (e.g. each tool); ``()`` for the prefix alone.
+    start_hz, stop_hz : float
+        The band searched, Hz.
+    rtol : float
+        Relative width of the final bracket of every frequency.
+    scan_points : int
+        Points of a geometric scan over the band, when no ``grid_hz`` is given.
+    grid_hz : numpy.ndarray, shape (ngrid,), optional
+        Frequencies to count at first (e.g. the requested lines), increasing, Hz.
 
     Returns
     -------

@@ -113,7 +113,15 @@ class Receptance:
 
     @classmethod
     def from_hlnp(cls, frequency_hz: object, h: object, l: object, n: object, p: object) -> Receptance:  # noqa: E741
-        """Build from the four entries, each shape (nfreq,)."""
+        """Build from the four entries, each shape (nfreq,).
+
+        Parameters
+        ----------
+        frequency_hz : array_like, shape (nfreq,)
+            Strictly increasing, > 0, Hz.
+        h, l, n, p : array_like, shape (nfreq,), complex
+            The entries ``[[h, l], [n, p]]``, in m/N, 1/N, rad/N and rad/(N·m).
+        """
         f = np.asarray(frequency_hz, dtype=float)
         v = np.empty((f.size, 2, 2), dtype=complex)
         for (i, j), x in zip(((0, 0), (0, 1), (1, 0), (1, 1)), (h, l, n, p), strict=True):

@@ -192,6 +192,11 @@ def composite(*parts: Section) -> Section:
 
     EI, κGA, ρA and ρI add (``domain.md`` §2.6). Any Euler–Bernoulli part makes the
     composite rigid in shear.
+
+    Parameters
+    ----------
+    *parts : Section
+        The sections bending together, at least one.
     """
     flex: ComplexParam
     if any(p.shear_flexibility == 0 for p in parts):

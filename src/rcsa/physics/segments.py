@@ -283,7 +283,19 @@ class Waves:
 
     @classmethod
     def tiled(cls, base: Waves, reps: int, scratch: Scratch, slot: str) -> Waves:
-        """``base`` repeated ``reps`` times along the lines (every tool of a stacked solve on one grid)."""
+        """``base`` repeated ``reps`` times along the lines (every tool of a stacked solve on one grid).
+
+        Parameters
+        ----------
+        base : Waves
+            The waves on the grid repeated.
+        reps : int
+            How many times it is repeated.
+        scratch : Scratch
+            Where the repeated arrays live.
+        slot : str
+            Prefix of their names in ``scratch``.
+        """
         out = cls.__new__(cls)
         _tile_into(base, out, reps, scratch, slot, ("ra", "s", "q", "qq", "d", "k", "inv_k"))
         return out
@@ -323,6 +335,13 @@ class Waves:
         ``sin = sin x cosh y + i cos x sinh y``; the versine is formed as
         ``(1 − cos x) cosh y − (cosh y − 1) + i sin x sinh y`` with ``cosh y − 1 =
         sinh²y/(cosh y + 1)``, so it keeps full relative precision for small ``kL``.
+
+        Parameters
+        ----------
+        length_m : float or numpy.ndarray
+            Piece length, m (one per row for a stacked section).
+        scratch : Scratch
+            Work arrays (the results live there).
         """
         n, sc = self.n, scratch
         x, y = sc.real2("f.x", n), sc.real2("f.y", n)
@@ -354,6 +373,17 @@ class RealWaves:
     ``s₁ > 0`` always; ``s₂ < 0`` below the shear cut-off (an evanescent wave: cosh and
     sinh of ``k₂ = √(−s₂)``) and ``s₂ > 0`` above it (cos and sin of ``k₂ = √s₂``).
     The imaginary parts of the section's moduli are ignored: pass an undamped section.
+
+    Parameters
+    ----------
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies, rad/s.
+    section : Section
+        Undamped section (the imaginary parts of its moduli are ignored).
+    scratch : Scratch, optional
+        Where the arrays live (named with ``slot``); fresh arrays by default.
+    slot : str
+        Prefix of this section's arrays in ``scratch``.
 
     Attributes
     ----------
@@ -432,12 +462,30 @@ class RealWaves:
         self.decay_per_m = float(np.max(decay))
 
     def pieces(self, length_m: RealParam) -> int:
-        """Number of equal pieces keeping each piece's decay exponent ≤ MAX_DECAY_PER_PIECE."""
+        """Number of equal pieces keeping each piece's decay exponent ≤ MAX_DECAY_PER_PIECE.
+
+        Parameters
+        ----------
+        length_m : float or numpy.ndarray
+            Segment length, m.
+        """
         return max(1, math.ceil(self.decay_per_m * float(np.max(length_m)) / MAX_DECAY_PER_PIECE))
 
     @classmethod
     def tiled(cls, base: RealWaves, reps: int, scratch: Scratch, slot: str) -> RealWaves:
-        """``base`` repeated ``reps`` times along the lines (see :meth:`Waves.tiled`)."""
+        """``base`` repeated ``reps`` times along the lines (see :meth:`Waves.tiled`).
+
+        Parameters
+        ----------
+        base : RealWaves
+            The waves on the grid repeated.
+        reps : int
+            How many times it is repeated.
+        scratch : Scratch
+            Where the repeated arrays live.
+        slot : str
+            Prefix of their names in ``scratch``.
+        """
         out = cls.__new__(cls)
         _tile_into(base, out, reps, scratch, slot, ("ra", "s", "q", "qq", "d", "k", "inv_k", "below"))
         out.split = base.split
@@ -448,6 +496,13 @@ class RealWaves:
 
         The second wave below the cut-off (``k = i√(−s₂)``): ``V = 1 − cosh``,
         ``S = sinh/√(−s₂)``, ``k sin kL = −√(−s₂) sinh``.
+
+        Parameters
+        ----------
+        length_m : float or numpy.ndarray
+            Piece length, m (one per row for a stacked section).
+        scratch : Scratch
+            Work arrays (the results live there).
         """
         n, sc = self.n, scratch
         x = sc.real2("f.x", n)
@@ -535,6 +590,17 @@ def six_terms(waves: Waves | RealWaves, funcs: tuple[np.ndarray, np.ndarray, np.
         C = η (u_wv t_pp − u_pv t_wp)        G = −η d u_wv
 
     (the readable form is :func:`stiffness_terms_reference`).
+
+    Parameters
+    ----------
+    waves : Waves or RealWaves
+        The section's waves on the grid.
+    funcs : tuple of three numpy.ndarray
+        ``V``, ``S`` and ``sS`` of both waves (:meth:`Waves.functions`), each (2, nfreq).
+    out : tuple of six numpy.ndarray
+        Where the terms are written (complex for :class:`Waves`, real for :class:`RealWaves`).
+    scratch : Scratch
+        Work arrays.
     """
     real = isinstance(waves, RealWaves)
     n = waves.n
@@ -600,6 +666,17 @@ def double(terms: SixTerms | RealTerms, scratch: Scratch, pivots: Pivots | None 
         E' = γF² − αE²         F' = −(αE + γG) F     G' = αF² − γG²
 
     An undamped caller passes ``pivots`` to count the middle pivot (``multiplicity`` times).
+
+    Parameters
+    ----------
+    terms : tuple of six numpy.ndarray
+        One piece's six terms (complex or real), overwritten by those of two pieces.
+    scratch : Scratch
+        Work arrays.
+    pivots : Pivots, optional
+        Where the middle pivots are counted (undamped).
+    multiplicity : int
+        How many equal pairs this doubling stands for (each pivot counted that often).
     """
     a, b, c, e, f, g = terms
     get = scratch.real if np.isrealobj(a) else scratch.complex
@@ -696,7 +773,21 @@ def segment_terms(omega_rad_s: FloatArray, section: Section, length_m: RealParam
 
     A segment whose decay exponent exceeds ``MAX_DECAY_PER_PIECE`` is computed as ``2^m``
     equal pieces joined by :func:`double`, which is exact and keeps full precision for long,
-    strongly evanescent segments. Parameters as for :func:`stiffness_terms`.
+    strongly evanescent segments.
+
+    Parameters
+    ----------
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies, rad/s.
+    section : Section
+    length_m : float or numpy.ndarray
+        Segment length, m (one per row for a stacked section).
+    waves : Waves, optional
+        The section's waves on this grid, when the caller already has them.
+    scratch : Scratch, optional
+        Work arrays (fresh ones by default).
+    out : tuple of six numpy.ndarray, optional
+        Where to write the result (fresh arrays by default).
     """
     sc = Scratch() if scratch is None else scratch
     wv = waves if waves is not None else Waves(omega_rad_s, section, sc, "st.")
@@ -712,9 +803,25 @@ def undamped_segment_terms(omega_rad_s: FloatArray, section: Section, length_m: 
                            out: RealTerms | None = None, pivots: Pivots | None = None) -> RealTerms:
     """:func:`segment_terms` of an undamped segment in real arithmetic.
 
-    Parameters as for :func:`segment_terms`; the section's damping is ignored. When the
+    As :func:`segment_terms`, the section's damping ignored. When the
     segment is computed from ``2^m`` pieces the middle pivots are reported to ``pivots``
     (their negatives are the segment's own clamped–clamped natural frequencies below ω).
+
+    Parameters
+    ----------
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies, rad/s.
+    section : Section
+    length_m : float or numpy.ndarray
+        Segment length, m (one per row for a stacked section).
+    waves : RealWaves, optional
+        The section's waves on this grid, when the caller already has them.
+    scratch : Scratch, optional
+        Work arrays (fresh ones by default).
+    out : tuple of six numpy.ndarray, optional
+        Where to write the result (fresh arrays by default).
+    pivots : Pivots, optional
+        Where the middle pivots of the doublings are counted.
 
     Returns
     -------
@@ -735,6 +842,14 @@ def stiffness_terms_reference(omega_rad_s: FloatArray, section: Section, length_
 
     ``D11 = T_ds⁻¹ T_dd``, ``D12 = −T_ds⁻¹`` with the entries of §2.3 (times ``s₁ − s₂``)
     and numpy's own complex ``cos``, ``sin`` and square roots.
+
+    Parameters
+    ----------
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies, rad/s.
+    section : Section
+    length_m : float
+        Segment length, m.
     """
     w2 = np.asarray(omega_rad_s, dtype=float) ** 2
     ei, ra = section.ei, section.rho_a * w2
@@ -765,6 +880,14 @@ def dynamic_stiffness(omega_rad_s: FloatArray, section: Section, length_m: RealP
     Assembled from :func:`stiffness_terms`; a segment too long for one piece (strongly
     evanescent waves) is condensed from equal pieces.
 
+    Parameters
+    ----------
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies, rad/s.
+    section : Section
+    length_m : float
+        Segment length, m.
+
     Returns
     -------
     numpy.ndarray, shape (nfreq, 4, 4), complex
@@ -782,6 +905,14 @@ def free_free_receptance(omega_rad_s: FloatArray, section: Section, length_m: fl
     reciprocity. At frequencies where the segment is too long for one piece (strongly
     evanescent waves, where that form cancels catastrophically) ``R = D⁻¹`` is used instead;
     there the free-free rigid-body singularity of ``D`` is far away.
+
+    Parameters
+    ----------
+    omega_rad_s : numpy.ndarray, shape (nfreq,)
+        Angular frequencies, rad/s.
+    section : Section
+    length_m : float
+        Segment length, m.
 
     Returns
     -------
@@ -809,6 +940,12 @@ def static_terms(section: Section, length_m: RealParam) -> SixTerms:
 
     ``EI/((1+Φ)L³) · (12, 6L, (4+Φ)L², −12, 6L, (2−Φ)L²)``; each is a scalar, or an array
     over rows for a stacked section or length (complex either way).
+
+    Parameters
+    ----------
+    section : Section
+    length_m : float or numpy.ndarray
+        Segment length, m (one per row for a stacked beam).
     """
     ei, lm = section.ei, length_m
     phi = 12.0 * ei * section.shear_flexibility / lm**2
@@ -823,6 +960,12 @@ def static_stiffness(section: Section, length_m: RealParam) -> ComplexArray:
 
     ``EI/((1+Φ)L³) [[12, 6L, −12, 6L], [6L, (4+Φ)L², −6L, (2−Φ)L²], …]``, Φ = 12EI/(κGA L²)
     (``domain.md`` §2.4), with the section's complex moduli (entries :func:`static_terms`).
+
+    Parameters
+    ----------
+    section : Section
+    length_m : float
+        Segment length, m.
 
     Returns
     -------

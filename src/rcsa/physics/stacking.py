@@ -22,7 +22,13 @@ def chain_signature(chain: Chain) -> tuple[tuple[object, ...], ...]:
 
 
 def stack_chains(chains: Sequence[Chain]) -> Chain:
-    """One chain whose parameters are arrays over ``chains`` (which share one signature)."""
+    """One chain whose parameters are arrays over ``chains`` (which share one signature).
+
+    Parameters
+    ----------
+    chains : sequence of Chain
+        Chains with one :func:`chain_signature` (none, or empty ones, give an empty chain).
+    """
     if not chains or not chains[0]:
         return ()
     return tuple(items[0].stack(items) for items in zip(*chains, strict=True))
@@ -34,6 +40,13 @@ def take_rows(chain: Chain, rows: IntArray) -> Chain:
     Scalar parameters (shared by all rows, e.g. a damping set to zero) are kept as they are.
     An item repeated in the chain (the equal pieces of a subdivided beam) stays one object
     repeated, so the solvers compute its terms once.
+
+    Parameters
+    ----------
+    chain : Chain
+        A chain made by :func:`stack_chains`.
+    rows : numpy.ndarray of int, shape (nfreq,)
+        Which stacked chain each frequency line uses.
     """
     done: dict[int, ChainItem] = {}
     out = []

@@ -550,7 +550,8 @@ def test_parse_contract_example():
 def test_parse_with_frf_y_and_with_assembly():
     body = _body()
     body["frf_y"] = body["frf_x"]
-    assert parse_lobes_request(body).frf_yy is not None
+    both = parse_lobes_request(body)
+    np.testing.assert_array_equal(both.frf_yy, both.frf_xx)  # frf_y is read, not just present
     req = parse_lobes_request(_body(frf_x=None, assembly={"tool": {"length_m": 0.1}}))
     assert req.assembly == {"tool": {"length_m": 0.1}} and req.frf_xx is None
     with pytest.raises(InputError, match="assembly"):

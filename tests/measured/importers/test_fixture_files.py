@@ -83,7 +83,7 @@ def test_fixtures_store(tmp_path, name):
             HERE / name,
             MeasurementMeta(
                 "d",
-                "y",
+                "x",  # the file's FRFs are along +X (was "y": the importer ignored the file)
                 "spindle_nose",
                 "artifact_frfs",
                 points_m=(0.0, 0.03),
@@ -94,5 +94,7 @@ def test_fixtures_store(tmp_path, name):
     else:
         m = read_csv(HERE / name, META, units="um/N")
     got = store.get(store.put(m))
+    assert m.frfs and set(got.frfs) == set(m.frfs)  # the loop below cannot pass by having nothing to compare
+    assert got.frequency_hz.tobytes() == m.frequency_hz.tobytes()
     for k, v in m.frfs.items():
         assert got.frfs[k].tobytes() == v.tobytes()

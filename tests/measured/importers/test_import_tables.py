@@ -42,7 +42,7 @@ def test_csv_real_imag_with_header_and_comments(tmp_path):
 @pytest.mark.parametrize("sep", ["\t", ";", " "])
 def test_tsv_semicolon_and_space_delimiters(tmp_path, sep):
     (tmp_path / "h.txt").write_text(_table(zip(F, H.real * 1e3, H.imag * 1e3, strict=True), sep))
-    m = read_csv(tmp_path / "h.txt", META, units="mm/N")
+    m = read_csv(tmp_path / "h.txt", META, units="mm/N", columns="f,re,im")
     np.testing.assert_allclose(m.frfs["h"], H, rtol=RTOL, atol=0)
 
 
@@ -73,7 +73,7 @@ def test_magnitude_phase_in_degrees_and_khz(tmp_path):
 def test_declared_units_and_quantities(tmp_path, unit, to_file):
     v = to_file(F, H)
     (tmp_path / "u.csv").write_text(_table(zip(F, v.real, v.imag, strict=True)))
-    m = read_csv(tmp_path / "u.csv", META, units=unit)
+    m = read_csv(tmp_path / "u.csv", META, units=unit, columns="f,re,im")
     np.testing.assert_allclose(m.frfs["h"], H, rtol=RTOL, atol=0)
     assert m.provenance.original_quantity == parse_frf_unit(unit).quantity
 
@@ -103,7 +103,7 @@ def test_artifact_columns_with_coherence(tmp_path):
 def _bad(tmp_path, text, **kw):
     (tmp_path / "bad.csv").write_text(text)
     with pytest.raises(InputError) as err:
-        read_csv(tmp_path / "bad.csv", META, **{"units": "m/N", **kw})
+        read_csv(tmp_path / "bad.csv", META, **{"units": "m/N", "columns": "f,re,im", **kw})
     return err.value
 
 
@@ -128,7 +128,7 @@ def test_csv_refusals_name_the_field(tmp_path):
 
 def test_drop_nonpositive_is_explicit_and_recorded(tmp_path):
     (tmp_path / "z.csv").write_text(_table([[0, 0.77, 0], [10, 1e-7, -1e-7], [20, 2e-7, -2e-7]]))
-    m = read_csv(tmp_path / "z.csv", META, units="m/N", drop_nonpositive=True)
+    m = read_csv(tmp_path / "z.csv", META, units="m/N", columns="f,re,im", drop_nonpositive=True)
     np.testing.assert_array_equal(m.frequency_hz, [10.0, 20.0])
     assert "dropped 1 row(s) at f <= 0 Hz" in m.provenance.conversions
 

@@ -169,7 +169,7 @@ def test_sensor_mass_correction_inverts_the_mass_loading(tmp_path):
     (tmp_path / "m.csv").write_text(
         "".join(f"{a:.17g},{b.real:.17g},{b.imag:.17g}\n" for a, b in zip(f, measured, strict=True))
     )
-    m = read_csv(tmp_path / "m.csv", META, units="m/N", sensor_mass_kg=mass_kg)
+    m = read_csv(tmp_path / "m.csv", META, units="m/N", columns="f,re,im", sensor_mass_kg=mass_kg)
     np.testing.assert_allclose(m.frfs["h"], h, rtol=1e-12, atol=0)
     assert m.provenance.sensor_mass_kg == mass_kg
     assert any("sensor mass 0.012 kg removed" in c for c in m.provenance.conversions)

@@ -33,7 +33,7 @@ def _point_1():
 
 def test_point_1_imports_as_a_direct_frf_and_stores_bit_exact(tmp_path):
     with pytest.raises(InputError) as err:  # row 0 is 0 Hz: refused unless dropped explicitly
-        read_csv(POINT_1, META, units="m/N")
+        read_csv(POINT_1, META, units="m/N", columns="f,re,im")
     assert err.value.field == "frequency_hz" and "line 1" in err.value.rule
     m = _point_1()
     assert m.n_frequencies == 5000 and m.frequency_hz[0] == 1.0 and m.frequency_hz[-1] == 5000.0
@@ -79,3 +79,25 @@ def test_raw_tap_reproduces_point_1():
     for f in ratio:
         i = int(f) - 1
         assert abs(tap.frfs["h"][i] / ref.frfs["h"][i] - 1) <= 0.03, f
+
+
+def test_raw_tap_rate_from_its_seven_digit_stamps(tmp_path):
+    """The stamps carry 7 significant digits (9.999805e-001): the rate is 51200 Hz, not the
+    raw 51199.998 Hz, so the lines are exactly 1..5000 Hz and a hybrid request over 100-5000
+    Hz is inside the band (it was refused as 'outside the measured band 1-5000 Hz')."""
+    from rcsa.measured.hybrid import measured_base
+
+    auto = read_tap(RAW_TAP, META, force_unit="N", response_unit="m/s^2", max_frequency_hz=5000.0)
+    np.testing.assert_array_equal(auto.frequency_hz, np.arange(1.0, 5001.0))
+    assert "sample rate 51200 Hz from the time column" in auto.provenance.conversions[0]
+    declared = read_tap(
+        RAW_TAP,
+        META,
+        force_unit="N",
+        response_unit="m/s^2",
+        sample_rate_hz=51200.0,
+        max_frequency_hz=5000.0,
+    )
+    assert auto.frfs["h"].tobytes() == declared.frfs["h"].tobytes()
+    store = MeasurementStore(tmp_path / "store")
+    measured_base(store.put(auto), np.arange(100.0, 5001.0, 1.0), store)

@@ -11,11 +11,12 @@ from typing import Any
 
 from rcsa.analysis.diagnosis.report import build_response
 from rcsa.analysis.diagnosis.state import Analysis, analyse
+from rcsa.analysis.progress import Progress
 
 __all__ = ["Analysis", "analyse", "diagnose"]
 
 
-def diagnose(request: Mapping[str, Any]) -> dict[str, Any]:
+def diagnose(request: Mapping[str, Any], progress: Progress | None = None) -> dict[str, Any]:
     """Diagnose the gap between a base model and tap-test measurements.
 
     Parameters
@@ -24,6 +25,8 @@ def diagnose(request: Mapping[str, Any]) -> dict[str, Any]:
         ``{"assembly", "measurements": [{"tool", "frequency_hz", "h", "coherence", ...}],
         "tolerances"?, "options"?}`` (``contract.md`` "Diagnosis"; optional fields in
         :mod:`rcsa.analysis.diagnosis.request`).
+    progress : callable, optional
+        ``progress(done, total)`` at each step (:mod:`rcsa.analysis.progress`).
 
     Returns
     -------
@@ -36,6 +39,6 @@ def diagnose(request: Mapping[str, Any]) -> dict[str, Any]:
     rcsa.errors.InputError
         For an invalid request (the field and the rule are named).
     """
-    a = analyse(request)
+    a = analyse(request, progress)
     return build_response(a)
 

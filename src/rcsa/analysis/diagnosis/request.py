@@ -40,6 +40,9 @@ MAX_LINES_PER_MEASUREMENT = 200_000
 # five-line peak parabola has nothing to average over.
 MIN_VALID_LINES = 100
 DEFAULT_N_AVERAGES = 5.0
+#: Largest number of averaged impacts a measurement may claim, and the largest seed (64 bits).
+MAX_N_AVERAGES = 1.0e6
+MAX_SEED = 2**63 - 1
 # Relative |H| noise assumed when a measurement carries no coherence (1 %, the benchmark level).
 DEFAULT_NOISE_REL = 0.01
 
@@ -88,7 +91,7 @@ class Request:
 
 def _measurement(tap: TapTest, i: int) -> Measurement:
     extra = fields.Fields(tap.extra, tap.path)
-    n_avg = extra.number("n_averages", ge=1.0, default=DEFAULT_N_AVERAGES)
+    n_avg = extra.number("n_averages", ge=1.0, le=MAX_N_AVERAGES, default=DEFAULT_N_AVERAGES)
     mass = extra.optional_number("sensor_mass_kg", ge=0.0, le=1.0)
     label = tap.extra.get("label", f"#{i}")
     if not isinstance(label, str):
@@ -116,7 +119,7 @@ def _options(raw: object, n_meas: int) -> Options:
     # counts may come as JSON numbers with a fraction (e.g. 200.0): read as numbers, then truncated
     return Options(
         effects=tuple(dict.fromkeys(effects)), held_out=None if held is None else tuple(held),
-        seed=opts.integer("seed", ge=0, default=0),
+        seed=opts.integer("seed", ge=0, le=MAX_SEED, default=0),
         monte_carlo_draws=int(opts.number("monte_carlo_draws", ge=50, le=5000, default=200)),
         likelihood=opts.string("likelihood", "student_t", ("student_t", "gaussian")),
         claim_threshold=opts.number("claim_threshold", ge=0.0, le=50.0, default=3.0),

@@ -26,6 +26,7 @@ from rcsa.analysis.diagnosis.perturbed_model import Knobs, Solver, config_parts
 from rcsa.analysis.diagnosis.problem import Problem
 from rcsa.analysis.diagnosis.request import parse_request
 from rcsa.analysis.diagnosis.validation import HeldOut, folds, held_out
+from rcsa.analysis.progress import Progress, report
 
 __all__ = ["Analysis", "analyse"]
 
@@ -42,7 +43,7 @@ RESIDUAL_P = 0.05
 class Analysis:
     """The full diagnosis state (kept for the benchmark and the figure)."""
 
-    def __init__(self, request: Mapping[str, Any]) -> None:
+    def __init__(self, request: Mapping[str, Any], progress: Progress | None = None) -> None:
         self.started = t0 = time.perf_counter()
         self.request = parse_request(request)
         opts = self.request.options
@@ -56,7 +57,12 @@ class Analysis:
         n_feat = p.base_features.size
         self.like = Likelihood(p.measured_features, self.disc, np.arange(n_feat), opts.likelihood)
         self.log_z0 = float(self.like(p.base_features))
-        self.fits = [fit_candidate(c, self.features_at, self.like, self.log_z0) for c in self.candidates]
+        steps = len(self.candidates) + 3  # base model and discrepancy, each candidate, held-out, second effect
+        report(progress, 1, steps)
+        self.fits = []
+        for c in self.candidates:
+            self.fits.append(fit_candidate(c, self.features_at, self.like, self.log_z0))
+            report(progress, len(self.fits) + 1, steps)
         self.decision: Decision = decide(self.fits, opts.claim_threshold, opts.ambiguity_window)
         self.folds = folds([m.tool.stickout_m for m in self.request.measurements], opts.held_out)
         self.held: dict[str, HeldOut | None] = {}
@@ -64,9 +70,11 @@ class Analysis:
         for f in self.decision.ranking:
             if f.candidate.name in shown:
                 self.held[f.candidate.name] = self._held_out([f.candidate], [f.map])
+        report(progress, steps - 1, steps)
         self.second: tuple[Fit, HeldOut | None, float] | None = None
         if self.decision.status == "identified" and opts.max_effects >= 2:
             self.second = self._greedy_second()
+        report(progress, steps, steps)
         self.runtime_s = time.perf_counter() - t0
 
     # ------------------------------------------------------------------ model features
@@ -241,6 +249,10 @@ class Analysis:
         return out
 
 
-def analyse(request: Mapping[str, Any]) -> Analysis:
-    """Run a diagnosis and keep its full state (see :class:`Analysis`)."""
-    return Analysis(request)
+def analyse(request: Mapping[str, Any], progress: Progress | None = None) -> Analysis:
+    """Run a diagnosis and keep its full state (see :class:`Analysis`).
+
+    ``progress(done, total)``, when given, is called after the base model, after each
+    candidate effect's fit, after the held-out validation and at the end.
+    """
+    return Analysis(request, progress)

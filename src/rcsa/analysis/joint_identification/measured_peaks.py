@@ -1,7 +1,8 @@
 """What a joint identification reads from a measured tool-point FRF: noise level and peaks.
 
 * :func:`relative_noise` — the relative noise of a measured FRF from its third differences
-  (a smooth FRF sampled finely has negligible third differences; white noise does not).
+  (a smooth FRF sampled finely has negligible third differences; white noise does not;
+  it lives in :mod:`rcsa.model.modal_fit`, which gates peaks by it too).
 * :func:`measured_peaks` — the resonance peaks that stand out of the noise, each refined by
   a single-mode (Levy) fit so that its frequency, height and damping ratio are not those of
   one noisy line.
@@ -14,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rcsa.model.modal_fit import relative_noise
 from rcsa.model.peaks import peak_lines, single_mode_fit
 
 __all__ = ["LENIENT_PROMINENCE", "PEAK_PROMINENCE", "MeasuredPeak", "coherence_weights", "measured_peaks",
@@ -52,36 +54,6 @@ class MeasuredPeak:
     magnitude_m_n: float
     damping_ratio: float
     prominence: float = 1.0
-
-
-def relative_noise(h: np.ndarray, lines: np.ndarray | None = None) -> float:
-    """Standard deviation of the relative complex noise of an FRF, from third differences.
-
-    For ``h_k = s_k (1 + n_k)`` with white complex noise ``E|n|² = σ²`` and a smooth ``s``
-    (many lines per half-power bandwidth), ``|Δ³h|²/|h|² ≈ 20σ²·Exp(1)``, whose median is
-    ``20σ² ln 2``. Smooth curvature adds about ``|h'''|Δf³``, negligible at ≥ 10 lines
-    per bandwidth.
-
-    Parameters
-    ----------
-    h : numpy.ndarray, shape (nfreq,), complex
-        Measured receptance on consecutive lines.
-    lines : numpy.ndarray of int, optional
-        Use only these (ascending) lines; differences are taken within each run of
-        consecutive lines, never across a gap.
-
-    Returns
-    -------
-    float
-        σ (relative), e.g. 0.01 for 1 % noise; NaN without 4 consecutive lines.
-    """
-    h = np.asarray(h, dtype=complex)
-    idx = np.arange(h.size) if lines is None else np.asarray(lines, dtype=int)
-    runs = np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1) if idx.size else []
-    ratios = [np.abs(np.diff(h[r], 3)) ** 2 / np.abs(h[r][1:-2]) ** 2 for r in runs if r.size >= 4]
-    if not ratios:
-        return math.nan
-    return float(np.sqrt(np.median(np.concatenate(ratios)) / (20.0 * math.log(2.0))))
 
 
 def coherence_weights(coherence: np.ndarray | None, n: int) -> np.ndarray:
@@ -163,14 +135,20 @@ def measured_peaks(frequency_hz: np.ndarray, h: np.ndarray, noise_rel: float) ->
     return out
 
 
-def peaks_ln_hz(frequency_hz: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """ln(frequency) of the peaks of a noise-free model FRF, parabola-refined.
+def peaks_ln_hz(frequency_hz: np.ndarray, h: np.ndarray, noise_rel: float | np.ndarray = 0.0
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """ln(frequency) of the peaks of a model FRF, parabola-refined.
 
     Parameters
     ----------
     frequency_hz : numpy.ndarray, shape (nfreq,)
         Any increasing grid (a geometric one gives uniform resolution).
     h : numpy.ndarray, shape (nfreq,), complex
+    noise_rel : float or numpy.ndarray, shape (nfreq,)
+        Relative noise of ``h``, overall or per line (a model on a measured spindle carries
+        the spindle's): a peak that does not rise by :data:`PEAK_NOISE_SIGMAS`
+        ``· noise_rel · |h_peak|`` is still listed, but never as prominent (its prominence is
+        capped at the lenient 1 %), so it can be matched but is never required.
 
     Returns
     -------
@@ -181,8 +159,11 @@ def peaks_ln_hz(frequency_hz: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np
     """
     mag = np.abs(h)
     idx, prominences = peak_lines(mag, LENIENT_PROMINENCE * float(mag.max()))
+    sigma = np.broadcast_to(np.nan_to_num(np.asarray(noise_rel, dtype=float)), mag.shape)
     keep = (idx > 0) & (idx < mag.size - 1)
     idx, prom = idx[keep], prominences[keep] / float(mag.max())
+    prom = np.where(prominences[keep] >= PEAK_NOISE_SIGMAS * sigma[idx] * mag[idx], prom,
+                    np.minimum(prom, LENIENT_PROMINENCE))
     x = np.log(frequency_hz)
     y0, y1, y2 = mag[idx - 1], mag[idx], mag[idx + 1]
     x0, x1, x2 = x[idx - 1], x[idx], x[idx + 1]

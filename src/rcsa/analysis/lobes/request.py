@@ -13,6 +13,9 @@ from typing import Any
 
 import numpy as np
 
+from rcsa.analysis.lobes.modal_model import ModalModel, fit_modal_model
+from rcsa.analysis.lobes.options import MAX_SDM_SPEED_COUNT, OPTION_KEYS, LobesMethod, parse_method
+from rcsa.analysis.lobes.semi_discretization import semi_discretization_lobes
 from rcsa.analysis.lobes.zoa import LobeResult, Milling, check_cut, check_frf, stability_lobes
 from rcsa.errors import FrequencyMismatch, InputError
 from rcsa.model import fields
@@ -47,6 +50,8 @@ class LobesRequest:
         As in :func:`stability_lobes`.
     spindle_speed_rpm : numpy.ndarray, shape (count,)
         ``linspace(start, stop, count)``, rpm.
+    method : LobesMethod
+        ``"zoa"`` (default) or ``"semi_discretization"`` and its options.
     """
 
     frequency_hz: np.ndarray | None
@@ -59,17 +64,23 @@ class LobesRequest:
     radial_immersion: float
     milling: Milling
     spindle_speed_rpm: np.ndarray
+    method: LobesMethod = LobesMethod()
 
     def solve(
         self,
         frequency_hz: object | None = None,
         frf_xx: object | None = None,
         frf_yy: object | None = None,
+        *,
+        modal_model: ModalModel | None = None,
     ) -> LobeResult:
-        """Run :func:`stability_lobes` with this request's parameters.
+        """Run :func:`stability_lobes` (or the semi-discretization) with this request.
 
         The inline receptances are used unless given here (e.g. the tool-point FRF the
-        caller predicted from ``assembly``); ``frf_yy=None`` then means "same as x".
+        caller predicted from ``assembly``); ``frf_yy=None`` then means "same as x". With
+        ``method.name == "semi_discretization"`` the modes are ``modal_model`` when given
+        (e.g. the exact modes of an analytical assembly), else fitted to the receptances
+        (:func:`~rcsa.analysis.lobes.modal_model.fit_modal_model`).
         """
         if frequency_hz is None:
             if self.frequency_hz is None:
@@ -77,6 +88,24 @@ class LobesRequest:
                     "frf_x", "the request has an assembly: predict its FRF and pass it to solve()"
                 )
             frequency_hz, frf_xx, frf_yy = self.frequency_hz, self.frf_xx, self.frf_yy
+        if self.method.name == "semi_discretization":
+            if modal_model is None:
+                modal_model = fit_modal_model(
+                    np.asarray(frequency_hz, dtype=float),
+                    np.asarray(frf_xx, dtype=complex),
+                    None if frf_yy is None else np.asarray(frf_yy, dtype=complex),
+                    modes_per_direction=self.method.modes_per_direction,
+                )
+            return semi_discretization_lobes(
+                modal_model,
+                teeth=self.teeth,
+                tangential_coefficient_n_m2=self.tangential_coefficient_n_m2,
+                radial_ratio=self.radial_ratio,
+                radial_immersion=self.radial_immersion,
+                milling=self.milling,
+                spindle_speed_rpm=self.spindle_speed_rpm,
+                steps_per_period=self.method.steps_per_period,
+            )
         return stability_lobes(
             frequency_hz,
             frf_xx,
@@ -100,6 +129,7 @@ _REQUEST_KEYS = {
     "radial_immersion",
     "milling",
     "spindle_speed_rpm",
+    *OPTION_KEYS,
 }
 _REQUIRED_KEYS = (
     "teeth",
@@ -140,7 +170,9 @@ def parse_lobes_request(body: object) -> LobesRequest:
         "imag": [...]}}``) or ``assembly``, optional ``frf_y`` (same form and grid as
         ``frf_x``; null = same as x), ``teeth``, ``tangential_coefficient_n_m2``,
         ``radial_ratio``, ``radial_immersion``, ``milling`` (``"up"``/``"down"``) and
-        ``spindle_speed_rpm`` (``{"start", "stop", "count"}``).
+        ``spindle_speed_rpm`` (``{"start", "stop", "count"}``); optional ``method``
+        (``"zoa"`` or ``"semi_discretization"``, with ``steps_per_period`` and
+        ``modes_per_direction``: :func:`~rcsa.analysis.lobes.options.parse_method`).
 
     Returns
     -------
@@ -200,6 +232,10 @@ def parse_lobes_request(body: object) -> LobesRequest:
             "spindle_speed_rpm.stop", f"must be greater than start ({start}), got {stop}"
         )
     count = speed.integer("count", ge=MIN_SPEED_COUNT, le=MAX_SPEED_COUNT)
+    method = parse_method(body)
+    if method.name == "semi_discretization" and count > MAX_SDM_SPEED_COUNT:
+        raise InputError("spindle_speed_rpm.count",
+                         f"at most {MAX_SDM_SPEED_COUNT} speeds with method 'semi_discretization', got {count}")
     grid = np.linspace(start, stop, count)
     grid.flags.writeable = False
 
@@ -214,4 +250,5 @@ def parse_lobes_request(body: object) -> LobesRequest:
         radial_immersion=cut.radial_immersion,
         milling=cut.milling,
         spindle_speed_rpm=grid,
+        method=method,
     )

@@ -65,6 +65,8 @@ __all__ = [
     "Milling",
     "check_cut",
     "check_frf",
+    "json_float",
+    "json_list",
     "directional_factors",
     "engagement_angles_rad",
     "stability_lobes",
@@ -415,6 +417,57 @@ class LobeResult:
         """Number of lobes computed."""
         return len(self.lobes)
 
+    @classmethod
+    def from_dict(cls, doc: object) -> LobeResult:
+        """A result read back from its JSON form (:meth:`to_dict`, or the contract's fields alone).
+
+        ``null`` is read as NaN. Without ``min_depth_limit_m`` (a result written by another
+        program) the envelope's lowest value on the speed grid stands in for the absolute limit.
+
+        Parameters
+        ----------
+        doc : dict
+            ``spindle_speed_rpm``, ``depth_limit_m``, ``chatter_frequency_hz`` (lists, one
+            value per speed) and ``lobes`` (``index``, ``spindle_speed_rpm``, ``depth_limit_m``).
+
+        Returns
+        -------
+        LobeResult
+
+        Raises
+        ------
+        InputError
+            Naming the field that is missing, not a list of numbers, or of another length.
+        """
+        if not isinstance(doc, dict):
+            raise InputError("", "a stability-lobes result must be a JSON object")
+        speed = _result_array(doc, "spindle_speed_rpm")
+        n = speed.size
+        depth = _result_array(doc, "depth_limit_m", n)
+        chatter = _result_array(doc, "chatter_frequency_hz", n)
+        if not isinstance(doc.get("lobes", []), list):
+            raise InputError("lobes", "must be a list of {index, spindle_speed_rpm, depth_limit_m}")
+        lobes = []
+        for i, raw in enumerate(doc.get("lobes", [])):
+            if not isinstance(raw, dict) or isinstance(raw.get("index"), bool) or not isinstance(raw.get("index"), int):
+                raise InputError(f"lobes[{i}]", "must be an object {index, spindle_speed_rpm, depth_limit_m}")
+            lobe_speed = _result_array(raw, "spindle_speed_rpm", where=f"lobes[{i}].")
+            lobes.append(Lobe(raw["index"], lobe_speed,
+                              _result_array(raw, "depth_limit_m", lobe_speed.size, where=f"lobes[{i}].")))
+        governing = doc.get("governing_lobe")
+        governing_lobe = (np.array(governing, dtype=int) if isinstance(governing, list) and len(governing) == n
+                          else np.full(n, -1))
+        given_min = doc.get("min_depth_limit_m")
+        finite = depth[np.isfinite(depth)]
+        min_depth = (float(given_min) if isinstance(given_min, int | float) and not isinstance(given_min, bool)
+                     else float(finite.min()) if finite.size else math.nan)
+        min_chatter = doc.get("min_depth_chatter_frequency_hz")
+        min_speeds = doc.get("min_depth_spindle_speed_rpm")
+        return cls(speed, depth, chatter, governing_lobe, tuple(lobes), doc.get("frf_y_source") == "same_as_x",
+                   min_depth, float(min_chatter) if isinstance(min_chatter, int | float) else math.nan,
+                   np.array([math.nan if v is None else v for v in min_speeds], dtype=float)
+                   if isinstance(min_speeds, list) else np.full(len(lobes), math.nan))
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready response (contract "Stability lobes"), NaN written as ``None``.
 
@@ -425,30 +478,53 @@ class LobeResult:
         ``min_depth_spindle_speed_rpm`` and ``governing_lobe``.
         """
         return {
-            "spindle_speed_rpm": _json_list(self.spindle_speed_rpm),
-            "depth_limit_m": _json_list(self.depth_limit_m),
-            "chatter_frequency_hz": _json_list(self.chatter_frequency_hz),
+            "spindle_speed_rpm": json_list(self.spindle_speed_rpm),
+            "depth_limit_m": json_list(self.depth_limit_m),
+            "chatter_frequency_hz": json_list(self.chatter_frequency_hz),
             "lobes": [
                 {
                     "index": lobe.index,
-                    "spindle_speed_rpm": _json_list(lobe.spindle_speed_rpm),
-                    "depth_limit_m": _json_list(lobe.depth_limit_m),
+                    "spindle_speed_rpm": json_list(lobe.spindle_speed_rpm),
+                    "depth_limit_m": json_list(lobe.depth_limit_m),
                 }
                 for lobe in self.lobes
             ],
             "frf_y_source": "same_as_x" if self.same_frf_in_y else "given",
-            "min_depth_limit_m": _json_float(self.min_depth_limit_m),
-            "min_depth_chatter_frequency_hz": _json_float(self.min_depth_chatter_frequency_hz),
-            "min_depth_spindle_speed_rpm": _json_list(self.min_depth_spindle_speed_rpm),
+            "min_depth_limit_m": json_float(self.min_depth_limit_m),
+            "min_depth_chatter_frequency_hz": json_float(self.min_depth_chatter_frequency_hz),
+            "min_depth_spindle_speed_rpm": json_list(self.min_depth_spindle_speed_rpm),
             "governing_lobe": [int(k) for k in self.governing_lobe],
         }
 
 
-def _json_float(x: float) -> float | None:
+def _result_array(doc: dict[str, Any], key: str, n: int | None = None, where: str = "") -> np.ndarray:
+    """A list of numbers (``null`` as NaN) of a result document, of length ``n`` when given."""
+    raw = doc.get(key)
+    if not isinstance(raw, list) or not all(v is None or (isinstance(v, int | float) and not isinstance(v, bool))
+                                            for v in raw):
+        raise InputError(where + key, "must be a list of numbers (null where there is no value)")
+    if n is not None and len(raw) != n:
+        raise InputError(where + key, f"must have one value per speed ({n}), got {len(raw)}")
+    return np.array([math.nan if v is None else v for v in raw], dtype=float)
+
+
+def json_float(x: float) -> float | None:
+    """``x`` for JSON: a float, or None where it is not finite (no depth limit, no frequency).
+
+    Parameters
+    ----------
+    x : float
+    """
     return float(x) if math.isfinite(x) else None
 
 
-def _json_list(a: np.ndarray) -> list[float | None]:
+def json_list(a: np.ndarray) -> list[float | None]:
+    """An array for JSON, non-finite entries as None (see :func:`json_float`).
+
+    Parameters
+    ----------
+    a : numpy.ndarray
+    """
     return [float(x) if math.isfinite(x) else None for x in a.tolist()]
 
 

@@ -3,7 +3,11 @@ in m/N (1/N, rad/N, rad/(N·m) for rotations) vs Hz, in the contract's conventio
 returned as an immutable :class:`rcsa.measured.store.Measurement` ready for ``MeasurementStore.put``.
 
 Units are never guessed; a file that cannot be read raises :class:`rcsa.errors.InputError`
-(naming the field) and nothing is stored.
+(naming the field) and nothing is stored. What a file says is used and checked: a CSV
+header's columns and units (:mod:`~rcsa.measured.importers.header`), a UFF's response
+direction and dataset types, a tap file's time stamps; what the caller declares must agree
+with it. Every array meets the plausibility bounds of :mod:`~rcsa.measured.importers.bounds`,
+and a truncated file is refused, never read as a shorter measurement.
 """
 
 from __future__ import annotations

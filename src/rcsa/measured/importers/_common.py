@@ -12,13 +12,15 @@ from pathlib import Path
 import numpy as np
 
 from rcsa.errors import InputError
+from rcsa.measured.importers._table import COMMENTS as _COMMENTS
+from rcsa.measured.importers._table import cut_column
+from rcsa.measured.importers.bounds import check_frequency, check_magnitudes
+from rcsa.measured.importers.bounds import row_label as _where
 from rcsa.measured.importers.sensor import correct_sensor_mass
 from rcsa.measured.importers.units import to_receptance
 from rcsa.measured.store.measurement import Measurement, MeasurementMeta, Provenance
 
 __all__ = ["decode_text", "finish", "numeric_rows", "read_source", "split_line"]
-
-_COMMENTS = ("#", "%", "//", "!")
 
 
 def read_source(
@@ -67,11 +69,18 @@ def numeric_rows(
     Blank lines and lines starting with ``#``, ``%``, ``//`` or ``!`` are skipped anywhere;
     lines that are not numbers are skipped before the first data row (a header) and refused
     after it. With ``leading=k`` only the first k tokens of a line must be numbers and the
-    rest is ignored (CutPro's first line carries labels after its first triple).
+    rest is ignored (CutPro's first line carries labels after its first triple). A file
+    that ends without a newline in a last row that is short, or whose last value is written
+    shorter than the same column in the other rows, is refused as truncated
+    (:mod:`rcsa.measured.importers._table`).
     """
     rows: list[list[float]] = []
     lines: list[int] = []
-    for ln, raw in enumerate(text.splitlines(), 1):
+    tokens: list[list[str]] = []
+    raw_lines = text.splitlines()
+    last = next((i for i in range(len(raw_lines), 0, -1) if raw_lines[i - 1].strip()), 0)
+    open_end = not text.endswith(("\n", "\r"))
+    for ln, raw in enumerate(raw_lines, 1):
         s = raw.strip()
         if not s or s.startswith(_COMMENTS):
             continue
@@ -83,16 +92,35 @@ def numeric_rows(
         except ValueError:
             if not rows:
                 continue  # header line
-            raise InputError("file", f"line {ln} is not a row of numbers: {s[:80]!r}") from None
+            cut = (
+                "; the file ends there without a newline: it looks truncated"
+                if (ln == last and open_end)
+                else ""
+            )
+            raise InputError(
+                "file", f"line {ln} is not a row of numbers: {s[:80]!r}{cut}"
+            ) from None
         rows.append(vals)
         lines.append(ln)
+        tokens.append(toks)
     if not rows:
         raise InputError("file", "no rows of numbers found")
+    if open_end and len(rows) > 2 and lines[-1] == last:
+        if len(rows[-1]) < len(rows[-2]):
+            raise InputError(
+                "columns",
+                f"the last line {lines[-1]} has {len(rows[-1])} of {len(rows[-2])} values and no "
+                "newline: the file looks truncated (cut mid-row)",
+            )
+        j = cut_column(tokens[-1], tokens[-50:-1])
+        if j is not None:
+            raise InputError(
+                "file",
+                f"the last line {lines[-1]} ends without a newline and its value "
+                f"{tokens[-1][j]!r} is written shorter than every other row's "
+                f"({tokens[-2][j]!r}): the file looks truncated (cut mid-number)",
+            )
     return rows, lines
-
-
-def _where(i: int, lines: Sequence[int] | None) -> str:
-    return f"row {i + 1} (line {lines[i]})" if lines is not None else f"index {i}"
 
 
 def finish(
@@ -106,8 +134,14 @@ def finish(
     lines: Sequence[int] | None = None,
     drop_nonpositive: bool = False,
     sensor_mass_kg: float | None = None,
+    bound_hint: str = "",
 ) -> Measurement:
     """Validate, drop 0 Hz rows if asked, convert to receptance and build the measurement.
+
+    Every array is checked: finite values only, frequencies > 0, strictly increasing and at
+    most :data:`~rcsa.measured.importers.bounds.MAX_FREQUENCY_HZ`, and every receptance
+    within :data:`~rcsa.measured.importers.bounds.BOUNDS_BY_UNIT` once converted (so a unit
+    mix-up of a factor 1e6 is refused, not stored).
 
     Parameters
     ----------
@@ -125,6 +159,8 @@ def finish(
         Drop rows at f <= 0 Hz (e.g. the 0 Hz bin) instead of refusing them.
     sensor_mass_kg : float, optional
         Remove this accelerometer mass from the driving-point FRF (direct_frf only).
+    bound_hint : str
+        Advice appended when a magnitude is out of bounds (importer-specific).
     """
     f = np.asarray(frequency_hz, dtype=float)
     vals = {k: np.asarray(v, dtype=np.complex128) for k, v in values.items()}
@@ -167,7 +203,16 @@ def finish(
         steps.append("mobility -> receptance: H = Y/(i w)")
     elif quantity == "accelerance":
         steps.append("accelerance -> receptance: H = -A/w^2")
-    frfs = {k: to_receptance(f, v, quantity) for k, v in vals.items()}
+    check_frequency(f, lines)
+    with np.errstate(over="ignore", invalid="ignore"):
+        frfs = {k: to_receptance(f, v, quantity) for k, v in vals.items()}
+    for k, v in frfs.items():
+        bad = np.flatnonzero(~np.isfinite(v))
+        if bad.size:  # finite in the file's quantity, overflowed on conversion
+            raise InputError(
+                k, f"{_where(int(bad[0]), lines)} overflows on conversion to receptance"
+            )
+        check_magnitudes(k, v, f, lines=lines, read_as=provenance.original_units, hint=bound_hint)
     m = Measurement(
         frequency_hz=f,
         frfs=frfs,

@@ -12,6 +12,16 @@ numpy's forward FFT uses e^{−iωt}, which matches the contract's e^{+iωt} tim
 so a damped driving-point receptance comes out with Im H <= 0. The 0 Hz bin is always
 dropped (receptance is singular there).
 
+Sample rate: declared (``sample_rate_hz``; then the time column, if any, must agree within
+1 %), or taken from the time column. Time stamps are often printed with few digits (the
+leekunhwee file: 7 significant digits, ``9.999805e-001``), so one step, or the median step,
+is quantised to a unit of the last digit (±0.5 % of the 19.53 µs step there) while the mean
+step over the record, (t_last − t_first)/(n − 1), is good to that unit over the whole span
+(1e-7 in 1 s). The rate is then the *roundest* number within that uncertainty (fewest
+significant digits: 51 200 Hz, not 51 199.9985 Hz), so the frequency lines are exact
+multiples of rate/n (1.0, 2.0, … Hz for a 1 s record) and a later request up to 5000 Hz is
+not refused for lying 1.5e-4 Hz above a measured 4999.99985 Hz.
+
 Windows (both optional, both recorded in provenance):
 
 * force window ``force_window_s``: the force is kept within ±w/2 of its peak and set to 0
@@ -35,9 +45,12 @@ from rcsa.measured.store.measurement import Measurement, MeasurementMeta, Proven
 __all__ = ["h1_estimate", "read_tap"]
 
 _QUANTITY = {"displacement": "receptance", "velocity": "mobility", "acceleration": "accelerance"}
-#: Time stamps are often printed with 7 significant digits (the leekunhwee file: dt varies by
-#: ±0.4 % around 1/51200 s); a sampling is "uniform" if every step is within 1 % of the mean.
+#: A sampling is "uniform" if every step is within 1 % of the mean step, plus one unit of the
+#: stamps' last printed digit (7-digit stamps: steps of 19.5 and 19.6 µs around 19.53 µs).
+#: A declared sample rate must agree with the time column to 1 % too.
 _DT_RTOL = 0.01
+#: Time stamps whose digits are counted to find their printing resolution (evenly spread).
+_DIGIT_SAMPLE = 257
 #: Double-hit test: after the pulse has decayed below 5 % of its peak, a return above 20 %.
 _PULSE_END, _SECOND_HIT = 0.05, 0.20
 _ROLES = {"t": "t", "time": "t", "force": "force", "f": "force", "response": "response",
@@ -56,6 +69,74 @@ def _double_hit(force: np.ndarray, dt: float) -> str | None:
         return None
     i = after + int(again[0])
     return f"a second force pulse at t = {i * dt:.6g} s reaches {a[i] / a[peak]:.0%} of the first"
+
+
+def _stamp_digits(t: np.ndarray) -> int:
+    """Significant digits the stamps were printed with (the most any sampled stamp needs)."""
+    idx = np.unique(np.linspace(0, t.size - 1, min(t.size, _DIGIT_SAMPLE)).astype(int))
+    digits = 1
+    for x in (float(v) for v in t[idx]):
+        while x != 0.0 and digits < 17 and float(f"{x:.{digits - 1}e}") != x:
+            digits += 1
+    return digits
+
+
+def _last_digit_unit(x: float, digits: int) -> float:
+    """One unit of the last printed digit of ``x`` (at least its float spacing)."""
+    if x == 0.0:
+        return 0.0
+    return max(10.0 ** (np.floor(np.log10(abs(x))) - digits + 1), float(np.spacing(abs(x))))
+
+
+def roundest_within(x: float, tolerance: float) -> float:
+    """The number with the fewest significant digits within ``tolerance`` of ``x`` > 0.
+
+    >>> roundest_within(51199.99847, 0.0052)
+    51200.0
+    >>> roundest_within(12345.6781, 0.0012)
+    12345.678
+    """
+    k = int(np.floor(np.log10(x))) + 1
+    while True:
+        cand = float(f"{round(x / 10.0**k)}e{k}")  # the decimal, then its nearest double
+        if abs(cand - x) <= tolerance:
+            return cand
+        k -= 1
+
+
+def sample_rate_from_time(t: np.ndarray, where: str = "") -> tuple[float, str]:
+    """Sample rate of a time column, Hz, and how it was found (module docstring).
+
+    Raises
+    ------
+    InputError
+        Field ``t``: fewer than 8 samples, not increasing, or not uniform.
+    """
+    steps = np.diff(t)
+    if t.size < 8 or np.any(steps <= 0):
+        raise InputError("t", f"{where}time must be strictly increasing (and at least 8 samples)")
+    digits = _stamp_digits(t)
+    unit = max(_last_digit_unit(float(t[0]), digits), _last_digit_unit(float(t[-1]), digits))
+    span = float(t[-1] - t[0])
+    dt = span / (t.size - 1)
+    bad = np.flatnonzero(np.abs(steps - dt) > _DT_RTOL * dt + unit)
+    if bad.size:
+        i = int(bad[0])
+        raise InputError(
+            "t",
+            f"{where}the sampling is not uniform: step {i + 1} (t = {t[i]:.9g} s) is "
+            f"{steps[i]:.6g} s, the mean step {dt:.6g} s (more than 1 % apart); a missing or "
+            "repeated sample?",
+        )
+    estimate = 1.0 / dt
+    # the stamps' rounding (half a unit at each end) over the span, plus float arithmetic
+    tolerance = estimate * unit / span + 8 * float(np.spacing(estimate))
+    rate = roundest_within(estimate, tolerance)
+    how = (
+        f"sample rate {rate:.12g} Hz from the time column (mean step over {t.size} stamps of "
+        f"{digits} significant digits: {estimate:.12g} Hz +/- {tolerance:.2g})"
+    )
+    return rate, how
 
 
 def h1_estimate(
@@ -123,8 +204,9 @@ def read_tap(
     columns : str
         One token per column: ``t``, ``force``, ``response`` (alias ``acc``) or ``_``.
     sample_rate_hz : float, optional
-        Declared sampling rate, Hz; checked against the time column (±1 %), which may then
-        be absent. Default: estimated from the time column.
+        Declared sampling rate, Hz (CLI ``--sample-rate-hz``, form field ``sample_rate_hz``);
+        checked against the time column (±1 %), which may then be absent. Default: from the
+        time column (module docstring).
     force_window_s, exponential_tau_s : float, optional
         Windows, s (module docstring).
     max_frequency_hz : float, optional
@@ -165,14 +247,18 @@ def read_tap(
         )
     if "t" not in roles and sample_rate_hz is None:
         raise InputError("sample_rate_hz", "is required when there is no time column")
+    if sample_rate_hz is not None and not (np.isfinite(sample_rate_hz) and sample_rate_hz > 0):
+        raise InputError("sample_rate_hz", f"must be a rate > 0 Hz, got {sample_rate_hz!r}")
     srcs = (
         [sources] if isinstance(sources, str | bytes | bytearray | os.PathLike) else list(sources)
     )
     if not srcs:
         raise InputError("file", "no tap file given")
-    forces, responses, names, shas, dt = [], [], [], [], None
+    forces, responses, names, shas, rate = [], [], [], [], None
+    rate_how = ""
     for k, src in enumerate(srcs):
         data, name, sha = read_source(src, file_name if len(srcs) == 1 else "")
+        label = name or f"tap {k + 1}"
         rows, lines = numeric_rows(decode_text(data))
         bad = next(
             (ln for row, ln in zip(rows, lines, strict=True) if len(row) != len(roles)), None
@@ -180,35 +266,33 @@ def read_tap(
         if bad is not None:
             raise InputError(
                 "columns",
-                f"{name or f'tap {k + 1}'} line {bad}: expected {len(roles)} values ({columns!r})",
+                f"{label} line {bad}: expected {len(roles)} values ({columns!r})",
             )
         table = np.array(rows, dtype=float)
         if not np.all(np.isfinite(table)):
-            raise InputError("file", f"{name or f'tap {k + 1}'} contains NaN or infinite values")
+            raise InputError("file", f"{label} contains NaN or infinite values")
         col = {r: table[:, i] for i, r in enumerate(roles) if r != "skip"}
         if "t" in col:
-            t = col["t"]
-            steps = np.diff(t)
-            if t.size < 8 or np.any(steps <= 0):
-                raise InputError(
-                    "t", f"{name}: time must be strictly increasing (and at least 8 samples)"
-                )
-            dt_k = (t[-1] - t[0]) / (t.size - 1)
-            if np.max(np.abs(steps - dt_k)) > _DT_RTOL * dt_k:
-                raise InputError(
-                    "t", f"{name}: the sampling is not uniform (steps vary by more than 1 %)"
-                )
+            rate_k, how = sample_rate_from_time(col["t"], f"{label}: ")
             if sample_rate_hz is not None:
-                if abs(dt_k * sample_rate_hz - 1) > _DT_RTOL:
+                if abs(sample_rate_hz / rate_k - 1) > _DT_RTOL:
                     raise InputError(
-                        "sample_rate_hz", f"{name}: the time column gives {1 / dt_k:g} Hz"
+                        "sample_rate_hz",
+                        f"{label}: {sample_rate_hz:g} Hz was declared but the time column gives "
+                        f"{rate_k:.12g} Hz",
                     )
-                dt_k = 1.0 / sample_rate_hz
+                how = f"sample rate {sample_rate_hz:.12g} Hz (declared; the time column gives {rate_k:.12g} Hz)"
+                rate_k = float(sample_rate_hz)
         else:
-            dt_k = 1.0 / sample_rate_hz
-        if dt is not None and (abs(dt_k / dt - 1) > 1e-9 or table.shape[0] != forces[0].size):
-            raise InputError("file", f"{name}: all taps need the same sampling rate and length")
-        dt = dt_k
+            rate_k, how = float(sample_rate_hz), f"sample rate {sample_rate_hz:.12g} Hz (declared)"  # type: ignore[arg-type]
+        if rate is not None and (rate_k != rate or table.shape[0] != forces[0].size):
+            raise InputError(
+                "file",
+                f"{label}: all taps need the same sampling rate and length "
+                f"({rate_k:.12g} Hz x {table.shape[0]} vs {rate:.12g} Hz x {forces[0].size})",
+            )
+        rate, rate_how = rate_k, how
+        dt = 1.0 / rate
         force, resp = col["force"] * fu.factor_to_si, col["response"] * ru.factor_to_si
         if not allow_double_hit and (msg := _double_hit(force, dt)):
             raise InputError(
@@ -221,7 +305,7 @@ def read_tap(
 
     n = forces[0].size
     t = np.arange(n) * dt
-    steps = [f"H1 estimate from {len(srcs)} tap(s), {n} samples at {1 / dt:g} Hz"]
+    steps = [f"H1 estimate from {len(srcs)} tap(s), {n} samples; {rate_how}"]
     if force_window_s is not None:
         if not force_window_s > 0:
             raise InputError("force_window_s", "must be > 0 s")
@@ -238,7 +322,8 @@ def read_tap(
         steps.append(
             f"exponential window tau={exponential_tau_s:g} s on force and response (adds damping {1 / exponential_tau_s:g} 1/s)"
         )
-    freq, h1, coh = h1_estimate(forces, responses, dt)
+    _, h1, coh = h1_estimate(forces, responses, dt)
+    freq = np.arange(h1.size) * rate / n  # k * rate / n: exact for an integer rate
     keep = freq > 0
     if max_frequency_hz is not None:
         keep &= freq <= max_frequency_hz
@@ -267,4 +352,6 @@ def read_tap(
         provenance=prov,
         coherence={"h": np.clip(coh[keep], 0.0, 1.0)} if coh is not None else None,
         sensor_mass_kg=sensor_mass_kg,
+        bound_hint="above the hammer's band the force spectrum is too weak for H1: limit the "
+        "band with max_frequency_hz (CLI --max-frequency-hz)",
     )

@@ -142,11 +142,11 @@ def frequency_factor_to_hz(text: str, field: str = "frequency_unit") -> float:
 
 
 def phase_factor_to_rad(text: object, field: str = "phase_unit") -> float:
-    """Radians per unit of a declared phase unit: ``deg`` or ``rad``."""
+    """Radians per unit of a declared phase unit: ``deg`` (``°``) or ``rad``."""
     if not isinstance(text, str) or not text.strip():
         raise InputError(field, "a phase column needs its unit declared: deg or rad")
     t = _normalise(text)
-    if t in ("deg", "degree", "degrees"):
+    if t in ("deg", "degree", "degrees", "°"):
         return math.pi / 180.0
     if t in ("rad", "radian", "radians"):
         return 1.0

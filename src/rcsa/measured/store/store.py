@@ -30,7 +30,7 @@ from pathlib import Path
 import filelock
 
 from rcsa._version import __version__
-from rcsa.errors import NotFoundError, StoreError
+from rcsa.errors import ConflictError, DamagedError, NotFoundError, StoreError
 from rcsa.infra.atomic_files import fsync_dir as _fsync_dir
 from rcsa.infra.atomic_files import fsync_file
 from rcsa.infra.clock import utc_now_iso
@@ -164,21 +164,49 @@ class MeasurementStore:
         return n
 
     # ------------------------------------------------------------------ API
-    def put(self, measurement: Measurement) -> str:
+    def new_id(self) -> str:
+        """A fresh measurement id, neither live nor deleted (for :meth:`put` with an id chosen
+        beforehand, e.g. recorded with an idempotency key before the write)."""
+        for _ in range(_ID_ATTEMPTS):
+            mid = P.new_measurement_id()
+            if not self._file(mid).exists() and not (self._deleted / mid).exists():
+                return mid
+        raise StoreError("could not draw a fresh measurement id")  # pragma: no cover - 2**48 ids
+
+    def was_deleted(self, measurement_id: str) -> bool:
+        """Whether ``measurement_id`` was stored once and deleted since (its tombstone)."""
+        return P.is_measurement_id(measurement_id) and (self._deleted / measurement_id).exists()
+
+    def put(self, measurement: Measurement, *, measurement_id: str | None = None) -> str:
         """Store ``measurement`` and return its new id (``m-`` + 12 hex digits).
 
         When this returns, the file is on stable storage under its final name.
+
+        Parameters
+        ----------
+        measurement : Measurement
+        measurement_id : str, optional
+            The id to store it under (from :meth:`new_id`); default a fresh one.
+
+        Raises
+        ------
+        ConflictError
+            ``measurement_id`` is already stored, or was deleted (ids are never reused).
         """
         if not isinstance(measurement, Measurement):
             raise TypeError("put() takes an rcsa.measured.store.Measurement")
+        if measurement_id is not None and not P.is_measurement_id(measurement_id):
+            raise StoreError(f"internal: {measurement_id!r} is not a measurement id")
         with self._lock():
             self._clean_tmp()
-            for _ in range(_ID_ATTEMPTS):
-                mid = P.new_measurement_id()
-                if not self._file(mid).exists() and not (self._deleted / mid).exists():
-                    break
-            else:  # pragma: no cover - 2**48 ids
-                raise StoreError("could not draw a fresh measurement id")
+            if measurement_id is None:
+                mid = self.new_id()
+            else:
+                mid = measurement_id
+                if self._file(mid).exists():
+                    raise ConflictError("measurement", mid, "is already stored")
+                if (self._deleted / mid).exists():
+                    raise ConflictError("measurement", mid, "was deleted; its id is never reused")
             stored = Measurement(
                 frequency_hz=measurement.frequency_hz,
                 frfs=measurement.frfs,
@@ -218,6 +246,8 @@ class MeasurementStore:
             return read_measurement_file(self._file(measurement_id))
         except FileNotFoundError:
             raise NotFoundError("measurement", measurement_id) from None
+        except StoreError as exc:  # this one file: retrying does not help
+            raise DamagedError("measurement", measurement_id, str(exc)) from None
 
     def info(self, measurement_id: str) -> MeasurementInfo:
         """Metadata of one measurement, without reading its arrays."""
@@ -227,6 +257,8 @@ class MeasurementStore:
             return read_info_file(self._file(measurement_id))
         except FileNotFoundError:
             raise NotFoundError("measurement", measurement_id) from None
+        except StoreError as exc:
+            raise DamagedError("measurement", measurement_id, str(exc)) from None
 
     def __contains__(self, measurement_id: object) -> bool:
         return P.is_measurement_id(measurement_id) and self._file(str(measurement_id)).is_file()
@@ -289,6 +321,12 @@ class MeasurementStore:
             rows.sort(key=lambda i: (i.created_utc or "", i.id or ""))
         return [r for r in rows if r.id in on_disk]
 
+    def damaged(self) -> builtins.list[str]:
+        """Ids of the measurement files that :meth:`list` leaves out because they cannot be
+        read (or carry another id); :meth:`check` says why."""
+        listed = {i.id for i in self.list()}
+        return sorted(self._ids_on_disk() - listed)
+
     def _try_info(self, measurement_id: str) -> MeasurementInfo | None:
         try:
             info = read_info_file(self._file(measurement_id))
@@ -309,6 +347,52 @@ class MeasurementStore:
             except StoreError as e:
                 problems.append(str(e))
         return problems
+
+    def verify(self) -> dict[str, object]:
+        """Verify the whole store without changing it: every file read completely (schema
+        of every object, Fletcher-32 checksums of every dataset, metadata, its id against its
+        name) and the catalogue against the files.
+
+        Returns
+        -------
+        dict
+            ``store``, ``ok``, ``measurements`` (files), ``readable``, ``problems`` (each
+            ``{"id", "problem", "detail"}``, problem one of ``damaged``, ``misnamed``,
+            ``catalogue-missing``, ``catalogue-stale``, ``catalogue-unreadable``) and
+            ``notes`` (harmless findings, e.g. leftovers of an interrupted write in ``tmp/``).
+        """
+        problems: builtins.list[dict[str, str | None]] = []
+        on_disk = self._ids_on_disk()
+        readable: set[str] = set()
+        for mid in sorted(on_disk):
+            try:
+                m = read_measurement_file(self._file(mid))
+            except FileNotFoundError:  # deleted meanwhile
+                continue
+            except StoreError as e:
+                problems.append({"id": mid, "problem": "damaged", "detail": str(e)})
+                continue
+            if m.id != mid:
+                problems.append({"id": mid, "problem": "misnamed", "detail": f"the file carries id {m.id!r}"})
+            else:
+                readable.add(mid)
+        try:
+            known: set[str] | None = self._catalogue.ids()
+        except (sqlite3.Error, OSError) as e:
+            known = None
+            problems.append({"id": None, "problem": "catalogue-unreadable",
+                             "detail": f"{P.INDEX}: {e}; `rcsa store rebuild` makes it again from the files"})
+        if known is not None:
+            problems += [{"id": mid, "problem": "catalogue-missing", "detail": "readable file without a catalogue row "
+                          "(the next listing or `rcsa store rebuild` adds it)"} for mid in sorted(readable - known)]
+            problems += [{"id": mid, "problem": "catalogue-stale", "detail": "catalogue row without a file"}
+                         for mid in sorted(known - on_disk)]
+        with os.scandir(self._tmp) as it:
+            leftovers = sorted(e.name for e in it)
+        notes = [f"tmp/ holds {len(leftovers)} leftover(s) of interrupted writes or deletes (removed by the next "
+                 f"write): {', '.join(leftovers[:5])}"] if leftovers else []
+        return {"store": str(self.path), "ok": not problems, "measurements": len(on_disk), "readable": len(readable),
+                "problems": problems, "notes": notes}
 
     def rebuild_index(self) -> int:
         """Recreate ``index.sqlite`` from the files; returns the number of measurements."""

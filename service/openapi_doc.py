@@ -1,0 +1,51 @@
+"""What the OpenAPI document says beyond what FastAPI derives from the routes.
+
+* **Who may call an operation.** FastAPI marks every operation that reads ``X-API-Key``
+  as requiring it (``security: [{"APIKey": []}]``). Reads and computations are open to
+  anonymous callers while ``RCSA_ANONYMOUS_READ`` is true (:mod:`service.security`): those
+  operations are declared ``security: [{}, {"APIKey": []}]`` (no key, or a key), so that
+  generated clients do not insist on one. Writes keep the key as required.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from typing import Any
+
+from fastapi.routing import APIRoute
+
+from .errors import iter_routes
+from .security import require_read, require_write
+
+__all__ = ["OPTIONAL_KEY", "mark_anonymous_operations", "route_access"]
+
+#: ``security`` of an operation that anonymous callers may use: no key, or a key.
+OPTIONAL_KEY: list[dict[str, list[str]]] = [{}, {"APIKey": []}]
+
+
+def route_access(route: APIRoute) -> str | None:
+    """``"write"``, ``"read"`` or None: the strictest access among a route's dependencies."""
+    found: set[str] = set()
+    todo = [route.dependant]
+    while todo:
+        dep = todo.pop()
+        if dep.call is require_write:
+            found.add("write")
+        elif dep.call is require_read:
+            found.add("read")
+        todo.extend(dep.dependencies)
+    return "write" if "write" in found else ("read" if found else None)
+
+
+def mark_anonymous_operations(doc: dict[str, Any], routes: Iterable[Any], anonymous_read: bool) -> None:
+    """Declare the key optional on the operations anonymous callers may use (in place)."""
+    if not anonymous_read:
+        return
+    paths = doc.get("paths", {})
+    for route in iter_routes(routes):
+        if not isinstance(route, APIRoute) or not route.include_in_schema or route_access(route) != "read":
+            continue
+        for method in route.methods:
+            operation = paths.get(route.path_format, {}).get(method.lower())
+            if operation is not None and "security" in operation:
+                operation["security"] = [dict(s) for s in OPTIONAL_KEY]

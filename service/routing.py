@@ -1,0 +1,129 @@
+"""The route class of every router: what happens before FastAPI looks at a request's body.
+
+FastAPI reads and parses a route's body before it runs the route's dependencies, so a
+check made by a dependency (the API key) comes after the body was read. :class:`ServiceRoute`
+puts the checks that must come first in front, in this order:
+
+1. **Body size** — the route's own limit (``openapi_extra["x-max-body-bytes"]``, stated in
+   the OpenAPI; never above ``RCSA_MAX_BODY_BYTES``): a ``Content-Length`` above it is a
+   ``413`` at once, and :class:`service.middleware.RequestContextMiddleware` counts a chunked
+   body against it while it is read.
+2. **Authentication and scope** — the route's access (``require_read`` or ``require_write``
+   among its dependencies) is checked from the ``X-API-Key`` header before a byte of the body
+   is read: a refused write never reads, parses or stores anything.
+3. **The JSON policy** — a JSON body is decoded once by :func:`rcsa.app.inputs.decode_json`
+   (RFC 8259 strict: no NaN/Infinity; nesting ≤ ``MAX_JSON_DEPTH``; every number's magnitude
+   ≤ ``MAX_JSON_NUMBER``); a violation is a ``422`` naming the field. FastAPI's body
+   parsing, :func:`service.bodies.read_body` and the idempotency fingerprint then take that
+   document (:class:`ServiceRequest`), never the raw bytes again.
+
+Then the route's own handler runs (for :class:`service.idempotency.IdempotentRoute`, under
+its ``Idempotency-Key``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Awaitable, Callable
+from typing import Any
+
+from fastapi import Request
+from fastapi.concurrency import run_in_threadpool
+from fastapi.dependencies.models import Dependant
+from fastapi.routing import APIRoute
+from starlette.responses import Response
+
+from rcsa.app.inputs import decode_json
+from rcsa.app.keys import Principal
+
+from .errors import BodyTooLarge
+from .middleware import BODY_LIMIT_KEY
+from .security import principal, require_read, require_write
+from .state import ensure_state
+
+__all__ = ["BODY_LIMIT_KEY", "MAX_BODY_EXTENSION", "ServiceRequest", "ServiceRoute", "is_json_media"]
+
+#: ``openapi_extra`` key (an OpenAPI extension) holding a route's largest body, bytes.
+MAX_BODY_EXTENSION = "x-max-body-bytes"
+#: Scope key of the caller's principal once the route class has authenticated it.
+PRINCIPAL_KEY = "rcsa.principal"
+
+Handler = Callable[[Request], Awaitable[Response]]
+
+
+def is_json_media(media: str) -> bool:
+    """Whether a media type (no parameters, lower case) is JSON."""
+    return media == "application/json" or (media.startswith("application/") and media.endswith("+json"))
+
+
+class ServiceRequest(Request):
+    """A request whose JSON body is decoded once, under the JSON policy."""
+
+    async def json(self) -> Any:
+        """The body decoded by :func:`rcsa.app.inputs.decode_json` (cached)."""
+        if not hasattr(self, "_rcsa_json"):
+            self._rcsa_json = decode_json(await self.body())
+        return self._rcsa_json
+
+
+def _access(dependant: Dependant) -> str | None:
+    """``"write"``, ``"read"`` or None: the strictest access among a route's dependencies."""
+    found: set[str] = set()
+    todo = [dependant]
+    while todo:
+        dep = todo.pop()
+        if dep.call is require_write:
+            found.add("write")
+        elif dep.call is require_read:
+            found.add("read")
+        todo.extend(dep.dependencies)
+    return "write" if "write" in found else ("read" if found else None)
+
+
+class ServiceRoute(APIRoute):
+    """An ``APIRoute`` with the checks of the module docstring in front of its handler."""
+
+    def __init__(self, path: str, endpoint: Callable[..., Any], **kwargs: Any) -> None:
+        super().__init__(path, endpoint, **kwargs)  # builds the handler (get_route_handler)
+
+    def wrap_handler(self, handler: Handler) -> Handler:
+        """Hook for subclasses: wrap FastAPI's handler (runs after the checks)."""
+        return handler
+
+    def get_route_handler(self) -> Handler:  # type: ignore[override]
+        """FastAPI's handler behind the body-size, authentication and JSON checks."""
+        inner = self.wrap_handler(super().get_route_handler())
+        limit_given = (self.openapi_extra or {}).get(MAX_BODY_EXTENSION)
+        route_limit = int(limit_given) if limit_given is not None else None
+        access = _access(self.dependant)
+        where = f"{sorted(self.methods or ())[0] if self.methods else ''} {self.path}".strip()
+
+        async def handler(request: Request) -> Response:
+            request = ServiceRequest(request.scope, request.receive)
+            state = await run_in_threadpool(ensure_state, request.app)
+            limit = state.settings.max_body_bytes
+            if route_limit is not None and route_limit < limit:
+                limit = route_limit
+                request.scope[BODY_LIMIT_KEY] = limit
+            length = request.headers.get("content-length", "")
+            if length.isdigit() and int(length) > limit:
+                raise BodyTooLarge(limit, where=where if limit == route_limit else None)
+            if access is not None:
+                request.scope[PRINCIPAL_KEY] = await run_in_threadpool(_authorize, state, request, access)
+            if request.method in ("POST", "PUT", "PATCH"):
+                media = request.headers.get("content-type", "").split(";")[0].strip().lower()
+                if is_json_media(media):
+                    await request.json()
+            return await inner(request)
+
+        return handler
+
+
+def _authorize(state: Any, request: Request, access: str) -> Principal:
+    who = principal(state, request.headers.get("x-api-key"))
+    return require_write(who) if access == "write" else require_read(state, who)
+
+
+def caller(request: Request) -> Principal | None:
+    """The principal the route class authenticated (None on routes without access checks)."""
+    found = request.scope.get(PRINCIPAL_KEY)
+    return found if isinstance(found, Principal) else None

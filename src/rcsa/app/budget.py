@@ -1,0 +1,503 @@
+"""The compute budget of every operation: what a request will cost, known before it runs.
+
+A request that passes validation may still ask for hours of work or gigabytes of memory
+(a 5 Hz–10 MHz grid, 40 000 holder segments, 5 000 Monte-Carlo draws). Each operation has a
+*cost model* here that reads the request's sizes — frequency lines, beam elements (and how
+finely a beam must be cut at the band's top for exact natural frequencies), modes,
+parameters, measurements, draws, combinations, speeds — and estimates the compute seconds
+and the peak memory the work will take on the reference machine (2 cores, Python 3.11;
+constants below, calibrated by ``benchmarks/bench_budget.py``). :func:`check` compares the
+estimate with the limits of how the work is asked for, **before any work starts**:
+
+* :data:`SYNC` — a request answered at once (every anonymous HTTP request unless it asks
+  for a job): ≤ 20 s estimated, ≤ 1 GiB estimated. Whatever fits, runs; nothing that fits
+  can take more than the stated bound :data:`STATED_SYNC_BOUND` (60 s CPU, 1.5 GiB peak
+  RSS: the estimate's margin, checked by ``tests/service/test_budget.py``).
+* :data:`JOB` — the same work queued as a job (``Prefer: respond-async``): ≤ 1 h, ≤ 4 GiB.
+
+Above the limit, :class:`BudgetExceeded` (an :class:`~rcsa.errors.InputError`, a 422 in the
+service) names the limit, the request's cost and its terms, the fields that shrink it, and
+how to run it as a job instead.
+
+Extending: an operation (or a new option of one, e.g. another lobes method) registers its
+cost model with :func:`cost_model`; the model receives the request document and returns a
+:class:`Cost`. Options a model does not know cost nothing, so **a new option that adds work
+must add its term here** (a lobes method: :data:`LOBE_METHOD_S`), and every option has a
+bound in its parser.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+
+from rcsa.errors import InputError
+from rcsa.model.assembly import build_model
+from rcsa.model.contract import AssemblySpec, SpindleSpec, parse_assembly, parse_frequency
+from rcsa.model.parameters import parameter_names
+from rcsa.physics.chain import Beam, Chain
+
+__all__ = [
+    "BODY_LIMITS",
+    "JOB",
+    "OPERATIONS",
+    "STATED_SYNC_BOUND",
+    "SYNC",
+    "BudgetExceeded",
+    "Cost",
+    "Limits",
+    "Mode",
+    "body_limit",
+    "check",
+    "check_work",
+    "cost_model",
+    "estimate",
+    "natural_frequency_seconds",
+]
+
+MiB = 1024 * 1024
+GiB = 1024 * MiB
+
+Mode = Literal["sync", "job"]
+
+
+@dataclass(frozen=True)
+class Limits:
+    """What one request may cost: estimated compute seconds and peak memory, bytes."""
+
+    seconds: float
+    memory_bytes: float
+
+
+#: A request answered at once.
+SYNC = Limits(seconds=20.0, memory_bytes=1.0 * GiB)
+#: The same work run as a job (its runtime is also bounded by the job queue).
+JOB = Limits(seconds=3600.0, memory_bytes=4.0 * GiB)
+#: What no synchronous request inside :data:`SYNC` can exceed, measured: CPU seconds and
+#: peak resident memory of the process (the estimate's margin covers load and error).
+STATED_SYNC_BOUND = Limits(seconds=60.0, memory_bytes=1.5 * GiB)
+
+#: Largest request body of each operation's endpoint, bytes (the service states them in the
+#: OpenAPI as ``x-max-body-bytes``). An assembly with the most segments is ~0.2 MB and a
+#: 200 000-line grid given as values ~4 MB; analyses carry up to 20 measured FRFs.
+BODY_LIMITS: dict[str, int] = {
+    "prediction": 8 * MiB,
+    "lobes": 16 * MiB,
+    "effects": 8 * MiB,
+    "identification": 32 * MiB,
+    "diagnosis": 32 * MiB,
+    "plot": 16 * MiB,
+    "batch": 64 * MiB,
+    "library": 64 * MiB,
+    "measurement": 64 * MiB,
+}
+
+# ---------------------------------------------------------------------------- calibration
+# Seconds on the reference machine (benchmarks/bench_budget.py prints the fit):
+#: Exact receptance of one beam element on one frequency line (a 4×4 condensation step).
+K_LINE_S = 2.0e-7
+#: Natural frequencies (Wittrick–Williams bisection): per element of the chain cut for the
+#: band's top frequency, and per such element and mode (modes ≈ those elements).
+K_NF_ELEMENT_S = 1.8e-3
+K_NF_MODE_S = 4.2e-6
+#: Memory per frequency line of a prediction (result and condensation workspaces), bytes.
+MEM_LINE_BYTES = 3072.0
+#: Memory of the process that is not the request's (libraries, caches), bytes.
+MEM_BASE_BYTES = 64.0 * MiB
+
+
+@dataclass(frozen=True)
+class Cost:
+    """The estimated cost of one request.
+
+    Attributes
+    ----------
+    operation : str
+    seconds : float
+        Estimated compute seconds on the reference machine.
+    memory_bytes : float
+        Estimated peak memory of the work, bytes.
+    terms : dict
+        The sizes the estimate is made of (``lines``, ``elements``, ``draws`` …).
+    shrink : tuple of str
+        What to reduce (request fields, in words) to make it cheaper.
+    """
+
+    operation: str
+    seconds: float
+    memory_bytes: float
+    terms: Mapping[str, float] = field(default_factory=dict)
+    shrink: tuple[str, ...] = ()
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form (in problem documents)."""
+        return {"operation": self.operation, "estimated_seconds": round(self.seconds, 3),
+                "estimated_memory_bytes": int(self.memory_bytes),
+                "terms": {k: (int(v) if float(v).is_integer() else round(float(v), 6)) for k, v in self.terms.items()}}
+
+
+class BudgetExceeded(InputError):
+    """A request whose estimated cost exceeds the limits of how it was asked for.
+
+    Attributes
+    ----------
+    cost : Cost
+    limits : Limits
+    mode : {"sync", "job"}
+    """
+
+    def __init__(self, cost: Cost, limits: Limits, mode: Mode, field_name: str = "") -> None:
+        self.cost = cost
+        self.limits = limits
+        self.mode = mode
+        over = []
+        if cost.seconds > limits.seconds:
+            over.append(f"about {cost.seconds:.3g} s of computation, above the {limits.seconds:g} s")
+        if cost.memory_bytes > limits.memory_bytes:
+            over.append(f"about {cost.memory_bytes / MiB:.0f} MiB of memory, above the "
+                        f"{limits.memory_bytes / MiB:.0f} MiB")
+        terms = ", ".join(f"{k} {v:g}" for k, v in cost.terms.items())
+        where = "a request answered at once" if mode == "sync" else "a job"
+        advice = (f"Send it with the header Prefer: respond-async to run it as a job (up to {JOB.seconds:g} s and "
+                  f"{JOB.memory_bytes / GiB:g} GiB), or make it smaller"
+                  if mode == "sync" and cost.seconds <= JOB.seconds and cost.memory_bytes <= JOB.memory_bytes
+                  else "Make it smaller")
+        shrink = f": {'; '.join(cost.shrink)}" if cost.shrink else ""
+        super().__init__(field_name, f"this {cost.operation} needs {' and '.join(over)} that {where} may use "
+                                     f"(estimated from {terms}). {advice}{shrink}")
+
+
+CostModel = Callable[[Mapping[str, Any]], Cost]
+OPERATIONS: dict[str, CostModel] = {}
+
+
+def cost_model(operation: str) -> Callable[[CostModel], CostModel]:
+    """Register the cost model of ``operation`` (decorator); the last registration wins."""
+    def register(fn: CostModel) -> CostModel:
+        OPERATIONS[operation] = fn
+        return fn
+    return register
+
+
+def estimate(operation: str, request: Mapping[str, Any]) -> Cost:
+    """The estimated cost of ``request`` for ``operation``.
+
+    Raises
+    ------
+    InputError
+        The request is invalid where the estimate needs it (the same error the operation
+        would raise), or the operation has no cost model.
+    """
+    model = OPERATIONS.get(operation)
+    if model is None:
+        raise InputError("", f"no cost model for operation {operation!r}")
+    if not isinstance(request, Mapping):
+        raise InputError("", "the request must be a JSON object")
+    return model(request)
+
+
+def check(operation: str, request: Mapping[str, Any], *, mode: Mode = "sync",
+          limits: Limits | None = None) -> Cost:
+    """Estimate ``request`` and refuse it when it exceeds the limits of ``mode``.
+
+    Parameters
+    ----------
+    operation : str
+        A key of :data:`OPERATIONS` (``prediction``, ``batch``, ``library``, ``lobes``,
+        ``effects``, ``identification``, ``diagnosis``).
+    request : mapping
+        The request document.
+    mode : {"sync", "job"}
+    limits : Limits, optional
+        Default :data:`SYNC` or :data:`JOB`.
+
+    Returns
+    -------
+    Cost
+
+    Raises
+    ------
+    BudgetExceeded
+    """
+    cost = estimate(operation, request)
+    lim = limits if limits is not None else (SYNC if mode == "sync" else JOB)
+    if cost.seconds > lim.seconds or cost.memory_bytes > lim.memory_bytes:
+        raise BudgetExceeded(cost, lim, mode)
+    return cost
+
+
+def body_limit(operation: str) -> int:
+    """Largest request body of ``operation``'s endpoint, bytes (:data:`BODY_LIMITS`)."""
+    return BODY_LIMITS[operation]
+
+
+# ---------------------------------------------------------------------------- sizes
+
+
+def natural_frequency_seconds(effective_elements: float) -> float:
+    """Estimated seconds of one exact natural-frequency search over a chain cut into
+    ``effective_elements`` pieces for its band (modes ≈ pieces)."""
+    return effective_elements * (K_NF_ELEMENT_S + K_NF_MODE_S * effective_elements)
+
+
+def _effective_elements(chain: Chain, top_hz: float) -> float:
+    """Elements of ``chain`` once its beams are cut for exact counting up to ``top_hz``
+    (as :func:`rcsa.physics.elimination.subdivide` would, without building the pieces)."""
+    omega = 2.0 * math.pi * top_hz
+    n = 0.0
+    for item in chain:
+        if isinstance(item, Beam):
+            n += max(1.0, math.ceil(float(np.max(item.length_m)) / item.max_piece_length_m(omega)))
+        else:
+            n += 1.0
+    return n
+
+
+def _chain(spec: AssemblySpec) -> Chain:
+    # a measured spindle without a holder is a holder_tip measurement (its holder is inside it)
+    return build_model(spec, base_plane="holder_tip" if spec.holder is None else None).chain()
+
+
+def _assembly_cost(spec: AssemblySpec, *, natural_frequencies: bool = True) -> tuple[float, float, dict[str, float]]:
+    """Seconds and bytes of one prediction, and its terms."""
+    chain = _chain(spec)
+    lines = float(spec.frequency_hz.size)
+    top = float(spec.frequency_hz[-1])
+    elements = float(len(chain))
+    effective = _effective_elements(chain, top) if natural_frequencies and isinstance(spec.spindle, SpindleSpec) \
+        else elements
+    seconds = K_LINE_S * elements * lines + (natural_frequency_seconds(effective) if natural_frequencies else 0.0)
+    return seconds, MEM_BASE_BYTES + MEM_LINE_BYTES * lines, {
+        "lines": lines, "elements": elements, "elements_cut_for_modes": effective}
+
+
+_ASSEMBLY_SHRINK = ("fewer frequency lines (frequency)", "a lower top frequency (natural frequencies are found "
+                    "exactly up to it)", "fewer holder or spindle segments")
+
+
+def _parse(document: object, prefix: str = "") -> AssemblySpec:
+    try:
+        return parse_assembly(document)
+    except InputError as exc:
+        if not prefix:
+            raise
+        raise InputError(f"{prefix}.{exc.field}".rstrip("."), exc.rule) from None
+
+
+# ---------------------------------------------------------------------------- operations
+
+
+@cost_model("prediction")
+def _prediction(request: Mapping[str, Any]) -> Cost:
+    spec = _parse(request)
+    seconds, memory, terms = _assembly_cost(spec)
+    return Cost("prediction", seconds, memory, terms, _ASSEMBLY_SHRINK)
+
+
+def _count(value: object) -> int:
+    return len(value) if isinstance(value, list) else 0
+
+
+def _holder_segments(combo: object) -> int:
+    holder = combo.get("holder") if isinstance(combo, Mapping) else None
+    return _count(holder.get("segments")) if isinstance(holder, Mapping) else 0
+
+
+@cost_model("batch")
+def _batch(request: Mapping[str, Any]) -> Cost:
+    """Every combination costs a prediction; the one with the most holder segments stands
+    for all (they share the spindle and the band)."""
+    combos = request.get("combinations")
+    combos = combos if isinstance(combos, list) else []
+    if not combos:
+        return Cost("batch", 0.0, MEM_BASE_BYTES, {"combinations": 0.0})
+    worst = max(range(len(combos)), key=lambda i: _holder_segments(combos[i]))
+    base = {k: v for k, v in request.items() if k not in ("combinations", "options", "natural_frequencies")}
+    combo = combos[worst]
+    n = float(len(combos))
+    shrink = ("fewer combinations (split the batch)", *_ASSEMBLY_SHRINK)
+    try:
+        spec = parse_assembly({**base, **{k: v for k, v in combo.items() if k not in ("id", "name")}})
+    except (InputError, TypeError, AttributeError):  # that combination is refused by the batch itself
+        lines = float(parse_frequency(request.get("frequency")).size)
+        elements = 30.0 + _holder_segments(combo)
+        seconds = n * (K_LINE_S * elements * lines + natural_frequency_seconds(elements))
+        return Cost("batch", seconds, MEM_BASE_BYTES + n * MEM_LINE_BYTES * lines / 8.0,
+                    {"combinations": n, "lines": lines, "elements": elements}, shrink)
+    seconds, memory, terms = _assembly_cost(spec, natural_frequencies=request.get("natural_frequencies", True)
+                                            is not False)
+    return Cost("batch", seconds * n, memory + n * MEM_LINE_BYTES * terms["lines"] / 8.0,
+                {"combinations": n, **terms}, shrink)
+
+
+@cost_model("library")
+def _library(request: Mapping[str, Any]) -> Cost:
+    """Like a batch whose tools each have a holder of up to ~60 cylinders (cones cut into
+    ``holder_segments_per_cone``)."""
+    library = request.get("library")
+    items = library.get("data") if isinstance(library, Mapping) else None
+    n = float(len(items)) if isinstance(items, list) else 1.0
+    lines = float(parse_frequency(request.get("frequency")).size) if isinstance(request.get("frequency"), Mapping) \
+        else 1.0
+    elements = 80.0
+    seconds = n * (K_LINE_S * elements * lines + natural_frequency_seconds(elements))
+    return Cost("library", seconds, MEM_BASE_BYTES + MEM_LINE_BYTES * lines * (1.0 + n / 8.0),
+                {"tools": n, "lines": lines, "elements": elements}, ("fewer tools", "fewer frequency lines"))
+
+
+#: Estimated seconds per speed and frequency line of each lobes method (``method``).
+LOBE_METHOD_S: dict[str, float] = {"zoa": 1.0e-9}
+
+
+@cost_model("lobes")
+def _lobes(request: Mapping[str, Any]) -> Cost:
+    seconds = 0.0
+    memory = MEM_BASE_BYTES
+    terms: dict[str, float] = {}
+    if request.get("assembly") is not None:
+        spec = _parse(request["assembly"], "assembly")
+        seconds, memory, terms = _assembly_cost(spec)
+        lines = terms["lines"]
+    else:
+        frf = request.get("frf_x")
+        lines = float(_count(frf.get("frequency_hz"))) if isinstance(frf, Mapping) else 0.0
+        terms["lines"] = lines
+    speeds = request.get("spindle_speed_rpm")
+    count = speeds.get("count", 0) if isinstance(speeds, Mapping) else 0
+    count = float(count) if isinstance(count, int | float) and not isinstance(count, bool) else 0.0
+    method = request.get("method")
+    name = method if isinstance(method, str) else (method.get("name", "zoa") if isinstance(method, Mapping) else "zoa")
+    per = LOBE_METHOD_S.get(str(name), LOBE_METHOD_S["zoa"])
+    seconds += per * count * max(lines, 1.0)
+    memory += 64.0 * count
+    return Cost("lobes", seconds, memory, {**terms, "speeds": count},
+                ("fewer speeds (spindle_speed_rpm.count)", "fewer frequency lines"))
+
+
+@cost_model("effects")
+def _effects(request: Mapping[str, Any]) -> Cost:
+    """Two perturbed natural-frequency searches per parameter, plus the nominal one, over
+    the band (widened by 12 %)."""
+    document = request.get("assembly", request)
+    spec = _parse(document, "assembly" if "assembly" in request else "")
+    params = request.get("parameters") if "assembly" in request else None
+    n_params = float(len(params)) if isinstance(params, list) else float(len(parameter_names(spec)))
+    band = request.get("band_hz") if "assembly" in request else None
+    top = float(spec.frequency_hz[-1])
+    if isinstance(band, list) and len(band) == 2 and all(isinstance(b, int | float) and not isinstance(b, bool)
+                                                          for b in band):
+        top = max(float(band[1]), 1.0e-3)
+    top *= 1.12
+    chain = _chain(spec)
+    effective = _effective_elements(chain, top)
+    runs = 1.0 + 2.0 * n_params
+    seconds = runs * (natural_frequency_seconds(effective) + K_LINE_S * len(chain) * 400.0)
+    return Cost("effects", seconds, MEM_BASE_BYTES + 4096.0 * effective * runs / 8.0,
+                {"parameters": n_params, "band_top_hz": top, "elements_cut_for_modes": effective, "runs": runs},
+                ("a narrower band (band_hz, or the assembly's frequency range): every mode in it is tracked",
+                 "fewer parameters"))
+
+
+def _taps(request: Mapping[str, Any]) -> list[Mapping[str, Any]]:
+    taps = request.get("measurements")
+    return [t for t in taps if isinstance(t, Mapping)] if isinstance(taps, list) else []
+
+
+def _tap_lines(tap: Mapping[str, Any]) -> float:
+    return float(_count(tap.get("frequency_hz")))
+
+
+def _analysis_spec(request: Mapping[str, Any]) -> AssemblySpec:
+    assembly = request.get("assembly")
+    if not isinstance(assembly, Mapping):
+        raise InputError("assembly", "is required (an object)")
+    return _parse({"frequency": {"values_hz": [1.0]}, **assembly}, "assembly")
+
+
+#: Estimated seconds of an identification per measurement and beam element.
+K_IDENT_S = 0.05
+
+
+@cost_model("identification")
+def _identification(request: Mapping[str, Any]) -> Cost:
+    spec = _analysis_spec(request)
+    taps = _taps(request)
+    elements = float(len(_chain(spec)))
+    lines = sum(_tap_lines(t) for t in taps)
+    n = float(len(taps))
+    seconds = n * K_IDENT_S * elements + K_LINE_S * elements * lines * 20.0
+    return Cost("identification", seconds, MEM_BASE_BYTES + 2048.0 * lines,
+                {"measurements": n, "lines": lines, "elements": elements},
+                ("fewer measurements", "fewer segments"))
+
+
+#: Diagnosis, per beam element, configuration and (draw + fit equivalent): seconds per line
+#: of the union grid, and seconds that do not grow with the grid; plus a fixed part.
+K_DIAG_LINE_S = 2.5e-8
+K_DIAG_CONFIG_S = 4.0e-5
+K_DIAG_FIXED_S = 0.5
+#: The candidate fits cost about as much as this many Monte-Carlo draws.
+DIAG_FIT_DRAWS = 300.0
+#: Memory per draw, configuration and line of the union grid, bytes (draws and features kept).
+MEM_DIAG_BYTES = 100.0
+
+
+def _union_lines(taps: list[Mapping[str, Any]], max_lines: float) -> float:
+    """Lines of the grid a diagnosis solves on: the union of the lines picked from each
+    measurement (at most ``max_lines`` each), bounded by the distinct frequencies given."""
+    picked = sum(min(_tap_lines(t), max_lines) for t in taps)
+    values = [t.get("frequency_hz") for t in taps]
+    try:
+        distinct = float(np.unique(np.concatenate([np.asarray(v, dtype=float) for v in values
+                                                   if isinstance(v, list) and v])).size)
+    except (ValueError, TypeError):  # not numbers: the parser says so
+        return picked
+    return min(picked, distinct)
+
+
+@cost_model("diagnosis")
+def _diagnosis(request: Mapping[str, Any]) -> Cost:
+    """Every Monte-Carlo draw and every candidate fit solves each configuration (one per
+    measurement) on the union of the lines picked from the measurements."""
+    spec = _analysis_spec(request)
+    taps = _taps(request)
+    options = request.get("options") if isinstance(request.get("options"), Mapping) else {}
+    assert isinstance(options, Mapping)
+    draws = options.get("monte_carlo_draws", 200)
+    draws = float(draws) if isinstance(draws, int | float) and not isinstance(draws, bool) else 200.0
+    max_lines = options.get("max_lines", 1200)
+    max_lines = float(max_lines) if isinstance(max_lines, int | float) and not isinstance(max_lines, bool) else 1200.0
+    configs = float(len(taps))
+    grid = _union_lines(taps, max_lines)
+    elements = float(len(_chain(spec)))
+    seconds = K_DIAG_FIXED_S + elements * configs * (draws + DIAG_FIT_DRAWS) * (K_DIAG_LINE_S * grid + K_DIAG_CONFIG_S)
+    memory = MEM_BASE_BYTES + MEM_DIAG_BYTES * draws * configs * grid
+    return Cost("diagnosis", seconds, memory,
+                {"measurements": configs, "grid_lines": grid, "draws": draws, "elements": elements},
+                ("fewer Monte-Carlo draws (options.monte_carlo_draws)", "fewer lines (options.max_lines)",
+                 "fewer measurements"))
+
+
+def check_work(kind: str, request: Mapping[str, Any], size: int, *, mode: Mode) -> Cost:
+    """:func:`check` for prepared batch, library and sync work (:class:`rcsa.app.jobs.Work`):
+    its combinations form a batch (``request["batch"]``), of which ``size`` are computed (a
+    sync computes only tools not in its cache)."""
+    inner = request.get("batch")
+    batch = inner if isinstance(inner, Mapping) else request  # prepared work: {"entries", "batch"}
+    if not isinstance(batch, Mapping):
+        return Cost(kind, 0.0, MEM_BASE_BYTES)
+    cost = estimate("batch", batch)
+    combos = batch.get("combinations")
+    n = len(combos) if isinstance(combos, list) else 0
+    if n and size != n:  # only ``size`` of them are computed
+        scale = size / n
+        cost = Cost(kind, cost.seconds * scale, MEM_BASE_BYTES + (cost.memory_bytes - MEM_BASE_BYTES) * scale,
+                    {**cost.terms, "combinations": float(size)}, cost.shrink)
+    lim = SYNC if mode == "sync" else JOB
+    if cost.seconds > lim.seconds or cost.memory_bytes > lim.memory_bytes:
+        raise BudgetExceeded(cost, lim, mode)
+    return cost

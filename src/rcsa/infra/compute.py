@@ -1,0 +1,310 @@
+"""Where chunks of work run: in this process, or on a Dask cluster (optional).
+
+A *backend* runs a given pure function over chunks: ``backend.map(fn, chunks, shared=s)``
+yields ``(i, fn(chunks[i], s))`` for every chunk. What a chunk is, and what ``fn`` computes,
+is the caller's business; nothing here knows the domain.
+
+* :class:`LocalBackend` (the default) runs the chunks one after the other in the calling
+  thread. It needs nothing beyond the standard library.
+* :class:`DaskBackend` runs them as tasks on a Dask cluster (``pip install 'rcsa[dask]'``;
+  ``dask.distributed`` is imported here only, when one is built). The workers share nothing
+  with the caller but the network: ``fn``, each chunk and ``shared`` travel by value
+  (pickled), and the results come back to the caller. ``shared`` is sent once per
+  :meth:`~DaskBackend.map` as a task of its own, so the scheduler can recompute it if the
+  worker holding it dies. At most ``window`` chunks are in flight (results wait at the
+  caller in bounded memory); ``ordered=False`` hands results over as they finish.
+
+Faults on a cluster:
+
+* a worker that dies mid-chunk (killed, out of memory) is noticed by the scheduler, which
+  runs the chunk again on another worker (Dask's ``allowed-failures``, 3 by default; a
+  chunk that keeps killing its workers fails with :class:`ChunkFailed`); a chunk that
+  *raises* is retried ``retries`` times, then its exception is raised here;
+* the scheduler going away cancels the chunks in flight: :meth:`DaskBackend.map` raises
+  :class:`ComputeUnavailable` naming the scheduler, never waits for ever; the next
+  :meth:`~DaskBackend.map` connects again;
+* a scheduler that cannot be reached when the backend is built (or reconnected) raises
+  :class:`ComputeUnavailable` after ``connect_timeout_s``.
+
+``on_wait``, called about every ``poll_s`` while a map waits for results, lets the caller
+stop it (e.g. a job's time limit or a lost claim): whatever it raises cancels the chunks
+still in flight and propagates.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import itertools
+import logging
+import secrets
+import threading
+import time
+from collections.abc import Callable, Iterator, Sequence
+from typing import Any, Protocol
+
+from rcsa.errors import RcsaError
+
+__all__ = ["Backend", "ChunkFailed", "ComputeUnavailable", "DaskBackend", "LocalBackend", "compute_backend"]
+
+log = logging.getLogger("rcsa.infra.compute")
+
+#: ``fn(chunk, shared) -> result``: a module-level function (or a ``functools.partial`` of one)
+#: so that a cluster's workers can import it.
+ChunkFunction = Callable[[Any, Any], Any]
+
+
+class ComputeUnavailable(RcsaError):
+    """The compute cluster cannot be reached, or went away while work was running on it."""
+
+    #: How a job that fails with it is reported (problem ``title`` and ``status``).
+    title = "Compute cluster unavailable"
+    http_status = 503
+
+
+class ChunkFailed(RcsaError):
+    """A chunk could not be computed on the cluster (it killed its workers again and again)."""
+
+    title = "Job failed on the compute cluster"
+    http_status = 500
+
+
+class Backend(Protocol):
+    """Runs a function over chunks (:class:`LocalBackend`, :class:`DaskBackend`)."""
+
+    name: str
+
+    def map(self, fn: ChunkFunction, chunks: Sequence[Any], *, shared: Any = None, ordered: bool = True,
+            on_wait: Callable[[], None] | None = None) -> Iterator[tuple[int, Any]]:
+        """``(i, fn(chunks[i], shared))`` for every chunk (in chunk order when ``ordered``)."""
+        ...
+
+    def describe(self) -> dict[str, Any]:
+        """JSON-ready description (name, address, workers) for logs and health checks."""
+        ...
+
+    def close(self) -> None:
+        """Release connections (idempotent)."""
+        ...
+
+
+class LocalBackend:
+    """Runs every chunk in the calling thread, in order."""
+
+    name = "local"
+
+    def map(self, fn: ChunkFunction, chunks: Sequence[Any], *, shared: Any = None, ordered: bool = True,
+            on_wait: Callable[[], None] | None = None) -> Iterator[tuple[int, Any]]:
+        """``(i, fn(chunks[i], shared))`` for every chunk, computed here one after the other.
+
+        Parameters
+        ----------
+        fn : callable
+            ``fn(chunk, shared) -> result``, importable by name where it runs.
+        chunks : sequence
+            The chunks.
+        shared : object, optional
+            What every chunk needs besides itself (sent once).
+        ordered : bool
+            Yield in chunk order (else as chunks finish).
+        on_wait : callable, optional
+            Called while waiting for results; whatever it raises stops the map.
+
+        Yields
+        ------
+        tuple of (int, object)
+            A chunk's index and ``fn``'s result for it.
+        """
+        for i, chunk in enumerate(chunks):
+            yield i, fn(chunk, shared)
+
+    def describe(self) -> dict[str, Any]:
+        """``{"backend": "local"}``."""
+        return {"backend": "local"}
+
+    def close(self) -> None:
+        """Nothing to release."""
+        return None
+
+    def __repr__(self) -> str:
+        return "LocalBackend()"
+
+
+def _identity(value: Any) -> Any:
+    """The task that holds a map's shared part on the cluster."""
+    return value
+
+
+class DaskBackend:
+    """Runs chunks as tasks on the Dask cluster of the scheduler at ``address``.
+
+    Parameters
+    ----------
+    address : str
+        The scheduler, e.g. ``tcp://127.0.0.1:8786``.
+    connect_timeout_s : float
+        How long to try to reach the scheduler before :class:`ComputeUnavailable`, s.
+    retries : int
+        Extra tries of a chunk that raises (a worker that dies is handled by the scheduler,
+        see the module docstring).
+    window : int, optional
+        Most chunks in flight per map; default twice the cluster's worker threads (at least 2).
+    poll_s : float
+        How often a waiting map looks at its chunks and calls ``on_wait``, s.
+
+    Raises
+    ------
+    ComputeUnavailable
+        The scheduler cannot be reached within ``connect_timeout_s``, or ``dask.distributed``
+        is not installed.
+    """
+
+    name = "dask"
+
+    def __init__(self, address: str, *, connect_timeout_s: float = 10.0, retries: int = 3,
+                 window: int | None = None, poll_s: float = 0.05) -> None:
+        self.address = str(address)
+        self.connect_timeout_s = float(connect_timeout_s)
+        self.retries = int(retries)
+        self.window = window
+        self.poll_s = float(poll_s)
+        self._lock = threading.Lock()
+        self._client: Any = None
+        self._connect()
+
+    def __repr__(self) -> str:
+        return f"DaskBackend({self.address!r})"
+
+    def _connect(self) -> Any:
+        try:  # only here: the embedded default needs no Dask installed
+            from distributed import Client
+        except ImportError:
+            raise ComputeUnavailable(f"a Dask scheduler ({self.address}) is configured but dask.distributed is not "
+                                     "installed: pip install 'rcsa[dask]'") from None
+        with self._lock:
+            if self._client is not None and self._client.status == "running":
+                return self._client
+            if self._client is not None:
+                with contextlib.suppress(Exception):
+                    self._client.close(timeout=1)
+                self._client = None
+            try:
+                self._client = Client(self.address, timeout=self.connect_timeout_s, set_as_default=False)
+            except (OSError, TimeoutError, ValueError) as exc:
+                raise ComputeUnavailable(f"cannot reach the Dask scheduler at {self.address} within "
+                                         f"{self.connect_timeout_s:g} s ({exc}); start it, or unset "
+                                         "RCSA_DASK_SCHEDULER to compute locally") from None
+            return self._client
+
+    @property
+    def client(self) -> Any:
+        """The ``distributed.Client`` (connected again if the scheduler was lost)."""
+        return self._connect()
+
+    def describe(self) -> dict[str, Any]:
+        """The scheduler's address and its workers and threads (or the error reaching it)."""
+        try:
+            threads = self.client.nthreads()
+        except Exception as exc:  # a health check must not raise
+            return {"backend": "dask", "scheduler": self.address, "error": str(exc)}
+        return {"backend": "dask", "scheduler": self.address, "workers": len(threads),
+                "threads": int(sum(threads.values()))}
+
+    def close(self) -> None:
+        """Close the connection to the scheduler (idempotent; the cluster keeps running)."""
+        with self._lock:
+            if self._client is not None:
+                with contextlib.suppress(Exception):
+                    self._client.close(timeout=5)
+                self._client = None
+
+    def map(self, fn: ChunkFunction, chunks: Sequence[Any], *, shared: Any = None, ordered: bool = True,
+            on_wait: Callable[[], None] | None = None) -> Iterator[tuple[int, Any]]:
+        """``(i, fn(chunks[i], shared))`` for every chunk, computed as tasks on the cluster.
+
+        Parameters
+        ----------
+        fn : callable
+            ``fn(chunk, shared) -> result``, importable by name where it runs.
+        chunks : sequence
+            The chunks.
+        shared : object, optional
+            What every chunk needs besides itself (sent once).
+        ordered : bool
+            Yield in chunk order (else as chunks finish).
+        on_wait : callable, optional
+            Called while waiting for results; whatever it raises stops the map.
+
+        Yields
+        ------
+        tuple of (int, object)
+            A chunk's index and ``fn``'s result for it.
+        """
+        from distributed.client import FutureCancelledError
+        from distributed.scheduler import KilledWorker
+
+        client = self.client
+        n = len(chunks)
+        if n == 0:
+            return
+        window = self.window or max(2, 2 * int(sum(client.nthreads().values())))
+        token = secrets.token_hex(6)
+        shared_future = client.submit(_identity, shared, key=f"rcsa-shared-{token}", pure=False)
+        pending: dict[int, Any] = {}
+        ready: dict[int, Any] = {}
+        submitted = 0
+        next_out = 0
+        try:
+            while next_out < n:
+                while submitted < n and len(pending) + len(ready) < window:
+                    pending[submitted] = client.submit(fn, chunks[submitted], shared_future, retries=self.retries,
+                                                       key=f"rcsa-chunk-{token}-{submitted}", pure=False)
+                    submitted += 1
+                finished = [i for i, f in pending.items() if f.done()]
+                for i in finished:
+                    future = pending.pop(i)
+                    try:
+                        ready[i] = future.result()
+                    except FutureCancelledError:
+                        raise ComputeUnavailable(f"lost the Dask scheduler at {self.address} while chunk {i + 1} of "
+                                                 f"{n} was running (client {client.status}); the work was "
+                                                 "stopped, submit it again once the cluster is back") from None
+                    except KilledWorker as exc:
+                        raise ChunkFailed(f"chunk {i + 1} of {n} killed every Dask worker it ran on ({exc}); it "
+                                          "may need more memory than a worker has") from None
+                    finally:
+                        future.release()
+                if ordered:
+                    while next_out in ready:
+                        yield next_out, ready.pop(next_out)
+                        next_out += 1
+                else:
+                    for i in sorted(ready):
+                        yield i, ready.pop(i)
+                        next_out += 1
+                if not finished and next_out < n:
+                    if client.status not in ("running", "connecting"):
+                        raise ComputeUnavailable(f"lost the Dask scheduler at {self.address} (client "
+                                                 f"{client.status}); the work was stopped")
+                    if on_wait is not None:
+                        on_wait()
+                    time.sleep(self.poll_s)
+        finally:
+            leftover = list(itertools.chain(pending.values(), [shared_future]))
+            if leftover and client.status == "running":
+                with contextlib.suppress(Exception):
+                    client.cancel(leftover)
+
+
+def compute_backend(scheduler: str | None, *, connect_timeout_s: float = 10.0, retries: int = 3) -> Backend:
+    """A :class:`DaskBackend` on ``scheduler`` when one is given, else a :class:`LocalBackend`.
+
+    Raises
+    ------
+    ComputeUnavailable
+        The scheduler cannot be reached (or Dask is not installed).
+    """
+    if scheduler:
+        backend = DaskBackend(scheduler, connect_timeout_s=connect_timeout_s, retries=retries)
+        log.info("computing on the Dask cluster at %s: %s", scheduler, backend.describe())
+        return backend
+    return LocalBackend()
