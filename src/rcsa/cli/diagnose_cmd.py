@@ -7,7 +7,6 @@ from typing import Annotated
 
 import typer
 
-from rcsa.app.figures import FIGURE_SUFFIXES, diagnosis_with_figure
 from rcsa.cli._common import (
     QuietOption,
     fail,
@@ -30,6 +29,8 @@ def register(app: typer.Typer) -> None:
         quiet: QuietOption = False,
     ) -> None:
         """Where model and measurement part, which unmodelled effect explains it, and how far the gap shrinks."""
+        # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+        from rcsa.app.figures import FIGURE_SUFFIXES, diagnosis_with_figure
         if plot is not None and plot.suffix.lower() not in FIGURE_SUFFIXES:
             raise fail(f"--plot: the file must end in .png or .svg, got {plot.name!r}")
         doc = read_json(request)
