@@ -1,35 +1,61 @@
-"""Engine benchmarks (issue 2): RA-1 at 10 000 lines, and 1 000 tools on one spindle + holder.
+"""Engine benchmarks (issue 14): RA-1 at 10 000 lines, 1 000 tools on one spindle + holder, start-up.
 
-Run: ``.venv/bin/python benchmarks/bench_engine.py``. Prints median wall times over repeats
-and the ratio against a straightforward baseline run in the same process:
+Run: ``.venv/bin/python benchmarks/bench_engine.py``. Prints, in one run, median wall times
+over repeats with the machine's load, and the ratios against baselines run in the same
+process:
 
-* baseline for one FRF: the same exact solver called once per frequency line (a Python loop
-  over frequency — what the vectorised code replaces);
-* baseline for the tool library: every tool solved as a full assembly, nothing reused.
+* ``rcsa.predict`` of RA-1 at 10 000 lines (FRF + exact natural frequencies + peaks + static
+  stiffness, from the contract document) against a straightforward vectorised numpy FRF
+  (``numpy_baseline.py``: global dynamic stiffness and ``np.linalg.solve``, the FRF alone);
+* 1 000 tools × 1 999 lines on one spindle + holder with every tool's exact modes;
+* where the time goes: each part of a prediction timed on its own, and cProfile of the batch;
+* ``import rcsa`` and ``rcsa --help`` in fresh interpreters.
+
+``--slow-baselines`` adds the older yardsticks (the solver called per frequency line; each
+tool solved as a full assembly), which take about a minute.
 """
 
 from __future__ import annotations
 
 import argparse
+import cProfile
+import os
+import pstats
 import statistics
+import subprocess
+import sys
 import time
+from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 
+import rcsa
+from numpy_baseline import tip_receptance as numpy_tip_receptance
 from rcsa import app
 from rcsa.model.assembly import build_model
 from rcsa.model.contract import parse_assembly
-from rcsa.physics.elimination import tip_receptance
+from rcsa.model.peaks import find_frf_peaks
+from rcsa.model.prediction import SubassemblyCache, count_lines_hz, tool_point_receptance
+from rcsa.physics.elimination import static_tip_receptance, tip_receptance
+from rcsa.physics.natural_frequencies import natural_frequencies_batch
 from rcsa.reference import ra1
 
 
-def median_time_s(fn, repeats: int) -> float:
+def median_time_s(fn: Callable[[], object], repeats: int, warm: bool = True) -> float:
+    if warm:
+        fn()
     times = []
     for _ in range(repeats):
         t0 = time.perf_counter()
         fn()
         times.append(time.perf_counter() - t0)
     return statistics.median(times)
+
+
+def load() -> str:
+    one, five, fifteen = os.getloadavg()
+    return f"load average {one:.2f}, {five:.2f}, {fifteen:.2f} on {os.cpu_count()} cores"
 
 
 def tools(n: int, rng: np.random.Generator) -> list[dict]:
@@ -44,41 +70,124 @@ def tools(n: int, rng: np.random.Generator) -> list[dict]:
     return out
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--tools", type=int, default=1000)
-    parser.add_argument("--repeats", type=int, default=7)
-    args = parser.parse_args()
+def fresh_interpreter_s(argv: list[str], repeats: int) -> float:
+    """Median wall time of a command in a fresh process."""
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        subprocess.run(argv, check=True, capture_output=True)
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times)
 
+
+def ra1_section(repeats: int, slow: bool) -> None:
     doc = ra1({"start_hz": 1.0, "stop_hz": 10000.0, "step_hz": 1.0})
     spec = parse_assembly(doc)
     model = build_model(spec)
     chain = model.chain()
-    omega = 2 * np.pi * spec.frequency_hz
-    t_vec = median_time_s(lambda: tip_receptance(chain, omega), args.repeats)
-    t_pred = median_time_s(lambda: app.predict(spec), max(3, args.repeats // 2))
-    sub = omega[::20]  # the loop baseline is timed on 500 lines and scaled to 10 000
-    t_loop = median_time_s(lambda: [tip_receptance(chain, sub[i:i + 1]) for i in range(sub.size)], 3) * 20
-    print("RA-1 tool-point FRF, 10 000 lines")
-    print(f"  vectorised dynamic-stiffness solve   {t_vec * 1e3:8.1f} ms")
-    print(f"  per-frequency loop (baseline)        {t_loop * 1e3:8.1f} ms   ratio {t_loop / t_vec:6.0f}x")
-    print(f"  full prediction (+ exact modes, peaks, static)  {t_pred * 1e3:8.1f} ms")
+    f = spec.frequency_hz
+    omega = 2 * np.pi * f
+    err = np.max(np.abs(numpy_tip_receptance(chain, omega)[:, 0, 0] - rcsa.predict(doc).tool_point.h))
+    t_pred = median_time_s(lambda: rcsa.predict(doc), repeats)
+    t_numpy = median_time_s(lambda: numpy_tip_receptance(chain, omega), max(3, repeats // 3))
+    print(f"RA-1 tool point, 10 000 lines ({load()})")
+    print(f"  rcsa.predict (FRF + exact modes + peaks + static)  {t_pred * 1e3:8.1f} ms")
+    print(f"  vectorised numpy FRF alone (numpy_baseline.py)      {t_numpy * 1e3:8.1f} ms   "
+          f"ratio {t_numpy / t_pred:5.1f}x   (|h| agree to {err / np.max(np.abs(rcsa.predict(doc).tool_point.h)):.0e})")
 
+    # where the time goes: each part of rcsa.predict timed on its own
+    prefix, rest = model.to_holder_tip(), model.tool_side()
+    grid = count_lines_hz(f)
+    g = tool_point_receptance(model, SubassemblyCache(omega))
+    parts = {
+        "parse the document + build the chain": lambda: build_model(parse_assembly(doc)),
+        "FRF: spindle + holder condensed, tool marched, 2x2 inverse":
+            lambda: tool_point_receptance(model, SubassemblyCache(omega)),
+        "  of which spindle + holder (cached across tools)": lambda: SubassemblyCache(omega).condensed(prefix),
+        "natural frequencies: count on the grid + lockstep refinement":
+            lambda: natural_frequencies_batch(prefix, [rest], float(f[0]), float(f[-1]), grid_hz=grid),
+        "  of which the count on the grid (undamped, real)":
+            lambda: natural_frequencies_batch(prefix, [rest], float(f[0]), float(f[-1]), grid_hz=grid, rtol=0.5),
+        "peaks of h": lambda: find_frf_peaks(f, g[:, 0, 0]),
+        "static stiffness": lambda: static_tip_receptance(rest, SubassemblyCache(omega).static(prefix)),
+        "contract document (to_dict, lists)": lambda: rcsa.predict(spec).to_dict(),
+    }
+    print("  where the time goes (each part alone, median):")
+    for name, fn in parts.items():
+        print(f"    {name:<64s} {median_time_s(fn, repeats) * 1e3:7.1f} ms")
+    print("    (rcsa.predict returns the Prediction; to_dict runs when a caller serialises it and is in neither figure)")
+    if slow:
+        sub = omega[::20]  # the loop is timed on 500 lines and scaled to 10 000
+        t_vec = median_time_s(lambda: tip_receptance(chain, omega), repeats)
+        t_loop = median_time_s(lambda: [tip_receptance(chain, sub[i:i + 1]) for i in range(sub.size)], 3) * 20
+        print(f"  same solver per frequency line (loop)               {t_loop * 1e3:8.1f} ms   "
+              f"ratio {t_loop / t_vec:5.0f}x the vectorised FRF")
+
+
+def batch_section(n_tools: int, slow: bool) -> None:
+    doc = ra1()
     rng = np.random.default_rng(2026)
     grid = {"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 2.5}  # 1 999 lines
     combos = [{"id": t.pop("id"), "holder": doc["holder"], "tool": t, "joints": doc["joints"]}
-              for t in tools(args.tools, rng)]
+              for t in tools(n_tools, rng)]
     request = {"frequency": grid, "spindle": doc["spindle"], "combinations": combos}
-    # results kept as numpy arrays (what the service serialises with orjson); "list" adds ~0.7 ms/tool
-    t_frf = median_time_s(lambda: app.predict_batch({**request, "natural_frequencies": False}, arrays="numpy"), 3)
-    t_full = median_time_s(lambda: app.predict_batch(request, arrays="numpy"), 1)
-    n_base = max(20, args.tools // 20)
-    t_base = median_time_s(lambda: [app.predict({**ra1(grid), "tool": c["tool"]}) for c in combos[:n_base]], 1)
-    t_base *= args.tools / n_base
-    print(f"{args.tools} tools on one spindle + holder, 1 999 lines (results as contract documents)")
-    print(f"  batch, FRFs + peaks (spindle+holder reused)  {t_frf:7.2f} s")
-    print(f"  batch, + exact natural frequencies           {t_full:7.2f} s")
-    print(f"  each tool as a full assembly (baseline)      {t_base:7.2f} s   ratio {t_base / t_full:5.1f}x")
+    # results kept as numpy arrays (what the service serialises with orjson)
+    app.predict_batch({**request, "combinations": combos[:10]}, arrays="numpy")
+    t_frf = median_time_s(lambda: app.predict_batch({**request, "natural_frequencies": False}, arrays="numpy"), 3,
+                          warm=False)
+    t_full = median_time_s(lambda: app.predict_batch(request, arrays="numpy"), 3, warm=False)
+    n_modes = sum(len(r["natural_frequencies_hz"]) for r in app.predict_batch(request, arrays="numpy")["results"])
+    print(f"{n_tools} tools on one spindle + holder, 1 999 lines ({load()})")
+    print(f"  batch, FRFs + peaks + static stiffness          {t_frf:7.2f} s")
+    print(f"  batch, + every tool's exact natural frequencies {t_full:7.2f} s   ({n_modes} modes)")
+    profile = cProfile.Profile()
+    profile.enable()
+    app.predict_batch(request, arrays="numpy")
+    profile.disable()
+    stats = pstats.Stats(profile)
+    total = max(v[3] for v in stats.stats.values())  # type: ignore[attr-defined]
+    wanted = {"march_tools": "stacked FRF elimination (tools x lines)", "inv2": "2x2 inverses (receptance)",
+              "static_condense_rows": "stacked static stiffness", "natural_frequencies_batch": "exact modes",
+              "evaluate": "  of which count + det passes of the refinement", "find_frf_peaks": "peaks",
+              "build_model": "chains built from the documents", "parse_combination": "documents parsed",
+              "to_dict": "results as contract documents"}
+    print("  where the time goes (cProfile, cumulative; profiling adds its overhead to Python-heavy parts):")
+    seen: dict[str, float] = {}
+    for (file, _, name), (_, _, _, cum, _) in stats.stats.items():  # type: ignore[attr-defined]
+        if name in wanted and "rcsa" in file:
+            seen[name] = seen.get(name, 0.0) + cum
+    for name, label in wanted.items():
+        if name in seen:
+            print(f"    {label:<52s} {seen[name]:6.2f} s  {100 * seen[name] / total:4.0f} %")
+    if slow:
+        n_base = max(20, n_tools // 20)
+        t_base = median_time_s(lambda: [app.predict({**ra1(grid), "tool": c["tool"]}) for c in combos[:n_base]], 1,
+                               warm=False) * n_tools / n_base
+        print(f"  each tool as a full assembly (baseline)        {t_base:7.2f} s   ratio {t_base / t_full:5.1f}x")
+
+
+def startup_section(repeats: int) -> None:
+    exe = sys.executable
+    cli = str(Path(exe).with_name("rcsa"))
+    t_python = fresh_interpreter_s([exe, "-c", "pass"], repeats)
+    t_import = fresh_interpreter_s([exe, "-c", "import rcsa"], repeats)
+    t_help = fresh_interpreter_s([cli, "--help"], repeats)
+    print(f"start-up, fresh processes, median of {repeats} ({load()})")
+    print(f"  python -c pass         {t_python * 1e3:6.0f} ms")
+    print(f"  python -c 'import rcsa' {t_import * 1e3:6.0f} ms")
+    print(f"  rcsa --help            {t_help * 1e3:6.0f} ms")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--tools", type=int, default=1000)
+    parser.add_argument("--repeats", type=int, default=15)
+    parser.add_argument("--slow-baselines", action="store_true", help="also the per-line loop and full assemblies")
+    args = parser.parse_args()
+    print(f"python {sys.version.split()[0]}, numpy {np.__version__}, {os.uname().machine}")
+    ra1_section(args.repeats, args.slow_baselines)
+    batch_section(args.tools, args.slow_baselines)
+    startup_section(7)
 
 
 if __name__ == "__main__":

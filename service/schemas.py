@@ -44,6 +44,7 @@ from rcsa.app.bounds import (
     IDENTIFICATION_MIN_LINES,
     MAX_BEARINGS,
     MAX_COHERENCE,
+    MAX_CONFIDENCE,
     MAX_CUTTING_COEFFICIENT_N_M2,
     MAX_DAMPING,
     MAX_DENSITY_KG_M3,
@@ -63,6 +64,10 @@ from rcsa.app.bounds import (
     MAX_SPEED_RPM,
     MAX_STIFFNESS,
     MAX_TEETH,
+    MAX_TOLERANCE,
+    MAX_UNCERTAINTY_DRAWS,
+    MAX_UNCERTAINTY_SEED,
+    MIN_CONFIDENCE,
     MIN_CUTTING_COEFFICIENT_N_M2,
     MIN_DENSITY_KG_M3,
     MIN_FLUTED_DIAMETER_RATIO,
@@ -75,6 +80,7 @@ from rcsa.app.bounds import (
     MIN_SHEAR_COEFFICIENT,
     MIN_SPEED_COUNT,
     MIN_SPEED_RPM,
+    MIN_UNCERTAINTY_DRAWS,
     SDM_DEFAULT_MODES_PER_DIRECTION,
     SDM_DEFAULT_STEPS_PER_PERIOD,
     SDM_MAX_MODES_PER_DIRECTION,
@@ -89,6 +95,9 @@ from .field_errors import pydantic_errors
 
 __all__ = [
     "Assembly",
+    "PredictionRequest",
+    "Robust",
+    "Uncertainty",
     "BatchRequest",
     "BatchResult",
     "DiagnosisRequest",
@@ -294,6 +303,17 @@ ShearCoefficient = Literal["hutchinson", "cowper"] | Annotated[float, Field(ge=M
                                                                           le=MAX_SHEAR_COEFFICIENT)]
 
 
+class Uncertainty(_Request):
+    """Uncertainty band (contract v1.1): the assembly drawn under the diagnosis's tolerances."""
+
+    draws: int = Field(200, ge=MIN_UNCERTAINTY_DRAWS, le=MAX_UNCERTAINTY_DRAWS, description="Monte-Carlo draws "
+                       "(draws × frequency lines bounded too).")
+    seed: int = Field(0, ge=0, le=MAX_UNCERTAINTY_SEED, description="Seed of the draws (same seed, same band).")
+    tolerances: dict[str, Annotated[float, Field(ge=0, le=MAX_TOLERANCE)]] | None = Field(
+        None, description="Tolerance by name (as the diagnosis's tolerances; a measured spindle adds its "
+                          "measurement uncertainty); left out: the defaults.")
+
+
 class Assembly(_Request):
     """A spindle–holder–tool assembly (contract "Assembly"); body of POST /v1/tool-point-frf."""
 
@@ -311,6 +331,13 @@ class Assembly(_Request):
     joints: Joints | None = Field(None, description="Elastic joints; left out = rigid.")
     name: str | None = Field(None, max_length=200, description="Free label, echoed nowhere.")
     description: str | None = Field(None, max_length=10_000, description="Free text.")
+
+
+class PredictionRequest(Assembly):
+    """Body of POST /v1/tool-point-frf: an assembly, optionally with an uncertainty band."""
+
+    uncertainty: Uncertainty | None = Field(None, description="Add an uncertainty band to the prediction "
+                                            "(p05/p50/p95 of |h|, mean/sd of the natural frequencies).")
 
 
 # --------------------------------------------------------------------------- batch
@@ -357,6 +384,7 @@ class BatchRequest(_Request):
     spindle: Spindle
     natural_frequencies: bool = Field(True, description="Compute the exact natural frequencies of every "
                                       "combination (analytical spindles; costs time on big batches).")
+    uncertainty: Uncertainty | None = Field(None, description="Every combination's uncertainty band (same seed).")
     combinations: list[Annotated[Combination, WrapValidator(_keep_invalid)]] = Field(
         min_length=1, description="Combinations (at most RCSA_MAX_BATCH_COMBINATIONS). Each is checked on "
                                   "its own: one that is invalid gets status error in its result.")
@@ -683,6 +711,13 @@ class SpeedRange(_Request):
     count: int = Field(ge=MIN_SPEED_COUNT, le=MAX_SPEED_COUNT, description="Number of speeds.")
 
 
+class Robust(_Request):
+    """How sure the robust depth limit is."""
+
+    confidence: float = Field(0.95, ge=MIN_CONFIDENCE, le=MAX_CONFIDENCE, description="The robust limit holds "
+                              "in this fraction of the draws (its percentile is 100 (1 - confidence)).")
+
+
 class LobesRequest(_Request):
     """Stability-lobes request (contract "Stability lobes"): inline FRFs or an assembly."""
 
@@ -703,6 +738,9 @@ class LobesRequest(_Request):
                                                                                 "(dimensionless).")
     milling: Literal["up", "down"]
     spindle_speed_rpm: SpeedRange
+    uncertainty: Uncertainty | None = Field(None, description="Robust lobes: draw the assembly (method zoa) "
+                                            "and give depth_limit_robust_m beside the nominal limit.")
+    robust: Robust | None = Field(None, description="Confidence of the robust limit (needs uncertainty).")
     method: Literal["zoa", "semi_discretization"] = Field(
         "zoa", description="zoa: zero-order (Altintas–Budak); semi_discretization: first-order SDM "
                            "(time-periodic force, flip lobes; slower).")

@@ -47,7 +47,6 @@ ALLOWED_INCOMPLETE: dict[str, str] = {
     "rcsa.physics.chain.Beam.stack": "documented in the merge of b1 (chain items own their steps) and b3 (numpydoc check); to complete",
     "rcsa.physics.chain.Beam.subdivided": "documented in the merge of b1 (chain items own their steps) and b3 (numpydoc check); to complete",
     "rcsa.physics.chain.Beam.take_rows": "documented in the merge of b1 (chain items own their steps) and b3 (numpydoc check); to complete",
-    "rcsa.physics.chain.ChainItem": "documented in the merge of b1 (chain items own their steps) and b3 (numpydoc check); to complete",
     "rcsa.physics.chain.ChainItem.absorb_compliance": "documented in the merge of b1 (chain items own their steps) and b3 (numpydoc check); to complete",
     "rcsa.physics.chain.ChainItem.eliminate": "documented in the merge of b1 (chain items own their steps) and b3 (numpydoc check); to complete",
     "rcsa.physics.chain.ChainItem.eliminate_static": "documented in the merge of b1 (chain items own their steps) and b3 (numpydoc check); to complete",
@@ -141,6 +140,8 @@ CALLABLES = _callables()
 def _parameters(obj: object) -> list[str]:
     """The parameter names a docstring must give, ``*args``/``**kwargs`` without their stars."""
     if inspect.isclass(obj) and obj.__init__ is object.__init__ and obj.__new__ is object.__new__:
+        return []
+    if inspect.isclass(obj) and getattr(obj, "_is_protocol", False):  # a Protocol is never constructed
         return []
     try:
         signature = inspect.signature(obj)

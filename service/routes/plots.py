@@ -28,7 +28,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from starlette.responses import Response
 
 from rcsa.app import budget, exports, figures
-from rcsa.app.analyses import stability_lobes, stability_lobes_result
+from rcsa.app.analyses import stability_lobes, stability_lobes_results
 from rcsa.app.bounds import MAX_LENGTH_M, MAX_SPEED_RPM, MIN_SPEED_RPM
 from rcsa.app.examples import ra1
 from rcsa.app.predictions import predict
@@ -37,7 +37,7 @@ from ..bodies import require_json
 from ..deps import StateDep
 from ..responses import body_limit, problems
 from ..routing import ServiceRoute
-from ..schemas import Assembly, FrfIn, LobesRequest
+from ..schemas import Assembly, FrfIn, LobesRequest, PredictionRequest
 from ..security import ReadAccess
 
 router = APIRouter(prefix="/v1", tags=["plots and exports"], route_class=ServiceRoute)
@@ -132,16 +132,19 @@ def plot_lobes(body: LobesPlotRequest, state: StateDep, _: ReadAccess, format: F
                accept: AcceptHeader = None) -> Response:
     """Axial depth-of-cut limit (mm) against spindle speed (rpm): the lower envelope, every
     lobe, the stable region shaded, the absolute limit dashed and, when given, the operating
-    point. The body is a ``POST /v1/stability-lobes`` request plus the drawing options."""
+    point; with ``uncertainty``, the robust limit dashed. The body is a ``POST /v1/stability-lobes``
+    request plus the drawing options."""
     request = body.model_dump(exclude_unset=True,
                               exclude={"show_lobes", "operating_point", "depth_max_mm", "title"})
     budget.check("lobes", request, mode="sync")
     with state.metrics.timed("lobes"):
-        result = stability_lobes_result(request, store=state.reader, max_lines=state.settings.max_frequency_lines)
+        result, robust = stability_lobes_results(request, store=state.reader,
+                                                 max_lines=state.settings.max_frequency_lines)
     point = body.operating_point
     fmt = _image_format(format, accept)
     with state.metrics.timed("plot"), _RENDER_LOCK:
-        image = figures.lobes_picture(result, fmt=fmt, show_lobes=body.show_lobes, depth_max_mm=body.depth_max_mm,
+        image = figures.lobes_picture(result, fmt=fmt, robust=None if robust is None else robust.to_dict(),
+                                      show_lobes=body.show_lobes, depth_max_mm=body.depth_max_mm,
                                       title=body.title, operating_point=None if point is None else
                                       (point.spindle_speed_rpm, point.depth_m))
     return _image(image, fmt, "stability-lobes")
@@ -150,13 +153,15 @@ def plot_lobes(body: LobesPlotRequest, state: StateDep, _: ReadAccess, format: F
 @router.post("/exports/frf.csv", dependencies=[Depends(require_json)], response_class=Response, openapi_extra=body_limit("plot"),
              responses={**_csv_response(
                  "Header row frequency_hz, h_real_m_n, h_imag_m_n, l_real_1_n, l_imag_1_n, n_real_rad_n, "
-                 "n_imag_rad_n, p_real_rad_n_m, p_imag_rad_n_m; one row per frequency line."),
+                 "n_imag_rad_n, p_real_rad_n_m, p_imag_rad_n_m (with uncertainty also h_magnitude_p05_m_n, "
+                 "h_magnitude_p50_m_n, h_magnitude_p95_m_n); one row per frequency line."),
                  **problems(401, 413, 415, 422)},
              summary="Tool-point FRF of one assembly as CSV")
-def export_frf_csv(body: Assembly, state: StateDep, _: ReadAccess) -> Response:
+def export_frf_csv(body: PredictionRequest, state: StateDep, _: ReadAccess) -> Response:
     """Predict the assembly (exactly as ``POST /v1/tool-point-frf``) and answer its tool-point
     receptances as CSV: frequency in Hz, then real and imaginary parts of h (m/N), l (1/N),
-    n (rad/N) and p (rad/(N·m)). The numbers equal the JSON result's."""
+    n (rad/N) and p (rad/(N·m)); with ``uncertainty``, the band's p05/p50/p95 of ``|h|`` (m/N).
+    The numbers equal the JSON result's."""
     doc = body.model_dump(exclude_unset=True)
     budget.check("prediction", doc, mode="sync")
     with state.metrics.timed("predict"):
@@ -167,7 +172,8 @@ def export_frf_csv(body: Assembly, state: StateDep, _: ReadAccess) -> Response:
 
 @router.post("/exports/lobes.csv", dependencies=[Depends(require_json)], response_class=Response, openapi_extra=body_limit("plot"),
              responses={**_csv_response(
-                 "Header row spindle_speed_rpm, depth_limit_m, chatter_frequency_hz, governing_lobe; one row per "
+                 "Header row spindle_speed_rpm, depth_limit_m, chatter_frequency_hz, governing_lobe (with "
+                 "uncertainty also depth_limit_robust_m); one row per "
                  "speed; empty cells where no lobe reaches the speed (governing_lobe -1)."),
                  **problems(401, 413, 415, 422)},
              summary="Stability lobes (lower envelope) as CSV")

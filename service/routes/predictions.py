@@ -14,7 +14,7 @@ from ..deps import StateDep
 from ..jobs import caller, compute
 from ..responses import ASYNC_ACCEPTED, body_limit, json_response, problems
 from ..routing import ServiceRoute
-from ..schemas import Assembly, PredictionResult
+from ..schemas import PredictionRequest, PredictionResult
 from ..security import ReadAccess
 from .batches import PreferHeader, ToolPointQuery
 
@@ -24,7 +24,7 @@ router = APIRouter(prefix="/v1", tags=["predictions"], route_class=ServiceRoute)
 @router.post("/tool-point-frf", dependencies=[Depends(require_json)], response_model=PredictionResult,
              responses={**problems(401, 413, 415, 422), **ASYNC_ACCEPTED}, openapi_extra=body_limit("prediction"),
              summary="Tool-point FRF of one assembly")
-def predict_tool_point_frf(body: Assembly, request: Request, state: StateDep, who: ReadAccess,
+def predict_tool_point_frf(body: PredictionRequest, request: Request, state: StateDep, who: ReadAccess,
                            tool_point: ToolPointQuery = None, prefer: PreferHeader = None) -> Response:
     """Predict the tool-point receptance of a spindle–holder–tool assembly (contract "Assembly").
 

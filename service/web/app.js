@@ -298,8 +298,11 @@
     setStatus("predict-status", "Predicting …");
     const t0 = performance.now();
     try {
-      const result = await (await call("v1/tool-point-frf?tool_point=h", { method: "POST", json: assembly })).json();
+      const option = uncertaintyOption();
+      const body = option ? Object.assign({}, assembly, { uncertainty: option }) : assembly;
+      const result = await (await call("v1/tool-point-frf?tool_point=h", { method: "POST", json: body })).json();
       state.assembly = assembly;
+      state.uncertainty = option;
       state.prediction = result;
       state.label = describeSelection();
       state.lobes = null;
@@ -343,10 +346,20 @@
 
   // ------------------------------------------------------------------ lobes
 
+  /** The uncertainty option of the draws field (null for 0 draws): a fixed seed, so a result repeats. */
+  function uncertaintyOption() {
+    const draws = numberFrom("draws", "Uncertainty draws", { integer: true, optional: true });
+    return draws ? { draws: draws, seed: 0 } : null;
+  }
+
   function lobesRequest() {
     const r = state.prediction;
+    // robust lobes need the assembly (its draws), and are zero-order only
+    const robust = state.uncertainty && $("lobes-method").value === "zoa";
+    const source = robust ? { assembly: state.assembly, uncertainty: state.uncertainty }
+      : { frf_x: { frequency_hz: r.frequency_hz, h: r.tool_point.h } };
     return {
-      frf_x: { frequency_hz: r.frequency_hz, h: r.tool_point.h },
+      ...source,
       teeth: numberFrom("teeth", "Teeth", { integer: true }),
       tangential_coefficient_n_m2: numberFrom("kt", "Kt"),
       radial_ratio: numberFrom("kr", "Kr"),
@@ -667,7 +680,22 @@
     const lmax = Math.pow(10, Math.ceil(Math.log10(hi)));
     const a2 = axes(svg, { x: left, y: 290, w: width, h: 170 }, Object.assign({ showLabels: false }, x),
       { min: lmin, max: lmax > lmin ? lmax : lmin * 10, log: true, label: "|h| (µm/N)" });
+    if (r.uncertainty) {  // the p05–p95 band of |h| over the draws, under the nominal curve
+      const p05 = r.uncertainty.h_magnitude_m_n.p05.map((v) => v * UM_PER_M);
+      const p95 = r.uncertainty.h_magnitude_m_n.p95.map((v) => v * UM_PER_M);
+      const pts = [];
+      f.forEach((fi, i) => { if (p95[i] > 0) pts.push(a2.sx(fi).toFixed(2) + "," + a2.sy(p95[i]).toFixed(2)); });
+      for (let i = f.length - 1; i >= 0; i--) {
+        if (p05[i] > 0) pts.push(a2.sx(f[i]).toFixed(2) + "," + a2.sy(p05[i]).toFixed(2));
+      }
+      const band = svgEl("polygon", { class: "band", id: "frf-band", points: pts.join(" ") }, a2.plot);
+      svgEl("title", {}, band).textContent = "p05–p95 of |h| over " + r.uncertainty.draws + " draws";
+    }
     line(a2, f, mag, "series-mag", "frf-mag-path", true);
+    if (r.uncertainty) {
+      legend(svg, left + width - 150, 308, [{ cls: "series-mag", label: "nominal" },
+        { cls: "band-key", label: "p05–p95, " + r.uncertainty.draws + " draws" }]);
+    }
 
     const a3 = axes(svg, { x: left, y: 484, w: width, h: 110 }, Object.assign({ label: "Frequency (Hz)" }, x),
       { min: -180, max: 180, ticks: [-180, -90, 0, 90, 180], label: "Phase (°)" });
@@ -709,6 +737,12 @@
         "series-lobe", "lobe-" + lobe.index + "-path");
     });
     line(ax, n, env, "series-envelope", "lobes-envelope-path");
+    if (result.depth_limit_robust_m) {
+      line(ax, n, result.depth_limit_robust_m.map((v) => (v === null ? null : v * MM_PER_M)), "series-robust",
+        "lobes-robust-path");
+      legend(svg, left + width - 230, 34, [{ cls: "series-envelope", label: "nominal limit" },
+        { cls: "series-robust", label: "robust limit (p" + result.robust.percentile + " of draws)" }]);
+    }
     if (minMm) {
       svgEl("line", { class: "limit", x1: left, x2: left + width, y1: ax.sy(minMm), y2: ax.sy(minMm) }, ax.plot);
     }
@@ -762,7 +796,8 @@
     $("fill-json").addEventListener("click", fillJson);
     $("error-close").addEventListener("click", clearError);
     $("download-frf-csv").addEventListener("click", () =>
-      download("v1/exports/frf.csv", state.assembly, stem() + "-frf.csv", "frf-download-status"));
+      download("v1/exports/frf.csv", state.uncertainty ? Object.assign({}, state.assembly,
+      { uncertainty: state.uncertainty }) : state.assembly, stem() + "-frf.csv", "frf-download-status"));
     $("download-frf-png").addEventListener("click", () => frfFigure("png"));
     $("download-frf-svg").addEventListener("click", () => frfFigure("svg"));
     $("download-lobes-csv").addEventListener("click", () =>

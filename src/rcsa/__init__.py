@@ -19,12 +19,41 @@ The Python API of the contract:
 
 from __future__ import annotations
 
+import importlib
+from typing import TYPE_CHECKING, Any
+
 from rcsa._version import __version__
-from rcsa.app.analyses import diagnose, stability_lobes
-from rcsa.app.predictions import predict, predict_batch
 from rcsa.errors import FrequencyMismatch, InputError, NotFoundError, RcsaError, StoreError
-from rcsa.model.prediction import Prediction
-from rcsa.physics.receptance import Receptance
+
+if TYPE_CHECKING:
+    from rcsa.app.analyses import diagnose, stability_lobes
+    from rcsa.app.predictions import predict, predict_batch
+    from rcsa.model.prediction import Prediction
+    from rcsa.physics.receptance import Receptance
+
+# The API is loaded on first use (PEP 562): `import rcsa` (and `rcsa --help`) then costs
+# milliseconds, not the numpy/scipy/h5py of the whole library.
+_LAZY = {
+    "diagnose": "rcsa.app.analyses",
+    "stability_lobes": "rcsa.app.analyses",
+    "predict": "rcsa.app.predictions",
+    "predict_batch": "rcsa.app.predictions",
+    "Prediction": "rcsa.model.prediction",
+    "Receptance": "rcsa.physics.receptance",
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'rcsa' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
 
 __all__ = [
     "FrequencyMismatch",

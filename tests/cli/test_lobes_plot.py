@@ -76,3 +76,29 @@ def test_plot_a_lobes_result_as_it_is(tmp_path):
     source.write_text(json.dumps({**minimal, "depth_limit_m": minimal["depth_limit_m"][:-1]}))
     result = runner.invoke(app, ["plot", str(source), "-o", str(tmp_path / "m.png")])
     assert result.exit_code == 1 and result.stderr.startswith("error: depth_limit_m: must have one value per speed")
+
+
+def test_robust_lobes_on_the_command_line_with_their_plot(tmp_path):
+    request = tmp_path / "lobes.json"
+    small = {**LOBES, "spindle_speed_rpm": {"start": 3000, "stop": 24000, "count": 100}}
+    request.write_text(json.dumps({"assembly": ra1(GRID), **small, "uncertainty": {"draws": 4, "seed": 5}}))
+    picture = tmp_path / "lobes.svg"
+    result = runner.invoke(app, ["lobes", str(request), "--plot", str(picture)])
+    assert result.exit_code == 0, result.stderr
+    out = json.loads(result.stdout)
+    assert len(out["depth_limit_robust_m"]) == 100 and out["robust"]["draws"] == 4
+    assert 'id="robust' in picture.read_text()
+    again = tmp_path / "again.svg"  # rcsa plot draws what rcsa lobes wrote, robust limit included
+    (tmp_path / "out.json").write_text(result.stdout)
+    assert runner.invoke(app, ["plot", str(tmp_path / "out.json"), "-o", str(again)]).exit_code == 0
+    assert 'id="robust' in again.read_text()
+
+
+def test_plot_a_prediction_with_its_uncertainty_band(tmp_path):
+    source = tmp_path / "prediction.json"
+    prediction = rcsa.app.predict({**ra1(GRID), "uncertainty": {"draws": 4}}).to_dict()
+    source.write_text(json.dumps(prediction))
+    picture = tmp_path / "frf.svg"
+    result = runner.invoke(app, ["plot", str(source), "-o", str(picture)])
+    assert result.exit_code == 0, result.stderr
+    assert 'id="band' in picture.read_text()

@@ -337,3 +337,17 @@ def test_cli_sync_show_export(tmp_path, monkeypatch):
     assert r.exit_code == 1 and r.stderr.startswith("error: ")
     r = runner.invoke(_cli(), ["library", "export", "Mill-tools", "-o", str(tmp_path / "out.csv")])
     assert r.exit_code == 1
+
+
+def test_cli_library_predict_with_an_uncertainty_band(tmp_path):
+    spindle, lib_path = tmp_path / "ra1.json", tmp_path / "tools.json"
+    spindle.write_text(json.dumps(RA1))
+    lib_path.write_text(json.dumps(make_library(2)))
+    args = ["library", "predict", str(lib_path), "--spindle", str(spindle), "--frequency", "5:1000:5", "-q",
+            "--uncertainty", '{"draws": 3, "seed": 2}']
+    r = CliRunner().invoke(_cli(), args)
+    assert r.exit_code == 0, r.stderr
+    ok = [item for item in json.loads(r.stdout)["results"] if item["status"] == "ok"]
+    assert ok and all(item["uncertainty"]["draws"] == 3 for item in ok)
+    r = CliRunner().invoke(_cli(), [*args[:-1], '{"draws": 1}'])
+    assert r.exit_code == 1 and "uncertainty.draws" in r.stderr

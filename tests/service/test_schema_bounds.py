@@ -21,8 +21,17 @@ from service.main import create_app
 from service.schemas import Assembly, LobesRequest
 
 from rcsa.analysis.lobes.request import parse_lobes_request
+from rcsa.analysis.lobes.robust import split_robust_request
 from rcsa.errors import InputError
+from rcsa.model.bounds import (
+    MAX_CONFIDENCE,
+    MAX_UNCERTAINTY_DRAWS,
+    MAX_UNCERTAINTY_SEED,
+    MIN_CONFIDENCE,
+    MIN_UNCERTAINTY_DRAWS,
+)
 from rcsa.model.contract import parse_assembly
+from rcsa.model.uncertainty import parse_uncertainty
 from rcsa.reference import ra1
 
 # JSON-schema keyword -> (the bound is included, the direction "inside" lies in)
@@ -205,7 +214,7 @@ def _lobes_document(path: Path, value: float) -> dict[str, Any]:
 def test_schema_and_library_agree_on_the_stability_lobes_bounds(openapi):
     components = openapi["components"]["schemas"]
     schema = {"properties": {k: v for k, v in components["LobesRequest"]["properties"].items()
-                             if k not in ("assembly", "frf_x", "frf_y")}}
+                             if k not in ("assembly", "frf_x", "frf_y", "uncertainty", "robust")}}
     bounds = list(_numeric_bounds(schema, components))
     assert {p[0] for p, _, _ in bounds} >= {"teeth", "tangential_coefficient_n_m2", "radial_ratio",
                                             "radial_immersion", "spindle_speed_rpm"}
@@ -221,3 +230,26 @@ def test_schema_and_library_agree_on_the_stability_lobes_bounds(openapi):
             if got != (expected, expected):
                 disagreements.append((".".join(map(str, path)), keyword, bound, value, got))
     assert not disagreements, "\n".join(map(str, disagreements))
+
+
+@pytest.mark.parametrize(("option", "value", "accepted"), [
+    ("draws", MIN_UNCERTAINTY_DRAWS, True), ("draws", MIN_UNCERTAINTY_DRAWS - 1, False),
+    ("draws", MAX_UNCERTAINTY_DRAWS, True), ("draws", MAX_UNCERTAINTY_DRAWS + 1, False),
+    ("seed", 0, True), ("seed", -1, False), ("seed", MAX_UNCERTAINTY_SEED + 1, False),
+    ("confidence", MIN_CONFIDENCE, True), ("confidence", math.nextafter(MIN_CONFIDENCE, 0.0), False),
+    ("confidence", MAX_CONFIDENCE, True), ("confidence", math.nextafter(MAX_CONFIDENCE, 1.0), False),
+])
+def test_schema_and_library_agree_on_the_uncertainty_bounds(option, value, accepted):
+    doc = {"assembly": ra1({"start_hz": 100.0, "stop_hz": 200.0, "step_hz": 10.0}), "teeth": 4,
+           "tangential_coefficient_n_m2": 6e8, "radial_ratio": 0.3, "radial_immersion": 0.5, "milling": "down",
+           "spindle_speed_rpm": {"start": 2000.0, "stop": 30000.0, "count": 3}, "uncertainty": {"draws": 2}}
+    if option == "confidence":
+        doc["robust"] = {"confidence": value}
+    else:
+        doc["uncertainty"][option] = value
+
+    def library(d):
+        _, robust = split_robust_request(d)
+        parse_uncertainty(robust.uncertainty, lines=11)
+
+    assert (_schema_accepts(LobesRequest, doc), _rcsa_accepts(library, doc)) == (accepted, accepted)

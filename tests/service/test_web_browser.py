@@ -219,6 +219,29 @@ def test_predict_ra1_draw_frf_and_lobes_and_download(server, browser, downloads)
     assert _severe_console(browser) == []
 
 
+def test_uncertainty_draws_give_a_band_and_robust_lobes(server, browser, downloads):
+    _open(browser, server)
+    browser.find_element(By.ID, "draws").clear()
+    browser.find_element(By.ID, "draws").send_keys("12")
+    browser.find_element(By.ID, "predict").click()
+    _wait_state(browser, "frf")
+    band = browser.find_element(By.ID, "frf-band").get_attribute("points") or ""
+    assert band.count(",") > 8000  # p95 forward and p05 back over 4 996 lines
+    browser.find_element(By.ID, "lobes").click()
+    _wait_state(browser, "lobes")
+    assert _points(browser, "lobes-robust-path") > 500
+    before = {p.name for p in downloads.iterdir()}  # the folder may hold other tests' downloads
+    browser.find_element(By.ID, "download-frf-csv").click()
+
+    def banded_csv(_):
+        fresh = [p for p in downloads.iterdir() if p.suffix == ".csv" and p.name not in before]
+        return fresh and fresh[0].read_text().count("\n") > 4996 and fresh[0]
+
+    header = WebDriverWait(browser, WAIT_S).until(banded_csv).read_text().splitlines()[0]
+    assert header.endswith("h_magnitude_p05_m_n,h_magnitude_p50_m_n,h_magnitude_p95_m_n")
+    assert _severe_console(browser) == []
+
+
 def test_library_entry_on_measured_spindle_and_errors_shown(server, browser):
     _open(browser, server)
     browser.find_element(By.ID, "library-file").send_keys(str(LIBRARY))

@@ -124,6 +124,7 @@ def frf_figure(
     labels: Sequence[str] | None = None,
     layout: FrfLayout = "full",
     title: str | None = None,
+    band_m_n: tuple[object, object] | None = None,
 ) -> Figure:
     """Figure of one or more receptances, shown in µm/N.
 
@@ -140,6 +141,9 @@ def frf_figure(
         minimum drives stability); ``"bode"``: magnitude (log y) and phase (deg);
         ``"full"`` (default): both, as a 2 × 2 grid.
     title : str, optional
+    band_m_n : (array_like, array_like), optional
+        Lower and upper ``|h|`` of an uncertainty band (e.g. p05 and p95), m/N, on the same
+        grid: shaded on the magnitude axes (``gid`` ``"band"``).
 
     Returns
     -------
@@ -170,6 +174,9 @@ def frf_figure(
         ylabel, data, scale = panels[name]
         for c in range(h.shape[1]):
             ax.plot(f, data[:, c], lw=1.2, label=None if labels is None else labels[c])
+        if name == "mag" and band_m_n is not None:
+            low, high = (np.asarray(b, dtype=float) * UM_PER_M for b in band_m_n)
+            ax.fill_between(f, low, high, color="tab:blue", alpha=0.2, lw=0, gid="band", label="p05–p95")
         ax.set_ylabel(ylabel)
         ax.set_yscale(scale)
         ax.set_gid(name)
@@ -193,6 +200,8 @@ def lobes_figure(
     operating_point: tuple[float, float] | None = None,
     depth_max_mm: float | None = None,
     title: str | None = None,
+    robust_depth_limit_m: object | None = None,
+    robust_label: str = "robust limit",
 ) -> Figure:
     """Stability lobe diagram: axial depth limit (mm) against spindle speed (rpm).
 
@@ -209,6 +218,10 @@ def lobes_figure(
         Upper y limit, mm. Default: the envelope's maximum, capped at 8 × the absolute
         limit so that the pockets stay readable.
     title : str, optional
+    robust_depth_limit_m : array_like, shape (nspeed,), optional
+        A robust depth limit per speed (:mod:`rcsa.analysis.lobes.robust`), m; drawn dashed
+        (``gid`` ``"robust"``) with ``robust_label``.
+    robust_label : str
 
     Returns
     -------
@@ -242,6 +255,9 @@ def lobes_figure(
         label="stable",
     )
     ax.plot(speed, env_mm, color="tab:blue", lw=2.0, gid="envelope", label="stability limit")
+    if robust_depth_limit_m is not None:
+        robust_mm = np.asarray(robust_depth_limit_m, dtype=float) * MM_PER_M
+        ax.plot(speed, robust_mm, color="tab:orange", lw=1.5, ls="--", gid="robust", label=robust_label)
     min_mm = result.min_depth_limit_m * MM_PER_M
     ax.axhline(min_mm, color="tab:red", lw=0.8, ls="--", label=f"absolute limit {min_mm:.3g} mm")
     if operating_point is not None:

@@ -62,10 +62,14 @@ class TermsGrid(Grid):
         self._terms: dict[Beam, SixTerms] = {}
 
     def beam_terms(self, beam: Beam) -> SixTerms:
-        """The beam's terms on this grid, computed once."""
+        """The beam's terms on this grid, computed once.
+
+        Copied: :meth:`Grid.beam_terms` returns the grid's work arrays, valid until its next call.
+        """
         hit = self._terms.get(beam)
         if hit is None:
-            hit = self._terms[beam] = super().beam_terms(beam)
+            a, b, c, e, f, g = (x.copy() for x in super().beam_terms(beam))
+            hit = self._terms[beam] = (a, b, c, e, f, g)
         return hit
 
 

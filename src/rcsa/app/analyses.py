@@ -6,41 +6,69 @@ from collections.abc import Mapping
 from typing import Any
 
 from rcsa.analysis.lobes.modal_model import modal_model_from_assembly
-from rcsa.analysis.lobes.request import parse_lobes_request
+from rcsa.analysis.lobes.request import LobesRequest, parse_lobes_request
+from rcsa.analysis.lobes.robust import (
+    RobustLobes,
+    RobustRequest,
+    robust_lobes,
+    split_robust_request,
+)
 from rcsa.analysis.lobes.zoa import LobeResult
 from rcsa.analysis.progress import Progress
 from rcsa.analysis.sensitivity import effects as _effects
-from rcsa.app.predictions import predict
+from rcsa.app.predictions import predict, predict_draws
 from rcsa.app.stores import MeasurementSource, resolver
 from rcsa.errors import InputError
 from rcsa.measured.store import MeasurementStore
 from rcsa.model.bounds import MAX_FREQUENCY_LINES
 from rcsa.model.contract import SpindleSpec, parse_assembly
+from rcsa.model.uncertainty import parse_prediction_request
 
 __all__ = ["ANALYSIS_KINDS", "Progress", "diagnose", "effects", "identify", "run_analysis", "stability_lobes",
-           "stability_lobes_result", "validate"]
+           "stability_lobes_result", "stability_lobes_results", "validate"]
 
 #: Single computations that may also run as jobs (``Prefer: respond-async``), by the name of
 #: their cost model in :mod:`rcsa.app.budget`.
 ANALYSIS_KINDS = ("prediction", "lobes", "effects", "identification", "diagnosis")
 
 
-def stability_lobes_result(request: Mapping[str, Any], *, store: MeasurementStore | None = None,
-                           max_lines: int = MAX_FREQUENCY_LINES) -> LobeResult:
-    """Stability lobes (``contract.md`` "Stability lobes") from inline FRFs or an assembly.
+def _parse_lobes(request: Mapping[str, Any]) -> tuple[LobesRequest, RobustRequest | None]:
+    """A stability-lobes request and its robust part; robust lobes are zero-order only."""
+    body, robust = split_robust_request(request)
+    parsed = parse_lobes_request(body)
+    if robust is not None and parsed.method.name != "zoa":
+        raise InputError("uncertainty", f"robust lobes are computed with method 'zoa' only, not "
+                                        f"{parsed.method.name!r} (one semi-discretization per draw is too slow)")
+    if parsed.assembly is not None and "uncertainty" in parsed.assembly:
+        raise InputError("assembly.uncertainty", "give uncertainty at the top of a stability-lobes request "
+                                                 "(it asks for robust lobes there)")
+    return parsed, robust
+
+
+def stability_lobes_results(request: Mapping[str, Any], *, store: MeasurementStore | None = None,
+                            max_lines: int = MAX_FREQUENCY_LINES) -> tuple[LobeResult, RobustLobes | None]:
+    """Stability lobes (``contract.md`` "Stability lobes") and, when asked for, robust ones.
 
     With an ``assembly``, its tool-point ``h`` is predicted first and used in x and y (the
     result says so: ``same_frf_in_y``). With ``"method": "semi_discretization"`` an
     analytical assembly gives its exact modes (:func:`~rcsa.analysis.lobes.modal_model.
     modal_model_from_assembly`); a measured spindle's predicted ``h`` is fitted instead.
+    With ``uncertainty`` (and optionally ``robust``: ``{"confidence"}``; method ``zoa``) the
+    assembly is also drawn and every draw's lobes computed (:mod:`rcsa.analysis.lobes.robust`).
 
     Returns
     -------
-    rcsa.analysis.lobes.zoa.LobeResult
+    nominal : rcsa.analysis.lobes.zoa.LobeResult
+    robust : rcsa.analysis.lobes.robust.RobustLobes or None
     """
-    parsed = parse_lobes_request(request)
+    parsed, robust = _parse_lobes(request)
     if parsed.assembly is None:
-        return parsed.solve()
+        return parsed.solve(), None
+    if robust is not None:
+        prediction, draws, options = predict_draws(parsed.assembly, robust.uncertainty, store=store,
+                                                   max_lines=max_lines)
+        nominal = parsed.solve(prediction.frequency_hz, prediction.tool_point.h)
+        return nominal, robust_lobes(parsed, nominal, prediction.frequency_hz, draws.h, options, robust.confidence)
     spec = parse_assembly(parsed.assembly, max_lines)
     prediction = predict(spec, store=store, max_lines=max_lines)
     frequency_hz, h = prediction.frequency_hz, prediction.tool_point.h
@@ -48,7 +76,18 @@ def stability_lobes_result(request: Mapping[str, Any], *, store: MeasurementStor
     if parsed.method.name == "semi_discretization" and isinstance(spec.spindle, SpindleSpec):
         modes = modal_model_from_assembly(spec, modes_per_direction=parsed.method.modes_per_direction,
                                           frequency_hz=frequency_hz, h=h)
-    return parsed.solve(frequency_hz, h, modal_model=modes)
+    return parsed.solve(frequency_hz, h, modal_model=modes), None
+
+
+def stability_lobes_result(request: Mapping[str, Any], *, store: MeasurementStore | None = None,
+                           max_lines: int = MAX_FREQUENCY_LINES) -> LobeResult:
+    """The nominal stability lobes of a request (:func:`stability_lobes_results`, robust ones left out).
+
+    Returns
+    -------
+    rcsa.analysis.lobes.zoa.LobeResult
+    """
+    return stability_lobes_results(request, store=store, max_lines=max_lines)[0]
 
 
 def stability_lobes(request: Mapping[str, Any], *, store: MeasurementStore | None = None,
@@ -68,9 +107,12 @@ def stability_lobes(request: Mapping[str, Any], *, store: MeasurementStore | Non
     -------
     dict
         ``spindle_speed_rpm``, ``depth_limit_m``, ``chatter_frequency_hz``, ``lobes`` and
-        the extras of :class:`rcsa.analysis.lobes.zoa.LobeResult` (``frf_y_source``, minimum depth, …).
+        the extras of :class:`rcsa.analysis.lobes.zoa.LobeResult` (``frf_y_source``, minimum depth, …);
+        with ``uncertainty``, also ``depth_limit_robust_m`` and ``robust``
+        (:class:`rcsa.analysis.lobes.robust.RobustLobes`).
     """
-    return stability_lobes_result(request, store=store, max_lines=max_lines).to_dict()
+    nominal, robust = stability_lobes_results(request, store=store, max_lines=max_lines)
+    return nominal.to_dict() if robust is None else {**nominal.to_dict(), **robust.to_dict()}
 
 
 def effects(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
@@ -136,7 +178,9 @@ def validate(kind: str, request: Mapping[str, Any], *, store: MeasurementSource 
 
         parse_identification_request(request, resolver(store))
     elif kind == "lobes":
-        parse_lobes_request(request)
+        _parse_lobes(request)
+    elif kind == "prediction" and isinstance(request, Mapping) and "uncertainty" in request:
+        parse_prediction_request(request)  # the option is checked against the spindle and the grid
     # prediction and effects: the budget's estimate already parsed the assembly
 
 

@@ -39,6 +39,7 @@ from rcsa.errors import InputError
 from rcsa.model.assembly import build_model
 from rcsa.model.contract import AssemblySpec, SpindleSpec, parse_assembly, parse_frequency
 from rcsa.model.parameters import parameter_names
+from rcsa.model.uncertainty import DEFAULT_DRAWS
 from rcsa.physics.chain import Beam, Chain
 
 __all__ = [
@@ -275,6 +276,29 @@ def _assembly_cost(spec: AssemblySpec, *, natural_frequencies: bool = True) -> t
         "lines": lines, "elements": elements, "elements_cut_for_modes": effective}
 
 
+def _draws(request: Mapping[str, Any]) -> float:
+    """Monte-Carlo draws an ``uncertainty`` option asks for (0 without one; its default when unset)."""
+    option = request.get("uncertainty")
+    if not isinstance(option, Mapping):
+        return 0.0
+    draws = option.get("draws", DEFAULT_DRAWS)
+    return float(draws) if isinstance(draws, int | float) and not isinstance(draws, bool) else float(DEFAULT_DRAWS)
+
+
+def _with_draws(seconds: float, memory: float, terms: dict[str, float], draws: float
+                ) -> tuple[float, float, dict[str, float]]:
+    """A prediction's cost with ``draws`` drawn assemblies: each costs one march of the chain over
+    the grid (the stacked march is vectorised as the plain one is, not cheaper per line), plus
+    the draws' tool-point ``h`` kept (16 bytes per draw and line) and their modes."""
+    if not draws:
+        return seconds, memory, terms
+    per_draw = K_LINE_S * terms["elements"] * terms["lines"]
+    return (seconds + draws * (per_draw + K_NF_MODE_S * terms["elements"]),
+            memory + 16.0 * draws * terms["lines"] * 4.0, {**terms, "draws": draws})
+
+
+_DRAWS_SHRINK = ("fewer draws (uncertainty.draws)",)
+
 _ASSEMBLY_SHRINK = ("fewer frequency lines (frequency)", "a lower top frequency (natural frequencies are found "
                     "exactly up to it)", "fewer holder or spindle segments")
 
@@ -293,9 +317,10 @@ def _parse(document: object, prefix: str = "") -> AssemblySpec:
 
 @cost_model("prediction")
 def _prediction(request: Mapping[str, Any]) -> Cost:
-    spec = _parse(request)
-    seconds, memory, terms = _assembly_cost(spec)
-    return Cost("prediction", seconds, memory, terms, _ASSEMBLY_SHRINK)
+    spec = _parse({k: v for k, v in request.items() if k != "uncertainty"})
+    seconds, memory, terms = _with_draws(*_assembly_cost(spec), _draws(request))
+    return Cost("prediction", seconds, memory, terms, (*_DRAWS_SHRINK, *_ASSEMBLY_SHRINK) if _draws(request)
+                else _ASSEMBLY_SHRINK)
 
 
 def _count(value: object) -> int:
@@ -316,7 +341,8 @@ def _batch(request: Mapping[str, Any]) -> Cost:
     if not combos:
         return Cost("batch", 0.0, MEM_BASE_BYTES, {"combinations": 0.0})
     worst = max(range(len(combos)), key=lambda i: _holder_segments(combos[i]))
-    base = {k: v for k, v in request.items() if k not in ("combinations", "options", "natural_frequencies")}
+    base = {k: v for k, v in request.items() if k not in ("combinations", "options", "natural_frequencies",
+                                                           "uncertainty")}
     combo = combos[worst]
     n = float(len(combos))
     shrink = ("fewer combinations (split the batch)", *_ASSEMBLY_SHRINK)
@@ -328,8 +354,10 @@ def _batch(request: Mapping[str, Any]) -> Cost:
         seconds = n * (K_LINE_S * elements * lines + natural_frequency_seconds(elements))
         return Cost("batch", seconds, MEM_BASE_BYTES + n * MEM_LINE_BYTES * lines / 8.0,
                     {"combinations": n, "lines": lines, "elements": elements}, shrink)
-    seconds, memory, terms = _assembly_cost(spec, natural_frequencies=request.get("natural_frequencies", True)
-                                            is not False)
+    seconds, memory, terms = _with_draws(*_assembly_cost(spec, natural_frequencies=request.get(
+        "natural_frequencies", True) is not False), _draws(request))
+    if _draws(request):
+        shrink = (*_DRAWS_SHRINK, *shrink)
     return Cost("batch", seconds * n, memory + n * MEM_LINE_BYTES * terms["lines"] / 8.0,
                 {"combinations": n, **terms}, shrink)
 
@@ -360,7 +388,7 @@ def _lobes(request: Mapping[str, Any]) -> Cost:
     terms: dict[str, float] = {}
     if request.get("assembly") is not None:
         spec = _parse(request["assembly"], "assembly")
-        seconds, memory, terms = _assembly_cost(spec)
+        seconds, memory, terms = _with_draws(*_assembly_cost(spec), _draws(request))
         lines = terms["lines"]
     else:
         frf = request.get("frf_x")
@@ -372,8 +400,8 @@ def _lobes(request: Mapping[str, Any]) -> Cost:
     method = request.get("method")
     name = method if isinstance(method, str) else (method.get("name", "zoa") if isinstance(method, Mapping) else "zoa")
     per = LOBE_METHOD_S.get(str(name), LOBE_METHOD_S["zoa"])
-    seconds += per * count * max(lines, 1.0)
-    memory += 64.0 * count
+    seconds += per * count * max(lines, 1.0) * (1.0 + _draws(request))
+    memory += 64.0 * count * (1.0 + _draws(request))
     return Cost("lobes", seconds, memory, {**terms, "speeds": count},
                 ("fewer speeds (spindle_speed_rpm.count)", "fewer frequency lines"))
 

@@ -19,7 +19,7 @@ import numpy as np
 from rcsa.analysis.lobes.zoa import LobeResult
 from rcsa.analysis.progress import Progress
 from rcsa.analysis.sensitivity import effects_figure, effects_report
-from rcsa.app.analyses import stability_lobes_result
+from rcsa.app.analyses import stability_lobes_results
 from rcsa.app.predictions import predict
 from rcsa.app.stores import resolver
 from rcsa.errors import InputError
@@ -32,12 +32,14 @@ __all__ = [
     "FRF_LAYOUTS",
     "Curve",
     "Figure",
+    "band_of",
     "check_picture_path",
     "diagnosis_with_figure",
     "document_figure",
     "effects_with_figure",
     "frf_figure",
     "lobes_figure",
+    "robust_lobes_figure",
     "save_figure",
     "tool_point_curve",
 ]
@@ -91,14 +93,16 @@ def save_figure(figure: Figure, path_or_format: str | os.PathLike[str]) -> bytes
 
 
 def frf_figure(frequency_hz: Any, h_m_n: Any, *, layout: str = "full", title: str | None = None,
-               labels: list[str] | None = None) -> Figure:
-    """Real and imaginary parts, magnitude and phase of receptances (µm/N) against frequency."""
+               labels: list[str] | None = None, band_m_n: tuple[Any, Any] | None = None) -> Figure:
+    """Real and imaginary parts, magnitude and phase of receptances (µm/N) against frequency;
+    ``band_m_n`` (low, high ``|h|``, m/N) is shaded on the magnitude axes."""
     # matplotlib: only when a picture is asked for
     from rcsa.analysis.figures import frf_figure as draw
 
     if layout not in FRF_LAYOUTS:
         raise InputError("layout", f"must be one of {', '.join(FRF_LAYOUTS)}, got {layout!r}")
-    return draw(frequency_hz, h_m_n, layout=layout, title=title, labels=labels)  # type: ignore[arg-type]
+    return draw(frequency_hz, h_m_n, layout=layout, title=title, labels=labels,  # type: ignore[arg-type]
+                band_m_n=band_m_n)
 
 
 def lobes_figure(result: LobeResult, **options: Any) -> Figure:
@@ -108,6 +112,36 @@ def lobes_figure(result: LobeResult, **options: Any) -> Figure:
     from rcsa.analysis.figures import lobes_figure as draw
 
     return draw(result, **options)
+
+
+def band_of(result: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray] | None:
+    """The p05–p95 ``|h|`` band of a prediction result (``to_dict()``), None without one.
+
+    Raises
+    ------
+    InputError
+        An ``uncertainty`` whose percentiles are not number lists.
+    """
+    band = result.get("uncertainty")
+    if not isinstance(band, Mapping):
+        return None
+    mag = band.get("h_magnitude_m_n")
+    if not isinstance(mag, Mapping):
+        raise InputError("uncertainty.h_magnitude_m_n", "must be an object with p05 and p95")
+    return (number_list(mag.get("p05"), "uncertainty.h_magnitude_m_n.p05", finite=False),
+            number_list(mag.get("p95"), "uncertainty.h_magnitude_m_n.p95", finite=False))
+
+
+def robust_lobes_figure(result: LobeResult, robust: Mapping[str, Any] | None, **options: Any) -> Figure:
+    """:func:`lobes_figure` with the robust limit of a response (``depth_limit_robust_m`` and
+    ``robust``, :meth:`rcsa.analysis.lobes.robust.RobustLobes.to_dict`) drawn dashed when given."""
+    if robust is None or robust.get("depth_limit_robust_m") is None:
+        return lobes_figure(result, **options)
+    depth = number_list(robust["depth_limit_robust_m"], "depth_limit_robust_m", finite=False)
+    about = robust.get("robust")
+    pct = about.get("percentile") if isinstance(about, Mapping) else None
+    label = f"robust limit (p{pct:g} of draws)" if isinstance(pct, int | float) else "robust limit"
+    return lobes_figure(result, robust_depth_limit_m=depth, robust_label=label, **options)
 
 
 def tool_point_curve(*, frf: Mapping[str, Any] | None = None, assembly: Mapping[str, Any] | None = None,
@@ -148,9 +182,10 @@ def frf_picture(curve: Curve, *, fmt: str, layout: str = "full", title: str | No
     return save_figure(frf_figure(curve.frequency_hz, curve.h_m_n, layout=layout, title=title), fmt)  # type: ignore[return-value]
 
 
-def lobes_picture(result: LobeResult, *, fmt: str, **options: Any) -> bytes:
-    """The stability lobe diagram as PNG or SVG bytes (``options`` as in :func:`lobes_figure`)."""
-    return save_figure(lobes_figure(result, **options), fmt)  # type: ignore[return-value]
+def lobes_picture(result: LobeResult, *, fmt: str, robust: Mapping[str, Any] | None = None, **options: Any) -> bytes:
+    """The stability lobe diagram as PNG or SVG bytes (``options`` as in :func:`lobes_figure`;
+    ``robust`` as in :func:`robust_lobes_figure`)."""
+    return save_figure(robust_lobes_figure(result, robust, **options), fmt)  # type: ignore[return-value]
 
 
 def document_figure(doc: object, *, layout: str = "full", store: MeasurementSource | None = None) -> Figure:
@@ -167,17 +202,19 @@ def document_figure(doc: object, *, layout: str = "full", store: MeasurementSour
         tool_point = doc["tool_point"]
         h = tool_point.get("h") if isinstance(tool_point, Mapping) else None
         return frf_figure(doc.get("frequency_hz"), complex_from_wire(h, "tool_point.h", finite=False),
-                          labels=["tool point h"], layout=layout)
+                          labels=["tool point h"], layout=layout, band_m_n=band_of(doc))
     if "h" in doc and "frequency_hz" in doc:
         return frf_figure(doc["frequency_hz"], complex_from_wire(doc["h"], "h", finite=False),
                           labels=["measured h"], layout=layout)
     if isinstance(doc.get("spindle_speed_rpm"), list) and "depth_limit_m" in doc:
-        return lobes_figure(LobeResult.from_dict(doc))  # a stability-lobes result
+        return robust_lobes_figure(LobeResult.from_dict(doc), doc)  # a stability-lobes result
     if "tangential_coefficient_n_m2" in doc:
-        return lobes_figure(stability_lobes_result(doc, store=store))
+        nominal, robust = stability_lobes_results(doc, store=store)
+        return robust_lobes_figure(nominal, None if robust is None else robust.to_dict())
     if "tool" in doc and "spindle" in doc:
         result = predict(doc, store=store)
-        return frf_figure(result.frequency_hz, result.tool_point.h, labels=["tool point h"], layout=layout)
+        return frf_figure(result.frequency_hz, result.tool_point.h, labels=["tool point h"], layout=layout,
+                          band_m_n=band_of(result.to_dict()) if result.uncertainty is not None else None)
     raise InputError("", "not a prediction result, measurement, assembly, stability-lobes request or "
                          "stability-lobes result")
 

@@ -10,14 +10,16 @@ from collections.abc import Mapping
 from typing import Any, Literal
 
 from rcsa.app.stores import resolver
+from rcsa.errors import InputError
 from rcsa.measured.store import MeasurementStore
 from rcsa.model import batch
 from rcsa.model.bounds import MAX_BATCH_COMBINATIONS, MAX_FREQUENCY_LINES
-from rcsa.model.contract import AssemblySpec, CommonSpec, parse_assembly
+from rcsa.model.contract import AssemblySpec, CommonSpec, MeasuredSpindleSpec
 from rcsa.model.prediction import Prediction
-from rcsa.model.spindle_side import SpindleSide
+from rcsa.model.spindle_side import SpindleSide, ToolPointDraws
+from rcsa.model.uncertainty import UncertaintyOptions, parse_prediction_request, parse_uncertainty
 
-__all__ = ["predict", "predict_batch"]
+__all__ = ["predict", "predict_batch", "predict_draws"]
 
 
 def predict(assembly: Mapping[str, Any] | AssemblySpec, *, store: MeasurementStore | None = None,
@@ -27,7 +29,9 @@ def predict(assembly: Mapping[str, Any] | AssemblySpec, *, store: MeasurementSto
     Parameters
     ----------
     assembly : dict or AssemblySpec
-        The contract's assembly document (SI units), or an already parsed spec.
+        The contract's assembly document (SI units), or an already parsed spec. The document
+        may carry ``"uncertainty": {"draws", "seed", "tolerances"}`` (each optional): the
+        result then gains the band of :mod:`rcsa.model.uncertainty`.
     store : MeasurementStore, optional
         Where ``"spindle": {"measurement_id": ...}`` is looked up; the default store
         (``RCSA_STORE`` or the per-user location) when omitted.
@@ -47,10 +51,52 @@ def predict(assembly: Mapping[str, Any] | AssemblySpec, *, store: MeasurementSto
     >>> [round(f, 2) for f in result["natural_frequencies_hz"]]
     [599.85, 921.69, 1115.51, 1383.61, 1444.68]
     """
-    spec = assembly if isinstance(assembly, AssemblySpec) else parse_assembly(assembly, max_lines)
+    spec, uncertainty = (assembly, None) if isinstance(assembly, AssemblySpec) else \
+        parse_prediction_request(assembly, max_lines)
     common = CommonSpec(spec.frequency_hz, spec.beam_theory, spec.shear_coefficient, spec.materials,
                         spec.spindle)
-    return SpindleSide(common, resolver(store)).predict(spec)
+    return SpindleSide(common, resolver(store)).predict(spec, uncertainty=uncertainty)
+
+
+def predict_draws(assembly: Mapping[str, Any], uncertainty: object, *, store: MeasurementStore | None = None,
+                  max_lines: int = MAX_FREQUENCY_LINES, path: str = "uncertainty"
+                  ) -> tuple[Prediction, ToolPointDraws, UncertaintyOptions]:
+    """The nominal prediction of an assembly and its drawn assemblies' tool-point ``h``.
+
+    For analyses built on many draws (robust stability lobes): the draws of
+    :meth:`rcsa.model.spindle_side.SpindleSide.tool_point_draws`, without the band's
+    statistics.
+
+    Parameters
+    ----------
+    assembly : dict
+        The contract's assembly document (without an ``uncertainty`` of its own).
+    uncertainty : dict
+        The ``uncertainty`` option (:func:`rcsa.model.uncertainty.parse_uncertainty`).
+    store : MeasurementStore, optional
+        Where a measured spindle is looked up (the default store when omitted).
+    max_lines : int
+        Largest accepted number of frequency lines.
+    path : str
+        Where the option sits in the request, for error messages.
+
+    Returns
+    -------
+    prediction : Prediction
+        The nominal assembly's.
+    draws : ToolPointDraws
+    options : UncertaintyOptions
+    """
+    spec, nested = parse_prediction_request(assembly, max_lines)
+    if nested is not None:
+        raise InputError("assembly.uncertainty", f"give the option once, as {path}")
+    options = parse_uncertainty(uncertainty, path, measured_spindle=isinstance(spec.spindle, MeasuredSpindleSpec),
+                                lines=int(spec.frequency_hz.size))
+    if options is None:
+        raise InputError(path, "is required")
+    side = SpindleSide(CommonSpec(spec.frequency_hz, spec.beam_theory, spec.shear_coefficient, spec.materials,
+                                  spec.spindle), resolver(store))
+    return side.predict(spec), side.tool_point_draws(spec, options), options
 
 
 def predict_batch(request: Mapping[str, Any], *, store: MeasurementStore | None = None,

@@ -11,7 +11,6 @@ from typing import Annotated, Any, TypeVar
 import orjson
 import typer
 
-from rcsa.app.inputs import decode_json
 from rcsa.errors import InputError, NotFoundError, RcsaError
 
 __all__ = ["QuietOption", "fail", "progress_callback", "read_json", "run_guarded", "write_json"]
@@ -34,6 +33,9 @@ def read_json(path: Path) -> Any:
         text = sys.stdin.read() if str(path) == "-" else path.read_text(encoding="utf-8")
     except OSError as exc:
         raise fail(f"cannot read {path}: {exc.strerror or exc}") from None
+    # rcsa.app is imported when a command runs, not with the CLI: `rcsa --help` stays fast
+    from rcsa.app.inputs import decode_json
+
     try:  # the service's JSON policy: no NaN/Infinity, numbers within range, nesting bounded
         return decode_json(text, what=str(path))
     except InputError as exc:

@@ -7,8 +7,6 @@ from typing import Annotated
 
 import typer
 
-from rcsa.app.figures import FIGURE_SUFFIXES, diagnosis_with_figure
-from rcsa.app.stores import open_store
 from rcsa.cli._common import (
     QuietOption,
     fail,
@@ -37,6 +35,9 @@ def register(app: typer.Typer) -> None:
         The base model's spindle may be a stored measurement ({"measurement_id": ...}), looked
         up in the store.
         """
+        # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+        from rcsa.app.figures import FIGURE_SUFFIXES, diagnosis_with_figure
+        from rcsa.app.stores import open_store
         if plot is not None and plot.suffix.lower() not in FIGURE_SUFFIXES:
             raise fail(f"--plot: the file must end in .png or .svg, got {plot.name!r}")
         doc = read_json(request)

@@ -7,8 +7,6 @@ from typing import Annotated
 
 import typer
 
-from rcsa.app.figures import check_picture_path, effects_with_figure
-from rcsa.app.stores import open_store
 from rcsa.cli._common import QuietOption, progress_callback, read_json, run_guarded, write_json
 
 
@@ -31,6 +29,9 @@ def register(app: typer.Typer) -> None:
         On a measured spindle ({"measurement_id": ...}) the modes come from a modal fit of the
         hybrid model and bearings are reported as not applicable.
         """
+        # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+        from rcsa.app.figures import check_picture_path, effects_with_figure
+        from rcsa.app.stores import open_store
         doc = read_json(assembly)
         picture = None if plot is None else run_guarded(lambda: check_picture_path(plot, "--plot"))
         with progress_callback("effect analysis", quiet) as progress:

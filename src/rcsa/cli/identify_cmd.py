@@ -7,8 +7,6 @@ from typing import Annotated
 
 import typer
 
-from rcsa.app.analyses import identify as identify_joints
-from rcsa.app.stores import open_store
 from rcsa.cli._common import QuietOption, progress_callback, read_json, run_guarded, write_json
 
 
@@ -30,6 +28,9 @@ def register(app: typer.Typer) -> None:
         ``detail``), and both exit 0: only a malformed request fails. The assembly's spindle
         may be a stored measurement ({"measurement_id": ...}).
         """
+        # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+        from rcsa.app.analyses import identify as identify_joints
+        from rcsa.app.stores import open_store
         doc = read_json(request)
         with progress_callback("joint identification", quiet) as progress:
             result = run_guarded(lambda: identify_joints(doc, store=open_store(store) if store else None,

@@ -13,7 +13,6 @@ from typing import Annotated
 
 import typer
 
-from rcsa.app.keys import key_file
 from rcsa.cli._common import run_guarded, write_json
 
 __all__ = ["keys_app", "register"]
@@ -33,6 +32,8 @@ def create(
     store: StoreOpt = None,
 ) -> None:
     """Create a key and print its secret once (only its hash is kept)."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app.keys import key_file
     record, secret = run_guarded(lambda: key_file(store).create(scope, label))
     if as_json:
         write_json({**record.to_dict(with_hash=False), "key": secret}, None)
@@ -48,6 +49,8 @@ def list_(
     store: StoreOpt = None,
 ) -> None:
     """List keys (ids, scopes, labels, dates; never secrets) as JSON."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app.keys import key_file
     records = run_guarded(lambda: key_file(store).list(include_revoked=include_revoked))
     write_json([r.to_dict(with_hash=False) for r in records], None)
 
@@ -58,6 +61,8 @@ def revoke(
     store: StoreOpt = None,
 ) -> None:
     """Revoke a key; services on this store refuse it from the next request on."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app.keys import key_file
     record = run_guarded(lambda: key_file(store).revoke(key))
     write_json(record.to_dict(with_hash=False), None)
 

@@ -33,31 +33,16 @@ to stderr; exit status 1 when a tool failed.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rcsa.app.inputs import decode_json
-from rcsa.app.jobs import Workbench, compute_backend, run_work
-from rcsa.app.libraries import (
-    EXPORT_FORMATS,
-    library_id_from_name,
-    prepare_library,
-    prepare_sync,
-    read_library,
-    spindle_settings,
-    write_export,
-)
-from rcsa.app.presets import (
-    PresetFile,
-    check_recommendation,
-    recommend_predicted,
-    recommend_stored,
-    write_preset_file,
-)
-from rcsa.app.stores import is_measurement_id, library_store, open_store
 from rcsa.cli._common import fail, read_json, run_guarded, write_json
 from rcsa.errors import InputError
+
+if TYPE_CHECKING:
+    from rcsa.app.jobs import Workbench
+    from rcsa.app.presets import PresetFile
 
 __all__ = ["library_app", "register"]
 
@@ -67,6 +52,8 @@ library_app = typer.Typer(help="Tool-point FRFs of whole CAM tool libraries.", n
 
 def parse_frequency_option(text: str) -> dict[str, Any]:
     """``START:STOP:STEP`` (Hz, stop included) or a JSON frequency object."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app.inputs import decode_json
     text = text.strip()
     if text.startswith("{"):
         doc: dict[str, Any] = decode_json(text, path="frequency", what="--frequency")
@@ -93,9 +80,19 @@ def _spindle_document(path: Path) -> dict[str, Any]:
 
 
 def _options_json(options: str | None) -> dict[str, Any] | None:
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app.inputs import decode_json
     if options is None:
         return None
     doc: dict[str, Any] | None = decode_json(options, path="options", what="--options")
+    return doc
+
+
+def _uncertainty_json(option: str | None) -> dict[str, Any] | None:
+    from rcsa.app.inputs import decode_json  # when the command runs (`rcsa --help` stays fast)
+    if option is None:
+        return None
+    doc: dict[str, Any] | None = decode_json(option, path="uncertainty", what="--uncertainty")
     return doc
 
 
@@ -105,6 +102,8 @@ def _settings(base: dict[str, Any], frequency: str | None, joints: Path | None, 
     ``store`` is given when the spindle is a stored measurement named on the command line;
     its lines are then the default grid.
     """
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app.libraries import spindle_settings
     return spindle_settings(base, frequency=parse_frequency_option(frequency) if frequency is not None else None,
                             joints=read_json(joints) if joints is not None else None, store=store)
 
@@ -132,6 +131,8 @@ JointsOption = Annotated[Path | None, typer.Option(
 ImportOptions = Annotated[str | None, typer.Option(
     help='Import options as JSON, e.g. \'{"holder_segments_per_cone": 6}\'.')]
 NaturalFrequenciesOption = Annotated[bool, typer.Option(help="Compute exact natural frequencies.")]
+UncertaintyOption = Annotated[str | None, typer.Option(
+    help='Every tool\'s uncertainty band as JSON, e.g. \'{"draws": 200, "seed": 1}\' (p05/p50/p95 of |h|).')]
 QuietOption = Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")]
 DaskOption = Annotated[str | None, typer.Option(
     "--dask-scheduler", envvar="RCSA_DASK_SCHEDULER",
@@ -157,6 +158,7 @@ def predict(
     joints: JointsOption = None,
     options: ImportOptions = None,
     natural_frequencies: NaturalFrequenciesOption = True,
+    uncertainty: UncertaintyOption = None,
     out: Annotated[Path | None, typer.Option("-o", "--out", help="Write the result here instead of stdout.")] = None,
     store: Annotated[Path | None, typer.Option("--store", help="Measurement store (default: RCSA_STORE or "
                                                                "the per-user store).")] = None,
@@ -166,6 +168,10 @@ def predict(
     holder: HolderOption = None,
 ) -> None:
     """Predict the tool-point FRF of every tool in a Fusion or FreeCAD library on one spindle."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app.jobs import Workbench, compute_backend, run_work
+    from rcsa.app.libraries import prepare_library, read_library
+    from rcsa.app.stores import open_store
     if (spindle is None) == (measurement is None):
         raise fail("give exactly one of --spindle SPINDLE.json or --measurement ID")
     base = _spindle_document(spindle) if spindle is not None else {"spindle": {"measurement_id": measurement}}
@@ -174,7 +180,8 @@ def predict(
         bench = Workbench(open_store(store) if (store is not None or measurement is not None) else None)
         settings = _settings(base, frequency, joints, bench.store if measurement is not None else None)
         work = prepare_library(bench, read_library(library, holder=holder), **settings,
-                               natural_frequencies=natural_frequencies, options=_options_json(options))
+                               natural_frequencies=natural_frequencies, options=_options_json(options),
+                               uncertainty=_uncertainty_json(uncertainty))
         if work.check is not None:
             work.check()  # before the progress bar starts
         return bench, work
@@ -218,6 +225,7 @@ def sync(
     joints: JointsOption = None,
     options: ImportOptions = None,
     natural_frequencies: NaturalFrequenciesOption = True,
+    uncertainty: UncertaintyOption = None,
     out: Annotated[Path | None, typer.Option("-o", "--out", help="Write the sync report here instead of "
                                                                  "stdout.")] = None,
     store: StoreOption = None,
@@ -227,6 +235,10 @@ def sync(
     holder: HolderOption = None,
 ) -> None:
     """Keep a library's tool-point FRFs in the store, computing only new or changed tools."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app.jobs import Workbench, compute_backend, run_work
+    from rcsa.app.libraries import library_id_from_name, prepare_sync, read_library
+    from rcsa.app.stores import is_measurement_id, open_store
     measurement = spindle if is_measurement_id(spindle) else None
     base = {"spindle": {"measurement_id": measurement}} if measurement else _spindle_document(Path(spindle))
     ident = library_id if library_id is not None else library_id_from_name(library)
@@ -236,7 +248,8 @@ def sync(
         bench = Workbench(st, st.path)
         settings = _settings(base, frequency, joints, st if measurement is not None else None)
         work = prepare_sync(bench, ident, read_library(library, holder=holder), **settings,
-                            natural_frequencies=natural_frequencies, options=_options_json(options))
+                            natural_frequencies=natural_frequencies, options=_options_json(options),
+                               uncertainty=_uncertainty_json(uncertainty))
         if work.size and work.check is not None:
             work.check()  # before the progress bar starts
         return bench, work
@@ -275,6 +288,8 @@ def show(
     out: Annotated[Path | None, typer.Option("-o", "--out", help="Write here instead of stdout.")] = None,
 ) -> None:
     """Print a stored library's summary and every tool's status (JSON)."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app.stores import library_store
     write_json(run_guarded(lambda: library_store(store).get(library_id)), out)
 
 
@@ -286,6 +301,9 @@ def export(
     store: StoreOption = None,
 ) -> None:
     """Write a stored library's results to a file; the format follows its suffix."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app.libraries import EXPORT_FORMATS, write_export
+    from rcsa.app.stores import library_store
     if out.suffix.lower() not in EXPORT_FORMATS:
         raise fail(f"{out}: the file name must end in .h5, .hdf5, .zip or .json")
     try:
@@ -334,6 +352,15 @@ def recommend(
     quiet: QuietOption = False,
 ) -> None:
     """Write chatter-safe presets (spindle speed and stepdown in a stable pocket) into a Fusion library."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app.jobs import Workbench
+    from rcsa.app.presets import (
+        check_recommendation,
+        recommend_predicted,
+        recommend_stored,
+        write_preset_file,
+    )
+    from rcsa.app.stores import open_store
     if sum(x is not None for x in (spindle, measurement, library_id)) != 1:
         raise fail("give exactly one of --spindle SPINDLE.json, --measurement ID or --library-id ID")
     if (out is None) == (not in_place):

@@ -7,9 +7,6 @@ from typing import Annotated
 
 import typer
 
-from rcsa.app.analyses import stability_lobes_result
-from rcsa.app.figures import check_picture_path, lobes_figure, save_figure
-from rcsa.app.stores import open_store
 from rcsa.cli._common import read_json, run_guarded, write_json
 
 
@@ -24,9 +21,16 @@ def register(app: typer.Typer) -> None:
         store: Annotated[Path | None, typer.Option("--store", help="Measurement store for hybrid assemblies.")] = None,
     ) -> None:
         """Stability lobes from inline FRFs or an assembly: zero-order (Altintas–Budak, the default) or
-        "method": "semi_discretization" in the request (Insperger–Stépán, for low radial immersion)."""
+        "method": "semi_discretization" in the request (Insperger–Stépán, for low radial immersion).
+        With "uncertainty" (and "robust": {"confidence"}) beside an assembly: depth_limit_robust_m too
+        (zero-order only)."""
+        # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+        from rcsa.app.analyses import stability_lobes_results
+        from rcsa.app.figures import check_picture_path, robust_lobes_figure, save_figure
+        from rcsa.app.stores import open_store
         doc = read_json(request)
-        result = run_guarded(lambda: stability_lobes_result(doc, store=open_store(store) if store else None))
+        result, robust = run_guarded(lambda: stability_lobes_results(doc, store=open_store(store) if store else None))
+        extra = None if robust is None else robust.to_dict()
         if plot is not None:
-            run_guarded(lambda: save_figure(lobes_figure(result), check_picture_path(plot, "--plot")))
-        write_json(result.to_dict(), out)
+            run_guarded(lambda: save_figure(robust_lobes_figure(result, extra), check_picture_path(plot, "--plot")))
+        write_json(result.to_dict() if extra is None else {**result.to_dict(), **extra}, out)

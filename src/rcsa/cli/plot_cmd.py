@@ -12,8 +12,6 @@ from typing import Annotated
 
 import typer
 
-from rcsa.app.figures import FRF_LAYOUTS, check_picture_path, document_figure, save_figure
-from rcsa.app.stores import open_store
 from rcsa.cli._common import read_json, run_guarded
 from rcsa.errors import InputError
 
@@ -30,6 +28,9 @@ def register(app: typer.Typer) -> None:
         store: Annotated[Path | None, typer.Option("--store", help="Measurement store for hybrid assemblies.")] = None,
     ) -> None:
         """Draw an FRF (real/imaginary, magnitude/phase) or a stability lobe diagram."""
+        # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+        from rcsa.app.figures import FRF_LAYOUTS, check_picture_path, document_figure, save_figure
+        from rcsa.app.stores import open_store
         doc = read_json(source)
 
         def draw() -> None:

@@ -15,8 +15,6 @@ from typing import Annotated, Any, TypeVar
 
 import typer
 
-from rcsa.app import measurements as M
-from rcsa.app.stores import open_store
 from rcsa.cli._common import fail, write_json
 from rcsa.errors import InputError, RcsaError
 
@@ -163,6 +161,9 @@ def import_(
     store: StoreOpt = None,
 ) -> None:
     """Import a measurement file and print the new measurement's metadata JSON (with its id)."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app import measurements as M
+    from rcsa.app.stores import open_store
 
     def run() -> dict[str, Any]:
         metadata = {"spindle_id": spindle_id, "direction": direction, "plane": plane, "kind": kind,
@@ -208,6 +209,8 @@ def list_(
     store: StoreOpt = None,
 ) -> None:
     """List stored measurements (metadata only), oldest first."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app.stores import open_store
     infos = _guard(
         lambda: open_store(store).list(
             spindle_id, machine=machine, direction=direction, plane=plane, kind=kind
@@ -252,6 +255,9 @@ def show(
     store: StoreOpt = None,
 ) -> None:
     """Print a measurement's metadata and a summary (peak of each FRF) as JSON."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app import measurements as M
+    from rcsa.app.stores import open_store
 
     def run() -> dict[str, Any]:
         return M.measurement_document(open_store(store), measurement_id, include_data=data)
@@ -265,6 +271,9 @@ def delete(
     store: StoreOpt = None,
 ) -> None:
     """Delete a measurement (its id is never reused)."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app import measurements as M
+    from rcsa.app.stores import open_store
     write_json(_guard(lambda: M.delete_measurement(open_store(store), measurement_id)), None)
 
 
@@ -272,6 +281,9 @@ def delete(
 def check(store: StoreOpt = None) -> None:
     """Verify every measurement file (schema, checksums, readability, id) and the catalogue;
     print a JSON report; exit 1 when it lists problems. Changes nothing."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app import measurements as M
+    from rcsa.app.stores import open_store
     report = _guard(lambda: M.check_store(open_store(store)))
     write_json(report, None)
     if not report["ok"]:
@@ -282,6 +294,9 @@ def check(store: StoreOpt = None) -> None:
 def rebuild(store: StoreOpt = None) -> None:
     """Make the catalogue (index.sqlite) again from the measurement files; print a JSON
     report; exit 1 when some files cannot be read (listed as damaged, left out)."""
+    # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app import measurements as M
+    from rcsa.app.stores import open_store
     report = _guard(lambda: M.rebuild_catalogue(open_store(store)))
     write_json(report, None)
     if not report["ok"]:

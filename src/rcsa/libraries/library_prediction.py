@@ -85,6 +85,7 @@ def library_request(
     shear_coefficient: str | float | None = None,
     natural_frequencies: bool | None = None,
     options: Mapping[str, Any] | None = None,
+    uncertainty: Mapping[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Turn a Fusion or FreeCAD tool library into a library request (JSON-ready).
 
@@ -103,6 +104,9 @@ def library_request(
         As in the batch request.
     options : mapping, optional
         :data:`LIBRARY_OPTIONS` for the import (holder material, cones, fluted ratio, ...).
+    uncertainty : mapping, optional
+        ``{"draws", "seed", "tolerances"}``: every tool's uncertainty band, as in the batch
+        request (:mod:`rcsa.model.uncertainty`).
 
     Returns
     -------
@@ -142,7 +146,8 @@ def library_request(
             combos.append(item)
     batch: dict[str, Any] = {"spindle": spindle, "frequency": frequency, "combinations": combos}
     for key, value in (("materials", materials), ("beam_theory", beam_theory),
-                       ("shear_coefficient", shear_coefficient), ("natural_frequencies", natural_frequencies)):
+                       ("shear_coefficient", shear_coefficient), ("natural_frequencies", natural_frequencies),
+                       ("uncertainty", uncertainty)):
         if value is not None:
             batch[key] = value
     return {"library": {"source": imported.source, "library_sha256": imported.library_sha256,

@@ -10,6 +10,9 @@ A result is filed under the SHA-256 of everything that determines it (``ecosyste
   of its *content* (:func:`measurement_sha256`: frequency lines, receptances, plane, kind,
   points, artifact), not by its id; ``materials``, ``beam_theory``, ``shear_coefficient``
   and ``natural_frequencies`` (defaults filled in, so "left out" and "the default" agree);
+  and, only when the request has one, its ``uncertainty`` option with every default filled in
+  (:func:`rcsa.model.uncertainty.parse_uncertainty`: draws, seed, every tolerance), so a band
+  is never served for another option and results without one keep their keys;
 * the frequency grid as computed (SHA-256 of the float64 lines), so ``{start, stop, step}``
   and the same lines given as ``values_hz`` share results;
 * the model: ``rcsa.__version__`` and :func:`model_fingerprint`, the SHA-256 of the source of
@@ -55,6 +58,7 @@ from rcsa._version import __version__
 from rcsa.errors import StoreError
 from rcsa.infra.clock import utc_now_iso
 from rcsa.infra.sqlite import connect, transaction
+from rcsa.model.uncertainty import parse_uncertainty
 from rcsa.model.wire import complex_from_wire, complex_to_wire
 
 __all__ = [
@@ -121,7 +125,7 @@ def frequency_sha256(frequency_hz: np.ndarray) -> str:
     return hashlib.sha256(np.ascontiguousarray(frequency_hz, dtype="<f8").tobytes()).hexdigest()
 
 
-def measurement_sha256(measurement: Any) -> str:
+def measurement_sha256(measurement: Any, *, coherence: bool = False) -> str:
     """SHA-256 (hex) of what a stored measurement contributes to a prediction.
 
     Covers the frequency lines, every receptance (name and complex128 values), and the
@@ -131,8 +135,16 @@ def measurement_sha256(measurement: Any) -> str:
     Parameters
     ----------
     measurement : rcsa.measured.store.Measurement
+    coherence : bool
+        Also the stored coherences (name and float64 values): what an uncertainty band's
+        noise draws read.
     """
     digest = hashlib.sha256(b"rcsa.measurement-content/1\0")
+    if coherence:
+        digest.update(b"coherence\0")
+        for name in sorted(measurement.coherence):
+            digest.update(b"\0" + name.encode() + b"\0")
+            digest.update(np.ascontiguousarray(measurement.coherence[name], dtype="<f8").tobytes())
     digest.update(np.ascontiguousarray(measurement.frequency_hz, dtype="<f8").tobytes())
     for name in sorted(measurement.frfs):
         digest.update(b"\0" + name.encode() + b"\0")
@@ -171,6 +183,10 @@ def shared_part(batch: Mapping[str, Any], measurement_sha: str | None) -> dict[s
     for name in _SHARED[1:]:
         value = batch.get(name)
         out[name] = _DEFAULTS[name] if value is None else value
+    if batch.get("uncertainty") is not None:
+        option = parse_uncertainty(batch["uncertainty"], measured_spindle=measurement_sha is not None)
+        assert option is not None  # not None: given
+        out["uncertainty"] = option.to_dict()
     return out
 
 

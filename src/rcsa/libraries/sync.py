@@ -519,6 +519,7 @@ def sync_request(
     shear_coefficient: str | float | None = None,
     natural_frequencies: bool | None = None,
     options: Mapping[str, Any] | None = None,
+    uncertainty: Mapping[str, Any] | None = None,
 ) -> dict[str, Any]:
     """A JSON-ready sync request: the library imported, keyed by ``library_id``.
 
@@ -532,19 +533,19 @@ def sync_request(
     _check_id(library_id)
     request = library_request(library, spindle=spindle, frequency=frequency, joints=joints, materials=materials,
                               beam_theory=beam_theory, shear_coefficient=shear_coefficient,
-                              natural_frequencies=natural_frequencies, options=options)
+                              natural_frequencies=natural_frequencies, options=options, uncertainty=uncertainty)
     settings = {k: v for k, v in (("joints", joints), ("options", options)) if v}
     return {"library_id": library_id, **request, "settings": settings}
 
 
-def _measurement_sha(store: MeasurementSource | None, measurement_id: str) -> str:
+def _measurement_sha(store: MeasurementSource | None, measurement_id: str, coherence: bool = False) -> str:
     if store is None:
         raise InputError("spindle.measurement_id", "a measured spindle needs a measurement store")
     try:
         m = store.get(measurement_id)
     except NotFoundError:
         raise InputError("spindle.measurement_id", f"no stored measurement {measurement_id!r}") from None
-    return measurement_sha256(m)
+    return measurement_sha256(m, coherence=coherence)
 
 
 def plan_sync(libraries: LibraryStore, request: Mapping[str, Any], *, store: MeasurementSource | None = None,
@@ -573,7 +574,8 @@ def plan_sync(libraries: LibraryStore, request: Mapping[str, Any], *, store: Mea
     common = parse_common({k: batch[k] for k in _COMMON if k in batch}, max_lines=max_lines)
     msha = None
     if isinstance(common.spindle, MeasuredSpindleSpec):
-        msha = _measurement_sha(store, common.spindle.measurement_id)
+        # an uncertainty band's noise draws read the stored coherences too
+        msha = _measurement_sha(store, common.spindle.measurement_id, coherence=batch.get("uncertainty") is not None)
     shared = shared_part(batch, msha)
     fsha = frequency_sha256(common.frequency_hz)
     combos = batch.get("combinations") or []

@@ -39,7 +39,7 @@ from rcsa.measured.artifact_identification import (
 )
 from rcsa.measured.store import Measurement
 from rcsa.model.contract import MeasuredSpindleSpec
-from rcsa.model.spindle_side import BaseResolver, BaseUncertainty, MeasuredBase
+from rcsa.model.spindle_side import BaseResolver, MeasuredBase
 
 __all__ = ["ASSUMED_N_AVERAGES", "DEFAULT_EFFECTIVE_LENGTH_M", "MeasurementSource", "base_resolver",
            "cantilever_rotations", "measured_base"]
@@ -104,7 +104,7 @@ def _complex_noise(rng: np.random.Generator, shape: tuple[int, ...]) -> np.ndarr
 
 
 @dataclass(frozen=True)
-class _EntryNoise(BaseUncertainty):
+class _EntryNoise:
     """Independent relative noise on the stored FRFs of a point receptance (h; l = n; p) or of h alone.
 
     ``direct_frf``: one draw of h's noise scales the whole estimated 2×2 (its rotations are
@@ -141,7 +141,7 @@ class _EntryNoise(BaseUncertainty):
 
 
 @dataclass(frozen=True)
-class _ArtifactNoise(BaseUncertainty):
+class _ArtifactNoise:
     """Noise on the artifact FRFs pushed through the exact identification (its conditioning included)."""
 
     receptance: np.ndarray               # (nfreq, 2, 2), the identified base receptance

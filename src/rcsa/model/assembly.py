@@ -173,10 +173,13 @@ def spindle_chain(spindle: SpindleSpec, materials: Mapping[str, Material],
     x0 = 0.0
 
     def ground_at(x: float) -> None:
-        for key in [k for k in grounds if abs(k - x) < 1e-9]:
-            for b in grounds.pop(key):
-                items.append(Ground(b.stiffness_n_m, b.damping_ns_m, b.rotational_stiffness_nm_rad,
-                                    b.rotational_damping_nms_rad))
+        # the bearings of one node are one grounded attachment (their parameters add): one
+        # elimination step, and co-located equal bearings give bit-identical results whichever is varied
+        here = [b for key in [k for k in grounds if abs(k - x) < 1e-9] for b in grounds.pop(key)]
+        if here:
+            items.append(Ground(sum(b.stiffness_n_m for b in here), sum(b.damping_ns_m for b in here),
+                                sum(b.rotational_stiffness_nm_rad for b in here),
+                                sum(b.rotational_damping_nms_rad for b in here)))
 
     ground_at(0.0)
     for seg in reversed(spindle.segments):

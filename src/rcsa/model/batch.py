@@ -1,9 +1,14 @@
 """Tool-point FRFs of many tool–holder combinations on one spindle.
 
 The spindle (and each distinct spindle + holder + insertion) is condensed once and reused;
-the exact natural frequencies of all tools are found together afterwards (one lockstep
-bisection, :func:`rcsa.physics.natural_frequencies.natural_frequencies_batch`). Results come
-in input order, each with its own ``status``; a bad combination never fails the others.
+on an analytical spindle the tools are then solved together, stacked
+(:func:`rcsa.model.prediction.predict_tools`): FRFs and static stiffnesses in passes of many
+tools, exact natural frequencies in one lockstep search. Results come in input order, each
+with its own ``status``; a bad combination never fails the others.
+
+An ``uncertainty`` option (:mod:`rcsa.model.uncertainty`) applies to every combination: each
+gets its own band, drawn from the same seed (common random numbers: two tools' bands differ
+by their geometry, not by the luck of their draws).
 """
 
 from __future__ import annotations
@@ -13,14 +18,19 @@ from dataclasses import replace
 from typing import Any, Literal
 
 from rcsa.errors import InputError
-from rcsa.model.assembly import AssemblyModel
+from rcsa.model.assembly import AssemblyModel, assembly_notes, build_model
 from rcsa.model.bounds import MAX_BATCH_COMBINATIONS, MAX_FREQUENCY_LINES
-from rcsa.model.contract import CommonSpec, assemble, parse_combination, parse_common
-from rcsa.model.prediction import Prediction
+from rcsa.model.contract import (
+    AssemblySpec,
+    CommonSpec,
+    MeasuredSpindleSpec,
+    assemble,
+    parse_combination,
+    parse_common,
+)
+from rcsa.model.prediction import Prediction, predict_tools
 from rcsa.model.spindle_side import BaseResolver, SpindleSide
-from rcsa.physics.arrays import FloatArray
-from rcsa.physics.chain import Chain
-from rcsa.physics.natural_frequencies import natural_frequencies_batch
+from rcsa.model.uncertainty import UncertaintyOptions, parse_uncertainty
 
 __all__ = ["BATCH_FIELDS", "Progress", "parse_batch", "predict_batch"]
 
@@ -29,28 +39,9 @@ Progress = Callable[[int, int], None]
 
 #: Fields of a batch request.
 BATCH_FIELDS = ("frequency", "beam_theory", "shear_coefficient", "materials", "spindle", "combinations",
-                "natural_frequencies")
+                "natural_frequencies", "uncertainty")
 
 _Slot = dict[str, Any] | tuple[str, AssemblyModel, Prediction]
-
-
-def _fill_natural_frequencies(slots: list[_Slot], frequency_hz: FloatArray) -> None:
-    """Exact natural frequencies of every ok combination, all tools on one spindle solved together.
-
-    The spindle (with its joint to the holder) is the shared prefix; holders and tools are
-    the stacked tails, so tools in different holders or with different shanks still share
-    one lockstep bisection (:func:`rcsa.physics.natural_frequencies.natural_frequencies_batch`).
-    """
-    solved = {i: slot for i, slot in enumerate(slots) if isinstance(slot, tuple)}
-    groups: dict[Chain, list[int]] = {}
-    for i, (_, model, _) in solved.items():
-        groups.setdefault(model.spindle_side(), []).append(i)
-    for prefix, members in groups.items():
-        tails = [solved[i][1].holder + solved[i][1].tool_side() for i in members]
-        found = natural_frequencies_batch(prefix, tails, float(frequency_hz[0]), float(frequency_hz[-1]))
-        for i, nat in zip(members, found, strict=True):
-            ident, model, prediction = solved[i]
-            slots[i] = (ident, model, replace(prediction, natural_frequencies_hz=nat))
 
 
 def parse_batch(request: Mapping[str, Any], *, max_lines: int = MAX_FREQUENCY_LINES,
@@ -90,9 +81,17 @@ def parse_batch(request: Mapping[str, Any], *, max_lines: int = MAX_FREQUENCY_LI
     with_modes = request.get("natural_frequencies", True)
     if not isinstance(with_modes, bool):
         raise InputError("natural_frequencies", "must be true or false")
-    common = parse_common({k: v for k, v in request.items() if k not in ("combinations", "natural_frequencies")},
-                          max_lines=max_lines)
+    common = parse_common({k: v for k, v in request.items()
+                           if k not in ("combinations", "natural_frequencies", "uncertainty")}, max_lines=max_lines)
+    _batch_uncertainty(request, common)
     return combos, with_modes, common
+
+
+def _batch_uncertainty(request: Mapping[str, Any], common: CommonSpec) -> UncertaintyOptions | None:
+    """The batch's ``uncertainty`` option, checked against its spindle and grid."""
+    return parse_uncertainty(request.get("uncertainty"), measured_spindle=isinstance(common.spindle,
+                                                                                   MeasuredSpindleSpec),
+                             lines=int(common.frequency_hz.size))
 
 
 def predict_batch(request: Mapping[str, Any], *, resolve_base: BaseResolver | None = None,
@@ -104,8 +103,9 @@ def predict_batch(request: Mapping[str, Any], *, resolve_base: BaseResolver | No
     ----------
     request : dict
         ``{"spindle", "frequency", "combinations": [{"id", "holder", "tool", "joints"}]}``,
-        optionally ``materials``, ``beam_theory``, ``shear_coefficient`` and
-        ``natural_frequencies`` (bool, default true).
+        optionally ``materials``, ``beam_theory``, ``shear_coefficient``,
+        ``natural_frequencies`` (bool, default true) and ``uncertainty`` (every combination's
+        band, :mod:`rcsa.model.uncertainty`).
     resolve_base : callable, optional
         Turns a measured spindle into its base receptance
         (:func:`rcsa.measured.hybrid.base_resolver`); needed for ``{"measurement_id"}``.
@@ -123,8 +123,12 @@ def predict_batch(request: Mapping[str, Any], *, resolve_base: BaseResolver | No
         "error": {"field", "detail"}}], "summary": {"ok", "error"}}``
     """
     combos, with_modes, common = parse_batch(request, max_lines=max_lines, max_combinations=max_combinations)
+    uncertainty = _batch_uncertainty(request, common)
     side = SpindleSide(common, resolve_base)
-    slots: list[_Slot] = []
+    total = len(combos)
+    slots: list[_Slot | None] = []
+    pending: dict[int, tuple[str, AssemblyModel, tuple[str, ...]]] = {}  # analytical: solved below, all together
+    specs: dict[int, AssemblySpec] = {}
     for i, raw in enumerate(combos):
         ident = raw.get("id") if isinstance(raw, Mapping) else None
         path = f"combinations[{i}]"
@@ -132,17 +136,40 @@ def predict_batch(request: Mapping[str, Any], *, resolve_base: BaseResolver | No
             if not isinstance(ident, str) or not ident:
                 raise InputError(f"{path}.id", "is required (a non-empty string)")
             spec = assemble(common, parse_combination(raw, common.materials, path, extra_fields=("id",)))
-            # exact modes come afterwards for all tools at once (natural_frequencies_batch)
-            model, prediction = side.predict_with_model(spec, natural_frequencies=False)
-            slots.append((ident, model, prediction))
+            if side.base is None:
+                pending[i] = (ident, build_model(spec, spindle=side.spindle), assembly_notes(spec))
+                specs[i] = spec
+                slots.append(None)
+            else:
+                model, prediction = side.predict_with_model(spec)
+                if uncertainty is not None:
+                    band = side.uncertainty_band(spec, model, prediction, uncertainty, natural_frequencies=with_modes)
+                    prediction = replace(prediction, uncertainty=band)
+                slots.append((ident, model, prediction))
         except InputError as exc:
             field = exc.field if exc.field.startswith(path) else f"{path}.{exc.field}".rstrip(".")
             slots.append({"id": ident if isinstance(ident, str) else None, "status": "error",
                           "error": {"field": field, "detail": exc.rule}})
-        if progress is not None:
-            progress(i + 1, len(combos))
-    if with_modes and side.base is None:
-        _fill_natural_frequencies(slots, common.frequency_hz)
-    results = [s if isinstance(s, dict) else {"id": s[0], "status": "ok", **s[2].to_dict(arrays)} for s in slots]
+        if progress is not None and side.base is not None:
+            progress(i + 1, total)
+    if pending:
+        errors = len(slots) - len(pending)
+
+        def done(n: int) -> None:
+            if progress is not None:
+                progress(errors + n, total)
+
+        predictions = predict_tools([model for _, model, _ in pending.values()], common.frequency_hz, side.cache,
+                                    natural_frequencies=with_modes, done=done,
+                                    notes=[notes for _, _, notes in pending.values()])
+        for (i, (ident, model, _)), prediction in zip(pending.items(), predictions, strict=True):
+            if uncertainty is not None:
+                band = side.uncertainty_band(specs[i], model, prediction, uncertainty, natural_frequencies=with_modes)
+                prediction = replace(prediction, uncertainty=band)
+            slots[i] = (ident, model, prediction)
+    elif progress is not None and side.base is None:
+        progress(total, total)
+    results = [s if isinstance(s, dict) else {"id": s[0], "status": "ok", **s[2].to_dict(arrays)}
+               for s in slots if s is not None]
     ok = sum(r["status"] == "ok" for r in results)
     return {"results": results, "summary": {"ok": ok, "error": len(results) - ok}}

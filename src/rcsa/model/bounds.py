@@ -16,6 +16,7 @@ __all__ = [
     "MAX_BATCH_COMBINATIONS",
     "MAX_BEARINGS",
     "MAX_COHERENCE",
+    "MAX_CONFIDENCE",
     "MAX_CUTTING_COEFFICIENT_N_M2",
     "MAX_DAMPING",
     "MAX_DENSITY_KG_M3",
@@ -37,6 +38,12 @@ __all__ = [
     "MAX_SPEED_RPM",
     "MAX_STIFFNESS",
     "MAX_TEETH",
+    "MAX_TOLERANCE",
+    "MAX_TOLERANCE_STICKOUT_M",
+    "MAX_UNCERTAINTY_DRAWS",
+    "MAX_UNCERTAINTY_DRAW_LINES",
+    "MAX_UNCERTAINTY_SEED",
+    "MIN_CONFIDENCE",
     "MIN_CUTTING_COEFFICIENT_N_M2",
     "MIN_DENSITY_KG_M3",
     "MIN_FLUTED_DIAMETER_RATIO",
@@ -49,6 +56,7 @@ __all__ = [
     "MIN_SHEAR_COEFFICIENT",
     "MIN_SPEED_COUNT",
     "MIN_SPEED_RPM",
+    "MIN_UNCERTAINTY_DRAWS",
 ]
 
 # ---------------------------------------------------------------------------- JSON documents
@@ -128,3 +136,20 @@ MIN_SPEED_COUNT, MAX_SPEED_COUNT = 2, 100_000
 
 #: Cylinders per conical holder segment of a CAM library's holder.
 MAX_HOLDER_SEGMENTS_PER_CONE = 50
+
+# ---------------------------------------------------------------------------- uncertainty
+
+#: Monte-Carlo draws of one uncertainty request (band, natural frequencies, robust lobes):
+#: percentiles need a few; a thousand give p05/p95 to about ±1 percentile point.
+MIN_UNCERTAINTY_DRAWS, MAX_UNCERTAINTY_DRAWS = 2, 1000
+#: Compute budget of one uncertain assembly: draws × frequency lines (each draw is a full
+#: solve of every line; 2 000 000 is 1 000 draws of 2 000 lines, ~10 s on the reference machine).
+MAX_UNCERTAINTY_DRAW_LINES = 2_000_000
+#: Largest seed of the draws' random generator (an unsigned 32-bit integer).
+MAX_UNCERTAINTY_SEED = 2**32 - 1
+#: One standard deviation of a tolerance: relative (``_rel``) and log-scale (``_log``) ones,
+#: dimensionless, and the stickout's, m (the diagnosis accepts the same).
+MAX_TOLERANCE = 2.0
+MAX_TOLERANCE_STICKOUT_M = 0.05
+#: Confidence of a robust (percentile) depth limit: from the median to 99.9 %.
+MIN_CONFIDENCE, MAX_CONFIDENCE = 0.5, 0.999

@@ -7,7 +7,7 @@ exactly the contract's JSON shape (``contract.md`` "Prediction result").
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -16,15 +16,49 @@ import numpy as np
 from rcsa.model.assembly import AssemblyModel
 from rcsa.model.modal_fit import modal_fit
 from rcsa.model.peaks import find_frf_peaks
+from rcsa.model.uncertainty import UncertaintyBand
 from rcsa.model.wire import complex_to_wire
 from rcsa.physics.algebra2x2 import inv2
 from rcsa.physics.arrays import ComplexArray, FloatArray
 from rcsa.physics.chain import Beam, Chain
-from rcsa.physics.elimination import march, static_condense, static_tip_receptance
+from rcsa.physics.elimination import (
+    march,
+    march_tools,
+    static_condense,
+    static_condense_rows,
+    static_tip_receptance,
+    static_tip_receptance_rows,
+)
 from rcsa.physics.natural_frequencies import natural_frequencies_batch
 from rcsa.physics.receptance import Receptance
+from rcsa.physics.stacking import chain_signature, stack_chains
 
-__all__ = ["Prediction", "SubassemblyCache", "predict_model", "tool_point_receptance"]
+__all__ = ["COUNT_LINES", "TOOLS_PER_PASS", "Prediction", "SubassemblyCache", "count_lines_hz", "predict_model",
+           "predict_tools", "tool_point_receptance"]
+
+#: Most lines of the requested grid counted (Wittrick–Williams) before the natural frequencies
+#: are refined: counting costs a real elimination per line, a refinement step a fixed ~0.5 ms;
+#: every k-th line up to this many keeps both small (see ``benchmarks/bench_engine.py``).
+COUNT_LINES = 256
+
+
+def count_lines_hz(frequency_hz: FloatArray, most: int = COUNT_LINES) -> FloatArray:
+    """Lines of the requested grid at which the modes are first counted: every k-th, at most ``most``.
+
+    Parameters
+    ----------
+    frequency_hz : numpy.ndarray, shape (nfreq,)
+        The requested grid, Hz, increasing.
+    most : int
+        Largest number of lines returned (the first and last are always among them).
+
+    Returns
+    -------
+    numpy.ndarray, shape (ncount,)
+    """
+    f = np.asarray(frequency_hz, dtype=float)
+    step = max(1, -(-(f.size - 1) // max(most - 1, 1)))
+    return np.unique(np.concatenate([f[::step], f[-1:]]))
 
 
 @dataclass(frozen=True)
@@ -51,6 +85,10 @@ class Prediction(Mapping[str, Any]):
         What the numbers mean where it is not obvious (hybrid estimates, uncertainty).
     extra : dict
         Further JSON fields (e.g. the hybrid identification report).
+    uncertainty : UncertaintyBand or None
+        The band over the draws of an ``uncertainty`` option (:mod:`rcsa.model.uncertainty`);
+        written as the result's ``uncertainty`` (merged with a ``direct_frf`` spindle's
+        bounds, which ``extra`` may already hold under that name).
     """
 
     tool_point: Receptance
@@ -62,6 +100,7 @@ class Prediction(Mapping[str, Any]):
     min_real_frequency_hz: float
     notes: tuple[str, ...] = ()
     extra: Mapping[str, Any] = field(default_factory=dict)
+    uncertainty: UncertaintyBand | None = None
 
     @property
     def frequency_hz(self) -> FloatArray:
@@ -91,6 +130,8 @@ class Prediction(Mapping[str, Any]):
             "notes": list(self.notes),
         }
         out.update(self.extra)
+        if self.uncertainty is not None:
+            out["uncertainty"] = {**out.get("uncertainty", {}), **self.uncertainty.to_dict(arrays)}
         return out
 
     def _dict(self) -> dict[str, Any]:
@@ -199,34 +240,120 @@ def predict_model(model: AssemblyModel, frequency_hz: FloatArray, *,
         cache = SubassemblyCache(omega, base_receptance)
     prefix, rest = model.to_holder_tip(), model.tool_side()
     g = tool_point_receptance(model, cache)
-    tool_point = Receptance(f, g)
+    if base_receptance is not None:
+        h = g[:, 0, 0]
+        fit = modal_fit(f, h)
+        peaks = [{"frequency_hz": float(f[i]), "magnitude_m_n": float(abs(h[i]))} for i in fit.peak_lines]
+        notes_out = (*notes, "hybrid assembly: natural_frequencies_hz are modal-fit estimates from the predicted "
+                     "tool-point h (one pole per peak that stands out of the noise, fitted with residual "
+                     "terms on ±2.5 half-power half-widths), not exact eigenvalues; natural_frequencies_sd_hz "
+                     "gives each one's standard uncertainty (fit covariance and spread over band choices), "
+                     "modal_fit the details; peaks lists only peaks above the noise; static stiffness is not "
+                     "available from a measured spindle")
+        return _prediction(f, g, fit.frequency_hz, "modal_fit", None, notes_out,
+                           {**(extra or {}), "natural_frequencies_sd_hz": fit.sd_hz.tolist(),
+                            "modal_fit": [m.to_dict() for m in fit.modes]}, peaks)
+    nat = natural_frequencies_batch(prefix, [rest], float(f[0]), float(f[-1]), grid_hz=count_lines_hz(f))[0] \
+        if natural_frequencies else np.empty(0)
+    static = static_tip_receptance(rest, cache.static(prefix))
+    return _prediction(f, g, nat, "wittrick_williams", static, notes, extra)
+
+
+#: Tools solved together in one stacked elimination by :func:`predict_tools` (bounds the
+#: memory of a pass and sets the granularity of progress reports).
+TOOLS_PER_PASS = 64
+
+
+def predict_tools(models: Sequence[AssemblyModel], frequency_hz: FloatArray, cache: SubassemblyCache, *,
+                  natural_frequencies: bool = True, done: Callable[[int], None] | None = None,
+                  notes: Sequence[tuple[str, ...]] | None = None) -> list[Prediction]:
+    """Predictions of many analytical models (tools) on one grid, solved together.
+
+    Tools whose spindle + holder is the same chain and whose tool sides have one structure
+    are stacked (:func:`rcsa.physics.stacking.stack_chains`) and solved in one elimination
+    over tools × lines (:func:`rcsa.physics.elimination.march_tools`), up to
+    :data:`TOOLS_PER_PASS` at a time, on the cached spindle + holder condensation; their
+    static stiffnesses likewise, and their exact natural frequencies in one lockstep search
+    per spindle + holder (:func:`rcsa.physics.natural_frequencies.natural_frequencies_batch`).
+    Each result equals :func:`predict_model` of that model.
+
+    Parameters
+    ----------
+    models : sequence of AssemblyModel
+        Analytical models (no measured base).
+    frequency_hz : numpy.ndarray, shape (nfreq,)
+        The grid of ``cache``, Hz.
+    cache : SubassemblyCache
+        Spindle + holder condensations on the grid (shared with other calls).
+    natural_frequencies : bool
+        Compute the exact natural frequencies.
+    done : callable, optional
+        Called with the number of models finished so far, after each pass.
+    notes : sequence of tuple of str, optional
+        Notes passed on to each model's result (e.g. :func:`rcsa.model.assembly.assembly_notes`).
+
+    Returns
+    -------
+    list of Prediction
+        In the order of ``models``.
+    """
+    f = np.asarray(frequency_hz, dtype=float)
+    omega = cache.omega_rad_s
+    groups: dict[tuple[Chain, tuple[tuple[object, ...], ...]], list[int]] = {}
+    for i, model in enumerate(models):
+        groups.setdefault((model.to_holder_tip(), chain_signature(model.tool_side())), []).append(i)
+    g_all: list[ComplexArray | None] = [None] * len(models)
+    static_all: list[FloatArray | None] = [None] * len(models)
+    finished = 0
+    for (prefix, _), members in groups.items():
+        k0 = cache.condensed(prefix)
+        s0 = cache.static(prefix)
+        for c0 in range(0, len(members), TOOLS_PER_PASS):
+            chunk = members[c0:c0 + TOOLS_PER_PASS]
+            stacked = stack_chains([models[i].tool_side() for i in chunk])
+            g = inv2(march_tools(stacked, omega, len(chunk), k0).reshape(-1, 2, 2)).reshape(len(chunk), -1, 2, 2)
+            statics = static_tip_receptance_rows(static_condense_rows(stacked, len(chunk), s0))
+            for j, i in enumerate(chunk):
+                g_all[i], static_all[i] = g[j], statics[j]
+            finished += len(chunk)
+            if done is not None:
+                done(finished)
+    nat_all: list[FloatArray] = [np.empty(0)] * len(models)
+    if natural_frequencies:
+        by_prefix: dict[Chain, list[int]] = {}
+        for i, model in enumerate(models):
+            by_prefix.setdefault(model.to_holder_tip(), []).append(i)
+        for prefix, members in by_prefix.items():
+            found = natural_frequencies_batch(prefix, [models[i].tool_side() for i in members], float(f[0]),
+                                              float(f[-1]), grid_hz=count_lines_hz(f))
+            for i, nat in zip(members, found, strict=True):
+                nat_all[i] = nat
+    out = []
+    for i in range(len(models)):
+        g_i = g_all[i]
+        assert g_i is not None
+        out.append(_prediction(f, g_i, nat_all[i], "wittrick_williams", static_all[i],
+                               () if notes is None else notes[i], None))
+    return out
+
+
+def _prediction(f: FloatArray, g: ComplexArray, nat: FloatArray, method: str, static: FloatArray | None,
+                notes: Sequence[str], extra: Mapping[str, Any] | None,
+                peaks: list[dict[str, float]] | None = None) -> Prediction:
+    """The :class:`Prediction` of a tool-point receptance ``g`` (nfreq, 2, 2) and what was found for it.
+
+    ``peaks`` defaults to every peak of ``h`` (:func:`rcsa.model.peaks.find_frf_peaks`).
+    """
     h = g[:, 0, 0]
     notes_out = list(notes)
-    if base_receptance is None:
-        nat = natural_frequencies_batch(prefix, [rest], float(f[0]), float(f[-1]))[0] if natural_frequencies \
-            else np.empty(0)
-        method = "wittrick_williams"
-        peaks = find_frf_peaks(f, h)
-        static = static_tip_receptance(rest, cache.static(prefix))
-        static_k = None if static is None else float(1.0 / static[0, 0])
+    static_k = None
+    if method == "wittrick_williams":
         if static is None:
             notes_out.append("static_stiffness_n_m is null: the assembly is not grounded (no bearings)")
-    else:
-        fit = modal_fit(f, h)
-        nat = fit.frequency_hz
-        method = "modal_fit"
-        static_k = None
-        peaks = [{"frequency_hz": float(f[i]), "magnitude_m_n": float(abs(h[i]))} for i in fit.peak_lines]
-        notes_out.append("hybrid assembly: natural_frequencies_hz are modal-fit estimates from the predicted "
-                         "tool-point h (one pole per peak that stands out of the noise, fitted with residual "
-                         "terms on ±2.5 half-power half-widths), not exact eigenvalues; natural_frequencies_sd_hz "
-                         "gives each one's standard uncertainty (fit covariance and spread over band choices), "
-                         "modal_fit the details; peaks lists only peaks above the noise; static stiffness is not "
-                         "available from a measured spindle")
-        extra = {**(extra or {}), "natural_frequencies_sd_hz": fit.sd_hz.tolist(),
-                 "modal_fit": [m.to_dict() for m in fit.modes]}
+        else:
+            static_k = float(1.0 / static[0, 0])
     i_min = int(np.argmin(h.real))
-    return Prediction(tool_point=tool_point, natural_frequencies_hz=np.asarray(nat, dtype=float),
-                      natural_frequencies_method=method, peaks=peaks,
+    return Prediction(tool_point=Receptance(f, g), natural_frequencies_hz=np.asarray(nat, dtype=float),
+                      natural_frequencies_method=method, peaks=find_frf_peaks(f, h) if peaks is None else peaks,
                       static_stiffness_n_m=static_k, min_real_m_n=float(h.real[i_min]),
                       min_real_frequency_hz=float(f[i_min]), notes=tuple(notes_out), extra=dict(extra or {}))

@@ -6,28 +6,43 @@ condensed spindle (analytical) or the measured spindle-side receptance at its pl
 after the other on it. How a measured base is obtained from a store is the measured layer's
 business (:func:`rcsa.measured.hybrid.measured_base`); here it is just a
 :class:`MeasuredBase`.
+
+With an ``uncertainty`` option (:mod:`rcsa.model.uncertainty`) a prediction also draws the
+assembly — and a measured base, under its own uncertainty — and solves every draw at once
+(:meth:`SpindleSide.tool_point_draws`, :mod:`rcsa.model.draws`).
 """
 
 from __future__ import annotations
 
-from abc import ABC, abstractmethod
-from collections.abc import Callable
-from dataclasses import dataclass, field
-from typing import Any
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field, replace
+from typing import Any, Protocol
 
 import numpy as np
 
 from rcsa.errors import InputError
 from rcsa.model.assembly import AssemblyModel, assembly_notes, build_model, spindle_chain
 from rcsa.model.contract import AssemblySpec, CommonSpec, MeasuredSpindleSpec, SpindleSpec
+from rcsa.model.draws import (
+    ModeStatistics,
+    drawn_models,
+    magnitude_percentiles,
+    mode_statistics,
+    peak_statistics,
+    tool_point_h_draws,
+)
 from rcsa.model.prediction import Prediction, SubassemblyCache, predict_model, tool_point_receptance
+from rcsa.model.tolerances import MEASURED_SPINDLE_TOLERANCES, draw_nuisance
+from rcsa.model.uncertainty import PERCENTILES, UncertaintyBand, UncertaintyOptions
 from rcsa.model.wire import complex_to_wire
 from rcsa.physics.arrays import ComplexArray, FloatArray
 
-__all__ = ["BaseResolver", "BaseUncertainty", "MeasuredBase", "SpindleSide", "spread_of_bounds"]
+__all__ = ["BaseResolver", "BaseUncertainty", "MeasuredBase", "SpindleSide", "ToolPointDraws", "measured_base_draws",
+           "spread_of_bounds"]
 
 
-class BaseUncertainty(ABC):
+class BaseUncertainty(Protocol):
     """How uncertain a measured spindle-side receptance is: draws of it, and what was assumed.
 
     Implemented by the measured layer per kind of measurement (:mod:`rcsa.measured.hybrid`):
@@ -35,7 +50,6 @@ class BaseUncertainty(ABC):
     artifact identification where there is one.
     """
 
-    @abstractmethod
     def draw(self, rng: np.random.Generator, n: int, default_noise_rel: float) -> ComplexArray:
         """Equally likely receptances under the measurement's own noise.
 
@@ -53,8 +67,8 @@ class BaseUncertainty(ABC):
         numpy.ndarray, shape (n, nfreq, 2, 2), complex
             On the base's grid, ``[[h, l], [n, p]]`` in m/N, m/(N·m), rad/N, rad/(N·m).
         """
+        ...
 
-    @abstractmethod
     def summary(self, default_noise_rel: float) -> dict[str, Any]:
         """What the draws assume (noise source and level, conditioning), JSON-ready.
 
@@ -67,6 +81,7 @@ class BaseUncertainty(ABC):
         -------
         dict
         """
+        ...
 
 
 @dataclass(frozen=True)
@@ -101,6 +116,25 @@ class MeasuredBase:
     effective_length_m: float | None = None
 
 
+@dataclass(frozen=True)
+class ToolPointDraws:
+    """The drawn assemblies of an uncertainty option and their tool-point ``h``.
+
+    Attributes
+    ----------
+    h : numpy.ndarray, shape (ndraws, nfreq), complex
+        Tool-point ``h`` of every draw, m/N.
+    models : list of AssemblyModel
+        Every draw's chain model.
+    measured_spindle : dict or None
+        What a measured spindle's draws assumed (:func:`measured_base_draws`).
+    """
+
+    h: ComplexArray
+    models: list[AssemblyModel]
+    measured_spindle: dict[str, Any] | None = None
+
+
 #: Turns a measured spindle of a request into its base receptance on a grid (Hz).
 BaseResolver = Callable[[MeasuredSpindleSpec, FloatArray], MeasuredBase]
 
@@ -128,7 +162,8 @@ class SpindleSide:
                         if isinstance(common.spindle, SpindleSpec) else ())
         self.alt_caches = [] if self.base is None else [SubassemblyCache(omega, r) for r in self.base.alternatives]
 
-    def predict(self, spec: AssemblySpec, natural_frequencies: bool = True) -> Prediction:
+    def predict(self, spec: AssemblySpec, natural_frequencies: bool = True,
+                uncertainty: UncertaintyOptions | None = None) -> Prediction:
         """Tool-point prediction of one assembly on this spindle side.
 
         Parameters
@@ -137,11 +172,13 @@ class SpindleSide:
             An assembly on this spindle side's grid and spindle.
         natural_frequencies : bool
             Compute the exact natural frequencies (analytical spindles).
+        uncertainty : UncertaintyOptions, optional
+            Also draw the assembly and give the band (:meth:`uncertainty_band`).
         """
-        return self.predict_with_model(spec, natural_frequencies)[1]
+        return self.predict_with_model(spec, natural_frequencies, uncertainty)[1]
 
-    def predict_with_model(self, spec: AssemblySpec, natural_frequencies: bool = True
-                           ) -> tuple[AssemblyModel, Prediction]:
+    def predict_with_model(self, spec: AssemblySpec, natural_frequencies: bool = True,
+                           uncertainty: UncertaintyOptions | None = None) -> tuple[AssemblyModel, Prediction]:
         """The solved chain model and its prediction.
 
         Parameters
@@ -150,7 +187,16 @@ class SpindleSide:
             An assembly on this spindle side's grid and spindle.
         natural_frequencies : bool
             Compute the exact natural frequencies (analytical spindles).
+        uncertainty : UncertaintyOptions, optional
+            Also draw the assembly and give the band (:meth:`uncertainty_band`).
         """
+        model, prediction = self._predict(spec, natural_frequencies)
+        if uncertainty is not None:
+            band = self.uncertainty_band(spec, model, prediction, uncertainty, natural_frequencies)
+            prediction = replace(prediction, uncertainty=band)
+        return model, prediction
+
+    def _predict(self, spec: AssemblySpec, natural_frequencies: bool) -> tuple[AssemblyModel, Prediction]:
         base = self.base
         if base is None:
             model = build_model(spec, spindle=self.spindle)
@@ -169,6 +215,127 @@ class SpindleSide:
         return model, predict_model(model, spec.frequency_hz, base_receptance=base.receptance, cache=self.cache,
                                     natural_frequencies=natural_frequencies, notes=(*base.notes, *assembly_notes(spec)),
                                     extra=extra)
+
+    def tool_point_draws(self, spec: AssemblySpec, options: UncertaintyOptions) -> ToolPointDraws:
+        """Draw the assembly (and a measured base) ``options.draws`` times and solve every draw.
+
+        The generator ``default_rng(options.seed)`` gives the nuisance knobs of all draws
+        first (:func:`rcsa.model.tolerances.draw_nuisance`), then a measured spindle's noise
+        and rotation lengths (:func:`measured_base_draws`).
+
+        Parameters
+        ----------
+        spec : AssemblySpec
+            An assembly on this spindle side (as for :meth:`predict`).
+        options : UncertaintyOptions
+
+        Returns
+        -------
+        ToolPointDraws
+        """
+        rng = np.random.default_rng(options.seed)
+        knobs = draw_nuisance(rng, options.tolerances, options.draws)
+        base = self.base
+        models = drawn_models(spec, knobs, None if base is None else base.plane)
+        if base is None:
+            return ToolPointDraws(tool_point_h_draws(models, spec.frequency_hz), models)
+        receptances, summary = measured_base_draws(base.receptance, base.uncertainty, base.effective_length_m,
+                                                   options.tolerances, rng, options.draws)
+        return ToolPointDraws(tool_point_h_draws(models, spec.frequency_hz, receptances), models, summary)
+
+    def uncertainty_band(self, spec: AssemblySpec, model: AssemblyModel, prediction: Prediction,
+                         options: UncertaintyOptions, natural_frequencies: bool = True) -> UncertaintyBand:
+        """The band of a prediction: percentiles of ``|h|`` and natural frequencies over the draws.
+
+        Parameters
+        ----------
+        spec : AssemblySpec
+        model : AssemblyModel
+            The nominal model (:meth:`predict_with_model`).
+        prediction : Prediction
+            Its prediction.
+        options : UncertaintyOptions
+        natural_frequencies : bool
+            Also the natural frequencies of every draw (analytical spindles).
+
+        Returns
+        -------
+        UncertaintyBand
+        """
+        drawn = self.tool_point_draws(spec, options)
+        f = spec.frequency_hz
+        notes = []
+        stats = ModeStatistics(np.empty(0), np.empty(0), np.empty(0))
+        if self.base is None:
+            matching = "by order: exact natural frequencies of every draw (one lockstep search), the k-th counted " \
+                       "from 0 Hz matched to the nominal k-th"
+            if natural_frequencies:
+                stats = mode_statistics(model, drawn.models, float(f[0]), float(f[-1]))
+        else:
+            matching = "by order within each modal-fit band: every draw's |h| peak in the band of each modal-fit " \
+                       "mode (parabolic refinement), moved by the nominal h's own peak offset"
+            bands = [(float(m["band_hz"][0]), float(m["band_hz"][1])) for m in prediction.extra.get("modal_fit", [])]
+            stats = peak_statistics(f, drawn.h, prediction.tool_point.h, prediction.natural_frequencies_hz, bands)
+            inside = ("the bearings" if self.base.plane == "spindle_nose"
+                      else "the bearings, the spindle–holder joint and the holder")
+            notes.append(f"measured spindle: {inside} are inside the measurement, so their tolerances do not apply; "
+                         f"the measurement is drawn under its own uncertainty instead (measured_spindle)")
+        return UncertaintyBand(options, magnitude_percentiles(drawn.h, list(PERCENTILES.values())), stats.mean_hz,
+                               stats.sd_hz, stats.in_band_fraction, matching, stats.entering, drawn.measured_spindle,
+                               tuple(notes))
+
+
+def measured_base_draws(receptance: ComplexArray, uncertainty: BaseUncertainty | None,
+                        effective_length_m: float | None, tolerances: Mapping[str, float],
+                        rng: np.random.Generator, n: int) -> tuple[ComplexArray, dict[str, Any]]:
+    """Draws of a measured spindle's receptance: its noise, then (``direct_frf``) its rotations.
+
+    * Noise: ``uncertainty.draw`` with ``spindle_noise_rel`` for FRFs without a coherence
+      (none when ``uncertainty`` is None or the tolerance is 0).
+    * ``direct_frf`` (``effective_length_m`` given): the equivalent-cantilever estimate
+      ``l = n = 3h/2L``, ``p = 3h/L²`` redone with ``ln L' ~ N(ln L, σ²)``, ``σ =
+      spindle_effective_length_log``, kept within the bounds L/2 … 2L the prediction
+      reports: ``l, n × L/L'`` and ``p × (L/L')²``.
+
+    Parameters
+    ----------
+    receptance : numpy.ndarray, shape (nfreq, 2, 2)
+        The measured base as predicted with (m/N, 1/N, rad/N, rad/(N·m)).
+    uncertainty : BaseUncertainty or None
+    effective_length_m : float or None
+        The rotation estimate's length L, m (``direct_frf`` only).
+    tolerances : mapping of str to float
+        With the names of :data:`~rcsa.model.tolerances.MEASURED_SPINDLE_TOLERANCES`.
+    rng : numpy.random.Generator
+    n : int
+        Number of draws.
+
+    Returns
+    -------
+    draws : numpy.ndarray, shape (n, nfreq, 2, 2)
+    summary : dict
+        What was drawn, JSON-ready.
+    """
+    tol = {**MEASURED_SPINDLE_TOLERANCES, **tolerances}
+    noise_rel = float(tol["spindle_noise_rel"])
+    summary: dict[str, Any] = {}
+    if uncertainty is not None:
+        out = uncertainty.draw(rng, n, noise_rel)
+        summary["noise"] = uncertainty.summary(noise_rel)
+    else:
+        out = np.array(np.broadcast_to(receptance, (n, *receptance.shape)))
+        summary["noise"] = None
+    if effective_length_m is not None:
+        sd = float(tol["spindle_effective_length_log"])
+        ln_ratio = np.clip(sd * rng.standard_normal(n), -math.log(2.0), math.log(2.0))  # ln(L'/L)
+        s = np.exp(-ln_ratio)  # L / L'
+        out[:, :, 0, 1] *= s[:, None]
+        out[:, :, 1, 0] *= s[:, None]
+        out[:, :, 1, 1] *= (s * s)[:, None]
+        summary["effective_length_m"] = {"nominal": effective_length_m, "bounds": [effective_length_m / 2,
+                                                                                   effective_length_m * 2],
+                                         "log_sd": sd}
+    return out, summary
 
 
 def spread_of_bounds(frequency_hz: FloatArray, bounds: list[ComplexArray]) -> dict[str, Any]:

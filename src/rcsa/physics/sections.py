@@ -64,7 +64,9 @@ class Section:
     rho_i: RealParam
 
     def undamped(self) -> Section:
-        """The section with real moduli (damping removed); works on stacked (array) sections too."""
+        """The section with real moduli: damping removed, or itself when they are real; stacked too."""
+        if not np.any(np.imag(np.asarray(self.ei))) and not np.any(np.imag(np.asarray(self.shear_flexibility))):
+            return self
         flex = np.asarray(self.shear_flexibility)
         with np.errstate(divide="ignore"):
             real_flex = np.where(flex == 0, 0.0, 1.0 / np.real(1.0 / np.where(flex == 0, 1.0, flex)))
@@ -82,9 +84,13 @@ class Section:
 
     @classmethod
     def stack(cls, sections: Sequence[Section]) -> Section:
-        """One section whose properties are arrays over ``sections``, shape (nsections,) each."""
-        return cls(np.array([s.ei for s in sections]), np.array([s.shear_flexibility for s in sections]),
-                   np.array([s.rho_a for s in sections]), np.array([s.rho_i for s in sections]))
+        """One section whose properties are arrays over ``sections``, shape (nsections,) each.
+
+        A property equal in all of them stays one value (so equal sections stay one hashable
+        section whose waves the solvers compute once).
+        """
+        return cls(_stacked([s.ei for s in sections]), _stacked([s.shear_flexibility for s in sections]),
+                   _stacked([s.rho_a for s in sections]), _stacked([s.rho_i for s in sections]))
 
     def take_rows(self, rows: IntArray) -> Section:
         """A stacked section with its property arrays indexed by ``rows`` (scalars kept as they are)."""
@@ -93,6 +99,14 @@ class Section:
 
 
 _P = TypeVar("_P", ComplexParam, RealParam)
+
+
+def _stacked(values: Sequence[_P]) -> _P:
+    """One value if all are equal scalars, else an array over them."""
+    first = values[0]
+    if np.ndim(first) == 0 and all(np.ndim(v) == 0 and v == first for v in values):
+        return first
+    return np.array(values)
 
 
 def _rows(value: _P, rows: IntArray) -> _P:

@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from rcsa.physics.arrays import IntArray
-from rcsa.physics.chain import Chain
+from rcsa.physics.chain import Chain, ChainItem
 
 __all__ = ["chain_signature", "stack_chains", "take_rows"]
 
@@ -38,6 +38,8 @@ def take_rows(chain: Chain, rows: IntArray) -> Chain:
     """The stacked chain with its parameter arrays indexed by ``rows`` (one row per frequency).
 
     Scalar parameters (shared by all rows, e.g. a damping set to zero) are kept as they are.
+    An item repeated in the chain (the equal pieces of a subdivided beam) stays one object
+    repeated, so the solvers compute its terms once.
 
     Parameters
     ----------
@@ -46,4 +48,11 @@ def take_rows(chain: Chain, rows: IntArray) -> Chain:
     rows : numpy.ndarray of int, shape (nfreq,)
         Which stacked chain each frequency line uses.
     """
-    return tuple(item.take_rows(rows) for item in chain)
+    done: dict[int, ChainItem] = {}
+    out = []
+    for item in chain:
+        hit = done.get(id(item))
+        if hit is None:
+            hit = done[id(item)] = item.take_rows(rows)
+        out.append(hit)
+    return tuple(out)

@@ -15,7 +15,8 @@ never blamed on an effect. Noise is complex Gaussian with the Bendat & Piersol r
 |H| (and of its phase, rad) ``σ = √(1−γ²) / (|γ| √(2 n_avg))`` from the measured coherence γ².
 
 Default tolerances (one standard deviation; overridable per request, ``tolerances``) follow
-``diagnosis.md`` §2 and §5.1:
+``diagnosis.md`` §2 and §5.1; they and their draws are defined once, in
+:mod:`rcsa.model.tolerances` (predictions with uncertainty bands use the same):
 
 ==================================  =======  =============================================
 key                                 default  meaning
@@ -55,23 +56,16 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from rcsa.analysis.diagnosis.perturbed_model import Knobs
+from rcsa.model.tolerances import DEFAULT_TOLERANCES as MODEL_TOLERANCES
+from rcsa.model.tolerances import apply_nuisance, draw_nuisance
 
 __all__ = ["DEFAULT_TOLERANCES", "Discrepancy", "build_discrepancy", "draw_knobs", "noise_sd_rel",
            "shrink"]
 
+#: The diagnosis's tolerances: the model's (:data:`rcsa.model.tolerances.DEFAULT_TOLERANCES`)
+#: and a measured spindle's own (see the table above).
 DEFAULT_TOLERANCES: dict[str, float] = {
-    "tool_youngs_modulus_rel": 0.03,
-    "tool_density_rel": 0.01,
-    "structure_youngs_modulus_rel": 0.02,
-    "structure_density_rel": 0.01,
-    "loss_factor_log": 0.25,
-    "bearing_stiffness_log": 0.08,
-    "bearing_damping_log": 0.25,
-    "spindle_holder_stiffness_log": 0.15,
-    "spindle_holder_damping_log": 0.25,
-    "holder_tool_stiffness_log": 0.15,
-    "holder_tool_damping_log": 0.25,
-    "stickout_m": 0.0003,
+    **MODEL_TOLERANCES,
     "spindle_effective_length_log": 0.35,
     "spindle_rotation_shape_log": 0.35,
     "spindle_noise_rel": 0.005,
@@ -107,36 +101,20 @@ def draw_knobs(rng: np.random.Generator, tol: Mapping[str, float], n_configs: in
                base: Knobs | None = None, estimated_rotations: bool = False) -> list[Knobs]:
     """One nuisance draw: the shared part once, the per-measurement part per configuration.
 
+    The draw itself is the one every model user shares (:func:`rcsa.model.tolerances.draw_nuisance`).
     ``estimated_rotations``: the spindle's rotations are an equivalent-cantilever estimate
     (a measured ``direct_frf`` spindle); its length is drawn too (``base_rotation_scale``
-    = L/L' with ln L' ~ N(ln L, ``spindle_effective_length_log``²)), after everything else.
+    = L/L' with ln L' ~ N(ln L, ``spindle_effective_length_log``²)) and its shape, after
+    everything else.
     """
+    draw = draw_nuisance(rng, tol, 1, n_configs)
     base = Knobs() if base is None else base
-    n = rng.standard_normal
-    shared = {
-        "tool_youngs_scale": 1.0 + tol["tool_youngs_modulus_rel"] * n(),
-        "tool_density_scale": 1.0 + tol["tool_density_rel"] * n(),
-        "structure_youngs_scale": 1.0 + tol["structure_youngs_modulus_rel"] * n(),
-        "structure_density_scale": 1.0 + tol["structure_density_rel"] * n(),
-        "loss_factor_scale": float(np.exp(tol["loss_factor_log"] * n())),
-        "bearing_stiffness_scale": float(np.exp(tol["bearing_stiffness_log"] * n())),
-        "bearing_damping_scale": float(np.exp(tol["bearing_damping_log"] * n())),
-        "sh_translational_scale": float(np.exp(tol["spindle_holder_stiffness_log"] * n())),
-        "sh_rotational_scale": float(np.exp(tol["spindle_holder_stiffness_log"] * n())),
-        "sh_damping_scale": float(np.exp(tol["spindle_holder_damping_log"] * n())),
-    }
-    per_config = [{"ht_translational_scale": float(np.exp(tol["holder_tool_stiffness_log"] * n())),
-                   "ht_rotational_scale": float(np.exp(tol["holder_tool_stiffness_log"] * n())),
-                   "ht_damping_scale": float(np.exp(tol["holder_tool_damping_log"] * n())),
-                   "stickout_offset_m": tol["stickout_m"] * n()} for _ in range(n_configs)]
+    out = [apply_nuisance(base, draw.fields(0, c)) for c in range(n_configs)]
     if estimated_rotations:
-        shared["base_rotation_scale"] = float(np.exp(-tol["spindle_effective_length_log"] * n()))
-        shared["base_rotation_shape"] = float(np.exp(tol["spindle_rotation_shape_log"] * n()))
-    out = []
-    for per in per_config:
-        fields = {**shared, **per}
-        out.append(replace(base, **{k: (getattr(base, k) + v if k == "stickout_offset_m" else getattr(base, k) * v)
-                                    for k, v in fields.items()}))
+        scale = float(np.exp(-tol["spindle_effective_length_log"] * rng.standard_normal()))
+        shape = float(np.exp(tol["spindle_rotation_shape_log"] * rng.standard_normal()))
+        out = [replace(k, base_rotation_scale=k.base_rotation_scale * scale,
+                       base_rotation_shape=k.base_rotation_shape * shape) for k in out]
     return out
 
 

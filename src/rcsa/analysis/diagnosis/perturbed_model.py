@@ -468,6 +468,9 @@ class Solver:
             self._states.move_to_end(key)
             return hit[1]
         k, s = _advance(self._state(base, chains[:-1]), chains[-1], self._grid)
+        # an elimination step writes into the grid's work arrays, which the next step reuses:
+        # the cached state is a copy of them
+        k = None if k is None else (k[0].copy(), k[1].copy(), k[2].copy())
         for arr in (*(k or ()), *(() if s is None else (s,))):
             arr.flags.writeable = False  # shared by every later configuration with this prefix
         self._states[key] = (objs, (k, s))

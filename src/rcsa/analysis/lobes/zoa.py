@@ -65,6 +65,7 @@ __all__ = [
     "Milling",
     "check_cut",
     "check_frf",
+    "depth_limit_envelopes",
     "json_float",
     "json_list",
     "directional_factors",
@@ -196,12 +197,12 @@ def directional_factors(
 
 
 def _oriented_eigenvalues(alpha: np.ndarray, frf_xx: np.ndarray, frf_yy: np.ndarray) -> np.ndarray:
-    """Eigenvalues of the oriented FRF ``α · diag(Φxx, Φyy)``, shape (nfreq, 2).
+    """Eigenvalues of the oriented FRF ``α · diag(Φxx, Φyy)``, shape (..., nfreq, 2).
 
     Closed form of ``λ² − a1 λ + a0 = 0``; the square root is kept on one continuous
-    branch along frequency (so a column follows one eigenvalue curve), and the smaller
-    root is taken from Vieta's ``λ1 λ2 = a0`` to avoid cancellation when ``a0 → 0``
-    (one flexible direction, or ``det α = 0``).
+    branch along frequency (the last axis of the FRFs; so a column follows one eigenvalue
+    curve), and the smaller root is taken from Vieta's ``λ1 λ2 = a0`` to avoid cancellation
+    when ``a0 → 0`` (one flexible direction, or ``det α = 0``).
     """
     a1 = alpha[0, 0] * frf_xx + alpha[1, 1] * frf_yy
     a0 = (alpha[0, 0] * alpha[1, 1] - alpha[0, 1] * alpha[1, 0]) * frf_xx * frf_yy
@@ -209,8 +210,8 @@ def _oriented_eigenvalues(alpha: np.ndarray, frf_xx: np.ndarray, frf_yy: np.ndar
     # Principal sqrt jumps sign across its branch cut: flip back where consecutive values
     # point in opposite directions (the vectorised form of tracking eigenvalue curves).
     flip = np.ones(s.shape)
-    flip[1:] = np.where((s[1:] * np.conj(s[:-1])).real < 0.0, -1.0, 1.0)
-    s = s * np.cumprod(flip)
+    flip[..., 1:] = np.where((s[..., 1:] * np.conj(s[..., :-1])).real < 0.0, -1.0, 1.0)
+    s = s * np.cumprod(flip, axis=-1)
     plus, minus = 0.5 * (a1 + s), 0.5 * (a1 - s)
     plus_is_big = np.abs(plus) >= np.abs(minus)
     big = np.where(plus_is_big, plus, minus)
@@ -723,3 +724,128 @@ def _speed_grid(values: object) -> np.ndarray:
         raise InputError(field, "speeds must be strictly increasing")
     n.flags.writeable = False
     return n
+
+
+# --------------------------------------------------------------------------- many FRFs at once
+
+
+def _curve_rows_on_grid(speed_rpm: np.ndarray, depth_m: np.ndarray, grid_rpm: np.ndarray
+                        ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_curve_on_grid` of every row of ``(nrows, nfreq)`` polylines at once.
+
+    Returns ``(row · nspeed + grid_index, depth)`` for all (segment, grid point) pairs;
+    segments never join two rows. The arithmetic is that of :func:`_curve_on_grid`, so each
+    row's values equal its own call's.
+    """
+    ok = np.isfinite(depth_m)
+    r, c = np.nonzero(ok[:, :-1] & ok[:, 1:])
+    n0, n1 = speed_rpm[r, c], speed_rpm[r, c + 1]
+    j_lo = np.searchsorted(grid_rpm, np.minimum(n0, n1), side="left")
+    j_hi = np.searchsorted(grid_rpm, np.maximum(n0, n1), side="right")
+    counts = np.maximum(j_hi - j_lo, 0)
+    seg = np.repeat(np.arange(r.size), counts)
+    start = np.cumsum(counts) - counts
+    j = j_lo[seg] + np.arange(seg.size) - start[seg]
+    dn = (n1 - n0)[seg]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(dn != 0.0, (grid_rpm[j] - n0[seg]) / dn, 0.0)
+    b0 = depth_m[r, c]
+    b = b0[seg] + t * (depth_m[r, c + 1] - b0)[seg]
+    return r[seg] * grid_rpm.size + j, b
+
+
+def _unsettled_rows(depth_m: np.ndarray, next_speed_rpm: np.ndarray, grid_rpm: np.ndarray,
+                    envelope_m: np.ndarray) -> np.ndarray:
+    """:func:`_needs_more_lobes` of every row at once, shape (nrows, nspeed).
+
+    Per row: the smallest depth ``b`` of the points whose first omitted lobe reaches speed
+    ``s`` or beyond (``n_K ≥ s``), against the envelope at ``s``. The points and the grid
+    speeds of a row are sorted together (a grid speed before points of equal speed), and a
+    running minimum from the top gives every grid speed the minimum over the points above.
+    """
+    rows, npoints, nspeed = depth_m.shape[0], depth_m.shape[1], grid_rpm.size
+    ok = np.isfinite(depth_m)
+    speed = np.concatenate([np.where(ok, next_speed_rpm, -np.inf), np.broadcast_to(grid_rpm, (rows, nspeed))], axis=1)
+    depth = np.concatenate([np.where(ok, depth_m, np.inf), np.full((rows, nspeed), np.inf)], axis=1)
+    is_point = np.concatenate([np.ones((rows, npoints)), np.zeros((rows, nspeed))], axis=1)
+    order = np.lexsort((is_point, speed), axis=-1)
+    above_min = np.minimum.accumulate(np.take_along_axis(depth, order, axis=1)[:, ::-1], axis=1)[:, ::-1]
+    position = np.argsort(order, axis=1)[:, npoints:]  # where each grid speed went
+    missing_min = np.take_along_axis(above_min, position, axis=1)
+    out: np.ndarray = np.isfinite(envelope_m) & (missing_min < envelope_m)
+    return out
+
+
+def depth_limit_envelopes(
+    frequency_hz: object,
+    frf_xx: object,
+    frf_yy: object | None = None,
+    *,
+    teeth: int,
+    tangential_coefficient_n_m2: float,
+    radial_ratio: float,
+    radial_immersion: float,
+    milling: Milling,
+    spindle_speed_rpm: object,
+) -> np.ndarray:
+    """The lower envelope of :func:`stability_lobes` for many FRFs at once (e.g. Monte-Carlo draws).
+
+    Row ``d`` of the result equals ``stability_lobes(frequency_hz, frf_xx[d], frf_yy[d],
+    ...).depth_limit_m`` — the same automatic lobe count per row, the same withdrawal of
+    speeds an omitted lobe could lower — but all rows are computed together: one array
+    operation per lobe over every row, never a loop over rows. A row whose FRF cannot chatter
+    in this cut is NaN throughout (where :func:`stability_lobes` refuses it).
+
+    Parameters
+    ----------
+    frequency_hz : array_like, shape (nfreq,)
+        Frequency grid, Hz (> 0, strictly increasing).
+    frf_xx : array_like, shape (nrows, nfreq)
+        Direct tool-point receptances in x, m/N, complex.
+    frf_yy : array_like, shape (nrows, nfreq), optional
+        In y; ``None``: ``Φyy = Φxx`` for every row.
+    teeth, tangential_coefficient_n_m2, radial_ratio, radial_immersion, milling, spindle_speed_rpm
+        As for :func:`stability_lobes`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (nrows, nspeed)
+        Depth limits, m; NaN where unsettled (as in :attr:`LobeResult.depth_limit_m`).
+
+    Raises
+    ------
+    InputError
+        On an invalid argument (names the field).
+    """
+    f = check_frequency_hz(frequency_hz)
+    hxx = np.asarray(frf_xx, dtype=complex)
+    if hxx.ndim != 2 or hxx.shape[1] != f.size or not np.all(np.isfinite(hxx)):
+        raise InputError("frf_x", f"expected finite values of shape (nrows, {f.size}), got {hxx.shape}")
+    hyy = hxx if frf_yy is None else np.asarray(frf_yy, dtype=complex)
+    if hyy.shape != hxx.shape or not np.all(np.isfinite(hyy)):
+        raise InputError("frf_y", f"expected finite values of shape {hxx.shape}, got {hyy.shape}")
+    n_teeth, kt, kr, immersion, milling = check_cut(teeth, tangential_coefficient_n_m2, radial_ratio,
+                                                    radial_immersion, milling)
+    grid = _speed_grid(spindle_speed_rpm)
+    alpha = directional_factors(*engagement_angles_rad(immersion, milling), kr)
+    depth, epsilon = zoa_depth_limit(hxx, hyy, teeth=n_teeth, tangential_coefficient_n_m2=kt, alpha=alpha)
+    rows = hxx.shape[0]
+    valid = np.any(np.isfinite(depth), axis=2)  # (nrows, nfreq)
+    f_max = np.max(np.where(valid, f, -np.inf), axis=1)
+    needed = np.where(np.isfinite(f_max), np.ceil(60.0 * f_max / (n_teeth * float(grid[0]))) + 1, 1)
+    lobes_count = np.minimum(needed, MAX_AUTO_LOBES).astype(int)  # per row, as stability_lobes counts
+
+    env = np.full(rows * grid.size, np.inf)
+    for k in range(int(lobes_count.max())):  # loop over lobes and eigenvalues, never over rows or frequency
+        used = (k < lobes_count)[:, None]
+        for e in range(2):
+            j, b = _curve_rows_on_grid(_lobe_speed_rpm(f, epsilon[:, :, e], n_teeth, k),
+                                       np.where(used, depth[:, :, e], np.nan), grid)
+            np.minimum.at(env, j, b)
+    envelope = env.reshape(rows, grid.size)
+    envelope[~np.isfinite(envelope)] = np.nan
+    k_next = lobes_count[:, None, None]
+    next_speed = 60.0 * 2.0 * np.pi * f[None, :, None] / (n_teeth * (epsilon + 2.0 * np.pi * k_next))
+    unsure = _unsettled_rows(depth.reshape(rows, -1), next_speed.reshape(rows, -1), grid, envelope)
+    envelope[unsure] = np.nan
+    return envelope
