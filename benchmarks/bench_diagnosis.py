@@ -20,9 +20,19 @@ truth (``tests/analysis/diagnosis/truth.py``) with in-tolerance scatter of the n
 * runtime per diagnosis (median, max; the first diagnosis of a worker includes the
   Monte-Carlo Σ, later ones reuse it).
 
+Hybrid trials (``--hybrid``): the spindle is a stored measurement of the same FE truth — a
+``point_receptance`` with 0.3 % noise, a ``direct_frf`` (rotations estimated by the
+equivalent cantilever) and ``artifact_frfs`` on a test arbor, identified by the exact
+three-FRF method (``tests/analysis/diagnosis/truth_hybrid.py``) — three stickouts (50, 66,
+82 mm; leave-one-out held out), the classes a measured spindle admits, scored the same way
+per kind and pooled (``bearings`` is never a candidate there; ``spindle_rotational_receptance``
+is an error of the stored rotations). The SNR of a rotation error is that of the base model
+on the erroneous versus the error-free stored spindle.
+
 Run::
 
     .venv/bin/python benchmarks/bench_diagnosis.py --trials 250 --seed 1 --workers 2
+    .venv/bin/python benchmarks/bench_diagnosis.py --hybrid --trials-per-class 12 --seed 2 --workers 2
     .venv/bin/python benchmarks/bench_diagnosis.py --check-mesh
     .venv/bin/python benchmarks/bench_diagnosis.py --calibrate holder_tool
 
@@ -41,19 +51,25 @@ from collections import Counter
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-import numpy as np
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):  # one core per worker: CPU times comparable
+    os.environ.setdefault(_var, "1")
+
+import numpy as np  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
-from tests.analysis.diagnosis import truth  # noqa: E402
+from tests.analysis.diagnosis import truth, truth_hybrid  # noqa: E402
 
+from rcsa.analysis.diagnosis.perturbed_model import BaseReceptance, Knobs  # noqa: E402
 from rcsa.analysis.diagnosis.report import build_response  # noqa: E402
-from rcsa.analysis.diagnosis.state import analyse  # noqa: E402
+from rcsa.analysis.diagnosis.state import Analysis, analyse  # noqa: E402
+from rcsa.measured.hybrid import base_resolver, measured_base  # noqa: E402
 
 EQUIVALENT = ({"holder_tool_joint", "insertion_depth"}, {"spindle_holder_joint", "spindle_rotational_receptance"})
 SNR_BINS = ((0.0, 5.0), (5.0, 10.0), (10.0, 20.0), (20.0, float("inf")))
+DEFAULT_OUT = REPO / "benchmarks" / "results" / "diagnosis.json"
 
 
 def _equivalent(a: str, b: str) -> bool:
@@ -66,22 +82,59 @@ def run_trial(index: int, effect: str, seed: int, tolerance_scale: float = 1.0) 
     t0 = time.perf_counter()
     trial = truth.make_trial(rng, effect, tolerance_scale=tolerance_scale)
     t_truth = time.perf_counter() - t0
-    t1 = time.perf_counter()
+    t1, c1 = time.perf_counter(), time.process_time()
     a = analyse(trial.request)
     r = build_response(a)
-    t_diag = time.perf_counter() - t1
-    p = a.problem
+    t_diag, c_diag = time.perf_counter() - t1, time.process_time() - c1
     snr = 0.0
     if effect != "none":
-        def feats(hs: list[np.ndarray]) -> np.ndarray:
-            return p.features([hs[c.index][c.lines] for c in p.configs])
-        snr = float(np.linalg.norm(a.like.w @ (feats(trial.clean) - feats(trial.clean_null))))
+        snr = float(np.linalg.norm(a.like.w @ (_features(a, trial.clean) - _features(a, trial.clean_null))))
+    return _record(index, effect, trial.params, a, r, snr, t_diag, t_truth, c_diag)
+
+
+def run_hybrid_trial(index: int, effect: str, kind: str, seed: int,
+                     length_log_sd: float = truth_hybrid.LENGTH_LOG_SD) -> dict:
+    """One hybrid trial (measured spindle of ``kind``): truth, diagnosis, scores."""
+    rng = np.random.default_rng([seed, index])
+    t0 = time.perf_counter()
+    trial = truth_hybrid.make_hybrid_trial(rng, effect, kind, length_log_sd=length_log_sd)
+    t_truth = time.perf_counter() - t0
+    t1, c1 = time.perf_counter(), time.process_time()
+    a = analyse(trial.request, base_resolver(trial.source))
+    r = build_response(a)
+    t_diag, c_diag = time.perf_counter() - t1, time.process_time() - c1
+    p = a.problem
+    snr = 0.0
+    if effect == "spindle_rotational_receptance":  # the base model on the erroneous vs the error-free spindle
+        if kind == "direct_frf":
+            length = trial.request["assembly"]["spindle"]["effective_length_m"]
+            f_null = p.features(p.h(Knobs(base_rotation_scale=length / trial.length_null_m)))
+        else:
+            assert trial.source_null is not None
+            mb = measured_base(next(iter(trial.source_null)), p.solver.frequency_hz, trial.source_null)
+            f_null = p.features(p.h(Knobs(), BaseReceptance(mb.receptance)))
+        snr = float(np.linalg.norm(a.like.w @ (p.base_features - f_null)))
+    elif effect != "none":
+        snr = float(np.linalg.norm(a.like.w @ (_features(a, trial.clean) - _features(a, trial.clean_null))))
+    out = _record(index, effect, trial.params, a, r, snr, t_diag, t_truth, c_diag)
+    out["kind"] = kind
+    out["not_applicable"] = [x["effect"] for x in r["not_applicable"]]
+    return out
+
+
+def _features(a: Analysis, hs: list[np.ndarray]) -> np.ndarray:
+    p = a.problem
+    return p.features([hs[c.index][c.lines] for c in p.configs])
+
+
+def _record(index: int, effect: str, params: dict, a: Analysis, r: dict, snr: float, t_diag: float,
+            t_truth: float, cpu_diag: float) -> dict:
     v = r["verdict"]
     first = r["effects"][0] if r["effects"] else None
     ranked = [e["effect"] for e in r["ranking"]]
     correct = v["status"] == "identified" and v["effect"] == effect
     out = {
-        "index": index, "effect": effect, "params": {k: float(x) for k, x in trial.params.items()},
+        "index": index, "effect": effect, "params": {k: float(x) for k, x in params.items()},
         "status": v["status"], "verdict": v["effect"], "ambiguous_with": v["ambiguous_with"],
         "log_bayes_factor": v["log_bayes_factor"], "snr_true": snr, "snr_fitted": v["snr"],
         "top1": correct, "best_ranked": ranked[0] if ranked else "none",
@@ -96,11 +149,47 @@ def run_trial(index: int, effect: str, seed: int, tolerance_scale: float = 1.0) 
         "second_effect": r["effects"][-1]["effect"] if r["effects"] and "given" in r["effects"][-1] else None,
         "residual_p_value": first["residual_p_value"] if first else None,
         "collinear_rivals": [x["effect"] for x in v["collinear_rivals"]],
-        "runtime_s": t_diag, "truth_s": t_truth,
+        "runtime_s": t_diag, "cpu_s": cpu_diag, "truth_s": t_truth,
         "ranking": [(e["effect"], round(e["log_bayes_factor"], 2)) for e in r["ranking"]],
     }
     if first is not None and effect != "none":
         out["parameters"] = {k: (p_["value"], p_["sd"]) for k, p_ in first["parameters"].items()}
+    return out
+
+
+def timing(repeats: int = 3) -> dict:
+    """CPU and wall time of one diagnosis, and what takes what (the phases of the best cold run).
+
+    Fixed seeded requests with a hidden 1-8 g sensor mass: RA-1 with 5 stickouts (analytical
+    spindle), and 3 stickouts on each kind of measured spindle. "cold" computes the
+    Monte-Carlo Σ; "warm" repeats the request with its draws cached (a re-run with other
+    options, or the benchmark's later trials of one worker on the same lines).
+    """
+    from rcsa.analysis.diagnosis import problem
+
+    cases = [("analytical, 5 stickouts", truth.make_trial(np.random.default_rng([7, 0]), "sensor_mass",
+                                                          with_null=False).request, None)]
+    for kind in truth_hybrid.KINDS:
+        trial = truth_hybrid.make_hybrid_trial(np.random.default_rng([7, 1]), "sensor_mass", kind, with_null=False)
+        cases.append((f"{kind}, 3 stickouts", trial.request, base_resolver(trial.source)))
+    out = {}
+    for name, request, resolve in cases:
+        runs = []
+        for i in range(repeats + 2):
+            if i < repeats:
+                problem._DRAW_CACHE.clear()
+            c0, t0 = time.process_time(), time.perf_counter()
+            r = build_response(analyse(request, resolve))
+            runs.append({"cpu_s": time.process_time() - c0, "wall_s": time.perf_counter() - t0,
+                         "phases_s": r["analysis"]["timings_s"], "verdict": r["verdict"]["effect"]})
+        cold, warm = runs[:repeats], runs[repeats:]
+        best = min(cold, key=lambda x: x["cpu_s"])
+        out[name] = {"cold_cpu_s": best["cpu_s"], "cold_wall_s": min(x["wall_s"] for x in cold),
+                     "warm_cpu_s": min(x["cpu_s"] for x in warm), "warm_wall_s": min(x["wall_s"] for x in warm),
+                     "phases_of_best_cold_run_s": best["phases_s"], "verdict": best["verdict"]}
+        ph = " ".join(f"{k} {v:.2f}" for k, v in best["phases_s"].items())
+        print(f"{name:34s} cold CPU {best['cpu_s']:.2f} s (wall {out[name]['cold_wall_s']:.2f}), "
+              f"warm CPU {out[name]['warm_cpu_s']:.2f} s | phases (wall, s): {ph}", flush=True)
     return out
 
 
@@ -118,8 +207,8 @@ def summarise(records: list[dict]) -> dict:
         rs = [r for r in eff if lo <= r["snr_true"] < hi]
         bins[f"{lo:g}-{hi:g}"] = {"n": len(rs), "top1": rate(rs, "top1"), "equivalence": rate(rs, "equivalent"),
                                   "miss": float(np.mean([r["status"] == "none" for r in rs])) if rs else None}
-    classes = list(truth.EFFECTS)
-    columns = [*classes, "ambiguous"]
+    classes = [c for c in truth.EFFECTS if any(r["effect"] == c for r in records)]
+    columns = [*truth.EFFECTS, "ambiguous"]
     confusion = {h: dict.fromkeys(columns, 0) for h in classes}
     for r in records:
         col = "ambiguous" if r["status"] == "ambiguous" else r["verdict"]
@@ -137,6 +226,7 @@ def summarise(records: list[dict]) -> dict:
     claims = [r for r in eff if r["status"] != "none" and r["held_out_gap_ratio"] is not None]
     db_ratio = [r["held_out_db_after"] / r["held_out_db_before"] for r in good if r["held_out_db_before"]]
     runtimes = [r["runtime_s"] for r in records]
+    cpu = [r.get("cpu_s", np.nan) for r in records]
     return {
         "trials": len(records), "effect_trials": len(eff), "null_trials": len(null),
         "top1_all": rate(eff, "top1"), "top1_snr_ge_10": rate(strong, "top1"), "n_snr_ge_10": len(strong),
@@ -157,8 +247,9 @@ def summarise(records: list[dict]) -> dict:
         "confirmation_rate": rate([r for r in eff if r["status"] != "none" and r["confirmed"] is not None],
                                   "confirmed"),
         "spurious_second_effect": float(np.mean([r["second_effect"] is not None for r in eff])) if eff else None,
-        "runtime_s": {"median": float(np.median(runtimes)), "max": float(np.max(runtimes)),
-                      "first_of_worker_max": None},
+        "runtime_s": {"median": float(np.median(runtimes)), "p95": float(np.quantile(runtimes, 0.95)),
+                      "max": float(np.max(runtimes))},
+        "cpu_s": {"median": float(np.median(cpu)), "p95": float(np.quantile(cpu, 0.95)), "max": float(np.max(cpu))},
         "confusion": confusion, "per_class": per_class,
     }
 
@@ -181,7 +272,9 @@ def print_summary(s: dict) -> None:
           f"{pct(s['median_held_out_gap_ratio_all_claims'])}; dB ratio {pct(s['median_held_out_db_ratio_correct'])} "
           f"(median dB {s['median_held_out_db_before_after_correct']})")
     print(f"confirmation rate {pct(s['confirmation_rate'])}; spurious second effect {pct(s['spurious_second_effect'])}")
-    print(f"runtime per diagnosis: median {s['runtime_s']['median']:.2f} s, max {s['runtime_s']['max']:.2f} s")
+    print(f"runtime per diagnosis (wall, shared machine): median {s['runtime_s']['median']:.2f} s, "
+          f"95 % {s['runtime_s']['p95']:.2f} s, max {s['runtime_s']['max']:.2f} s; CPU time: median "
+          f"{s['cpu_s']['median']:.2f} s, 95 % {s['cpu_s']['p95']:.2f} s")
     cols = list(next(iter(s["confusion"].values())))
     short = {c: c[:6] for c in cols}
     print("confusion (rows hidden, columns verdict):")
@@ -287,14 +380,37 @@ def main() -> None:
     ap.add_argument("--classes", nargs="*", default=list(truth.EFFECTS), choices=truth.EFFECTS)
     ap.add_argument("--tolerance-scale", type=float, default=1.0,
                     help="true tolerances relative to those the diagnoser assumes (misspecification run)")
-    ap.add_argument("--out", type=Path, default=REPO / "benchmarks" / "results" / "diagnosis.json")
+    ap.add_argument("--out", type=Path, default=DEFAULT_OUT)
+    ap.add_argument("--hybrid", action="store_true", help="measured-spindle trials (writes diagnosis_hybrid.json)")
+    ap.add_argument("--kinds", nargs="*", default=list(truth_hybrid.KINDS), choices=truth_hybrid.KINDS)
+    ap.add_argument("--trials-per-class", type=int, default=12, help="hybrid: trials per class and kind")
+    ap.add_argument("--length-log-sd", type=float, default=truth_hybrid.LENGTH_LOG_SD,
+                    help="hybrid: how well the cantilever length of a direct_frf spindle is known (ln sd; "
+                         "the estimate scatters by it and the request states it)")
+    ap.add_argument("--score-partial", type=Path, metavar="JSONL",
+                    help="hybrid: only score the records a cut-short run wrote (with that run's settings)")
     ap.add_argument("--check-mesh", action="store_true", help="only print the FE truth's discretisation error")
     ap.add_argument("--calibrate", choices=["holder_tool", "spindle_holder"],
                     help="only refit the distributed contact closest to the base joint")
     ap.add_argument("--example", nargs=2, type=Path, metavar=("REQUEST_JSON", "PNG"),
                     help="only write the README example's request and figure")
     ap.add_argument("--example-effect", default="holder_tool_joint", choices=truth.EFFECTS)
+    ap.add_argument("--timing", action="store_true",
+                    help="only time one diagnosis per kind of spindle, cold and warm, with its phases")
+    ap.add_argument("--form-error", action="store_true",
+                    help="only measure the candidates' form error on correct fits (--trials-per-class per effect)")
     args = ap.parse_args()
+    if args.form_error:
+        from benchmarks.diagnosis_calibration import form_error
+
+        form_error(args)
+        return
+    if args.timing:
+        result = {"machine": machine(), "timing": timing()}
+        path = DEFAULT_OUT.with_name("diagnosis_timing.json")
+        path.write_text(json.dumps(result, indent=1))
+        print(f"wrote {path}")
+        return
     if args.example:
         example(*args.example, effect=args.example_effect, seed=args.seed)
         return
@@ -304,16 +420,27 @@ def main() -> None:
     if args.calibrate:
         calibrate(args.calibrate)
         return
+    if args.score_partial:
+        score_partial(args)
+        return
+    if args.hybrid:
+        run_hybrid(args)
+        return
     plan_rng = np.random.default_rng(args.seed)
     plan = [args.classes[i % len(args.classes)] for i in range(args.trials)]
     plan = [plan[i] for i in plan_rng.permutation(len(plan))]
     t0 = time.perf_counter()
     records: list[dict] = []
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    partial = args.out.with_suffix(".partial.jsonl")  # as in run_hybrid: a run cut short can still be scored
+    partial.write_text("")
     with ProcessPoolExecutor(max_workers=args.workers) as pool:
         futures = [pool.submit(run_trial, i, e, args.seed, args.tolerance_scale) for i, e in enumerate(plan)]
         for k, fut in enumerate(futures):
             rec = fut.result()
             records.append(rec)
+            with partial.open("a") as fh:
+                fh.write(json.dumps(rec) + "\n")
             print(f"[{k + 1}/{len(plan)}] {rec['effect']:29s} -> {rec['status']:10s} {rec['verdict']:29s} "
                   f"SNR {rec['snr_true']:5.1f} lnBF {rec['log_bayes_factor'] or 0:7.1f} {rec['runtime_s']:.1f} s",
                   flush=True)
@@ -322,11 +449,95 @@ def main() -> None:
     summary["command"] = " ".join(["benchmarks/bench_diagnosis.py", *sys.argv[1:]])
     summary["settings"] = {"stickouts_m": list(truth.STICKOUTS_M), "band_hz": [50.0, 8000.0], "line_step_hz": 2.0,
                            "noise": "1 % + floor -50 dB of peak, 5 averages", "seed": args.seed,
-                           "tolerance_scale": args.tolerance_scale, "workers": args.workers}
+                           "tolerance_scale": args.tolerance_scale, "workers": args.workers,
+                           "machine": machine()}
     print_summary(summary)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps({"summary": summary, "trials": records}, indent=1))
+    partial.unlink()
     print(f"wrote {args.out}")
+
+
+def machine() -> str:
+    """CPU model and count (what the runtimes were measured on)."""
+    model = "unknown CPU"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return f"{model}, {os.cpu_count()} cores (shared)"
+
+
+def hybrid_summary(records: list[dict], args: argparse.Namespace, planned: int) -> dict:
+    """Scores of hybrid trials per kind of spindle and pooled, printed; ``planned`` trials were asked for."""
+    kinds = [k for k in args.kinds if any(r["kind"] == k for r in records)]
+    summary = {"pooled": summarise(records), "by_kind": {k: summarise([r for r in records if r["kind"] == k])
+                                                         for k in kinds}}
+    rot = [r for r in records if r["kind"] == "direct_frf" and r["effect"] == "spindle_rotational_receptance"]
+    strong = [r for r in rot if r["snr_true"] >= 10]
+    summary["direct_frf_rotation_named"] = {
+        "n": len(rot), "identified": float(np.mean([r["top1"] for r in rot])) if rot else None,
+        "named_in_verdict": float(np.mean([r["in_set"] for r in rot])) if rot else None,
+        "n_snr_ge_10": len(strong),
+        "identified_snr_ge_10": float(np.mean([r["top1"] for r in strong])) if strong else None}
+    summary["trials_done"], summary["trials_planned"] = len(records), planned
+    summary["command"] = " ".join(["benchmarks/bench_diagnosis.py", *sys.argv[1:]])
+    summary["settings"] = {"stickouts_m": list(truth_hybrid.STICKOUTS_M), "band_hz": [50.0, 8000.0],
+                           "line_step_hz": 2.0, "noise": "taps 1 % + floor -50 dB of peak, 5 averages; "
+                           "stored spindle FRFs 0.3 %", "plane": "spindle_nose", "kinds": list(args.kinds),
+                           "trials_per_class_and_kind": args.trials_per_class, "seed": args.seed,
+                           "direct_frf_length_log_sd": args.length_log_sd,
+                           "workers": args.workers, "machine": machine()}
+    for k in kinds:
+        print(f"===== {k}")
+        print_summary(summary["by_kind"][k])
+    print("===== pooled")
+    print_summary(summary["pooled"])
+    print(f"direct_frf rotation errors named: {summary['direct_frf_rotation_named']}")
+    print(f"trials: {len(records)} of {planned} planned")
+    return summary
+
+
+def score_partial(args: argparse.Namespace) -> None:
+    """Score the records a cut-short hybrid run wrote (``--score-partial``) as the full run would."""
+    records = [json.loads(line) for line in args.score_partial.read_text().splitlines() if line.strip()]
+    classes = [c for c in truth_hybrid.HYBRID_EFFECTS if c in args.classes or args.classes == list(truth.EFFECTS)]
+    summary = hybrid_summary(records, args, planned=len(classes) * len(args.kinds) * args.trials_per_class)
+    summary["cut_short"] = True
+    out = args.out if args.out != DEFAULT_OUT else DEFAULT_OUT.with_name("diagnosis_hybrid.json")
+    out.write_text(json.dumps({"summary": summary, "trials": records}, indent=1))
+    print(f"wrote {out}")
+
+
+def run_hybrid(args: argparse.Namespace) -> None:
+    """The hybrid benchmark: every kind of measured spindle × every class it admits."""
+    classes = [c for c in truth_hybrid.HYBRID_EFFECTS if c in args.classes or args.classes == list(truth.EFFECTS)]
+    plan = [(e, k) for k in args.kinds for e in classes for _ in range(args.trials_per_class)]
+    plan = [plan[i] for i in np.random.default_rng(args.seed).permutation(len(plan))]
+    t0 = time.perf_counter()
+    records: list[dict] = []
+    out = args.out if args.out != DEFAULT_OUT else DEFAULT_OUT.with_name("diagnosis_hybrid.json")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    partial = out.with_suffix(".partial.jsonl")  # every record as it comes: a run cut short can still be scored
+    partial.write_text("")
+    with ProcessPoolExecutor(max_workers=args.workers) as pool:
+        futures = [pool.submit(run_hybrid_trial, i, e, k, args.seed, args.length_log_sd)
+                   for i, (e, k) in enumerate(plan)]
+        for n, fut in enumerate(futures):
+            rec = fut.result()
+            records.append(rec)
+            with partial.open("a") as fh:
+                fh.write(json.dumps(rec) + "\n")
+            print(f"[{n + 1}/{len(plan)}] {rec['kind']:16s} {rec['effect']:29s} -> {rec['status']:10s} "
+                  f"{rec['verdict']:29s} SNR {rec['snr_true']:5.1f} lnBF {rec['log_bayes_factor'] or 0:7.1f} "
+                  f"{rec['runtime_s']:.1f} s", flush=True)
+    summary = hybrid_summary(records, args, planned=len(plan))
+    summary["wall_time_s"] = time.perf_counter() - t0
+    out.write_text(json.dumps({"summary": summary, "trials": records}, indent=1))
+    partial.unlink()
+    print(f"wrote {out}")
 
 
 if __name__ == "__main__":

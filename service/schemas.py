@@ -855,6 +855,16 @@ class DiagnosisTolerances(_AnalysisRequest):
                                                        "(default 0.25).")
     stickout_m: float = Field(None, ge=0, le=DIAGNOSIS_TOLERANCES["stickout_m"],
                               description="Stickout setting, m, per measurement (default 0.0003).")
+    spindle_effective_length_log: float = Field(
+        None, ge=0, le=DIAGNOSIS_TOLERANCES["spindle_effective_length_log"],
+        description="Measured direct_frf spindle: its equivalent cantilever length, ln scale (default 0.35).")
+    spindle_rotation_shape_log: float = Field(
+        None, ge=0, le=DIAGNOSIS_TOLERANCES["spindle_rotation_shape_log"],
+        description="Measured direct_frf spindle: the shape PH/N² of its estimated rotations, ln scale "
+                    "(default 0.35).")
+    spindle_noise_rel: float = Field(
+        None, ge=0, le=DIAGNOSIS_TOLERANCES["spindle_noise_rel"],
+        description="Measured spindle stored without coherence: relative noise of its FRFs (default 0.005).")
 
 
 def _option(name: str, default: float, description: str) -> Any:

@@ -4,8 +4,8 @@ Each route validates the body against its schema (:class:`service.schemas.Diagno
 :class:`~service.schemas.IdentificationRequest`, :data:`~service.schemas.EffectsRequest`:
 types and the library's bounds, published in the OpenAPI) and passes it, as sent, to
 ``rcsa.app.analyses.diagnose`` / ``identify`` / ``effects``, which check every rule between
-fields and name the field as the schema does. Identifications and effect analyses also get
-the service's measurement store (measured spindles).
+fields and name the field as the schema does. All three also get the service's measurement
+store (measured spindles are looked up there).
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ from .batches import PreferHeader
 router = APIRouter(prefix="/v1", tags=["analyses"], route_class=ServiceRoute)
 
 #: Operations that read measured spindles from the service's store.
-_WITH_STORE = {"identify", "effects"}
+_WITH_STORE = {"diagnose", "identify", "effects"}
 _ERRORS = {**problems(401, 413, 415, 422), **ASYNC_ACCEPTED}
 
 

@@ -141,17 +141,19 @@ def identify(request: Mapping[str, Any], *, store: MeasurementSource | None = No
     return run(request, resolver(store), progress)
 
 
-def diagnose(request: Mapping[str, Any], *, progress: Progress | None = None, **kwargs: Any) -> dict[str, Any]:
+def diagnose(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
+             progress: Progress | None = None) -> dict[str, Any]:
     """Sim-to-real gap diagnosis (``contract.md`` "Diagnosis").
 
     Parameters
     ----------
     request : dict
         The diagnosis request: ``{"assembly", "measurements", "tolerances"?, "options"?}``.
+    store : MeasurementSource, optional
+        Where a measured spindle (``assembly.spindle = {"measurement_id": ...}``) is looked
+        up; the default store when omitted (opened only if the request has one).
     progress : callable, optional
         ``progress(done, total)`` at each step (:mod:`rcsa.analysis.progress`).
-    **kwargs
-        Passed on to :func:`rcsa.analysis.diagnosis.diagnose.diagnose`.
 
     Returns
     -------
@@ -161,16 +163,16 @@ def diagnose(request: Mapping[str, Any], *, progress: Progress | None = None, **
     # scipy.stats and scipy.optimize (~0.9 s to import): only when a diagnosis is asked for
     from rcsa.analysis.diagnosis.diagnose import diagnose as run
 
-    return run(request, progress=progress, **kwargs)
+    return run(request, resolver(store), progress)
 
 
 def validate(kind: str, request: Mapping[str, Any], *, store: MeasurementSource | None = None) -> None:
     """Refuse an invalid request before it is queued as a job (the checks its run makes
     first), so that a bad request is a 422 at once instead of a failed job."""
     if kind == "diagnosis":
-        from rcsa.analysis.diagnosis.request import parse_request
+        from rcsa.analysis.diagnosis.state import validate as validate_diagnosis
 
-        parse_request(request)
+        validate_diagnosis(request, resolver(store))
     elif kind == "identification":
         from rcsa.analysis.joint_identification.request import parse_identification_request
 
@@ -200,5 +202,5 @@ def run_analysis(kind: str, request: Mapping[str, Any], *, store: MeasurementSto
     if kind == "identification":
         return identify(request, store=store)
     if kind == "diagnosis":
-        return diagnose(request)
+        return diagnose(request, store=store)
     raise InputError("kind", f"no analysis {kind!r} (known: {', '.join(ANALYSIS_KINDS)})")

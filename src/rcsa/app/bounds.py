@@ -46,7 +46,8 @@ DIAGNOSIS_LIKELIHOODS = ("student_t", "gaussian")
 DIAGNOSIS_TOLERANCES = dict.fromkeys((
     "tool_youngs_modulus_rel", "tool_density_rel", "structure_youngs_modulus_rel", "structure_density_rel",
     "loss_factor_log", "bearing_stiffness_log", "bearing_damping_log", "spindle_holder_stiffness_log",
-    "spindle_holder_damping_log", "holder_tool_stiffness_log", "holder_tool_damping_log"), 2.0) | {"stickout_m": 0.05}
+    "spindle_holder_damping_log", "holder_tool_stiffness_log", "holder_tool_damping_log",
+    "spindle_effective_length_log", "spindle_rotation_shape_log", "spindle_noise_rel"), 2.0) | {"stickout_m": 0.05}
 #: (lowest, highest) of the numeric diagnosis options (``diagnosis.request._options``).
 DIAGNOSIS_OPTION_BOUNDS = {"monte_carlo_draws": (50.0, 5000.0), "claim_threshold": (0.0, 50.0),
                            "ambiguity_window": (0.0, 50.0), "max_effects": (1.0, 2.0), "max_lines": (200.0, 20000.0)}

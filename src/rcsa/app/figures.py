@@ -231,10 +231,13 @@ def effects_with_figure(request: Mapping[str, Any], picture: str | os.PathLike[s
 
 
 def diagnosis_with_figure(request: Mapping[str, Any], picture: str | os.PathLike[str] | None = None, *,
+                          store: MeasurementSource | None = None,
                           progress: Progress | None = None) -> dict[str, Any]:
     """Diagnosis (:func:`rcsa.app.analyses.diagnose`), its figure (measured, base and corrected
     FRFs, and the gap map) drawn to ``picture`` (.png or .svg) when given; ``progress(done,
     total)`` is called at each step.
+
+    ``store``: where a measured spindle is looked up (the default store when omitted).
 
     Raises
     ------
@@ -245,7 +248,7 @@ def diagnosis_with_figure(request: Mapping[str, Any], picture: str | os.PathLike
     from rcsa.analysis.diagnosis.report import build_response, diagnosis_figure
     from rcsa.analysis.diagnosis.state import analyse
 
-    analysis = analyse(request, progress)
+    analysis = analyse(request, resolver(store), progress)
     response = build_response(analysis)
     if picture is not None:
         save_figure(diagnosis_figure(analysis, response), picture)

@@ -15,6 +15,7 @@ from rcsa.cli._common import (
     run_guarded,
     write_json,
 )
+from rcsa.cli.predict_cmd import StoreOption
 
 
 def register(app: typer.Typer) -> None:
@@ -26,17 +27,24 @@ def register(app: typer.Typer) -> None:
         out: Annotated[Path | None, typer.Option("-o", "--out", help="Write the result here instead of stdout.")] = None,
         plot: Annotated[Path | None, typer.Option("--plot", help="Also draw measured/base/corrected FRFs and the "
                                                                   "gap map to this .png or .svg file.")] = None,
+        store: StoreOption = None,
         quiet: QuietOption = False,
     ) -> None:
-        """Where model and measurement part, which unmodelled effect explains it, and how far the gap shrinks."""
+        """Where model and measurement part, which unmodelled effect explains it, and how far the gap shrinks.
+
+        The base model's spindle may be a stored measurement ({"measurement_id": ...}), looked
+        up in the store.
+        """
         # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
         from rcsa.app.figures import FIGURE_SUFFIXES, diagnosis_with_figure
+        from rcsa.app.stores import open_store
         if plot is not None and plot.suffix.lower() not in FIGURE_SUFFIXES:
             raise fail(f"--plot: the file must end in .png or .svg, got {plot.name!r}")
         doc = read_json(request)
         try:
             with progress_callback("diagnosis", quiet) as progress:
-                response = run_guarded(lambda: diagnosis_with_figure(doc, plot, progress=progress))
+                response = run_guarded(lambda: diagnosis_with_figure(
+                    doc, plot, store=open_store(store) if store else None, progress=progress))
         except OSError as exc:
             raise fail(f"cannot write {plot}: {exc.strerror or exc}") from None
         write_json(response, out)

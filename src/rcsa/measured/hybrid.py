@@ -115,6 +115,7 @@ class _EntryNoise:
     sd: Mapping[str, np.ndarray | None]  # per stored FRF, (nfreq,) or None (no coherence)
 
     def draw(self, rng: np.random.Generator, n: int, default_noise_rel: float) -> np.ndarray:
+        """See :meth:`rcsa.model.spindle_side.BaseUncertainty.draw`."""
         nf = self.receptance.shape[0]
 
         def sd(name: str) -> np.ndarray:
@@ -133,6 +134,7 @@ class _EntryNoise:
         return out
 
     def summary(self, default_noise_rel: float) -> dict[str, Any]:
+        """See :meth:`rcsa.model.spindle_side.BaseUncertainty.summary`."""
         return {"propagation": "relative noise on each stored FRF" if len(self.sd) > 1 else
                 "relative noise on h, carried by the estimated rotations",
                 **_noise_summary(self.sd, default_noise_rel)}
@@ -151,6 +153,7 @@ class _ArtifactNoise:
     condition_number: np.ndarray         # (nfreq,)
 
     def draw(self, rng: np.random.Generator, n: int, default_noise_rel: float) -> np.ndarray:
+        """See :meth:`rcsa.model.spindle_side.BaseUncertainty.draw`."""
         nf = self.frequency_hz.size
         noisy = {}
         for name, v in self.frfs.items():
@@ -162,6 +165,7 @@ class _ArtifactNoise:
         return self.receptance + (drawn - centre)
 
     def summary(self, default_noise_rel: float) -> dict[str, Any]:
+        """See :meth:`rcsa.model.spindle_side.BaseUncertainty.summary`."""
         c = self.condition_number
         return {"propagation": "noise on h11, h21, h22 re-identified by the exact three-FRF method",
                 **_noise_summary(self.sd, default_noise_rel),

@@ -51,7 +51,7 @@ class BaseUncertainty(Protocol):
     """
 
     def draw(self, rng: np.random.Generator, n: int, default_noise_rel: float) -> ComplexArray:
-        """``n`` equally likely receptances, shape (n, nfreq, 2, 2), on the base's grid.
+        """Equally likely receptances under the measurement's own noise.
 
         Parameters
         ----------
@@ -59,8 +59,13 @@ class BaseUncertainty(Protocol):
         n : int
             Number of draws.
         default_noise_rel : float
-            Relative sd of |H| and of its phase, per real and imaginary part, for the FRFs
+            Relative sd of the magnitude and of the phase (per real and imaginary part) used for FRFs
             stored without coherence.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n, nfreq, 2, 2), complex
+            On the base's grid, ``[[h, l], [n, p]]`` in m/N, m/(N·m), rad/N, rad/(N·m).
         """
         ...
 
@@ -71,6 +76,10 @@ class BaseUncertainty(Protocol):
         ----------
         default_noise_rel : float
             As for :meth:`draw`.
+
+        Returns
+        -------
+        dict
         """
         ...
 

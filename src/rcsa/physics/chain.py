@@ -50,7 +50,6 @@ from rcsa.physics.segments import (
     SixTerms,
     Waves,
     double,
-    dynamic_stiffness,
     segment_terms,
     six_terms,
     static_terms,
@@ -675,8 +674,14 @@ class Beam:
         return _beam_step(k, terms, local_scratch("static"), None)[0]  # type: ignore[arg-type]
 
     def absorb_compliance(self, compliance: ComplexArray, grid: Grid) -> tuple[ComplexArray, bool]:
-        """``D22 − D21 S (I + D11 S)⁻¹ D12``: the stiffness at the beam's end, never inverting ``S``."""
-        d = dynamic_stiffness(grid.omega_rad_s, self.section, self.length_m)
+        """``D22 − D21 S (I + D11 S)⁻¹ D12``: the stiffness at the beam's end, never inverting ``S``.
+
+        ``D`` from the grid's six terms (:meth:`Grid.beam_terms`), so a grid that caches them
+        (the diagnosis's) absorbs a measured base without recomputing the beam.
+        """
+        a, b, c, e, f, g = grid.beam_terms(self)
+        d = np.stack([np.stack(r, axis=-1) for r in ([a, b, e, f], [b, c, -f, g], [e, -f, a, -b], [f, g, -b, c])],
+                     axis=-2)
         d11, d12, d21, d22 = d[:, :2, :2], d[:, :2, 2:], d[:, 2:, :2], d[:, 2:, 2:]
         s = compliance
         return d22 - d21 @ s @ inv2(_EYE + d11 @ s) @ d12, True

@@ -197,6 +197,13 @@ def _taper_spindle(doc: dict[str, Any]) -> dict[str, Any]:
 
 def _spindle_nose_receptance(doc: dict[str, Any], f: np.ndarray) -> np.ndarray:
     """FE receptance [[h, l], [n, p]] of the spindle alone (bearings, no holder) at its nose."""
+    model, nose = spindle_model(doc)
+    dofs = list(model.node_dofs[nose])
+    return harmonic_receptance(model, f, dofs, dofs)
+
+
+def spindle_model(doc: dict[str, Any]) -> tuple[BeamModel, int]:
+    """FE of the spindle alone (bearings, no holder): the model and its nose node (x = 0, rear toward −x)."""
     mats = doc["materials"]
     model = BeamModel()
     nose = model.add_node(0.0)
@@ -221,8 +228,7 @@ def _spindle_nose_receptance(doc: dict[str, Any], f: np.ndarray) -> np.ndarray:
                          translational_ns_m=bg.get("damping_ns_m", 0.0),
                          rotational_nm_rad=bg.get("rotational_stiffness_nm_rad", 0.0),
                          rotational_nms_rad=bg.get("rotational_damping_nms_rad", 0.0))
-    dofs = list(model.node_dofs[nose])
-    return harmonic_receptance(model, f, dofs, dofs)
+    return model, nose
 
 
 # ---------------------------------------------------------------------------------- effects

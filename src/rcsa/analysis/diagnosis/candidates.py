@@ -27,6 +27,21 @@ spindle_rotational_receptance     residual compliance added to the spindle's   0
 ``m_max`` is 1.5 × the largest declared ``sensor_mass_kg`` of the measurements, or 20 g.
 Speed-dependent effects are listed in :data:`NOT_OBSERVABLE_AT_STANDSTILL`; they are never
 candidates for a standstill tap test.
+
+On a **measured spindle** (hybrid, ``domain.md`` §4) the catalogue changes where the
+physics does (:func:`not_applicable` gives each excluded effect its reason):
+
+* ``bearings`` is not applicable: the bearings are inside the measured receptance;
+* ``spindle_holder_joint`` is not applicable on a ``holder_tip`` measurement (the joint is
+  inside it), and so is the holder's part of ``insertion_depth`` (only the tool's free
+  length grows);
+* ``spindle_rotational_receptance`` acts on the measured receptance at its plane. For a
+  ``direct_frf`` spindle, whose rotations are an equivalent-cantilever estimate of length L
+  (:func:`rcsa.measured.hybrid.cantilever_rotations`), its parameter is the effective length
+  ``L·2^u``, u ∈ [−2, 2] (l, n scale as 1/L, p as 1/L²); for a ``point_receptance`` or
+  ``artifact_frfs`` spindle it is the residual compliance above with l₀, p₀ read from the
+  measurement at its lowest analysis line, a ∈ [−0.6, 1.5], b ∈ [−0.8, 4] (a measured
+  rotation may be too large as well as too small).
 """
 
 from __future__ import annotations
@@ -38,10 +53,11 @@ import numpy as np
 
 from rcsa.analysis.diagnosis.perturbed_model import Knobs, Solver, config_parts, null_shear_scale
 from rcsa.model.contract import AssemblySpec, ToolSpec
+from rcsa.model.spindle_side import MeasuredBase
 from rcsa.physics.algebra2x2 import inv2
 
 __all__ = ["CANDIDATE_NAMES", "NOT_OBSERVABLE_AT_STANDSTILL", "STANDSTILL_SENTENCE", "Candidate",
-           "Parameter", "catalogue"]
+           "Parameter", "catalogue", "not_applicable"]
 
 CANDIDATE_NAMES = ("holder_tool_joint", "spindle_holder_joint", "bearings", "shear_and_rotary_inertia",
                    "fluted_section", "insertion_depth", "sensor_mass", "joint_damping",
@@ -104,9 +120,81 @@ def _static_nose_rotational_receptance(spec: AssemblySpec, solver: Solver) -> tu
     return float(r[0, 1]), float(r[1, 1])
 
 
+def _rotational_candidate(spec: AssemblySpec, solver: Solver, measured: MeasuredBase | None) -> Candidate:
+    """``spindle_rotational_receptance``: effective length of estimated rotations, else a residual compliance."""
+    name = "spindle_rotational_receptance"
+    if measured is not None and measured.effective_length_m is not None:
+        length = measured.effective_length_m
+        return Candidate(
+            name, (Parameter("log2_effective_length_scale", -2.0, 2.0, 0.0, "1"),),
+            lambda k, v: replace(k, base_rotation_scale=k.base_rotation_scale * float(2.0 ** -v[0])),
+            lambda v: {"effective_length_m": length * float(2.0 ** v[0]), "estimate_effective_length_m": length})
+    if measured is None:
+        l0, p0 = _static_nose_rotational_receptance(spec, solver)
+        a_lo, b_lo = -0.5, -0.5
+    else:
+        r = measured.receptance[0].real
+        l0, p0 = float(0.5 * (r[0, 1] + r[1, 0])), float(r[1, 1])
+        a_lo, b_lo = -0.6, -0.8
+    return Candidate(
+        name,
+        (Parameter("cross_residual_over_static_l", a_lo, 1.5, 0.0, "1"),
+         Parameter("rotational_residual_over_static_p", b_lo, 4.0, 0.0, "1")),
+        lambda k, v: replace(k, nose_cross_compliance_rad_n=float(v[0]) * l0,
+                             nose_rotational_residual_rad_nm=float(v[1]) * p0),
+        lambda v: {"added_cross_compliance_rad_n": float(v[0]) * l0,
+                   "added_rotational_compliance_rad_nm": float(v[1]) * p0,
+                   "spindle_static_l_rad_n": l0, "spindle_static_p_rad_nm": p0})
+
+
+def not_applicable(spec: AssemblySpec, tools: Sequence[ToolSpec], measured: MeasuredBase | None = None
+                   ) -> dict[str, tuple[str, bool]]:
+    """Effects that are no candidate for this base model, with the reason.
+
+    Parameters
+    ----------
+    spec : AssemblySpec
+    tools : sequence of ToolSpec
+        The measurements' tools.
+    measured : MeasuredBase, optional
+        The measured spindle (hybrid).
+
+    Returns
+    -------
+    dict
+        ``{effect: (reason, cannot_exist)}``; ``cannot_exist`` is True when the effect cannot
+        exist for this spindle at all (asking for it is refused), False when only the base
+        model leaves it out (e.g. a rigid joint, which a finite stiffness would make testable).
+    """
+    out: dict[str, tuple[str, bool]] = {}
+    plane = None if measured is None else measured.plane
+    if measured is not None:
+        out["bearings"] = ("the spindle is measured: its bearings are inside the measured receptance, so no bearing "
+                           "deviation can be added to it (nor blamed on a stand-in)", True)
+    if plane == "holder_tip":
+        out["spindle_holder_joint"] = ("the spindle was measured at the holder tip: the spindle-holder joint is inside "
+                                       "the measurement", True)
+    ht, sh = spec.holder_tool, spec.spindle_holder
+    if ht is None or ht.rotational_stiffness_nm_rad is None:
+        out["holder_tool_joint"] = ("the base model's holder-tool joint (or its rotational stiffness) is rigid; give "
+                                    "finite stiffnesses to test it" + (" (at a holder_tip plane the clamping of the "
+                                                                       "measured artifact is inside the measurement)"
+                                                                       if plane == "holder_tip" else ""), False)
+    if sh is None and "spindle_holder_joint" not in out:
+        out["spindle_holder_joint"] = ("the base model's spindle-holder joint is rigid; give finite stiffnesses to "
+                                       "test it", False)
+    if plane == "holder_tip" and ht is None:
+        out["joint_damping"] = ("no joint is modelled (the spindle was measured at the holder tip and the holder-tool "
+                                "joint is rigid)", False)
+    holder_len = spec.holder.length_m if spec.holder is not None else float("inf")
+    if min(min(t.inserted_length_m for t in tools), holder_len) <= 0.0:
+        out["insertion_depth"] = ("no tool shank is inserted in the holder", False)
+    return out
+
+
 def catalogue(spec: AssemblySpec, tools: Sequence[ToolSpec], solver: Solver,
-              sensor_mass_max_kg: float | None = None, names: Sequence[str] | None = None
-              ) -> tuple[list[Candidate], list[str]]:
+              sensor_mass_max_kg: float | None = None, names: Sequence[str] | None = None,
+              measured: MeasuredBase | None = None) -> tuple[list[Candidate], list[str]]:
     """Candidates applicable to this base model, and notes on those left out.
 
     Parameters
@@ -116,39 +204,46 @@ def catalogue(spec: AssemblySpec, tools: Sequence[ToolSpec], solver: Solver,
     tools : sequence of ToolSpec
         The measurements' tools (bounds of ``insertion_depth``).
     solver : Solver
-        Used once for the spindle's static nose compliance.
+        Used once for an analytical spindle's static nose compliance.
     sensor_mass_max_kg : float, optional
         Upper bound of ``sensor_mass``.
     names : sequence of str, optional
         Restrict the catalogue to these effects.
+    measured : MeasuredBase, optional
+        The measured spindle of a hybrid diagnosis (its plane, receptance and kind).
 
     Returns
     -------
     candidates : list of Candidate
     notes : list of str
+        One per effect the base model leaves out (effects that cannot exist for a measured
+        spindle are not noted here; see :func:`not_applicable`).
     """
     out: list[Candidate] = []
-    notes: list[str] = []
+    excluded = not_applicable(spec, tools, measured)
+    notes = [f"{name}: not a candidate because {reason}." for name, (reason, cannot) in excluded.items()
+             if not cannot]
     ht, sh = spec.holder_tool, spec.spindle_holder
 
-    if ht is not None and ht.rotational_stiffness_nm_rad is not None:
+    if "holder_tool_joint" not in excluded and ht is not None and ht.rotational_stiffness_nm_rad is not None:
+        kr0 = ht.rotational_stiffness_nm_rad
+
         def ht_meaning(v: np.ndarray) -> dict[str, float]:
+            assert ht is not None
             return {"holder_tool.stiffness_n_m": ht.stiffness_n_m * 10 ** v[0],
-                    "holder_tool.rotational_stiffness_nm_rad": ht.rotational_stiffness_nm_rad * 10 ** v[1]}
+                    "holder_tool.rotational_stiffness_nm_rad": kr0 * 10 ** v[1]}
         out.append(Candidate(
             "holder_tool_joint",
             (Parameter("log10_translational_stiffness_scale", -2.0, 0.5, 0.0, "1"),
              Parameter("log10_rotational_stiffness_scale", -2.0, 0.5, 0.0, "1")),
             lambda k, v: _mul(k, ht_translational_scale=10 ** v[0], ht_rotational_scale=10 ** v[1]),
             ht_meaning))
-    else:
-        notes.append("holder_tool_joint: not a candidate because the base model's holder-tool joint "
-                     "(or its rotational stiffness) is rigid; give finite stiffnesses to test it.")
 
-    if sh is not None:
+    if "spindle_holder_joint" not in excluded and sh is not None:
         rot = sh.rotational_stiffness_nm_rad
 
         def sh_meaning(v: np.ndarray) -> dict[str, float]:
+            assert sh is not None
             out_ = {"spindle_holder.stiffness_n_m": sh.stiffness_n_m * 10 ** v[0]}
             if rot is not None:
                 out_["spindle_holder.rotational_stiffness_nm_rad"] = rot * 10 ** v[1]
@@ -161,14 +256,12 @@ def catalogue(spec: AssemblySpec, tools: Sequence[ToolSpec], solver: Solver,
             lambda k, v: _mul(k, sh_translational_scale=10 ** v[0],
                               sh_rotational_scale=10 ** v[-1] if v.size > 1 else 1.0),
             sh_meaning))
-    else:
-        notes.append("spindle_holder_joint: not a candidate because the base model's spindle-holder joint "
-                     "is rigid.")
 
-    out.append(Candidate(
-        "bearings", (Parameter("log10_stiffness_scale", -1.0, 0.5, 0.0, "1"),),
-        lambda k, v: _mul(k, bearing_stiffness_scale=10 ** v[0]),
-        lambda v: {"bearing_stiffness_scale": float(10 ** v[0])}))
+    if "bearings" not in excluded:
+        out.append(Candidate(
+            "bearings", (Parameter("log10_stiffness_scale", -1.0, 0.5, 0.0, "1"),),
+            lambda k, v: _mul(k, bearing_stiffness_scale=10 ** v[0]),
+            lambda v: {"bearing_stiffness_scale": float(10 ** v[0])}))
 
     s0 = null_shear_scale(spec)
     out.append(Candidate(
@@ -186,15 +279,13 @@ def catalogue(spec: AssemblySpec, tools: Sequence[ToolSpec], solver: Solver,
         lambda k, v: replace(k, fluted_stiffness_ratio=float(v[0]), fluted_mass_ratio=float(v[1])),
         lambda v: {"fluted_diameter_ratio": float(v[0]), "fluted_mass_diameter_ratio": float(v[1])}))
 
-    holder_len = spec.holder.length_m if spec.holder is not None else 0.0
-    inserted = min(min(t.inserted_length_m for t in tools), holder_len)
-    if inserted > 0.0:
+    if "insertion_depth" not in excluded:
+        holder_len = spec.holder.length_m if spec.holder is not None else float("inf")
+        inserted = min(min(t.inserted_length_m for t in tools), holder_len)
         out.append(Candidate(
             "insertion_depth", (Parameter("clamping_point_inside_holder_m", 0.0, 0.3 * inserted, 0.0, "m"),),
             lambda k, v: replace(k, insertion_offset_m=float(v[0])),
             lambda v: {"clamping_point_inside_holder_m": float(v[0])}))
-    else:
-        notes.append("insertion_depth: not a candidate because no tool shank is inserted in the holder.")
 
     m_max = DEFAULT_SENSOR_MASS_MAX_KG if sensor_mass_max_kg is None else sensor_mass_max_kg
     out.append(Candidate(
@@ -203,21 +294,13 @@ def catalogue(spec: AssemblySpec, tools: Sequence[ToolSpec], solver: Solver,
         lambda k, v: replace(k, tip_mass_kg=float(v[0]), tip_mass_distance_m=float(v[1])),
         lambda v: {"tip_mass_kg": float(v[0]), "distance_from_tip_m": float(v[1])}))
 
-    out.append(Candidate(
-        "joint_damping", (Parameter("log10_joint_damping_scale", -1.0, 1.2, 0.0, "1"),),
-        lambda k, v: _mul(k, sh_damping_scale=10 ** v[0], ht_damping_scale=10 ** v[0]),
-        lambda v: {"joint_damping_scale": float(10 ** v[0])}))
+    if "joint_damping" not in excluded:
+        out.append(Candidate(
+            "joint_damping", (Parameter("log10_joint_damping_scale", -1.0, 1.2, 0.0, "1"),),
+            lambda k, v: _mul(k, sh_damping_scale=10 ** v[0], ht_damping_scale=10 ** v[0]),
+            lambda v: {"joint_damping_scale": float(10 ** v[0])}))
 
-    l0, p0 = _static_nose_rotational_receptance(spec, solver)
-    out.append(Candidate(
-        "spindle_rotational_receptance",
-        (Parameter("cross_residual_over_static_l", -0.5, 1.5, 0.0, "1"),
-         Parameter("rotational_residual_over_static_p", -0.5, 4.0, 0.0, "1")),
-        lambda k, v: replace(k, nose_cross_compliance_rad_n=float(v[0]) * l0,
-                             nose_rotational_residual_rad_nm=float(v[1]) * p0),
-        lambda v: {"added_cross_compliance_rad_n": float(v[0]) * l0,
-                   "added_rotational_compliance_rad_nm": float(v[1]) * p0,
-                   "spindle_static_l_rad_n": l0, "spindle_static_p_rad_nm": p0}))
+    out.append(_rotational_candidate(spec, solver, measured))
 
     if names is not None:
         out = [c for c in out if c.name in names]

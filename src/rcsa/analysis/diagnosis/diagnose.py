@@ -12,11 +12,13 @@ from typing import Any
 from rcsa.analysis.diagnosis.report import build_response
 from rcsa.analysis.diagnosis.state import Analysis, analyse
 from rcsa.analysis.progress import Progress
+from rcsa.model.spindle_side import BaseResolver
 
 __all__ = ["Analysis", "analyse", "diagnose"]
 
 
-def diagnose(request: Mapping[str, Any], progress: Progress | None = None) -> dict[str, Any]:
+def diagnose(request: Mapping[str, Any], resolve_base: BaseResolver | None = None,
+             progress: Progress | None = None) -> dict[str, Any]:
     """Diagnose the gap between a base model and tap-test measurements.
 
     Parameters
@@ -25,6 +27,10 @@ def diagnose(request: Mapping[str, Any], progress: Progress | None = None) -> di
         ``{"assembly", "measurements": [{"tool", "frequency_hz", "h", "coherence", ...}],
         "tolerances"?, "options"?}`` (``contract.md`` "Diagnosis"; optional fields in
         :mod:`rcsa.analysis.diagnosis.request`).
+    resolve_base : callable, optional
+        Looks a measured spindle (``assembly.spindle = {"measurement_id": ...}``) up
+        (:data:`rcsa.model.spindle_side.BaseResolver`; the application layer passes one on its
+        store). Without it only analytical spindles are accepted.
     progress : callable, optional
         ``progress(done, total)`` at each step (:mod:`rcsa.analysis.progress`).
 
@@ -32,13 +38,14 @@ def diagnose(request: Mapping[str, Any], progress: Progress | None = None) -> di
     -------
     dict
         ``{"gap": {"bands", "modes", ...}, "verdict": {"effect", "status", "ambiguous_with"},
-        "effects": [...], "ranking": [...], "not_observable_at_standstill": [...], ...}``.
+        "effects": [...], "ranking": [...], "not_applicable": [{"effect", "reason"}],
+        "not_observable_at_standstill": [...], "spindle_measurement"?, ...}``.
 
     Raises
     ------
     rcsa.errors.InputError
         For an invalid request (the field and the rule are named).
     """
-    a = analyse(request, progress)
+    a = analyse(request, resolve_base, progress)
     return build_response(a)
 

@@ -33,22 +33,43 @@ spindle_holder_damping_log          0.25     ln-scale of the spindle–holder da
 holder_tool_stiffness_log           0.15     per measurement (re-clamp), k_t and k_r
 holder_tool_damping_log             0.25     per measurement
 stickout_m                          0.0003   per measurement, m
+spindle_effective_length_log        0.35     measured ``direct_frf`` spindle: ln-scale of the
+                                             equivalent-cantilever length of its estimated
+                                             rotations (L/2 and 2L at 2σ)
+spindle_rotation_shape_log          0.35     measured ``direct_frf`` spindle: ln-scale of the
+                                             estimate's shape PH/N² (4/3 for a cantilever;
+                                             a real spindle's differs: RA-1's is 1.55)
+spindle_noise_rel                   0.005    measured spindle: relative noise of its stored FRFs
+                                             where no coherence is stored
 ==================================  =======  =============================================
+
+For a measured spindle the bearing tolerances do not apply (the bearings are inside the
+measurement), and at a ``holder_tip`` plane neither do the spindle–holder ones; the
+measurement's own uncertainty enters instead (:meth:`rcsa.analysis.diagnosis.problem.Problem.discrepancy`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from rcsa.analysis.diagnosis.perturbed_model import Knobs
-from rcsa.model.tolerances import DEFAULT_TOLERANCES, apply_nuisance, draw_nuisance
+from rcsa.model.tolerances import DEFAULT_TOLERANCES as MODEL_TOLERANCES
+from rcsa.model.tolerances import apply_nuisance, draw_nuisance
 
 __all__ = ["DEFAULT_TOLERANCES", "Discrepancy", "build_discrepancy", "draw_knobs", "noise_sd_rel",
            "shrink"]
 
+#: The diagnosis's tolerances: the model's (:data:`rcsa.model.tolerances.DEFAULT_TOLERANCES`)
+#: and a measured spindle's own (see the table above).
+DEFAULT_TOLERANCES: dict[str, float] = {
+    **MODEL_TOLERANCES,
+    "spindle_effective_length_log": 0.35,
+    "spindle_rotation_shape_log": 0.35,
+    "spindle_noise_rel": 0.005,
+}
 # Shrinkage towards the diagonal (Ledoit–Wolf style, fixed weight as in the prototype): with
 # ~40-60 features and a few hundred draws the sample covariance is invertible but noisy.
 SHRINKAGE = 0.1
@@ -77,14 +98,24 @@ def noise_sd_rel(coherence: np.ndarray, n_averages: float) -> np.ndarray:
 
 
 def draw_knobs(rng: np.random.Generator, tol: Mapping[str, float], n_configs: int,
-               base: Knobs | None = None) -> list[Knobs]:
+               base: Knobs | None = None, estimated_rotations: bool = False) -> list[Knobs]:
     """One nuisance draw: the shared part once, the per-measurement part per configuration.
 
     The draw itself is the one every model user shares (:func:`rcsa.model.tolerances.draw_nuisance`).
+    ``estimated_rotations``: the spindle's rotations are an equivalent-cantilever estimate
+    (a measured ``direct_frf`` spindle); its length is drawn too (``base_rotation_scale``
+    = L/L' with ln L' ~ N(ln L, ``spindle_effective_length_log``²)) and its shape, after
+    everything else.
     """
     draw = draw_nuisance(rng, tol, 1, n_configs)
     base = Knobs() if base is None else base
-    return [apply_nuisance(base, draw.fields(0, c)) for c in range(n_configs)]
+    out = [apply_nuisance(base, draw.fields(0, c)) for c in range(n_configs)]
+    if estimated_rotations:
+        scale = float(np.exp(-tol["spindle_effective_length_log"] * rng.standard_normal()))
+        shape = float(np.exp(tol["spindle_rotation_shape_log"] * rng.standard_normal()))
+        out = [replace(k, base_rotation_scale=k.base_rotation_scale * scale,
+                       base_rotation_shape=k.base_rotation_shape * shape) for k in out]
+    return out
 
 
 def shrink(cov: np.ndarray, weight: float = SHRINKAGE) -> np.ndarray:

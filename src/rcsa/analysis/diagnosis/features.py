@@ -135,27 +135,33 @@ def _edges(f: np.ndarray, peaks: np.ndarray, static_hi: float) -> np.ndarray:
     return edges
 
 
-def _vertex(x: np.ndarray, y: np.ndarray, i: np.ndarray, lo: np.ndarray, hi: np.ndarray, sign: float
-            ) -> tuple[np.ndarray, np.ndarray]:
+def _vertex(x: np.ndarray, y: np.ndarray, i: np.ndarray, lo: np.ndarray, hi: np.ndarray, sign: float,
+            rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Least-squares parabola through the lines ``i-2 … i+2`` (clipped to [lo, hi)); its vertex.
 
     ``sign`` = +1 for a maximum, −1 for a minimum. Falls back to the line itself when the
-    parabola opens the wrong way. Vectorised over rows: ``y`` (m, n), ``i``, ``lo``, ``hi`` (m,).
+    parabola opens the wrong way. Vectorised: ``i``, ``lo``, ``hi`` (m,) on rows ``rows`` of
+    ``y`` (n, nlines) (default: row k for entry k).
     """
-    rows = np.arange(y.shape[0])
+    rows = np.arange(y.shape[0]) if rows is None else rows
     offsets = np.arange(-2, 3)
     j = np.clip(i[:, None] + offsets, lo[:, None], hi[:, None] - 1)  # (m, 5)
     d = x[j] - x[i][:, None]
     yy = y[rows[:, None], j]
     # Normal equations of y = c0 + c1 d + c2 d² over five points (duplicates from clipping
     # only reweight; three distinct points are enough, fewer fall back to the line).
-    v = np.stack([np.ones_like(d), d, d * d], axis=-1)  # (m, 5, 3)
-    a = np.einsum("mki,mkj->mij", v, v)
-    b = np.einsum("mki,mk->mi", v, yy)
-    ok = np.linalg.det(a) > 1e-30 * np.maximum(np.abs(a).max(axis=(1, 2)), 1e-300) ** 3
-    c = np.zeros((y.shape[0], 3))
-    if ok.any():
-        c[ok] = np.linalg.solve(a[ok], b[ok][..., None])[..., 0]
+    # A = VᵀV = [[s0, s1, s2], [s1, s2, s3], [s2, s3, s4]], b = Vᵀy, V = [1, d, d²]; solved by its
+    # adjugate (the vectorised form of np.linalg.solve on the (m, 3, 3) stack).
+    d2 = d * d
+    s0, s1, s2, s3, s4 = float(d.shape[1]), d.sum(1), d2.sum(1), (d2 * d).sum(1), (d2 * d2).sum(1)
+    t0, t1, t2 = yy.sum(1), (yy * d).sum(1), (yy * d2).sum(1)
+    a00, a01, a02 = s2 * s4 - s3 * s3, s2 * s3 - s1 * s4, s1 * s3 - s2 * s2
+    a11, a12, a22 = s0 * s4 - s2 * s2, s1 * s2 - s0 * s3, s0 * s2 - s1 * s1
+    det = s0 * a00 + s1 * a01 + s2 * a02
+    ok = det > 1e-30 * np.maximum(np.maximum(np.maximum(s0, np.abs(s1)), np.maximum(s2, np.abs(s3))), s4) ** 3
+    with np.errstate(divide="ignore", invalid="ignore"):
+        c = np.where(ok[:, None], np.stack([a00 * t0 + a01 * t1 + a02 * t2, a01 * t0 + a11 * t1 + a12 * t2,
+                                            a02 * t0 + a12 * t1 + a22 * t2], axis=1) / det[:, None], 0.0)
     good = ok & (sign * c[:, 2] < 0)
     span_lo = x[np.maximum(i - 1, lo)] - x[i]
     span_hi = x[np.minimum(i + 1, hi - 1)] - x[i]
@@ -189,25 +195,29 @@ def extract(frequency_hz: np.ndarray, h: np.ndarray, w: Windows) -> np.ndarray:
     if w.static.stop > 0:
         out.append(y[:, w.static].mean(axis=1))
     k = w.peaks_hz.size
-    peak_i = []
-    for j in range(k):
-        lo, hi = int(w.edges[j]), int(w.edges[j + 1])
-        i = lo + np.argmax(y[:, lo:hi], axis=1)
-        peak_i.append(i)
-    for j in range(k):
-        lo, hi = int(w.edges[j]), int(w.edges[j + 1])
-        xf, yf = _vertex(x, y, peak_i[j], np.full(m, lo), np.full(m, hi), +1.0)
-        out += [xf, yf, y[:, lo:hi].mean(axis=1)]
-        if j + 1 < k:
+    lo_w, hi_w = w.edges[:-1].astype(int), w.edges[1:].astype(int)
+    peak_i = np.stack([lo + np.argmax(y[:, lo:hi], axis=1) for lo, hi in zip(lo_w, hi_w, strict=True)])  # (k, m)
+    rows = np.tile(np.arange(m), k)
+    xf, yf = _vertex(x, y, peak_i.ravel(), np.repeat(lo_w, m), np.repeat(hi_w, m), +1.0, rows)  # all windows at once
+    xf, yf = xf.reshape(k, m), yf.reshape(k, m)
+    anti = np.empty((max(k - 1, 0), m))
+    if k > 1:
+        ia = np.empty((k - 1, m), dtype=int)
+        for j in range(k - 1):  # the minimum strictly between consecutive peaks, over their span of lines only
             a, b = peak_i[j], peak_i[j + 1]
-            cols = np.arange(y.shape[1])
+            c0, c1 = int(a.min()) + 1, max(int(b.max()), int(a.min()) + 1)
+            cols = np.arange(c0, c1)
             inside = (cols[None, :] > a[:, None]) & (cols[None, :] < b[:, None])
-            masked = np.where(inside, y, np.inf)
-            ia = np.argmin(masked, axis=1)
-            none = ~inside.any(axis=1)  # adjacent peaks: take the midpoint line
-            ia = np.where(none, (a + b) // 2, ia)
-            xa, _ = _vertex(x, y, ia, np.minimum(a + 1, ia), np.maximum(b, ia + 1), -1.0)
-            out.append(xa)
+            found = c0 + np.argmin(np.where(inside, y[:, c0:c1], np.inf), axis=1) if cols.size else a
+            ia[j] = np.where(inside.any(axis=1), found, (a + b) // 2)  # adjacent peaks: the midpoint line
+        a, b = peak_i[:-1].ravel(), peak_i[1:].ravel()
+        flat = ia.ravel()
+        anti = _vertex(x, y, flat, np.minimum(a + 1, flat), np.maximum(b, flat + 1), -1.0,
+                       np.tile(np.arange(m), k - 1))[0].reshape(k - 1, m)
+    for j in range(k):
+        out += [xf[j], yf[j], y[:, lo_w[j]:hi_w[j]].mean(axis=1)]
+        if j + 1 < k:
+            out.append(anti[j])
     feats = np.stack(out, axis=1)
     return feats[0] if single else feats
 

@@ -2,15 +2,18 @@
 
 Everything the diagnosis varies — a material's modulus within its grade tolerance, a
 re-clamped joint, a sensor on the tip, an effective clamping point inside the holder — is a
-field of one frozen :class:`Knobs` value. :func:`config_parts` turns (base assembly, one
+field of one frozen :class:`Knobs` value. :class:`PartsBuilder` turns (base assembly, one
 measurement's tool, knobs) into the three sub-chains that are solved one after the other::
 
-    spindle (rear → nose, bearings)  |  nose residual, SH joint, holder  |  HT joint, tool, tip mass
+    analytical:             spindle (rear → nose, bearings) | nose corrections, SH joint, holder | HT joint, tool, tip mass
+    measured, spindle_nose: (measured receptance)           | nose corrections, SH joint, holder | HT joint, tool, tip mass
+    measured, holder_tip:   (measured receptance)           | corrections at the holder tip      | HT joint, tool, tip mass
 
-and :class:`Solver` condenses them with :func:`rcsa.physics.elimination.march`, caching each condensed
-stiffness under the sub-chain itself (chain items are frozen and hashable) and each beam's
-stiffness terms. A change of a tool-side knob then costs three beams per measurement, not
-the twenty of the whole chain.
+and :class:`Solver` condenses them item by item (each chain item's own elimination step; a
+measured receptance is absorbed, never inverted), caching the condensed state after the
+spindle and after the middle sub-chain and each beam's stiffness terms. The builder hands
+out the very same sub-chain objects for equal inputs, so a change of a tool-side knob costs
+three beams per measurement, not the twenty of the whole chain.
 
 Modelling of the effect knobs (the candidates' own formulas; the benchmark's truth uses
 different, physical realisations, see ``tests/analysis/diagnosis/truth.py``):
@@ -27,18 +30,28 @@ different, physical realisations, see ``tests/analysis/diagnosis/truth.py``):
   length grows by δ (its overall length is unchanged).
 * ``nose_cross_compliance_rad_n`` / ``nose_rotational_residual_rad_nm`` add a residual
   compliance ``[[0, c_wψ], [c_wψ, c_ψψ]]`` to the spindle's receptance at its nose (before the
-  spindle–holder joint): the spindle's rotational receptances l = n and p are off by a
-  frequency-independent amount (the residual-compensation form of Duarte & Ewins 2000).
+  spindle–holder joint), or to a measured receptance at its plane: the rotational receptances
+  l = n and p are off by a frequency-independent amount (the residual-compensation form of
+  Duarte & Ewins 2000; :class:`~rcsa.analysis.diagnosis.chain_items.AddedCompliance`).
+* ``base_rotation_scale`` s and ``base_rotation_shape`` c scale the rotational entries of
+  the spindle's receptance (l, n × s, p × s²c;
+  :class:`~rcsa.analysis.diagnosis.chain_items.RotationRescale`): for a ``direct_frf``
+  spindle, whose rotations are an equivalent-cantilever estimate, the estimate with effective
+  length L/s instead of L and shape PH/N² = 4c/3 instead of 4/3.
+* At ``holder_tip`` the holder is inside the measurement: ``insertion_offset_m`` only
+  lengthens the tool's free length (the holder's annulus over δ is part of the measurement).
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections import OrderedDict
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
 
+from rcsa.analysis.diagnosis.chain_items import AddedCompliance, RotationRescale
 from rcsa.model.assembly import holder_chain, joint_spring, spindle_chain, tool_chain
 from rcsa.model.contract import (
     AssemblySpec,
@@ -50,13 +63,13 @@ from rcsa.model.contract import (
     ToolSpec,
 )
 from rcsa.physics.arrays import ComplexArray, FloatArray, IntArray
-from rcsa.physics.chain import Beam, Chain, ChainItem, Grid, Ground, Lumped, Sym
-from rcsa.physics.elimination import march
+from rcsa.physics.chain import Beam, Chain, ChainItem, Grid, Ground, Sym
 from rcsa.physics.materials import Material
 from rcsa.physics.sections import Section
-from rcsa.physics.segments import SixTerms, segment_terms
+from rcsa.physics.segments import SixTerms, Waves, segment_terms
 
-__all__ = ["Knobs", "Parts", "Solver", "config_parts", "null_shear_scale"]
+__all__ = ["AddedCompliance", "BaseReceptance", "Knobs", "Parts", "PartsBuilder", "RotationRescale", "Solver",
+           "config_parts", "null_shear_scale"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -88,72 +101,30 @@ class Knobs:
     insertion_offset_m: float = 0.0
     nose_cross_compliance_rad_n: float = 0.0
     nose_rotational_residual_rad_nm: float = 0.0
-
-
-@dataclass(frozen=True, slots=True)
-class AddedCompliance(Lumped):
-    """A residual compliance added to the receptance at this node: R → R + [[0, c_wψ], [c_wψ, c_ψψ]].
-
-    ``c_wψ`` in rad/N (= m/(N·m)), ``c_ψψ`` in rad/(N·m). A correction term of the kind used to
-    compensate truncated or estimated rotational receptances (Duarte & Ewins 2000), not a spring.
-    A chain item (:class:`rcsa.physics.chain.ChainItem`): frequency-independent and undamped,
-    it eliminates no node.
-
-    Parameters
-    ----------
-    cross_rad_n : float
-        ``c_wψ``, rad/N.
-    rotational_rad_nm : float
-        ``c_ψψ``, rad/(N·m).
-    """
-
-    cross_rad_n: float
-    rotational_rad_nm: float
-
-    def eliminate(self, k: Sym, grid: Grid, count: bool = False) -> tuple[Sym, IntArray | None]:
-        """``K ← (K⁻¹ + C)⁻¹`` with ``C = [[0, c_wψ], [c_wψ, c_ψψ]]``; no pivot."""
-        k11, k12, k22 = k
-        det = k11 * k22 - k12 * k12
-        r11, r12, r22 = k22 / det, -k12 / det + self.cross_rad_n, k11 / det + self.rotational_rad_nm
-        det_r = r11 * r22 - r12 * r12
-        return (r22 / det_r, -r12 / det_r, r11 / det_r), None
-
-    def eliminate_static(self, k: Sym) -> Sym:
-        """The same as :meth:`eliminate`: the compliance does not depend on frequency."""
-        return self.eliminate(k, Grid(np.zeros(1)))[0]
-
-    def absorb_compliance(self, compliance: ComplexArray, grid: Grid) -> tuple[ComplexArray, bool]:
-        """``S ← S + C``."""
-        c = np.array([[0.0, self.cross_rad_n], [self.cross_rad_n, self.rotational_rad_nm]])
-        return compliance + c, False
-
-    def undamped(self) -> AddedCompliance:
-        """Real already: itself."""
-        return self
+    base_rotation_scale: float = 1.0
+    base_rotation_shape: float = 1.0
 
 
 class _BeamTermsGrid(Grid):
-    """A grid that keeps the six stiffness terms of the most recently used beams."""
+    """A grid that keeps the six stiffness terms of the most recently used beams, and the
+    wavenumbers of the most recently used sections (beams of one section share them: the
+    shank of every stickout, the pieces of a split segment)."""
 
     def __init__(self, omega_rad_s: FloatArray, max_beams: int) -> None:
         super().__init__(omega_rad_s)
         self._terms = lru_cache(maxsize=max_beams)(self._segment_terms)
+        self._section_waves = lru_cache(maxsize=max_beams // 4)(lambda section: Waves(self.omega_rad_s, section))
+
+    def waves(self, section: Section) -> Waves:
+        """Wavenumbers of ``section`` (bounded cache: the Monte Carlo makes new sections all the time)."""
+        return self._section_waves(section)  # type: ignore[no-any-return]
 
     def _segment_terms(self, beam: Beam) -> SixTerms:
-        return segment_terms(self.omega_rad_s, beam.section, beam.length_m)
+        return segment_terms(self.omega_rad_s, beam.section, beam.length_m, self.waves(beam.section))
 
     def beam_terms(self, beam: Beam) -> SixTerms:
         """Six-term dynamic stiffness of ``beam``, cached by beam (section and length)."""
         return self._terms(beam)
-
-
-@dataclass(frozen=True, slots=True)
-class Parts:
-    """The three sub-chains of one configuration (see the module docstring)."""
-
-    spindle: Chain
-    middle: Chain
-    tool: Chain
 
 
 def null_shear_scale(spec: AssemblySpec) -> float:
@@ -258,107 +229,273 @@ def _with_mass(chain: list[ChainItem], mass_kg: float, distance_m: float) -> lis
     raise ValueError("tip mass lies beyond the tool")
 
 
-def config_parts(spec: AssemblySpec, tool: ToolSpec, k: Knobs) -> Parts:
+
+class BaseReceptance:
+    """A measured spindle's receptance at its plane, on the solver's grid.
+
+    Compared and hashed by identity: the solver caches what is condensed on it, and every
+    Monte-Carlo draw of the spindle is its own object.
+
+    Parameters
+    ----------
+    compliance : numpy.ndarray, shape (nfreq, 2, 2), complex
+        ``[[h, l], [n, p]]`` (m/N, m/(N·m), rad/N, rad/(N·m)); stored read-only.
+    """
+
+    __slots__ = ("compliance",)
+
+    def __init__(self, compliance: ComplexArray) -> None:
+        c = np.array(compliance, dtype=complex)
+        c.flags.writeable = False
+        self.compliance = c
+
+
+@dataclass(frozen=True, slots=True)
+class Parts:
+    """The sub-chains of one configuration (see the module docstring).
+
+    ``spindle`` is empty and ``base`` set for a measured spindle (the chain starts from its
+    receptance); ``base`` is None for an analytical one.
+    """
+
+    spindle: Chain
+    middle: Chain
+    tool: Chain
+    base: BaseReceptance | None = None
+
+
+_MAX_CACHED = 4096
+
+
+def _cached(store: dict, key: tuple, make):  # type: ignore[no-untyped-def]
+    hit = store.get(key)
+    if hit is None:
+        if len(store) >= _MAX_CACHED:
+            store.clear()
+        hit = store[key] = make()
+    return hit
+
+
+class PartsBuilder:
+    """Sub-chains of the base assembly with knobs applied, each built once per distinct input.
+
+    The spindle, middle and tool sub-chains are cached under the knobs that change them, so
+    configurations that differ only on the tool side share the very same spindle and middle
+    objects (the :class:`Solver` caches their condensation by identity).
+
+    Parameters
+    ----------
+    spec : AssemblySpec
+        Base assembly.
+    plane : {None, "spindle_nose", "holder_tip"}
+        ``None`` for an analytical spindle; for a measured one, the plane of its receptance:
+        at ``spindle_nose`` the spindle–holder joint and the holder are modelled, at
+        ``holder_tip`` only the tool (its clamping and the holder are inside the measurement).
+    base : BaseReceptance, optional
+        The measured spindle's receptance (default base of every configuration).
+    """
+
+    def __init__(self, spec: AssemblySpec, plane: str | None = None, base: BaseReceptance | None = None) -> None:
+        if plane is None and (not isinstance(spec.spindle, SpindleSpec) or spec.holder is None):
+            raise TypeError("an analytical diagnosis needs an analytical spindle and a holder")
+        if plane == "spindle_nose" and spec.holder is None:
+            raise TypeError("a spindle_nose base needs a holder")
+        self.spec, self.plane, self.base = spec, plane, base
+        self._mats: dict = {}
+        self._spindles: dict = {}
+        self._middles: dict = {}
+        self._tails: dict = {}
+
+    def parts(self, tool: ToolSpec, k: Knobs, base: BaseReceptance | None = None) -> Parts:
+        """Sub-chains of the configuration with ``tool`` under ``k`` (on ``base``, default the builder's)."""
+        spec = self.spec
+        mkey = (k.tool_youngs_scale, k.tool_density_scale, k.structure_youngs_scale, k.structure_density_scale,
+                k.loss_factor_scale)
+        mats = _cached(self._mats, mkey, lambda: tuple(sorted(_materials(spec, k).items())))
+        s = null_shear_scale(spec) if k.shear_scale is None else k.shear_scale
+        theory = "euler_bernoulli" if (spec.beam_theory == "euler_bernoulli" and s == 0.0) else "timoshenko"
+        scale = 1.0 if theory == "euler_bernoulli" else s
+        shear = spec.shear_coefficient
+
+        def shear_scaled(chain: Sequence[ChainItem]) -> Chain:
+            return tuple(chain) if scale == 1.0 else _scale_shear(tuple(chain), scale)
+
+        spindle: Chain = ()
+        if self.plane is None:
+            assert isinstance(spec.spindle, SpindleSpec)
+            sp = spec.spindle
+            spindle = _cached(self._spindles, (mkey, s, k.bearing_stiffness_scale, k.bearing_damping_scale),
+                              lambda: shear_scaled(_spindle_chain(_spindle(sp, k), mats, shear, theory)))
+        stickout = tool.stickout_m + k.stickout_offset_m + k.insertion_offset_m
+        r_i = tool.fluted_diameter_ratio if k.fluted_stiffness_ratio is None else k.fluted_stiffness_ratio
+        r_a = tool.fluted_mass_diameter_ratio if k.fluted_mass_ratio is None else k.fluted_mass_ratio
+        made: list[ToolSpec] = []
+
+        def tool_of() -> ToolSpec:  # the tool with its knobs, built only when a sub-chain is (a cache miss)
+            if not made:
+                made.append(replace(tool, stickout_m=stickout, fluted_diameter_ratio=r_i,
+                                    fluted_mass_diameter_ratio=r_a))
+            return made[0]
+
+        def middle() -> Chain:
+            items: list[ChainItem] = []
+            if k.base_rotation_scale != 1.0 or k.base_rotation_shape != 1.0:
+                items.append(RotationRescale(k.base_rotation_scale, k.base_rotation_shape))
+            if k.nose_cross_compliance_rad_n != 0.0 or k.nose_rotational_residual_rad_nm != 0.0:
+                items.append(AddedCompliance(k.nose_cross_compliance_rad_n, k.nose_rotational_residual_rad_nm))
+            if self.plane == "holder_tip":
+                return tuple(items)
+            assert spec.holder is not None
+            holder, ring = _trim_holder(spec.holder, k.insertion_offset_m, dict(mats))
+            sh = joint_spring(_joint(spec.spindle_holder, k.sh_translational_scale, k.sh_rotational_scale,
+                                     k.sh_damping_scale))
+            if sh is not None:
+                items.append(sh)
+            items.extend(shear_scaled(_holder_chain(holder, tool_of(), mats, shear, theory)))
+            if ring is not None:
+                items.append(ring)
+            return tuple(items)
+
+        mid_key = (mkey, s, k.base_rotation_scale, k.base_rotation_shape, k.nose_cross_compliance_rad_n,
+                   k.nose_rotational_residual_rad_nm)
+        if self.plane != "holder_tip":
+            assert spec.holder is not None
+            # the holder chain sees the tool only through the inserted length inside the (trimmed) holder
+            filled = round(min(tool.overall_length_m - stickout, spec.holder.length_m - k.insertion_offset_m), 12)
+            mid_key += (k.sh_translational_scale, k.sh_rotational_scale, k.sh_damping_scale, k.insertion_offset_m,
+                        filled, tool.shank_diameter_m, tool.material)
+        mid = _cached(self._middles, mid_key, middle)
+
+        def tail() -> Chain:
+            items: list[ChainItem] = []
+            ht = joint_spring(_joint(spec.holder_tool, k.ht_translational_scale, k.ht_rotational_scale,
+                                     k.ht_damping_scale))
+            if ht is not None:
+                items.append(ht)
+            items.extend(shear_scaled(_tool_chain(tool_of(), mats, shear, theory)))
+            if k.tip_mass_kg > 0.0:
+                items = _with_mass(items, k.tip_mass_kg, k.tip_mass_distance_m)
+            return tuple(items)
+
+        tail_key = (mkey, s, tool, stickout, r_i, r_a, k.ht_translational_scale, k.ht_rotational_scale, k.ht_damping_scale,
+                    k.tip_mass_kg, k.tip_mass_distance_m)
+        return Parts(spindle, mid, _cached(self._tails, tail_key, tail), self.base if base is None else base)
+
+
+def config_parts(spec: AssemblySpec, tool: ToolSpec, k: Knobs, plane: str | None = None,
+                 base: BaseReceptance | None = None) -> Parts:
     """Sub-chains of the base assembly with ``tool`` and the knobs applied.
 
     Parameters
     ----------
     spec : AssemblySpec
-        Base assembly (analytical spindle).
+        Base assembly (analytical spindle, or a measured one with ``plane`` and ``base``).
     tool : ToolSpec
         The measurement's tool (base tool with its overrides).
     k : Knobs
+    plane : {None, "spindle_nose", "holder_tip"}
+        See :class:`PartsBuilder`.
+    base : BaseReceptance, optional
+        The measured spindle's receptance.
 
     Returns
     -------
     Parts
     """
-    if not isinstance(spec.spindle, SpindleSpec) or spec.holder is None:
-        raise TypeError("config_parts needs an analytical spindle and a holder")
-    mats = _materials(spec, k)
-    shear = spec.shear_coefficient
-    base_theory = spec.beam_theory
-    s = null_shear_scale(spec) if k.shear_scale is None else k.shear_scale
-    theory = "euler_bernoulli" if (base_theory == "euler_bernoulli" and s == 0.0) else "timoshenko"
-    scale = 1.0 if theory == "euler_bernoulli" else s
-
-    stickout = tool.stickout_m + k.stickout_offset_m + k.insertion_offset_m
-    t = replace(tool, stickout_m=stickout,
-                fluted_diameter_ratio=(tool.fluted_diameter_ratio if k.fluted_stiffness_ratio is None
-                                       else k.fluted_stiffness_ratio),
-                fluted_mass_diameter_ratio=(tool.fluted_mass_diameter_ratio if k.fluted_mass_ratio is None
-                                            else k.fluted_mass_ratio))
-    holder, ring = _trim_holder(spec.holder, k.insertion_offset_m, mats)
-
-    items = tuple(sorted(mats.items()))
-    spindle = _spindle_chain(_spindle(spec.spindle, k), items, shear, theory)
-    middle: list[ChainItem] = []
-    if k.nose_cross_compliance_rad_n != 0.0 or k.nose_rotational_residual_rad_nm != 0.0:
-        middle.append(AddedCompliance(k.nose_cross_compliance_rad_n, k.nose_rotational_residual_rad_nm))
-    sh = joint_spring(_joint(spec.spindle_holder, k.sh_translational_scale, k.sh_rotational_scale,
-                             k.sh_damping_scale))
-    if sh is not None:
-        middle.append(sh)
-    middle.extend(_holder_chain(holder, t, items, shear, theory))
-    if ring is not None:
-        middle.append(ring)
-    tail: list[ChainItem] = []
-    ht = joint_spring(_joint(spec.holder_tool, k.ht_translational_scale, k.ht_rotational_scale,
-                             k.ht_damping_scale))
-    if ht is not None:
-        tail.append(ht)
-    tail.extend(_tool_chain(t, items, shear, theory))
-    if k.tip_mass_kg > 0.0:
-        tail = _with_mass(tail, k.tip_mass_kg, k.tip_mass_distance_m)
-    parts = Parts(spindle, tuple(middle), tuple(tail))
-    if scale != 1.0:
-        parts = Parts(*(_scale_shear(p, scale) for p in (parts.spindle, parts.middle, parts.tool)))
-    return parts
+    return PartsBuilder(spec, plane, base).parts(tool, k)
 
 
+#: Condensed state after a prefix of a chain: the stiffness seen from the right (a Sym), or —
+#: while no beam has turned a measured base into a stiffness yet — its receptance (nfreq, 2, 2).
+_State = tuple[Sym | None, ComplexArray | None]
+
+
+def _advance(state: _State, chain: Chain, grid: Grid) -> _State:
+    """Carry the condensed state across ``chain`` (each item's own elimination step)."""
+    k, s = state
+    for item in chain:
+        if s is not None:
+            out, is_stiffness = item.absorb_compliance(s, grid)
+            if is_stiffness:
+                k, s = (out[:, 0, 0], 0.5 * (out[:, 0, 1] + out[:, 1, 0]), out[:, 1, 1]), None
+            else:
+                s = out
+        else:
+            assert k is not None
+            k, _ = item.eliminate(k, grid)
+    return k, s
 
 
 class Solver:
     """Tool-point ``h`` of many configurations on one frequency grid, with caches.
 
-    The chain is condensed from the spindle rear to the tool tip by
-    :func:`rcsa.physics.elimination.march`, with two caches: the condensed stiffness after
-    each sub-chain (keyed by the sub-chains themselves), and the six stiffness terms of each
-    beam (keyed by section and length, in the grid the march runs on), so a changed bearing
-    or joint re-uses every beam.
+    The chain is condensed from the spindle rear (or a measured spindle's receptance at its
+    plane) to the tool tip, each item doing its own elimination step
+    (:meth:`rcsa.physics.chain.ChainItem.eliminate`, and
+    :meth:`~rcsa.physics.chain.ChainItem.absorb_compliance` on a measured base, which is never
+    inverted), with two caches: the condensed state after the spindle and after the middle
+    sub-chain (keyed by the identity of the base and of the sub-chain objects, which
+    :class:`PartsBuilder` shares), and the six stiffness terms of each beam (keyed by section
+    and length), so a changed joint or tool re-uses every beam.
 
     Parameters
     ----------
     frequency_hz : numpy.ndarray, shape (nfreq,)
         The common (union) analysis grid, Hz.
     cache_size : int
-        Condensed stiffnesses kept (least recently used are dropped); beam terms keep 4×.
+        Condensed states kept (least recently used are dropped); beam terms keep 4×.
     """
 
     def __init__(self, frequency_hz: FloatArray, cache_size: int = 128) -> None:
         self.frequency_hz = np.asarray(frequency_hz, dtype=float)
         self.omega_rad_s = 2.0 * np.pi * self.frequency_hz
         self._grid = _BeamTermsGrid(self.omega_rad_s, 4 * cache_size)
-        self._condensed = lru_cache(maxsize=cache_size)(self._condense)
+        self._cache_size = cache_size
+        self._states: OrderedDict[tuple[int, ...], tuple[tuple[object, ...], _State]] = OrderedDict()
+        zero = np.zeros(self.omega_rad_s.size, dtype=complex)
+        zero.flags.writeable = False
+        self._free: _State = ((zero, zero, zero), None)
         self.evaluations = 0
 
-    def _condense(self, key: tuple[Chain, ...]) -> ComplexArray | None:
-        """Dynamic stiffness at the end of the sub-chains ``key``, shape (nfreq, 2, 2); None if empty."""
-        if not key:
-            return None
-        k = march(key[-1], self.omega_rad_s, self._condensed(key[:-1]), grid=self._grid)[0]
-        k.flags.writeable = False  # shared by every later configuration with this prefix
-        return k
+    def _state(self, base: BaseReceptance | None, chains: tuple[Chain, ...]) -> _State:
+        """Condensed state after ``chains`` on ``base`` (cached by identity)."""
+        if not chains:
+            return self._free if base is None else (None, base.compliance)
+        objs = (base, *chains)
+        key = tuple(id(o) for o in objs)
+        hit = self._states.get(key)
+        if hit is not None and all(a is b for a, b in zip(hit[0], objs, strict=True)):
+            self._states.move_to_end(key)
+            return hit[1]
+        k, s = _advance(self._state(base, chains[:-1]), chains[-1], self._grid)
+        # an elimination step writes into the grid's work arrays, which the next step reuses:
+        # the cached state is a copy of them
+        k = None if k is None else (k[0].copy(), k[1].copy(), k[2].copy())
+        for arr in (*(k or ()), *(() if s is None else (s,))):
+            arr.flags.writeable = False  # shared by every later configuration with this prefix
+        self._states[key] = (objs, (k, s))
+        while len(self._states) > self._cache_size:
+            self._states.popitem(last=False)
+        return k, s
 
     def tip_h(self, parts: Parts, lines: IntArray | slice = slice(None)) -> ComplexArray:
         """Driving-point tool-tip receptance ``h`` (m/N), shape (nlines,)."""
-        k = march(parts.tool, self.omega_rad_s, self._condensed((parts.spindle, parts.middle)), grid=self._grid)[0]
+        k, s = _advance(self._state(parts.base, (parts.spindle, parts.middle)), parts.tool, self._grid)
         self.evaluations += 1
-        k11, k12, k22 = k[:, 0, 0], k[:, 0, 1], k[:, 1, 1]
+        if k is None:
+            assert s is not None
+            return s[:, 0, 0][lines]
+        k11, k12, k22 = k
         return (k22 / (k11 * k22 - k12 * k12))[lines]
 
+    def tip_h_many(self, parts: Sequence[Parts], lines: IntArray | slice = slice(None)) -> ComplexArray:
+        """:meth:`tip_h` of many configurations, shape (n, nlines)."""
+        return np.stack([self.tip_h(p, lines) for p in parts])
+
     def nose_stiffness(self, parts: Parts) -> ComplexArray:
-        """Condensed dynamic stiffness of the spindle at its nose, shape (nfreq, 2, 2)."""
-        k = self._condensed((parts.spindle,))
+        """Condensed dynamic stiffness of an analytical spindle at its nose, shape (nfreq, 2, 2)."""
+        k, _ = self._state(parts.base, (parts.spindle,))
         assert k is not None
-        return k.copy()
+        out = np.empty((self.omega_rad_s.size, 2, 2), dtype=complex)
+        out[:, 0, 0], out[:, 0, 1], out[:, 1, 0], out[:, 1, 1] = k[0], k[1], k[1], k[2]
+        return out

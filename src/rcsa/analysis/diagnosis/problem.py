@@ -6,6 +6,11 @@ per measurement, all of them where the measured grid is sparser than the log gri
 lines carry the measured and the modelled FRF through the same extractor. When the
 measurements share a frequency grid they share the lines, and the spindle (and holder) are
 condensed once for all of them.
+
+A measured spindle (hybrid) is looked up on these lines through the request's resolver; its
+plane decides what is modelled (holder and spindle–holder joint at ``spindle_nose``, only
+the tool at ``holder_tip``), and its own uncertainty (noise, identification conditioning,
+estimated rotations) is drawn with the tolerances in the discrepancy.
 """
 
 from __future__ import annotations
@@ -27,9 +32,10 @@ from rcsa.analysis.diagnosis.discrepancy import (
     noise_sd_rel,
 )
 from rcsa.analysis.diagnosis.features import Windows, band_rms_db, design_windows, extract
-from rcsa.analysis.diagnosis.perturbed_model import Knobs, Solver, config_parts
+from rcsa.analysis.diagnosis.perturbed_model import BaseReceptance, Knobs, PartsBuilder, Solver
 from rcsa.analysis.diagnosis.request import DEFAULT_NOISE_REL, MIN_VALID_LINES, Request
 from rcsa.errors import InputError
+from rcsa.model.spindle_side import MeasuredBase
 
 __all__ = ["Problem", "VALID_COHERENCE"]
 
@@ -107,11 +113,17 @@ class Problem:
                  for m, (lo, hi) in zip(request.measurements, bands, strict=True)]
         grid = np.unique(np.concatenate([m.frequency_hz[p] for m, p in zip(request.measurements, picks, strict=True)]))
         self.solver = Solver(grid)
+        self.measured: MeasuredBase | None = None
+        if request.measured_spindle is not None:
+            self.measured = self._resolve(grid)
+            self.builder = PartsBuilder(self.spec, self.measured.plane, BaseReceptance(self.measured.receptance))
+        else:
+            self.builder = PartsBuilder(self.spec)
         self.configs: list[Config] = []
         for i, (m, p) in enumerate(zip(request.measurements, picks, strict=True)):
             f = m.frequency_hz[p]
             grid_lines = np.searchsorted(grid, f)
-            h_base = self.solver.tip_h(config_parts(self.spec, m.tool, Knobs()), grid_lines)
+            h_base = self.solver.tip_h(self.builder.parts(m.tool, Knobs()), grid_lines)
             noise = (noise_sd_rel(m.coherence[p], m.n_averages) if m.coherence is not None
                      else np.full(p.size, DEFAULT_NOISE_REL))
             try:
@@ -133,12 +145,74 @@ class Problem:
         self.measured_features = self.features([c.h_meas for c in self.configs])
         self.feature_config = np.concatenate([np.full(c.windows.size, c.index) for c in self.configs])
 
+    # ------------------------------------------------------------------ measured spindle
+    @property
+    def plane(self) -> str | None:
+        """Plane of a measured spindle (``spindle_nose`` or ``holder_tip``); None when analytical."""
+        return None if self.measured is None else self.measured.plane
+
+    def _resolve(self, grid: np.ndarray) -> MeasuredBase:
+        """The measured spindle on the analysis grid, checked against the assembly and the tools.
+
+        Also resolves it on every measurement's own lines (:attr:`full_bases`, for the corrected
+        FRFs on those lines): a measurement whose band leaves the spindle's measured band is
+        refused, naming it.
+        """
+        req = self.request
+        resolve, spindle = req.resolve_base, req.measured_spindle
+        assert resolve is not None and spindle is not None
+
+        def field_of(exc: InputError) -> str:
+            return f"assembly.{exc.field}" if exc.field.startswith("spindle") else exc.field
+
+        self.full_bases: dict[bytes, MeasuredBase] = {}
+        for i, m in enumerate(req.measurements):
+            key = m.frequency_hz.tobytes()
+            if key in self.full_bases:
+                continue
+            try:
+                self.full_bases[key] = resolve(spindle, m.frequency_hz)
+            except InputError as exc:
+                if exc.field != "frequency":
+                    raise InputError(field_of(exc), exc.rule) from None
+                raise InputError(f"measurements[{i}].frequency_hz",
+                                 f"this measurement's band lies outside the measured spindle's: {exc.rule}") from None
+        try:
+            base = resolve(spindle, grid)
+        except InputError as exc:
+            raise InputError(field_of(exc), exc.rule) from None
+        spec = self.spec
+        if base.plane == "holder_tip" and spec.holder is not None:
+            raise InputError("assembly.holder", f"must be left out: the measured spindle "
+                                                f"{req.measured_spindle.measurement_id!r} (plane holder_tip) already "
+                                                "contains its holder")
+        if base.plane != "holder_tip" and spec.holder is None:
+            raise InputError("assembly.holder", "is required: the measured spindle's plane is spindle_nose, so the "
+                                                "holder is modelled")
+        if base.plane == "holder_tip" and base.artifact_diameter_m is not None:
+            d = base.artifact_diameter_m
+            for i, m in enumerate(req.measurements):
+                if abs(m.tool.shank_diameter_m - d) > 1e-6 * d:
+                    where = (f"measurements[{i}].tool.shank_diameter_m" if "shank_diameter_m" in m.overrides
+                             else "assembly.tool.shank_diameter_m")
+                    raise InputError(where, f"must match the shank the holder-tip measurement was taken with "
+                                            f"({d:g} m); got {m.tool.shank_diameter_m:g} m")
+        return base
+
     # ------------------------------------------------------------------ evaluation
-    def h(self, knobs: Knobs | Sequence[Knobs]) -> list[np.ndarray]:
-        """Model ``h`` of every configuration on its analysis lines (one knobs, or one per config)."""
+    def h(self, knobs: Knobs | Sequence[Knobs], base: BaseReceptance | None = None) -> list[np.ndarray]:
+        """Model ``h`` of every configuration on its analysis lines (one knobs, or one per config).
+
+        ``base``: another draw of the measured spindle's receptance (default: as measured).
+        """
         ks = [knobs] * len(self.configs) if isinstance(knobs, Knobs) else list(knobs)
-        return [self.solver.tip_h(config_parts(self.spec, self.tools[c.index], k), c.grid_lines)
+        return [self.solver.tip_h(self.builder.parts(self.tools[c.index], k, base), c.grid_lines)
                 for c, k in zip(self.configs, ks, strict=True)]
+
+    def h_many(self, knobs: Sequence[Knobs]) -> list[np.ndarray]:
+        """Model ``h`` of every configuration for many knobs, per configuration shape (n, nlines)."""
+        return [self.solver.tip_h_many([self.builder.parts(self.tools[c.index], k) for k in knobs], c.grid_lines)
+                for c in self.configs]
 
     def features(self, hs: Sequence[np.ndarray]) -> np.ndarray:
         """Concatenated features of per-configuration FRFs (each (nlines,) or (n, nlines))."""
@@ -164,20 +238,55 @@ class Problem:
         digest = hashlib.sha256(payload)
         for c in self.configs:
             digest.update(c.frequency_hz.tobytes())
+        if self.measured is not None:
+            digest.update(self.measured.receptance.tobytes())
+            digest.update(json.dumps(self.spindle_uncertainty(), sort_keys=True, default=str).encode())
         return digest.hexdigest()
 
     @cached(_DRAW_CACHE, key=lambda self, n_mc: self._cache_key(n_mc), lock=threading.Lock())
     def _draws(self, n_mc: int) -> list[np.ndarray]:
-        """Model ``h`` of every configuration under ``n_mc`` tolerance draws, each (n_mc, nlines)."""
+        """Model ``h`` of every configuration under ``n_mc`` nuisance draws, each (n_mc, nlines).
+
+        Each draw turns every tolerance (shared and per measurement) and, for a measured
+        spindle, draws its receptance (noise through its identification) and — for estimated
+        rotations — its equivalent-cantilever length.
+        """
         rng = np.random.default_rng([self.request.options.seed, 1])
         out = [np.empty((n_mc, c.frequency_hz.size), dtype=complex) for c in self.configs]
+        bases: list[BaseReceptance | None] = [None] * n_mc
+        m = self.measured
+        if m is not None and m.uncertainty is not None:
+            drawn = m.uncertainty.draw(np.random.default_rng([self.request.options.seed, 3]), n_mc,
+                                       self.request.tolerances["spindle_noise_rel"])
+            bases = [BaseReceptance(b) for b in drawn]
+        estimated = m is not None and m.effective_length_m is not None
         for d in range(n_mc):
-            for c, h in zip(out, self.h(draw_knobs(rng, self.request.tolerances, len(self.configs))), strict=True):
+            knobs = draw_knobs(rng, self.request.tolerances, len(self.configs), estimated_rotations=estimated)
+            for c, h in zip(out, self.h(knobs, bases[d]), strict=True):
                 c[d] = h
         return out
 
+    def spindle_uncertainty(self) -> dict[str, object] | None:
+        """What the discrepancy assumes about the measured spindle's own uncertainty (None: analytical)."""
+        m = self.measured
+        if m is None:
+            return None
+        tol = self.request.tolerances
+        out: dict[str, object] = {"kind": m.report.get("kind"), "plane": m.plane}
+        if m.uncertainty is None:
+            out["noise"] = "not propagated (finite-difference identification: its bias is not a random error)"
+        else:
+            out["noise"] = m.uncertainty.summary(tol["spindle_noise_rel"])
+        if m.effective_length_m is not None:
+            sd = tol["spindle_effective_length_log"]
+            out["estimated_rotations"] = {
+                "effective_length_m": m.effective_length_m, "log_sd": sd,
+                "two_sigma_range_m": [m.effective_length_m * float(np.exp(-2 * sd)),
+                                      m.effective_length_m * float(np.exp(2 * sd))]}
+        return out
+
     def discrepancy(self) -> Discrepancy:
-        """Σ and μ of the features under the stated tolerances and the measured coherence."""
+        """Σ and μ of the features under the stated tolerances, the measured coherence and the spindle's uncertainty."""
         n_mc = self.request.options.monte_carlo_draws
         return build_discrepancy(self.base_features, self._draws, self.features, self.band_db,
                                  [c.noise_rel for c in self.configs], n_mc,

@@ -5,8 +5,11 @@ against what tolerances and noise already explain, plus χ², p-value and a sent
 ``verdict`` (``effect``, ``status``, ``ambiguous_with``, held-out confirmation, SNR,
 sentence), ``effects`` (the verdict's effects with parameters ± sd, gaps before/after on the
 fitted and held-out measurements, and ``corrected_h`` per measurement in request order),
-``ranking`` (every candidate, best first, without FRFs), ``not_observable_at_standstill``,
-``held_out``, ``analysis``, ``notes`` and ``runtime_s``.
+``ranking`` (every candidate, best first, without FRFs), ``not_applicable`` (effects that are
+no candidate here, each with its reason: e.g. ``bearings`` on a measured spindle),
+``not_observable_at_standstill``, ``held_out``, ``analysis``, ``notes``, ``runtime_s`` and,
+for a measured spindle, ``spindle_measurement`` (what was measured, how it was turned into a
+receptance, and the uncertainty of it that entered the expected scatter).
 
 The figure (:func:`diagnosis_figure`) is a :class:`matplotlib.figure.Figure` on the Agg
 canvas (no pyplot): measured, base and corrected |h| per measurement, and the gap map
@@ -175,6 +178,7 @@ def _sentence(a: Analysis, effects: list[dict[str, Any]]) -> str:
 
 def build_response(a: Analysis) -> dict[str, Any]:
     """The JSON-ready response of a finished :class:`~rcsa.analysis.diagnosis.state.Analysis`."""
+    response_started = time.perf_counter()
     d, p = a.decision, a.problem
     log_z = {f.candidate.name: f.log_evidence for f in d.ranking}
     top = max([a.log_z0, *log_z.values()])
@@ -210,6 +214,13 @@ def build_response(a: Analysis) -> dict[str, Any]:
         notes.append("Only one measurement: nothing can be held out, so no claim is confirmed on unseen data.")
     if any(m.coherence is None for m in a.request.measurements):
         notes.append("A measurement without coherence was given 1 % relative noise per line.")
+    spindle: dict[str, Any] = {}
+    if p.measured is not None:
+        report = {k: v for k, v in p.measured.report.items() if k != "condition_number"}
+        spindle = {"spindle_measurement": {**report, "notes": list(p.measured.notes),
+                                           "uncertainty_in_expected_scatter": p.spindle_uncertainty()}}
+        notes.append("The spindle is measured: its own uncertainty (see spindle_measurement) is part of the expected "
+                     "scatter, so a gap it already explains is not blamed on an effect.")
     return {
         "gap": gap,
         "verdict": {"effect": d.effect, "status": d.status, "ambiguous_with": list(d.ambiguous_with),
@@ -225,6 +236,7 @@ def build_response(a: Analysis) -> dict[str, Any]:
                         f"treat the mechanism as uncertain between them." if rivals else "")},
         "effects": effects,
         "ranking": ranking,
+        "not_applicable": [{"effect": e, "reason": reason} for e, (reason, _) in a.not_applicable.items()],
         "not_observable_at_standstill": list(NOT_OBSERVABLE_AT_STANDSTILL),
         "not_observable_sentence": STANDSTILL_SENTENCE,
         "held_out": {"method": fold_kind, "folds": [{"fit": tr, "held_out": te} for tr, te in a.folds]},
@@ -236,8 +248,10 @@ def build_response(a: Analysis) -> dict[str, Any]:
                      "claim_threshold": a.request.options.claim_threshold,
                      "ambiguity_window": a.request.options.ambiguity_window,
                      "tolerances": dict(a.request.tolerances),
-                     "log_evidence_base": a.log_z0},
+                     "log_evidence_base": a.log_z0,
+                     "timings_s": {**a.timings_s, "response": time.perf_counter() - response_started}},
         "notes": notes,
+        **spindle,
         "runtime_s": time.perf_counter() - a.started,  # analysis and this response
     }
 

@@ -14,7 +14,11 @@ Request::
                  "likelihood": "student_t", "claim_threshold": 3.0, "ambiguity_window": 2.3,
                  "max_effects": 2, "max_lines": 1200}}          # optional
 
-Every violation raises :class:`~rcsa.errors.InputError` naming the field and the rule.
+``assembly.spindle`` may be a stored measured spindle (``{"measurement_id": ...}``, the hybrid
+case); it is looked up through the ``resolve_base`` the caller passes
+(:data:`rcsa.model.spindle_side.BaseResolver`, e.g. the application layer's store), never by
+this module. Every violation raises :class:`~rcsa.errors.InputError` naming the field and the
+rule.
 """
 
 from __future__ import annotations
@@ -30,7 +34,8 @@ from rcsa.analysis.diagnosis.discrepancy import DEFAULT_TOLERANCES
 from rcsa.analysis.measured_tool_point import MAX_TAP_TESTS, TapTest, parse_tap_tests
 from rcsa.errors import InputError
 from rcsa.model import fields
-from rcsa.model.contract import AssemblySpec, SpindleSpec, ToolSpec, parse_assembly
+from rcsa.model.contract import AssemblySpec, MeasuredSpindleSpec, ToolSpec, parse_assembly
+from rcsa.model.spindle_side import BaseResolver
 
 __all__ = ["MAX_MEASUREMENTS", "MIN_VALID_LINES", "Measurement", "Options", "Request", "parse_request"]
 
@@ -68,6 +73,7 @@ class Options:
     """Decision and effort settings (``diagnosis.md`` §7 defaults)."""
 
     effects: tuple[str, ...] = CANDIDATE_NAMES
+    effects_requested: bool = False
     held_out: tuple[int, ...] | None = None
     seed: int = 0
     monte_carlo_draws: int = 200
@@ -87,6 +93,13 @@ class Request:
     measurements: tuple[Measurement, ...]
     tolerances: Mapping[str, float]
     options: Options = field(default_factory=Options)
+    resolve_base: BaseResolver | None = None
+
+    @property
+    def measured_spindle(self) -> MeasuredSpindleSpec | None:
+        """The stored spindle of a hybrid request, else None."""
+        sp = self.spec.spindle
+        return sp if isinstance(sp, MeasuredSpindleSpec) else None
 
 
 def _measurement(tap: TapTest, i: int) -> Measurement:
@@ -118,7 +131,8 @@ def _options(raw: object, n_meas: int) -> Options:
             raise InputError("options.held_out", "must leave at least one measurement for fitting")
     # counts may come as JSON numbers with a fraction (e.g. 200.0): read as numbers, then truncated
     return Options(
-        effects=tuple(dict.fromkeys(effects)), held_out=None if held is None else tuple(held),
+        effects=tuple(dict.fromkeys(effects)), effects_requested="effects" in o,
+        held_out=None if held is None else tuple(held),
         seed=opts.integer("seed", ge=0, le=MAX_SEED, default=0),
         monte_carlo_draws=int(opts.number("monte_carlo_draws", ge=50, le=5000, default=200)),
         likelihood=opts.string("likelihood", "student_t", ("student_t", "gaussian")),
@@ -128,13 +142,15 @@ def _options(raw: object, n_meas: int) -> Options:
         max_lines=int(opts.number("max_lines", ge=200, le=20000, default=1200)))
 
 
-def parse_request(request: object) -> Request:
+def parse_request(request: object, resolve_base: BaseResolver | None = None) -> Request:
     """Validate a diagnosis request.
 
     Parameters
     ----------
     request : dict
         See the module docstring.
+    resolve_base : callable, optional
+        Looks a measured spindle up (needed when ``assembly.spindle`` is one).
 
     Returns
     -------
@@ -154,9 +170,10 @@ def parse_request(request: object) -> Request:
         spec = parse_assembly(assembly)
     except InputError as exc:
         raise InputError(f"assembly.{exc.field}" if exc.field else "assembly", exc.rule) from None
-    if not isinstance(spec.spindle, SpindleSpec):
-        raise InputError("assembly.spindle", "a diagnosis needs an analytical spindle (segments and bearings); "
-                                             "measured spindles are not supported yet")
+    if isinstance(spec.spindle, MeasuredSpindleSpec) and resolve_base is None:
+        raise InputError("assembly.spindle", "a measured spindle is looked up in a measurement store, and none was "
+                                             "given: call rcsa.diagnose (or the CLI or the service), or pass "
+                                             "resolve_base")
     taps = parse_tap_tests(o.get("measurements"), fields.json_object(assembly.get("tool") or {}, "assembly.tool"),
                            spec.materials,
                            extra_fields=("n_averages", "sensor_mass_kg", "label"), max_tests=MAX_MEASUREMENTS,
@@ -166,4 +183,5 @@ def parse_request(request: object) -> Request:
     tolerances = dict(DEFAULT_TOLERANCES)
     for key in tol.value:
         tolerances[key] = tol.number(key, ge=0.0, le=0.05 if key == "stickout_m" else 2.0)
-    return Request(assembly, spec, measurements, tolerances, _options(o.get("options"), len(measurements)))
+    return Request(assembly, spec, measurements, tolerances, _options(o.get("options"), len(measurements)),
+                   resolve_base)
