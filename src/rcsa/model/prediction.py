@@ -74,6 +74,8 @@ class Prediction(Mapping[str, Any]):
         (hybrid; ``natural_frequencies_method == "modal_fit"``, :func:`rcsa.model.modal_fit.modal_fit`:
         sorted, distinct, each with its standard uncertainty in ``extra["natural_frequencies_sd_hz"]``
         and its fit in ``extra["modal_fit"]``).
+    natural_frequencies_method : str
+        How they were found: ``"wittrick_williams"`` (exact, analytical) or ``"modal_fit"`` (hybrid).
     peaks : list of dict
         ``{"frequency_hz", "magnitude_m_n"}`` local maxima of ``|h|`` (hybrid: those that
         stand out of the noise of the predicted ``h``).
@@ -172,14 +174,27 @@ class SubassemblyCache:
         self._static: dict[Chain, FloatArray] = {}
 
     def static(self, chain: Chain) -> FloatArray:
-        """Static undamped stiffness at the end of ``chain`` (cached), shape (2, 2)."""
+        """Static undamped stiffness at the end of ``chain`` (cached), shape (2, 2).
+
+        Parameters
+        ----------
+        chain : Chain
+            A sub-chain from the spindle's rear (e.g. spindle + holder), shared across tools.
+        """
         hit = self._static.get(chain)
         if hit is None:
             hit = self._static[chain] = static_condense(chain)
         return hit
 
     def condensed(self, chain: Chain) -> ComplexArray:
-        """Dynamic stiffness at the end of ``chain`` (plus the base), shape (nfreq, 2, 2)."""
+        """Dynamic stiffness at the end of ``chain`` (plus the base), shape (nfreq, 2, 2).
+
+        Parameters
+        ----------
+        chain : Chain
+            A sub-chain from the spindle's rear or from the measured base (cached by identity
+            of its items).
+        """
         hit = self._store.get(chain)
         if hit is None:
             hit = march(chain, self.omega_rad_s, start_compliance=self.base_receptance)[0]

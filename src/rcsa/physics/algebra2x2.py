@@ -14,13 +14,25 @@ __all__ = ["Pivots", "det2", "inv2", "negative_count_sym", "negative_count_sym2"
 
 
 def det2(a: ComplexArray) -> ComplexArray:
-    """Determinant of each 2×2 matrix, shape (...)."""
+    """Determinant of each 2×2 matrix, shape (...).
+
+    Parameters
+    ----------
+    a : numpy.ndarray, shape (..., 2, 2)
+        Stacked 2×2 matrices (e.g. receptances over frequency).
+    """
     out: ComplexArray = a[..., 0, 0] * a[..., 1, 1] - a[..., 0, 1] * a[..., 1, 0]
     return out
 
 
 def inv2(a: ComplexArray) -> ComplexArray:
-    """Inverse of each 2×2 matrix, shape (..., 2, 2)."""
+    """Inverse of each 2×2 matrix, shape (..., 2, 2).
+
+    Parameters
+    ----------
+    a : numpy.ndarray, shape (..., 2, 2)
+        Stacked non-singular 2×2 matrices (a singular one gives inf/NaN, not an error).
+    """
     d = det2(a)
     out = np.empty_like(a)
     out[..., 0, 0] = a[..., 1, 1] / d
@@ -49,7 +61,13 @@ def negative_count_sym(a11: ComplexArray | FloatArray, a12: ComplexArray | Float
 
 
 def negative_count_sym2(a: ComplexArray | FloatArray) -> IntArray:
-    """Number of negative eigenvalues of each real symmetric 2×2 matrix, shape (...), int."""
+    """Number of negative eigenvalues of each real symmetric 2×2 matrix, shape (...), int.
+
+    Parameters
+    ----------
+    a : numpy.ndarray, shape (..., 2, 2)
+        Real symmetric matrices (a complex array's real part is used).
+    """
     return negative_count_sym(a[..., 0, 0], a[..., 0, 1], a[..., 1, 1])
 
 

@@ -142,6 +142,16 @@ class Grid:
         The last two sections are kept (a chain lists the pieces of one section together:
         spindle segments split at bearings, the pieces of a subdivided beam), so the work
         arrays stay few and in cache; stacked (array) sections are not cached.
+
+        Parameters
+        ----------
+        section : Section
+            Cross-section (scalar, or stacked over tools).
+
+        Returns
+        -------
+        Waves
+            Its wavenumbers at every frequency of the grid.
         """
         hit: Waves | None = self._find(self._waves, section)
         if hit is None:
@@ -194,6 +204,16 @@ class Grid:
         """Six-term dynamic stiffness of ``beam`` on this grid (:func:`rcsa.physics.segments.segment_terms`).
 
         The arrays are this grid's work arrays: valid until the next call.
+
+        Parameters
+        ----------
+        beam : Beam
+            The segment.
+
+        Returns
+        -------
+        SixTerms
+            ``(a, b, c, e, f, g)``, each shape (nfreq,) (or (ntools·nfreq,) stacked), complex.
         """
         last, terms = self._last
         if last is beam and terms is not None and not np.isrealobj(terms[0]):
@@ -542,11 +562,29 @@ class ChainItem(Protocol):
 
         Returns the new stiffness and, with ``count``, the number of negative eigenvalues of
         the eliminated pivot per frequency (``None`` when the item eliminates no node).
+
+        Parameters
+        ----------
+        k : Sym
+            Carried stiffness at the current node ``(k11, k12, k22)``, each shape (nfreq,),
+            N/m, N/rad, N·m/rad.
+        grid : Grid
+            Frequencies, work arrays (the result may live in them) and caches.
+        count : bool
+            Also return the number of negative eigenvalues of the eliminated pivot per
+            frequency (the Wittrick–Williams count).
         """
         ...
 
     def eliminate_static(self, k: Sym) -> Sym:
-        """:meth:`eliminate` at ω = 0 without damping (arrays of shape (1,))."""
+        """:meth:`eliminate` at ω = 0 without damping (arrays of shape (1,)).
+
+        Parameters
+        ----------
+        k : Sym
+            Static stiffness at the current node, arrays of shape (1,) (or (ntools,) stacked),
+            N/m, N/rad, N·m/rad.
+        """
         ...
 
     def announce(self, grid: Grid) -> None:
@@ -583,6 +621,13 @@ class ChainItem(Protocol):
 
         Returns the new base receptance (``False``), or — for an item that eliminates the
         base's node, a beam — the dynamic stiffness at its far end (``True``).
+
+        Parameters
+        ----------
+        compliance : numpy.ndarray, shape (nfreq, 2, 2), complex
+            Receptance ``S`` of the grounded base at the current node, m/N, 1/N, rad/N, rad/(N·m).
+        grid : Grid
+            Frequencies, work arrays and caches.
         """
         ...
 
@@ -591,11 +636,23 @@ class ChainItem(Protocol):
         ...
 
     def subdivided(self, omega_max_rad_s: float) -> tuple[ChainItem, ...]:
-        """Equal pieces with no clamped–clamped natural frequency below ω_max (rad/s)."""
+        """Equal pieces with no clamped–clamped natural frequency below ω_max (rad/s).
+
+        Parameters
+        ----------
+        omega_max_rad_s : float
+            Highest angular frequency the pieces must be free of clamped–clamped modes below, rad/s.
+        """
         ...
 
     def map_sections(self, fn: Callable[[Section], Section]) -> Self:
-        """The item with ``fn`` applied to its cross-sections (if it has any)."""
+        """The item with ``fn`` applied to its cross-sections (if it has any).
+
+        Parameters
+        ----------
+        fn : callable
+            ``fn(section) -> Section``.
+        """
         ...
 
     def signature(self) -> tuple[object, ...]:
@@ -603,11 +660,23 @@ class ChainItem(Protocol):
         ...
 
     def stack(self, items: Sequence[Self]) -> Self:
-        """One item whose parameters are arrays over ``items`` (equal signatures; ``self`` is ``items[0]``)."""
+        """One item whose parameters are arrays over ``items`` (equal signatures; ``self`` is ``items[0]``).
+
+        Parameters
+        ----------
+        items : sequence of items of this type
+            Items with equal :meth:`signature` (``self`` is ``items[0]``), one per stacked row (tool).
+        """
         ...
 
     def take_rows(self, rows: IntArray) -> Self:
-        """A stacked item with its parameter arrays indexed by ``rows`` (scalars kept)."""
+        """A stacked item with its parameter arrays indexed by ``rows`` (scalars kept).
+
+        Parameters
+        ----------
+        rows : numpy.ndarray of int
+            Rows (tools) to keep, in the order given.
+        """
         ...
 
     @property
@@ -634,7 +703,27 @@ class Beam:
     length_m: RealParam
 
     def eliminate(self, k: Sym, grid: Grid, count: bool = False) -> tuple[Sym, IntArray | None]:
-        """Condense the beam's first node (:func:`beam_step`); the pivot is ``K + D11``."""
+        """Condense the beam's first node (:func:`beam_step`); the pivot is ``K + D11``.
+
+        Parameters
+        ----------
+        k : Sym
+            Carried stiffness at the current node ``(k11, k12, k22)``, each shape (nfreq,),
+            N/m, N/rad, N·m/rad.
+        grid : Grid
+            Frequencies, work arrays (the result may live in them) and caches.
+        count : bool
+            Also return the number of negative eigenvalues of the eliminated pivot per
+            frequency (the Wittrick–Williams count).
+
+        Returns
+        -------
+        k : Sym
+            The carried stiffness at the next node.
+        negatives : numpy.ndarray of int, shape (nfreq,), or None
+            With ``count``, negative eigenvalues of the pivot; ``None`` otherwise or when
+            no node is eliminated.
+        """
         k, pivot, _ = _beam_step(k, grid.beam_terms(self), grid.scratch, grid.carried(real=False))
         return k, negative_count_sym(*pivot) if count else None
 
@@ -668,6 +757,12 @@ class Beam:
         """With the exact static Timoshenko stiffness; ``P = K + D11`` is positive definite.
 
         The six terms of :func:`rcsa.physics.segments.static_terms`, per row for a stacked beam.
+
+        Parameters
+        ----------
+        k : Sym
+            Static stiffness at the current node, arrays of shape (1,) (or (ntools,) stacked),
+            N/m, N/rad, N·m/rad.
         """
         shape = k[0].shape
         terms = tuple(np.broadcast_to(x, shape) for x in static_terms(self.section.undamped(), self.length_m))
@@ -678,6 +773,20 @@ class Beam:
 
         ``D`` from the grid's six terms (:meth:`Grid.beam_terms`), so a grid that caches them
         (the diagnosis's) absorbs a measured base without recomputing the beam.
+
+        Parameters
+        ----------
+        compliance : numpy.ndarray, shape (nfreq, 2, 2), complex
+            Receptance ``S`` of the grounded base at the current node, m/N, 1/N, rad/N, rad/(N·m).
+        grid : Grid
+            Frequencies, work arrays and caches.
+
+        Returns
+        -------
+        numpy.ndarray, shape (nfreq, 2, 2), complex
+            The new base receptance, or (a beam) the dynamic stiffness at its far end.
+        bool
+            True when the result is a stiffness (the base's node was eliminated).
         """
         a, b, c, e, f, g = grid.beam_terms(self)
         d = np.stack([np.stack(r, axis=-1) for r in ([a, b, e, f], [b, c, -f, g], [e, -f, a, -b], [f, g, -b, c])],
@@ -730,6 +839,11 @@ class Beam:
         Below the shear cut-off the evanescent wavenumber obeys ``|s₂|² ≤ s₁|s₂| = c/EI ≤
         ρAω²/EI`` (``s₁ + s₂ ≥ 0``), so its decay rate is at most ``(ρAω²/EI)^¼`` up to ω_max;
         above it there is none. The pieces are one object repeated (their terms are computed once).
+
+        Parameters
+        ----------
+        omega_max_rad_s : float
+            Highest angular frequency the pieces must be free of clamped–clamped modes below, rad/s.
         """
         length = float(np.max(self.length_m))
         s = self.section
@@ -740,7 +854,13 @@ class Beam:
         return (Beam(self.section, self.length_m / n),) * n
 
     def map_sections(self, fn: Callable[[Section], Section]) -> Beam:
-        """The beam with section ``fn(section)``."""
+        """The beam with section ``fn(section)``.
+
+        Parameters
+        ----------
+        fn : callable
+            ``fn(section) -> Section``.
+        """
         return Beam(fn(self.section), self.length_m)
 
     def signature(self) -> tuple[object, ...]:
@@ -748,11 +868,23 @@ class Beam:
         return ("Beam",)
 
     def stack(self, items: Sequence[Beam]) -> Beam:
-        """Sections and lengths as arrays over ``items``."""
+        """Sections and lengths as arrays over ``items``.
+
+        Parameters
+        ----------
+        items : sequence of items of this type
+            Items with equal :meth:`signature` (``self`` is ``items[0]``), one per stacked row (tool).
+        """
         return Beam(Section.stack([i.section for i in items]), np.array([i.length_m for i in items]))
 
     def take_rows(self, rows: IntArray) -> Beam:
-        """Section properties and length indexed by ``rows``."""
+        """Section properties and length indexed by ``rows``.
+
+        Parameters
+        ----------
+        rows : numpy.ndarray of int
+            Rows (tools) to keep, in the order given.
+        """
         return Beam(self.section.take_rows(rows), _row(self.length_m, rows))
 
     @property
@@ -774,7 +906,13 @@ class Lumped:
     __slots__ = ()
 
     def subdivided(self, omega_max_rad_s: float) -> tuple[Self, ...]:
-        """A lumped item has no natural frequency of its own: itself."""
+        """A lumped item has no natural frequency of its own: itself.
+
+        Parameters
+        ----------
+        omega_max_rad_s : float
+            Highest angular frequency the pieces must be free of clamped–clamped modes below, rad/s.
+        """
         return (self,)
 
     def announce(self, grid: Grid) -> None:
@@ -805,7 +943,13 @@ class Lumped:
         return tuple(np.ascontiguousarray(np.real(x)) for x in new)  # type: ignore[return-value]
 
     def map_sections(self, fn: Callable[[Section], Section]) -> Self:
-        """A lumped item has no section: itself."""
+        """A lumped item has no section: itself.
+
+        Parameters
+        ----------
+        fn : callable
+            ``fn(section) -> Section``.
+        """
         return self
 
     def signature(self) -> tuple[object, ...]:
@@ -818,13 +962,25 @@ class Lumped:
         return {f.name: getattr(self, f.name) for f in fields(item)}
 
     def stack(self, items: Sequence[Self]) -> Self:
-        """Every field as an array over ``items`` (``None`` stays ``None``: equal signatures agree on it)."""
+        """Every field as an array over ``items`` (``None`` stays ``None``: equal signatures agree on it).
+
+        Parameters
+        ----------
+        items : sequence of items of this type
+            Items with equal :meth:`signature` (``self`` is ``items[0]``), one per stacked row (tool).
+        """
         values = [i._values() for i in items]
         return type(self)(**{name: None if value is None else np.array([v[name] for v in values])
                              for name, value in self._values().items()})
 
     def take_rows(self, rows: IntArray) -> Self:
-        """Every array field indexed by ``rows`` (scalars kept)."""
+        """Every array field indexed by ``rows`` (scalars kept).
+
+        Parameters
+        ----------
+        rows : numpy.ndarray of int
+            Rows (tools) to keep, in the order given.
+        """
         return type(self)(**{name: _row(value, rows) for name, value in self._values().items()})
 
     @property
@@ -857,19 +1013,37 @@ class Spring(Lumped):
     rotational_damping_nms_rad: RealParam = 0.0
 
     def translational(self, omega_rad_s: FloatArray) -> ComplexArray | None:
-        """``k_t + iωc_t`` (N/m), shape (nfreq,), or ``None`` if rigid."""
+        """``k_t + iωc_t`` (N/m), shape (nfreq,), or ``None`` if rigid.
+
+        Parameters
+        ----------
+        omega_rad_s : numpy.ndarray, shape (nfreq,)
+            Angular frequencies, rad/s.
+        """
         if self.stiffness_n_m is None:
             return None
         return self.stiffness_n_m + 1j * omega_rad_s * self.damping_ns_m
 
     def rotational(self, omega_rad_s: FloatArray) -> ComplexArray | None:
-        """``k_r + iωc_r`` (N·m/rad), shape (nfreq,), or ``None`` if rigid."""
+        """``k_r + iωc_r`` (N·m/rad), shape (nfreq,), or ``None`` if rigid.
+
+        Parameters
+        ----------
+        omega_rad_s : numpy.ndarray, shape (nfreq,)
+            Angular frequencies, rad/s.
+        """
         if self.rotational_stiffness_nm_rad is None:
             return None
         return self.rotational_stiffness_nm_rad + 1j * omega_rad_s * self.rotational_damping_nms_rad
 
     def compliance(self, omega_rad_s: FloatArray) -> ComplexArray:
-        """Joint compliance ``K⁻¹``, shape (nfreq, 2, 2); zero for rigid DOFs."""
+        """Joint compliance ``K⁻¹``, shape (nfreq, 2, 2); zero for rigid DOFs.
+
+        Parameters
+        ----------
+        omega_rad_s : numpy.ndarray, shape (nfreq,)
+            Angular frequencies, rad/s.
+        """
         out = np.zeros((omega_rad_s.size, 2, 2), dtype=complex)
         kt, kr = self.translational(omega_rad_s), self.rotational(omega_rad_s)
         if kt is not None:
@@ -879,7 +1053,27 @@ class Spring(Lumped):
         return out
 
     def eliminate(self, k: Sym, grid: Grid, count: bool = False) -> tuple[Sym, IntArray | None]:
-        """Condense across the joint (:func:`joint_step`)."""
+        """Condense across the joint (:func:`joint_step`).
+
+        Parameters
+        ----------
+        k : Sym
+            Carried stiffness at the current node ``(k11, k12, k22)``, each shape (nfreq,),
+            N/m, N/rad, N·m/rad.
+        grid : Grid
+            Frequencies, work arrays (the result may live in them) and caches.
+        count : bool
+            Also return the number of negative eigenvalues of the eliminated pivot per
+            frequency (the Wittrick–Williams count).
+
+        Returns
+        -------
+        k : Sym
+            The carried stiffness at the next node.
+        negatives : numpy.ndarray of int, shape (nfreq,), or None
+            With ``count``, negative eigenvalues of the pivot; ``None`` otherwise or when
+            no node is eliminated.
+        """
         w = grid.omega_rad_s
         if count:
             return joint_step(k, self.translational(w), self.rotational(w), count)
@@ -896,7 +1090,14 @@ class Spring(Lumped):
         return _joint_step(k, kt, kr, sc, grid.carried(real=False)), None
 
     def eliminate_static(self, k: Sym) -> Sym:
-        """Across the joint's static stiffness."""
+        """Across the joint's static stiffness.
+
+        Parameters
+        ----------
+        k : Sym
+            Static stiffness at the current node, arrays of shape (1,) (or (ntools,) stacked),
+            N/m, N/rad, N·m/rad.
+        """
         w0 = np.zeros(1)
         stiff = self.undamped()
         return joint_step(k, stiff.translational(w0), stiff.rotational(w0))[0]
@@ -915,7 +1116,22 @@ class Spring(Lumped):
                            grid.carried(real=True), grid.pivots)
 
     def absorb_compliance(self, compliance: ComplexArray, grid: Grid) -> tuple[ComplexArray, bool]:
-        """A joint adds its compliance to the base's."""
+        """A joint adds its compliance to the base's.
+
+        Parameters
+        ----------
+        compliance : numpy.ndarray, shape (nfreq, 2, 2), complex
+            Receptance ``S`` of the grounded base at the current node, m/N, 1/N, rad/N, rad/(N·m).
+        grid : Grid
+            Frequencies, work arrays and caches.
+
+        Returns
+        -------
+        numpy.ndarray, shape (nfreq, 2, 2), complex
+            The new base receptance, or (a beam) the dynamic stiffness at its far end.
+        bool
+            True when the result is a stiffness (the base's node was eliminated).
+        """
         return compliance + self.compliance(grid.omega_rad_s), False
 
     def undamped(self) -> Spring:
@@ -955,7 +1171,13 @@ class Ground(Lumped):
     rotary_inertia_kg_m2: RealParam = 0.0
 
     def stiffness(self, omega_rad_s: FloatArray) -> ComplexArray:
-        """Dynamic stiffness, shape (nfreq, 2, 2)."""
+        """Dynamic stiffness, shape (nfreq, 2, 2).
+
+        Parameters
+        ----------
+        omega_rad_s : numpy.ndarray, shape (nfreq,)
+            Angular frequencies, rad/s.
+        """
         w = omega_rad_s
         out = np.zeros((w.size, 2, 2), dtype=complex)
         out[:, 0, 0] = self.stiffness_n_m + 1j * w * self.damping_ns_m - w**2 * self.mass_kg
@@ -964,7 +1186,27 @@ class Ground(Lumped):
         return out
 
     def eliminate(self, k: Sym, grid: Grid, count: bool = False) -> tuple[Sym, IntArray | None]:
-        """``K ← K + Δ``: no node is eliminated, so no pivot."""
+        """``K ← K + Δ``: no node is eliminated, so no pivot.
+
+        Parameters
+        ----------
+        k : Sym
+            Carried stiffness at the current node ``(k11, k12, k22)``, each shape (nfreq,),
+            N/m, N/rad, N·m/rad.
+        grid : Grid
+            Frequencies, work arrays (the result may live in them) and caches.
+        count : bool
+            Also return the number of negative eigenvalues of the eliminated pivot per
+            frequency (the Wittrick–Williams count).
+
+        Returns
+        -------
+        k : Sym
+            The carried stiffness at the next node.
+        negatives : numpy.ndarray of int, shape (nfreq,), or None
+            With ``count``, negative eigenvalues of the pivot; ``None`` otherwise or when
+            no node is eliminated.
+        """
         return self._add(k, grid, real=False), None
 
     def eliminate_undamped(self, k: Sym, grid: Grid) -> Sym:
@@ -1002,11 +1244,33 @@ class Ground(Lumped):
         return o11, o12, o22
 
     def eliminate_static(self, k: Sym) -> Sym:
-        """``K ← K + diag(k_t, k_r)``."""
+        """``K ← K + diag(k_t, k_r)``.
+
+        Parameters
+        ----------
+        k : Sym
+            Static stiffness at the current node, arrays of shape (1,) (or (ntools,) stacked),
+            N/m, N/rad, N·m/rad.
+        """
         return k[0] + self.stiffness_n_m, k[1], k[2] + self.rotational_stiffness_nm_rad
 
     def absorb_compliance(self, compliance: ComplexArray, grid: Grid) -> tuple[ComplexArray, bool]:
-        """``S (I + Δ S)⁻¹``."""
+        """``S (I + Δ S)⁻¹``.
+
+        Parameters
+        ----------
+        compliance : numpy.ndarray, shape (nfreq, 2, 2), complex
+            Receptance ``S`` of the grounded base at the current node, m/N, 1/N, rad/N, rad/(N·m).
+        grid : Grid
+            Frequencies, work arrays and caches.
+
+        Returns
+        -------
+        numpy.ndarray, shape (nfreq, 2, 2), complex
+            The new base receptance, or (a beam) the dynamic stiffness at its far end.
+        bool
+            True when the result is a stiffness (the base's node was eliminated).
+        """
         s = compliance
         return s @ inv2(_EYE + self.stiffness(grid.omega_rad_s) @ s), False
 
@@ -1018,5 +1282,15 @@ class Ground(Lumped):
 
 
 def undamped(chain: Chain) -> Chain:
-    """The chain with every damper removed and real moduli (for natural frequencies)."""
+    """The chain with every damper removed and real moduli (for natural frequencies).
+
+    Parameters
+    ----------
+    chain : Chain
+        The items, spindle rear to tool tip.
+
+    Returns
+    -------
+    Chain
+    """
     return tuple(item.undamped() for item in chain)

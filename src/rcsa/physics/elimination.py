@@ -317,7 +317,21 @@ def close(k: FloatArray, pivots: Pivots) -> None:
 
 
 def subdivide(chain: Chain, omega_max_rad_s: float) -> Chain:
-    """Split beams into equal pieces with no clamped–clamped natural frequency below ω_max (rad/s)."""
+    """Split beams into equal pieces with no clamped–clamped natural frequency below ω_max (rad/s).
+
+    Parameters
+    ----------
+    chain : Chain
+        The items, spindle rear to tool tip.
+    omega_max_rad_s : float
+        Highest angular frequency of interest, rad/s.
+
+    Returns
+    -------
+    Chain
+        The same structure with each beam replaced by its pieces
+        (:meth:`rcsa.physics.chain.ChainItem.subdivided`); lumped items unchanged.
+    """
     out: list[ChainItem] = []
     for item in chain:
         out.extend(item.subdivided(omega_max_rad_s))

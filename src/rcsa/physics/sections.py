@@ -88,12 +88,23 @@ class Section:
 
         A property equal in all of them stays one value (so equal sections stay one hashable
         section whose waves the solvers compute once).
+
+        Parameters
+        ----------
+        sections : sequence of Section
+            One per stacked row (tool).
         """
         return cls(_stacked([s.ei for s in sections]), _stacked([s.shear_flexibility for s in sections]),
                    _stacked([s.rho_a for s in sections]), _stacked([s.rho_i for s in sections]))
 
     def take_rows(self, rows: IntArray) -> Section:
-        """A stacked section with its property arrays indexed by ``rows`` (scalars kept as they are)."""
+        """A stacked section with its property arrays indexed by ``rows`` (scalars kept as they are).
+
+        Parameters
+        ----------
+        rows : numpy.ndarray of int
+            Rows (tools) to keep, in the order given.
+        """
         return Section(_rows(self.ei, rows), _rows(self.shear_flexibility, rows), _rows(self.rho_a, rows),
                        _rows(self.rho_i, rows))
 

@@ -325,7 +325,13 @@ class Waves:
         return out
 
     def pieces(self, length_m: RealParam) -> int:
-        """Number of equal pieces keeping each piece's decay exponent ≤ MAX_DECAY_PER_PIECE."""
+        """Number of equal pieces keeping each piece's decay exponent ≤ MAX_DECAY_PER_PIECE.
+
+        Parameters
+        ----------
+        length_m : float or numpy.ndarray
+            Segment length, m (the longest when stacked).
+        """
         return max(1, math.ceil(self.decay_per_m * float(np.max(length_m)) / MAX_DECAY_PER_PIECE))
 
     def functions(self, length_m: RealParam, scratch: Scratch) -> tuple[ComplexArray, ComplexArray, ComplexArray]:

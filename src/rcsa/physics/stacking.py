@@ -17,7 +17,18 @@ __all__ = ["chain_signature", "stack_chains", "take_rows"]
 
 
 def chain_signature(chain: Chain) -> tuple[tuple[object, ...], ...]:
-    """Structure of a chain (item kinds, rigid joint DOFs): chains with equal signatures stack."""
+    """Structure of a chain (item kinds, rigid joint DOFs): chains with equal signatures stack.
+
+    Parameters
+    ----------
+    chain : Chain
+        The items, spindle rear to tool tip.
+
+    Returns
+    -------
+    tuple of tuple
+        Each item's :meth:`~rcsa.physics.chain.ChainItem.signature`.
+    """
     return tuple(item.signature() for item in chain)
 
 
