@@ -299,7 +299,10 @@ _RECOMMEND_FIELDS = {
     "max_surface_speed_m_min": "Surface-speed limit, m/min (default: the table's, for carbide tools).",
     "feed_per_tooth_m": "Feed per tooth for the preset's feeds, m (default: f_z of the tool's own first preset).",
     "method": "Stability-lobe method: zoa.",
-    "confidence": "Robust limit at this confidence (not available in this version).",
+    "uncertainty": "Robust presets: the uncertainty option as JSON ({\"draws\": 200, \"seed\": 1, \"tolerances\": "
+                   "{...}}); every tool's assembly is drawn with the stored sync's settings and the pocket chosen on "
+                   "the robust depth limit.",
+    "confidence": "With uncertainty: the robust limit's confidence (default 0.95).",
 }
 assert set(_RECOMMEND_FIELDS) - {"library"} == set(OPTION_FIELDS)
 _RECOMMEND_BODY = {"requestBody": {"required": True, "content": {
@@ -332,6 +335,9 @@ async def _recommend_inputs(request: Request, limit_bytes: int) -> tuple[bytes, 
                 continue
             if field in _TEXT_OPTIONS:
                 options[field] = text.strip()
+                continue
+            if field == "uncertainty":
+                options[field] = decode_json(text, path=field, what="the uncertainty form field")
                 continue
             try:
                 options[field] = float(text)

@@ -67,3 +67,18 @@ def test_recommend_refuses_what_it_cannot_do(tmp_path):
     r = runner.invoke(app, ["library", "recommend", str(lib), "--material", "7075", "--max-rpm", "24000",
                             "--library-id", "nope", "--store", str(tmp_path / "store"), "--in-place"])
     assert r.exit_code == 1 and "nope" in r.stderr
+
+
+def test_recommend_robust_presets_with_uncertainty_and_confidence(tmp_path):
+    spindle = tmp_path / "ra1.json"
+    spindle.write_text(json.dumps(ra1(GRID)))
+    lib = SAMPLES / "fusion-synthetic" / "synthetic_library.json"
+    args = ["library", "recommend", str(lib), "--spindle", str(spindle), "--material", "aluminium-7075",
+            "--max-rpm", "24000", "-o", str(tmp_path / "robust.json"), "-q",
+            "--uncertainty", '{"draws": 12, "seed": 2}', "--confidence", "0.9"]
+    r = runner.invoke(app, args)
+    assert r.exit_code == 0, r.stderr
+    tools = [t for t in json.loads(r.stdout)["tools"] if t["status"] == "written"]
+    assert tools and all(t["confidence"] == 0.9 and t["robust_depth_limit_m"] <= t["depth_limit_m"] for t in tools)
+    r = runner.invoke(app, [*args[:-4], "--confidence", "0.9"])
+    assert r.exit_code == 1 and "confidence: needs uncertainty" in r.stderr

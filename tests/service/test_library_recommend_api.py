@@ -75,3 +75,16 @@ def test_write_key_and_problems(client):
     body = assert_problem(client.post("/v1/libraries/shop:recommend", headers=WRITE,
                                       files={"library": ("5mm_Endmill.fctb", fctb)}, data=OPTIONS), 422, "library")
     assert "FreeCAD" in body["detail"]
+
+
+def test_robust_presets_from_the_uncertainty_form_field(client):
+    _sync(client)
+    r = client.post("/v1/libraries/shop:recommend", headers=WRITE, files={"library": ("shop.json", SAMPLE)},
+                    data={**OPTIONS, "uncertainty": json.dumps({"draws": 12, "seed": 2}), "confidence": "0.9"})
+    assert r.status_code == 200, r.text
+    tools = [t for t in r.json()["tools"] if t["status"] == "written"]
+    assert tools and all(t["confidence"] == 0.9 and t["robust_depth_limit_m"] <= t["depth_limit_m"] for t in tools)
+    assert r.json()["options"]["uncertainty"] == {"draws": 12, "seed": 2}
+    for bad, field in (({"uncertainty": "{not json"}, "uncertainty"), ({"confidence": "0.9"}, "confidence")):
+        assert_problem(client.post("/v1/libraries/shop:recommend", headers=WRITE,
+                                   files={"library": ("shop.json", SAMPLE)}, data={**OPTIONS, **bad}), 422, field)

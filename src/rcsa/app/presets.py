@@ -120,7 +120,8 @@ def recommend_stored(bench: Workbench, library_id: str, data: bytes, options: Ma
     """
     opts = parse_recommend_options(options)
     file, library = _read(data, file_name, content_type)
-    source = stored_frfs(bench.libraries, library_id, library, store=bench.store, max_lines=bench.max_lines)
+    source = stored_frfs(bench.libraries, library_id, library, store=bench.store, max_lines=bench.max_lines,
+                         uncertainty=opts.uncertainty)
     return _answer(file, file_name, source, opts)
 
 
@@ -155,6 +156,7 @@ def recommend_predicted(bench: Workbench, data: bytes, options: Mapping[str, Any
     file, library = _read(data, file_name, content_type)
     source = predicted_frfs(library, spindle=spindle, frequency=frequency, store=bench.store,
                             max_lines=bench.max_lines, max_combinations=bench.max_combinations, progress=progress,
+                            uncertainty=opts.uncertainty,
                             options=import_options, **{k: v for k, v in fields.items() if v is not None})
     return _answer(file, file_name, source, opts)
 

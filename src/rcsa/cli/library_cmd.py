@@ -345,6 +345,9 @@ def recommend(
     feed_per_tooth_mm: Annotated[float | None, typer.Option(help="Feed per tooth for the preset's feeds, mm "
                                                                  "(default: f_z of the tool's own preset).")] = None,
     method: Annotated[str, typer.Option(help="Lobe method.")] = "zoa",
+    uncertainty: UncertaintyOption = None,
+    confidence: Annotated[float | None, typer.Option(help="With --uncertainty: choose the pocket on the robust "
+                                                          "depth limit at this confidence (default 0.95).")] = None,
     frequency: FrequencyOption = None,
     joints: JointsOption = None,
     options: ImportOptions = None,
@@ -370,7 +373,8 @@ def recommend(
                 "tangential_coefficient_n_m2": tangential_coefficient_n_m2, "radial_ratio": radial_ratio,
                 "radial_immersion": radial_immersion, "milling": milling, "safety_factor": safety_factor,
                 "speed_tolerance": speed_tolerance, "max_surface_speed_m_min": max_surface_speed,
-                "feed_per_tooth_m": None if feed_per_tooth_mm is None else feed_per_tooth_mm * 1e-3, "method": method}
+                "feed_per_tooth_m": None if feed_per_tooth_mm is None else feed_per_tooth_mm * 1e-3, "method": method,
+                "uncertainty": _uncertainty_json(uncertainty), "confidence": confidence}
     settings = {k: v for k, v in settings.items() if v is not None}
     try:
         data = library.read_bytes()

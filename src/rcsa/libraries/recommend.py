@@ -52,7 +52,9 @@ from rcsa.analysis.lobes.pockets import (
     PocketRule,
     best_pocket,
     pocket_speed_grid,
+    window_minimum,
 )
+from rcsa.analysis.lobes.robust import DEFAULT_CONFIDENCE, robust_depth_limit
 from rcsa.analysis.lobes.workpiece_materials import (
     COEFFICIENT_MODEL,
     SPEED_SOURCE,
@@ -60,13 +62,13 @@ from rcsa.analysis.lobes.workpiece_materials import (
     material_key,
     workpiece_material,
 )
-from rcsa.analysis.lobes.zoa import Milling, check_cut, stability_lobes
+from rcsa.analysis.lobes.zoa import Milling, check_cut, depth_limit_envelopes, stability_lobes
 from rcsa.errors import InputError
 from rcsa.libraries.fusion_geometry import tool_geometry
 from rcsa.libraries.fusion_presets import FusionFile, is_replaced, write_presets
 from rcsa.libraries.tool_materials import tool_material
 from rcsa.model import fields
-from rcsa.model.bounds import MAX_SPEED_RPM
+from rcsa.model.bounds import MAX_CONFIDENCE, MAX_SPEED_RPM, MIN_CONFIDENCE
 
 __all__ = [
     "DEFAULT_MIN_RPM",
@@ -98,7 +100,7 @@ MILLING_TOOL_TYPES = frozenset({
 #: The options of a recommendation, as the CLI and the REST service name them.
 OPTION_FIELDS = ("material", "tangential_coefficient_n_m2", "radial_ratio", "radial_immersion", "milling",
                  "min_rpm", "max_rpm", "safety_factor", "speed_tolerance", "max_surface_speed_m_min",
-                 "feed_per_tooth_m", "method", "confidence")
+                 "feed_per_tooth_m", "method", "uncertainty", "confidence")
 
 _NAMESPACE = uuid.uuid5(uuid.NAMESPACE_URL, "urn:rcsa:chatter-safe-preset")
 _INCH = (254, 10000)
@@ -106,10 +108,12 @@ _INCH = (254, 10000)
 
 @dataclass(frozen=True, slots=True)
 class Frf:
-    """A tool-point FRF: frequency grid (Hz) and the direct receptance ``h`` (m/N)."""
+    """A tool-point FRF: frequency grid (Hz) and the direct receptance ``h`` (m/N), and the
+    ``h`` of the tool's drawn assemblies, shape (ndraws, nfreq), when robust presets are asked for."""
 
     frequency_hz: np.ndarray
     h: np.ndarray
+    h_draws: np.ndarray | None = None
 
 
 class FrfFailure(str):
@@ -145,8 +149,11 @@ class RecommendOptions:
         Feed per tooth for the preset's feeds, m.
     method : str
         Lobe method (:data:`LOBE_METHODS`).
+    uncertainty : mapping or None
+        The ``uncertainty`` option (draws, seed, tolerances; :mod:`rcsa.model.uncertainty`):
+        each tool's assembly is drawn and the pocket chosen on the robust limit.
     confidence : float or None
-        Robust limit at this confidence (not available yet: always None).
+        The robust limit's confidence (default 0.95 with ``uncertainty``; None without).
     """
 
     material: str
@@ -163,6 +170,7 @@ class RecommendOptions:
     max_surface_speed_m_min: float | None = None
     feed_per_tooth_m: float | None = None
     method: str = "zoa"
+    uncertainty: Mapping[str, Any] | None = None
     confidence: float | None = None
 
     @property
@@ -187,7 +195,9 @@ class RecommendOptions:
                 "safety_factor": self.safety_factor, "speed_tolerance": self.speed_tolerance,
                 "max_surface_speed_m_min": self.max_surface_speed_m_min,
                 "surface_speed_source": SPEED_SOURCE if self.max_surface_speed_m_min is None else "given by the caller",
-                "feed_per_tooth_m": self.feed_per_tooth_m, "method": self.method, "confidence": self.confidence}
+                "feed_per_tooth_m": self.feed_per_tooth_m, "method": self.method,
+                "uncertainty": None if self.uncertainty is None else dict(self.uncertainty),
+                "confidence": self.confidence}
 
 
 def parse_recommend_options(body: Mapping[str, Any]) -> RecommendOptions:
@@ -200,7 +210,9 @@ def parse_recommend_options(body: Mapping[str, Any]) -> RecommendOptions:
         ``tangential_coefficient_n_m2`` with ``radial_ratio`` (both, or neither: then the
         table's), ``radial_immersion`` (0.5), ``milling`` (``"down"``), ``min_rpm`` (1000),
         ``safety_factor`` (1.25), ``speed_tolerance`` (0.03), ``max_surface_speed_m_min``,
-        ``feed_per_tooth_m``, ``method`` (``"zoa"``) and ``confidence``.
+        ``feed_per_tooth_m``, ``method`` (``"zoa"``), ``uncertainty`` (robust presets:
+        every tool's assembly drawn, :mod:`rcsa.analysis.lobes.robust`) and ``confidence``
+        (0.95; only with ``uncertainty``).
 
     Returns
     -------
@@ -257,14 +269,19 @@ def parse_recommend_options(body: Mapping[str, Any]) -> RecommendOptions:
     method = body.get("method", "zoa")
     if method not in LOBE_METHODS:
         raise InputError("method", f"must be one of {', '.join(LOBE_METHODS)} in this version, got {method!r}")
-    if body.get("confidence") is not None:
-        raise InputError("confidence", "robust lobes under uncertainty are not available in this version; "
-                                       "leave confidence out (the nominal limit is used)")
+    uncertainty, confidence = body.get("uncertainty"), body.get("confidence")
+    if uncertainty is None and confidence is not None:
+        raise InputError("confidence", "needs uncertainty: the robust limit is taken over drawn assemblies")
+    if uncertainty is not None:
+        uncertainty = fields.json_object(uncertainty, "uncertainty")
+        confidence = fields.number(DEFAULT_CONFIDENCE if confidence is None else confidence, "confidence",
+                                   ge=MIN_CONFIDENCE, le=MAX_CONFIDENCE)
     return RecommendOptions(material=material, workpiece=row, tangential_coefficient_n_m2=cut.tangential_coefficient_n_m2,
                             radial_ratio=cut.radial_ratio, coefficient_source=source,
                             radial_immersion=cut.radial_immersion, milling=cut.milling, min_rpm=min_rpm,
                             max_rpm=max_rpm, safety_factor=rule.safety_factor, speed_tolerance=rule.speed_tolerance,
-                            max_surface_speed_m_min=vc, feed_per_tooth_m=fz, method=str(method))
+                            max_surface_speed_m_min=vc, feed_per_tooth_m=fz, method=str(method),
+                            uncertainty=uncertainty, confidence=confidence)
 
 
 def preset_name(options: RecommendOptions) -> str:
@@ -388,21 +405,32 @@ def _one_tool(item: Any, entry: Mapping[str, Any], frf: Frf | str | None,
                                 milling=options.milling, spindle_speed_rpm=grid)
     except InputError as err:
         raise InputError(f"stability lobes: {err.field}", err.rule) from None
-    # Robust limits (depth_limit_robust_m at a confidence) plug in here: the pocket is then
-    # chosen on the robust limit instead of the nominal one.
-    limit, robust = lobes.depth_limit_m, None
+    limit = lobes.depth_limit_m
+    if options.confidence is not None:  # robust: the pocket is chosen on the robust limit
+        if frf.h_draws is None:
+            raise InputError("uncertainty", "no drawn FRFs for this tool: robust presets need them")
+        envelopes = depth_limit_envelopes(frf.frequency_hz, frf.h_draws, teeth=teeth,
+                                          tangential_coefficient_n_m2=options.tangential_coefficient_n_m2,
+                                          radial_ratio=options.radial_ratio, radial_immersion=options.radial_immersion,
+                                          milling=options.milling, spindle_speed_rpm=grid)
+        limit = robust_depth_limit(envelopes, lobes.depth_limit_m, options.confidence)
     rule = PocketRule(options.safety_factor, options.speed_tolerance, max_depth_m=flute_m)
     pocket = best_pocket(grid, limit, min_rpm=lo, max_rpm=hi, rule=rule,
                          chatter_frequency_hz=lobes.chatter_frequency_hz, governing_lobe=lobes.governing_lobe)
     if pocket is None:
         raise _Skip(f"no stable pocket between {lo:.0f} and {hi:.0f} rpm keeps a ±{options.speed_tolerance:.0%} "
-                    "speed window stable")
+                    "speed window stable" + (" at the robust limit" if options.confidence is not None else ""))
+    nominal_m, robust = pocket.depth_limit_m, None
+    if options.confidence is not None:  # the window minimum of the nominal limit, beside the robust one
+        at = int(np.argmin(np.abs(grid - pocket.spindle_speed_rpm)))
+        nominal_m = float(window_minimum(grid, lobes.depth_limit_m, options.speed_tolerance)[at])
+        robust = pocket.depth_limit_m
     preset, unit_report, feed_note = _preset(item, entry, geo, pocket, teeth, options)
     if feed_note:
         warnings.append(feed_note)
     report = {
         "spindle_speed_rpm": preset["n"], "stepdown_m": pocket.stepdown_m, "stepdown": unit_report,
-        "depth_limit_m": pocket.depth_limit_m, "safety_factor": options.safety_factor,
+        "depth_limit_m": nominal_m, "safety_factor": options.safety_factor,
         "robust_depth_limit_m": robust, "confidence": options.confidence,
         "limited_by": pocket.limited_by,
         "pocket": {"low_rpm": pocket.pocket_low_rpm, "high_rpm": pocket.pocket_high_rpm,
@@ -511,7 +539,10 @@ def _preset(item: Any, entry: Mapping[str, Any], geo: Mapping[str, Any], pocket:
     description = (f"rcsa {__version__}: {options.method} stability lobes; stepdown = depth limit within "
                    f"+/-{options.speed_tolerance:.0%} of n / {options.safety_factor:g}; {options.display_name}, "
                    f"Kt {options.tangential_coefficient_n_m2 / 1e6:g} N/mm2, Kr {options.radial_ratio:.4g}, "
-                   f"ae/D {options.radial_immersion:g}, {options.milling} milling")
+                   f"ae/D {options.radial_immersion:g}, {options.milling} milling"
+                   + ("" if options.confidence is None else
+                      f"; robust: the {100 * (1 - options.confidence):g}th percentile over "
+                      f"{(options.uncertainty or {}).get('draws', 'the')} drawn assemblies"))
     preset: dict[str, Any] = {
         "name": name, "guid": guid, "description": description,
         "material": {"category": "all", "query": options.display_name, "use-hardness": False},

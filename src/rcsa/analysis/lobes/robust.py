@@ -35,8 +35,8 @@ from rcsa.model.bounds import MAX_CONFIDENCE, MIN_CONFIDENCE
 from rcsa.model.fields import Fields, json_object
 from rcsa.model.uncertainty import UncertaintyOptions
 
-__all__ = ["DEFAULT_CONFIDENCE", "ROBUST_FIELDS", "RobustLobes", "RobustRequest", "robust_lobes",
-           "split_robust_request"]
+__all__ = ["DEFAULT_CONFIDENCE", "ROBUST_FIELDS", "RobustLobes", "RobustRequest", "robust_depth_limit",
+           "robust_lobes", "split_robust_request"]
 
 #: Request fields of robust lobes (beside those of a stability-lobes request).
 ROBUST_FIELDS = ("uncertainty", "robust")
@@ -165,9 +165,31 @@ def robust_lobes(request: LobesRequest, nominal: LobeResult, frequency_hz: np.nd
                                       tangential_coefficient_n_m2=request.tangential_coefficient_n_m2,
                                       radial_ratio=request.radial_ratio, radial_immersion=request.radial_immersion,
                                       milling=request.milling, spindle_speed_rpm=request.spindle_speed_rpm)
-    quantile = np.percentile(envelopes, _percentile(confidence), axis=0)  # NaN wherever a draw is NaN
-    robust = np.fmin(quantile, nominal.depth_limit_m)
-    robust[np.isnan(quantile) | np.isnan(nominal.depth_limit_m)] = np.nan
-    robust.flags.writeable = False
+    robust = robust_depth_limit(envelopes, nominal.depth_limit_m, confidence)
     envelopes.flags.writeable = False
     return RobustLobes(robust, envelopes, confidence, options)
+
+
+def robust_depth_limit(envelopes: np.ndarray, nominal_m: np.ndarray, confidence: float) -> np.ndarray:
+    """The robust depth limit per speed from every draw's limit (the rule of the module docstring).
+
+    Parameters
+    ----------
+    envelopes : numpy.ndarray, shape (ndraws, nspeed)
+        Every draw's depth limit at each speed, m (NaN: unsettled).
+    nominal_m : numpy.ndarray, shape (nspeed,)
+        The nominal assembly's depth limit, m.
+    confidence : float
+        In (0.5, 1): the limit holds in this fraction of the draws.
+
+    Returns
+    -------
+    numpy.ndarray, shape (nspeed,)
+        The ``100 (1 − confidence)`` percentile over the draws, never above the nominal
+        limit, m; NaN where the nominal or any draw is NaN. Read-only.
+    """
+    quantile = np.percentile(envelopes, _percentile(confidence), axis=0)  # NaN wherever a draw is NaN
+    robust = np.fmin(quantile, nominal_m)
+    robust[np.isnan(quantile) | np.isnan(nominal_m)] = np.nan
+    robust.flags.writeable = False
+    return robust
