@@ -540,6 +540,7 @@ class LibraryPredictionRequest(_Request):
     shear_coefficient: ShearCoefficient | None = None
     natural_frequencies: bool | None = Field(None, description="Compute exact natural frequencies (default true).")
     options: LibraryOptions | None = None
+    uncertainty: Uncertainty | None = Field(None, description="Every tool's uncertainty band (same seed).")
 
 
 class LibraryResultItem(_Response):

@@ -78,7 +78,7 @@ from ..state import AppState
 
 router = APIRouter(prefix="/v1", tags=["tool libraries"], route_class=IdempotentRoute)
 
-_JSON_FIELDS = ("spindle", "frequency", "joints", "materials", "options", "shear_coefficient")
+_JSON_FIELDS = ("spindle", "frequency", "joints", "materials", "options", "shear_coefficient", "uncertainty")
 _FORM_FIELDS = {
     "library": "The tool library: Fusion .json or .tools (zip holding tools.json); FreeCAD .fctb, or a zip of "
                ".fctb files (with their .fctl and .fcholder).",
@@ -93,6 +93,8 @@ _FORM_FIELDS = {
     "natural_frequencies": "true | false: compute exact natural frequencies (default true).",
     "options": "JSON: holder_material, tool_material_default, holder_segments_per_cone, fluted_diameter_ratio; "
                "Fusion: shaft_origin, default_holder; FreeCAD: stickout_m (required; m, or {toolbit id: m}).",
+    "uncertainty": 'JSON: every tool\'s uncertainty band, e.g. {"draws": 200, "seed": 1} (p05/p50/p95 of |h|; '
+                   "the prediction's uncertainty option).",
 }
 _BODY = {"requestBody": {"required": True, "content": {
     "multipart/form-data": {"schema": {

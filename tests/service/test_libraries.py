@@ -213,3 +213,22 @@ def test_cli_freecad_predict_and_sync(tmp_path, monkeypatch):
     assert json.loads(r.stdout)["counts"]["added"] == 2
     r = runner.invoke(_cli(), ["library", "predict", str(bits), *common[:-3], "-q"])
     assert r.exit_code == 1 and "stickout_m" in r.stderr
+
+
+def test_library_upload_with_an_uncertainty_band_form_and_json(client):
+    name = "synthetic_library.json"
+    option = {"draws": 8, "seed": 4}
+    r = client.post("/v1/tool-libraries:predict", files={"library": (name, (LIBS / name).read_bytes())},
+                    data={**FORM, "uncertainty": json.dumps(option)})
+    assert r.status_code == 200, r.text
+    ok = [x for x in r.json()["results"] if x["status"] == "ok"]
+    assert len(ok) == 2 and all(x["uncertainty"]["draws"] == 8 for x in ok)
+    band = ok[0]["uncertainty"]["h_magnitude_m_n"]
+    assert all(a <= b <= c for a, b, c in zip(band["p05"], band["p50"], band["p95"], strict=True))
+    body = {"library": json.loads((LIBS / name).read_text()), "spindle": RA1["spindle"], "frequency": GRID,
+            "joints": RA1["joints"], "uncertainty": option}
+    r = client.post("/v1/tool-libraries:predict", json=body)
+    assert r.status_code == 200, r.text
+    assert [x.get("uncertainty") for x in r.json()["results"]] == [x["uncertainty"] for x in ok] + [None, None]
+    assert_problem(client.post("/v1/tool-libraries:predict", files={"library": (name, (LIBS / name).read_bytes())},
+                               data={**FORM, "uncertainty": json.dumps({"draws": 1})}), 422, "uncertainty.draws")
