@@ -37,7 +37,7 @@ from ..bodies import require_json
 from ..deps import StateDep
 from ..responses import body_limit, problems
 from ..routing import ServiceRoute
-from ..schemas import Assembly, FrfIn, LobesRequest, PredictionRequest
+from ..schemas import FrfIn, LobesRequest, PredictionRequest
 from ..security import ReadAccess
 
 router = APIRouter(prefix="/v1", tags=["plots and exports"], route_class=ServiceRoute)
@@ -78,7 +78,8 @@ class FrfPlotRequest(BaseModel):
 
     frf: FrfIn | None = Field(None, description="Inline tool-point FRF (frequency_hz in Hz, h in m/N); "
                                                 "give frf or assembly.")
-    assembly: Assembly | None = Field(None, description="Predict this assembly's tool-point h and draw it.")
+    assembly: PredictionRequest | None = Field(None, description="Predict this assembly's tool-point h and draw "
+                                                                 "it (with uncertainty: its p05–p95 band shaded).")
     layout: Literal["full", "real_imag", "bode"] = Field(
         "full", description="full: real, imaginary, magnitude (log) and phase; real_imag; bode: magnitude and "
                             "phase. Receptance shown in µm/N, phase in degrees, frequency in Hz.")

@@ -95,3 +95,14 @@ def test_a_bad_option_is_refused_before_it_is_queued(client, assembly):
     assert_problem(client.post("/v1/tool-point-frf", json=body, headers=async_), 422, "uncertainty.tolerances.stickout_m")
     lobes = {"assembly": assembly, **CUT, "robust": {"confidence": 0.9}}
     assert_problem(client.post("/v1/stability-lobes", json=lobes, headers=async_), 422, "robust")
+
+
+def test_frf_picture_of_an_assembly_with_uncertainty_shades_the_band(client, assembly):
+    plain = client.post("/v1/plots/frf?format=svg", json={"assembly": assembly, "layout": "bode"})
+    banded = client.post("/v1/plots/frf?format=svg", json={"assembly": {**assembly, "uncertainty": OPTION},
+                                                           "layout": "bode"})
+    assert plain.status_code == banded.status_code == 200, banded.text
+    # the band is one more filled area on the magnitude axes (a PolyCollection: an SVG path group)
+    assert banded.text.count("<path") > plain.text.count("<path")
+    assert_problem(client.post("/v1/plots/frf", json={"assembly": {**assembly, "uncertainty": {"draws": 1}}}),
+                   422, "assembly.uncertainty.draws")

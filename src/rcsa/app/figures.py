@@ -63,11 +63,14 @@ class Curve:
     h_m_n : numpy.ndarray, shape (nfreq,), complex
     source : {"frf", "assembly"}
         Where it came from (names the field of an error about it).
+    band_m_n : tuple of numpy.ndarray or None
+        The p05 and p95 ``|h|`` of an assembly predicted with ``uncertainty``, m/N.
     """
 
     frequency_hz: np.ndarray
     h_m_n: np.ndarray
     source: Literal["frf", "assembly"]
+    band_m_n: tuple[np.ndarray, np.ndarray] | None = None
 
 
 def check_picture_path(path: str | os.PathLike[str], field: str) -> Path:
@@ -160,7 +163,8 @@ def tool_point_curve(*, frf: Mapping[str, Any] | None = None, assembly: Mapping[
         f = number_list(frf.get("frequency_hz"), "frf.frequency_hz", finite=False)
         return Curve(f, complex_from_wire(frf.get("h"), "frf.h", f.size, finite=False), "frf")
     result = predict(assembly, store=store, max_lines=max_lines)  # type: ignore[arg-type]
-    return Curve(result.frequency_hz, result.tool_point.h, "assembly")
+    band = None if result.uncertainty is None else band_of(result.to_dict())
+    return Curve(result.frequency_hz, result.tool_point.h, "assembly", band)
 
 
 def frf_picture(curve: Curve, *, fmt: str, layout: str = "full", title: str | None = None) -> bytes:
@@ -179,7 +183,8 @@ def frf_picture(curve: Curve, *, fmt: str, layout: str = "full", title: str | No
         raise InputError(f"{where}.h" if where == "frf" else where,
                          "h is zero at every line, so its magnitude cannot be drawn on a log scale; "
                          "use layout real_imag")
-    return save_figure(frf_figure(curve.frequency_hz, curve.h_m_n, layout=layout, title=title), fmt)  # type: ignore[return-value]
+    return save_figure(frf_figure(curve.frequency_hz, curve.h_m_n, layout=layout, title=title,  # type: ignore[return-value]
+                                  band_m_n=curve.band_m_n), fmt)
 
 
 def lobes_picture(result: LobeResult, *, fmt: str, robust: Mapping[str, Any] | None = None, **options: Any) -> bytes:
