@@ -15,24 +15,13 @@ never blamed on an effect. Noise is complex Gaussian with the Bendat & Piersol r
 |H| (and of its phase, rad) ``σ = √(1−γ²) / (|γ| √(2 n_avg))`` from the measured coherence γ².
 
 Default tolerances (one standard deviation; overridable per request, ``tolerances``) follow
-``diagnosis.md`` §2 and §5.1; they and their draws are defined once, in
-:mod:`rcsa.model.tolerances` (predictions with uncertainty bands use the same):
+``diagnosis.md`` §2 and §5.1: those of the model (the table of :mod:`rcsa.model.tolerances`,
+where they and their draws are defined once — predictions with uncertainty bands use the
+same), and those of a measured spindle:
 
 ==================================  =======  =============================================
 key                                 default  meaning
 ==================================  =======  =============================================
-tool_youngs_modulus_rel             0.03     carbide E (grade/Co content: ±6 % at 2σ)
-tool_density_rel                    0.01     tool ρ
-structure_youngs_modulus_rel        0.02     E of the other materials (spindle, holder)
-structure_density_rel               0.01     ρ of the other materials
-loss_factor_log                     0.25     ln-scale of every material loss factor
-bearing_stiffness_log               0.08     ln-scale of all bearing stiffnesses
-bearing_damping_log                 0.25     ln-scale of all bearing dampers
-spindle_holder_stiffness_log        0.15     ln-scale of k_t and k_r (independent draws)
-spindle_holder_damping_log          0.25     ln-scale of the spindle–holder dampers
-holder_tool_stiffness_log           0.15     per measurement (re-clamp), k_t and k_r
-holder_tool_damping_log             0.25     per measurement
-stickout_m                          0.0003   per measurement, m
 spindle_effective_length_log        0.35     measured ``direct_frf`` spindle: ln-scale of the
                                              equivalent-cantilever length of its estimated
                                              rotations (L/2 and 2L at 2σ)
