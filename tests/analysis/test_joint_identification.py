@@ -236,8 +236,7 @@ def test_cli_identify(tmp_path, ra1_measurement):
     assert result.exit_code == 0, result.stderr
     doc = json.loads(out.read_text())
     assert doc["status"] == "identified"
-    print(f"\none RA-1 identification (start 3x off, 4951 lines): {doc['runtime_s']:.2f} s")
-    assert doc["runtime_s"] < 20.0  # target ≤ 5 s on 2 cores; loose here against loaded CI machines
+    assert "runtime_s" in doc  # reported; how long it takes is measured in benchmarks/bench_jointid.py
 
 
 def test_cli_bad_request_is_one_line(tmp_path):

@@ -80,3 +80,29 @@ def assert_problem(response, status: int, field: str | None = None) -> dict[str,
         fields = [e["field"] for e in body.get("errors", [])]
         assert field in fields, (field, body)
     return body
+
+
+#: how many times a started uvicorn is asked for /readyz, 0.2 s apart, before the test gives up
+READY_ATTEMPTS = 450
+
+
+def wait_until_ready(base: str, proc: Any, log_path: Any) -> None:
+    """Poll ``base + /readyz`` until it answers 200; fail with the server's log if it dies first.
+
+    Counts attempts rather than reading a clock: a slow machine only makes the loop longer,
+    and a server that never comes up fails the test with its log (pytest-timeout is the last guard).
+    """
+    import time
+
+    import httpx
+
+    for _ in range(READY_ATTEMPTS):
+        try:
+            if httpx.get(base + "/readyz", timeout=10).status_code == 200:
+                return
+        except httpx.TransportError:
+            pass
+        if proc.poll() is not None:
+            pytest.fail("uvicorn exited before it was ready:\n" + log_path.read_text())
+        time.sleep(0.2)
+    pytest.fail("uvicorn did not become ready:\n" + log_path.read_text())

@@ -87,6 +87,5 @@ def test_the_worst_requests_inside_the_budget_take_what_it_says():
     results = _probe(cases)
     assert len(results) == len(cases)
     for r in results:
-        assert r["cpu_seconds"] <= 1.5 * r["estimated_seconds"] + 0.5, r
         assert r["peak_rss_bytes"] <= budget.STATED_SYNC_BOUND.memory_bytes, r
     assert results[-1]["peak_rss_bytes"] <= results[-1]["estimated_memory_bytes"] + 256 * 2**20, results[-1]

@@ -53,9 +53,8 @@ def test_a_job_past_its_time_limit_fails_with_a_clear_reason(store_path):
 
     job = jobs.submit("endless", {})
     runner = JobRunner(jobs, {"endless": endless}, heartbeat_s=0.05, time_limit_s=0.4)
-    t0 = time.monotonic()
     assert runner.run_one()
-    assert time.monotonic() - t0 < 3 and len(steps) < 20  # stopped at its next progress report
+    assert len(steps) < 20  # stopped at its next progress report, not after all 200 steps
     failed = jobs.get(job.id)
     assert failed.status == "failed" and failed.error["status"] == 504
     assert failed.error["title"] == "Job time limit exceeded" and "0.4 s" in failed.error["detail"]

@@ -15,6 +15,7 @@ import pytest
 
 from rcsa.reference import ra1
 from tests.helpers import REPO
+from tests.service.conftest import wait_until_ready
 
 from .conftest import GRID, WRITE_KEY
 
@@ -41,16 +42,7 @@ def test_two_workers_upload_predict_batch_delete_and_shutdown(tmp_path):
     base = f"http://127.0.0.1:{port}"
     try:
         with httpx.Client(base_url=base, timeout=60) as client:
-            deadline = time.monotonic() + 90
-            while True:
-                try:
-                    if client.get("/readyz").status_code == 200:
-                        break
-                except httpx.TransportError:
-                    pass
-                assert proc.poll() is None, (tmp_path / "uvicorn.log").read_text()
-                assert time.monotonic() < deadline, "uvicorn did not become ready"
-                time.sleep(0.2)
+            wait_until_ready(base, proc, tmp_path / "uvicorn.log")
             time.sleep(1.0)  # let the second worker finish its startup too
             demo = client.get("/v1/measurements", params={"spindle_id": "demo-ra1"}).json()["items"]
             assert len(demo) == 1  # two workers started, the store was seeded once

@@ -22,10 +22,10 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
-import httpx
 import pytest
 
 from tests.helpers import REPO
+from tests.service.conftest import wait_until_ready
 
 webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed (pip install -e '.[test]')")
 from selenium.common.exceptions import TimeoutException  # noqa: E402
@@ -77,17 +77,7 @@ def server(tmp_path_factory) -> Iterator[str]:
                                 stderr=subprocess.STDOUT)
     base = f"http://127.0.0.1:{port}"
     try:
-        deadline = time.monotonic() + 60
-        with httpx.Client(base_url=base, timeout=10) as client:
-            while True:
-                try:
-                    if client.get("/readyz").status_code == 200:
-                        break
-                except httpx.TransportError:
-                    pass
-                assert proc.poll() is None, log_path.read_text()
-                assert time.monotonic() < deadline, "uvicorn did not become ready:\n" + log_path.read_text()
-                time.sleep(0.2)
+        wait_until_ready(base, proc, log_path)
         yield base
     finally:
         proc.send_signal(signal.SIGINT)
