@@ -48,8 +48,10 @@ from rcsa.physics.segments import SixTerms
 __all__ = ["GEOMETRY", "MeasuredSpindle", "TermsGrid", "ToolPointModel"]
 
 _TWO_PI = 2.0 * np.pi
-#: Parameters that change the holder and tool chains (the others change only the springs).
-GEOMETRY = ("tool.stickout_m", "tool.fluted_diameter_ratio")
+#: Parameters that change the holder and tool chains (the others change only the springs):
+#: the tool's, and those of a holder–tool clamping along the insertion (in the holder chain).
+GEOMETRY = ("tool.stickout_m", "tool.fluted_diameter_ratio", "holder_tool.interface_scale",
+            "holder_tool.interface_stiffness_n_m3")
 #: Grids whose condensations are kept per model (least recently used dropped first).
 _GRIDS_KEPT = 12
 
@@ -254,21 +256,11 @@ class ToolPointModel:
             k = march(chain, omega, start=state.start, grid=grid)[0]
             return inv2(k)[:, 0, 0]
         s = state.start
-        for i, item in enumerate(chain):
-            if isinstance(item, Spring):
-                s = s + item.compliance(omega)
-                continue
-            if not isinstance(item, Beam):  # a measured base is followed by joints and beams only
-                raise InputError("spindle", "a measured spindle must be followed by joints and beams")
-            a, b, c, e, f, g = grid.beam_terms(item)
-            d11 = np.stack([np.stack([a, b], -1), np.stack([b, c], -1)], -2)
-            d12 = np.stack([np.stack([e, f], -1), np.stack([-f, g], -1)], -2)
-            d22 = np.stack([np.stack([a, -b], -1), np.stack([-b, c], -1)], -2)
-            d21 = np.swapaxes(d12, -1, -2)
-            eye = np.eye(2)
-            k = d22 - d21 @ s @ inv2(eye + d11 @ s) @ d12  # never inverting S (Beam.absorb_compliance)
-            k = march(chain[i + 1:], omega, start=k, grid=grid)[0]
-            return inv2(k)[:, 0, 0]
+        for i, item in enumerate(chain):  # onto the measured base, never inverting it, up to the first beam
+            s, stiffness = item.absorb_compliance(s, grid)
+            if stiffness:
+                k = march(chain[i + 1:], omega, start=s, grid=grid)[0]
+                return inv2(k)[:, 0, 0]
         return s[:, 0, 0]
 
     def h_sets(self, frequency_hz: FloatArray, value_sets: Sequence[Mapping[str, float]]) -> ComplexArray:

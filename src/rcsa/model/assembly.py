@@ -36,7 +36,14 @@ import numpy as np
 
 from rcsa.errors import InputError
 from rcsa.model.clamping import clamping_notes, insertion_item
-from rcsa.model.contract import AssemblySpec, ClampingSpec, HolderSpec, JointSpec, SpindleSpec, ToolSpec
+from rcsa.model.contract import (
+    AssemblySpec,
+    ClampingSpec,
+    HolderSpec,
+    JointSpec,
+    SpindleSpec,
+    ToolSpec,
+)
 from rcsa.physics.chain import Beam, Chain, Ground, Spring
 from rcsa.physics.materials import Material
 from rcsa.physics.sections import (

@@ -117,7 +117,7 @@ def interface_per_length(clamping: ClampingSpec, holder_outer_diameter_m: float,
         k_t = clamping.interface_tangential_ratio * k_n
         iw, itheta = contact_per_length(k_n, k_t, d)
         k_w, k_theta = 1.0 / (1.0 / k_w + 1.0 / iw), 1.0 / (1.0 / k_theta + 1.0 / itheta)
-    return complex(k_w), complex(k_theta)
+    return complex(k_w * clamping.interface_scale), complex(k_theta * clamping.interface_scale)
 
 
 def insertion_item(holder: HolderSpec, tool: ToolSpec, clamping: ClampingSpec, materials: Mapping[str, Material],

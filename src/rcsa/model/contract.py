@@ -293,6 +293,10 @@ class ClampingSpec:
     contact_pressure_pa, surface_roughness_m : float or None
         The contact model's inputs when ``interface_stiffness_n_m3`` was derived from them
         (kept for the result's notes), Pa and m.
+    interface_scale : float
+        A factor on the whole interface stiffness per unit length (dimensionless; 1 as
+        parsed). Not a contract field: the knob analyses vary (``holder_tool.interface_scale``:
+        effect analysis, tolerance draws, diagnosis candidates).
     """
 
     model: str
@@ -302,6 +306,7 @@ class ClampingSpec:
     front_gap_length_m: float = 0.0
     contact_pressure_pa: float | None = None
     surface_roughness_m: float | None = None
+    interface_scale: float = 1.0
 
 
 @dataclass(frozen=True, slots=True)

@@ -555,9 +555,9 @@ class Insertion:
             lines = np.flatnonzero(inverse == row)
             item = self.take_rows(np.full(1, lines[0]))
             scalar = Insertion(tuple(_squeeze(p) for p in item.pieces))
-            part = pivots.block(0, 0) if pivots is None else Pivots(lines.size)
-            out[lines] = scalar.two_port(omega[lines], part if pivots is not None else None)
-            if pivots is not None:
+            part = None if pivots is None else Pivots(lines.size)
+            out[lines] = scalar.two_port(omega[lines], part)
+            if pivots is not None and part is not None:
                 pivots.negatives[lines] += part.negatives
                 pivots.log_abs_det[lines] += part.log_abs_det
         return out

@@ -109,7 +109,7 @@ from rcsa.analysis.joint_identification.request import (
     parse_identification_request,
 )
 from rcsa.analysis.progress import Progress, report
-from rcsa.model.contract import AssemblySpec
+from rcsa.model.contract import AssemblySpec, JointSpec
 from rcsa.model.spindle_side import BaseResolver
 
 __all__ = ["Identification", "identify", "identify_joints"]
@@ -364,7 +364,7 @@ def _all_joint_values(spec: AssemblySpec) -> dict[str, float]:
     out = {}
     for joint in ("spindle_holder", "holder_tool"):
         spec_joint = getattr(spec, joint)
-        if spec_joint is None:
+        if not isinstance(spec_joint, JointSpec):  # rigid, or a clamping along the insertion (held as given)
             continue
         for f in ("stiffness_n_m", "damping_ns_m", "rotational_stiffness_nm_rad", "rotational_damping_nms_rad"):
             v = getattr(spec_joint, f)

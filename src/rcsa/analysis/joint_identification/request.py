@@ -35,11 +35,12 @@ from rcsa.errors import InputError
 from rcsa.model import fields
 from rcsa.model.assembly import build_model
 from rcsa.model.bounds import MAX_STIFFNESS
-from rcsa.model.contract import AssemblySpec, MeasuredSpindleSpec, parse_assembly
+from rcsa.model.contract import AssemblySpec, ClampingSpec, MeasuredSpindleSpec, parse_assembly
 from rcsa.model.parameters import get_parameter
 from rcsa.model.spindle_side import BaseResolver
 
 __all__ = [
+    "CLAMPING_REASON",
     "HOLDER_TIP_REASON",
     "IDENTIFIABLE",
     "IdentificationRequest",
@@ -60,6 +61,11 @@ DEFAULT_MAX_RESIDUAL_TO_NOISE = 4.0
 #: Why the spindle–holder joint cannot be identified on a holder-tip measurement.
 HOLDER_TIP_REASON = ("not applicable: the measured spindle's plane is holder_tip, so the spindle–holder joint "
                      "is inside the measurement (measure at the spindle nose to identify it)")
+#: Why a holder–tool clamping along the insertion is held, not identified.
+CLAMPING_REASON = ("not identified: the holder–tool joint is a clamping along the insertion (model {model!r}), whose "
+                   "stiffness follows from the geometry and the interface; it is held as given while the point joints "
+                   "are identified (compare its prediction with the measurement in a diagnosis, whose holder_tool_joint "
+                   "candidate softens the interface)")
 
 
 @dataclass(frozen=True)
@@ -128,7 +134,8 @@ def _bounds(raw: object, base: AssemblySpec, names: tuple[str, ...], holder_tip:
         if holder_tip and key.startswith("spindle_holder."):
             raise InputError(f"bounds.{key}", HOLDER_TIP_REASON)
         if key not in names:
-            raise InputError(f"bounds.{key}", "this joint is rigid in the assembly: nothing to identify")
+            raise InputError(f"bounds.{key}", "this joint is rigid in the assembly, or a clamping along the insertion: "
+                                              "nothing to identify")
     for name in names:
         start = float(get_parameter(base, name) or 0.0)
         lo, hi = start / DEFAULT_BOUND_FACTOR, start * DEFAULT_BOUND_FACTOR
@@ -219,6 +226,9 @@ def parse_identification_request(request: object, resolve_base: BaseResolver | N
     holder_tip = spindle is not None and spindle.plane == "holder_tip"
     not_applicable = {n: HOLDER_TIP_REASON for n in IDENTIFIABLE
                       if holder_tip and n.startswith("spindle_holder.") and base.spindle_holder is not None}
+    if isinstance(base.holder_tool, ClampingSpec):
+        not_applicable.update({n: CLAMPING_REASON.format(model=base.holder_tool.model)
+                               for n in IDENTIFIABLE if n.startswith("holder_tool.")})
     names = tuple(n for n in IDENTIFIABLE if getattr(base, n.split(".")[0]) is not None and n not in not_applicable)
     if not names:
         raise InputError("assembly.joints", "no elastic joint to identify: give starting values for the "
