@@ -33,7 +33,7 @@ import orjson
 from rcsa.app.analyses import ANALYSIS_KINDS, run_analysis
 from rcsa.app.stores import library_store
 from rcsa.errors import InputError
-from rcsa.infra.compute import (
+from rcsa.infra.compute_backends import (
     Backend,
     ChunkFailed,
     ComputeUnavailable,
