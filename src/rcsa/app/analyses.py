@@ -17,14 +17,15 @@ from rcsa.analysis.lobes.zoa import LobeResult
 from rcsa.analysis.progress import Progress
 from rcsa.analysis.sensitivity import effects as _effects
 from rcsa.app.predictions import predict, predict_draws
-from rcsa.app.stores import MeasurementSource, resolver
+from rcsa.app.stores import resolver
 from rcsa.errors import InputError
+from rcsa.measured.hybrid import MeasurementSource
 from rcsa.measured.store import MeasurementStore
 from rcsa.model.bounds import MAX_FREQUENCY_LINES
 from rcsa.model.contract import SpindleSpec, parse_assembly
 from rcsa.model.uncertainty import parse_prediction_request
 
-__all__ = ["ANALYSIS_KINDS", "Progress", "diagnose", "effects", "identify", "run_analysis", "stability_lobes",
+__all__ = ["ANALYSIS_KINDS", "diagnose", "effects", "identify", "run_analysis", "stability_lobes",
            "stability_lobes_result", "stability_lobes_results", "validate"]
 
 #: Single computations that may also run as jobs (``Prefer: respond-async``), by the name of
