@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from rcsa.analysis.effects.sensitivities import effects as _effects
 from rcsa.analysis.lobes.modal_model import modal_model_from_assembly
 from rcsa.analysis.lobes.request import LobesRequest, parse_lobes_request
 from rcsa.analysis.lobes.robust import (
@@ -15,7 +16,6 @@ from rcsa.analysis.lobes.robust import (
 )
 from rcsa.analysis.lobes.zoa import LobeResult
 from rcsa.analysis.progress import Progress
-from rcsa.analysis.sensitivity import effects as _effects
 from rcsa.app.predictions import predict, predict_draws
 from rcsa.app.stores import resolver
 from rcsa.errors import InputError
@@ -120,7 +120,7 @@ def effects(request: Mapping[str, Any], *, store: MeasurementSource | None = Non
             progress: Progress | None = None) -> dict[str, Any]:
     """Effect analysis: sensitivity of each mode to every bearing and joint parameter.
 
-    See :func:`rcsa.analysis.sensitivity.effects` (request: an assembly, or ``{"assembly",
+    See :func:`rcsa.analysis.effects.sensitivities.effects` (request: an assembly, or ``{"assembly",
     "parameters", "relative_step", "band_hz"}``). ``store`` is where a measured spindle
     (``"spindle": {"measurement_id": ...}``) is looked up (the default store when omitted);
     ``progress(done, total)`` is called at each step (:mod:`rcsa.analysis.progress`).
