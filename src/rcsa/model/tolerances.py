@@ -49,7 +49,14 @@ from typing import TYPE_CHECKING, Literal, TypeVar
 import numpy as np
 
 from rcsa.model.bounds import MAX_TOLERANCE, MAX_TOLERANCE_STICKOUT_M
-from rcsa.model.contract import AssemblySpec, BearingSpec, ClampingSpec, JointSpec, SpindleSpec, ToolSpec
+from rcsa.model.contract import (
+    AssemblySpec,
+    BearingSpec,
+    ClampingSpec,
+    JointSpec,
+    SpindleSpec,
+    ToolSpec,
+)
 from rcsa.model.fields import Fields
 from rcsa.physics.arrays import FloatArray
 from rcsa.physics.materials import Material

@@ -58,17 +58,16 @@ import numpy as np
 
 from rcsa.analysis.diagnosis.chain_items import AddedCompliance, RotationRescale
 from rcsa.model.assembly import holder_chain, joint_spring, spindle_chain, tool_chain
-from rcsa.model.tolerances import scaled_joint
 from rcsa.model.contract import (
     AssemblySpec,
     BearingSpec,
     ClampingSpec,
     HolderSpec,
-    JointSpec,
     SegmentSpec,
     SpindleSpec,
     ToolSpec,
 )
+from rcsa.model.tolerances import scaled_joint
 from rcsa.physics.arrays import ComplexArray, FloatArray, IntArray
 from rcsa.physics.chain import Beam, Chain, ChainItem, Grid, Ground, Sym
 from rcsa.physics.materials import Material
