@@ -576,6 +576,9 @@ class LibraryPredictionRequest(_Request):
     frequency: Frequency
     joints: Joints | None = Field(None, description="Joints applied to every tool (the library has none); "
                                   "rigid when left out.")
+    holder_tool: Literal["point", "bonded"] | HolderToolJoint | None = Field(None, description=(
+        "Every tool's holder–tool clamping, replacing the joints' own: a model name, or a joints.holder_tool "
+        "object (contact with its interface stiffness)."))
     materials: dict[str, Material] | None = None
     beam_theory: BeamTheory | None = None
     shear_coefficient: ShearCoefficient | None = None

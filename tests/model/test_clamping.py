@@ -108,3 +108,23 @@ def test_wall_ratios_outside_the_calibration_are_noted():
     doc["holder"]["segments"][-1]["outer_diameter_m"] = 0.014  # a 0.7 mm wall around the 12.7 mm shank
     notes = assembly_notes(parse_assembly(doc))
     assert any("outside the calibrated range" in n for n in notes), notes
+
+
+def test_a_face_mounted_tool_sits_on_the_holders_face():
+    """Nothing inserted (a shell mill on an arbor): no shallow-insertion note; bonded = a rigid face;
+    contact = the face's stiffness from the contact annulus (k_r = k_n I, k_t = r_t k_n A)."""
+    doc = _doc(None)
+    doc["holder"]["segments"] = [{"length_m": 0.04, "outer_diameter_m": 0.063, "material": "steel"},
+                                 {"length_m": 0.02, "outer_diameter_m": 0.04, "material": "steel"}]
+    doc["tool"] = {"material": "carbide", "diameter_m": 0.05, "shank_diameter_m": 0.04, "overall_length_m": 0.04,
+                   "flute_length_m": 0.006, "stickout_m": 0.04}
+    rigid = rcsa.predict(doc)
+    assert not any("shallow" in n for n in rigid.notes) and any("face-mounted" in n for n in rigid.notes)
+    doc["joints"]["holder_tool"] = {"model": "bonded"}
+    assert np.array_equal(rcsa.predict(doc).tool_point.h, rigid.tool_point.h)
+    doc["joints"]["holder_tool"] = {"model": "contact", "interface_stiffness_n_m3": 5e13}
+    spring = build_model(parse_assembly(doc)).holder_tool
+    assert spring is not None
+    assert spring.rotational_stiffness_nm_rad == pytest.approx(5e13 * np.pi * 0.04**4 / 64)
+    assert spring.stiffness_n_m == pytest.approx(5e13 * np.pi * 0.04**2 / 4)
+    assert rcsa.predict(doc)["static_stiffness_n_m"] < rigid["static_stiffness_n_m"]

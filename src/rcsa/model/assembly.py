@@ -35,7 +35,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from rcsa.errors import InputError
-from rcsa.model.clamping import clamping_notes, insertion_item
+from rcsa.model.clamping import clamping_notes, face_contact, insertion_item
 from rcsa.model.contract import (
     AssemblySpec,
     ClampingSpec,
@@ -103,8 +103,13 @@ def assembly_notes(spec: AssemblySpec) -> tuple[str, ...]:
     -------
     tuple of str
     """
-    note = shallow_insertion_note(spec.tool.inserted_length_m, spec.tool.shank_diameter_m)
+    face_mounted = spec.tool.inserted_length_m <= _TOL_M
+    note = None if face_mounted else shallow_insertion_note(spec.tool.inserted_length_m, spec.tool.shank_diameter_m)
     notes = () if note is None else (note,)
+    if face_mounted and not isinstance(spec.holder_tool, ClampingSpec):
+        notes += ("face-mounted tool (nothing inserted): it sits on the holder's face, joined by "
+                  + ("the point joint given" if spec.holder_tool is not None else "a rigid point joint")
+                  + " (model contact gives the face contact's stiffness from its area)",)
     if isinstance(spec.holder_tool, ClampingSpec) and spec.holder is not None:
         notes += clamping_notes(spec.holder, spec.tool, spec.holder_tool)
     return notes
@@ -373,10 +378,14 @@ def build_model(spec: AssemblySpec, base_plane: str | None = None, spindle: Chai
                          f"{spec.holder_tool.model!r} models the clamping from the holder's geometry, which a "
                          "holder_tip measurement does not give (it contains holder and clamping): use the point "
                          "joint, or measure the spindle at its nose")
+    holder_tool = joint_spring(spec.holder_tool)
+    if isinstance(spec.holder_tool, ClampingSpec) and spec.tool.inserted_length_m <= _TOL_M:
+        assert spec.holder is not None  # a clamping on a holder_tip measurement is refused above
+        holder_tool = face_contact(spec.holder, spec.tool, spec.holder_tool)
     return AssemblyModel(
         spindle=spindle,
         spindle_holder=joint_spring(spec.spindle_holder) if base_plane != "holder_tip" else None,
         holder=holder,
-        holder_tool=joint_spring(spec.holder_tool),
+        holder_tool=holder_tool,
         tool=tool_chain(spec.tool, mats, shear, theory),
     )

@@ -26,16 +26,18 @@ A clamping given by its pressure instead of its stiffness uses the stated contac
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 
 from rcsa.errors import InputError
 from rcsa.model.contract import ClampingSpec, HolderSpec, ToolSpec
+from rcsa.physics.chain import Spring
 from rcsa.physics.insertion import Insertion, InsertionPiece, contact_per_length
 from rcsa.physics.materials import Material
 from rcsa.physics.sections import BeamTheory, ShearModel, tube
 
-__all__ = ["BULK_COEFFICIENTS", "VALID_WALL_RATIO", "BulkCoefficients", "clamping_notes", "insertion_item", "interface_per_length"]
+__all__ = ["BULK_COEFFICIENTS", "VALID_WALL_RATIO", "BulkCoefficients", "clamping_notes", "face_contact", "insertion_item", "interface_per_length"]
 
 _TOL_M = 1e-12
 
@@ -179,6 +181,38 @@ def insertion_item(holder: HolderSpec, tool: ToolSpec, clamping: ClampingSpec, m
     return Insertion(tuple(pieces))
 
 
+def face_contact(holder: HolderSpec, tool: ToolSpec, clamping: ClampingSpec) -> Spring | None:
+    """The joint of a face-mounted tool (nothing inserted: a shell or face mill on an arbor).
+
+    The tool's back face sits on the holder's front face; the contact is the annulus between
+    the holder's last bore and the smaller of the two outer diameters. ``bonded``: an ideal
+    face, rigid (``None``). ``contact``: the normal interface stiffness resists the rotation
+    through the contact's second moment of area (``k_r = k_n I``), the tangential one the
+    shear (``k_t = r_t k_n A``); the interface's loss factor is not carried (a point joint has
+    viscous dampers only), the materials' is.
+
+    Parameters
+    ----------
+    holder : HolderSpec
+    tool : ToolSpec
+        Face-mounted: ``stickout_m`` equal to ``overall_length_m``.
+    clamping : ClampingSpec
+
+    Returns
+    -------
+    Spring or None
+    """
+    if clamping.model != "contact" or clamping.interface_stiffness_n_m3 is None:
+        return None
+    last = holder.segments[-1]
+    outer = min(last.outer_diameter_m, tool.shank_diameter_m)
+    inner = min(last.inner_diameter_m, outer)
+    area_m2 = math.pi * (outer**2 - inner**2) / 4.0
+    inertia_m4 = math.pi * (outer**4 - inner**4) / 64.0
+    k_n = clamping.interface_stiffness_n_m3 * clamping.interface_scale
+    return Spring(clamping.interface_tangential_ratio * k_n * area_m2, 0.0, k_n * inertia_m4, 0.0)
+
+
 def clamping_notes(holder: HolderSpec, tool: ToolSpec, clamping: ClampingSpec) -> tuple[str, ...]:
     """Notes where a clamping model is used outside the range it was calibrated on.
 
@@ -192,6 +226,11 @@ def clamping_notes(holder: HolderSpec, tool: ToolSpec, clamping: ClampingSpec) -
     -------
     tuple of str
     """
+    if tool.inserted_length_m <= _TOL_M:
+        return (f"face-mounted tool with clamping model {clamping.model!r}: "
+                + ("an ideal (rigid) face" if clamping.model == "bonded" else
+                   "the face contact's normal and tangential stiffness (its loss factor is not carried)")
+                + "; face contacts are not calibrated on the 3-D reference",)
     notes = []
     length = holder.length_m
     start = length - min(tool.inserted_length_m, length)

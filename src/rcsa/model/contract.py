@@ -63,6 +63,7 @@ __all__ = [
     "SegmentSpec",
     "SpindleSpec",
     "ToolSpec",
+    "CLAMPING_MODELS",
     "CombinationSpec",
     "CommonSpec",
     "assemble",
