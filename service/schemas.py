@@ -329,6 +329,8 @@ class HolderToolJoint(_Request):
                                                 "loss factor of the interface (default 0).")
     front_gap_length_m: float | None = Field(None, ge=0, le=MAX_LENGTH_M, description=(
         "bonded/contact: length from the holder face into the bore over which the shank does not touch, m."))
+    contact_length_m: float | None = Field(None, ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description=(
+        "bonded/contact: length of the contact behind the front gap, m (default: the rest of the insertion)."))
 
 
 class Joints(_Request):

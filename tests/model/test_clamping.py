@@ -63,7 +63,8 @@ def test_stiffness_orders_bonded_contact_and_the_front_gap():
     stiff_contact = _static({"model": "contact", "interface_stiffness_n_m3": 1e17})
     soft_contact = _static({"model": "contact", "interface_stiffness_n_m3": 1e13})
     gap = _static({"model": "bonded", "front_gap_length_m": 0.01})
-    assert rigid > bonded > soft_contact and bonded > gap
+    front_only = _static({"model": "bonded", "contact_length_m": 0.02})
+    assert rigid > bonded > soft_contact and bonded > gap and bonded > front_only
     assert stiff_contact < bonded and stiff_contact / bonded > 0.99  # in series with a stiff interface
 
 

@@ -127,7 +127,9 @@ def insertion_item(holder: HolderSpec, tool: ToolSpec, clamping: ClampingSpec, m
     """The chain item of the inserted length: holder annulus and shank core, joined by the interface.
 
     Pieces from where the insertion starts (toward the spindle) to the holder's tool-end face,
-    cut at the holder's section steps and where the front gap (``front_gap_length_m``) begins.
+    cut at the holder's section steps and where the contact begins and ends: the shank touches
+    the bore from ``front_gap_length_m`` behind the face over ``contact_length_m`` (default: to
+    the end of the insertion); elsewhere the two beams are free of each other.
 
     Parameters
     ----------
@@ -151,18 +153,19 @@ def insertion_item(holder: HolderSpec, tool: ToolSpec, clamping: ClampingSpec, m
     """
     length = holder.length_m
     start = length - min(tool.inserted_length_m, length)
-    gap_start = length - clamping.front_gap_length_m
+    gap_start = length - clamping.front_gap_length_m  # contact over [contact_start, gap_start]
     if gap_start <= start + _TOL_M:
         raise InputError("joints.holder_tool.front_gap_length_m",
                          f"leaves no contact: the inserted length in the holder is {length - start:g} m, the front "
                          f"gap {clamping.front_gap_length_m:g} m")
+    contact_start = start if clamping.contact_length_m is None else max(start, gap_start - clamping.contact_length_m)
     tool_material = materials[tool.material]
     core = tube(tool.shank_diameter_m, 0.0, tool_material, shear, theory)
     pieces: list[InsertionPiece] = []
     x0 = 0.0
     for i, seg in enumerate(holder.segments):
         x1 = x0 + seg.length_m
-        cuts = sorted({x for x in (start, gap_start) if x0 + 1e-9 < x < x1 - 1e-9})
+        cuts = sorted({x for x in (start, contact_start, gap_start) if x0 + 1e-9 < x < x1 - 1e-9})
         for a, b in zip([x0, *cuts], [*cuts, x1], strict=True):
             if a < start - 1e-9:
                 continue
@@ -173,7 +176,8 @@ def insertion_item(holder: HolderSpec, tool: ToolSpec, clamping: ClampingSpec, m
                     f"holder.segments[{i}], which the inserted length ({tool.inserted_length_m:g} m) reaches")
             holder_material = materials[seg.material]
             annulus = tube(seg.outer_diameter_m, seg.inner_diameter_m, holder_material, shear, theory)
-            k_w, k_theta = ((0j, 0j) if a >= gap_start - 1e-9 else
+            touching = contact_start - 1e-9 <= a and b <= gap_start + 1e-9
+            k_w, k_theta = ((0j, 0j) if not touching else
                             interface_per_length(clamping, seg.outer_diameter_m, seg.inner_diameter_m,
                                                  tool.shank_diameter_m, holder_material, tool_material))
             pieces.append(InsertionPiece(annulus, core, b - a, k_w, k_theta))

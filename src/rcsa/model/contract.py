@@ -291,6 +291,9 @@ class ClampingSpec:
     front_gap_length_m : float
         Length from the holder face into the bore over which the shank does not touch, m
         (a bell-mouthed bore, or contact lost at the front); 0 by default.
+    contact_length_m : float or None
+        Length of the contact behind the front gap, m (a collet gripping the front of the
+        shank only); ``None``: the rest of the insertion.
     contact_pressure_pa, surface_roughness_m : float or None
         The contact model's inputs when ``interface_stiffness_n_m3`` was derived from them
         (kept for the result's notes), Pa and m.
@@ -308,6 +311,7 @@ class ClampingSpec:
     contact_pressure_pa: float | None = None
     surface_roughness_m: float | None = None
     interface_scale: float = 1.0
+    contact_length_m: float | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -626,14 +630,15 @@ def parse_joint(value: object, path: str) -> JointSpec | None:
 
 _POINT_FIELDS = ("stiffness_n_m", "damping_ns_m", "rotational_stiffness_nm_rad", "rotational_damping_nms_rad")
 _CLAMPING_FIELDS = ("interface_stiffness_n_m3", "interface_tangential_ratio", "interface_loss_factor",
-                    "front_gap_length_m", "contact_pressure_pa", "surface_roughness_m")
+                    "front_gap_length_m", "contact_length_m", "contact_pressure_pa", "surface_roughness_m")
 
 
 def parse_holder_tool(value: object, path: str = "joints.holder_tool") -> JointSpec | ClampingSpec | None:
     """The holder–tool joint: a point joint (``model`` absent or ``"point"``) or a clamping.
 
     ``bonded`` takes no stiffness: the clamping follows from geometry and materials
-    (optionally ``front_gap_length_m``). ``contact`` takes ``interface_stiffness_n_m3``, or
+    (optionally ``front_gap_length_m`` and ``contact_length_m``: where along the bore the shank
+    touches). ``contact`` takes ``interface_stiffness_n_m3``, or
     ``contact_pressure_pa`` and ``surface_roughness_m`` from which it is derived
     (:func:`rcsa.physics.insertion.contact_stiffness_n_m3`), and optionally
     ``interface_tangential_ratio``, ``interface_loss_factor`` and ``front_gap_length_m``.
@@ -667,10 +672,11 @@ def parse_holder_tool(value: object, path: str = "joints.holder_tool") -> JointS
                                          "the clamping's stiffness from the geometry"
                                          + (" and interface_stiffness_n_m3" if model == "contact" else
                                             " (use model \"contact\" with interface_stiffness_n_m3 for a softer one)"))
+    gap = o.number("front_gap_length_m", ge=0.0, le=MAX_LENGTH_M, default=0.0)
+    contact = o.optional_number("contact_length_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
     if model == "bonded":
-        o.only("model", "front_gap_length_m")
-        return ClampingSpec("bonded", front_gap_length_m=o.number("front_gap_length_m", ge=0.0, le=MAX_LENGTH_M,
-                                                                  default=0.0))
+        o.only("model", "front_gap_length_m", "contact_length_m")
+        return ClampingSpec("bonded", front_gap_length_m=gap, contact_length_m=contact)
     o.only("model", *_CLAMPING_FIELDS)
     stiffness = o.optional_number("interface_stiffness_n_m3", gt=0.0, ge=MIN_INTERFACE_STIFFNESS_N_M3,
                                   le=MAX_INTERFACE_STIFFNESS_N_M3)
@@ -692,8 +698,8 @@ def parse_holder_tool(value: object, path: str = "joints.holder_tool") -> JointS
     return ClampingSpec(
         "contact", stiffness, o.number("interface_tangential_ratio", gt=0.0, ge=MIN_INTERFACE_TANGENTIAL_RATIO,
                            le=MAX_INTERFACE_TANGENTIAL_RATIO, default=1.0),
-        o.number("interface_loss_factor", ge=0.0, lt=MAX_LOSS_FACTOR, default=0.0),
-        o.number("front_gap_length_m", ge=0.0, le=MAX_LENGTH_M, default=0.0), pressure, roughness)
+        o.number("interface_loss_factor", ge=0.0, lt=MAX_LOSS_FACTOR, default=0.0), gap, pressure, roughness,
+        contact_length_m=contact)
 
 
 @dataclass(frozen=True, slots=True)
