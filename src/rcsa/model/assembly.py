@@ -30,12 +30,12 @@ Modelling rules (``contract.md`` "Assembly", ``domain.md`` §1.3, §5):
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
 from rcsa.errors import InputError
-from rcsa.model.clamping import clamping_notes, face_contact, insertion_item
+from rcsa.model.clamping import clamped_holder_chain, clamping_notes, face_contact
 from rcsa.model.contract import (
     AssemblySpec,
     ClampingSpec,
@@ -245,9 +245,7 @@ def holder_chain(holder: HolderSpec, tool: ToolSpec, materials: Mapping[str, Mat
     length = holder.length_m
     insertion_start = length - min(tool.inserted_length_m, length)
     if clamping is not None and tool.inserted_length_m > _TOL_M:
-        return (*holder_chain(_up_to(holder, insertion_start), replace(tool, overall_length_m=tool.stickout_m),
-                              materials, shear, theory),
-                insertion_item(holder, tool, clamping, materials, shear, theory))
+        return clamped_holder_chain(holder, tool, clamping, materials, shear, theory)
     core = (tube(tool.shank_diameter_m, 0.0, materials[tool.material], shear, theory)
             if tool.inserted_length_m > _TOL_M else None)
     items: list[Beam | Spring | Ground] = []
@@ -269,17 +267,6 @@ def holder_chain(holder: HolderSpec, tool: ToolSpec, materials: Mapping[str, Mat
             items.append(Beam(annulus if filling is None else composite(annulus, filling), b - a))
         x0 = x1
     return tuple(items)
-
-
-def _up_to(holder: HolderSpec, x_m: float) -> HolderSpec:
-    """The holder's segments from the gauge line up to ``x_m`` (the last one cut there)."""
-    out, x0 = [], 0.0
-    for seg in holder.segments:
-        if x0 >= x_m - 1e-9:
-            break
-        out.append(seg if x0 + seg.length_m <= x_m + 1e-9 else replace(seg, length_m=x_m - x0))
-        x0 += seg.length_m
-    return HolderSpec(tuple(out))
 
 
 def fluted_section(tool: ToolSpec, material: Material, shear: ShearModel | float,

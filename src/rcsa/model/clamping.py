@@ -30,26 +30,33 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 
+import numpy as np
+
 from rcsa.errors import InputError
-from rcsa.model.contract import ClampingSpec, HolderSpec, ToolSpec
-from rcsa.physics.chain import Spring
+from rcsa.model.contract import ClampingSpec, HolderSpec, SegmentSpec, ToolSpec
+from rcsa.physics.chain import Beam, Chain, Spring
 from rcsa.physics.insertion import Insertion, InsertionPiece, contact_per_length
 from rcsa.physics.materials import Material
-from rcsa.physics.sections import BeamTheory, ShearModel, tube
+from rcsa.physics.sections import BeamTheory, Section, ShearModel, tube
 
-__all__ = ["BULK_COEFFICIENTS", "VALID_WALL_RATIO", "BulkCoefficients", "clamping_notes", "face_contact", "insertion_item", "interface_per_length"]
+__all__ = ["BULK_COEFFICIENTS", "VALID_WALL_RATIO", "BulkCoefficients", "clamped_holder_chain", "clamping_notes", "face_contact", "interface_per_length"]
 
 _TOL_M = 1e-12
 
 
 @dataclass(frozen=True, slots=True)
 class BulkCoefficients:
-    """Dimensionless coefficients of the bulk interface stiffness (holder wall and shank surface).
+    """Dimensionless coefficients of a clamping's elasticity that beam theory does not give.
 
     Holder wall, per unit length: ``k_h = E_h a_h τ^b_h / (1 + τ^b_h)`` with ``τ = (D − d)/d``
     (wall thickness over bore radius ×½), so a thin wall ovalises (``k_h ∝ τ^b``) and a thick
     one tends to ``a_h E_h``. Shank surface: ``k_s = a_s E_t``. In series: ``1/k_w = 1/k_h +
     1/k_s``. Rotational: ``k_θ = c_θ k_w (d/2)²``.
+
+    Holder steps: next to a step from a larger outer diameter D to a smaller d the larger
+    section does not bend as a whole at once: over ``ℓ = step_cone (D − d)/2`` from the step its
+    stiffness grows as a cone from d to D (the 45° load-spreading cone at ``step_cone = 1``; 0:
+    none), its mass unchanged.
 
     Parameters
     ----------
@@ -59,23 +66,28 @@ class BulkCoefficients:
         Shank-surface coefficient.
     c_theta : float
         Rotational over translational, per (d/2)².
+    step_cone : float
+        Length of the stiffness cone at a holder step, per radial step height.
     """
 
     a_h: float
     b_h: float
     a_s: float
     c_theta: float
+    step_cone: float = 0.0
 
 
 #: The fitted coefficients (``benchmarks/calibrate_clamping.py``).
-BULK_COEFFICIENTS = BulkCoefficients(a_h=2.0, b_h=2.0, a_s=3.0, c_theta=1.0)
+BULK_COEFFICIENTS = BulkCoefficients(a_h=1.5, b_h=2.0, a_s=2.0, c_theta=1.0, step_cone=0.0)
+#: Pieces a step's stiffness cone is cut into (constant sections at their mid-diameters).
+CONE_PIECES = 4
 #: Holder outer diameter over bore diameter covered by the calibration cases.
 VALID_WALL_RATIO = (1.3, 4.0)
 
 
 def interface_per_length(clamping: ClampingSpec, holder_outer_diameter_m: float, bore_diameter_m: float,
                          shank_diameter_m: float, holder: Material, tool: Material,
-                         coefficients: BulkCoefficients = BULK_COEFFICIENTS) -> tuple[complex, complex]:
+                         coefficients: BulkCoefficients | None = None) -> tuple[complex, complex]:
     """Interface stiffness per unit length between shank and holder, ``(k_w, k_θ)``.
 
     Parameters
@@ -88,8 +100,8 @@ def interface_per_length(clamping: ClampingSpec, holder_outer_diameter_m: float,
         Shank diameter, m (the bore's, when it is larger: the shank touches the bore).
     holder, tool : Material
         Holder and tool materials.
-    coefficients : BulkCoefficients
-        The bulk coefficients (the fitted ones by default).
+    coefficients : BulkCoefficients, optional
+        The bulk coefficients (default :data:`BULK_COEFFICIENTS`, the fitted ones).
 
     Returns
     -------
@@ -105,7 +117,7 @@ def interface_per_length(clamping: ClampingSpec, holder_outer_diameter_m: float,
     >>> 1e11 < kw.real < 1e13, kt.real > 0
     (True, True)
     """
-    c = coefficients
+    c = BULK_COEFFICIENTS if coefficients is None else coefficients
     d = shank_diameter_m
     tau = max(holder_outer_diameter_m - bore_diameter_m, 0.0) / d
     wall = tau**c.b_h / (1.0 + tau**c.b_h)
@@ -122,35 +134,89 @@ def interface_per_length(clamping: ClampingSpec, holder_outer_diameter_m: float,
     return complex(k_w * clamping.interface_scale), complex(k_theta * clamping.interface_scale)
 
 
-def insertion_item(holder: HolderSpec, tool: ToolSpec, clamping: ClampingSpec, materials: Mapping[str, Material],
-                   shear: ShearModel | float = "hutchinson", theory: BeamTheory = "timoshenko") -> Insertion:
-    """The chain item of the inserted length: holder annulus and shank core, joined by the interface.
+@dataclass(frozen=True, slots=True)
+class _HolderPiece:
+    """A uniform length of the holder: its segment, and the outer diameter its stiffness sees."""
 
-    Pieces from where the insertion starts (toward the spindle) to the holder's tool-end face,
-    cut at the holder's section steps and where the contact begins and ends: the shank touches
-    the bore from ``front_gap_length_m`` behind the face over ``contact_length_m`` (default: to
-    the end of the insertion); elsewhere the two beams are free of each other.
+    x0_m: float
+    x1_m: float
+    index: int
+    segment: SegmentSpec
+    stiffness_diameter_m: float
+
+
+def _holder_pieces(holder: HolderSpec, step_cone: float) -> list[_HolderPiece]:
+    """The holder cut into uniform pieces, with each step's stiffness cone (:class:`BulkCoefficients`)."""
+    segs = holder.segments
+    bounds = np.cumsum([0.0] + [s.length_m for s in segs])
+    out: list[_HolderPiece] = []
+    for i, seg in enumerate(segs):
+        x0, x1, big = float(bounds[i]), float(bounds[i + 1]), seg.outer_diameter_m
+        # cone lengths at the step before (toward the gauge line) and after (toward the tool end)
+        cones = []
+        for j, at in ((i - 1, x0), (i + 1, x1)):
+            small = segs[j].outer_diameter_m if 0 <= j < len(segs) else big
+            if step_cone > 0 and small < big:
+                cones.append((at, small, min(step_cone * (big - small) / 2.0, seg.length_m / 2.0)))
+        cuts = {x0, x1}
+        for at, _, ell in cones:
+            cuts.update(at + np.sign(x0 + x1 - 2 * at) * ell * np.arange(1, CONE_PIECES + 1) / CONE_PIECES)
+        xs = sorted(cuts)
+        for a, b in zip(xs[:-1], xs[1:], strict=True):
+            mid, d = 0.5 * (a + b), big
+            for at, small, ell in cones:
+                if abs(mid - at) < ell:
+                    d = min(d, small + (big - small) * abs(mid - at) / ell)
+            out.append(_HolderPiece(a, b, i, seg, d))
+    return out
+
+
+def _annulus(piece: _HolderPiece, material: Material, shear: ShearModel | float, theory: BeamTheory) -> Section:
+    """The piece's section: stiffness (EI, κGA) of its stiffness diameter, mass (ρA, ρI) of its own."""
+    seg = piece.segment
+    real = tube(seg.outer_diameter_m, seg.inner_diameter_m, material, shear, theory)
+    if piece.stiffness_diameter_m >= seg.outer_diameter_m:
+        return real
+    stiff = tube(piece.stiffness_diameter_m, seg.inner_diameter_m, material, shear, theory)
+    return Section(stiff.ei, stiff.shear_flexibility, real.rho_a, real.rho_i)
+
+
+def clamped_holder_chain(holder: HolderSpec, tool: ToolSpec, clamping: ClampingSpec,
+                         materials: Mapping[str, Material], shear: ShearModel | float = "hutchinson",
+                         theory: BeamTheory = "timoshenko", coefficients: BulkCoefficients | None = None) -> Chain:
+    """The holder chain with a clamping along the insertion: beams, then one :class:`Insertion`.
+
+    From the gauge line to where the insertion starts, the holder annulus (solid where it has no
+    bore); from there to the holder's tool-end face, holder annulus and shank core joined by the
+    interface, one :class:`~rcsa.physics.insertion.Insertion` that ends at the shank's node in
+    the face. Cut at the holder's steps (each with its stiffness cone) and where the contact
+    begins and ends: the shank touches the bore from ``front_gap_length_m`` behind the face over
+    ``contact_length_m`` (default: to the end of the insertion); elsewhere the two beams are free
+    of each other.
 
     Parameters
     ----------
     holder : HolderSpec
     tool : ToolSpec
-        Its shank fills the bore over the inserted length (beyond the holder: ignored).
+        Its shank fills the bore over the inserted length (beyond the holder: ignored); > 0.
     clamping : ClampingSpec
     materials : mapping of str to Material
         Materials by name.
     shear : {"hutchinson", "cowper"} or float
     theory : {"timoshenko", "euler_bernoulli"}
+    coefficients : BulkCoefficients, optional
+        Default :data:`BULK_COEFFICIENTS`.
 
     Returns
     -------
-    Insertion
+    Chain
 
     Raises
     ------
     InputError
         The shank does not fit a bore it reaches, or the front gap leaves no contact.
     """
+    c = BULK_COEFFICIENTS if coefficients is None else coefficients
     length = holder.length_m
     start = length - min(tool.inserted_length_m, length)
     gap_start = length - clamping.front_gap_length_m  # contact over [contact_start, gap_start]
@@ -161,28 +227,27 @@ def insertion_item(holder: HolderSpec, tool: ToolSpec, clamping: ClampingSpec, m
     contact_start = start if clamping.contact_length_m is None else max(start, gap_start - clamping.contact_length_m)
     tool_material = materials[tool.material]
     core = tube(tool.shank_diameter_m, 0.0, tool_material, shear, theory)
+    beams: list[Beam] = []
     pieces: list[InsertionPiece] = []
-    x0 = 0.0
-    for i, seg in enumerate(holder.segments):
-        x1 = x0 + seg.length_m
-        cuts = sorted({x for x in (start, contact_start, gap_start) if x0 + 1e-9 < x < x1 - 1e-9})
-        for a, b in zip([x0, *cuts], [*cuts, x1], strict=True):
+    for hp in _holder_pieces(holder, c.step_cone):
+        cuts = sorted({x for x in (start, contact_start, gap_start) if hp.x0_m + 1e-9 < x < hp.x1_m - 1e-9})
+        seg, mat = hp.segment, materials[hp.segment.material]
+        section = _annulus(hp, mat, shear, theory)
+        for a, b in zip([hp.x0_m, *cuts], [*cuts, hp.x1_m], strict=True):
             if a < start - 1e-9:
+                beams.append(Beam(section, b - a))
                 continue
             if tool.shank_diameter_m > seg.inner_diameter_m * (1 + 1e-9):
                 raise InputError(
                     "tool.shank_diameter_m",
                     f"the shank ({tool.shank_diameter_m:g} m) does not fit the bore ({seg.inner_diameter_m:g} m) of "
-                    f"holder.segments[{i}], which the inserted length ({tool.inserted_length_m:g} m) reaches")
-            holder_material = materials[seg.material]
-            annulus = tube(seg.outer_diameter_m, seg.inner_diameter_m, holder_material, shear, theory)
+                    f"holder.segments[{hp.index}], which the inserted length ({tool.inserted_length_m:g} m) reaches")
             touching = contact_start - 1e-9 <= a and b <= gap_start + 1e-9
             k_w, k_theta = ((0j, 0j) if not touching else
                             interface_per_length(clamping, seg.outer_diameter_m, seg.inner_diameter_m,
-                                                 tool.shank_diameter_m, holder_material, tool_material))
-            pieces.append(InsertionPiece(annulus, core, b - a, k_w, k_theta))
-        x0 = x1
-    return Insertion(tuple(pieces))
+                                                 tool.shank_diameter_m, mat, tool_material, c))
+            pieces.append(InsertionPiece(section, core, b - a, k_w, k_theta))
+    return (*beams, Insertion(tuple(pieces)))
 
 
 def face_contact(holder: HolderSpec, tool: ToolSpec, clamping: ClampingSpec) -> Spring | None:
