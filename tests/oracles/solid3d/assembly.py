@@ -27,7 +27,7 @@ from skfem import Basis, ElementTetP2, FacetBasis, MeshTet2
 from tests.oracles.solid3d.case import Interface, SolidMaterial
 from tests.oracles.solid3d.geometry import SolidMesh
 
-__all__ = ["BaseKind", "Matrices", "assemble"]
+__all__ = ["BaseKind", "Matrices", "assemble", "layer_matrix", "tip_loads"]
 
 BaseKind = Literal["clamped", "elastic", "free"]
 _INTORDER = 4
@@ -95,7 +95,7 @@ def _elasticity(basis: Basis, material: SolidMaterial, n: int) -> tuple[sp.csr_m
     e, nu, rho = material.youngs_modulus_pa, material.poisson_ratio, material.density_kg_m3
     lam, mu = e * nu / ((1 + nu) * (1 - 2 * nu)), e / (2 * (1 + nu))
     grads = np.stack([b[0].grad for b in basis.basis], axis=-1)      # (3, nel, nq, 10)
-    values = np.stack([b[0].value for b in basis.basis], axis=-1)    # (nel, nq, 10)
+    values = np.stack([np.asarray(b[0]) for b in basis.basis], axis=-1)    # (nel, nq, 10)
     dx = basis.dx                                                    # (nel, nq)
     dofs = _vector_dofs(basis.element_dofs)
     eye = np.eye(3)
@@ -113,9 +113,24 @@ def _elasticity(basis: Basis, material: SolidMaterial, n: int) -> tuple[sp.csr_m
     return _scatter(np.concatenate(ks), dofs, n), _scatter(np.concatenate(ms), dofs, n)
 
 
-def _layer(fb: FacetBasis, kn: float, kt: float, n: int) -> sp.csr_matrix:
-    """∫ φ_i φ_j [k_t δ_ab + (k_n − k_t) n_a n_b] dA over the facet basis' facets."""
-    values = np.stack([b[0].value for b in fb.basis], axis=-1)       # (nf, nq, 10)
+def layer_matrix(fb: FacetBasis, kn: float, kt: float, n: int) -> sp.csr_matrix:
+    """The spring layer ∫ φ_i φ_j [k_t δ_ab + (k_n − k_t) n_a n_b] dA on the facets of ``fb``.
+
+    Parameters
+    ----------
+    fb : skfem.FacetBasis
+        Scalar P2 basis on the interface facets.
+    kn, kt : float
+        Normal and tangential stiffness per unit area, N/m³.
+    n : int
+        3 × number of nodes (DOF k = 3·node + component).
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix, shape (n, n)
+        Acting on the jump [u] in the mesh's own (unduplicated) numbering.
+    """
+    values = np.stack([np.asarray(b[0]) for b in fb.basis], axis=-1)       # (nf, nq, 10)
     normal = fb.normals                                              # (3, nf, nq)
     tensor = kt * np.eye(3)[:, :, None, None] + (kn - kt) * np.einsum("afq,bfq->abfq", normal, normal)
     local = np.einsum("fqi,fqj,fq,abfq->fiajb", values, values, fb.dx, tensor, optimize=True)
@@ -194,7 +209,7 @@ def assemble(mesh: SolidMesh, materials: tuple[SolidMaterial, SolidMaterial], in
     fz = m.p[2][m.facets[:, between]]                      # (3, nfacets) vertex z
     bottom = np.ptp(fz, axis=0) < tol
     centre_z = fz.mean(axis=0)
-    connected = np.zeros(between.size, dtype=bool)
+    connected = np.ones(between.size, dtype=bool)          # no insertion given: all bonded/sprung
     if insertion is not None and between.size:
         start, face = insertion
         z_hi = face - interface.contact_start_m
@@ -274,29 +289,47 @@ def assemble(mesh: SolidMesh, materials: tuple[SolidMaterial, SolidMaterial], in
     if springs.size:
         kn = float(interface.interface_stiffness_n_m3 or 0.0)
         kt = kn * interface.tangential_ratio
-        a = _layer(FacetBasis(m, element, facets=springs, intorder=_INTORDER), kn, kt, ndof)
+        a = layer_matrix(FacetBasis(m, element, facets=springs, intorder=_INTORDER), kn, kt, ndof)
         jump = (t_t - t_h).tocsr()
         stiff.append(((jump.T @ a @ jump).tocsr(), interface.loss_factor))
     for k, (mat, eta) in enumerate(stiff):
         stiff[k] = ((0.5 * (mat + mat.T)).tocsr(), eta)
 
-    loads = _tip_loads(m, element, tip_z_m, tol, 4 if mesh.quarter else 1)
+    loads = tip_loads(m, element, tip_z_m, tol, 4 if mesh.quarter else 1)
     tip = np.column_stack([t_t.T @ loads[:, 0], t_t.T @ loads[:, 1]])
     return Matrices(stiffness=tuple(stiff), mass=(0.5 * (mass + mass.T)).tocsr(), tip_loads=tip,
                     n_boundary=nq, multiplicity=4 if mesh.quarter else 1, n_dof_mesh=ndof)
 
 
-def _tip_loads(m: MeshTet2, element: ElementTetP2, tip_z_m: float, tol: float, multiplicity: int) -> np.ndarray:
-    """(ndof, 2): unit x force (uniform traction) and unit y-moment (linear traction) on the tip face."""
+def tip_loads(m: MeshTet2, element: ElementTetP2, tip_z_m: float, tol: float, multiplicity: int) -> np.ndarray:
+    """Unit x force (uniform traction) and unit moment about +y (linear axial traction) on the tip face.
+
+    Parameters
+    ----------
+    m : skfem.MeshTet2
+    element : skfem.ElementTetP2
+    tip_z_m : float
+        z of the tip face, m.
+    tol : float
+        Distance within which a node lies on the face, m.
+    multiplicity : int
+        Copies of the mesh in the whole body (4 for the quarter model): the face's area
+        and second moment are those of the whole face.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3 · nnodes, 2)
+        Consistent nodal loads (DOF k = 3·node + component).
+    """
     bf = m.boundary_facets()
     on_tip = bf[np.all(np.abs(m.p[2][m.facets[:, bf]] - tip_z_m) < tol, axis=0)]
     if on_tip.size == 0:
         raise ValueError("no tip face found at z = tip_z_m")
     fb = FacetBasis(m, element, facets=on_tip, intorder=_INTORDER)
-    x = fb.global_coordinates().value[0]                             # (nf, nq)
+    x = np.asarray(fb.global_coordinates())[0]                             # (nf, nq)
     area = multiplicity * float(np.sum(fb.dx))
     second = multiplicity * float(np.sum(fb.dx * x**2))
-    values = np.stack([b[0].value for b in fb.basis], axis=-1)       # (nf, nq, 10)
+    values = np.stack([np.asarray(b[0]) for b in fb.basis], axis=-1)       # (nf, nq, 10)
     out = np.zeros((3 * m.nvertices + 3 * m.nedges, 2))
     dofs = fb.element_dofs.T                                         # (nf, 10) nodes
     np.add.at(out[:, 0], 3 * dofs, np.einsum("fqi,fq->fi", values, fb.dx) / area)

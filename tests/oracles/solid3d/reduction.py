@@ -215,7 +215,12 @@ def direct_tip_receptance(mats: Matrices, omega_rad_s: np.ndarray, base_stiffnes
             d = base_block(base_stiffness[j:j + 1], nq, mats.multiplicity)[0]
             rows, cols = np.meshgrid(np.arange(n - nq, n), np.arange(n - nq, n), indexing="ij")
             z = z + sp.csc_matrix((d.ravel(), (rows.ravel(), cols.ravel())), shape=(n, n))
-        x = spla.splu(z.tocsc(), permc_spec="MMD_AT_PLUS_A").solve(mats.tip_loads.astype(complex))
+        # SuperLU's complex factorisation is ~10x slower than the real one of [[Re, −Im], [Im, Re]]
+        z = z.tocsc()
+        big = sp.bmat([[z.real, -z.imag], [z.imag, z.real]]).tocsc()
+        lu = spla.splu(big, permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True})
+        xx = lu.solve(np.vstack([mats.tip_loads, np.zeros_like(mats.tip_loads)]))
+        x = xx[:n] + 1j * xx[n:]
         out[j] = mats.multiplicity * (mats.tip_loads.T @ x)
     return out
 
