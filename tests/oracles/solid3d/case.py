@@ -255,8 +255,8 @@ class MeshSize:
             raise ValueError("mesh: 0 < tool_m <= holder_m and growth > 0 are required")
 
     def scaled(self, factor: float) -> MeshSize:
-        """All sizes times ``factor`` (a refinement sequence)."""
-        return MeshSize(self.tool_m * factor, self.holder_m * factor, self.growth)
+        """The size field times ``factor`` everywhere (sizes and slope: a refinement sequence)."""
+        return MeshSize(self.tool_m * factor, self.holder_m * factor, self.growth * factor)
 
 
 Symmetry = Literal["auto", "quarter", "full"]

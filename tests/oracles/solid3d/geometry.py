@@ -14,10 +14,11 @@ from typing import Literal
 
 import gmsh
 import numpy as np
+from skfem import Basis, ElementTetP2, MeshTet2
 
 from tests.oracles.solid3d.case import Flutes, MeshSize, SolidCase
 
-__all__ = ["FineZone", "Piece", "SolidMesh", "case_pieces", "mesh_pieces", "tool_fine_zone"]
+__all__ = ["CORNER_RATIO", "FineZone", "Piece", "SolidMesh", "case_pieces", "mesh_pieces", "tool_fine_zone"]
 
 Part = Literal["holder", "tool"]
 PARTS: tuple[Part, ...] = ("holder", "tool")
@@ -54,10 +55,27 @@ class Piece:
 
 @dataclass(frozen=True, slots=True)
 class FineZone:
-    """Where the mesh is fine: radius ≤ ``radius_m`` and z ≥ ``z_start_m`` (tool and bore wall)."""
+    """Where the mesh is fine.
+
+    Parameters
+    ----------
+    radius_m : float
+        The fine zone is r ≤ ``radius_m`` and z ≥ ``z_start_m`` (tool and bore wall), m.
+    z_start_m : float
+        m.
+    corners : tuple of (float, float)
+        Circles ``(r_m, z_m)`` where the interface ends (the shank leaving the bore, the
+        ends of a contact region): the stress is singular there, so the mesh is graded
+        toward them down to ``CORNER_RATIO · tool_m``.
+    """
 
     radius_m: float
     z_start_m: float
+    corners: tuple[tuple[float, float], ...] = ()
+
+
+#: element size at an interface corner, as a fraction of the tool's size
+CORNER_RATIO = 0.3
 
 
 @dataclass(frozen=True, slots=True)
@@ -75,12 +93,15 @@ class SolidMesh:
         0 = holder, 1 = tool.
     quarter : bool
         True for the quarter model (x ≥ 0, y ≥ 0).
+    straightened : int
+        Elements whose curved edges were made straight because their map folded.
     """
 
     points_m: np.ndarray
     tets: np.ndarray
     part: np.ndarray
     quarter: bool
+    straightened: int = 0
 
 
 def case_pieces(case: SolidCase) -> tuple[Piece, ...]:
@@ -122,8 +143,12 @@ def case_pieces(case: SolidCase) -> tuple[Piece, ...]:
 
 def tool_fine_zone(case: SolidCase) -> FineZone:
     """The fine zone of a case: the tool and one shank radius of steel around the bore."""
+    face, radius = case.holder_length_m, case.tool.shank_diameter_m / 2
+    depths = {0.0, case.interface.contact_start_m, face - case.insertion_start_m}
+    if case.interface.contact_stop_m is not None:
+        depths.add(min(case.interface.contact_stop_m, face - case.insertion_start_m))
     return FineZone(radius_m=case.tool.shank_diameter_m, z_start_m=case.insertion_start_m - 0.5
-                    * case.tool.shank_diameter_m)
+                    * case.tool.shank_diameter_m, corners=tuple((radius, face - d) for d in sorted(depths)))
 
 
 def _fluted_surface(piece: Piece) -> int:
@@ -210,12 +235,15 @@ def mesh_pieces(pieces: tuple[Piece, ...], size: MeshSize, quarter: bool, fine: 
         else:
             expr = (f"Min({size.holder_m}, {size.tool_m} + {size.growth}*(Max(0, Sqrt(x*x+y*y) - {fine.radius_m})"
                     f" + Max(0, {fine.z_start_m} - z)))")
+            for r, z in fine.corners:
+                expr = (f"Min({expr}, {CORNER_RATIO * size.tool_m} + {size.growth}"
+                        f"*Sqrt((Sqrt(x*x+y*y) - {r})^2 + (z - {z})^2))")
         field = gmsh.model.mesh.field.add("MathEval")
         gmsh.model.mesh.field.setString(field, "F", expr)
         gmsh.model.mesh.field.setAsBackgroundMesh(field)
         for name, value in (("Mesh.MeshSizeExtendFromBoundary", 0), ("Mesh.MeshSizeFromPoints", 0),
-                            ("Mesh.MeshSizeFromCurvature", 12), ("Mesh.ElementOrder", 2),
-                            ("Mesh.HighOrderOptimize", 1), ("Mesh.SecondOrderLinear", 0),
+                            ("Mesh.MeshSizeFromCurvature", 0), ("Mesh.ElementOrder", 2),
+                            ("Mesh.HighOrderOptimize", 0), ("Mesh.SecondOrderLinear", 0),
                             ("Mesh.MeshSizeMin", 0.25 * size.tool_m), ("Mesh.MeshSizeMax", size.holder_m)):
             gmsh.option.setNumber(name, value)
         gmsh.model.mesh.generate(3)
@@ -239,7 +267,32 @@ def mesh_pieces(pieces: tuple[Piece, ...], size: MeshSize, quarter: bool, fine: 
     t = inverse.reshape(t.shape).astype(np.int64)
     points = np.ascontiguousarray(coords[:, used])
     _check_edge_nodes(points, t)
-    return SolidMesh(points_m=points, tets=t, part=np.concatenate(parts), quarter=quarter)
+    points, straightened = _straighten_inverted(points, t)
+    return SolidMesh(points_m=points, tets=t, part=np.concatenate(parts), quarter=quarter,
+                     straightened=straightened)
+
+
+def _straighten_inverted(points: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, int]:
+    """Move the edge nodes of elements whose curved map folds back to their edges' midpoints.
+
+    gmsh places edge nodes on the curved CAD faces; on a coarse mesh a thin element at a
+    curved face can fold (negative Jacobian). Its edges are made straight instead (a local
+    linear approximation of the face there); the count is reported in the mesh.
+    """
+    points = points.copy()
+    done: set[int] = set()
+    for _ in range(5):
+        basis = Basis(MeshTet2(points, t), ElementTetP2(), intorder=4)
+        det = basis.mapping.detDF(basis.X)                          # (nel, nq), signed
+        p0, p1, p2, p3 = (points[:, t[i]] for i in range(4))
+        volume6 = np.einsum("ie,ie->e", np.cross((p1 - p0).T, (p2 - p0).T).T, p3 - p0)
+        bad = np.flatnonzero(np.min(det * np.sign(volume6)[:, None], axis=1) <= 0)
+        if bad.size == 0:
+            return points, len(done)
+        done.update(bad.tolist())
+        for k, (a, b) in enumerate(_EDGES):
+            points[:, t[4 + k, bad]] = 0.5 * (points[:, t[a, bad]] + points[:, t[b, bad]])
+    raise RuntimeError("could not untangle the curved mesh")
 
 
 def _check_edge_nodes(points: np.ndarray, t: np.ndarray) -> None:

@@ -285,7 +285,7 @@ def solve_model(model: SolidModel, frequency_hz: np.ndarray, base: Base = "clamp
     Parameters
     ----------
     model : SolidModel
-        Built for this kind of base, with a cut-off ≥ ``CUTOFF_FACTOR`` × the highest frequency.
+        Built with ``base_kind="elastic"`` (serves both bases) or ``"clamped"``, with a cut-off ≥ ``CUTOFF_FACTOR`` × the highest frequency.
     frequency_hz : numpy.ndarray, shape (nfreq,)
     base : "clamped" or ReceptanceBase
 
@@ -295,8 +295,8 @@ def solve_model(model: SolidModel, frequency_hz: np.ndarray, base: Base = "clamp
     """
     f = _frequencies(frequency_hz)
     kind = _kind(base)
-    if (kind == "clamped") != (model.matrices.n_boundary == 0):
-        raise ValueError("model was built for another kind of base")
+    if kind == "elastic" and model.matrices.n_boundary == 0:
+        raise ValueError("model was built with a clamped base: build it with base_kind='elastic'")
     if model.reduced.cutoff_hz < CUTOFF_FACTOR * float(f.max()) * (1 - 1e-9):
         raise ValueError("frequency_hz goes above the model's cut-off / CUTOFF_FACTOR")
     t0 = time.perf_counter()
