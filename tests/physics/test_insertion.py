@@ -25,6 +25,7 @@ from rcsa.physics.insertion import (
     Insertion,
     InsertionPiece,
     expm_stack,
+    insertion_fit,
     piece_fit,
     piece_stiffness,
     unit_stiffness,
@@ -152,3 +153,14 @@ def test_stacked_insertions_give_each_tools_own_two_port():
     got = stacked.take_rows(rows).two_port(w)
     for line, row in enumerate(rows):
         assert _rel(got[line], items[row].two_port(w[line:line + 1])[0]) < 1e-12
+
+
+def test_the_whole_insertions_interpolant_is_its_exact_condensation(compact_bonded):
+    """Below its own clamped modes an insertion is evaluated whole; it equals the line-by-line
+    condensation of exact units, at frequencies between the interpolation nodes."""
+    spec, _ = compact_bonded
+    ins = build_model(spec).holder[-1]
+    w = 2 * np.pi * np.sort(np.random.default_rng(4).uniform(1.0, 8000.0, 60))
+    assert insertion_fit(ins, float(w.max())) is not None
+    exact = ins.condensed(w, exact=True)
+    assert _rel(ins.two_port(w), exact) < 1e-8
