@@ -54,6 +54,7 @@ from rcsa.app.bounds import (
     MAX_FRF_VALUE,
     MAX_HOLDER_SEGMENTS_PER_CONE,
     MAX_INTERFACE_STIFFNESS_N_M3,
+    MAX_INTERFACE_STIFFNESS_SCALE,
     MAX_INTERFACE_TANGENTIAL_RATIO,
     MAX_LENGTH_M,
     MAX_LOSS_FACTOR,
@@ -78,6 +79,7 @@ from rcsa.app.bounds import (
     MIN_FLUTED_DIAMETER_RATIO,
     MIN_FREQUENCY_HZ,
     MIN_INTERFACE_STIFFNESS_N_M3,
+    MIN_INTERFACE_STIFFNESS_SCALE,
     MIN_INTERFACE_TANGENTIAL_RATIO,
     MIN_JOINT_STIFFNESS,
     MIN_LENGTH_M,
@@ -331,6 +333,9 @@ class HolderToolJoint(_Request):
         "bonded/contact: length from the holder face into the bore over which the shank does not touch, m."))
     contact_length_m: float | None = Field(None, ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description=(
         "bonded/contact: length of the contact behind the front gap, m (default: the rest of the insertion)."))
+    interface_stiffness_scale: float | None = Field(None, ge=MIN_INTERFACE_STIFFNESS_SCALE,
+                                                    le=MAX_INTERFACE_STIFFNESS_SCALE, description=(
+        "bonded/contact: a factor on the whole interface stiffness (default 1; what an identification finds)."))
 
 
 class Joints(_Request):

@@ -26,6 +26,7 @@ __all__ = [
     "MAX_FRF_VALUE",
     "MAX_HOLDER_SEGMENTS_PER_CONE",
     "MAX_INTERFACE_STIFFNESS_N_M3",
+    "MAX_INTERFACE_STIFFNESS_SCALE",
     "MAX_INTERFACE_TANGENTIAL_RATIO",
     "MAX_JSON_DEPTH",
     "MAX_JSON_NUMBER",
@@ -54,6 +55,7 @@ __all__ = [
     "MIN_FLUTED_DIAMETER_RATIO",
     "MIN_FREQUENCY_HZ",
     "MIN_INTERFACE_STIFFNESS_N_M3",
+    "MIN_INTERFACE_STIFFNESS_SCALE",
     "MIN_INTERFACE_TANGENTIAL_RATIO",
     "MIN_JOINT_STIFFNESS",
     "MIN_LENGTH_M",
@@ -114,6 +116,8 @@ MAX_DAMPING = 1.0e12
 #: model ``contact``), N/m³: from a soft polymer layer (1e9) to far stiffer than any
 #: machined steel contact (1e17; measured shrink-fit and collet interfaces lie near 1e13–1e15).
 MIN_INTERFACE_STIFFNESS_N_M3, MAX_INTERFACE_STIFFNESS_N_M3 = 1.0e9, 1.0e17
+#: A factor on a clamping's whole interface stiffness (dimensionless; what an identification finds).
+MIN_INTERFACE_STIFFNESS_SCALE, MAX_INTERFACE_STIFFNESS_SCALE = 1.0e-4, 1.0e2
 #: Tangential over normal interface stiffness (dimensionless; 2(1−ν)/(2−ν) ≈ 0.8 for elastic
 #: asperity contact of steels).
 MIN_INTERFACE_TANGENTIAL_RATIO, MAX_INTERFACE_TANGENTIAL_RATIO = 1.0e-3, 10.0

@@ -131,7 +131,7 @@ def interface_per_length(clamping: ClampingSpec, holder_outer_diameter_m: float,
         k_t = clamping.interface_tangential_ratio * k_n
         iw, itheta = contact_per_length(k_n, k_t, d)
         k_w, k_theta = 1.0 / (1.0 / k_w + 1.0 / iw), 1.0 / (1.0 / k_theta + 1.0 / itheta)
-    return complex(k_w * clamping.interface_scale), complex(k_theta * clamping.interface_scale)
+    return complex(k_w * clamping.interface_stiffness_scale), complex(k_theta * clamping.interface_stiffness_scale)
 
 
 @dataclass(frozen=True, slots=True)
@@ -278,7 +278,7 @@ def face_contact(holder: HolderSpec, tool: ToolSpec, clamping: ClampingSpec) -> 
     inner = min(last.inner_diameter_m, outer)
     area_m2 = math.pi * (outer**2 - inner**2) / 4.0
     inertia_m4 = math.pi * (outer**4 - inner**4) / 64.0
-    k_n = clamping.interface_stiffness_n_m3 * clamping.interface_scale
+    k_n = clamping.interface_stiffness_n_m3 * clamping.interface_stiffness_scale
     return Spring(clamping.interface_tangential_ratio * k_n * area_m2, 0.0, k_n * inertia_m4, 0.0)
 
 
