@@ -63,9 +63,18 @@ def holder_tool(case: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
+#: Where the 3-D reference data are read (``--data`` overrides).
+DATA = dataset.DATA_DIR
+
+
+def load(name: str) -> dict[str, Any]:
+    """A case of the 3-D data set (:func:`tests.oracles.solid3d.dataset.load_case`) from :data:`DATA`."""
+    return dataset.load_case(name, DATA)
+
+
 def rcsa_h(name: str, model: str, base: str, frequency_hz: np.ndarray) -> np.ndarray:
     """rcsa's tool-point h of a data-set case with the holder–tool ``model`` (point or the case's clamping)."""
-    case = dataset.load_case(name)["case"]
+    case = load(name)["case"]
     doc = dataset.beam_document(_solid_case(name), frequency_hz)
     if model != "point":
         doc["joints"]["holder_tool"] = holder_tool(case)
@@ -105,13 +114,16 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--fit", action="store_true", help="refit the coefficients on the calibration cases")
     parser.add_argument("--max-evaluations", type=int, default=300)
+    parser.add_argument("--data", type=Path, default=dataset.DATA_DIR, help="the 3-D data set's folder")
     args = parser.parse_args()
-    index = json.loads((dataset.DATA_DIR / "cases.json").read_text())
+    global DATA
+    DATA = args.data
+    index = json.loads((DATA / "cases.json").read_text())
     names = list(index["cases"])
     t0 = time.perf_counter()
     if args.fit:
-        f_fit = dataset.load_case(names[0])["frequency_hz"][::_FIT_EVERY]
-        truths = {(n, b): dataset.load_case(n)[f"h_{b}"][::_FIT_EVERY] for n in CALIBRATION for b in dataset.BASES}
+        f_fit = load(names[0])["frequency_hz"][::_FIT_EVERY]
+        truths = {(n, b): load(n)[f"h_{b}"][::_FIT_EVERY] for n in CALIBRATION if n in names for b in dataset.BASES}
         start = np.log(np.array(list(asdict(clamping.BULK_COEFFICIENTS).values())) + 1e-3)
         res = minimize(_objective, start, args=(truths, f_fit), method="Nelder-Mead",
                        options={"maxfev": args.max_evaluations, "xatol": 1e-3, "fatol": 1e-4})
@@ -119,7 +131,7 @@ def main() -> None:
         print(f"fitted in {res.nfev} evaluations, objective {res.fun:.4f}: {clamping.BULK_COEFFICIENTS}")
     rows = []
     for name in names:
-        data = dataset.load_case(name)
+        data = load(name)
         f = data["frequency_hz"]
         for base in dataset.BASES:
             truth = data[f"h_{base}"]
