@@ -25,6 +25,8 @@ from rcsa.analysis.lobes.robust import split_robust_request
 from rcsa.errors import InputError
 from rcsa.model.bounds import (
     MAX_CONFIDENCE,
+    MAX_DIAMETER_M,
+    MAX_LENGTH_M,
     MAX_UNCERTAINTY_DRAWS,
     MAX_UNCERTAINTY_SEED,
     MIN_CONFIDENCE,
@@ -97,11 +99,11 @@ def _document(path: Path, value: float) -> dict[str, Any]:
         doc["spindle"] = {"measurement_id": "m-0123456789ab", "effective_length_m": value}
     elif head in ("spindle", "holder") and path[1] == "segments":
         # a segment of its own at the end: solid, and as thick as allowed
-        segment = {"length_m": 0.05, "outer_diameter_m": 100.0, "inner_diameter_m": 0.0, "material": "steel"}
+        segment = {"length_m": 0.05, "outer_diameter_m": MAX_DIAMETER_M, "inner_diameter_m": 0.0, "material": "steel"}
         segment[field] = value
         doc[head]["segments"].append(segment)
     elif head == "spindle" and path[1] == "bearings":
-        doc["spindle"]["segments"].append({"length_m": 100.0, "outer_diameter_m": 0.05, "material": "steel"})
+        doc["spindle"]["segments"].append({"length_m": MAX_LENGTH_M, "outer_diameter_m": 0.05, "material": "steel"})
         doc["spindle"]["bearings"][0][field] = value
     elif head == "joints":
         doc["joints"][path[1]][field] = value

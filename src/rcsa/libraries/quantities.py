@@ -23,6 +23,7 @@ import re
 
 from rcsa.errors import InputError
 from rcsa.model import fields
+from rcsa.model.bounds import MAX_LENGTH_M
 
 __all__ = ["UNIT_SPELLINGS", "Unit", "count_value", "length_value", "unit_fraction", "unit_to_metres"]
 
@@ -122,7 +123,11 @@ def length_value(value: object, field: str, unit: Unit, *, gt: float | None = 0.
     """
     if isinstance(value, str):
         value = _number_from_text(value, field, unit)
-    return fields.number(value, field, gt=gt)
+    number = fields.number(value, field, gt=gt)
+    metres = abs(number) * unit[0] / unit[1]
+    if metres > MAX_LENGTH_M:
+        raise InputError(field, f"{value!r} is {metres:g} m, longer than any machine-tool part ({MAX_LENGTH_M:g} m)")
+    return number
 
 
 def _number_from_text(text: str, field: str, unit: Unit) -> float:
