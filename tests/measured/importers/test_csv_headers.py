@@ -387,8 +387,8 @@ def test_absurd_and_non_finite_values_in_a_table_are_refused(tmp_path):
         "h",
         "below 1e-15 m/N",
     )
-    _refused(tmp_path, text.replace("\n2040,", "\n1e300,"), "frequency_hz", "line 201", "out of range")
-    _refused(tmp_path, text.replace("\n2040,", "\n2e6,"), "frequency_hz", "above 1e+06 Hz")
+    _refused(tmp_path, plausible.replace("\n2040,", "\n1e300,"), "frequency_hz", "line 201", "out of range")
+    _refused(tmp_path, plausible.replace("\n2040,", "\n2e6,"), "frequency_hz", "above 1e+06 Hz")
 
 
 def test_truncated_cutpro_and_tap_files_are_refused(tmp_path):
