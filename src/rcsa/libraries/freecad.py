@@ -48,7 +48,7 @@ from rcsa.libraries.quantities import count_value, unit_to_metres
 from rcsa.libraries.tool_materials import tool_material
 from rcsa.model import fields
 from rcsa.model.assembly import shallow_insertion_note
-from rcsa.model.bounds import MAX_HOLDER_SEGMENTS_PER_CONE, MAX_LENGTH_M
+from rcsa.model.bounds import MAX_HOLDER_SEGMENTS_PER_CONE, MAX_LENGTH_M, MAX_TEETH
 from rcsa.model.input_policy import load_json
 
 __all__ = ["MAX_FILE_BYTES", "freecad_combination", "load_freecad_object", "map_toolbit", "parse_length_m"]
@@ -243,9 +243,9 @@ def _flutes(value: object, warnings: list[str]) -> int | None:
     if value is None:
         return None
     count = count_value(value)
-    if count is not None and count > 0:
+    if count is not None and 1 <= count <= MAX_TEETH:
         return count
-    warnings.append(f"Flutes {value!r} is not a positive integer; teeth unknown")
+    warnings.append(f"Flutes {value!r} is not an integer from 1 to {MAX_TEETH}; teeth unknown")
     return None
 
 

@@ -80,7 +80,7 @@ from rcsa.libraries.quantities import count_value, unit_to_metres
 from rcsa.libraries.tool_materials import tool_material
 from rcsa.model import fields
 from rcsa.model.assembly import shallow_insertion_note
-from rcsa.model.bounds import MAX_HOLDER_SEGMENTS_PER_CONE, MIN_FLUTED_DIAMETER_RATIO
+from rcsa.model.bounds import MAX_HOLDER_SEGMENTS_PER_CONE, MAX_TEETH, MIN_FLUTED_DIAMETER_RATIO
 from rcsa.model.input_policy import load_json
 
 __all__ = [
@@ -387,10 +387,10 @@ def _combination(index: int, item: object, ident: str, occurrence: int, opts: _O
     tool_type = item.get("type") if isinstance(item.get("type"), str) else None
     nof = item.get("geometry", {}).get("NOF") if isinstance(item.get("geometry"), dict) else None
     teeth = count_value(nof)
-    if teeth is not None and teeth < 1:
+    if teeth is not None and not 1 <= teeth <= MAX_TEETH:
         teeth = None
     if nof is not None and teeth is None:
-        warnings.append(f"geometry.NOF {nof!r} is not a positive integer; teeth unknown")
+        warnings.append(f"geometry.NOF {nof!r} is not an integer from 1 to {MAX_TEETH}; teeth unknown")
     meta = {"description": desc if isinstance(desc, str) else "", "number": _t_number(item),
             "teeth": teeth, "tool_type": tool_type}
     try:

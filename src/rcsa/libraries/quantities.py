@@ -25,7 +25,7 @@ from rcsa.errors import InputError
 from rcsa.model import fields
 from rcsa.model.bounds import MAX_LENGTH_M
 
-__all__ = ["UNIT_SPELLINGS", "Unit", "count_value", "length_value", "unit_fraction", "unit_to_metres"]
+__all__ = ["MAX_COUNT", "UNIT_SPELLINGS", "Unit", "count_value", "length_value", "unit_fraction", "unit_to_metres"]
 
 #: A length unit as an exact ratio to the metre: (numerator, denominator).
 Unit = tuple[int, int]
@@ -149,13 +149,23 @@ def count_value(value: object) -> int | None:
     """An integer count (flutes, T number) from a JSON number or a string; None when not one.
 
     Integers, integer-valued floats and strings holding one integer (``"4"``) count; ``"4.5"``,
-    ``"four"``, ``true``, ``NaN`` do not (the caller decides whether that is a warning).
+    ``"four"``, ``true``, ``NaN`` and counts beyond :data:`MAX_COUNT` do not (the caller decides
+    whether that is a warning).
 
     Examples
     --------
     >>> count_value("4"), count_value(4.0), count_value("4.5")
     (4, 4, None)
     """
+    count = _count(value)
+    return count if count is not None and abs(count) <= MAX_COUNT else None
+
+
+#: Largest count (flutes, T number) read from a library: beyond a 32-bit integer it is no count.
+MAX_COUNT = 2**31 - 1
+
+
+def _count(value: object) -> int | None:
     if isinstance(value, str):
         m = _INTEGER.fullmatch(value)
         return int(m.group(1)) if m else None
