@@ -164,8 +164,10 @@ _NUMBER_TOKENS = ("1e308", "-1e31", "nan", "inf", "-Infinity", _BIG_INT, "1.0D+3
 
 
 def table_mutations(text: str, rng: random.Random, n: int, *, policy_rows: int,
-                    number_sep: str | None = None) -> Iterator[tuple[str, bytes, str]]:
-    """Mutated text tables (CSV, TSV, CutPro, tap): policy numbers, truncations, garbage."""
+                    number_sep: str | None = None, columns: int | None = None) -> Iterator[tuple[str, bytes, str]]:
+    """Mutated text tables (CSV, TSV, CutPro, tap): policy numbers, truncations, garbage
+    (``columns``: only the first so many columns are data; CutPro's first line carries labels
+    after its three numbers)."""
     lines = text.splitlines(keepends=True)
     data_idx = [i for i, ln in enumerate(lines) if ln.strip() and (ln.strip()[0].isdigit() or ln.strip()[0] == "-")]
     for _ in range(n):
@@ -175,7 +177,7 @@ def table_mutations(text: str, rng: random.Random, n: int, *, policy_rows: int,
             toks = lines[i].rstrip("\r\n")
             sep = number_sep or ("," if "," in toks else "\t" if "\t" in toks else None)
             parts = toks.split(sep) if sep else toks.split()
-            j = rng.randrange(len(parts))
+            j = rng.randrange(min(len(parts), columns or len(parts)))
             token = rng.choice(_NUMBER_TOKENS[:6])
             parts[j] = token
             new = (sep or "\t").join(parts) + "\n"
@@ -337,7 +339,8 @@ def _file_mutations(kind: str, rng: random.Random, n: int, heavy: bool) -> Itera
     """Mutated files of ``kind``: (label, bytes, expectation)."""
     text = _file_text(kind)
     if kind in ("csv", "tsv", "frf"):
-        yield from table_mutations(text, rng, n, policy_rows=250_000 if heavy else 0)
+        yield from table_mutations(text, rng, n, policy_rows=250_000 if heavy else 0,
+                                   columns=3 if kind == "frf" else None)
     elif kind == "tap":
         yield from table_mutations(text, rng, n, policy_rows=2_100_000 if heavy else 0)
     elif kind == "uff":

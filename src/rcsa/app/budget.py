@@ -46,18 +46,21 @@ __all__ = [
     "BODY_LIMITS",
     "JOB",
     "OPERATIONS",
+    "SDM_COST",
     "STATED_SYNC_BOUND",
     "SYNC",
     "BudgetExceeded",
     "Cost",
     "Limits",
     "Mode",
+    "SdmCostModel",
     "body_limit",
     "check",
     "check_work",
     "cost_model",
     "estimate",
     "natural_frequency_seconds",
+    "sdm_terms",
 ]
 
 MiB = 1024 * 1024
@@ -377,8 +380,72 @@ def _library(request: Mapping[str, Any]) -> Cost:
                 {"tools": n, "lines": lines, "elements": elements}, ("fewer tools", "fewer frequency lines"))
 
 
-#: Estimated seconds per speed and frequency line of each lobes method (``method``).
-LOBE_METHOD_S: dict[str, float] = {"zoa": 1.0e-9}
+#: Estimated seconds per speed and frequency line of each lobes method (``method``); the
+#: semi-discretization is priced by :data:`SDM_COST` on top of its line term.
+LOBE_METHOD_S: dict[str, float] = {"zoa": 1.0e-9, "semi_discretization": 1.0e-9}
+
+
+@dataclass(frozen=True)
+class SdmCostModel:
+    """What semi-discretization lobes cost, from the request's speeds, steps and modes.
+
+    Per speed, the depth search evaluates the period map ~20 times; each evaluation
+    multiplies ``k`` step maps of the state ``n = 4 m`` (``m`` modes per direction, x and y,
+    position and velocity) and takes the eigenvalues of the map of dimension
+    ``D = n + 2 k_cut`` (``k_cut``: the steps in cut, whose delayed samples the map keeps).
+    Hence, for ``S`` speeds (and ``draws`` drawn assemblies, each a lobes run):
+
+        seconds = S · (1 + draws) · (per_speed_s + per_step_s · k·D·n + per_eig_s · D³)
+        memory  = min(S, chunk) · (1 + draws_in_memory) · mem_per_state_bytes · k·D·n + S · mem_per_speed_bytes
+
+    The constants are fitted by ``.venv/bin/python benchmarks/bench_budget.py --fit-sdm``
+    (least squares with non-negative constants on measured CPU seconds and peak RSS over a
+    grid of speeds, ``steps_per_period`` and ``modes_per_direction``), which prints the
+    line to paste here; refit after any change of the SDM solver.
+    """
+
+    per_speed_s: float
+    per_step_s: float
+    per_eig_s: float
+    mem_per_state_bytes: float
+    mem_per_speed_bytes: float
+    chunk: int = 256
+
+    def sizes(self, steps: float, modes: float, cut_fraction: float) -> tuple[float, float]:
+        """``(n, D)``: the modal state and the period map's dimension."""
+        n = 4.0 * modes
+        return n, n + 2.0 * math.ceil(steps * min(1.0, max(cut_fraction, 1.0 / steps)))
+
+    def seconds(self, speeds: float, steps: float, modes: float, cut_fraction: float, draws: float = 0.0) -> float:
+        """Estimated CPU seconds on the reference machine."""
+        n, d = self.sizes(steps, modes, cut_fraction)
+        return speeds * (1.0 + draws) * (self.per_speed_s + self.per_step_s * steps * d * n + self.per_eig_s * d**3)
+
+    def memory_bytes(self, speeds: float, steps: float, modes: float, cut_fraction: float) -> float:
+        """Estimated peak memory of the search, bytes (beyond the process's base)."""
+        n, d = self.sizes(steps, modes, cut_fraction)
+        return min(speeds, self.chunk) * self.mem_per_state_bytes * steps * d * n + speeds * self.mem_per_speed_bytes
+
+
+#: The semi-discretization's constants (``benchmarks/bench_budget.py --fit-sdm`` fits them).
+SDM_COST = SdmCostModel(per_speed_s=2.0e-3, per_step_s=3.0e-8, per_eig_s=6.0e-9,
+                        mem_per_state_bytes=100.0, mem_per_speed_bytes=4096.0)
+
+
+def sdm_terms(request: Mapping[str, Any]) -> tuple[float, float, float]:
+    """``(steps_per_period, modes_per_direction, fraction of a tooth period in cut)`` of a lobes request."""
+    from rcsa.analysis.lobes.options import parse_method
+    from rcsa.analysis.lobes.zoa import engagement_angles_rad
+
+    method = parse_method(request)
+    try:
+        phi_st, phi_ex = engagement_angles_rad(float(request.get("radial_immersion", 1.0)),
+                                               str(request.get("milling", "down")))  # type: ignore[arg-type]
+        teeth = float(request.get("teeth", 1))
+        fraction = (phi_ex - phi_st) * teeth / (2.0 * math.pi)
+    except (InputError, TypeError, ValueError):  # the request's parser says why
+        fraction = 1.0
+    return float(method.steps_per_period), float(method.modes_per_direction), fraction
 
 
 @cost_model("lobes")
@@ -402,8 +469,16 @@ def _lobes(request: Mapping[str, Any]) -> Cost:
     per = LOBE_METHOD_S.get(str(name), LOBE_METHOD_S["zoa"])
     seconds += per * count * max(lines, 1.0) * (1.0 + _draws(request))
     memory += 64.0 * count * (1.0 + _draws(request))
-    return Cost("lobes", seconds, memory, {**terms, "speeds": count},
-                ("fewer speeds (spindle_speed_rpm.count)", "fewer frequency lines"))
+    shrink: tuple[str, ...] = ("fewer speeds (spindle_speed_rpm.count)", "fewer frequency lines")
+    if name == "semi_discretization":
+        steps, modes, fraction = sdm_terms(request)
+        seconds += SDM_COST.seconds(count, steps, modes, fraction, _draws(request))
+        memory += SDM_COST.memory_bytes(count, steps, modes, fraction)
+        terms = {**terms, "steps_per_period": steps, "modes_per_direction": modes,
+                 "period_map_dimension": SDM_COST.sizes(steps, modes, fraction)[1]}
+        shrink = ("fewer speeds (spindle_speed_rpm.count)", "fewer steps_per_period",
+                  "fewer modes_per_direction", "fewer frequency lines")
+    return Cost("lobes", seconds, memory, {**terms, "speeds": count}, shrink)
 
 
 @cost_model("effects")
