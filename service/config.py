@@ -49,8 +49,9 @@ class Settings(BaseSettings):
                                        "0: no budget.")
     job_max_unfinished_per_caller: int = Field(10, ge=1, description="Queued or running jobs one caller (API key, "
                                                "or anonymous client address) may have; more answer 429.")
-    job_max_running_per_caller: int = Field(0, ge=0, description="Jobs of one caller running at once (0: no cap; "
-                                            "queued jobs are claimed round-robin across callers either way).")
+    job_max_running_per_caller: int = Field(1, ge=0, description="Jobs of one caller running at once, all "
+                                            "anonymous callers counting as one (0: no cap; queued jobs are claimed "
+                                            "round-robin across callers either way).")
     dask_scheduler: str | None = Field(None, description="Dask scheduler address (tcp://host:8786): jobs compute "
                                        "on that cluster (pip install 'rcsa[dask]'); unset, in this process.")
     dask_connect_timeout_s: float = Field(10.0, gt=0, description="How long to try to reach the Dask scheduler "

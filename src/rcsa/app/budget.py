@@ -59,6 +59,7 @@ __all__ = [
     "check_work",
     "cost_model",
     "estimate",
+    "held_result_bytes",
     "natural_frequency_seconds",
     "sdm_terms",
 ]
@@ -112,6 +113,13 @@ K_NF_MODE_S = 4.2e-6
 MEM_LINE_BYTES = 3072.0
 #: Memory of the process that is not the request's (libraries, caches), bytes.
 MEM_BASE_BYTES = 64.0 * MiB
+#: Batches (``benchmarks/bench_memory.py`` measures them): a chunk of tools is computed at a
+#: time (:func:`rcsa.libraries.chunks.chunk_size`), bytes per tool and line of a chunk in
+#: flight (its receptances, the stacked march's workspaces, the results being written);
+#: and, for an answer given at once, bytes per tool and line of the whole result held (four
+#: complex receptances as arrays, then as JSON text while it is serialised).
+MEM_CHUNK_TOOL_LINE_BYTES = 400.0
+MEM_RESULT_TOOL_LINE_BYTES = 400.0
 
 
 @dataclass(frozen=True)
@@ -343,6 +351,8 @@ def _batch(request: Mapping[str, Any]) -> Cost:
     combos = combos if isinstance(combos, list) else []
     if not combos:
         return Cost("batch", 0.0, MEM_BASE_BYTES, {"combinations": 0.0})
+    # memory: one chunk of tools in flight (the result is streamed; an answer given at once
+    # adds the whole result held, in check_work), plus one prediction's workspaces
     worst = max(range(len(combos)), key=lambda i: _holder_segments(combos[i]))
     base = {k: v for k, v in request.items() if k not in ("combinations", "options", "natural_frequencies",
                                                            "uncertainty")}
@@ -355,14 +365,25 @@ def _batch(request: Mapping[str, Any]) -> Cost:
         lines = float(parse_frequency(request.get("frequency")).size)
         elements = 30.0 + _holder_segments(combo)
         seconds = n * (K_LINE_S * elements * lines + natural_frequency_seconds(elements))
-        return Cost("batch", seconds, MEM_BASE_BYTES + n * MEM_LINE_BYTES * lines / 8.0,
+        return Cost("batch", seconds, MEM_BASE_BYTES + MEM_LINE_BYTES * lines + _chunk_bytes(n, lines),
                     {"combinations": n, "lines": lines, "elements": elements}, shrink)
     seconds, memory, terms = _with_draws(*_assembly_cost(spec, natural_frequencies=request.get(
         "natural_frequencies", True) is not False), _draws(request))
     if _draws(request):
         shrink = (*_DRAWS_SHRINK, *shrink)
-    return Cost("batch", seconds * n, memory + n * MEM_LINE_BYTES * terms["lines"] / 8.0,
-                {"combinations": n, **terms}, shrink)
+    return Cost("batch", seconds * n, memory + _chunk_bytes(n, terms["lines"]), {"combinations": n, **terms}, shrink)
+
+
+def _chunk_bytes(tools: float, lines: float) -> float:
+    """Memory of the chunk of tools in flight (:func:`rcsa.libraries.chunks.chunk_size`)."""
+    from rcsa.libraries.chunks import chunk_size
+
+    return min(tools, float(chunk_size(int(lines)))) * lines * MEM_CHUNK_TOOL_LINE_BYTES
+
+
+def held_result_bytes(tools: float, lines: float) -> float:
+    """Memory of a batch result held whole (an answer given at once), bytes."""
+    return tools * lines * MEM_RESULT_TOOL_LINE_BYTES
 
 
 @cost_model("library")
@@ -376,7 +397,7 @@ def _library(request: Mapping[str, Any]) -> Cost:
         else 1.0
     elements = 80.0
     seconds = n * (K_LINE_S * elements * lines + natural_frequency_seconds(elements))
-    return Cost("library", seconds, MEM_BASE_BYTES + MEM_LINE_BYTES * lines * (1.0 + n / 8.0),
+    return Cost("library", seconds, MEM_BASE_BYTES + MEM_LINE_BYTES * lines + _chunk_bytes(n, lines),
                 {"tools": n, "lines": lines, "elements": elements}, ("fewer tools", "fewer frequency lines"))
 
 
@@ -585,10 +606,32 @@ def _diagnosis(request: Mapping[str, Any]) -> Cost:
                  "fewer measurements"))
 
 
-def check_work(kind: str, request: Mapping[str, Any], size: int, *, mode: Mode) -> Cost:
+def check_work(kind: str, request: Mapping[str, Any], size: int, *, mode: Mode,
+               limits: Limits | None = None) -> Cost:
     """:func:`check` for prepared batch, library and sync work (:class:`rcsa.app.jobs.Work`):
     its combinations form a batch (``request["batch"]``), of which ``size`` are computed (a
-    sync computes only tools not in its cache)."""
+    sync computes only tools not in its cache). A job streams its result (one chunk of tools
+    in memory); an answer given at once also holds the whole result (:func:`held_result_bytes`).
+
+    Parameters
+    ----------
+    kind : {"batch", "library", "library-sync"}
+    request : mapping
+        The prepared work's request.
+    size : int
+        Combinations computed.
+    mode : {"sync", "job"}
+    limits : Limits, optional
+        Default :data:`SYNC` or :data:`JOB`.
+
+    Returns
+    -------
+    Cost
+
+    Raises
+    ------
+    BudgetExceeded
+    """
     inner = request.get("batch")
     batch = inner if isinstance(inner, Mapping) else request  # prepared work: {"entries", "batch"}
     if not isinstance(batch, Mapping):
@@ -596,11 +639,14 @@ def check_work(kind: str, request: Mapping[str, Any], size: int, *, mode: Mode) 
     cost = estimate("batch", batch)
     combos = batch.get("combinations")
     n = len(combos) if isinstance(combos, list) else 0
+    lines = float(cost.terms.get("lines", 0.0))
     if n and size != n:  # only ``size`` of them are computed
-        scale = size / n
-        cost = Cost(kind, cost.seconds * scale, MEM_BASE_BYTES + (cost.memory_bytes - MEM_BASE_BYTES) * scale,
+        cost = Cost(kind, cost.seconds * size / n,
+                    cost.memory_bytes - _chunk_bytes(n, lines) + _chunk_bytes(size, lines),
                     {**cost.terms, "combinations": float(size)}, cost.shrink)
-    lim = SYNC if mode == "sync" else JOB
+    if mode == "sync" and kind != "library-sync":  # a sync's answer is its report, not the results
+        cost = Cost(kind, cost.seconds, cost.memory_bytes + held_result_bytes(size, lines), cost.terms, cost.shrink)
+    lim = limits if limits is not None else (SYNC if mode == "sync" else JOB)
     if cost.seconds > lim.seconds or cost.memory_bytes > lim.memory_bytes:
         raise BudgetExceeded(cost, lim, mode)
     return cost
