@@ -75,41 +75,50 @@ def _measure_sdm() -> list[dict]:
 
 
 def _fit_sdm(rows: list[dict]) -> budget.SdmCostModel:
+    """Non-negative least squares on relative errors, scaled so that no point is under-estimated."""
     import numpy as np
     from scipy.optimize import nnls
 
-    from rcsa.app.budget import SDM_COST, sdm_terms
-
+    chunk = budget.SDM_COST.chunk
     feats, mem_feats, cpu, mem = [], [], [], []
     for r in rows:
         req = _sdm_request(r["speeds"], r["steps"], r["modes"], r["immersion"])
-        steps, modes, fraction = sdm_terms(req)
-        n, d = SDM_COST.sizes(steps, modes, fraction)
-        lobes_free = budget.estimate("lobes", {**req, "method": "zoa", "steps_per_period": None,
-                                               "modes_per_direction": None}).seconds
+        steps, modes, fraction = budget.sdm_terms(req)
+        n, k_cut, d = budget.SDM_COST.sizes(steps, modes, fraction)
+        zoa = budget.estimate("lobes", {**req, "method": "zoa", "steps_per_period": None,
+                                        "modes_per_direction": None}).seconds  # the assembly's prediction
         s = r["speeds"]
-        feats.append([s, s * steps * d * n, s * d**3])
-        cpu.append(max(r["cpu_seconds"] - lobes_free, 1e-3))
-        mem_feats.append([min(s, SDM_COST.chunk) * steps * d * n, s])
+        feats.append([steps, s * steps * n, s * k_cut, s * k_cut * n, s * d**3])
+        cpu.append(max(r["cpu_seconds"] - zoa, 1e-3))
+        c = min(s, chunk)
+        mem_feats.append([c * steps * n, c * k_cut * n, c * d * d, c])
         mem.append(max(r["peak_rss_bytes"] - r["base_rss_bytes"], 1.0))
-    a, c = np.array(feats), np.array(cpu)
-    x, _ = nnls(a / c[:, None], np.ones_like(c))  # relative errors
-    am, cm = np.array(mem_feats), np.array(mem)
-    y, _ = nnls(am / cm[:, None], np.ones_like(cm))
-    return budget.SdmCostModel(per_speed_s=float(x[0]), per_step_s=float(x[1]), per_eig_s=float(x[2]),
-                               mem_per_state_bytes=float(y[0]), mem_per_speed_bytes=float(y[1]))
+    a, t = np.array(feats), np.array(cpu)
+    x, _ = nnls(a / t[:, None], np.ones_like(t))  # relative errors
+    x = x / np.min(a @ x / t)  # no calibration point above its estimate
+    am, m = np.array(mem_feats), np.array(mem)
+    y, _ = nnls(am / m[:, None], np.ones_like(m))
+    y = y / np.min(am @ y / m)
+    return budget.SdmCostModel(per_step_s=float(x[0]), per_state_s=float(x[1]), per_cut_s=float(x[2]),
+                               per_cut_state_s=float(x[3]), per_eig_s=float(x[4]), mem_state_bytes=float(y[0]),
+                               mem_cut_bytes=float(y[1]), mem_map_bytes=float(y[2]), mem_speed_bytes=float(y[3]),
+                               chunk=chunk)
 
 
-def sdm(fit: bool, out_path: Path) -> None:
-    """``--fit-sdm`` / ``--check-sdm``."""
-    load = os.getloadavg()
-    print(f"SDM cost model, load average {load[0]:.2f}, {load[1]:.2f}, {load[2]:.2f} on {os.cpu_count()} cores")
-    rows = _measure_sdm()
+def sdm(fit: bool, out_path: Path, reuse: bool = False) -> None:
+    """``--fit-sdm`` / ``--check-sdm`` (``--reuse``: the measurements of the last run)."""
+    if reuse:
+        saved = json.loads(out_path.read_text())
+        load, rows = saved["load_average"], saved["rows"]
+        print(f"SDM cost model from the measurements in {out_path.name} (load average {load[0]:.2f})")
+    else:
+        load = os.getloadavg()
+        print(f"SDM cost model, load average {load[0]:.2f}, {load[1]:.2f}, {load[2]:.2f} on {os.cpu_count()} cores")
+        rows = _measure_sdm()
     model = _fit_sdm(rows) if fit else budget.SDM_COST
     if fit:
-        print(f"SDM_COST = SdmCostModel(per_speed_s={model.per_speed_s:.3g}, per_step_s={model.per_step_s:.3g}, "
-              f"per_eig_s={model.per_eig_s:.3g},\n                        "
-              f"mem_per_state_bytes={model.mem_per_state_bytes:.3g}, mem_per_speed_bytes={model.mem_per_speed_bytes:.3g})")
+        fields = ", ".join(f"{k}={v:.2g}" for k, v in model.__dict__.items() if k != "chunk")
+        print(f"SDM_COST = SdmCostModel({fields})")
     worst_t, worst_m = 0.0, 0.0
     for r in rows:
         req = _sdm_request(r["speeds"], r["steps"], r["modes"], r["immersion"])
@@ -123,7 +132,7 @@ def sdm(fit: bool, out_path: Path) -> None:
         print(f"  {r['label']:42s} estimate/measured: CPU {rt:5.2f}  peak RSS {rm:5.2f}")
     print(f"worst factor between estimate and measurement: CPU {worst_t:.2f}, peak RSS {worst_m:.2f}")
     out_path.parent.mkdir(parents=True, exist_ok=True)
-    out_path.write_text(json.dumps({"load_average": load, "model": model.__dict__, "rows": rows,
+    out_path.write_text(json.dumps({"load_average": list(load), "model": model.__dict__, "rows": rows,
                                     "worst_factor": {"cpu": worst_t, "rss": worst_m}}, indent=1) + "\n")
 
 
@@ -133,9 +142,11 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=REPO / "benchmarks" / "results" / "budget.json")
     parser.add_argument("--fit-sdm", action="store_true", help="Fit SDM_COST (see above).")
     parser.add_argument("--check-sdm", action="store_true", help="Report SDM_COST against measurements.")
+    parser.add_argument("--reuse", action="store_true", help="With --fit-sdm/--check-sdm: refit the measurements "
+                                                             "of the last run instead of measuring again.")
     args = parser.parse_args()
     if args.fit_sdm or args.check_sdm:
-        sdm(args.fit_sdm, REPO / "benchmarks" / "results" / "budget_sdm.json")
+        sdm(args.fit_sdm, REPO / "benchmarks" / "results" / "budget_sdm.json", reuse=args.reuse)
         return
     cases = worst_cases(args.scale * budget.SYNC.seconds, args.scale * budget.SYNC.memory_bytes)
     out = subprocess.run([sys.executable, "-m", "tests.service._budget_probe"], input=json.dumps(cases),

@@ -410,47 +410,65 @@ LOBE_METHOD_S: dict[str, float] = {"zoa": 1.0e-9, "semi_discretization": 1.0e-9}
 class SdmCostModel:
     """What semi-discretization lobes cost, from the request's speeds, steps and modes.
 
-    Per speed, the depth search evaluates the period map ~20 times; each evaluation
-    multiplies ``k`` step maps of the state ``n = 4 m`` (``m`` modes per direction, x and y,
-    position and velocity) and takes the eigenvalues of the map of dimension
-    ``D = n + 2 k_cut`` (``k_cut``: the steps in cut, whose delayed samples the map keeps).
-    Hence, for ``S`` speeds (and ``draws`` drawn assemblies, each a lobes run):
+    The depth search evaluates the period map ~20 times per speed, all open speeds of a
+    chunk at once; each evaluation loops over the ``k`` steps of a tooth period (a Python
+    loop whose numpy calls cost about the same whatever the chunk), updates the modal state
+    ``n = 4 m`` (``m`` modes per direction, x and y, position and velocity) on every step,
+    couples the ``k_cut`` steps in cut to their delayed samples, and takes the eigenvalues of
+    the period map of dimension ``D = n + 2 k_cut``. Hence, for ``S`` speeds (and ``draws``
+    drawn assemblies, each a lobes run)::
 
-        seconds = S · (1 + draws) · (per_speed_s + per_step_s · k·D·n + per_eig_s · D³)
-        memory  = min(S, chunk) · (1 + draws_in_memory) · mem_per_state_bytes · k·D·n + S · mem_per_speed_bytes
+        seconds = (1 + draws) · (per_step_s · k
+                                 + S · (per_state_s · k·n + k_cut · (per_cut_s + per_cut_state_s · n)
+                                        + per_eig_s · D³))
+        memory  = min(S, chunk) · (mem_state_bytes · k·n + mem_cut_bytes · k_cut·n + mem_map_bytes · D²
+                                   + mem_speed_bytes)
 
     The constants are fitted by ``.venv/bin/python benchmarks/bench_budget.py --fit-sdm``
-    (least squares with non-negative constants on measured CPU seconds and peak RSS over a
-    grid of speeds, ``steps_per_period`` and ``modes_per_direction``), which prints the
-    line to paste here; refit after any change of the SDM solver.
+    (non-negative least squares on the relative error of measured CPU seconds and peak RSS
+    over a grid of speeds, ``steps_per_period``, ``modes_per_direction`` and immersions, then
+    scaled up so that no measured point exceeds its estimate), which prints the line to
+    paste here; refit after any change of the SDM solver (``--check-sdm`` compares the
+    constants in force with new measurements).
     """
 
-    per_speed_s: float
     per_step_s: float
+    per_state_s: float
+    per_cut_s: float
+    per_cut_state_s: float
     per_eig_s: float
-    mem_per_state_bytes: float
-    mem_per_speed_bytes: float
+    mem_state_bytes: float
+    mem_cut_bytes: float
+    mem_map_bytes: float
+    mem_speed_bytes: float
     chunk: int = 256
 
-    def sizes(self, steps: float, modes: float, cut_fraction: float) -> tuple[float, float]:
-        """``(n, D)``: the modal state and the period map's dimension."""
+    def sizes(self, steps: float, modes: float, cut_fraction: float) -> tuple[float, float, float]:
+        """``(n, k_cut, D)``: the modal state, the steps in cut and the period map's dimension."""
         n = 4.0 * modes
-        return n, n + 2.0 * math.ceil(steps * min(1.0, max(cut_fraction, 1.0 / steps)))
+        k_cut = float(math.ceil(steps * min(1.0, max(cut_fraction, 1.0 / steps))))
+        return n, k_cut, n + 2.0 * k_cut
 
     def seconds(self, speeds: float, steps: float, modes: float, cut_fraction: float, draws: float = 0.0) -> float:
         """Estimated CPU seconds on the reference machine."""
-        n, d = self.sizes(steps, modes, cut_fraction)
-        return speeds * (1.0 + draws) * (self.per_speed_s + self.per_step_s * steps * d * n + self.per_eig_s * d**3)
+        n, k_cut, d = self.sizes(steps, modes, cut_fraction)
+        per_speed = (self.per_state_s * steps * n + k_cut * (self.per_cut_s + self.per_cut_state_s * n)
+                     + self.per_eig_s * d**3)
+        return (1.0 + draws) * (self.per_step_s * steps + speeds * per_speed)
 
     def memory_bytes(self, speeds: float, steps: float, modes: float, cut_fraction: float) -> float:
         """Estimated peak memory of the search, bytes (beyond the process's base)."""
-        n, d = self.sizes(steps, modes, cut_fraction)
-        return min(speeds, self.chunk) * self.mem_per_state_bytes * steps * d * n + speeds * self.mem_per_speed_bytes
+        n, k_cut, d = self.sizes(steps, modes, cut_fraction)
+        return min(speeds, self.chunk) * (self.mem_state_bytes * steps * n + self.mem_cut_bytes * k_cut * n
+                                          + self.mem_map_bytes * d * d + self.mem_speed_bytes)
 
 
-#: The semi-discretization's constants (``benchmarks/bench_budget.py --fit-sdm`` fits them).
-SDM_COST = SdmCostModel(per_speed_s=2.0e-3, per_step_s=3.0e-8, per_eig_s=6.0e-9,
-                        mem_per_state_bytes=100.0, mem_per_speed_bytes=4096.0)
+#: The semi-discretization's constants, fitted by ``benchmarks/bench_budget.py --fit-sdm`` on 15
+#: grid points (20–400 speeds, k = 10–200, 1–8 modes per direction, a/D = 0.05–1; load 9.6 on
+#: the 2-core VM): estimates 1.0–2.1× the measured CPU seconds, 1.0–1.7× the peak memory.
+SDM_COST = SdmCostModel(per_step_s=0.0001, per_state_s=1.2e-06, per_cut_s=5.6e-05, per_cut_state_s=1.4e-05,
+                        per_eig_s=2.9e-10, mem_state_bytes=820.0, mem_cut_bytes=1300.0, mem_map_bytes=0.0,
+                        mem_speed_bytes=0.0)
 
 
 def sdm_terms(request: Mapping[str, Any]) -> tuple[float, float, float]:
@@ -496,7 +514,7 @@ def _lobes(request: Mapping[str, Any]) -> Cost:
         seconds += SDM_COST.seconds(count, steps, modes, fraction, _draws(request))
         memory += SDM_COST.memory_bytes(count, steps, modes, fraction)
         terms = {**terms, "steps_per_period": steps, "modes_per_direction": modes,
-                 "period_map_dimension": SDM_COST.sizes(steps, modes, fraction)[1]}
+                 "period_map_dimension": SDM_COST.sizes(steps, modes, fraction)[2]}
         shrink = ("fewer speeds (spindle_speed_rpm.count)", "fewer steps_per_period",
                   "fewer modes_per_direction", "fewer frequency lines")
     return Cost("lobes", seconds, memory, {**terms, "speeds": count}, shrink)
