@@ -34,20 +34,21 @@ _PROBE = r"""
 import json, os, resource, sys, tempfile
 from rcsa.app import budget
 from rcsa.app.jobs import run_work, stream_work, Workbench
+from rcsa.app.libraries import prepare_batch
 from rcsa.reference import ra1
 
 n, lines, mode = json.loads(sys.argv[1])
 def batch(n, lines):
     asm = ra1({"start_hz": 5.0, "stop_hz": 20000.0, "step_hz": (20000.0 - 5.0) / (lines - 1)})
-    return {"spindle": asm["spindle"], "frequency": asm["frequency"], "joints": asm["joints"],
-            "combinations": [{"id": f"T{i}", "holder": asm["holder"],
+    return {"spindle": asm["spindle"], "frequency": asm["frequency"],
+            "combinations": [{"id": f"T{i}", "holder": asm["holder"], "joints": asm["joints"],
                               "tool": {**asm["tool"], "stickout_m": 0.05 + 0.03 * i / max(n, 1)}}
                              for i in range(n)]}
 bench = Workbench(store=None)
 import orjson
-run_work(bench, "batch", batch(3, 200))  # warm-up: imports and caches
+run_work(bench, "batch", prepare_batch(bench, batch(3, 200)).request)  # warm-up: imports and caches
 base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
-req = batch(n, lines)
+req = prepare_batch(bench, batch(n, lines)).request
 cost = budget.check_work("batch", req, n, mode=mode, limits=budget.Limits(1e12, 1e15))
 if mode == "sync":
     out = run_work(bench, "batch", req)
