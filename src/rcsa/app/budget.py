@@ -35,6 +35,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from rcsa.analysis.progress import time_limit
 from rcsa.errors import InputError
 from rcsa.model.assembly import build_model
 from rcsa.model.contract import AssemblySpec, SpindleSpec, parse_assembly, parse_frequency
@@ -62,6 +63,7 @@ __all__ = [
     "held_result_bytes",
     "natural_frequency_seconds",
     "sdm_terms",
+    "time_limited",
 ]
 
 MiB = 1024 * 1024
@@ -240,6 +242,18 @@ def check(operation: str, request: Mapping[str, Any], *, mode: Mode = "sync",
     if cost.seconds > lim.seconds or cost.memory_bytes > lim.memory_bytes:
         raise BudgetExceeded(cost, lim, mode)
     return cost
+
+
+def time_limited(seconds: float | None) -> Any:
+    """A context manager: what runs inside stops at its next step boundary once ``seconds``
+    have passed, raising :class:`~rcsa.errors.TimeLimitExceeded` (None: no limit). The
+    service runs every answer given at once inside it (``RCSA_SYNC_TIME_LIMIT_S``).
+
+    Returns
+    -------
+    contextlib.AbstractContextManager
+    """
+    return time_limit(seconds)
 
 
 def body_limit(operation: str) -> int:
