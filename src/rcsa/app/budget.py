@@ -115,13 +115,19 @@ K_NF_MODE_S = 4.2e-6
 MEM_LINE_BYTES = 3072.0
 #: Memory of the process that is not the request's (libraries, caches), bytes.
 MEM_BASE_BYTES = 64.0 * MiB
-#: Batches (``benchmarks/bench_memory.py`` measures them): a chunk of tools is computed at a
-#: time (:func:`rcsa.libraries.chunks.chunk_size`), bytes per tool and line of a chunk in
-#: flight (its receptances, the stacked march's workspaces, the results being written);
-#: and, for an answer given at once, bytes per tool and line of the whole result held (four
-#: complex receptances as arrays, then as JSON text while it is serialised).
-MEM_CHUNK_TOOL_LINE_BYTES = 400.0
-MEM_RESULT_TOOL_LINE_BYTES = 400.0
+#: Batches, fitted to the peaks ``benchmarks/bench_memory.py`` measures (10–2 000 tools,
+#: 1 000–20 000 lines, as jobs and answered at once) and raised ~10 % so that none is above
+#: its estimate: a chunk of tools is computed at a time (:func:`rcsa.libraries.chunks.chunk_size`),
+#: bytes per line (the spindle side's condensation, the grid), per tool and line of the
+#: chunk in flight (its receptances, the stacked march's workspaces, the results being
+#: written), per tool of the batch (its parsed combination and result summary), and, for an
+#: answer given at once, per tool and line of the whole result held (four complex
+#: receptances as arrays, then as JSON text while it is serialised).
+MEM_BATCH_FIXED_BYTES = 4.0 * MiB
+MEM_BATCH_LINE_BYTES = 2100.0
+MEM_CHUNK_TOOL_LINE_BYTES = 225.0
+MEM_TOOL_BYTES = 17_600.0
+MEM_RESULT_TOOL_LINE_BYTES = 240.0
 
 
 @dataclass(frozen=True)
@@ -379,20 +385,28 @@ def _batch(request: Mapping[str, Any]) -> Cost:
         lines = float(parse_frequency(request.get("frequency")).size)
         elements = 30.0 + _holder_segments(combo)
         seconds = n * (K_LINE_S * elements * lines + natural_frequency_seconds(elements))
-        return Cost("batch", seconds, MEM_BASE_BYTES + MEM_LINE_BYTES * lines + _chunk_bytes(n, lines),
+        return Cost("batch", seconds, MEM_BASE_BYTES + _chunk_bytes(n, lines),
                     {"combinations": n, "lines": lines, "elements": elements}, shrink)
     seconds, memory, terms = _with_draws(*_assembly_cost(spec, natural_frequencies=request.get(
         "natural_frequencies", True) is not False), _draws(request))
     if _draws(request):
         shrink = (*_DRAWS_SHRINK, *shrink)
-    return Cost("batch", seconds * n, memory + _chunk_bytes(n, terms["lines"]), {"combinations": n, **terms}, shrink)
+    from rcsa.libraries.chunks import chunk_size
+
+    draws_bytes = memory - MEM_BASE_BYTES - MEM_LINE_BYTES * terms["lines"]  # each tool's drawn FRFs, if any
+    in_flight = min(n, float(chunk_size(int(terms["lines"]))))
+    return Cost("batch", seconds * n, MEM_BASE_BYTES + _chunk_bytes(n, terms["lines"]) + draws_bytes * in_flight,
+                {"combinations": n, **terms}, shrink)
 
 
 def _chunk_bytes(tools: float, lines: float) -> float:
-    """Memory of the chunk of tools in flight (:func:`rcsa.libraries.chunks.chunk_size`)."""
+    """Memory of a batch computed chunk by chunk (:func:`rcsa.libraries.chunks.chunk_size`),
+    its result streamed: the grid, the chunk of tools in flight and every tool's summary."""
     from rcsa.libraries.chunks import chunk_size
 
-    return min(tools, float(chunk_size(int(lines)))) * lines * MEM_CHUNK_TOOL_LINE_BYTES
+    in_flight = min(tools, float(chunk_size(int(lines))))
+    return (MEM_BATCH_FIXED_BYTES + lines * MEM_BATCH_LINE_BYTES + in_flight * lines * MEM_CHUNK_TOOL_LINE_BYTES
+            + tools * MEM_TOOL_BYTES)
 
 
 def held_result_bytes(tools: float, lines: float) -> float:
@@ -411,7 +425,7 @@ def _library(request: Mapping[str, Any]) -> Cost:
         else 1.0
     elements = 80.0
     seconds = n * (K_LINE_S * elements * lines + natural_frequency_seconds(elements))
-    return Cost("library", seconds, MEM_BASE_BYTES + MEM_LINE_BYTES * lines + _chunk_bytes(n, lines),
+    return Cost("library", seconds, MEM_BASE_BYTES + _chunk_bytes(n, lines),
                 {"tools": n, "lines": lines, "elements": elements}, ("fewer tools", "fewer frequency lines"))
 
 
