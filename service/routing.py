@@ -41,8 +41,8 @@ from starlette.responses import Response
 
 from rcsa.app.budget import time_limited
 from rcsa.app.inputs import decode_json
-from rcsa.app.keys import Principal
 from rcsa.errors import TimeLimitExceeded
+from rcsa.infra.api_keys import Principal
 
 from .errors import BodyTooLarge
 from .middleware import BODY_LIMIT_KEY

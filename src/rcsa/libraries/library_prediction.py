@@ -22,7 +22,7 @@ import orjson
 
 from rcsa.analysis.progress import check_time
 from rcsa.errors import InputError
-from rcsa.infra.compute import Backend, LocalBackend
+from rcsa.infra.compute_backends import Backend, LocalBackend
 from rcsa.libraries.chunks import (
     Shared,
     chunk_ranges,
