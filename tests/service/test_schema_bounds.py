@@ -268,8 +268,8 @@ def _openapi_bound(openapi: dict[str, Any], model: str, field: str, keyword: str
 def test_the_effects_step_and_the_sensor_mass_are_bounded_alike_in_schema_and_library(openapi, monkeypatch):
     from service.schemas import DiagnosisRequest, EffectAnalysisRequest
 
-    from rcsa.analysis.effects import sensitivities as sensitivity
     from rcsa.analysis.diagnosis.request import parse_request
+    from rcsa.analysis.effects import sensitivities as sensitivity
     from rcsa.measured.importers.sensor import remove_sensor_mass
     from rcsa.model.bounds import MAX_RELATIVE_STEP, MAX_SENSOR_MASS_KG, MIN_RELATIVE_STEP
 

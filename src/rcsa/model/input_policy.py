@@ -127,6 +127,18 @@ def check_json(value: Any, *, path: str = "") -> Any:
 def check_number(x: float | int, field: str) -> float | int:
     """One number under the policy: finite and of magnitude at most ``MAX_JSON_NUMBER``.
 
+    Parameters
+    ----------
+    x : float or int
+        The number.
+    field : str
+        Its field, for the message.
+
+    Returns
+    -------
+    float or int
+        ``x`` itself.
+
     Raises
     ------
     InputError
@@ -187,6 +199,17 @@ def check_numbers(values: npt.ArrayLike, field: str, *, lines: Sequence[int] | N
 
 def check_count(count: int, field: str, limit: int, what: str = "rows") -> None:
     """Refuse more than ``limit`` items (rows, lines, samples, entries) of ``field``.
+
+    Parameters
+    ----------
+    count : int
+        How many there are.
+    field : str
+        Their field, for the message.
+    limit : int
+        The most allowed.
+    what : str
+        What they are, for the message.
 
     Raises
     ------

@@ -189,6 +189,8 @@ def read_table(text: str, *, delimiter: str | None = None, max_rows: int = MAX_F
         The whole file, decoded.
     delimiter : str, optional
         Forced delimiter (``","``, ``";"``, ``"\\t"``); default: detected.
+    max_rows : int
+        Most data rows (the input policy's row count): a longer file is refused.
 
     Raises
     ------
