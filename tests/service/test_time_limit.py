@@ -58,3 +58,45 @@ def test_an_answer_without_step_boundaries_is_cut_off_at_the_limit(monkeypatch):
 
     with pytest.raises(TimeLimitExceeded):
         asyncio.run(main())
+
+
+@pytest.mark.slow
+def test_a_real_server_answers_503_at_the_limit_and_stops_on_sigterm_without_waiting(tmp_path):
+    """uvicorn with a 1 s limit: a semi-discretization of ~5 s of work answers 503 and its
+    computation stops (the server logs it); SIGTERM then shuts the server down gracefully
+    (``wait``'s timeout only guards against a hang; nothing here is timed)."""
+    import os
+    import signal
+    import socket
+    import subprocess
+    import sys
+
+    import httpx
+
+    from tests.helpers import REPO
+    from tests.service.conftest import wait_until_ready
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    env = {**os.environ, "RCSA_STORE": str(tmp_path / "store"), "RCSA_SEED_DEMO": "false",
+           "RCSA_SYNC_TIME_LIMIT_S": "1", "RCSA_JOB_WORKERS": "0"}
+    log = tmp_path / "uvicorn.log"
+    with log.open("w") as out:
+        proc = subprocess.Popen([sys.executable, "-m", "uvicorn", "service.main:create_app", "--factory",
+                                 "--host", "127.0.0.1", "--port", str(port)], cwd=REPO, env=env, stdout=out,
+                                stderr=subprocess.STDOUT)
+    base = f"http://127.0.0.1:{port}"
+    try:
+        wait_until_ready(base, proc, log)
+        heavy = {**_sdm_lobes(), "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 800}}
+        r = httpx.post(base + "/v1/stability-lobes", json=heavy, timeout=120)
+        assert r.status_code == 503 and r.json()["type"].endswith("compute-time-limit"), r.text[:300]
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(timeout=120) in (0, -signal.SIGTERM)  # uvicorn re-raises the signal once shut down
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    text = log.read_text()
+    assert "time limit: POST /v1/stability-lobes stopped after 1 s" in text and "Traceback" not in text
+    assert "Application shutdown complete" in text  # a graceful shutdown, not a kill
