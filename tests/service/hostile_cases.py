@@ -20,6 +20,7 @@ process) and the full run against a real 2-worker uvicorn (``benchmarks/bench_ho
 from __future__ import annotations
 
 import copy
+import functools
 import io
 import json
 import random
@@ -253,8 +254,10 @@ def _tap(stickout: float, lines: int = 200) -> dict[str, Any]:
             "h": {"real": h.real.tolist(), "imag": h.imag.tolist()}}
 
 
+@functools.cache
 def _seeds() -> dict[str, tuple[str, Any]]:
-    """operation → (path, JSON document) of a valid, cheap request."""
+    """operation → (path, JSON document) of a valid, cheap request (never mutated: every
+    mutation works on a copy)."""
     grid = {"start_hz": 5.0, "stop_hz": 2000.0, "step_hz": 10.0}
     asm = ra1(grid)
     taps = [_tap(0.074), _tap(0.06)]

@@ -38,7 +38,7 @@ def test_the_generator_covers_every_operation_and_each_expectation():
     slice_ = cases(7, 2, write_headers=WRITE)
     assert {c.operation for c in slice_} == set(operations())
     assert len(operations()) >= 29
-    assert {c.expect for c in cases(7, 20)} == {"4xx", "item", "any"}
+    assert {c.expect for c in cases(7, 8)} == {"4xx", "item", "any"}
     assert [c.label for c in cases(7, 2)] == [c.label for c in slice_]  # seeded: the same cases
 
 
