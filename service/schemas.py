@@ -598,7 +598,8 @@ class MeasurementUpload(_Request):
     kind: Literal["point_receptance", "artifact_frfs", "direct_frf"]
     machine: str | None = Field(None, max_length=128, description="Machine tool name.")
     notes: str | None = Field(None, max_length=10_000)
-    frequency_hz: list[FrequencyValue] = Field(min_length=1, description="Frequency lines, Hz, strictly increasing, > 0.")
+    frequency_hz: list[FrequencyValue] = Field(min_length=1, max_length=MAX_FREQUENCY_LINES,
+                                               description="Frequency lines, Hz, strictly increasing, > 0.")
     h: ComplexArrayIn | None = Field(None, description="Receptance h, m/N (point_receptance, direct_frf).")
     l: ComplexArrayIn | None = Field(None, description="Receptance l, m/(N·m) (point_receptance).")  # noqa: E741
     n: ComplexArrayIn | None = Field(None, description="Receptance n, rad/N (point_receptance).")
@@ -703,7 +704,8 @@ class Deleted(_Response):
 class FrfIn(_Request):
     """An inline tool-point FRF."""
 
-    frequency_hz: list[FrequencyValue] = Field(min_length=1, description="Frequency lines, Hz.")
+    frequency_hz: list[FrequencyValue] = Field(min_length=1, max_length=MAX_FREQUENCY_LINES,
+                                               description="Frequency lines, Hz.")
     h: ComplexArrayIn = Field(description="Tool-point receptance, m/N.")
 
 

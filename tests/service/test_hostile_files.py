@@ -107,3 +107,17 @@ def test_a_22_m_holder_segment_a_tiny_step_and_a_broken_title_are_422(hostile_cl
     assert_problem(r, 422)
     r = hostile_client.post("/v1/plots/frf", json={"assembly": asm, "title": "$\\frac{$"})
     assert "matplotlib" in assert_problem(r, 422, "title")["detail"]
+
+
+def test_measured_frfs_in_json_are_bounded_in_rows_like_files(hostile_client):
+    from rcsa.model.bounds import MAX_FREQUENCY_LINES
+
+    n = MAX_FREQUENCY_LINES + 1
+    doc = {"spindle_id": "s", "direction": "x", "plane": "spindle_nose", "kind": "direct_frf",
+           "frequency_hz": [1.0 + i for i in range(n)], "h": {"real": [1e-7] * n, "imag": [-1e-8] * n}}
+    r = hostile_client.post("/v1/measurements:read", files={"file": ("tip.json", json.dumps(doc).encode())})
+    assert f"at most {MAX_FREQUENCY_LINES} frequency lines" in assert_problem(r, 422, "frequency_hz")["detail"]
+    lobes = {"frf_x": {"frequency_hz": doc["frequency_hz"], "h": doc["h"]}, "teeth": 4,
+             "tangential_coefficient_n_m2": 6e8, "radial_ratio": 0.3, "radial_immersion": 0.5, "milling": "down",
+             "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 3}}
+    assert_problem(hostile_client.post("/v1/stability-lobes", json=lobes), 422)

@@ -25,7 +25,8 @@ from rcsa.errors import InputError
 from rcsa.measured.importers._common import finish, read_source
 from rcsa.measured.store.measurement import Measurement, MeasurementMeta, Provenance
 from rcsa.measured.store.schema import ARTIFACT_FRF_NAME, CONVENTION, frf_unit
-from rcsa.model.input_policy import load_json
+from rcsa.model.bounds import MAX_FREQUENCY_LINES
+from rcsa.model.input_policy import check_count, load_json
 from rcsa.model.wire import complex_from_wire, complex_to_wire, number_list
 
 __all__ = ["measurement_from_contract", "measurement_to_contract", "read_contract_json"]
@@ -102,6 +103,8 @@ def measurement_from_contract(
     for key in ("spindle_id", "direction", "plane", "kind", "frequency_hz"):
         if key not in doc:
             raise InputError(key, "is required")
+    if isinstance(doc["frequency_hz"], list):  # the input policy's row count
+        check_count(len(doc["frequency_hz"]), "frequency_hz", MAX_FREQUENCY_LINES, "frequency lines")
     frf_keys = _frf_keys(doc["kind"], doc)
     unknown = sorted(
         set(doc) - set(_META_KEYS) - _OUTPUT_ONLY - set(frf_keys) - {"frequency_hz", "coherence"}
