@@ -33,7 +33,7 @@ class Settings(BaseSettings):
     max_batch_combinations: int = Field(10_000, ge=1, description="Most combinations per batch request.")
     async_batch_threshold: int = Field(50, ge=0, description="Batches and libraries with more "
                                        "combinations than this run as jobs (202 Accepted).")
-    sync_time_limit_s: float = Field(60.0, ge=0, description="An answer given at once (a POST that computes "
+    sync_time_limit_s: float = Field(120.0, ge=0, description="An answer given at once (a POST that computes "
                                      "without storing anything) stops at this many seconds with a 503 problem; send "
                                      "Prefer: respond-async for longer work (0: no limit).")
     job_workers: int = Field(1, ge=0, le=8, description="Job runner threads per process (0: this "
