@@ -60,9 +60,9 @@ def checked_text(text: str, field: str) -> str:
 
     Examples
     --------
-    >>> checked_text("RA-1, $\\omega_1$", "title")
-    'RA-1, $\\omega_1$'
-    >>> checked_text("$\\frac{$", "title")
+    >>> checked_text("RA-1, $x_1$", "title")
+    'RA-1, $x_1$'
+    >>> checked_text("$x^{$", "title")
     Traceback (most recent call last):
     ...
     rcsa.errors.InputError: title: is not a text matplotlib can draw: ...
