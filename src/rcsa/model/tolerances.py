@@ -44,7 +44,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Literal, TypeVar
+from typing import TYPE_CHECKING, Literal, TypeVar, overload
 
 import numpy as np
 
@@ -220,6 +220,15 @@ def apply_nuisance(base: _K, fields: Mapping[str, float]) -> _K:
     """
     return replace(base, **{k: (getattr(base, k) + v if k == "stickout_offset_m" else getattr(base, k) * v)
                             for k, v in fields.items()})
+
+
+@overload
+def scaled_joint(joint: JointSpec | None, kt: float, kr: float, c: float) -> JointSpec | None: ...
+
+
+@overload
+def scaled_joint(joint: JointSpec | ClampingSpec | None, kt: float, kr: float, c: float
+                 ) -> JointSpec | ClampingSpec | None: ...
 
 
 def scaled_joint(joint: JointSpec | ClampingSpec | None, kt: float, kr: float, c: float

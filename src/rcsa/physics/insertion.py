@@ -158,7 +158,7 @@ class InsertionPiece:
     def undamped(self) -> InsertionPiece:
         """The piece with real moduli and a real interface."""
         return InsertionPiece(self.holder.undamped(), self.core.undamped(), self.length_m,
-                              np.real(self.interface_n_m2), np.real(self.interface_rotational_n))
+                              _real_part(self.interface_n_m2), _real_part(self.interface_rotational_n))
 
     def decay_per_m(self, omega_max_rad_s: float) -> float:
         """An upper estimate of the fastest spatial decay rate of the piece's waves up to ω_max, 1/m.
@@ -183,6 +183,14 @@ class InsertionPiece:
             if np.all(f > 0):
                 rates.append((1.0 / (f * ei)) ** 0.5)
         return float(max(np.max(r) for r in rates))
+
+
+def _real_part(value: ComplexParam) -> ComplexParam:
+    """The real part of a (stacked) complex parameter, kept complex."""
+    if isinstance(value, np.ndarray):
+        out: ComplexArray = value.real.astype(complex)
+        return out
+    return complex(complex(value).real)
 
 
 def _broadcast(value: Any, n: int) -> np.ndarray:
@@ -296,7 +304,9 @@ def piece_stiffness(omega_rad_s: FloatArray, piece: InsertionPiece) -> ComplexAr
     d[:, :4, 4:] = -g
     d[:, 4:, 4:] = tff @ g
     d[:, 4:, :4] = tfu - d[:, 4:, 4:] @ tuu
-    return 0.5 * (d + np.swapaxes(d, -1, -2))  # symmetric in exact arithmetic (reciprocity)
+    d += np.swapaxes(d, -1, -2).copy()  # symmetric in exact arithmetic (reciprocity)
+    d *= 0.5
+    return d
 
 
 def _report(pivots: Pivots | None, p: np.ndarray) -> None:
@@ -314,7 +324,8 @@ def _schur(m: np.ndarray, keep: np.ndarray, drop: np.ndarray, pivots: Pivots | N
     p = m[:, drop][:, :, drop]
     _report(pivots, p)
     mk = m[:, keep]
-    return mk[:, :, keep] - mk[:, :, drop] @ np.linalg.solve(p, m[:, drop][:, :, keep])
+    out: np.ndarray = mk[:, :, keep] - mk[:, :, drop] @ np.linalg.solve(p, m[:, drop][:, :, keep])
+    return out
 
 
 _ENDS = np.arange(4), np.arange(4, 8)
@@ -384,7 +395,7 @@ def _chebyshev(values: ComplexArray) -> ComplexArray:
     m = values.shape[0]
     j = np.arange(m)
     basis = np.cos(np.pi * np.outer(np.arange(m), j + 0.5) / m)  # (k, j)
-    coef = 2.0 / m * np.tensordot(basis, values, axes=(1, 0))
+    coef: ComplexArray = 2.0 / m * np.tensordot(basis, values, axes=(1, 0))
     coef[0] /= 2.0
     return coef
 
@@ -408,7 +419,7 @@ def _interpolant(exact: Callable[[FloatArray], ComplexArray], omega_fit_rad_s: f
 
 def _fit_band_rad_s(omega_max_rad_s: float) -> float:
     """The interpolation band's top: the grid's highest frequency rounded up to 2^(k/2) rad/s."""
-    return 2.0 ** (math.ceil(2.0 * math.log2(max(omega_max_rad_s, 1.0))) / 2.0)
+    return float(2.0 ** (math.ceil(2.0 * math.log2(max(omega_max_rad_s, 1.0))) / 2.0))
 
 
 def _units(piece: InsertionPiece, omega_fit_rad_s: float) -> tuple[InsertionPiece, int]:
