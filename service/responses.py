@@ -67,10 +67,14 @@ def result_form(accept: str | None, what: str = "batch and library results") -> 
     """The result form (JSON, HDF5, Parquet) an Accept header asks for; 406 when the server lacks its extra."""
     fmt = RESULT_FORMS[negotiate(accept, RESULT_MEDIA, what)]
     missing = missing_extra(fmt)
-    if missing is not None:
+    if missing is None:
+        return fmt
+    available = tuple(m for m in RESULT_MEDIA if missing_extra(RESULT_FORMS[m]) is None)
+    try:  # the next best form the client accepts
+        return RESULT_FORMS[negotiate(accept, available, what)]
+    except ProblemError:
         raise ProblemError(406, f"{MEDIA_TYPES[fmt]} is not available on this server: {missing}; ask for "
-                                f"{MEDIA_TYPES['json']} or {MEDIA_TYPES['hdf5']}")
-    return fmt
+                                f"{' or '.join(available)}") from None
 
 
 def result_response(document: Any, fmt: Format, kind: str, headers: Mapping[str, str] | None = None) -> Response:
