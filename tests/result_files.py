@@ -47,17 +47,24 @@ def _fill(result: dict[str, Any], frequency_hz: np.ndarray, get: Any) -> None:
 
 
 def read_hdf5(data: bytes) -> dict[str, Any]:
-    """An HDF5 result file as the JSON document it was written from."""
+    """An HDF5 result file as the JSON document it was written from (``n_is_l``: ``l``'s row)."""
     import h5py
 
     with h5py.File(io.BytesIO(data), "r") as f:
         fields = json.loads(f["results_json"][()])
-        index = json.loads(f.attrs["tools_json"])
         frequency_hz = f["frequency_hz"][()]
-        for result, entry in zip(fields, index, strict=True):
-            if entry["group"] is not None:
-                group = f[entry["group"]]
-                _fill(result, frequency_hz, lambda name, g=group: g[name][()])
+        tool_point = f.get("tool_point")
+        band = f.get("uncertainty")
+        for row, position in enumerate(f["result"][()]):
+
+            def get(name: str, row: int = row) -> np.ndarray:
+                if name.startswith("h_magnitude_"):
+                    return band[name][row]
+                if name == "n" and tool_point["n_is_l"][row]:
+                    name = "l"
+                return tool_point[name][row]
+
+            _fill(fields[int(position)], frequency_hz, get)
         return {**json.loads(f.attrs["head_json"]), "results": fields, "summary": json.loads(f.attrs["summary_json"])}
 
 

@@ -10,7 +10,6 @@ from __future__ import annotations
 import io
 
 import h5py
-import numpy as np
 import orjson
 import pyarrow.parquet as pq
 import pytest
@@ -57,16 +56,18 @@ def _with_n_apart(document):
     return as_numpy(out)
 
 
-def test_hdf5_stores_n_once_where_it_is_l_bit_for_bit():
+def test_hdf5_stores_n_only_where_it_is_not_l_bit_for_bit():
     document = as_numpy(orjson.loads(golden("batch-rest")))
     with h5py.File(io.BytesIO(encode_result(document, "hdf5", "batch")), "r") as f:
-        groups = [f[e] for e in ("tools/T1-ra1-74mm", "tools/T1-ra1-50mm", "tools/T7-d10")]
-        assert all(g["n"].id == g["l"].id for g in groups)  # one dataset, two names
-        assert f.attrs["schema"] == "rcsa.batch-results" and f["tools/T1-ra1-74mm"]["h"].attrs["units"] == "m/N"
+        assert f.attrs["schema"] == "rcsa.batch-results" and f.attrs["schema_version"] == 2
+        assert list(f["result"][()]) == [0, 2, 3] and list(f["id"].asstr()[()]) == ["T1-ra1-74mm", "T1-ra1-50mm",
+                                                                                    "T7-d10"]
+        assert f["tool_point/n_is_l"][()].all() and f["tool_point/h"].attrs["units"] == "m/N"
+        assert f["tool_point/n"].id.get_storage_size() == 0  # no row of n written
     apart = _with_n_apart(document)
     data = encode_result(apart, "hdf5", "batch")
     with h5py.File(io.BytesIO(data), "r") as f:
-        assert f["tools/T1-ra1-74mm"]["n"].id != f["tools/T1-ra1-74mm"]["l"].id
+        assert list(f["tool_point/n_is_l"][()]) == [False, True, True]
     assert json_bytes(read_hdf5(data)) == json_bytes(apart)
 
 
@@ -96,11 +97,11 @@ def test_a_result_without_ok_entries_is_still_a_file():
         assert json_bytes(reader(encode_result(document, fmt, "batch"))) == json_bytes(document)
 
 
-def test_the_library_export_keeps_its_schema():
+def test_the_library_export_names_its_library():
     data = exports.library_hdf5(as_numpy(orjson.loads(golden("library-export"))))
     with h5py.File(io.BytesIO(data), "r") as f:
         assert f.attrs["schema"] == exports.HDF5_SCHEMA and f.attrs["library_id"] == "golden"
         assert f.attrs["revision"] == 1 and f["frequency_hz"].attrs["units"] == "Hz"
-        group = f["tools"]["00000000-0000-4000-8000-000000000101"]
-        assert group.attrs["signal"] == "h" and group["frequency_hz"].id == f["frequency_hz"].id
-        np.testing.assert_array_equal(group["frequency_hz"][()], f["frequency_hz"][()])
+        assert list(f["id"].asstr()[()]) == ["00000000-0000-4000-8000-000000000101",
+                                             "00000000-0000-4000-8000-000000000102"]
+        assert f["tool_point/h"].shape == (2, f["frequency_hz"].size)

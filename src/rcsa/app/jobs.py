@@ -79,6 +79,7 @@ __all__ = [
     "job_store",
     "run_work",
     "stream_work",
+    "write_entries",
 ]
 
 #: What may run as a job: batches, libraries and syncs (:data:`JOB_KINDS`), and single
@@ -280,14 +281,31 @@ def stream_work(bench: Workbench, kind: str, request: Mapping[str, Any], *,
         with bench.observer.timed(kind):
             started = iter_entries(request, store=bench.store, max_lines=bench.max_lines,
                                    max_combinations=bench.max_combinations, progress=progress, backend=backend)
-            summary = _write_entries(fh, started) if fmt == "json" else _write_binary(fh, started, fmt, kind)
+            summary = write_entries(fh, started, fmt, kind)
         bench.observer.computed(kind, int(summary.get("ok", 0)))
         return summary
 
     return StreamedResult(write)
 
 
-def _write_entries(fh: BinaryIO, started: EntryResults) -> dict[str, Any]:
+def write_entries(fh: BinaryIO, started: EntryResults, fmt: str = "json", kind: str = "batch") -> dict[str, Any]:
+    """Write a started batch or library result to ``fh`` result by result, in a form; its summary.
+
+    Parameters
+    ----------
+    fh : binary file
+        Readable and seekable for HDF5.
+    started : EntryResults
+        :func:`rcsa.libraries.library_prediction.iter_entries` of the request.
+    fmt : {"json", "hdf5", "parquet"}
+        JSON: the bytes :func:`json_bytes` gives the whole document.
+    kind : {"batch", "library"}
+        What the document is (a binary file's schema).
+    """
+    return _write_json(fh, started) if fmt == "json" else _write_binary(fh, started, fmt, kind)
+
+
+def _write_json(fh: BinaryIO, started: EntryResults) -> dict[str, Any]:
     """Write ``{**head, "results": [...], "summary": {...}}`` as :func:`json_bytes` would, result by result."""
     fh.write(b"{")
     for name, value in started.head.items():
@@ -311,7 +329,7 @@ def _write_entries(fh: BinaryIO, started: EntryResults) -> dict[str, Any]:
 
 
 def _write_binary(fh: BinaryIO, started: EntryResults, fmt: str, kind: str) -> dict[str, Any]:
-    """Write the same document as :func:`_write_entries` in a binary form, result by result."""
+    """Write the same document as :func:`_write_json` in a binary form, result by result."""
     counts: dict[str, int] = {}
     results = started.results
     with binary_writer(fmt, fh, kind) as writer:  # type: ignore[arg-type]

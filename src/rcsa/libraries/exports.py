@@ -1,22 +1,33 @@
-"""Exports of a stored library's results for other software: HDF5, and a zip of UFF 58 files.
+"""Result files for other software: HDF5 and Parquet (batches, libraries), a zip of UFF 58 files.
 
-Both take the document of :meth:`rcsa.libraries.sync.LibraryStore.results` and return bytes.
+A batch result, a library prediction or a stored library's results
+(:meth:`rcsa.libraries.sync.LibraryStore.results`) — ``{head..., "results": [...], "summary"}``
+— is written result by result (:class:`ResultsWriter`; jobs stream it to disk). Every number is
+the JSON's to the last bit: the long arrays (``frequency_hz``, each ``tool_point`` receptance,
+an uncertainty band's ``h_magnitude_m_n`` percentiles) are stored as float64 / complex128, and
+everything else of every result — errors, skipped entries, natural frequencies, peaks, notes,
+modal fits — as JSON (:func:`split_result`), so a reader can rebuild the JSON document exactly.
+Tool-point receptances are symmetric (reciprocity: ``n`` equals ``l`` bit for bit on the
+analytical model), so ``n`` is stored only where it differs from ``l``.
 
-HDF5 (``application/x-hdf5``; every group and dataset carries ``schema`` and
-``schema_version``)::
+HDF5 (``application/x-hdf5``, schema version 2; one row per ok result)::
 
-    /                    schema="rcsa.library-results", schema_version=1, library_id, revision,
-                         synced_utc, exported_utc, source, library_sha256, model_version,
-                         software_version, convention, tools_json (every tool: id, index,
-                         status, reason, error, group)
-    /frequency_hz        float64 (n,), units="Hz"
-    /tools/<name>        one NXdata group per ok tool (name: the tool id, percent-encoded where
-                         HDF5 needs it; attribute ``id`` holds it verbatim): signal="h",
-                         axes=["frequency_hz"]; attributes index, description, number, teeth,
-                         tool_type, natural_frequencies_hz, static_stiffness_n_m, result_sha256
-    /tools/<name>/frequency_hz   hard link to /frequency_hz
-    /tools/<name>/h, l, n, p     complex128 (n,) (h5py's compound {r, i}), units and
-                                 quantity="receptance"
+    /                     schema ("rcsa.batch-results", "rcsa.library-prediction" or
+                          "rcsa.library-results"), schema_version=2, kind, exported_utc,
+                          software_version, convention, head_json, summary_json; a stored
+                          library's also library_id, revision, synced_utc, source,
+                          library_sha256, model_version
+    /frequency_hz         float64 (m,), units="Hz"
+    /result               int32 (k,): each row's position in the document's results
+    /id                   str (k,): each row's id
+    /tool_point/h, l, n, p          complex128 (k, m), units, quantity="receptance"
+    /tool_point/n_is_l              bool (k,): that row of n is l's (and not stored)
+    /uncertainty/h_magnitude_<p>_m_n float64 (k, m), with an uncertainty band
+    /results_json         str: JSON list of every result's other fields, in order
+    /index_json           str: JSON list of (id, index, status, reason, error, row)
+
+Parquet (``application/vnd.apache.parquet``, the extra ``rcsa[parquet]``): one row per ok result
+and line, see :class:`ParquetResults`.
 
 UFF (``application/zip``): ``index.json`` (id → file, description, T number, teeth) and one
 ``<tool>.uff`` per ok tool, written with pyuff: a dataset 164 (SI units: m, N, K) then a
@@ -36,7 +47,6 @@ import zipfile
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, BinaryIO
-from urllib.parse import quote
 
 import numpy as np
 import orjson
@@ -50,18 +60,14 @@ __all__ = ["HDF5_SCHEMA", "PARQUET_EXTRA", "SCHEMAS", "Hdf5Results", "ParquetRes
            "tool_file_names"]
 
 HDF5_SCHEMA = "rcsa.library-results"
-SCHEMA_VERSION = 1
+#: 2: one row per ok result in stacked datasets (1: one group per tool), and every field kept.
+SCHEMA_VERSION = 2
 #: Schema name of each kind of result document in a binary file.
 SCHEMAS = {"library-results": HDF5_SCHEMA, "batch": "rcsa.batch-results", "library": "rcsa.library-prediction"}
 #: The optional extra that installs pyarrow (Parquet results).
 PARQUET_EXTRA = "parquet"
 #: Rows of a Parquet row group (at least; whole results are never split).
 PARQUET_ROW_GROUP = 1 << 17
-
-
-def _group_name(tool_id: str) -> str:
-    name = quote(tool_id, safe="")
-    return name.replace(".", "%2E") if set(name) <= {"."} else name
 
 
 def tool_file_names(ids: list[str]) -> list[str]:
@@ -84,13 +90,16 @@ def tool_file_names(ids: list[str]) -> list[str]:
     return out
 
 
-def split_result(result: Mapping[str, Any]) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+def split_result(result: Mapping[str, Any], pairs: bool = False) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     """A result's long arrays (one value per frequency line) apart from everything else.
 
     Parameters
     ----------
     result : mapping
         One entry of a batch or library result (any status).
+    pairs : bool
+        Receptances as ``<r>_real`` and ``<r>_imag`` float64 arrays (the JSON's own arrays
+        when they are already float64) instead of complex128 ``<r>``.
 
     Returns
     -------
@@ -110,13 +119,39 @@ def split_result(result: Mapping[str, Any]) -> tuple[dict[str, Any], dict[str, n
     fields["frequency_hz"] = None
     fields["tool_point"] = dict.fromkeys(result["tool_point"])
     for name, pair in result["tool_point"].items():
-        arrays[name] = complex_from_wire(pair, f"{ident}.tool_point.{name}", finite=False)
+        if pairs:
+            arrays[f"{name}_real"], arrays[f"{name}_imag"] = _pair(pair, f"{ident}.tool_point.{name}")
+        else:
+            arrays[name] = _complex(pair, f"{ident}.tool_point.{name}")
     band = result.get("uncertainty")
     if isinstance(band, Mapping) and isinstance(band.get("h_magnitude_m_n"), Mapping):
         fields["uncertainty"] = {**band, "h_magnitude_m_n": dict.fromkeys(band["h_magnitude_m_n"])}
         for p, values in band["h_magnitude_m_n"].items():
             arrays[f"h_magnitude_{p}_m_n"] = np.array(values, dtype=np.float64)
     return fields, arrays
+
+
+def _complex(pair: Any, field: str) -> np.ndarray:
+    """``{"real", "imag"}`` as complex128: one copy when both are float64 arrays (results rcsa made)."""
+    if isinstance(pair, Mapping) and set(pair) == {"real", "imag"}:
+        re, im = pair["real"], pair["imag"]
+        if isinstance(re, np.ndarray) and isinstance(im, np.ndarray) and re.dtype == im.dtype == np.float64 \
+                and re.ndim == im.ndim == 1 and re.shape == im.shape:
+            out = np.empty(re.shape, dtype=np.complex128)
+            out.real, out.imag = re, im
+            return out
+    return complex_from_wire(pair, field, finite=False)
+
+
+def _pair(pair: Any, field: str) -> tuple[np.ndarray, np.ndarray]:
+    """``{"real", "imag"}`` as two float64 arrays (no copy when they already are)."""
+    if isinstance(pair, Mapping) and set(pair) == {"real", "imag"}:
+        re, im = pair["real"], pair["imag"]
+        if isinstance(re, np.ndarray) and isinstance(im, np.ndarray) and re.dtype == im.dtype == np.float64 \
+                and re.ndim == im.ndim == 1 and re.shape == im.shape:
+            return np.ascontiguousarray(re), np.ascontiguousarray(im)
+    z = complex_from_wire(pair, field, finite=False)
+    return np.ascontiguousarray(z.real), np.ascontiguousarray(z.imag)
 
 
 def _same_bits(a: np.ndarray, b: np.ndarray) -> bool:
@@ -134,6 +169,9 @@ class ResultsWriter:
     Use as a context manager; call :meth:`head` once, :meth:`result` for every result in
     order, :meth:`summary` once. Every ok result must be on the grid of the first.
     """
+
+    #: Receptances as real and imaginary float64 arrays (see :func:`split_result`).
+    pairs = False
 
     def __init__(self, kind: str) -> None:
         if kind not in SCHEMAS:
@@ -157,7 +195,7 @@ class ResultsWriter:
 
     def result(self, result: Mapping[str, Any]) -> None:
         """One result, in order."""
-        fields, arrays = split_result(result)
+        fields, arrays = split_result(result, self.pairs)
         ok = bool(arrays)
         if ok:
             f = np.array(result["frequency_hz"], dtype=np.float64)
@@ -168,13 +206,14 @@ class ResultsWriter:
         self.fields.append(fields)
         self.index.append({"id": result.get("id"), "index": result.get("index"), "status": result.get("status"),
                            "reason": result.get("reason"), "error": result.get("error"),
-                           "group": self._write(len(self.fields) - 1, result, arrays) if ok else None})
+                           "row": self._write(len(self.fields) - 1, result, arrays) if ok else None})
 
     def summary(self, summary: Mapping[str, Any]) -> None:
         """The document's ``summary``."""
         self.summary_doc = dict(summary)
 
-    def _write(self, position: int, result: Mapping[str, Any], arrays: dict[str, np.ndarray]) -> str | None:
+    def _write(self, position: int, result: Mapping[str, Any], arrays: dict[str, np.ndarray]) -> int | None:
+        """Store an ok result's arrays; its row in the file's stacked arrays (None: found by column)."""
         raise NotImplementedError
 
     def close(self, failed: bool = False) -> None:
@@ -183,7 +222,7 @@ class ResultsWriter:
 
 
 def _hdf5_fields(kind: str, head: Mapping[str, Any]) -> dict[str, Any]:
-    """Root attributes of the file (those of a stored library's export since schema version 1)."""
+    """Root attributes of the file."""
     a: dict[str, Any] = {"schema": SCHEMAS[kind], "schema_version": SCHEMA_VERSION, "kind": kind,
                          "exported_utc": utc_now_iso(), "software_version": __version__, "convention": CONVENTION}
     if kind == "library-results":
@@ -198,13 +237,17 @@ def _hdf5_fields(kind: str, head: Mapping[str, Any]) -> dict[str, Any]:
     return a
 
 
+#: Bytes of one chunk of a stacked dataset, at most (whole rows; one row when a row is larger).
+HDF5_CHUNK_BYTES = 1 << 18
+
+
 class Hdf5Results(ResultsWriter):
-    """HDF5 form of a result document (layout in the module docstring), written result by result.
+    """HDF5 form of a result document (layout in the module docstring), written row by row.
 
     Parameters
     ----------
     target : binary file or path
-        A seekable binary file (e.g. a job's result file, ``io.BytesIO``) or a path.
+        A readable, seekable binary file (e.g. a job's result file, ``io.BytesIO``) or a path.
     kind : {"library-results", "batch", "library"}
     """
 
@@ -212,62 +255,66 @@ class Hdf5Results(ResultsWriter):
         import h5py
 
         super().__init__(kind)
+        self.h5py = h5py
         self.file = h5py.File(target, "w")
-        self.tools = self.file.create_group("tools")
-        self.names: set[str] = set()
-        self.fd: Any = None
+        self.rows = 0
+        self.datasets: dict[str, Any] = {}
+        self.positions: list[int] = []
+        self.ids: list[str] = []
+        self.n_is_l: list[bool] = []
 
-    def _write(self, position: int, result: Mapping[str, Any], arrays: dict[str, np.ndarray]) -> str:
-        if self.fd is None:
-            self.fd = fd = self.file.create_dataset("frequency_hz", data=self.frequency_hz)
-            fd.attrs["schema"], fd.attrs["schema_version"], fd.attrs["units"] = \
-                "rcsa.frequency_hz", SCHEMA_VERSION, "Hz"
-        name, k = _group_name(str(result.get("id"))), 1
-        while name in self.names:  # ids of a batch need not be unique
-            k += 1
-            name = f"{_group_name(str(result.get('id')))}~{k}"
-        self.names.add(name)
-        g = self.tools.create_group(name)
-        ga = g.attrs
-        ga["schema"], ga["schema_version"] = "rcsa.tool_point", SCHEMA_VERSION
-        ga["NX_class"], ga["signal"], ga["axes"], ga["frequency_hz_indices"] = "NXdata", "h", ["frequency_hz"], 0
-        ga["id"] = str(result.get("id"))
-        ga["result"] = position
-        ga["index"] = int(result.get("index") or 0)
-        for attr in ("description", "tool_type"):
-            ga[attr] = result.get(attr) or ""
-        for attr in ("number", "teeth"):
-            ga[attr] = -1 if result.get(attr) is None else int(result[attr])
-        modes = result.get("natural_frequencies_hz")
-        ga["natural_frequencies_hz"] = np.asarray([] if modes is None else modes, dtype=np.float64)
-        stiffness = result.get("static_stiffness_n_m")
-        ga["static_stiffness_n_m"] = np.nan if stiffness is None else float(stiffness)
-        ga["result_sha256"] = result.get("result_sha256") or ""
-        g["frequency_hz"] = self.fd
-        for key, values in arrays.items():
-            if key == "n" and "l" in arrays and _same_bits(values, arrays["l"]):
-                g["n"] = g["l"]  # reciprocity: the same bits, stored once (a hard link)
-                continue
-            d = g.create_dataset(key, data=values)
+    def _dataset(self, key: str, values: np.ndarray) -> Any:
+        d = self.datasets.get(key)
+        if d is None:
+            m = values.size
+            rows = max(1, HDF5_CHUNK_BYTES // max(1, m * values.itemsize))
+            parent = "tool_point" if key in RECEPTANCE_UNITS else "uncertainty"
+            d = self.file.require_group(parent).create_dataset(key, shape=(0, m), maxshape=(None, m),
+                                                               dtype=values.dtype, chunks=(rows, m))
             if key in RECEPTANCE_UNITS:
-                d.attrs["schema"], d.attrs["schema_version"] = "rcsa.frf", SCHEMA_VERSION
                 d.attrs["units"], d.attrs["quantity"] = RECEPTANCE_UNITS[key], "receptance"
             else:
                 d.attrs["units"], d.attrs["quantity"] = "m/N", "percentile of |h| over the uncertainty draws"
-        return f"/tools/{name}"
+            self.datasets[key] = d
+        elif d.shape[1] != values.size:
+            raise ValueError(f"{key} has {values.size} values per result, the first had {d.shape[1]}")
+        return d
+
+    def _write(self, position: int, result: Mapping[str, Any], arrays: dict[str, np.ndarray]) -> int:
+        row = self.rows
+        if self.datasets and set(arrays) != set(self.datasets):
+            raise ValueError(f"result {result.get('id')!r} has the arrays {sorted(arrays)}, the first had "
+                             f"{sorted(self.datasets)}")
+        same = "n" in arrays and "l" in arrays and _same_bits(arrays["n"], arrays["l"])
+        for key, values in arrays.items():
+            d = self._dataset(key, values)
+            d.resize(row + 1, axis=0)
+            if not (key == "n" and same):  # reciprocity: n is l's bits, its row stays unwritten (no storage)
+                d[row] = values
+        self.rows = row + 1
+        self.positions.append(position)
+        self.ids.append(str(result.get("id")))
+        self.n_is_l.append(same)
+        return row
 
     def close(self, failed: bool = False) -> None:
         """Write the index and the JSON fields, and close the file."""
         try:
             if not failed:
-                if self.fd is None:
-                    self.file.create_dataset("frequency_hz", data=np.zeros(0))
+                f = self.file
+                fd = f.create_dataset("frequency_hz", data=np.zeros(0) if self.frequency_hz is None
+                                      else self.frequency_hz)
+                fd.attrs["units"] = "Hz"
+                f.create_dataset("result", data=np.array(self.positions, dtype=np.int32))
+                f.create_dataset("id", data=self.ids, dtype=self.h5py.string_dtype())
+                if "n" in self.datasets:
+                    f["tool_point"].create_dataset("n_is_l", data=np.array(self.n_is_l, dtype=bool))
                 for key, value in _hdf5_fields(self.kind, self.head_doc).items():
-                    self.file.attrs[key] = value
-                self.file.attrs["tools_json"] = json.dumps(self.index)
-                self.file.attrs["head_json"] = _json(self.head_doc)
-                self.file.attrs["summary_json"] = _json(self.summary_doc)
-                self.file.create_dataset("results_json", data=_json(self.fields))
+                    f.attrs[key] = value
+                f.attrs["head_json"] = _json(self.head_doc)
+                f.attrs["summary_json"] = _json(self.summary_doc)
+                f.create_dataset("results_json", data=_json(self.fields))
+                f.create_dataset("index_json", data=_json(self.index))
         finally:
             self.file.close()
 
@@ -306,10 +353,13 @@ class ParquetResults(ResultsWriter):
     target : binary file or path
     kind : {"library-results", "batch", "library"}
     compression : str
-        Parquet codec of the float columns (byte-stream-split encoded).
+        Parquet codec (``"none"``: the fastest to write, about 0.3 of the JSON's bytes;
+        ``"zstd"`` about 0.2, byte-stream-split encoded, at about twice the write time).
     """
 
-    def __init__(self, target: BinaryIO | str | os.PathLike[str], kind: str, compression: str = "zstd") -> None:
+    pairs = True
+
+    def __init__(self, target: BinaryIO | str | os.PathLike[str], kind: str, compression: str = "none") -> None:
         super().__init__(kind)
         self.target = target
         self.compression = compression
@@ -338,32 +388,31 @@ class ParquetResults(ResultsWriter):
             return
         assert self.frequency_hz is not None and self.names is not None
         m = self.frequency_hz.size
-        ids = [ident for _, ident, _ in self.pending]
+        ids = pa.array([ident for _, ident, _ in self.pending])
+        frequency = pa.array(self.frequency_hz)
         columns: dict[str, Any] = {
-            "result": pa.array(np.repeat(np.array([p for p, _, _ in self.pending], dtype=np.int32), m)),
-            "id": pa.DictionaryArray.from_arrays(np.repeat(np.arange(len(ids), dtype=np.int32), m), pa.array(ids)),
-            "frequency_hz": pa.array(np.tile(self.frequency_hz, len(ids))),
+            "result": pa.chunked_array([pa.array(np.full(m, p, dtype=np.int32)) for p, _, _ in self.pending]),
+            "id": pa.chunked_array([pa.DictionaryArray.from_arrays(np.full(m, j, dtype=np.int32), ids)
+                                    for j in range(len(self.pending))]),
+            "frequency_hz": pa.chunked_array([frequency] * len(self.pending)),
         }
         for key in self.names:
-            parts = [a[key] for _, _, a in self.pending]
-            if key in RECEPTANCE_UNITS:
-                stacked = np.concatenate(parts)
-                real, imag = np.ascontiguousarray(stacked.real), np.ascontiguousarray(stacked.imag)
-                if key == "n" and "l" in self.names:
-                    same = np.repeat([_same_bits(a["n"], a["l"]) for _, _, a in self.pending], m)
-                    columns["n_real"] = pa.array(real, mask=same)
-                    columns["n_imag"] = pa.array(imag, mask=same)
-                else:
-                    columns[f"{key}_real"], columns[f"{key}_imag"] = pa.array(real), pa.array(imag)
+            if key.startswith("n_") and "l_real" in self.names:  # n null where it is l's bits (reciprocity)
+                columns[key] = pa.chunked_array([
+                    pa.nulls(m, pa.float64()) if _same_bits(a["n_real"], a["l_real"]) and
+                    _same_bits(a["n_imag"], a["l_imag"]) else pa.array(a[key]) for _, _, a in self.pending])
             else:
-                columns[key] = pa.array(np.concatenate(parts))
+                columns[key] = pa.chunked_array([pa.array(a[key]) for _, _, a in self.pending])
         table = pa.table(columns)
         if self.writer is None:
             floats = [c for c in table.column_names if c not in ("result", "id", "frequency_hz")]
+            encoding = {} if self.compression == "none" else \
+                {"column_encoding": dict.fromkeys(floats, "BYTE_STREAM_SPLIT")}
             self.writer = pq.ParquetWriter(self.target, table.schema, compression=self.compression,
                                            use_dictionary=["id", "frequency_hz"], write_statistics=["result"],
-                                           column_encoding=dict.fromkeys(floats, "BYTE_STREAM_SPLIT"))
-        self.writer.write_table(table, row_group_size=max(self.rows, 1))
+                                           **encoding)
+        self.writer.write_table(table.combine_chunks() if len(self.pending) > 1 and m < 4096 else table,
+                                row_group_size=max(self.rows, 1))
         self.pending, self.rows = [], 0
 
     def close(self, failed: bool = False) -> None:
