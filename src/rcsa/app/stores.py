@@ -108,5 +108,8 @@ class CachedMeasurements:
                     self._items.popitem(last=False)
         return m
 
+    def __contains__(self, measurement_id: object) -> bool:
+        return measurement_id in self.store
+
     def __getattr__(self, name: str) -> Any:
         return getattr(self.store, name)
