@@ -17,7 +17,13 @@ import orjson
 import pytest
 
 from rcsa.app.predictions import predict, predict_batch
-from rcsa.app.results import encode_result, format_of_suffix, json_bytes, require_format, write_result
+from rcsa.app.results import (
+    encode_result,
+    format_of_suffix,
+    json_bytes,
+    require_format,
+    write_result,
+)
 from rcsa.errors import InputError
 from rcsa.reference import ra1
 from tests.result_files import as_numpy, golden, read_hdf5
