@@ -9,17 +9,19 @@ FreeCAD stores no stickout: ``--options '{"stickout_m": 0.04}'`` (or per toolbit
 of every tool of the library on one spindle, computed
 here (no service needed), with a progress bar on stderr. The result JSON (one entry per
 library item: ``ok``, ``skipped`` with a reason, or ``error``) goes to stdout or ``-o
-OUT.json``; the exit status is 1 when any tool errored.
+OUT.json`` (``-o OUT.h5`` or ``OUT.parquet``: the same as HDF5 or Parquet); the exit status is
+1 when any tool errored.
 
 ``rcsa library sync LIBRARY --spindle ID-or-SPINDLE.json [--library-id ID]``: keep the
 library in the store (:func:`rcsa.app.libraries.prepare_sync`, the same code as ``POST
 /v1/libraries/{id}:sync``): only tools whose result is not stored yet are computed; the
 added / changed / unchanged / removed summary goes to stderr, the sync report (JSON) to
-stdout; exit status 1 when any tool failed. ``--dask-scheduler tcp://HOST:8786`` (or
+stdout (``-o OUT.json``: there; ``-o OUT.h5|.parquet``: the synced results written there, the
+report to stdout); exit status 1 when any tool failed. ``--dask-scheduler tcp://HOST:8786`` (or
 ``RCSA_DASK_SCHEDULER``) computes on that Dask cluster instead of here; the results are
 written here, the same bytes either way. ``rcsa library show ID`` prints a stored
-library's summary and per-tool status; ``rcsa library export ID -o FILE.h5|.zip|.json``
-writes its results (HDF5, zip of UFF 58 files, or JSON).
+library's summary and per-tool status; ``rcsa library export ID -o FILE.h5|.parquet|.zip|.json``
+writes its results (HDF5, Parquet, zip of UFF 58 files, or JSON).
 
 ``rcsa library recommend LIBRARY --material M --max-rpm N (--spindle S | --measurement ID |
 --library-id ID) (-o OUT | --in-place)``: chatter-safe presets (:mod:`rcsa.app.presets`). Per
