@@ -3,7 +3,8 @@
 Run: ``.venv/bin/python benchmarks/bench_wire.py`` (``--tools 100`` for a quick run). Prints, in
 one process, median wall times with the machine's load:
 
-* **JSON of one prediction.** ``rcsa.predict`` of RA-1 at 10 000 lines (the yardstick), then its
+* **JSON of one prediction.** ``rcsa.predict`` of RA-1 at 10 000 lines (the yardstick; cold, as in
+  ``bench_engine.py``: no spindle side kept from the call before), then its
   JSON bytes three ways: ``to_dict()`` (lists) + the standard library's ``json.dumps``;
   ``to_dict()`` (lists) + orjson (what the CLI did); and ``rcsa.app.results.json_bytes`` of the
   Prediction (arrays straight to bytes: what the CLI, REST, jobs and exports do now), compact and
@@ -34,6 +35,7 @@ from typing import Any
 import orjson
 
 import rcsa
+from rcsa.app import predictions
 from rcsa.app.jobs import write_entries
 from rcsa.app.results import json_bytes
 from rcsa.libraries.library_prediction import EntryResults
@@ -68,7 +70,7 @@ def prediction_section(repeats: int) -> dict[str, float]:
     }
     assert json_bytes(result) == orjson.dumps(result.to_dict())  # the same bytes as before
     print(f"RA-1 at 10 000 lines, one prediction ({load()})")
-    print(f"  rcsa.predict (the yardstick)                               {t_predict * 1e3:7.1f} ms")
+    print(f"  rcsa.predict, cold (the yardstick)                         {t_predict * 1e3:7.1f} ms")
     out = {"predict_ms": t_predict * 1e3}
     for name, fn in rows.items():
         t = median_s(fn, repeats)
@@ -142,6 +144,7 @@ def main() -> None:
     parser.add_argument("--skip-batch", action="store_true")
     args = parser.parse_args()
     print(f"python {sys.version.split()[0]}, orjson {orjson.__version__}")
+    predictions.SIDES.size = 0  # cold predictions, the yardstick of bench_engine.py
     prediction_section(args.repeats)
     if args.skip_batch:
         return

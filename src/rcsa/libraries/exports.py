@@ -409,8 +409,8 @@ class ParquetResults(ResultsWriter):
             encoding = {} if self.compression == "none" else \
                 {"column_encoding": dict.fromkeys(floats, "BYTE_STREAM_SPLIT")}
             self.writer = pq.ParquetWriter(self.target, table.schema, compression=self.compression,
-                                           use_dictionary=["id", "frequency_hz"], write_statistics=["result"],
-                                           **encoding)
+                                           use_dictionary=["result", "id", "frequency_hz"],
+                                           write_statistics=False, **encoding)
         self.writer.write_table(table.combine_chunks() if len(self.pending) > 1 and m < 4096 else table,
                                 row_group_size=max(self.rows, 1))
         self.pending, self.rows = [], 0
