@@ -340,8 +340,8 @@ def parquet_available() -> bool:
 class ParquetResults(ResultsWriter):
     """Apache Parquet form of a result document: one row per ok result and frequency line.
 
-    Columns: ``result`` (int32, the result's position in ``results``), ``id`` (dictionary
-    string), ``frequency_hz``, ``<r>_real`` and ``<r>_imag`` for each receptance ``r`` of
+    Columns: ``result`` (int32, the result's position in ``results``), ``id`` (string),
+    ``frequency_hz`` (these three dictionary-encoded in the file), ``<r>_real`` and ``<r>_imag`` for each receptance ``r`` of
     ``tool_point`` (float64; ``n_*`` null where ``n`` equals ``l`` bit for bit, as
     reciprocity makes it, and ``l_*`` then holds it), and ``h_magnitude_<p>_m_n`` with an
     uncertainty band. The file's key-value metadata holds ``rcsa.schema``, ``rcsa.head``,
@@ -389,9 +389,12 @@ class ParquetResults(ResultsWriter):
         assert self.frequency_hz is not None and self.names is not None
         m = self.frequency_hz.size
         ids = pa.array([ident for _, ident, _ in self.pending])
-        frequency = pa.array(self.frequency_hz)
+        # the repeated columns are given dictionary-encoded, as the file stores them (nothing to hash)
+        zeros, lines = np.zeros(m, dtype=np.int32), np.arange(m, dtype=np.int32)
+        frequency = pa.DictionaryArray.from_arrays(lines, pa.array(self.frequency_hz))
         columns: dict[str, Any] = {
-            "result": pa.chunked_array([pa.array(np.full(m, p, dtype=np.int32)) for p, _, _ in self.pending]),
+            "result": pa.chunked_array([pa.DictionaryArray.from_arrays(zeros, pa.array([p], pa.int32()))
+                                        for p, _, _ in self.pending]),
             "id": pa.chunked_array([pa.DictionaryArray.from_arrays(np.full(m, j, dtype=np.int32), ids)
                                     for j in range(len(self.pending))]),
             "frequency_hz": pa.chunked_array([frequency] * len(self.pending)),
@@ -410,7 +413,7 @@ class ParquetResults(ResultsWriter):
                 {"column_encoding": dict.fromkeys(floats, "BYTE_STREAM_SPLIT")}
             self.writer = pq.ParquetWriter(self.target, table.schema, compression=self.compression,
                                            use_dictionary=["result", "id", "frequency_hz"],
-                                           write_statistics=False, **encoding)
+                                           write_statistics=False, store_schema=False, **encoding)
         self.writer.write_table(table.combine_chunks() if len(self.pending) > 1 and m < 4096 else table,
                                 row_group_size=max(self.rows, 1))
         self.pending, self.rows = [], 0
@@ -426,9 +429,8 @@ class ParquetResults(ResultsWriter):
             return
         self._flush()
         if self.writer is None:  # no ok result: the columns of a prediction, no rows
-            schema = pa.schema([("result", pa.int32()), ("id", pa.dictionary(pa.int32(), pa.string())),
-                                ("frequency_hz", pa.float64())])
-            self.writer = pq.ParquetWriter(self.target, schema)
+            schema = pa.schema([("result", pa.int32()), ("id", pa.string()), ("frequency_hz", pa.float64())])
+            self.writer = pq.ParquetWriter(self.target, schema, store_schema=False)
         self.writer.add_key_value_metadata({
             "rcsa.schema": _json({"schema": SCHEMAS[self.kind], "schema_version": SCHEMA_VERSION, "kind": self.kind,
                                   "software_version": __version__, "exported_utc": utc_now_iso()}),
