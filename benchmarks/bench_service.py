@@ -347,6 +347,7 @@ def main() -> None:
     parser.add_argument("--keepalive-only", action="store_true", help="Measure only the keep-alive latency.")
     parser.add_argument("--largest", action="store_true", help="only the largest batch the limits allow")
     parser.add_argument("--stages", action="store_true", help="first time each stage of a request in-process")
+    parser.add_argument("--skip-batch", action="store_true", help="single predictions only (no batch jobs)")
     parser.add_argument("--out", type=Path, default=None)
     args = parser.parse_args()
     if args.largest:
@@ -388,7 +389,7 @@ def main() -> None:
         results["single_prediction_5000_lines"] = single
         results["server_side"] = _server_side(base)
         grid_1000 = {"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 5.0}
-        results["batch"] = [
+        results["batch"] = [] if args.skip_batch else [
             batch(base, mid, args.batch, grid_1000, tool_point=None, accept_encoding="identity"),
             batch(base, mid, args.batch, grid_1000, tool_point="h", accept_encoding="identity"),
             batch(base, mid, args.batch, grid_1000, tool_point="h", accept_encoding="gzip"),
