@@ -19,7 +19,9 @@ bit-exactness rules are in :mod:`rcsa.libraries.exports`.
 
 from __future__ import annotations
 
+import io
 import os
+import secrets
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, BinaryIO, Literal
@@ -158,8 +160,6 @@ def encode_result(document: Mapping[str, Any], fmt: Format, kind: str) -> bytes:
     """
     if fmt == "json":
         return json_bytes(document)
-    import io
-
     buffer = io.BytesIO()
     write_document(binary_writer(fmt, buffer, kind), document)
     return buffer.getvalue()
@@ -204,5 +204,15 @@ def write_result(document: Mapping[str, Any], path: str | os.PathLike[str], kind
         atomic_write_bytes(Path(path), json_bytes(document, indent=indent) + (b"\n" if indent else b""))
         return fmt
     require_format(fmt)
-    atomic_write_bytes(Path(path), encode_result(document, fmt, kind))
+    final = Path(path)
+    tmp = final.with_name(f".{final.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
+    try:  # written in place result by result (no copy of the file in memory), then renamed
+        with open(tmp, "w+b") as fh:
+            write_document(binary_writer(fmt, fh, kind), document)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, final)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
     return fmt
