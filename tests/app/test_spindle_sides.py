@@ -7,7 +7,7 @@ import pytest
 from rcsa.app import predictions
 from rcsa.app.measurements import demo_measurement
 from rcsa.app.results import json_bytes
-from rcsa.errors import InputError
+from rcsa.errors import InputError, RcsaError
 from rcsa.measured.store import MeasurementStore
 from rcsa.model.contract import CommonSpec
 from rcsa.model.spindle_side import SpindleSide
@@ -44,7 +44,7 @@ def test_sides_are_bounded(monkeypatch):
     assert len(sides._items) == 2
     monkeypatch.setattr(predictions, "PREFIXES_PER_SIDE", 0)  # a side holding too many chains is dropped
     predictions.predict(ra1({**GRID, "step_hz": 50.0}))
-    assert len(sides._items) == 2 and all(len(s.cache) <= 3 for s in sides._items.values())
+    assert len(sides._items) == 2 and all(len(s.cache) <= 3 for _, s in sides._items.values())
 
 
 def test_a_measured_spindle_deleted_since_is_not_used(tmp_path, monkeypatch):
@@ -54,6 +54,10 @@ def test_a_measured_spindle_deleted_since_is_not_used(tmp_path, monkeypatch):
     doc = {**ra1(GRID), "spindle": {"measurement_id": mid}}
     first = predictions.predict(doc, store=store)
     assert json_bytes(predictions.predict(doc, store=store)) == json_bytes(first) == json_bytes(_fresh(doc, store))
+    path = next(p for p in (tmp_path / "store").rglob(f"{mid}*") if p.is_file())
+    path.write_bytes(path.read_bytes()[:100])  # damaged in place: the kept side is not used
+    with pytest.raises(RcsaError):
+        predictions.predict(doc, store=store)
     store.delete(mid)
     with pytest.raises(InputError, match=f"spindle.measurement_id: no stored measurement '{mid}'"):
         predictions.predict(doc, store=store)

@@ -73,9 +73,9 @@ class SpindleSides:
     on the grid, then the holder on it); requests for other tools on the same spindle and
     holder — a CAM system asking tool after tool — reuse them. A side is keyed by the
     request's grid, beam theory, shear coefficient, materials and spindle (canonical JSON) and
-    the store; a measured spindle's side is used only while its measurement still exists
-    (ids are never reused and measurements are immutable, so what was computed from it stays
-    exact). Results are those of a fresh side, bit for bit: the same arrays are computed
+    the store; a measured spindle's side is used only while its measurement's file is the one
+    it was computed from (``file_identity``: inode, size, modification time — a file deleted,
+    replaced or damaged since is read again, and fails as a fresh request would). Results are those of a fresh side, bit for bit: the same arrays are computed
     once instead of each time.
 
     Parameters
@@ -86,7 +86,7 @@ class SpindleSides:
 
     def __init__(self, size: int = SIDES_KEPT) -> None:
         self.size = int(size)
-        self._items: OrderedDict[tuple[int, bytes], SpindleSide] = OrderedDict()
+        self._items: OrderedDict[tuple[int, bytes], tuple[Any, SpindleSide]] = OrderedDict()
         self._lock = threading.Lock()
 
     def side(self, document: Mapping[str, Any], common: CommonSpec,
@@ -106,34 +106,34 @@ class SpindleSides:
         if not self.size or (measured and store is None):
             return SpindleSide(common, resolver(store))
         key = (id(store), orjson.dumps({k: document.get(k) for k in _SHARED_FIELDS}, option=orjson.OPT_SORT_KEYS))
+        # a measured spindle's file as it is now: a side computed from another state of it is not used
+        identity = _identity(store, common.spindle.measurement_id) if measured else ()  # type: ignore[union-attr]
         with self._lock:
-            hit = self._items.get(key)
-            if hit is not None:
+            kept = self._items.get(key)
+            if kept is not None:
                 self._items.move_to_end(key)
-        if hit is not None and measured and not _exists(store, common.spindle.measurement_id):  # type: ignore[union-attr]
-            hit = None  # deleted since: resolve again (and fail as a fresh request would)
-        if hit is None:
+        hit = kept[1] if kept is not None and identity is not None and kept[0] == identity else None
+        if hit is None:  # new, or deleted, replaced or damaged since: resolve again (as a fresh request would)
             hit = SpindleSide(common, resolver(store))
         with self._lock:
-            if len(hit.cache) > PREFIXES_PER_SIDE:
+            if len(hit.cache) > PREFIXES_PER_SIDE or identity is None:
                 self._items.pop(key, None)
                 return hit
-            self._items[key] = hit
+            self._items[key] = (identity, hit)
             self._items.move_to_end(key)
             while len(self._items) > self.size:
                 self._items.popitem(last=False)
         return hit
 
 
-def _exists(store: Any, measurement_id: str) -> bool:
-    """Whether a stored measurement still exists (a ``stat`` for a store)."""
+def _identity(store: Any, measurement_id: str) -> Any:
+    """What identifies a stored measurement's file now (one ``stat``), None when it is gone or unknown."""
+    identity = getattr(store, "file_identity", None)
+    if identity is not None:
+        return identity(measurement_id)
     if hasattr(type(store), "__contains__"):
-        return measurement_id in store
-    try:
-        store.get(measurement_id)
-    except NotFoundError:
-        return False
-    return True
+        return measurement_id if measurement_id in store else None
+    return None  # a source that cannot say: never keep its sides
 
 
 #: The process's kept spindle sides (``SIDES.size = 0`` keeps none: every prediction cold).
