@@ -32,68 +32,24 @@ from scipy.optimize import minimize
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from tests.oracles.solid3d import dataset  # noqa: E402
+from tests.oracles.solid3d import clamping_scores, dataset  # noqa: E402
+from tests.oracles.solid3d.clamping_scores import CALIBRATION, INFORMATION, scores  # noqa: E402
 
 import rcsa.model.clamping as clamping  # noqa: E402
-from rcsa.model.assembly import build_model  # noqa: E402
-from rcsa.model.contract import parse_assembly  # noqa: E402
-from rcsa.physics.chain import Ground  # noqa: E402
-from rcsa.physics.elimination import tip_receptance  # noqa: E402
-
-#: The cases the coefficients are fitted on; every other bonded case is held out.
-CALIBRATION = ("base_d10", "diameter_d6", "diameter_d16", "nose_od1.6d", "nose_od3.2d", "insertion_2d",
-               "insertion_5d", "stickout_3d", "stickout_6d")
-#: Cases the clamping models do not describe (reported, not scored).
-INFORMATION = ("flutes_2", "flutes_4", "rigid_holder")
-_CLAMP = (Ground(1e15, 0.0, 1e15, 0.0),)
-_FIT_EVERY = 4
-
-
-def holder_tool(case: dict[str, Any]) -> dict[str, Any]:
-    """The case's interface as a contract ``joints.holder_tool`` (bonded, or contact with its layer)."""
-    face = case["interface"]
-    out: dict[str, Any] = {"model": "bonded"}
-    if face["model"] == "layer":
-        out = {"model": "contact", "interface_stiffness_n_m3": face["interface_stiffness_n_m3"],
-               "interface_tangential_ratio": face["tangential_ratio"], "interface_loss_factor": face["loss_factor"]}
-    if face["contact_start_m"] > 0:
-        out["front_gap_length_m"] = face["contact_start_m"]
-    if face["contact_stop_m"] is not None:
-        out["contact_length_m"] = face["contact_stop_m"] - face["contact_start_m"]
-    return out
-
 
 #: Where the 3-D reference data are read (``--data`` overrides).
 DATA = dataset.DATA_DIR
+_FIT_EVERY = 4
 
 
 def load(name: str) -> dict[str, Any]:
-    """A case of the 3-D data set (:func:`tests.oracles.solid3d.dataset.load_case`) from :data:`DATA`."""
-    return dataset.load_case(name, DATA)
+    """A case of the 3-D data set from :data:`DATA`."""
+    return clamping_scores.load(name, DATA)
 
 
 def rcsa_h(name: str, model: str, base: str, frequency_hz: np.ndarray) -> np.ndarray:
-    """rcsa's tool-point h of a data-set case with the holder–tool ``model`` (point or the case's clamping)."""
-    case = load(name)["case"]
-    doc = dataset.beam_document(_solid_case(name), frequency_hz)
-    if model != "point":
-        doc["joints"]["holder_tool"] = holder_tool(case)
-    m = build_model(parse_assembly(doc))
-    chain = (_CLAMP + m.holder + m.tool_side()) if base == "clamped" else m.chain()
-    return tip_receptance(chain, 2 * np.pi * frequency_hz)[:, 0, 0]
-
-
-def _solid_case(name: str):
-    return dataset.reference_cases()[name][0]
-
-
-def scores(frequency_hz: np.ndarray, h: np.ndarray, truth: np.ndarray) -> dict[str, float]:
-    """Mean |dB| over the band and the largest peak's frequency and height errors (relative)."""
-    i, j = int(np.argmax(np.abs(truth))), int(np.argmax(np.abs(h)))
-    return {"mean_abs_db": float(np.mean(np.abs(20 * np.log10(np.abs(h) / np.abs(truth))))),
-            "peak_frequency_error": float(frequency_hz[j] / frequency_hz[i] - 1.0),
-            "peak_height_error": float(abs(h[j]) / abs(truth[i]) - 1.0),
-            "peak_hz": float(frequency_hz[i])}
+    """rcsa's tool-point h of a case of :data:`DATA` (:func:`tests.oracles.solid3d.clamping_scores.rcsa_h`)."""
+    return clamping_scores.rcsa_h(name, model, base, frequency_hz, DATA)
 
 
 def _objective(log_c: np.ndarray, truths: dict[tuple[str, str], np.ndarray], f: np.ndarray) -> float:
