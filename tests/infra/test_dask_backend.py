@@ -147,6 +147,7 @@ def test_a_sync_on_dask_is_bit_identical_and_a_killed_worker_loses_nothing(tmp_p
         orjson.dumps(local_libs.results("shop")["results"], option=orjson.OPT_SERIALIZE_NUMPY)
 
 
+@pytest.mark.slow
 def test_losing_the_scheduler_fails_the_job_with_the_reason(tmp_path, monkeypatch):
     monkeypatch.setattr(library_sync, "compute_chunk", dask_helpers.compute_chunk_slowly)
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
