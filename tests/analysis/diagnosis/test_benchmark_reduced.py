@@ -21,6 +21,10 @@ from rcsa.analysis.diagnosis import analyse
 from rcsa.analysis.diagnosis.report import build_response
 from tests.analysis.diagnosis import truth
 
+#: pytest-timeout's 600 s is the hang guard; this module's shared fixture alone takes about a
+#: minute at load 4 on 2 cores and took over 10 min at load 12-14 (a full run: timed out at 600 s)
+pytestmark = pytest.mark.timeout(1800)
+
 CLASSES = ("none", "sensor_mass", "bearings", "fluted_section", "joint_damping")
 TRIALS_PER_CLASS = 3
 SEED = 20260601
