@@ -80,8 +80,8 @@ def _wait_ready(log: Path, proc: subprocess.Popen, timeout_s: float = 300.0) -> 
 
 
 def _wait_puts(log: Path, proc: subprocess.Popen, count: int) -> None:
-    """Until the writer has logged ``count`` committed puts (it exits only when killed)."""
-    while sum(line.startswith("put ") for line in log.read_text().splitlines()) < count:
+    """Until the writer has logged ``count`` committed puts (pytest-timeout guards a hang)."""
+    while log.read_text().count("\nput ") < count:
         if proc.poll() is not None:
             raise AssertionError(f"writer exited early: {proc.stderr.read().decode()}")
         time.sleep(0.005)
@@ -114,9 +114,8 @@ def test_writers_killed_at_random_moments_lose_nothing_committed(tmp_path):
             )
         for p, log in procs:
             _wait_ready(log, p)
-        # kill each writer at its own random moment: once it has committed a random number
-        # (2-5) of measurements — counted, not timed, so a slow machine still commits enough
-        # (>= 60 in all) — plus a random 0-130 ms, usually in the middle of a write
+        # kill each writer at its own random moment: once it has committed a few measurements
+        # (counted in its log, so a loaded machine only makes the round slower), then 0-130 ms on
         for p, log in procs:
             _wait_puts(log, p, int(rng.integers(2, 6)))
             time.sleep(rng.uniform(0.0, 0.4 / writers))
