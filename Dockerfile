@@ -18,12 +18,20 @@
 # Debian packages: docker build --build-arg BASE_IMAGE=rcsa-base:bookworm-python3.11 -t rcsa .
 #
 # Layers: the dependencies (pyproject.toml's requirements, pinned by constraints.txt) are
-# installed before the code is copied, so a code change rebuilds only the last, small layer.
+# installed before the code is copied, so a code change (or an edit of pyproject.toml that
+# leaves its requirements alone) rebuilds only the last, small layer.
 ARG BASE_IMAGE=python:3.11.11-slim-bookworm@sha256:081075da77b2b55c23c088251026fb69a7b2bf92471e491ff5fd75c192fd38e5
-FROM ${BASE_IMAGE}
 
+# 0. the requirements alone, out of pyproject.toml: the dependency layer below is keyed on this
+#    list (and constraints.txt), not on the whole pyproject.toml, so editing the tools'
+#    configuration there (ruff, pytest, import-linter) does not reinstall the dependencies
+FROM ${BASE_IMAGE} AS requirements
 # extras to install, e.g. --build-arg RCSA_EXTRAS=dask for a Dask cluster (docker-compose.yml)
 ARG RCSA_EXTRAS=""
+COPY pyproject.toml docker/requirements.py /r/
+RUN python3 /r/requirements.py /r/pyproject.toml "$RCSA_EXTRAS" > /r/requirements.txt
+
+FROM ${BASE_IMAGE}
 ENV PIP_NO_CACHE_DIR=1 \
     PIP_DISABLE_PIP_VERSION_CHECK=1 \
     PYTHONDONTWRITEBYTECODE=1 \
@@ -39,18 +47,17 @@ RUN useradd --uid 10001 --user-group --no-create-home --home-dir /tmp --shell /u
     && python3 -m venv /opt/venv \
     && pip uninstall -q -y setuptools
 
-# 1. the dependencies: rebuilt only when pyproject.toml or constraints.txt change. The packages'
-#    own test suites (tests/ and test/ directories: 53 MB, 65 MB with dask; never imported) are
-#    removed in the same layer.
-COPY pyproject.toml constraints.txt /src/
-COPY docker/requirements.py /src/docker/
-RUN python3 /src/docker/requirements.py /src/pyproject.toml "$RCSA_EXTRAS" > /src/requirements.txt \
-    && pip install -c /src/constraints.txt -r /src/requirements.txt hatchling \
+# 1. the dependencies: rebuilt only when the requirements or constraints.txt change. The
+#    packages' own test suites (tests/ and test/ directories: 53 MB, 65 MB with dask; never
+#    imported) are removed in the same layer.
+COPY --from=requirements /r/requirements.txt /src/
+COPY constraints.txt /src/
+RUN pip install -c /src/constraints.txt -r /src/requirements.txt hatchling \
     && find /opt/venv/lib/python3*/site-packages -mindepth 2 -type d \( -name tests -o -name test \) \
          -prune -exec rm -rf {} +
 
 # 2. the code: rcsa and the service, built with the hatchling of layer 1 (no download)
-COPY README.md /src/
+COPY pyproject.toml README.md /src/
 COPY src /src/src
 COPY service /src/service
 RUN pip install --no-deps --no-build-isolation /src \

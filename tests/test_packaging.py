@@ -68,11 +68,13 @@ def test_the_image_pins_its_base_caches_its_dependencies_and_runs_unprivileged()
     assert "VOLUME" not in instructions  # an anonymous volume per container, and `down -v` deletes it
     base = next(ln for ln in lines if ln.startswith("ARG BASE_IMAGE="))
     assert re.fullmatch(r"ARG BASE_IMAGE=python:3\.11\.\d+-slim-bookworm@sha256:[0-9a-f]{64}", base), base
-    assert lines[lines.index(base) + 1] == "FROM ${BASE_IMAGE}"
+    assert {ln for ln in lines if ln.startswith("FROM ")} == {"FROM ${BASE_IMAGE}", "FROM ${BASE_IMAGE} AS requirements"}
     text = "\n".join(lines)
-    deps, code = text.index(f"COPY pyproject.toml {LOCK} "), text.index("COPY src ")
-    install = text.index(f"pip install -c /src/{LOCK} -r")
-    assert deps < install < code  # the dependency layer is built before the code is copied
+    final = text.index("FROM ${BASE_IMAGE}\n")  # the image's own stage
+    deps, lock = text.index("COPY --from=requirements /r/requirements.txt"), text.index(f"COPY {LOCK} ")
+    install, code = text.index(f"pip install -c /src/{LOCK} -r"), text.index("COPY src ")
+    assert final < deps < lock < install < code  # the dependency layer is built before the code is copied
+    assert "COPY pyproject.toml" not in text[final:install]  # keyed on the requirements, not the whole file
     assert "--no-deps" in text[code:]  # the code layer installs nothing else
     users = [ln.split()[1] for ln in lines if ln.startswith("USER ")]
     assert users and users[-1] not in ("root", "0")
