@@ -20,8 +20,9 @@ from starlette.responses import Response
 
 from rcsa.app import budget
 from rcsa.app.analyses import validate
-from rcsa.app.jobs import Job, Outcome, QuotaExceeded, Work, answer_or_queue
-from rcsa.app.keys import Principal
+from rcsa.app.jobs import Outcome, Work, answer_or_queue
+from rcsa.infra.api_keys import Principal
+from rcsa.infra.job_queue import Job, QuotaExceeded
 
 from .errors import ProblemError
 from .responses import json_response

@@ -33,7 +33,7 @@ from fastapi.routing import APIRoute
 from starlette.responses import Response
 
 from rcsa.app.inputs import decode_json
-from rcsa.app.keys import Principal
+from rcsa.infra.api_keys import Principal
 
 from .errors import BodyTooLarge
 from .middleware import BODY_LIMIT_KEY

@@ -89,7 +89,7 @@ from rcsa.app.bounds import (
     SDM_MIN_STEPS_PER_PERIOD,
     TOOL_OVERRIDES,
 )
-from rcsa.app.examples import ra1
+from rcsa.app.predictions import example_assembly
 
 from .field_errors import pydantic_errors
 
@@ -121,7 +121,7 @@ __all__ = [
 ]
 
 _EXAMPLE_GRID = {"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 5.0}
-_RA1 = ra1(_EXAMPLE_GRID)
+_RA1 = example_assembly("ra1", _EXAMPLE_GRID)
 
 
 class _Request(BaseModel):

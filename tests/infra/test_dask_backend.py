@@ -18,19 +18,11 @@ import pytest
 
 distributed = pytest.importorskip("distributed", reason="dask.distributed is not installed (pip install 'rcsa[dask]')")
 
-from rcsa.app.jobs import (  # noqa: E402
-    ComputeUnavailable,
-    JobRunner,
-    LocalBackend,
-    Workbench,
-    compute_backend,
-    job_handlers,
-    job_store,
-    run_work,
-    stream_work,
-)
+from rcsa.app.jobs import Workbench, job_handlers, job_store, run_work, stream_work  # noqa: E402
 from rcsa.app.libraries import prepare_batch, prepare_sync  # noqa: E402
 from rcsa.app.measurements import demo_measurement  # noqa: E402
+from rcsa.infra.compute_backends import ComputeUnavailable, LocalBackend, compute_backend  # noqa: E402
+from rcsa.infra.job_queue import JobRunner  # noqa: E402
 from rcsa.libraries import chunks  # noqa: E402
 from rcsa.libraries import sync as library_sync  # noqa: E402
 from rcsa.measured.store import MeasurementStore  # noqa: E402

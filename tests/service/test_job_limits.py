@@ -10,8 +10,9 @@ import tracemalloc
 import orjson
 import pytest
 
-from rcsa.app.jobs import LocalBackend, Workbench, run_work, stream_work
+from rcsa.app.jobs import Workbench, run_work, stream_work
 from rcsa.app.libraries import prepare_batch
+from rcsa.infra.compute_backends import LocalBackend
 from rcsa.infra.job_queue import JobRunner, JobStore, ResultEvicted
 from rcsa.libraries import chunks
 from rcsa.reference import ra1

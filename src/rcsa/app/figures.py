@@ -16,9 +16,10 @@ from typing import Any, Literal
 
 import numpy as np
 
+from rcsa.analysis.effects.sensitivities import effects_report
+from rcsa.analysis.figures import effects_figure
 from rcsa.analysis.lobes.zoa import LobeResult
 from rcsa.analysis.progress import Progress
-from rcsa.analysis.sensitivity import effects_figure, effects_report
 from rcsa.app.analyses import stability_lobes_results
 from rcsa.app.predictions import predict
 from rcsa.app.stores import resolver

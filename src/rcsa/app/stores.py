@@ -21,17 +21,7 @@ from rcsa.measured.hybrid import MeasurementSource, base_resolver
 from rcsa.measured.store import Measurement, MeasurementStore, is_measurement_id
 from rcsa.model.spindle_side import BaseResolver
 
-__all__ = [
-    "CachedMeasurements",
-    "Measurement",
-    "MeasurementSource",
-    "MeasurementStore",
-    "LibraryStore",
-    "is_measurement_id",
-    "library_store",
-    "open_store",
-    "resolver",
-]
+__all__ = ["CachedMeasurements", "library_store", "open_store", "resolver", "spindle_reference"]
 
 
 def open_store(path: str | os.PathLike[str] | None = None) -> MeasurementStore:
@@ -57,6 +47,22 @@ def library_store(store_path: str | os.PathLike[str] | None = None) -> LibrarySt
         root = MeasurementStore(store_path).path  # the store (and its marker) first: never a stray directory
         found = _LIBRARY_STORES[str(root / LIBRARIES_DIRECTORY)] = LibraryStore(root / LIBRARIES_DIRECTORY)
         return found
+
+
+def spindle_reference(text: str) -> dict[str, Any] | None:
+    """``{"spindle": {"measurement_id": text}}`` when ``text`` is a measurement id, else None.
+
+    How a door reads a ``--spindle`` that may name a stored measurement (``m-...``) or a
+    file (None: the caller reads the file).
+
+    Examples
+    --------
+    >>> spindle_reference("m-0123456789ab")
+    {'spindle': {'measurement_id': 'm-0123456789ab'}}
+    >>> spindle_reference("ra1.json") is None
+    True
+    """
+    return {"spindle": {"measurement_id": text}} if is_measurement_id(text) else None
 
 
 def resolver(store: MeasurementSource | None = None) -> BaseResolver:

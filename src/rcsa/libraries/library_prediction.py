@@ -21,7 +21,7 @@ from typing import Any
 import orjson
 
 from rcsa.errors import InputError
-from rcsa.infra.compute import Backend, LocalBackend
+from rcsa.infra.compute_backends import Backend, LocalBackend
 from rcsa.libraries.chunks import (
     Shared,
     chunk_ranges,

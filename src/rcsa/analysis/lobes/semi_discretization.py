@@ -67,11 +67,10 @@ from rcsa.analysis.lobes.zoa import (
     Milling,
     directional_factors,
     engagement_angles_rad,
-    json_float,
-    json_list,
     zoa_depth_limit,
 )
 from rcsa.errors import InputError
+from rcsa.model.wire import complex_to_wire, json_float, json_list
 
 __all__ = [
     "DEFAULT_STEPS_PER_PERIOD",
@@ -167,7 +166,7 @@ class SemiDiscretizationResult(LobeResult):
         out.update(
             method="semi_discretization",
             instability=[str(k) if k else None for k in self.instability.tolist()],
-            critical_multiplier={"real": json_list(mu.real), "imag": json_list(mu.imag)},
+            critical_multiplier=complex_to_wire(mu, nonfinite_as_none=True),
             steps_per_period=self.steps_per_period,
             steps_per_chatter_cycle=json_list(self.steps_per_chatter_cycle),
             depth_search_max_m=json_float(self.depth_search_max_m),

@@ -26,7 +26,7 @@ from rcsa.errors import InputError
 from rcsa.measured.importers._common import finish, read_source
 from rcsa.measured.store.measurement import Measurement, MeasurementMeta, Provenance
 from rcsa.measured.store.schema import ARTIFACT_FRF_NAME, CONVENTION, frf_unit
-from rcsa.model.wire import complex_from_wire, number_list
+from rcsa.model.wire import complex_from_wire, complex_to_wire, number_list
 
 __all__ = ["measurement_from_contract", "measurement_to_contract", "read_contract_json"]
 
@@ -192,7 +192,7 @@ def measurement_to_contract(m: Measurement, *, include_data: bool = True) -> dic
     if include_data:
         out["frequency_hz"] = m.frequency_hz.tolist()
         for name, v in m.frfs.items():
-            out[name] = {"real": v.real.tolist(), "imag": v.imag.tolist()}
+            out[name] = complex_to_wire(v)
         if m.coherence:
             out["coherence"] = {k: v.tolist() for k, v in m.coherence.items()}
     return out

@@ -46,7 +46,7 @@ from rcsa.errors import RcsaError
 
 __all__ = ["Backend", "ChunkFailed", "ComputeUnavailable", "DaskBackend", "LocalBackend", "compute_backend"]
 
-log = logging.getLogger("rcsa.infra.compute")
+log = logging.getLogger("rcsa.infra.compute_backends")
 
 #: ``fn(chunk, shared) -> result``: a module-level function (or a ``functools.partial`` of one)
 #: so that a cluster's workers can import it.

@@ -48,12 +48,12 @@ from typing import Any
 
 import numpy as np
 
-from rcsa.analysis.effect_report import FEATURES, EffectReport
-from rcsa.analysis.hybrid_effects import hybrid_effect_analysis, split_parameters
-from rcsa.analysis.mode_features import (
+from rcsa.analysis.effects.measured_spindle import hybrid_effect_analysis, split_parameters
+from rcsa.analysis.effects.mode_features import (
     ModeFeatures,
     mode_features,
 )
+from rcsa.analysis.effects.report import FEATURES, EffectReport
 from rcsa.analysis.progress import Progress, report
 from rcsa.analysis.tool_point_model import MeasuredSpindle, ToolPointModel
 from rcsa.errors import InputError
@@ -67,12 +67,9 @@ from rcsa.physics.chain import Chain
 from rcsa.physics.natural_frequencies import natural_frequencies_hz
 
 __all__ = [
-    "FEATURES",
     "DEFAULT_RELATIVE_STEP",
-    "EffectReport",
     "effect_analysis",
     "effects",
-    "effects_figure",
     "effects_report",
     "nominal_features",
 ]
@@ -164,7 +161,7 @@ def effect_analysis(assembly: Mapping[str, Any] | AssemblySpec, *, parameters: S
 
     On a measured spindle (``"spindle": {"measurement_id": ...}``, with ``resolve_base``)
     the modes come from a modal fit of the hybrid model and bearings are not applicable
-    (:mod:`rcsa.analysis.hybrid_effects`).
+    (:mod:`rcsa.analysis.effects.measured_spindle`).
 
     Parameters
     ----------
@@ -312,55 +309,3 @@ def effects(request: Mapping[str, Any], resolve_base: BaseResolver | None = None
         For a malformed request.
     """
     return effects_report(request, resolve_base, progress).to_dict()
-
-
-# ---------------------------------------------------------------------------- figure
-
-
-def effects_figure(report: EffectReport, features: Sequence[str] = ("frequency_hz", "peak_magnitude_m_n",
-                                                                      "damping_ratio")) -> Any:
-    """Heat map of the sensitivities, modes × parameters, one panel per feature.
-
-    Uses :class:`matplotlib.figure.Figure` with the Agg canvas (never pyplot).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        Save it with :func:`rcsa.analysis.figures.save_figure`.
-
-    Raises
-    ------
-    InputError
-        When the report holds no mode or no parameter.
-    """
-    import matplotlib
-    from matplotlib.colors import TwoSlopeNorm
-
-    from rcsa.analysis.figures import freeze_layout, new_figure, percent_label
-
-    nm, npar = report.frequency_hz.size, len(report.parameters)
-    if nm == 0 or npar == 0:
-        raise InputError("band_hz", "the report has no mode (or no parameter) to draw")
-    fig = new_figure(max(6.0, 0.5 * npar + 2.5), 2.2 + len(features) * max(1.6, 0.3 * nm + 0.8))
-    axes = fig.subplots(len(features), 1, squeeze=False, sharex=True)[:, 0]
-    part = report.tip_participation
-    ylabels = [f"{f:.0f} Hz ({percent_label(p)})" for f, p in zip(report.frequency_hz, part, strict=True)]
-    titles = {"frequency_hz": "natural frequency", "peak_magnitude_m_n": "peak |h|",
-              "damping_ratio": "damping ratio", "peak_frequency_hz": "peak frequency"}
-    cmap = matplotlib.colormaps["RdBu_r"].with_extremes(bad="0.85")
-    for ax, q in zip(axes, features, strict=True):
-        s = np.asarray(report.sensitivity[q], dtype=float)
-        lim = float(np.nanmax(np.abs(s))) if np.any(np.isfinite(s)) else 1.0
-        lim = lim if lim > 0 else 1.0
-        image = ax.imshow(np.ma.masked_invalid(s), aspect="auto", cmap=cmap,
-                          norm=TwoSlopeNorm(0.0, -lim, lim), interpolation="nearest")
-        for (i, j), v in np.ndenumerate(s):
-            if math.isfinite(v) and abs(v) >= 0.01 * lim:
-                ax.text(j, i, f"{v:.2g}", ha="center", va="center", fontsize=6)
-        ax.set_yticks(range(nm), ylabels, fontsize=7)
-        ax.set_title(f"d ln({titles.get(q, q)}) / d ln(parameter)", fontsize=9)
-        fig.colorbar(image, ax=ax, shrink=0.9)
-    axes[-1].set_xticks(range(npar), report.parameters, rotation=60, ha="right", fontsize=7)
-    axes[0].text(0.0, 1.12, "modes: natural frequency (tip participation); grey: no peak at the tool point",
-                 transform=axes[0].transAxes, fontsize=7)
-    return freeze_layout(fig)
