@@ -3,7 +3,7 @@
 Run: ``.venv/bin/python benchmarks/calibrate_clamping.py`` (reads ``tests/data/solid3d``, which
 ``benchmarks/bench_solid3d.py --write-data`` regenerates). ``--fit`` refits
 :data:`rcsa.model.clamping.BULK_COEFFICIENTS` on the calibration cases (Nelder–Mead in the
-logarithms of the coefficients, on every 4th line of the band) and prints the new values;
+logarithms of the coefficients, on every 3rd line of the band) and prints the new values;
 without it, the current coefficients are scored. Results go to
 ``benchmarks/results/clamping.json``.
 
@@ -39,7 +39,7 @@ import rcsa.model.clamping as clamping  # noqa: E402
 
 #: Where the 3-D reference data are read (``--data`` overrides).
 DATA = dataset.DATA_DIR
-_FIT_EVERY = 4
+_FIT_EVERY = 3
 
 
 def load(name: str) -> dict[str, Any]:
@@ -57,7 +57,9 @@ def _objective(log_c: np.ndarray, truths: dict[tuple[str, str], np.ndarray], f: 
     total = 0.0
     for (name, base), truth in truths.items():
         s = scores(f, rcsa_h(name, "clamping", base, f), truth)
-        total += s["mean_abs_db"] + 10.0 * (100 * s["peak_frequency_error"]) ** 2 / 100 + abs(s["peak_height_error"])
+        # mean |dB| plus the largest peak's frequency error (0.1 per %²); peak heights are left out:
+        # on a thinned grid a lightly damped peak's height is a sampling accident
+        total += s["mean_abs_db"] + (100 * s["peak_frequency_error"]) ** 2 / 10
     return total / len(truths)
 
 

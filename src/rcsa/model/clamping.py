@@ -78,7 +78,7 @@ class BulkCoefficients:
 
 
 #: The fitted coefficients (``benchmarks/calibrate_clamping.py``).
-BULK_COEFFICIENTS = BulkCoefficients(a_h=2.04, b_h=1.93, a_s=2.0, c_theta=3.0, step_cone=1.0)
+BULK_COEFFICIENTS = BulkCoefficients(a_h=3.11, b_h=1.75, a_s=2.13, c_theta=2.04, step_cone=1.0)
 #: Pieces a step's stiffness cone is cut into (constant sections at their mid-diameters).
 CONE_PIECES = 4
 #: The ranges the calibration cases cover (``tests/data/solid3d``): the nose's outer diameter over
