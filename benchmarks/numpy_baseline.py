@@ -2,7 +2,7 @@
 
 What one would write first with numpy, vectorised over frequency: every beam's exact
 Timoshenko dynamic stiffness as a (nfreq, 4, 4) array (closed form from the transfer
-matrix, ``domain.md`` §2.3–2.4), joints and bearings added in, the global dynamic stiffness
+matrix, ``docs/physics.md`` §2.3–2.4), joints and bearings added in, the global dynamic stiffness
 assembled as (nfreq, N, N) and ``np.linalg.solve`` for the tip's two DOFs. No natural
 frequencies, peaks or static stiffness: the FRF alone.
 """

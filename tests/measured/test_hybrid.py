@@ -1,4 +1,4 @@
-"""Hybrid measured-plus-analytical predictions (issue 3, ``domain.md`` §4).
+"""Hybrid measured-plus-analytical predictions (issue 3, ``docs/physics.md`` §4).
 
 Truth for the artifact route comes from the dynamic-stiffness solver with interior nodes
 (condensation from both sides), not from the LM-FBS algebra the identification inverts.
@@ -62,7 +62,7 @@ def test_point_receptance_at_the_nose_reproduces_the_analytical_model(store, ra1
     assert result["natural_frequencies_method"] == "modal_fit"
     assert result["static_stiffness_n_m"] is None
     assert result["spindle_measurement"]["kind"] == "point_receptance"
-    # the modal fit finds the damped resonances of the peaks (599, 1386, 4034 Hz, domain.md §1.5)
+    # the modal fit finds the damped resonances of the peaks (599, 1386, 4034 Hz, docs/physics.md §1.5)
     fitted = np.array(result["natural_frequencies_hz"])
     for peak in (599.0, 1386.0, 4034.0):
         assert np.min(np.abs(fitted - peak)) < 3.0
@@ -109,7 +109,7 @@ def test_artifact_route_noise_free_is_exact(store, ra1_truth):
     f, frfs = blank_frfs()
     mid = put_blank(store, frfs, f)
     result = rcsa.predict(hybrid_doc(mid, holder=False), store=store)
-    # domain.md §4.6 / O14: exact method reproduces the tool point (8e-10 there); 1e-6 of peak here
+    # docs/physics.md §4.6 / O14: exact method reproduces the tool point (8e-10 there); 1e-6 of peak here
     assert max_error_of_peak(result.tool_point.values[:, 0, 0], ra1_truth[:, 0, 0]) < 1e-6
     report = result["spindle_measurement"]
     assert report["method"] == "exact_three_frf"
@@ -118,7 +118,7 @@ def test_artifact_route_noise_free_is_exact(store, ra1_truth):
 
 @pytest.mark.parametrize("noise, bound", [(0.002, 0.15), (0.01, 0.6)])
 def test_artifact_route_with_noise(store, ra1_truth, noise, bound):
-    # domain.md §4.6 measured 0.043 (0.2 %) and 0.288 (1 %) of peak over 300–5000 Hz; the
+    # docs/physics.md §4.6 measured 0.043 (0.2 %) and 0.288 (1 %) of peak over 300–5000 Hz; the
     # bounds leave room for the noise draw. The README reports the benchmark figures.
     f, frfs = blank_frfs(noise)
     mid = put_blank(store, frfs, f)
@@ -136,7 +136,7 @@ def test_finite_difference_fallback_is_labelled_and_biased(store, ra1_truth):
     assert result["spindle_measurement"]["method"] == "finite_difference_fallback"
     assert any("finite-difference" in n for n in result["notes"])
     err = max_error_of_peak(result.tool_point.h[f >= 300], ra1_truth[f >= 300, 0, 0])
-    assert 0.01 < err < 0.5  # domain.md §4.6: ≈0.12 of peak, noise-free
+    assert 0.01 < err < 0.5  # docs/physics.md §4.6: ≈0.12 of peak, noise-free
 
 
 def test_holder_tip_requires_the_matching_shank(store):

@@ -87,7 +87,7 @@ def test_noise_free_ra1_frf_gives_its_dominant_modes():
     exact = rcsa.predict(ra1({"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 1.0}))
     fit = modal_fit(exact.frequency_hz, exact.tool_point.h)
     assert_sorted_and_distinct(fit)
-    # the dominant damped resonances (599, 1386, 4034 Hz, domain.md §1.5), sharply determined
+    # the dominant damped resonances (599, 1386, 4034 Hz, docs/physics.md §1.5), sharply determined
     for peak in (599.0, 1386.0, 4034.0):
         k = int(np.argmin(np.abs(fit.frequency_hz - peak)))
         assert abs(fit.frequency_hz[k] - peak) < 3.0 and fit.sd_hz[k] < 0.5

@@ -56,7 +56,7 @@ def example_assembly(name: str, frequency: Mapping[str, Any] | None = None) -> d
 
 def predict(assembly: Mapping[str, Any] | AssemblySpec, *, store: MeasurementStore | None = None,
             max_lines: int = MAX_FREQUENCY_LINES) -> Prediction:
-    """Tool-point prediction of one assembly (``contract.md`` "Python API").
+    """Tool-point prediction of one assembly (``docs/contract.md`` "Python API").
 
     Parameters
     ----------

@@ -1,7 +1,7 @@
 """Content-addressed cache of computed tool-point results (derived data, safe to delete).
 
-A result is filed under the SHA-256 of everything that determines it (``ecosystem.md``
-§3.4), never under a tool or library id:
+A result is filed under the SHA-256 of everything that determines it (``docs/architecture.md``
+"Durable storage"), never under a tool or library id:
 
 * the canonical JSON (:func:`canonical_json`: sorted keys, integers written as floats,
   ``-0.0`` as ``0.0``) of the combination (``holder``, ``tool``, ``joints``; its ``id`` left

@@ -2,7 +2,7 @@
 
 :func:`predict_model` solves an :class:`~rcsa.model.assembly.AssemblyModel` and returns a
 :class:`Prediction`, which is both a typed object (numpy arrays) and a read-only mapping in
-exactly the contract's JSON shape (``contract.md`` "Prediction result").
+exactly the contract's JSON shape (``docs/contract.md`` "Prediction result").
 """
 
 from __future__ import annotations

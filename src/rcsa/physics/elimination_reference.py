@@ -19,7 +19,7 @@ One step, for an item between the current node ``a`` and a new node ``b``:
 3. **condense** the DOFs of node ``a`` that remain: ``K ← A_bb − A_ba A_aa⁻¹ A_ab``.
 
 A grounded item (bearing, lumped mass) has no second node: ``K ← K + Δ``. At the tool tip the
-point receptance is ``K⁻¹`` (domain.md conventions: ``[[h, l], [n, p]]``, e^{iωt}).
+point receptance is ``K⁻¹`` (docs/physics.md conventions: ``[[h, l], [n, p]]``, e^{iωt}).
 """
 
 from __future__ import annotations

@@ -22,7 +22,7 @@ different, physical realisations, see ``tests/analysis/diagnosis/truth.py``):
 * ``shear_scale`` multiplies the shear flexibility 1/(κGA) and the rotary inertia ρI of every
   Timoshenko section (0 = Euler–Bernoulli, 1 = Timoshenko with the assembly's κ).
 * ``fluted_stiffness_ratio`` / ``fluted_mass_ratio`` are the fluted section's equivalent
-  diameters over DC for EI (and ρI) and for ρA (``domain.md`` §5.1).
+  diameters over DC for EI (and ρI) and for ρA (``docs/physics.md`` §5.1).
 * ``tip_mass_kg`` is a point mass (no rotary inertia) on the tool, ``tip_mass_distance_m``
   behind the tip (the last beam is split there).
 * ``insertion_offset_m`` moves the clamping point that far into the holder: the holder's last

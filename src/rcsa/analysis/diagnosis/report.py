@@ -1,4 +1,4 @@
-"""The diagnosis response (``contract.md`` "Diagnosis") and its figure.
+"""The diagnosis response (``docs/contract.md`` "Diagnosis") and its figure.
 
 Response fields: ``gap`` (``modes`` and ``bands``: each feature and band judged as a z-score
 against what tolerances and noise already explain, plus χ², p-value and a sentence),
@@ -36,7 +36,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = ["build_response", "diagnosis_figure", "gap_map"]
 
-Z_FLAG = 3.0  # |z| above this is flagged in the gap map (diagnosis.md §4.4)
+Z_FLAG = 3.0  # |z| above this is flagged in the gap map (docs/diagnosis.md §4.4)
 P_GAP = 0.05
 
 
