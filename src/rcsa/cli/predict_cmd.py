@@ -15,9 +15,9 @@ StoreOption = Annotated[Path | None, typer.Option("--store", help="Measurement s
 def register(app: typer.Typer) -> None:
     """Add the ``predict`` command to ``app``."""
 
-    @app.command()
+    @app.command(short_help="Tool-point FRF of one assembly (contract JSON).")
     def predict(
-        assembly: Annotated[Path, typer.Argument(help="Assembly JSON (contract format, SI units); '-' for stdin.")],
+        assembly: Annotated[Path, typer.Argument(metavar="ASSEMBLY.json", help="Assembly JSON (contract format, SI units); '-' for stdin.")],
         out: Annotated[Path | None, typer.Option("-o", "--out", help="Write the result here instead of stdout.")] = None,
         store: StoreOption = None,
     ) -> None:
@@ -27,4 +27,4 @@ def register(app: typer.Typer) -> None:
         from rcsa.app.stores import open_store
         doc = read_json(assembly)
         result = run_guarded(lambda: predict_assembly(doc, store=open_store(store) if store else None))
-        write_json(result.to_dict(), out)
+        write_json(result.to_dict(), out, "the prediction")
