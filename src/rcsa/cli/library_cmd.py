@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rcsa.cli._common import command_group, fail, read_json, run_guarded, write_json
+from rcsa.cli._common import command_group, fail, read_json, run_guarded, write_json, wrote
 from rcsa.errors import InputError
 
 if TYPE_CHECKING:
@@ -322,7 +322,7 @@ def export(
     except OSError as exc:
         raise fail(f"cannot write {out}: {exc.strerror or exc}") from None
     ok = export.ok
-    typer.echo(f"{out}: {ok} tool{'s' if ok != 1 else ''} of {library_id} revision {export.revision}", err=True)
+    wrote(out, f"{ok} tool{'s' if ok != 1 else ''} of {library_id} revision {export.revision}")
 
 
 @library_app.command("recommend", short_help="Write chatter-safe presets into a Fusion library.")

@@ -154,6 +154,9 @@ def import_(
         list[Path] | None,
         typer.Option("--tap", help="tap: further tap files averaged with FILE (H1)."),
     ] = None,
+    id_only: Annotated[
+        bool, typer.Option("--id-only", help="Print only the new id, for scripts: ID=$(rcsa store import ... --id-only).")
+    ] = False,
     store: StoreOpt = None,
 ) -> None:
     """Import a measurement file and print the new measurement's metadata JSON (with its id)."""
@@ -187,7 +190,11 @@ def import_(
         )
         return M.store_measurement(open_store(store), m)
 
-    write_json(_guard(run), None)
+    info = _guard(run)
+    if id_only:
+        typer.echo(info["id"])
+    else:
+        write_json(info, None)
 
 
 @store_app.command("list")
