@@ -43,19 +43,19 @@ def citations(text: str) -> list[tuple[str, list[str], str | None]]:
     return out
 
 
-def _resolve(cited: str) -> Path | None:
-    if "/" in cited:
-        path = REPO / cited
-        return path if path.is_file() else None
+def _resolve(cited: str, here: Path = REPO) -> Path | None:
+    if "/" in cited:  # from the repository root, or from the citing file's folder
+        path = next((p for p in (REPO / cited, here / cited) if p.is_file()), None)
+        return path
     found = [p for p in REPO.rglob(cited) if ".venv" not in p.parts]
     return found[0] if found else None
 
 
-def problems(text: str) -> list[str]:
-    """What in ``text`` cites something this repository does not have."""
+def problems(text: str, here: Path = REPO) -> list[str]:
+    """What in ``text`` (a file in the folder ``here``) cites something this repository does not have."""
     out = []
     for cited, numbers, name in citations(text):
-        path = _resolve(cited)
+        path = _resolve(cited, here)
         if path is None:
             out.append(f"{cited}: no such file in the repository")
             continue
@@ -68,7 +68,8 @@ def problems(text: str) -> list[str]:
 
 @pytest.mark.parametrize("path", SCANNED, ids=lambda p: str(p.relative_to(REPO)))
 def test_every_citation_resolves_inside_the_repository(path):
-    assert not problems(path.read_text(encoding="utf-8")), problems(path.read_text(encoding="utf-8"))
+    found = problems(path.read_text(encoding="utf-8"), path.parent)
+    assert not found, found
 
 
 def test_the_project_documents_are_cited_and_cite_by_section():
