@@ -288,7 +288,7 @@ def _write_entries(fh: BinaryIO, started: EntryResults) -> dict[str, Any]:
 
 def answer_or_queue(bench: Workbench, jobs: JobStore, work: Work, *, respond_async: bool, async_threshold: int,
                     reuse_unfinished: bool = False, owner: str | None = None,
-                    max_unfinished: int | None = None) -> Job | Outcome:
+                    max_unfinished: int | None = None, pool: str | None = None) -> Job | Outcome:
     """Queue ``work`` as a job (:meth:`Work.should_queue`), or run it now.
 
     Parameters
@@ -301,12 +301,15 @@ def answer_or_queue(bench: Workbench, jobs: JobStore, work: Work, *, respond_asy
     async_threshold : int
         Work computing more results than this is queued.
     reuse_unfinished : bool
-        A retried submission: return the unfinished job of the same request, if any,
-        instead of queuing it twice (:meth:`JobStore.submit`).
+        A retried submission: return the owner's unfinished job of the same request, if
+        any, instead of queuing it twice (:meth:`JobStore.submit`).
     owner : str, optional
-        Who asks (jobs are claimed fairly across owners).
+        Who asks.
     max_unfinished : int, optional
         Most queued or running jobs one owner may have.
+    pool : str, optional
+        Whose runners the job shares (jobs are claimed fairly across pools and the running
+        cap counts per pool; default: the owner's own).
 
     Returns
     -------
@@ -324,7 +327,7 @@ def answer_or_queue(bench: Workbench, jobs: JobStore, work: Work, *, respond_asy
         if work.check is not None:
             work.check()
         return jobs.submit(work.kind, work.request, reuse_unfinished=reuse_unfinished, owner=owner,
-                           max_unfinished=max_unfinished)
+                           max_unfinished=max_unfinished, pool=pool)
     return run_work(bench, work.kind, work.request, plan=work.plan, backend=LocalBackend())
 
 
