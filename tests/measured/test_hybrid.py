@@ -187,8 +187,8 @@ def test_unknown_measurement_is_an_input_error(store):
 TAP = SHARED_DATA / "leekunhwee-tool-tap"
 
 
-@pytest.mark.skipif(not TAP.is_dir(), reason="third-party tap test is read from ../shared/data only "
-                                                "(unlicensed, never copied into the repo); absent here")
+@pytest.mark.skipif(not TAP.is_dir(), reason=f"third-party tap test not present at {TAP} "
+                                                "(unlicensed, never copied into the repo; set RCSA_SHARED_DATA)")
 def test_finite_difference_rotations_of_a_real_tap_test():
     # Roving hammer, sensor at the tip: Point_k = H_1k = H_k1 (reciprocity), points 0/55/90 mm.
     data = [np.loadtxt(TAP / f"Point_{k}_Channel_1_CH1.txt") for k in (1, 2, 3)]

@@ -99,7 +99,7 @@ TAP = SHARED_DATA / "leekunhwee-tool-tap" / "Point_1_Channel_1_CH1.txt"
 
 
 @pytest.mark.skipif(not TAP.is_file(), reason=f"third-party tap-test data not present at {TAP.parent} "
-                                              "(unlicensed, kept outside the repository)")
+                                              "(unlicensed, kept outside the repository; set RCSA_SHARED_DATA)")
 @pytest.mark.parametrize("plane", ["holder_tip", "spindle_nose"])
 def test_real_tap_test_as_a_spindle_gives_sorted_distinct_frequencies(tmp_path, plane):
     store = MeasurementStore(tmp_path / "store")

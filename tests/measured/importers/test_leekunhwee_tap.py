@@ -23,7 +23,7 @@ META = MeasurementMeta(
 
 pytestmark = pytest.mark.skipif(
     not (POINT_1.is_file() and RAW_TAP.is_file()),
-    reason=f"third-party tap-test data not present at {DATA} (kept outside the repository)",
+    reason=f"third-party tap-test data not present at {DATA} (kept outside the repository; set RCSA_SHARED_DATA)",
 )
 
 
