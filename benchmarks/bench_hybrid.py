@@ -20,7 +20,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from tests.helpers import max_error_of_peak  # noqa: E402
-from tests.test_hybrid import GRID, blank_frfs, hybrid_doc, put_blank  # noqa: E402
+from tests.measured.test_hybrid import GRID, blank_frfs, hybrid_doc, put_blank  # noqa: E402
 
 import rcsa  # noqa: E402
 from rcsa.measured.store import MeasurementStore  # noqa: E402

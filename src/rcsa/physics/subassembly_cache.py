@@ -273,6 +273,8 @@ class SubassemblyCache:
         Condensed
             Read-only.
         """
+        if not isinstance(chains, tuple) or not all(isinstance(c, tuple) for c in chains):
+            raise TypeError("condensed() takes a tuple of chains, e.g. (spindle, holder); for one chain: (chain,)")
         start = self.base if base is None else base
         if not chains:
             return self._free if start is None else Condensed(compliance=start)
