@@ -296,6 +296,10 @@ def test_every_serve_command_starts_a_service(scratch):
 
 
 def test_the_python_blocks_of_the_readmes_run(scratch):
+    # the files the README's reading snippet opens, made as its text says (rcsa predict BATCH.json -o ...)
+    for out in ("out.h5", "out.parquet"):
+        result = CliRunner().invoke(app, ["predict", "examples/batch.json", "-o", out])
+        assert result.exit_code == 0, result.stderr
     for readme in READMES:
         for block in _blocks(readme, "python"):
             exec(compile("\n".join(block), f"{readme.name} python block", "exec"), {})  # noqa: S102
