@@ -97,6 +97,10 @@ class LruStore(Generic[K, V]):
     def __len__(self) -> int:
         return len(self._items)
 
+    def values(self) -> list[V]:
+        """The entries kept, least recently used first."""
+        return list(self._items.values())
+
     def peek(self, key: K) -> V | None:
         """The entry of ``key`` (marked as just used), or None.
 
@@ -108,6 +112,15 @@ class LruStore(Generic[K, V]):
         if hit is not None:
             self._items.move_to_end(key)
         return hit
+
+    def pop(self, key: K) -> V | None:
+        """Drop the entry of ``key`` (None when there is none); ``on_evict`` is not called.
+
+        Parameters
+        ----------
+        key : hashable
+        """
+        return self._items.pop(key, None)
 
     def put(self, key: K, value: V) -> V:
         """Keep ``value`` under ``key`` (dropping the least recently used beyond :attr:`size`).
