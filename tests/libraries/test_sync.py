@@ -192,7 +192,7 @@ def test_killed_sync_resumes_from_the_cache(libs, tmp_path, computed):
     path = tmp_path / "request.json"
     path.write_text(json.dumps(request))
     run = subprocess.run([sys.executable, "-c", _KILLED_RUN, str(path), str(libs.directory)], cwd=REPO,
-                         capture_output=True, text=True, timeout=120)
+                         capture_output=True, text=True, timeout=600)
     assert run.returncode == -9, run.stderr
     assert "shop" not in libs  # nothing committed
     report = library_sync.run_sync(libs, request)

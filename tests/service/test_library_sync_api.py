@@ -30,7 +30,7 @@ def _json_body(library: dict) -> dict:
     return {"library": library, "spindle": RA1["spindle"], "frequency": GRID, "joints": RA1["joints"]}
 
 
-def _wait(client, location: str, timeout_s: float = 60.0) -> dict:
+def _wait(client, location: str, timeout_s: float = 300.0) -> dict:
     t0 = time.monotonic()
     while time.monotonic() - t0 < timeout_s:
         job = client.get(location).json()
