@@ -26,7 +26,7 @@ def register(app: typer.Typer) -> None:
         """Run the REST service (uvicorn) with the store from RCSA_STORE or the default location.
 
         The settings, the store and the Dask scheduler are checked once first (the service's
-        own start-up, ``python -m service.preflight``): a service that cannot start exits 1 with
+        own start-up, python -m service.preflight): a service that cannot start exits 1 with
         the reason instead of leaving its workers to fail (uvicorn then exits 0).
         """
         if dask_scheduler:
