@@ -138,6 +138,13 @@ def ra1_with_uncertainty() -> dict:
     return {**ra1(GRID), "uncertainty": {"draws": 50, "seed": 1}}
 
 
+def ra1_bonded() -> dict:
+    """RA-1 with its tool bonded along the insertion (``joints.holder_tool.model``) instead of the point joint."""
+    doc = ra1(GRID)
+    doc["joints"]["holder_tool"] = {"model": "bonded"}
+    return doc
+
+
 def lobes_robust() -> dict:
     """The cut of :func:`lobes_with_assembly` with robust limits at 95 % over 50 drawn assemblies."""
     return {**lobes_with_assembly(), "uncertainty": {"draws": 50, "seed": 1}, "robust": {"confidence": 0.95}}
@@ -159,7 +166,8 @@ def write(folder: Path) -> list[Path]:
     files = {"diagnosis.json": diagnosis(taps), "identification.json": identification(taps),
              "measurement.json": measurement, "lobes-frf.json": lobes_with_inline_frf(),
              "lobes-assembly.json": lobes_with_assembly(), "batch.json": batch(), "effects.json": effects(),
-             "ra1-uncertainty.json": ra1_with_uncertainty(), "lobes-robust.json": lobes_robust(),
+             "ra1-uncertainty.json": ra1_with_uncertainty(), "ra1-bonded.json": ra1_bonded(),
+             "lobes-robust.json": lobes_robust(),
              "lobes-sdm.json": lobes_semi_discretization()}
     paths = []
     for name, doc in files.items():

@@ -87,6 +87,8 @@ _FORM_FIELDS = {
     "measurement_id": "Instead of spindle: a stored measurement's id (hybrid).",
     "frequency": 'JSON: {"start_hz", "stop_hz", "step_hz"} or {"values_hz": [...]}, Hz.',
     "joints": 'JSON: {"spindle_holder": {...}, "holder_tool": {...}} applied to every tool (default rigid).',
+    "holder_tool": 'Every tool\'s holder-tool clamping, replacing the joints\' own: bonded, point, or JSON '
+                   '{"model": "contact", "interface_stiffness_n_m3": 5e13}.',
     "materials": "JSON: materials by name (added to steel and carbide).",
     "beam_theory": "timoshenko | euler_bernoulli.",
     "shear_coefficient": "hutchinson | cowper | a number.",
@@ -162,7 +164,10 @@ async def _from_form(form: Any, limit_bytes: int) -> tuple[dict[str, Any], dict[
         text = form_text(form, name) if name not in ("library", "holder") else None
         if text is None or text == "":
             continue
-        if name in _JSON_FIELDS:
+        if name == "holder_tool":
+            doc[name] = decode_json(text, path=name, what="form field holder_tool") if text.lstrip().startswith("{") \
+                else text
+        elif name in _JSON_FIELDS:
             try:
                 doc[name] = decode_json(text, path=name, what=f"form field {name}")
             except InputError:

@@ -112,16 +112,22 @@ def _uncertainty_json(option: str | None) -> dict[str, Any] | None:
     return doc
 
 
-def _settings(base: dict[str, Any], frequency: str | None, joints: Path | None, store: Any) -> dict[str, Any]:
+def _settings(base: dict[str, Any], frequency: str | None, joints: Path | None, store: Any,
+              holder_tool: str | None = None) -> dict[str, Any]:
     """Keyword arguments of :func:`rcsa.app.libraries.prepare_library` from the command's options.
 
     ``store`` is given when the spindle is a stored measurement named on the command line;
-    its lines are then the default grid.
+    its lines are then the default grid. ``holder_tool`` is a clamping model name or a JSON
+    ``joints.holder_tool`` object for every tool.
     """
     # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app.inputs import decode_json
     from rcsa.app.libraries import spindle_settings
+    ht: Any = holder_tool
+    if holder_tool is not None and holder_tool.lstrip().startswith("{"):
+        ht = decode_json(holder_tool, path="holder_tool", what="--holder-tool")
     return spindle_settings(base, frequency=parse_frequency_option(frequency) if frequency is not None else None,
-                            joints=read_json(joints) if joints is not None else None, store=store)
+                            joints=read_json(joints) if joints is not None else None, holder_tool=ht, store=store)
 
 
 def _progress_bar(quiet: bool) -> Any:
@@ -144,6 +150,10 @@ FrequencyOption = Annotated[str | None, typer.Option(
          "measurement's lines, else 5:5000:1.")]
 JointsOption = Annotated[Path | None, typer.Option(
     help="Joints JSON {spindle_holder, holder_tool} for every tool (default: the assembly's, else rigid).")]
+HolderToolOption = Annotated[str | None, typer.Option(
+    "--holder-tool", help="Every tool's holder-tool clamping: bonded, point, or a JSON joints.holder_tool object, "
+                          "e.g. '{\"model\": \"contact\", \"interface_stiffness_n_m3\": 5e13}' (replaces the "
+                          "joints' own).")]
 ImportOptions = Annotated[str | None, typer.Option(
     help='Import options as JSON, e.g. \'{"holder_segments_per_cone": 6}\'.')]
 NaturalFrequenciesOption = Annotated[bool, typer.Option(help="Compute exact natural frequencies.")]
@@ -172,6 +182,7 @@ def predict(
                                                          "(hybrid).")] = None,
     frequency: FrequencyOption = None,
     joints: JointsOption = None,
+    holder_tool: HolderToolOption = None,
     options: ImportOptions = None,
     natural_frequencies: NaturalFrequenciesOption = True,
     uncertainty: UncertaintyOption = None,
@@ -197,7 +208,7 @@ def predict(
 
     def build() -> tuple[Workbench, Any]:
         bench = Workbench(open_store(store) if (store is not None or measurement is not None) else None)
-        settings = _settings(base, frequency, joints, bench.store if measurement is not None else None)
+        settings = _settings(base, frequency, joints, bench.store if measurement is not None else None, holder_tool)
         work = prepare_library(bench, library, holder=holder, **settings,
                                natural_frequencies=natural_frequencies, options=_options_json(options),
                                uncertainty=_uncertainty_json(uncertainty))
@@ -246,6 +257,7 @@ def sync(
                                                                         "file name without suffix).")] = None,
     frequency: FrequencyOption = None,
     joints: JointsOption = None,
+    holder_tool: HolderToolOption = None,
     options: ImportOptions = None,
     natural_frequencies: NaturalFrequenciesOption = True,
     uncertainty: UncertaintyOption = None,
@@ -271,7 +283,7 @@ def sync(
     def build() -> tuple[Workbench, Any]:
         st = open_store(store)
         bench = Workbench(st, st.path)
-        settings = _settings(base, frequency, joints, st if measurement is not None else None)
+        settings = _settings(base, frequency, joints, st if measurement is not None else None, holder_tool)
         work = prepare_sync(bench, library_id, library, holder=holder, **settings,
                             natural_frequencies=natural_frequencies, options=_options_json(options),
                             uncertainty=_uncertainty_json(uncertainty))
@@ -388,6 +400,7 @@ def recommend(
                                                           "depth limit at this confidence (default 0.95).")] = None,
     frequency: FrequencyOption = None,
     joints: JointsOption = None,
+    holder_tool: HolderToolOption = None,
     options: ImportOptions = None,
     store: StoreOption = None,
     quiet: QuietOption = False,
@@ -427,7 +440,7 @@ def recommend(
     def predicted() -> PresetFile:
         base = _spindle_document(spindle) if spindle is not None else {"spindle": {"measurement_id": measurement}}
         bench = Workbench(open_store(store) if (store is not None or measurement is not None) else None)
-        fields = _settings(base, frequency, joints, bench.store if measurement is not None else None)
+        fields = _settings(base, frequency, joints, bench.store if measurement is not None else None, holder_tool)
         with _progress_bar(quiet) as bar:
             task = bar.add_task("tools", total=1)
 

@@ -41,6 +41,11 @@ different, physical realisations, see ``tests/analysis/diagnosis/truth.py``):
   length L/s instead of L and shape PH/N² = 4c/3 instead of 4/3.
 * At ``holder_tip`` the holder is inside the measurement: ``insertion_offset_m`` only
   lengthens the tool's free length (the holder's annulus over δ is part of the measurement).
+* With a holder–tool clamping along the insertion (model ``bonded``/``contact``) the holder-tool
+  knobs act on the clamping, which belongs to the holder chain: ``ht_translational_scale``
+  scales its whole interface stiffness (softening over the insertion), ``ht_damping_scale``
+  its interface loss factor, and ``insertion_offset_m`` is contact lost over that length
+  at the front of the bore (its ``front_gap_length_m``): holder and tool keep their geometry.
 """
 
 from __future__ import annotations
@@ -56,12 +61,13 @@ from rcsa.model.assembly import holder_chain, joint_spring, spindle_chain, tool_
 from rcsa.model.contract import (
     AssemblySpec,
     BearingSpec,
+    ClampingSpec,
     HolderSpec,
-    JointSpec,
     SegmentSpec,
     SpindleSpec,
     ToolSpec,
 )
+from rcsa.model.tolerances import scaled_joint
 from rcsa.physics.arrays import ComplexArray, FloatArray, IntArray
 from rcsa.physics.chain import Beam, Chain, ChainItem, Ground
 from rcsa.physics.materials import Material
@@ -121,14 +127,6 @@ def _materials(spec: AssemblySpec, k: Knobs) -> Mapping[str, Material]:
     return out
 
 
-def _joint(joint: JointSpec | None, kt: float, kr: float, c: float) -> JointSpec | None:
-    if joint is None:
-        return None
-    return JointSpec(joint.stiffness_n_m * kt, joint.damping_ns_m * c,
-                     None if joint.rotational_stiffness_nm_rad is None else joint.rotational_stiffness_nm_rad * kr,
-                     joint.rotational_damping_nms_rad * c)
-
-
 def _spindle(spindle: SpindleSpec, k: Knobs) -> SpindleSpec:
     bearings = tuple(BearingSpec(b.position_m, b.stiffness_n_m * k.bearing_stiffness_scale,
                                  b.damping_ns_m * k.bearing_damping_scale,
@@ -182,8 +180,9 @@ def _spindle_chain(spindle: SpindleSpec, mats: tuple, shear: object, theory: str
 
 
 @lru_cache(maxsize=256)
-def _holder_chain(holder: HolderSpec, tool: ToolSpec, mats: tuple, shear: object, theory: str) -> Chain:
-    return holder_chain(holder, tool, dict(mats), shear, theory)  # type: ignore[arg-type]
+def _holder_chain(holder: HolderSpec, tool: ToolSpec, mats: tuple, shear: object, theory: str,
+                  clamping: ClampingSpec | None = None) -> Chain:
+    return holder_chain(holder, tool, dict(mats), shear, theory, clamping)  # type: ignore[arg-type]
 
 
 @lru_cache(maxsize=256)
@@ -304,7 +303,14 @@ class PartsBuilder:
             sp = spec.spindle
             spindle = _cached(self._spindles, (mkey, s, k.bearing_stiffness_scale, k.bearing_damping_scale),
                               lambda: shear_scaled(_spindle_chain(_spindle(sp, k), mats, shear, theory)))
-        stickout = tool.stickout_m + k.stickout_offset_m + k.insertion_offset_m
+        # a clamping along the insertion belongs to the holder chain, with the holder-tool knobs
+        clamping = scaled_joint(spec.holder_tool, k.ht_translational_scale, k.ht_rotational_scale,
+                                k.ht_damping_scale) if isinstance(spec.holder_tool, ClampingSpec) else None
+        front_gap = clamping is not None and self.plane != "holder_tip"
+        if front_gap and k.insertion_offset_m > 0.0:
+            assert isinstance(clamping, ClampingSpec)
+            clamping = replace(clamping, front_gap_length_m=clamping.front_gap_length_m + k.insertion_offset_m)
+        stickout = tool.stickout_m + k.stickout_offset_m + (0.0 if front_gap else k.insertion_offset_m)
         r_i = tool.fluted_diameter_ratio if k.fluted_stiffness_ratio is None else k.fluted_stiffness_ratio
         r_a = tool.fluted_mass_diameter_ratio if k.fluted_mass_ratio is None else k.fluted_mass_ratio
         made: list[ToolSpec] = []
@@ -324,30 +330,31 @@ class PartsBuilder:
             if self.plane == "holder_tip":
                 return tuple(items)
             assert spec.holder is not None
-            holder, ring = _trim_holder(spec.holder, k.insertion_offset_m, dict(mats))
-            sh = joint_spring(_joint(spec.spindle_holder, k.sh_translational_scale, k.sh_rotational_scale,
-                                     k.sh_damping_scale))
+            holder, ring = _trim_holder(spec.holder, 0.0 if front_gap else k.insertion_offset_m, dict(mats))
+            sh = joint_spring(scaled_joint(spec.spindle_holder, k.sh_translational_scale, k.sh_rotational_scale,
+                                           k.sh_damping_scale))
             if sh is not None:
                 items.append(sh)
-            items.extend(shear_scaled(_holder_chain(holder, tool_of(), mats, shear, theory)))
+            items.extend(shear_scaled(_holder_chain(holder, tool_of(), mats, shear, theory, clamping)))
             if ring is not None:
                 items.append(ring)
             return tuple(items)
 
         mid_key = (mkey, s, k.base_rotation_scale, k.base_rotation_shape, k.nose_cross_compliance_rad_n,
-                   k.nose_rotational_residual_rad_nm)
+                   k.nose_rotational_residual_rad_nm, clamping)
         if self.plane != "holder_tip":
             assert spec.holder is not None
             # the holder chain sees the tool only through the inserted length inside the (trimmed) holder
-            filled = round(min(tool.overall_length_m - stickout, spec.holder.length_m - k.insertion_offset_m), 12)
+            filled = round(min(tool.overall_length_m - stickout,
+                               spec.holder.length_m - (0.0 if front_gap else k.insertion_offset_m)), 12)
             mid_key += (k.sh_translational_scale, k.sh_rotational_scale, k.sh_damping_scale, k.insertion_offset_m,
                         filled, tool.shank_diameter_m, tool.material)
         mid = _cached(self._middles, mid_key, middle)
 
         def tail() -> Chain:
             items: list[ChainItem] = []
-            ht = joint_spring(_joint(spec.holder_tool, k.ht_translational_scale, k.ht_rotational_scale,
-                                     k.ht_damping_scale))
+            ht = joint_spring(scaled_joint(spec.holder_tool, k.ht_translational_scale, k.ht_rotational_scale,
+                                           k.ht_damping_scale))
             if ht is not None:
                 items.append(ht)
             items.extend(shear_scaled(_tool_chain(tool_of(), mats, shear, theory)))
