@@ -23,15 +23,16 @@ the draw. The reduced model:
    s_m)`` and at most ``√(max s_k / min s_m)`` when every stiffness is scaled by some
    ``s_k`` and every mass by some ``s_m`` (:func:`frequency_ratio_bounds`). Around every
    visible pole, over that range widened by two half-power half-widths, lines are taken every
-   :data:`LINE_SPACING_HALF_WIDTHS` half-widths, plus :data:`BACKGROUND_LINES` spread over the
-   band; a few more lines between them are kept aside as checks.
+   :data:`LINE_SPACING_HALF_WIDTHS` half-widths, plus lines spread over the band
+   (:data:`BACKGROUND_LINES`, :data:`BACKGROUND_RATIO`); a few more lines between them are
+   kept aside as checks.
 3. **Exact solves at those lines** for every draw, in one stacked march.
 4. **One rational fit per draw** of ``h_d − B`` on its sample lines, starting from the
    nominal poles (vector fitting relocates them to the draw's own: a shifted mode, a veering
    pair), all draws in one batched least-squares problem per iteration.
 5. **Checks.** Each draw's model is compared with its exact values at the check lines it
-   was not fitted to; a draw whose error exceeds :data:`CHECK_TOLERANCE` of its peak is
-   solved exactly on every line instead.
+   was not fitted to; a draw whose |h| there is off by more than :data:`CHECK_TOLERANCE`
+   (relative) is solved exactly on every line instead.
 
 Readable form (the code is its vectorised equivalent)::
 
@@ -63,32 +64,41 @@ from rcsa.physics.arrays import ComplexArray, FloatArray, IntArray
 from rcsa.physics.seeded_modes import natural_frequencies_near
 from rcsa.physics.stacking import take_rows
 
-__all__ = ["BACKGROUND_LINES", "CHECK_TOLERANCE", "NOMINAL_FIT_TOLERANCE", "LINE_SPACING_HALF_WIDTHS", "STIFFNESS_KNOBS", "MASS_KNOBS",
-           "CALIBRATION_DRAWS", "ESTIMATE_TOLERANCE", "NATURAL_FREQUENCY_RTOL", "REGRESSION_KNOBS",
+__all__ = ["ADDED_POLES", "BACKGROUND_LINES", "EXTRA_POLES", "CHECK_TOLERANCE", "NOMINAL_FIT_TARGET", "NOMINAL_FIT_TOLERANCE", "BACKGROUND_RATIO", "LINE_SPACING_HALF_WIDTHS", "STIFFNESS_KNOBS", "MASS_KNOBS", "RESIDUE_FACTOR",
+           "CALIBRATION_DRAWS", "ESTIMATE_TOLERANCE", "HELD_OUT_DRAWS", "HELD_OUT_FACTOR", "OUTLIER_FACTOR", "NATURAL_FREQUENCY_RTOL", "REFIT_TOLERANCE", "REGRESSION_KNOBS",
            "TRACKED_HALF_WIDTH", "NominalStructure", "ReducedDraws", "antiresonances",
            "frequency_ratio_bounds", "match_poles", "nominal_structure", "reduced_draws", "reduced_mode_statistics",
            "sample_lines"]
 
 #: Sample lines per half-power half-width of a mode over its range (measured on RA-1: every
 #: 3 half-widths gives the quantiles to 1e-3 of the peak, every 4 to 2e-3).
-LINE_SPACING_HALF_WIDTHS = 5.0
-#: Lines spread geometrically over the band besides the modes' ranges.
-BACKGROUND_LINES = 8
+LINE_SPACING_HALF_WIDTHS = 8.0
+#: Lines spread geometrically over the band besides the modes' ranges: this many below half
+#: the lowest resonance, and a ratio of ``BACKGROUND_RATIO`` between neighbours above.
+BACKGROUND_LINES, BACKGROUND_RATIO = 6, 1.5
 #: Check lines kept aside per draw.
 CHECK_LINES = 6
 #: Largest error of the nominal fit (all its poles), relative to the nominal peak, for the
 #: reduced model to be used (measured: 1e-4 on RA-1).
 NOMINAL_FIT_TOLERANCE = 1e-2
-#: Largest check error of a draw's model, relative to the draw's peak |h|, before the draw is
-#: solved exactly on every line (the band's target is 2 %; the models measured are ~1e-4).
-CHECK_TOLERANCE = 2e-3
+#: Error of the nominal fit below which no pole is added, relative to the peak, and the most
+#: poles added (:func:`nominal_structure`).
+NOMINAL_FIT_TARGET, ADDED_POLES = 3e-4, 4
+#: Check error above which a draw's fit gets one more pole relocation (from its own poles).
+REFIT_TOLERANCE = 1e-3
+#: Largest check error of a draw's model — the relative error of its |h| at a check line —
+#: before the draw is solved exactly on every line (the band's target is 2 %).
+CHECK_TOLERANCE = 1e-2
 #: A pole is visible when its resonance peak ``|A| / Im p`` reaches this fraction of the
 #: nominal peak (weaker ones stay in the nominal background).
-VISIBLE_FRACTION = 1e-5
+VISIBLE_FRACTION = 0.0
 #: Starting damping ratio of the nominal fit's poles.
 START_DAMPING = 0.02
+#: Starting poles added to each draw's fit, relative to the band's top (rad/s): broad ones above
+#: the band, free to take up how the draw's background departs from the nominal one.
+EXTRA_POLES = np.array([1.3 + 0.3j, 2.0 + 0.6j])
 #: Vector-fitting iterations: the nominal fit, each draw's fit.
-NOMINAL_ITERATIONS, DRAW_ITERATIONS = 6, 3
+NOMINAL_ITERATIONS, DRAW_ITERATIONS = 6, 1
 #: Degree of the polynomial background of the fits.
 BACKGROUND_DEGREE = 3
 
@@ -180,6 +190,10 @@ def nominal_structure(frequency_hz: FloatArray, h: ComplexArray, modes_hz: Float
                       mode_order: IntArray | None = None) -> NominalStructure:
     """Fit the nominal ``h`` and keep its visible resonances (module docstring, step 1).
 
+    The fit starts from ``modes_hz``; while its error exceeds :data:`NOMINAL_FIT_TARGET` of the
+    peak, a pole is added where the relative error is largest (at most :data:`ADDED_POLES`):
+    a mode that hardly shows, or one the starting list missed (a measured spindle's).
+
     Parameters
     ----------
     frequency_hz : numpy.ndarray, shape (nfreq,)
@@ -196,10 +210,17 @@ def nominal_structure(frequency_hz: FloatArray, h: ComplexArray, modes_hz: Float
     NominalStructure
     """
     w = _TWO_PI * np.asarray(frequency_hz, dtype=float)
-    start = _TWO_PI * np.asarray(modes_hz, dtype=float) * (1.0 + 1.0j * START_DAMPING)
-    full = vector_fit(w, h, start, degree=BACKGROUND_DEGREE, iterations=NOMINAL_ITERATIONS, weights=1.0 / np.abs(h))
+    poles = _TWO_PI * np.asarray(modes_hz, dtype=float) * (1.0 + 1.0j * START_DAMPING)
     peak = float(np.max(np.abs(h)))
-    error = float(np.max(np.abs(full.evaluate(w) - h))) / peak
+    for added in range(ADDED_POLES + 1):  # a pole added where the fit is worst, a few times at most
+        full = vector_fit(w, h, poles, degree=BACKGROUND_DEGREE, iterations=NOMINAL_ITERATIONS,
+                          weights=1.0 / np.abs(h))
+        residual = np.abs(full.evaluate(w) - h)
+        error = float(np.max(residual)) / peak
+        if error <= NOMINAL_FIT_TARGET or added == ADDED_POLES:
+            break
+        worst = w[int(np.argmax(residual / np.abs(h)))]
+        poles = np.concatenate([full.poles_rad_s, [worst * (1.0 + 1.0j * START_DAMPING)]])
     p, a = full.poles_rad_s, full.residues
     visible = (p.real > 0.0) & (p.imag > 0.0) & (np.abs(a) / np.maximum(p.imag, 1e-300) >= VISIBLE_FRACTION * peak)
     fit = RationalFit(p[visible], a[visible], np.zeros(1, dtype=complex), full.scale_rad_s)
@@ -260,8 +281,9 @@ def sample_lines(frequency_hz: FloatArray, poles_rad_s: ComplexArray, low: Float
     """
     f = np.asarray(frequency_hz, dtype=float)
     nd = low.size
-    cols = [np.broadcast_to(f[0] * (f[-1] / f[0]) ** np.linspace(0.0, 1.0, BACKGROUND_LINES), (nd, BACKGROUND_LINES))]
-    valid = [np.ones((nd, BACKGROUND_LINES), dtype=bool)]
+    background = _background_lines_hz(f, poles_rad_s)
+    cols = [np.broadcast_to(background, (nd, background.size))]
+    valid = [np.ones((nd, background.size), dtype=bool)]
     span_lo, span_hi = [], []
     for p in poles_rad_s / _TWO_PI:  # a loop over the few modes
         half = p.imag
@@ -292,6 +314,17 @@ def sample_lines(frequency_hz: FloatArray, poles_rad_s: ComplexArray, low: Float
     keep = inside & (np.floor(rank / step) != np.floor((rank - 1) / step))
     check, check_mask = _unique_rows(np.where(keep, cand, 0), keep)
     return fit, fit_mask, check, check_mask
+
+
+def _background_lines_hz(f: FloatArray, poles_rad_s: ComplexArray) -> FloatArray:
+    """Lines spread over the band: :data:`BACKGROUND_LINES` geometric ones below half the lowest
+    resonance (quasi-static, smooth), and from there up a ratio of :data:`BACKGROUND_RATIO`
+    between neighbours (no wide gap for a fit to wander in between the modes' ranges)."""
+    lowest = float(np.min(poles_rad_s.real, initial=_TWO_PI * f[-1])) / _TWO_PI
+    knee = min(max(0.5 * lowest, f[0]), f[-1])
+    low = knee ** np.linspace(0.0, 1.0, BACKGROUND_LINES) * f[0] ** np.linspace(1.0, 0.0, BACKGROUND_LINES)
+    count = int(np.ceil(np.log(f[-1] / knee) / np.log(BACKGROUND_RATIO))) + 1 if f[-1] > knee else 1
+    return np.concatenate([low, knee * (f[-1] / knee) ** np.linspace(0.0, 1.0, count)])
 
 
 def _nearest(f: FloatArray, x: FloatArray) -> IntArray:
@@ -326,18 +359,22 @@ class ReducedDraws:
     h : numpy.ndarray, shape (ndraws, nfreq), complex
         m/N.
     poles_rad_s : numpy.ndarray, shape (ndraws, npoles), complex
-        Each draw's fitted poles (those of the nominal's visible resonances, moved), rad/s.
+        Each draw's fitted poles (those of the nominal's visible resonances, moved, and the
+        :data:`EXTRA_POLES`), rad/s.
+    residues : numpy.ndarray, shape (ndraws, npoles), complex
+        Their residues, m/N · rad/s.
     nominal : NominalStructure
     lines_per_draw : numpy.ndarray of int, shape (ndraws,)
         Lines each draw was solved at exactly (fit and check lines).
     check_error : numpy.ndarray, shape (ndraws,)
-        Each draw's largest error at its check lines, relative to its peak |h| at its lines.
+        Each draw's largest relative error of |h| at its check lines.
     exact : numpy.ndarray of bool, shape (ndraws,)
         Draws solved on every line (their check error exceeded :data:`CHECK_TOLERANCE`).
     """
 
     h: ComplexArray
     poles_rad_s: ComplexArray
+    residues: ComplexArray
     nominal: NominalStructure
     lines_per_draw: IntArray
     check_error: FloatArray
@@ -385,20 +422,43 @@ def reduced_draws(drawn: DrawnChains, frequency_hz: FloatArray, nominal: Nominal
                                            None if base_receptance is None else base_receptance[r, lines[r, c]])
     nf = fit.shape[1]
     h_fit = np.where(fit_mask, exact_lines[:, :nf], 1.0)
-    poles = nominal.fit.poles_rad_s
-    model = vector_fit(w[fit], h_fit - nominal.background[fit], np.broadcast_to(poles, (nd, poles.size)),
-                       degree=BACKGROUND_DEGREE, iterations=DRAW_ITERATIONS if poles.size else 0,
-                       weights=np.where(fit_mask, 1.0 / np.abs(h_fit), 0.0))
-    peak = np.max(np.where(mask, np.abs(exact_lines), 0.0), axis=1)
-    at_check = nominal.background[check] + _evaluate_rows(model, w[check])
-    error = np.max(np.where(check_mask, np.abs(at_check - exact_lines[:, nf:]), 0.0), axis=1) / peak
-    h = nominal.background + model.evaluate(w)
+    poles = np.concatenate([nominal.fit.poles_rad_s, w[-1] * EXTRA_POLES])
+    target = h_fit - nominal.background[fit]
+    weights = np.where(fit_mask, 1.0 / np.abs(h_fit), 0.0)
+    model = vector_fit(w[fit], target, np.broadcast_to(poles, (nd, poles.size)), degree=BACKGROUND_DEGREE,
+                       iterations=DRAW_ITERATIONS, weights=weights)
+    error = _check_error(model, nominal, w, check, exact_lines[:, nf:], check_mask)
+    again = np.flatnonzero(error > REFIT_TOLERANCE)
+    if again.size:  # the draws the first relocation left short: one more, from their own poles
+        refit = vector_fit(w[fit[again]], target[again], model.poles_rad_s[again], degree=BACKGROUND_DEGREE,
+                           iterations=DRAW_ITERATIONS, weights=weights[again])
+        model = _replace_rows(model, again, refit)
+        error[again] = _check_error(refit, nominal, w, check[again], exact_lines[again, nf:], check_mask[again])
+    h = model.evaluate(w, offset=nominal.background)
     exact = ~(error <= CHECK_TOLERANCE)
     if np.any(exact):
         rows = np.flatnonzero(exact)
         h[rows] = tool_point_h_draws(_subset(drawn, rows), f, None if base_receptance is None
                                      else base_receptance[rows])
-    return ReducedDraws(h, model.poles_rad_s, nominal, np.sum(mask, axis=1), error, exact)
+    return ReducedDraws(h, model.poles_rad_s, model.residues, nominal, np.sum(mask, axis=1), error, exact)
+
+
+def _check_error(model: RationalFit, nominal: NominalStructure, omega_rad_s: FloatArray, lines: IntArray,
+                 exact: ComplexArray, mask: np.ndarray) -> FloatArray:
+    """Each row's largest relative error of |h| at its check lines ``lines[row]`` (where ``mask``)."""
+    model_h = nominal.background[lines] + _evaluate_rows(model, omega_rad_s[lines])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        relative = np.abs(np.abs(model_h) / np.abs(exact) - 1.0)
+    out: FloatArray = np.max(np.where(mask, relative, 0.0), axis=1)
+    return out
+
+
+def _replace_rows(fit: RationalFit, rows: IntArray, new: RationalFit) -> RationalFit:
+    """``fit`` with the rows ``rows`` taken from ``new`` (same number of poles and degree)."""
+    poles, residues, background = fit.poles_rad_s.copy(), fit.residues.copy(), fit.background.copy()
+    poles[rows], residues[rows] = new.poles_rad_s, new.residues
+    background[rows] = new.background * (fit.scale_rad_s / new.scale_rad_s) ** np.arange(background.shape[-1])
+    return RationalFit(poles, residues, background, fit.scale_rad_s)
 
 
 def _subset(drawn: DrawnChains, draws: IntArray) -> DrawnChains:
@@ -429,8 +489,14 @@ TRACKED_HALF_WIDTH = 2e-3
 #: Relative width of the final bracket of a drawn natural frequency; the secant root inside
 #: it is then good to ~1e-4, far below any spread a tolerance gives.
 NATURAL_FREQUENCY_RTOL = 5e-3
-#: Draws whose natural frequencies are all solved exactly, to calibrate the others' estimates.
-CALIBRATION_DRAWS = 24
+#: Draws whose natural frequencies are all solved exactly, to calibrate the others' estimates,
+#: and further draws solved exactly to check the calibrated estimates on draws they were not
+#: fitted to: an estimate is used only if it is within ``HELD_OUT_FACTOR`` times its allowed
+#: error in every one of them.
+CALIBRATION_DRAWS, HELD_OUT_DRAWS, HELD_OUT_FACTOR = 24, 8, 3.0
+#: A draw's pole estimate is taken only where it agrees with the knobs' fit within this many
+#: times that fit's error (a pole mistaken in one draw's reduced model is solved exactly).
+OUTLIER_FACTOR = 4.0
 #: An estimate of a mode (from its pole, or from the regression) is used for the other draws
 #: when its root-mean-square error on the calibration draws stays within this fraction of the
 #: mode's spread (an independent error of 10 % of the spread changes the sd by 0.5 %); else
@@ -445,17 +511,21 @@ def reduced_mode_statistics(drawn: DrawnChains, reduced: ReducedDraws, knobs: Nu
                             ) -> tuple[ModeStatistics, dict[str, list[float]]]:
     """Every draw's natural frequencies from exact solves of a few draws and estimates for the rest.
 
-    1. The first :data:`CALIBRATION_DRAWS` draws (random like all of them) are solved exactly
-       for every nominal mode (:func:`rcsa.physics.seeded_modes.natural_frequencies_near`,
-       seeded by the estimate below or bracketed by the draw's min–max bound).
-    2. For each mode, its logarithm is fitted by least squares on those draws against the
-       logarithms of the drawn stiffness and mass knobs, the stickout offset and — for a mode
-       with a visible resonance in every draw (:func:`match_poles`) — ``ln(|p_d| / |p_0|)`` of
-       its pole in the draw's reduced model. When the root-mean-square leave-one-out error
-       stays within :data:`ESTIMATE_TOLERANCE` of the mode's spread over those draws, the fit
-       gives the other draws' values ("pole" or "regression").
-    3. Else the mode is solved exactly in every draw ("exact"), each bracketed about its pole's
-       estimate (or the fit's, or the min–max bound).
+    1. The first :data:`CALIBRATION_DRAWS` + :data:`HELD_OUT_DRAWS` draws (random like all of
+       them) are solved exactly for every nominal mode
+       (:func:`rcsa.physics.seeded_modes.natural_frequencies_near`, seeded by the pole's
+       estimate or bracketed by the draw's min–max bound).
+    2. For each mode, its logarithm is fitted by least squares on the calibration draws
+       against ``ln(|p_d| / |p_0|)`` of its pole in the draw's reduced model, where the draw
+       shows it (:func:`match_poles`; "pole"), or else against the logarithms of the drawn
+       stiffness and mass knobs and the stickout offset ("regression"). A fit is used for the
+       other draws when its root-mean-square leave-one-out error stays within
+       :data:`ESTIMATE_TOLERANCE` of the mode's spread and its error in each held-out draw within
+       :data:`HELD_OUT_FACTOR` times that — the pole's fit only in the draws that show the pole
+       and where it agrees with the knobs' fit within :data:`OUTLIER_FACTOR` times that fit's
+       error.
+    3. Every other (draw, mode) is solved exactly ("exact": no fit held), each bracketed about
+       its pole's estimate (or the knobs' fit, or the min–max bound).
 
     The table is then that of :func:`rcsa.model.draws.mode_statistics` (modes by order, NaN
     outside the band widened by ``band_margin``).
@@ -479,14 +549,15 @@ def reduced_mode_statistics(drawn: DrawnChains, reduced: ReducedDraws, knobs: Nu
     statistics : ModeStatistics
     how : dict
         Nominal frequencies (Hz) by how the other draws' values were obtained: ``"pole"`` (a fit
-        with the pole), ``"regression"`` (on the knobs alone), ``"exact"``.
+        with the pole; exact where a draw does not show it), ``"regression"`` (on the knobs
+        alone), ``"exact"``.
     """
     nominal = reduced.nominal
     modes = nominal.modes_hz
     nm, nd = modes.size, drawn.n_draws
     lo_w, hi_w = start_hz / band_margin, stop_hz * band_margin
     p0 = nominal.fit.poles_rad_s
-    matched = match_poles(p0, reduced.poles_rad_s, low, high)              # (ndraws, npoles), NaN: none
+    matched = match_poles(p0, reduced.poles_rad_s, low, high, nominal.fit.residues, reduced.residues)
     pole_estimate = np.full((nd, nm), np.nan)
     for k, fk in enumerate(modes):  # a loop over the few modes
         distance = np.abs(p0.real / _TWO_PI - fk) / fk
@@ -494,58 +565,71 @@ def reduced_mode_statistics(drawn: DrawnChains, reduced: ReducedDraws, knobs: Nu
         if j >= 0 and distance[j] <= max(3.0 * p0[j].imag / p0[j].real, 0.02):
             pole_estimate[:, k] = fk * np.abs(matched[:, j]) / np.abs(p0[j])
     cal = np.arange(min(CALIBRATION_DRAWS, nd))
+    held = np.arange(cal.size, min(cal.size + HELD_OUT_DRAWS, nd))
+    first = np.concatenate([cal, held])
     values = np.full((nd, nm), np.nan)
-    values[cal] = _exact_modes(drawn, nominal.mode_order, cal, pole_estimate[cal], modes, low, high)
+    c_draw, c_mode = np.repeat(first, nm), np.tile(np.arange(nm), first.size)
+    values[c_draw, c_mode] = _exact_pairs(drawn, c_draw, c_mode, nominal.mode_order, pole_estimate[c_draw, c_mode],
+                                          modes, low, high)
     features = _knob_features(knobs)
     how: dict[str, list[float]] = {"pole": [], "regression": [], "exact": []}
-    rest = np.arange(cal.size, nd)
-    exact_modes = []
-    seeds = np.empty((rest.size, nm))
+    rest = np.arange(first.size, nd)
+    todo_draw, todo_mode, todo_seed = [], [], []
     for k, fk in enumerate(modes):  # a loop over the few modes
-        truth = np.log(values[cal, k] / fk)
-        spread = float(np.std(truth)) if np.all(np.isfinite(truth)) else 0.0
+        truth = np.log(values[first, k] / fk)
+        limit = ESTIMATE_TOLERANCE * float(np.std(truth)) if np.all(np.isfinite(truth)) else 0.0
+        by_knobs, knob_error = _regression(features, cal, truth[:cal.size])
         by_pole = np.log(pole_estimate[:, k] / fk)
-        with_pole = bool(np.all(np.isfinite(by_pole)))
-        predicted, loo_error = _regression(np.column_stack([features, by_pole]) if with_pole else features, cal,
-                                           truth)
-        if spread > 0.0 and loo_error <= ESTIMATE_TOLERANCE * spread:
-            values[rest, k] = fk * np.exp(predicted[rest])
-            how["pole" if with_pole else "regression"].append(float(fk))
+        tracked = np.isfinite(by_pole)
+        with_pole = np.column_stack([np.ones(nd), np.where(tracked, by_pole, 0.0)])
+        by_both, pole_error = _regression(with_pole, cal[tracked[cal]], truth[:cal.size][tracked[cal]])
+        check_pole = held[tracked[held]]
+        pole_ok = (limit > 0.0 and pole_error <= limit and check_pole.size > 0 and
+                   np.max(np.abs(by_both[check_pole] - np.log(values[check_pole, k] / fk))) <= HELD_OUT_FACTOR * limit)
+        knob_ok = (limit > 0.0 and knob_error <= limit and held.size > 0 and
+                   np.max(np.abs(by_knobs[held] - np.log(values[held, k] / fk))) <= HELD_OUT_FACTOR * limit)
+        if pole_ok:   # the pole's fit where the draw shows the pole and the knobs' fit agrees, else exact
+            spread_knobs = max(knob_error if np.isfinite(knob_error) else np.inf, limit)
+            agree = tracked[rest] & (np.abs(by_both[rest] - by_knobs[rest]) <= OUTLIER_FACTOR * spread_knobs) \
+                if np.isfinite(spread_knobs) else tracked[rest]
+            use = rest[agree]
+            values[use, k] = fk * np.exp(by_both[use])
+            left = rest[~agree]
+            how["pole"].append(float(fk))
+        elif knob_ok:
+            values[rest, k] = fk * np.exp(by_knobs[rest])
+            how["regression"].append(float(fk))
+            continue
         else:
-            exact_modes.append(k)
-            seed = np.where(np.isfinite(by_pole[rest]), by_pole[rest], predicted[rest])
-            seeds[:, k] = fk * np.exp(seed)                                 # NaN: bracketed by the bound
+            left = rest
             how["exact"].append(float(fk))
-    if exact_modes and rest.size:
-        km = np.array(exact_modes)
-        values[np.ix_(rest, km)] = _exact_modes(drawn, nominal.mode_order[km], rest, seeds[:, km], modes[km],
-                                                 low, high)
+        todo_draw.append(left)
+        todo_mode.append(np.full(left.size, k))
+        todo_seed.append(fk * np.exp(np.where(tracked[left], by_pole[left], by_knobs[left])))  # NaN: the bound
+    if todo_draw:
+        d, k = np.concatenate(todo_draw), np.concatenate(todo_mode)
+        values[d, k] = _exact_pairs(drawn, d, k, nominal.mode_order, np.concatenate(todo_seed), modes, low, high)
     values[(values < lo_w) | (values > hi_w)] = np.nan
     columns = np.flatnonzero((modes >= start_hz) & (modes <= stop_hz))
     return order_statistics(values, columns, start_hz, stop_hz), how
 
 
-def _exact_modes(drawn: DrawnChains, order: IntArray, draws: IntArray, estimate_hz: FloatArray,
+def _exact_pairs(drawn: DrawnChains, draw: IntArray, mode: IntArray, order: IntArray, estimate_hz: FloatArray,
                  modes_hz: FloatArray, low: FloatArray, high: FloatArray) -> FloatArray:
-    """Exact natural frequencies (Hz) of ``draws`` for the nominal modes ``modes_hz`` of numbers ``order``:
-    brackets of ±:data:`TRACKED_HALF_WIDTH` around finite estimates, else the draw's min–max bound."""
-    nm = modes_hz.size
+    """Exact natural frequency (Hz) of nominal mode ``mode[j]`` (number ``order[mode[j]]``) in draw
+    ``draw[j]``: bracketed ±:data:`TRACKED_HALF_WIDTH` about a finite estimate, else by the draw's
+    min–max bound."""
     ok = np.isfinite(estimate_hz)
-    seed = np.where(ok, estimate_hz, modes_hz[None, :] * np.sqrt(low[draws] * high[draws])[:, None])
-    half = np.where(ok, TRACKED_HALF_WIDTH,
-                    np.minimum(0.5 * (high[draws] / low[draws] - 1.0) + TRACKED_HALF_WIDTH, 0.9)[:, None])
-    out = np.full((draws.size, nm), np.nan)
-    position = np.full(drawn.n_draws, -1)
-    position[draws] = np.arange(draws.size)
+    seed = np.where(ok, estimate_hz, modes_hz[mode] * np.sqrt(low[draw] * high[draw]))
+    half = np.where(ok, TRACKED_HALF_WIDTH, np.minimum(0.5 * (high[draw] / low[draw] - 1.0) + TRACKED_HALF_WIDTH, 0.9))
+    out = np.full(draw.size, np.nan)
     for g in drawn.groups:  # a loop over structures (one, unless a stickout moved a split)
-        rows = np.flatnonzero(position[g.draws] >= 0)                     # rows of the group's chain
-        if rows.size == 0:
-            continue
-        at = position[g.draws[rows]]                                     # their places in ``draws``
-        found = natural_frequencies_near(g.chain, np.repeat(rows, nm), np.tile(order, rows.size),
-                                         seed[at].ravel(), relative_half_width=half[at].ravel(),
-                                         rtol=NATURAL_FREQUENCY_RTOL)
-        out[at] = found.reshape(rows.size, nm)
+        position = np.full(drawn.n_draws, -1)
+        position[g.draws] = np.arange(g.draws.size)
+        sel = np.flatnonzero(position[draw] >= 0)
+        if sel.size:
+            out[sel] = natural_frequencies_near(g.chain, position[draw[sel]], order[mode[sel]], seed[sel],
+                                                relative_half_width=half[sel], rtol=NATURAL_FREQUENCY_RTOL)
     return out
 
 
@@ -575,18 +659,24 @@ def _regression(features: FloatArray, cal: IntArray, y: FloatArray) -> tuple[Flo
 
 
 #: A fitted pole stands for a mode when its damping ratio ``Im p / |p|`` is below this
-#: (heavily damped poles of a draw's fit stand for background).
-MODE_DAMPING_LIMIT = 0.2
+#: (heavily damped poles of a draw's fit stand for background), and within this factor of the
+#: nominal pole's (the damping tolerances move it by e^{±0.75} at three sd).
+MODE_DAMPING_LIMIT, DAMPING_FACTOR = 0.2, 2.5
+#: ... and a residue within this factor of the nominal pole's (a pole a draw's fit spends on its
+#: background may sit near a mode, with a residue unlike the mode's).
+RESIDUE_FACTOR = 10.0
 
 
-def match_poles(nominal_rad_s: ComplexArray, drawn_rad_s: ComplexArray, low: FloatArray, high: FloatArray
+def match_poles(nominal_rad_s: ComplexArray, drawn_rad_s: ComplexArray, low: FloatArray, high: FloatArray,
+                nominal_residues: ComplexArray | None = None, drawn_residues: ComplexArray | None = None
                 ) -> ComplexArray:
     """Each draw's pole for each nominal one, one to one, in the nominal's order.
 
     A draw's fit may spend a pole on its background (heavily damped, or at negative
-    frequency): only poles with ``Re p > 0`` and damping ratio below :data:`MODE_DAMPING_LIMIT`
-    are candidates, and only within the draw's min–max bound ``[low, high] × |p₀|``
-    (:func:`frequency_ratio_bounds`, widened by 5 %). Pairs are taken closest first in
+    frequency): only poles with ``Re p > 0``, a damping ratio below :data:`MODE_DAMPING_LIMIT`
+    and within :data:`DAMPING_FACTOR` of the nominal pole's are candidates, and only within
+    the draw's min–max bound ``[low, high] × |p₀|`` (:func:`frequency_ratio_bounds`, widened by
+    5 %). Pairs are taken closest first in
     ``|ln(p_d / p₀)|`` (greedy, all draws at once); the poles matched in a draw are then
     handed out again in ascending order to its matched nominal poles, so the k-th matched pole
     of a draw is its k-th mode, as natural frequencies are matched (by order).
@@ -598,6 +688,9 @@ def match_poles(nominal_rad_s: ComplexArray, drawn_rad_s: ComplexArray, low: Flo
     drawn_rad_s : numpy.ndarray, shape (ndraws, npoles_d), complex
     low, high : numpy.ndarray, shape (ndraws,)
         :func:`frequency_ratio_bounds` of the draws.
+    nominal_residues : numpy.ndarray, shape (npoles,), complex, optional
+    drawn_residues : numpy.ndarray, shape (ndraws, npoles_d), complex, optional
+        With both, a candidate's residue must lie within :data:`RESIDUE_FACTOR` of the nominal one.
 
     Returns
     -------
@@ -617,8 +710,16 @@ def match_poles(nominal_rad_s: ComplexArray, drawn_rad_s: ComplexArray, low: Flo
     with np.errstate(divide="ignore", invalid="ignore"):
         log_ratio = np.log(drawn_rad_s[:, None, :] / nominal_rad_s[None, :, None])
     modulus = np.exp(log_ratio.real)
-    candidate = ((drawn_rad_s.real > 0.0) & (drawn_rad_s.imag < MODE_DAMPING_LIMIT * np.abs(drawn_rad_s)))[:, None, :] \
-        & (modulus >= 0.95 * low[:, None, None]) & (modulus <= 1.05 * high[:, None, None])
+    zeta_d = drawn_rad_s.imag / np.abs(drawn_rad_s)
+    zeta_0 = nominal_rad_s.imag / np.abs(nominal_rad_s)
+    damping = zeta_d[:, None, :] / zeta_0[None, :, None]
+    candidate = ((drawn_rad_s.real > 0.0) & (zeta_d < MODE_DAMPING_LIMIT))[:, None, :] \
+        & (modulus >= 0.95 * low[:, None, None]) & (modulus <= 1.05 * high[:, None, None]) \
+        & (damping <= DAMPING_FACTOR) & (damping >= 1.0 / DAMPING_FACTOR)
+    if nominal_residues is not None and drawn_residues is not None:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            strength = np.abs(drawn_residues)[:, None, :] / np.abs(nominal_residues)[None, :, None]
+        candidate &= (strength <= RESIDUE_FACTOR) & (strength >= 1.0 / RESIDUE_FACTOR)
     cost = np.where(candidate, np.abs(log_ratio), np.inf)
     taken = np.full((nd, n), -1)
     rows = np.arange(nd)

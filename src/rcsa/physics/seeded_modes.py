@@ -51,6 +51,7 @@ class _Evaluator:
     """Count and ``log|det|`` of a (stacked) chain at one frequency per row."""
 
     def __init__(self, chain: Chain, omega_max_rad_s: float) -> None:
+        self.omega_max = omega_max_rad_s
         self.chain = subdivide(undamped(chain), omega_max_rad_s)
         self.stacked = any(item.is_stacked for item in self.chain)
         self.scratch = local_scratch()
@@ -103,33 +104,40 @@ def natural_frequencies_near(chain: Chain, rows: IntArray, order: IntArray, esti
     half = np.broadcast_to(np.asarray(relative_half_width, dtype=float), e.shape)
     lo = _TWO_PI * e * (1.0 - half)
     hi = _TWO_PI * e * (1.0 + half)
-    omega_max = _HEADROOM * float(np.max(hi, initial=0.0))
     if e.size == 0:
         return np.empty(0)
-    evaluate = _Evaluator(chain, omega_max)
-    found = _refine(evaluate, np.asarray(rows), np.asarray(order, dtype=np.int64), lo, hi, rtol, omega_max)
+    found = _refine(chain, np.asarray(rows), np.asarray(order, dtype=np.int64), lo, hi, rtol)
     out: FloatArray = found / _TWO_PI
     return out
 
 
-def _refine(evaluate: _Evaluator, rows: IntArray, k: IntArray, lo: FloatArray, hi: FloatArray,
-            rtol: float, omega_max: float) -> FloatArray:
-    """Roots (rad/s) of the brackets ``[lo, hi]`` of mode ``k`` of chain ``rows`` (module docstring)."""
+def _refine(chain: Chain, rows: IntArray, k: IntArray, lo: FloatArray, hi: FloatArray, rtol: float) -> FloatArray:
+    """Roots (rad/s) of the brackets ``[lo, hi]`` of mode ``k`` of chain ``rows`` (module docstring).
+
+    The chain is subdivided for :data:`_HEADROOM` times the highest bracket end; a bracket that
+    grows beyond has the chain subdivided again for twice its new end (and every bracket's ends
+    evaluated again: determinants of differently subdivided chains differ by a factor).
+    """
     n = rows.size
+    evaluate = _Evaluator(chain, _HEADROOM * float(np.max(hi)))
     j_lo, f_lo, known = evaluate(rows, lo)
     j_hi, f_hi, known_hi = evaluate(rows, hi)
     det_known = known and known_hi
     root = np.full(n, np.nan)
     for _ in range(MAX_STEPS):
         single = (j_lo == k) & (j_hi == k + 1)
-        done = single & (hi - lo <= rtol * hi)
+        done = single & (hi - lo <= rtol * hi) & np.isnan(root)
         if np.any(done):
             root[done] = _secant(lo[done], hi[done], f_lo[done], f_hi[done], k[done], j_lo[done], j_hi[done])
-        todo = np.flatnonzero(~done & np.isnan(root))
+        todo = np.flatnonzero(np.isnan(root))
         if todo.size == 0:
             break
         x = _points(lo[todo], hi[todo], f_lo[todo], f_hi[todo], k[todo], j_lo[todo], j_hi[todo], rtol, det_known)
-        x[x > omega_max] = np.nan  # beyond the subdivision: the count would not be exact
+        if np.nanmax(x, initial=0.0) > evaluate.omega_max:  # beyond the subdivision: subdivide again
+            evaluate = _Evaluator(chain, 2.0 * float(np.nanmax(x)))
+            j_lo, f_lo, known = evaluate(rows, lo)
+            j_hi, f_hi, known_hi = evaluate(rows, hi)
+            det_known = known and known_hi
         valid = np.isfinite(x)
         r_idx = np.broadcast_to(todo[:, None], x.shape)[valid]
         j_x, f_x, known_x = evaluate(rows[r_idx], x[valid])
