@@ -75,9 +75,9 @@ __all__ = ["ADDED_POLES", "BACKGROUND_LINES", "EXTRA_POLES", "CHECK_TOLERANCE", 
 LINE_SPACING_HALF_WIDTHS = 8.0
 #: Lines spread geometrically over the band besides the modes' ranges: this many below half
 #: the lowest resonance, and a ratio of ``BACKGROUND_RATIO`` between neighbours above.
-BACKGROUND_LINES, BACKGROUND_RATIO = 6, 1.5
+BACKGROUND_LINES, BACKGROUND_RATIO = 6, 1.35
 #: Check lines kept aside per draw.
-CHECK_LINES = 6
+CHECK_LINES = 4
 #: Largest error of the nominal fit (all its poles), relative to the nominal peak, for the
 #: reduced model to be used (measured: 1e-4 on RA-1).
 NOMINAL_FIT_TOLERANCE = 1e-2
@@ -493,7 +493,7 @@ NATURAL_FREQUENCY_RTOL = 5e-3
 #: and further draws solved exactly to check the calibrated estimates on draws they were not
 #: fitted to: an estimate is used only if it is within ``HELD_OUT_FACTOR`` times its allowed
 #: error in every one of them.
-CALIBRATION_DRAWS, HELD_OUT_DRAWS, HELD_OUT_FACTOR = 24, 8, 3.0
+CALIBRATION_DRAWS, HELD_OUT_DRAWS, HELD_OUT_FACTOR = 16, 8, 3.0
 #: A draw's pole estimate is taken only where it agrees with the knobs' fit within this many
 #: times that fit's error (a pole mistaken in one draw's reduced model is solved exactly).
 OUTLIER_FACTOR = 4.0
@@ -525,7 +525,9 @@ def reduced_mode_statistics(drawn: DrawnChains, reduced: ReducedDraws, knobs: Nu
        and where it agrees with the knobs' fit within :data:`OUTLIER_FACTOR` times that fit's
        error.
     3. Every other (draw, mode) is solved exactly ("exact": no fit held), each bracketed about
-       its pole's estimate (or the knobs' fit, or the min–max bound).
+       its pole's estimate (or the knobs' fit, or the min–max bound) — but for a mode outside
+       the requested band, which counts only in the draws that bring it in (the result's
+       ``modes_entering_band``), the knobs' fit is taken as it is ("estimated").
 
     The table is then that of :func:`rcsa.model.draws.mode_statistics` (modes by order, NaN
     outside the band widened by ``band_margin``).
@@ -550,7 +552,7 @@ def reduced_mode_statistics(drawn: DrawnChains, reduced: ReducedDraws, knobs: Nu
     how : dict
         Nominal frequencies (Hz) by how the other draws' values were obtained: ``"pole"`` (a fit
         with the pole; exact where a draw does not show it), ``"regression"`` (on the knobs
-        alone), ``"exact"``.
+        alone), ``"estimated"`` (the knobs' fit, outside the band), ``"exact"``.
     """
     nominal = reduced.nominal
     modes = nominal.modes_hz
@@ -572,9 +574,9 @@ def reduced_mode_statistics(drawn: DrawnChains, reduced: ReducedDraws, knobs: Nu
     values[c_draw, c_mode] = _exact_pairs(drawn, c_draw, c_mode, nominal.mode_order, pole_estimate[c_draw, c_mode],
                                           modes, low, high)
     features = _knob_features(knobs)
-    how: dict[str, list[float]] = {"pole": [], "regression": [], "exact": []}
+    how: dict[str, list[float]] = {"pole": [], "regression": [], "estimated": [], "exact": []}
     rest = np.arange(first.size, nd)
-    todo_draw, todo_mode, todo_seed = [], [], []
+    todo_draw, todo_mode, todo_seed, todo_half = [], [], [], []
     for k, fk in enumerate(modes):  # a loop over the few modes
         truth = np.log(values[first, k] / fk)
         limit = ESTIMATE_TOLERANCE * float(np.std(truth)) if np.all(np.isfinite(truth)) else 0.0
@@ -600,28 +602,44 @@ def reduced_mode_statistics(drawn: DrawnChains, reduced: ReducedDraws, knobs: Nu
             values[rest, k] = fk * np.exp(by_knobs[rest])
             how["regression"].append(float(fk))
             continue
+        elif not start_hz <= fk <= stop_hz and np.all(np.isfinite(by_knobs[rest])):
+            # a mode outside the band: it counts only where it enters it; the knobs' fit, noted
+            values[rest, k] = fk * np.exp(by_knobs[rest])
+            how["estimated"].append(float(fk))
+            continue
         else:
             left = rest
             how["exact"].append(float(fk))
+        if not start_hz <= fk <= stop_hz and np.all(np.isfinite(by_knobs[left])):
+            values[left, k] = fk * np.exp(by_knobs[left])
+            continue
+        # a draw whose bound keeps the mode out of the widened band needs no value
+        left = left[(fk * low[left] <= hi_w) & (fk * high[left] >= lo_w)]
         todo_draw.append(left)
         todo_mode.append(np.full(left.size, k))
-        todo_seed.append(fk * np.exp(np.where(tracked[left], by_pole[left], by_knobs[left])))  # NaN: the bound
+        from_pole = tracked[left] & ~pole_ok                 # a pole the fit did not take: still a seed
+        todo_seed.append(fk * np.exp(np.where(from_pole, by_pole[left], by_knobs[left])))  # NaN: the bound
+        knob_half = 3.0 * knob_error if np.isfinite(knob_error) else 0.0
+        todo_half.append(np.where(from_pole, TRACKED_HALF_WIDTH, max(knob_half, TRACKED_HALF_WIDTH)))
     if todo_draw:
         d, k = np.concatenate(todo_draw), np.concatenate(todo_mode)
-        values[d, k] = _exact_pairs(drawn, d, k, nominal.mode_order, np.concatenate(todo_seed), modes, low, high)
+        values[d, k] = _exact_pairs(drawn, d, k, nominal.mode_order, np.concatenate(todo_seed), modes, low, high,
+                                    np.concatenate(todo_half))
     values[(values < lo_w) | (values > hi_w)] = np.nan
     columns = np.flatnonzero((modes >= start_hz) & (modes <= stop_hz))
     return order_statistics(values, columns, start_hz, stop_hz), how
 
 
 def _exact_pairs(drawn: DrawnChains, draw: IntArray, mode: IntArray, order: IntArray, estimate_hz: FloatArray,
-                 modes_hz: FloatArray, low: FloatArray, high: FloatArray) -> FloatArray:
+                 modes_hz: FloatArray, low: FloatArray, high: FloatArray,
+                 half_width: FloatArray | None = None) -> FloatArray:
     """Exact natural frequency (Hz) of nominal mode ``mode[j]`` (number ``order[mode[j]]``) in draw
-    ``draw[j]``: bracketed ±:data:`TRACKED_HALF_WIDTH` about a finite estimate, else by the draw's
-    min–max bound."""
+    ``draw[j]``: bracketed ± ``half_width`` (relative; :data:`TRACKED_HALF_WIDTH` by default) about
+    a finite estimate, else by the draw's min–max bound."""
     ok = np.isfinite(estimate_hz)
     seed = np.where(ok, estimate_hz, modes_hz[mode] * np.sqrt(low[draw] * high[draw]))
-    half = np.where(ok, TRACKED_HALF_WIDTH, np.minimum(0.5 * (high[draw] / low[draw] - 1.0) + TRACKED_HALF_WIDTH, 0.9))
+    near = TRACKED_HALF_WIDTH if half_width is None else half_width
+    half = np.where(ok, near, np.minimum(0.5 * (high[draw] / low[draw] - 1.0) + TRACKED_HALF_WIDTH, 0.9))
     out = np.full(draw.size, np.nan)
     for g in drawn.groups:  # a loop over structures (one, unless a stickout moved a split)
         position = np.full(drawn.n_draws, -1)

@@ -325,14 +325,15 @@ class SpindleSide:
         if inside.size:  # the prediction's own (exact, in the band): search only the band's two extensions
             parts = [inside]
             if float(f[0]) > lo and counts_below(nominal_only, float(f[0]))[0] > below:
-                parts.append(natural_frequencies_batch((), [chain], lo, float(f[0]),
+                parts.append(natural_frequencies_batch((), [chain], lo, float(f[0]), rtol=STRUCTURE_RTOL,
                                                        scan_points=STRUCTURE_SCAN_POINTS)[0])
             if hi > float(f[-1]):
-                parts.append(natural_frequencies_batch((), [chain], float(f[-1]), hi,
+                parts.append(natural_frequencies_batch((), [chain], float(f[-1]), hi, rtol=STRUCTURE_RTOL,
                                                        scan_points=STRUCTURE_SCAN_POINTS)[0])
             modes = np.sort(np.concatenate(parts))
         else:
-            modes = natural_frequencies_batch((), [chain], lo, hi, scan_points=STRUCTURE_SCAN_POINTS)[0]
+            modes = natural_frequencies_batch((), [chain], lo, hi, rtol=STRUCTURE_RTOL,
+                                              scan_points=STRUCTURE_SCAN_POINTS)[0]
         return modes, below + np.arange(modes.size)
 
     def uncertainty_band(self, spec: AssemblySpec, model: AssemblyModel, prediction: Prediction,
@@ -400,6 +401,8 @@ class SpindleSide:
 #: Points of the geometric scan that brackets the nominal modes of a reduced band (a bracket
 #: holding two modes is split by the search; fewer points are fewer eliminations).
 STRUCTURE_SCAN_POINTS = 24
+#: Their relative precision (starting poles, and the nominal of modes outside the band).
+STRUCTURE_RTOL = 1e-9
 #: Starting poles above a measured spindle's band, relative to its top (they take up what lies
 #: beyond it: without them the nominal fit of RA-1 on a direct FRF was 5 % off, with them 0.14 %).
 ABOVE_BAND = np.array([1.2, 1.5])

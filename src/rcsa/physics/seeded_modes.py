@@ -120,9 +120,7 @@ def _refine(chain: Chain, rows: IntArray, k: IntArray, lo: FloatArray, hi: Float
     """
     n = rows.size
     evaluate = _Evaluator(chain, _HEADROOM * float(np.max(hi)))
-    j_lo, f_lo, known = evaluate(rows, lo)
-    j_hi, f_hi, known_hi = evaluate(rows, hi)
-    det_known = known and known_hi
+    j_lo, j_hi, f_lo, f_hi, det_known = _ends(evaluate, rows, lo, hi)
     root = np.full(n, np.nan)
     for _ in range(MAX_STEPS):
         single = (j_lo == k) & (j_hi == k + 1)
@@ -135,9 +133,7 @@ def _refine(chain: Chain, rows: IntArray, k: IntArray, lo: FloatArray, hi: Float
         x = _points(lo[todo], hi[todo], f_lo[todo], f_hi[todo], k[todo], j_lo[todo], j_hi[todo], rtol, det_known)
         if np.nanmax(x, initial=0.0) > evaluate.omega_max:  # beyond the subdivision: subdivide again
             evaluate = _Evaluator(chain, 2.0 * float(np.nanmax(x)))
-            j_lo, f_lo, known = evaluate(rows, lo)
-            j_hi, f_hi, known_hi = evaluate(rows, hi)
-            det_known = known and known_hi
+            j_lo, j_hi, f_lo, f_hi, det_known = _ends(evaluate, rows, lo, hi)
         valid = np.isfinite(x)
         r_idx = np.broadcast_to(todo[:, None], x.shape)[valid]
         j_x, f_x, known_x = evaluate(rows[r_idx], x[valid])
@@ -147,6 +143,14 @@ def _refine(chain: Chain, rows: IntArray, k: IntArray, lo: FloatArray, hi: Float
         jj[valid], ff[valid] = j_x, f_x
         _update(todo, x, jj, ff, k, lo, hi, j_lo, j_hi, f_lo, f_hi)
     return root
+
+
+def _ends(evaluate: _Evaluator, rows: IntArray, lo: FloatArray, hi: FloatArray
+          ) -> tuple[IntArray, IntArray, FloatArray, FloatArray, bool]:
+    """Count and ``log|det|`` at both ends of every bracket, in one elimination."""
+    n = rows.size
+    j, f, known = evaluate(np.concatenate([rows, rows]), np.concatenate([lo, hi]))
+    return j[:n].copy(), j[n:].copy(), f[:n].copy(), f[n:].copy(), known
 
 
 def _phi(j: IntArray, f: FloatArray, k: IntArray, ref: FloatArray) -> FloatArray:
