@@ -193,6 +193,79 @@ def timing(repeats: int = 3) -> dict:
     return out
 
 
+FRESH_CASES = ("example", "analytical5", *(f"hybrid:{k}" for k in truth_hybrid.KINDS))
+
+
+def _fresh_request(case: str) -> tuple[dict, object]:
+    """The request of a fresh-process timing case, and its base resolver (None: analytical)."""
+    if case == "example":
+        return json.loads((REPO / "examples" / "diagnosis.json").read_text()), None
+    if case == "analytical5":
+        return truth.make_trial(np.random.default_rng([7, 0]), "sensor_mass", with_null=False).request, None
+    kind = case.split(":", 1)[1]
+    trial = truth_hybrid.make_hybrid_trial(np.random.default_rng([7, 1]), "sensor_mass", kind, with_null=False)
+    return trial.request, base_resolver(trial.source)
+
+
+def fresh_child(case: str) -> dict:
+    """One fresh process: the first diagnosis in it, a repeat (Σ cached), a repeat with Σ dropped,
+    and RA-1's plain prediction in the same process (the yardstick of the ratios).
+
+    The request is built before the clock starts (the benchmark's truth); the first call
+    includes whatever the diagnosis imports on first use.
+    """
+    from rcsa import app
+    from rcsa.analysis.diagnosis import problem
+    from rcsa.reference import ra1
+
+    request, resolve = _fresh_request(case)
+
+    def run() -> tuple[float, float, dict]:
+        c0, t0 = time.process_time(), time.perf_counter()
+        r = build_response(analyse(request, resolve)) if resolve is not None else app.diagnose(request)
+        return time.process_time() - c0, time.perf_counter() - t0, r
+
+    first = run()
+    warm = run()
+    problem._DRAW_CACHE.clear()
+    cold_again = run()
+    assembly = ra1()
+    predictions = []
+    for _ in range(9):
+        c0, t0 = time.process_time(), time.perf_counter()
+        app.predict(assembly)
+        predictions.append((time.process_time() - c0, time.perf_counter() - t0))
+    pc = float(np.median([x[0] for x in predictions]))
+    pw = float(np.median([x[1] for x in predictions]))
+    verdict = first[2]["verdict"]
+    return {"case": case, "first_cpu_s": first[0], "first_wall_s": first[1], "warm_cpu_s": warm[0],
+            "warm_wall_s": warm[1], "cold_in_warm_process_cpu_s": cold_again[0],
+            "cold_in_warm_process_wall_s": cold_again[1], "prediction_cpu_s": pc, "prediction_wall_s": pw,
+            "first_over_prediction_cpu": first[0] / pc, "first_over_prediction_wall": first[1] / pw,
+            "verdict": verdict["effect"], "phases_of_first_s": first[2].get("analysis", {}).get("timings_s"),
+            "load_average": os.getloadavg()}
+
+
+def timing_fresh(repeats: int = 3, cases: tuple[str, ...] = FRESH_CASES) -> dict:
+    """:func:`fresh_child` in ``repeats`` fresh processes per case; the best (least CPU) first run of each."""
+    import subprocess
+
+    out = {}
+    for case in cases:
+        runs = []
+        for _ in range(repeats):
+            done = subprocess.run([sys.executable, __file__, "--timing-child", case], capture_output=True, text=True,
+                                  check=True, cwd=REPO)
+            runs.append(json.loads(done.stdout.strip().splitlines()[-1]))
+        best = min(runs, key=lambda x: x["first_cpu_s"])
+        out[case] = {**best, "runs": runs}
+        print(f"{case:22s} first in a process: CPU {best['first_cpu_s']:.2f} s (wall {best['first_wall_s']:.2f}) = "
+              f"{best['first_over_prediction_cpu']:.0f}x one RA-1 prediction ({best['prediction_cpu_s'] * 1e3:.1f} ms "
+              f"CPU); Σ cached {best['warm_cpu_s']:.2f} s; Σ dropped {best['cold_in_warm_process_cpu_s']:.2f} s | "
+              f"load {best['load_average'][0]:.1f}", flush=True)
+    return out
+
+
 def summarise(records: list[dict]) -> dict:
     """Scores of ``diagnosis.md`` §5.2 from the trial records."""
     eff = [r for r in records if r["effect"] != "none"]
@@ -397,6 +470,10 @@ def main() -> None:
     ap.add_argument("--example-effect", default="holder_tool_joint", choices=truth.EFFECTS)
     ap.add_argument("--timing", action="store_true",
                     help="only time one diagnosis per kind of spindle, cold and warm, with its phases")
+    ap.add_argument("--timing-fresh", action="store_true",
+                    help="only time the first diagnosis in fresh processes (examples/diagnosis.json, 5 stickouts, "
+                         "3 stickouts per measured spindle), with a repeat and RA-1's prediction in each")
+    ap.add_argument("--timing-child", choices=FRESH_CASES, help=argparse.SUPPRESS)
     ap.add_argument("--form-error", action="store_true",
                     help="only measure the candidates' form error on correct fits (--trials-per-class per effect)")
     args = ap.parse_args()
@@ -404,6 +481,15 @@ def main() -> None:
         from benchmarks.diagnosis_calibration import form_error
 
         form_error(args)
+        return
+    if args.timing_child:
+        print(json.dumps(fresh_child(args.timing_child)))
+        return
+    if args.timing_fresh:
+        result = {"machine": machine(), "timing_fresh": timing_fresh()}
+        path = DEFAULT_OUT.with_name("diagnosis_timing_fresh.json")
+        path.write_text(json.dumps(result, indent=1))
+        print(f"wrote {path}")
         return
     if args.timing:
         result = {"machine": machine(), "timing": timing()}
