@@ -3,7 +3,7 @@
 RA-1 on 2 000 lines (2.5–5 000 Hz), the default tolerances, 200 draws. Printed, each a median
 of ``--repeat`` runs after one warm-up, in one process:
 
-* one plain prediction (with its exact natural frequencies), as ``rcsa.app.predict``;
+* one plain prediction (with its exact natural frequencies), as ``rcsa.predict``;
 * the same request with ``"uncertainty": {"draws": 200}`` — the reduced model of the draws
   (``rcsa.model.reduced_draws``, the default solver) — and its ratio to the prediction
   (issue 22's target: ≤ 10×), wall time and CPU time;
@@ -33,7 +33,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from rcsa import app  # noqa: E402
+import rcsa as app  # noqa: E402  (rcsa.predict, rcsa.stability_lobes: the application layer's calls)
 from rcsa.measured.store import Measurement, MeasurementMeta, MeasurementStore  # noqa: E402
 from rcsa.model.assembly import build_model  # noqa: E402
 from rcsa.model.contract import parse_assembly  # noqa: E402

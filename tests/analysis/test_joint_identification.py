@@ -23,8 +23,9 @@ from rcsa.reference import ra1
 TRUE = {"spindle_holder": {"stiffness_n_m": 3.05e7, "damping_ns_m": 365.0},
         "holder_tool": {"stiffness_n_m": 1.14e7, "damping_ns_m": 34.0}}
 NOISE = 0.01
-#: the brief's acceptance: stiffness within 5 %, damping within 20 %
-RTOL_STIFFNESS, RTOL_DAMPING = 0.05, 0.20
+#: 2x what the README states for these seeded cases (stiffnesses within 1e-4, dampings within
+#: 4e-3; measured 4.4e-5 and 3.1e-3) — far inside the brief's acceptance of 5 % and 20 %
+RTOL_STIFFNESS, RTOL_DAMPING = 2e-4, 8e-3
 
 
 def measured(stickout_m: float = 0.074, band_hz=(50.0, 5000.0), seed: int = 0, noise: float = NOISE,

@@ -32,6 +32,7 @@ def test_frf_peaks_are_relative_to_the_largest_peak():
     assert find_frf_peaks(f[:2], h[:2]) == []
 
 
+@pytest.mark.slow
 def test_import_rcsa_does_not_import_scipy_signal():
     code = "import sys, rcsa, rcsa.analysis.diagnosis; sys.exit('scipy.signal' in sys.modules)"
     assert subprocess.run([sys.executable, "-c", code], check=False).returncode == 0

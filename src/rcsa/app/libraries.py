@@ -15,19 +15,17 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
-import orjson
-
 from rcsa.app.jobs import Work, Workbench
+from rcsa.app.results import RESULT_FORMAT_FIELD, Format, encode_result, json_bytes, require_format
 from rcsa.errors import InputError
 from rcsa.infra.atomic_files import atomic_write_bytes
-from rcsa.libraries.exports import library_hdf5, library_uff_zip
+from rcsa.libraries.exports import library_uff_zip
 from rcsa.libraries.formats import LibrarySource, import_library, read_library
 from rcsa.libraries.library_prediction import (
     LIBRARY_OPTIONS,
     check_common,
     checked_batch,
     library_request,
-    select_tool_point,
 )
 from rcsa.libraries.sync import (
     LIBRARY_ID_PATTERN,
@@ -44,15 +42,11 @@ __all__ = [
     "LIBRARY_ID_PATTERN",
     "LIBRARY_OPTIONS",
     "ExportFile",
-    "LibraryStore",
     "export_file",
     "library_entries",
-    "library_id_from_name",
     "prepare_batch",
     "prepare_library",
     "prepare_sync",
-    "read_library",
-    "select_tool_point",
     "spindle_settings",
     "write_export",
 ]
@@ -60,10 +54,17 @@ __all__ = [
 #: Frequency grid of a library prediction when neither the caller, the spindle's assembly
 #: nor a measured spindle gives one, Hz.
 DEFAULT_GRID = {"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 1.0}
+ExportFormat = Literal["hdf5", "zip", "json", "parquet"]
 #: Export formats of a stored library's results, by file suffix.
-EXPORT_FORMATS: dict[str, Literal["hdf5", "zip", "json"]] = {".h5": "hdf5", ".hdf5": "hdf5", ".zip": "zip",
-                                                             ".json": "json"}
-_SUFFIX = {"hdf5": ".h5", "zip": ".zip", "json": ".json"}
+EXPORT_FORMATS: dict[str, ExportFormat] = {".h5": "hdf5", ".hdf5": "hdf5", ".zip": "zip", ".json": "json",
+                                           ".parquet": "parquet"}
+_SUFFIX = {"hdf5": ".h5", "zip": ".zip", "json": ".json", "parquet": ".parquet"}
+
+
+def _with_format(request: dict[str, Any], result_format: Format) -> dict[str, Any]:
+    """The work request, naming the form its job writes when that is not JSON."""
+    require_format(result_format)
+    return request if result_format == "json" else {**request, RESULT_FORMAT_FIELD: result_format}
 
 
 def _check_tools(n: int, limit: int) -> None:
@@ -75,7 +76,7 @@ def _check_tools(n: int, limit: int) -> None:
 
 def prepare_batch(bench: Workbench, request: Mapping[str, Any],
                   refused: Mapping[int, Mapping[str, str]] | None = None,
-                  tool_point: list[str] | None = None) -> Work:
+                  tool_point: list[str] | None = None, result_format: Format = "json") -> Work:
     """A batch request (``contract.md`` "Batch"), read and sized: work of kind ``batch``.
 
     Parameters
@@ -88,43 +89,70 @@ def prepare_batch(bench: Workbench, request: Mapping[str, Any],
         ``error`` result in their place (:func:`rcsa.libraries.library_prediction.checked_batch`).
     tool_point : list of str, optional
         Keep only these receptances of each result (``["h"]``).
+    result_format : {"json", "hdf5", "parquet"}
+        The form a job of it writes its result in (:mod:`rcsa.app.results`).
 
     Raises
     ------
     InputError
-        Too many combinations, or the grid, spindle or materials they share are invalid.
+        Too many combinations, or the grid, spindle or materials they share are invalid;
+        Parquet without pyarrow.
     """
     combinations = request.get("combinations") if isinstance(request, Mapping) else None
     n = len(combinations) if isinstance(combinations, list) else 0
     if n > bench.max_combinations:
         raise InputError("combinations", f"at most {bench.max_combinations} per request, got {n}; split the batch")
-    checked = checked_batch(request, refused or {}, tool_point)
+    checked = _with_format(checked_batch(request, refused or {}, tool_point), result_format)
     return Work("batch", checked, n, check=lambda: check_common(request, store=bench.store, max_lines=bench.max_lines))
 
 
-def prepare_library(bench: Workbench, library: LibrarySource, **fields: Any) -> Work:
+def prepare_library(bench: Workbench, library: LibrarySource, *, file_name: str | None = None,
+                    content_type: str | None = None, holder: Any = None, holder_name: str | None = None,
+                    result_format: Format = "json", **fields: Any) -> Work:
     """A Fusion or FreeCAD tool library on one spindle, imported and sized: work of kind ``library``.
 
-    ``library`` as :func:`rcsa.libraries.formats.read_library` takes it, or already read by it
-    (an upload with its file name and media type, a FreeCAD holder given apart).
-
-    ``fields`` are those of :func:`rcsa.libraries.library_prediction.library_request`:
-    ``spindle``, ``frequency``, ``joints``, ``materials``, ``beam_theory``,
-    ``shear_coefficient``, ``natural_frequencies`` and ``options``.
+    Parameters
+    ----------
+    bench : Workbench
+    library : path, bytes or mapping
+        The library as :func:`rcsa.libraries.formats.read_library` reads it: a path (a folder
+        is a FreeCAD library), an upload's bytes or a JSON document.
+    file_name, content_type : str, optional
+        What an upload says it is.
+    holder : path, bytes or mapping, optional
+        A FreeCAD holder (``.fcholder``) for the toolbits; refused for Fusion.
+    holder_name : str, optional
+        The holder upload's file name.
+    result_format : {"json", "hdf5", "parquet"}
+        The form a job of it writes its result in (as in :func:`prepare_batch`).
+    **fields
+        Those of :func:`rcsa.libraries.library_prediction.library_request`: ``spindle``,
+        ``frequency``, ``joints``, ``materials``, ``beam_theory``, ``shear_coefficient``,
+        ``natural_frequencies``, ``options`` and ``uncertainty``.
     """
-    request = library_request(library, **fields)
+    library = read_library(library, file_name=file_name, content_type=content_type, holder=holder,
+                           holder_name=holder_name)
+    request = _with_format(library_request(library, **fields), result_format)
     n = len(request["batch"]["combinations"])
     _check_tools(n, bench.max_combinations)
     return Work("library", request, n,
                 check=lambda: check_common(request["batch"], store=bench.store, max_lines=bench.max_lines))
 
 
-def prepare_sync(bench: Workbench, library_id: str, library: LibrarySource, **fields: Any) -> Work:
+def prepare_sync(bench: Workbench, library_id: str | None, library: LibrarySource, *, file_name: str | None = None,
+                 content_type: str | None = None, holder: Any = None, holder_name: str | None = None,
+                 **fields: Any) -> Work:
     """A sync of the stored library ``library_id`` with this export: work of kind ``library-sync``.
 
     Its size is the number of results not in the result cache yet (only those are
-    computed). ``fields`` as in :func:`prepare_library`.
+    computed). ``library_id`` None: the library file's name without suffix, made id-safe
+    (``"Mill tools (BT40).tools"`` → ``Mill-tools-BT40``; the request's ``library_id`` says
+    which). The other arguments as in :func:`prepare_library`.
     """
+    if library_id is None:
+        library_id = library_id_from_name(str(library)) if isinstance(library, str | os.PathLike) else "library"
+    library = read_library(library, file_name=file_name, content_type=content_type, holder=holder,
+                           holder_name=holder_name)
     request = sync_request(library_id, library, **fields)
     _check_tools(len(request["batch"]["combinations"]), bench.max_combinations)
     plan = plan_sync(bench.libraries, request, store=bench.store, max_lines=bench.max_lines)
@@ -211,21 +239,27 @@ class ExportFile:
     revision: int
 
 
-def export_file(libraries: LibraryStore, library_id: str, fmt: Literal["hdf5", "zip", "json"]) -> ExportFile:
-    """A stored library's results as HDF5, a zip of UFF 58 files, or JSON.
+def export_file(libraries: LibraryStore, library_id: str, fmt: ExportFormat) -> ExportFile:
+    """A stored library's results as HDF5, a zip of UFF 58 files, JSON or Parquet.
 
     Raises
     ------
     NotFoundError
         No such library.
+    InputError
+        An unknown format, or Parquet without pyarrow (naming the extra ``rcsa[parquet]``).
     """
     if fmt not in _SUFFIX:
         raise InputError("format", f"must be one of {', '.join(_SUFFIX)}, got {fmt!r}")
+    if fmt == "parquet":
+        require_format(fmt)
     results = libraries.results(library_id)
     if fmt == "json":
-        data = orjson.dumps(results, option=orjson.OPT_SERIALIZE_NUMPY)
+        data = json_bytes(results)
+    elif fmt == "zip":
+        data = library_uff_zip(results)
     else:
-        data = library_hdf5(results) if fmt == "hdf5" else library_uff_zip(results)
+        data = encode_result(results, fmt, "library-results")
     revision = int(results["library"]["revision"])
     return ExportFile(data, f"{library_id}-r{revision}{_SUFFIX[fmt]}", int(results["summary"]["ok"]), revision)
 
@@ -244,7 +278,7 @@ def write_export(libraries: LibraryStore, library_id: str, path: str | os.PathLi
     """
     suffix = Path(path).suffix.lower()
     if suffix not in EXPORT_FORMATS:
-        raise InputError("out", f"{path}: the file name must end in .h5, .hdf5, .zip or .json")
+        raise InputError("out", f"{path}: the file name must end in {', '.join(EXPORT_FORMATS)}")
     export = export_file(libraries, library_id, EXPORT_FORMATS[suffix])
     atomic_write_bytes(Path(path), export.data)
     return export

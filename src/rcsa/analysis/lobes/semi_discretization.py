@@ -67,11 +67,11 @@ from rcsa.analysis.lobes.zoa import (
     Milling,
     directional_factors,
     engagement_angles_rad,
-    json_float,
-    json_list,
     zoa_depth_limit,
 )
+from rcsa.analysis.progress import check_time
 from rcsa.errors import InputError
+from rcsa.model.wire import complex_to_wire, json_float, json_list
 
 __all__ = [
     "DEFAULT_STEPS_PER_PERIOD",
@@ -167,7 +167,7 @@ class SemiDiscretizationResult(LobeResult):
         out.update(
             method="semi_discretization",
             instability=[str(k) if k else None for k in self.instability.tolist()],
-            critical_multiplier={"real": json_list(mu.real), "imag": json_list(mu.imag)},
+            critical_multiplier=complex_to_wire(mu, nonfinite_as_none=True),
             steps_per_period=self.steps_per_period,
             steps_per_chatter_cycle=json_list(self.steps_per_chatter_cycle),
             depth_search_max_m=json_float(self.depth_search_max_m),
@@ -227,6 +227,7 @@ def _scan(evaluate: _Evaluator, g0: np.ndarray, start_m: float, ceiling_m: float
     b = np.full(n, start_m)
     active = np.arange(n)
     while active.size:
+        check_time()
         g = _log_modulus(evaluate(active, b[active]))
         up = g >= 0.0
         hi[active[up]], g_hi[active[up]] = b[active[up]], g[up]
@@ -250,6 +251,7 @@ def _refine(evaluate: _Evaluator, idx: np.ndarray, a: np.ndarray, ga: np.ndarray
     a, ga, c, gc = a.copy(), ga.copy(), c.copy(), gc.copy()
     side = np.zeros(idx.size, dtype=np.int8)
     for _ in range(_MAX_REFINE):
+        check_time()
         open_ = np.flatnonzero(c - a > rtol * c)
         if open_.size == 0:
             break
