@@ -14,7 +14,6 @@ import numpy as np
 import pytest
 
 import rcsa
-from rcsa import app
 from rcsa.measured.store import Measurement, MeasurementMeta, MeasurementStore
 from rcsa.model import reduced_draws as reduced_module
 from rcsa.model.assembly import build_model
@@ -47,8 +46,8 @@ def mode_errors(reduced: dict, exact: dict) -> tuple[float, float]:
 
 
 def both(doc: dict, option: dict, **kwargs) -> tuple[dict, dict]:
-    reduced = app.predict({**doc, "uncertainty": option}, **kwargs)
-    exact = app.predict({**doc, "uncertainty": {**option, "solver": "exact"}}, **kwargs)
+    reduced = rcsa.predict({**doc, "uncertainty": option}, **kwargs)
+    exact = rcsa.predict({**doc, "uncertainty": {**option, "solver": "exact"}}, **kwargs)
     return reduced["uncertainty"], exact["uncertainty"]
 
 
@@ -87,8 +86,8 @@ def test_a_library_of_tools_on_one_spindle():
                "tool": {**tool, "diameter_m": 0.010, "stickout_m": 0.065}}]
     request = {"spindle": doc["spindle"], "frequency": doc["frequency"], "combinations": combos}
     option = {"draws": 40, "seed": 9}
-    reduced = app.predict_batch({**request, "uncertainty": option})["results"]
-    exact = app.predict_batch({**request, "uncertainty": {**option, "solver": "exact"}})["results"]
+    reduced = rcsa.predict_batch({**request, "uncertainty": option})["results"]
+    exact = rcsa.predict_batch({**request, "uncertainty": {**option, "solver": "exact"}})["results"]
     for r, e in zip(reduced, exact, strict=True):
         assert r["status"] == e["status"] == "ok", r.get("error")
         assert band_error(r["uncertainty"], e["uncertainty"]) < TARGET / 2, r["id"]

@@ -15,13 +15,12 @@ from rcsa.model.assembly import build_model
 from rcsa.model.contract import parse_assembly
 from rcsa.model.draw_chains import drawn_chains
 from rcsa.model.tolerances import DEFAULT_TOLERANCES, draw_nuisance
-from rcsa.physics.chain import Beam
+from rcsa.physics.chain import Beam, undamped
 from rcsa.physics.elimination import subdivide, wittrick_williams_count
 from rcsa.physics.materials import Material
 from rcsa.physics.natural_frequencies import natural_frequencies_batch
-from rcsa.physics.chain import undamped
-from rcsa.physics.seeded_modes import natural_frequencies_near
 from rcsa.physics.sections import tube
+from rcsa.physics.seeded_modes import natural_frequencies_near
 from rcsa.reference import ra1
 
 #: The bracket's root is refined to 1e-10 here; both searches agree to their brackets.

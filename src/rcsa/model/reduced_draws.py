@@ -57,7 +57,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from rcsa.model.draw_chains import DrawGroup, DrawnChains
-from rcsa.model.draws import ModeStatistics, order_statistics, tool_point_h_draws, tool_point_h_pairs
+from rcsa.model.draws import (
+    ModeStatistics,
+    order_statistics,
+    tool_point_h_draws,
+    tool_point_h_pairs,
+)
 from rcsa.model.tolerances import NuisanceDraws
 from rcsa.model.vector_fitting import RationalFit, vector_fit
 from rcsa.physics.arrays import ComplexArray, FloatArray, IntArray
@@ -622,8 +627,8 @@ def reduced_mode_statistics(drawn: DrawnChains, reduced: ReducedDraws, knobs: Nu
         knob_half = 3.0 * knob_error if np.isfinite(knob_error) else 0.0
         todo_half.append(np.where(from_pole, TRACKED_HALF_WIDTH, max(knob_half, TRACKED_HALF_WIDTH)))
     if todo_draw:
-        d, k = np.concatenate(todo_draw), np.concatenate(todo_mode)
-        values[d, k] = _exact_pairs(drawn, d, k, nominal.mode_order, np.concatenate(todo_seed), modes, low, high,
+        pair_draw, pair_mode = np.concatenate(todo_draw), np.concatenate(todo_mode)
+        values[pair_draw, pair_mode] = _exact_pairs(drawn, pair_draw, pair_mode, nominal.mode_order, np.concatenate(todo_seed), modes, low, high,
                                     np.concatenate(todo_half))
     values[(values < lo_w) | (values > hi_w)] = np.nan
     columns = np.flatnonzero((modes >= start_hz) & (modes <= stop_hz))
@@ -655,7 +660,7 @@ def _knob_features(knobs: NuisanceDraws) -> FloatArray:
     """Regressors of a drawn natural frequency's logarithm, shape (ndraws, nfeatures): 1, the
     logarithms of the stiffness and mass knobs, the stickout offset (scaled to its sd)."""
     v = knobs.values
-    cols = [np.ones(knobs.n_draws)]
+    cols: list[FloatArray] = [np.ones(knobs.n_draws)]
     cols += [np.log(v[name][:, 0]) for name in REGRESSION_KNOBS if name in v]
     if "stickout_offset_m" in v:
         offset = v["stickout_offset_m"][:, 0]

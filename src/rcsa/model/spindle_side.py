@@ -385,9 +385,10 @@ class SpindleSide:
             notes.append(f"measured spindle: {inside} are inside the measurement, so their tolerances do not apply; "
                          f"the measurement is drawn under its own uncertainty instead (measured_spindle)")
         notes += drawn.notes
-        reduced = None if drawn.reduced is None else drawn.reduced.summary()
+        reduced = None
         if drawn.reduced is not None:
             r = drawn.reduced
+            reduced = r.summary()
             notes.append(f"reduced model of the draws: each draw solved exactly at {np.mean(r.lines_per_draw):.0f} of "
                          f"{f.size} lines and fitted by a rational function with its own poles; largest error at the "
                          f"lines kept aside to check it {np.max(r.check_error, initial=0.0):.2g} of the draw's peak "
