@@ -34,6 +34,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import rcsa as app  # noqa: E402  (rcsa.predict, rcsa.stability_lobes: the application layer's calls)
+from rcsa.app import predictions  # noqa: E402
 from rcsa.measured.store import Measurement, MeasurementMeta, MeasurementStore  # noqa: E402
 from rcsa.model.assembly import build_model  # noqa: E402
 from rcsa.model.contract import parse_assembly  # noqa: E402
@@ -114,6 +115,7 @@ def main() -> None:
     args = parser.parse_args()
     print(f"python {platform.python_version()}, numpy {np.__version__}, {platform.machine()}, "
           f"{os.cpu_count()} cores; load average {', '.join(f'{x:.2f}' for x in os.getloadavg())}")
+    predictions.SIDES.size = 0  # cold predictions, as bench_engine.py times them: no spindle side kept across calls
     assembly = ra1(GRID)
     option = {"draws": args.draws, "seed": 1}
     plain = _median(lambda: app.predict(assembly), args.repeat)

@@ -391,7 +391,7 @@ class SpindleSide:
             reduced = r.summary()
             notes.append(f"reduced model of the draws: each draw solved exactly at {np.mean(r.lines_per_draw):.0f} of "
                          f"{f.size} lines and fitted by a rational function with its own poles; largest error at the "
-                         f"lines kept aside to check it {np.max(r.check_error, initial=0.0):.2g} of the draw's peak "
+                         f"lines kept aside to check it {np.max(r.check_error, initial=0.0):.2g} of the draw's |h| there "
                          f"(draws above {reduced['check_tolerance']:g} solved on every line: "
                          f"{int(np.sum(r.exact))})")
         return UncertaintyBand(options, magnitude_percentiles(drawn.h, list(PERCENTILES.values())), stats.mean_hz,
