@@ -219,6 +219,28 @@ def test_uncertainty_draws_give_a_band_and_robust_lobes(server, browser, downloa
     assert _severe_console(browser) == []
 
 
+def test_the_clamping_model_is_chosen_on_the_page(server, browser):
+    """Bonded along the insertion moves RA-1's tool mode (the point joint's 1383.6 Hz goes); a contact
+    with an impossible interface stiffness is the server's 422, shown, not a broken page."""
+    _open(browser, server)
+    Select(browser.find_element(By.ID, "clamping")).select_by_value("bonded")
+    for field, value in (("freq-stop", "3000"), ("freq-step", "2")):
+        browser.find_element(By.ID, field).clear()
+        browser.find_element(By.ID, field).send_keys(value)
+    browser.find_element(By.ID, "predict").click()
+    _wait_state(browser, "frf")
+    text = browser.find_element(By.ID, "nat-freqs").text
+    assert "1383.6" not in text, text
+    Select(browser.find_element(By.ID, "clamping")).select_by_value("contact")
+    browser.find_element(By.ID, "interface-stiffness").clear()
+    browser.find_element(By.ID, "interface-stiffness").send_keys("1e30")
+    assert _severe_console(browser) == []
+    browser.find_element(By.ID, "predict").click()
+    _wait_state(browser, "frf", want="error")
+    WebDriverWait(browser, WAIT_S).until(lambda d: "interface_stiffness_n_m3" in _page_error(d))
+    browser.get_log("browser")  # the refused request's console line is expected here, not in the next test
+
+
 def test_library_entry_on_measured_spindle_and_errors_shown(server, browser):
     _open(browser, server)
     browser.find_element(By.ID, "library-file").send_keys(str(LIBRARY))

@@ -35,6 +35,7 @@ from rcsa.libraries.sync import (
     sync_request,
 )
 from rcsa.measured.hybrid import MeasurementSource
+from rcsa.model.contract import CLAMPING_MODELS
 
 __all__ = [
     "DEFAULT_GRID",
@@ -77,7 +78,7 @@ def _check_tools(n: int, limit: int) -> None:
 def prepare_batch(bench: Workbench, request: Mapping[str, Any],
                   refused: Mapping[int, Mapping[str, str]] | None = None,
                   tool_point: list[str] | None = None, result_format: Format = "json") -> Work:
-    """A batch request (``contract.md`` "Batch"), read and sized: work of kind ``batch``.
+    """A batch request (``docs/contract.md`` "Batch"), read and sized: work of kind ``batch``.
 
     Parameters
     ----------
@@ -128,11 +129,12 @@ def prepare_library(bench: Workbench, library: LibrarySource, *, file_name: str 
     **fields
         Those of :func:`rcsa.libraries.library_prediction.library_request`: ``spindle``,
         ``frequency``, ``joints``, ``materials``, ``beam_theory``, ``shear_coefficient``,
-        ``natural_frequencies``, ``options`` and ``uncertainty``.
+        ``natural_frequencies``, ``options`` and ``uncertainty``; and ``holder_tool``, every
+        tool's holder–tool joint (:func:`every_tool_joints`).
     """
     library = read_library(library, file_name=file_name, content_type=content_type, holder=holder,
                            holder_name=holder_name)
-    request = _with_format(library_request(library, **fields), result_format)
+    request = _with_format(library_request(library, **_library_fields(fields)), result_format)
     n = len(request["batch"]["combinations"])
     _check_tools(n, bench.max_combinations)
     return Work("library", request, n,
@@ -153,15 +155,69 @@ def prepare_sync(bench: Workbench, library_id: str | None, library: LibrarySourc
         library_id = library_id_from_name(str(library)) if isinstance(library, str | os.PathLike) else "library"
     library = read_library(library, file_name=file_name, content_type=content_type, holder=holder,
                            holder_name=holder_name)
-    request = sync_request(library_id, library, **fields)
+    request = sync_request(library_id, library, **_library_fields(fields))
     _check_tools(len(request["batch"]["combinations"]), bench.max_combinations)
     plan = plan_sync(bench.libraries, request, store=bench.store, max_lines=bench.max_lines)
     return Work("library-sync", request, len(plan.pending), plan,
                 check=lambda: check_common(request["batch"], store=bench.store, max_lines=bench.max_lines))
 
 
+def every_tool_joints(joints: Mapping[str, Any] | None, holder_tool: str | Mapping[str, Any] | None
+                      ) -> Mapping[str, Any] | None:
+    """The joints applied to every tool of a library, with ``holder_tool`` replacing their own.
+
+    Parameters
+    ----------
+    joints : mapping or None
+        ``{"spindle_holder": {...}, "holder_tool": {...}}`` (either may be left out).
+    holder_tool : str or mapping or None
+        A clamping model name (``"bonded"``; ``"point"`` = a rigid point joint) or a whole
+        ``joints.holder_tool`` object (``{"model": "contact", "interface_stiffness_n_m3": 5e13}``);
+        ``None`` keeps the joints as they are.
+
+    Returns
+    -------
+    mapping or None
+
+    Raises
+    ------
+    InputError
+        ``holder_tool`` is neither a model name nor an object.
+
+    Examples
+    --------
+    >>> every_tool_joints({"holder_tool": {"stiffness_n_m": 1e7}}, "bonded")
+    {'holder_tool': {'model': 'bonded'}}
+    """
+    if holder_tool is None:
+        return joints
+    if isinstance(holder_tool, str):
+        if holder_tool not in CLAMPING_MODELS:
+            raise InputError("holder_tool", f"must be one of {', '.join(CLAMPING_MODELS)} or a holder_tool object, "
+                                            f"got {holder_tool!r}")
+        if holder_tool == "contact":
+            raise InputError("holder_tool", 'a contact clamping needs its interface stiffness: give the object '
+                                            '{"model": "contact", "interface_stiffness_n_m3": ...}')
+        holder_tool = {} if holder_tool == "point" else {"model": holder_tool}
+    elif not isinstance(holder_tool, Mapping):
+        raise InputError("holder_tool", "must be a clamping model name or a joints.holder_tool object")
+    out = {k: v for k, v in dict(joints or {}).items() if k != "holder_tool"}
+    if holder_tool:
+        out["holder_tool"] = dict(holder_tool)
+    return out
+
+
+def _library_fields(fields: dict[str, Any]) -> dict[str, Any]:
+    """The fields of a library request with a ``holder_tool`` shortcut merged into its joints."""
+    if "holder_tool" not in fields:
+        return fields
+    rest = dict(fields)
+    rest["joints"] = every_tool_joints(rest.get("joints"), rest.pop("holder_tool"))
+    return rest
+
+
 def spindle_settings(base: Mapping[str, Any], *, frequency: Mapping[str, Any] | None = None,
-                     joints: Mapping[str, Any] | None = None,
+                     joints: Mapping[str, Any] | None = None, holder_tool: str | Mapping[str, Any] | None = None,
                      store: MeasurementSource | None = None) -> dict[str, Any]:
     """The spindle, grid, joints and materials of a library prediction from a base document.
 
@@ -175,6 +231,11 @@ def spindle_settings(base: Mapping[str, Any], *, frequency: Mapping[str, Any] | 
         :data:`DEFAULT_GRID`.
     joints : mapping, optional
         Joints for every tool; default the base's (rigid when it has none).
+    holder_tool : str or mapping, optional
+        The holder–tool joint of every tool, replacing the joints' own: a clamping model name
+        (``"bonded"``, ``"point"`` = rigid point joint) or a whole ``joints.holder_tool`` object
+        (e.g. ``{"model": "contact", "interface_stiffness_n_m3": 5e13}``): how a whole library
+        is switched to a clamping model.
     store : MeasurementSource, optional
         Where a measured spindle's lines are read.
 
@@ -182,6 +243,11 @@ def spindle_settings(base: Mapping[str, Any], *, frequency: Mapping[str, Any] | 
     -------
     dict
         Keyword arguments of :func:`prepare_library` / :func:`prepare_sync`.
+
+    Raises
+    ------
+    InputError
+        ``holder_tool`` is neither a model name nor an object.
     """
     spindle = base["spindle"]
     if frequency is not None:
@@ -192,7 +258,8 @@ def spindle_settings(base: Mapping[str, Any], *, frequency: Mapping[str, Any] | 
         grid = {"values_hz": store.get(spindle["measurement_id"]).frequency_hz.tolist()}
     else:
         grid = dict(DEFAULT_GRID)
-    return {"spindle": spindle, "frequency": grid, "joints": joints if joints is not None else base.get("joints"),
+    chosen = every_tool_joints(joints if joints is not None else base.get("joints"), holder_tool)
+    return {"spindle": spindle, "frequency": grid, "joints": chosen,
             "materials": base.get("materials"), "beam_theory": base.get("beam_theory"),
             "shear_coefficient": base.get("shear_coefficient")}
 

@@ -38,7 +38,7 @@ from rcsa.model.draws import (
     peak_statistics,
     tool_point_h_draws,
 )
-from rcsa.model.prediction import Prediction, SubassemblyCache, predict_model, tool_point_receptance
+from rcsa.model.prediction import Prediction, predict_model, tool_point_receptance
 from rcsa.model.reduced_draws import (
     CALIBRATION_DRAWS,
     ESTIMATE_TOLERANCE,
@@ -55,6 +55,7 @@ from rcsa.model.uncertainty import PERCENTILES, UncertaintyBand, UncertaintyOpti
 from rcsa.model.wire import complex_to_wire
 from rcsa.physics.arrays import ComplexArray, FloatArray, IntArray
 from rcsa.physics.natural_frequencies import natural_frequencies_batch
+from rcsa.physics.subassembly_cache import SubassemblyCache
 
 __all__ = ["BaseResolver", "BaseUncertainty", "MeasuredBase", "SpindleSide", "ToolPointDraws", "measured_base_draws",
            "spread_of_bounds"]

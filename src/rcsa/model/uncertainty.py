@@ -1,13 +1,13 @@
 """Uncertainty on predictions: the request option, a measured spindle's own draws, the result.
 
 A prediction request may carry ``"uncertainty": {"draws": 200, "seed": 1, "tolerances":
-{...}, "solver": "reduced"}`` (``contract.md`` "Additions in v1.1"; ``solver`` is ours). The
+{...}, "solver": "reduced"}`` (``docs/contract.md`` "Additions in v1.1"; ``solver`` is ours). The
 assembly is then drawn ``draws`` times under the nuisance tolerances of
 :mod:`rcsa.model.tolerances` (the diagnosis's names and defaults) and — on a measured spindle
 — under the measurement's own uncertainty (:class:`rcsa.model.spindle_side.BaseUncertainty`,
 :func:`rcsa.model.spindle_side.measured_base_draws`). With ``"solver": "reduced"`` (the
 default) the draws are solved by a reduced model whose error is checked draw by draw
-(:mod:`rcsa.model.reduced_draws`, :mod:`rcsa.model.substructure_draws`); with ``"exact"``
+(:mod:`rcsa.model.reduced_draws`); with ``"exact"``
 every draw is solved exactly on every line (:mod:`rcsa.model.draws`, all draws at once). The
 result gains::
 
@@ -149,7 +149,7 @@ def parse_prediction_request(document: object, max_lines: int = MAX_FREQUENCY_LI
     Parameters
     ----------
     document : dict
-        The assembly (``contract.md`` "Assembly") and, optionally, ``"uncertainty"``.
+        The assembly (``docs/contract.md`` "Assembly") and, optionally, ``"uncertainty"``.
     max_lines : int
         Largest accepted number of frequency lines.
 
