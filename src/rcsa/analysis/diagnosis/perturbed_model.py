@@ -43,7 +43,8 @@ different, physical realisations, see ``tests/analysis/diagnosis/truth.py``):
 * With a holder–tool clamping along the insertion (model ``bonded``/``contact``) the holder-tool
   knobs act on the clamping, which belongs to the holder chain: ``ht_translational_scale``
   scales its whole interface stiffness (softening over the insertion), ``ht_damping_scale``
-  its interface loss factor, and ``insertion_offset_m`` is contact lost over that length
+  its interface loss factor (``ht_interface_loss_added`` adds to it: a bonded clamping has none
+  of its own), and ``insertion_offset_m`` is contact lost over that length
   at the front of the bore (its ``front_gap_length_m``): holder and tool keep their geometry.
 """
 
@@ -68,8 +69,10 @@ from rcsa.model.contract import (
     ToolSpec,
 )
 from rcsa.model.tolerances import scaled_joint
+from rcsa.physics.algebra2x2 import inv2
 from rcsa.physics.arrays import ComplexArray, FloatArray, IntArray
 from rcsa.physics.chain import Beam, Chain, ChainItem, Grid, Ground, Sym
+from rcsa.physics.insertion import Insertion
 from rcsa.physics.materials import Material
 from rcsa.physics.sections import Section
 from rcsa.physics.segments import SixTerms, Waves, segment_terms
@@ -98,6 +101,7 @@ class Knobs:
     ht_translational_scale: float = 1.0
     ht_rotational_scale: float = 1.0
     ht_damping_scale: float = 1.0
+    ht_interface_loss_added: float = 0.0
     stickout_offset_m: float = 0.0
     shear_scale: float | None = None
     fluted_stiffness_ratio: float | None = None
@@ -120,6 +124,18 @@ class _BeamTermsGrid(Grid):
         super().__init__(omega_rad_s)
         self._terms = lru_cache(maxsize=max_beams)(self._segment_terms)
         self._section_waves = lru_cache(maxsize=max_beams // 4)(lambda section: Waves(self.omega_rad_s, section))
+        self._two_ports = lru_cache(maxsize=max(max_beams // 8, 8))(self._insertion_two_port)
+
+    def _insertion_two_port(self, item: Insertion) -> ComplexArray:
+        d = item.two_port(self.omega_rad_s)
+        d.flags.writeable = False
+        return d
+
+    def insertion_two_port(self, item: Insertion) -> ComplexArray:
+        """A clamping's two-port dynamic stiffness (nfreq, 4, 4), cached by value: a candidate
+        that changes what lies before the holder (bearings, the spindle–holder joint, a nose
+        correction) re-uses it instead of re-condensing the insertion."""
+        return self._two_ports(item)  # type: ignore[no-any-return]
 
     def waves(self, section: Section) -> Waves:
         """Wavenumbers of ``section`` (bounded cache: the Monte Carlo makes new sections all the time)."""
@@ -328,6 +344,9 @@ class PartsBuilder:
         # a clamping along the insertion belongs to the holder chain, with the holder-tool knobs
         clamping = scaled_joint(spec.holder_tool, k.ht_translational_scale, k.ht_rotational_scale,
                                 k.ht_damping_scale) if isinstance(spec.holder_tool, ClampingSpec) else None
+        if clamping is not None and k.ht_interface_loss_added != 0.0:
+            clamping = replace(clamping, interface_loss_factor=clamping.interface_loss_factor
+                               + k.ht_interface_loss_added)
         front_gap = clamping is not None and self.plane != "holder_tip"
         if front_gap and k.insertion_offset_m > 0.0:
             assert isinstance(clamping, ClampingSpec)
@@ -417,10 +436,31 @@ def config_parts(spec: AssemblySpec, tool: ToolSpec, k: Knobs, plane: str | None
 _State = tuple[Sym | None, ComplexArray | None]
 
 
+def _insertion_step(state: _State, d: ComplexArray) -> _State:
+    """Across a two-port ``d`` (nfreq, 4, 4): ``K ← D22 − D21 (K + D11)⁻¹ D12``, or from a
+    compliance ``S``: ``D22 − D21 S (I + D11 S)⁻¹ D12`` (never inverting ``S``)."""
+    k, s = state
+    if s is not None:
+        x = s @ inv2(np.eye(2) + d[:, :2, :2] @ s)
+    else:
+        assert k is not None
+        p = np.array(d[:, :2, :2])
+        p[:, 0, 0] += k[0]
+        p[:, 0, 1] += k[1]
+        p[:, 1, 0] += k[1]
+        p[:, 1, 1] += k[2]
+        x = inv2(p)
+    out = d[:, 2:, 2:] - d[:, 2:, :2] @ x @ d[:, :2, 2:]
+    return (out[:, 0, 0], 0.5 * (out[:, 0, 1] + out[:, 1, 0]), out[:, 1, 1]), None
+
+
 def _advance(state: _State, chain: Chain, grid: Grid) -> _State:
     """Carry the condensed state across ``chain`` (each item's own elimination step)."""
     k, s = state
     for item in chain:
+        if isinstance(item, Insertion) and isinstance(grid, _BeamTermsGrid):
+            k, s = _insertion_step((k, s), grid.insertion_two_port(item))
+            continue
         if s is not None:
             out, is_stiffness = item.absorb_compliance(s, grid)
             if is_stiffness:

@@ -52,6 +52,12 @@ RESIDUAL_P = 0.05
 # (diag((ρ Δf)²), ρ = 0.1-0.2) left 10-13 %: the remainder sits mostly in features the
 # first candidate barely moves. The gate is the upper quartile of that form error.
 MIN_SECOND_SHIFT_RATIO = 0.2
+# A measured spindle is only blamed for a remainder (``spindle_rotational_receptance`` as the
+# second effect) when its own stated uncertainty accounts for at least this share of the
+# expected scatter along that remainder (:meth:`Analysis.spindle_share`): an exact point
+# receptance, whose 0.3 % noise moves the features by almost nothing, then never absorbs the
+# form error of the first effect under the spindle's name (issue 24).
+MIN_SPINDLE_SHARE = 0.1
 
 
 class _Phases:
@@ -107,6 +113,7 @@ class Analysis:
                                                 1.5 * max(masses) if masses and max(masses) > 0 else None,
                                                 opts.effects, p.measured)
         self._cache: dict[tuple, np.ndarray] = {}
+        self._spindle_cov: np.ndarray | None = None
         n_feat = p.base_features.size
         self.like = Likelihood(p.measured_features, self.disc, np.arange(n_feat), opts.likelihood)
         self.log_z0 = float(self.like(p.base_features))
@@ -288,6 +295,8 @@ class Analysis:
             return None  # the first effect leaves nothing that tolerances and noise do not explain
         best: tuple[Fit, HeldOut | None, float] | None = None
         for f in self.decision.ranking[1:1 + RANKED_WITH_HELD_OUT]:
+            if f.candidate.name == "spindle_rotational_receptance" and self.spindle_share(f1) < MIN_SPINDLE_SHARE:
+                continue  # the measured spindle's own uncertainty explains nothing of the remainder
             fit, cos, ratio = self._second_fit(f.candidate, like, f1)
             if (fit.log_bayes_factor <= self.request.options.claim_threshold or abs(cos) >= MAX_SIGNATURE_COSINE
                     or ratio < MIN_SECOND_SHIFT_RATIO
@@ -297,6 +306,23 @@ class Analysis:
             if improves:
                 best = (fit, ho, cos)
         return best
+
+    def spindle_share(self, model_features: np.ndarray) -> float:
+        """Share of the expected scatter along the remainder that the measured spindle's own uncertainty makes.
+
+        ``u`` the whitened remainder ``W (f_meas − μ − f_model)`` normalised, ``A = W Σ_sp Wᵀ``
+        with ``Σ_sp`` the features' covariance under the spindle's uncertainty alone
+        (:meth:`Problem.spindle_feature_covariance`): ``uᵀ A u`` ∈ [0, ~1] (1: the spindle's
+        uncertainty is all the scatter expected there). 1 for an analytical spindle (no gate).
+        """
+        if self.problem.measured is None:
+            return 1.0
+        if self._spindle_cov is None:
+            self._spindle_cov = self.problem.spindle_feature_covariance()
+        w = self.like.w
+        u = w @ (self.problem.measured_features - (model_features + self.disc.mu))
+        u = u / max(float(np.linalg.norm(u)), 1e-300)
+        return float(u @ (w @ self._spindle_cov @ w.T) @ u)
 
     # ------------------------------------------------------------------ reporting
     def residual_p_value(self, model_features: np.ndarray, whitener: np.ndarray | None = None) -> float:
