@@ -283,6 +283,7 @@ def print_summary(s: dict) -> None:
     print(f"equivalence-class: all {pct(s['equivalence_all'])}, SNR>=10 {pct(s['equivalence_snr_ge_10'])}; "
           f"set accuracy SNR>=10 {pct(s['set_accuracy_snr_ge_10'])}; best-ranked SNR>=10 "
           f"{pct(s['best_ranked_snr_ge_10'])}")
+    print(f"false claims, all trials (no effect of the hidden class named): {s['false_claims_all_count']}")
     print(f"false claims on no-effect data: {s['false_claims_count']} ({pct(s['false_claims_on_null'])}); "
           f"miss rate {pct(s['miss_rate'])}")
     for k, b in s["by_snr"].items():
@@ -467,11 +468,13 @@ def main() -> None:
     args.out.parent.mkdir(parents=True, exist_ok=True)
     partial = args.out.with_suffix(".partial.jsonl")  # as in run_hybrid: a run cut short can still be scored
     partial.write_text("")
+    load = [os.getloadavg()[0]]
     with ProcessPoolExecutor(max_workers=args.workers) as pool:
         futures = [pool.submit(run_trial, i, e, args.seed, args.tolerance_scale) for i, e in enumerate(plan)]
         for k, fut in enumerate(futures):
             rec = fut.result()
             records.append(rec)
+            load.append(os.getloadavg()[0])
             with partial.open("a") as fh:
                 fh.write(json.dumps(rec) + "\n")
             print(f"[{k + 1}/{len(plan)}] {rec['effect']:29s} -> {rec['status']:10s} {rec['verdict']:29s} "
@@ -483,7 +486,8 @@ def main() -> None:
     summary["settings"] = {"stickouts_m": list(truth.STICKOUTS_M), "band_hz": [50.0, 8000.0], "line_step_hz": 2.0,
                            "noise": "1 % + floor -50 dB of peak, 5 averages", "seed": args.seed,
                            "tolerance_scale": args.tolerance_scale, "workers": args.workers,
-                           "machine": machine()}
+                           "machine": machine(), "load_average": {"min": min(load), "max": max(load),
+                                                                  "median": float(np.median(load))}}
     print_summary(summary)
     args.out.write_text(json.dumps({"summary": summary, "trials": records}, indent=1))
     partial.unlink()
