@@ -88,7 +88,7 @@ def _verdict(a: Analysis, r: dict) -> dict:
             "residual_p_value": first["residual_p_value"] if first else r["gap"]["p_value"],
             "gap_p_value": r["gap"]["p_value"], "gap_chi2_per_feature": r["gap"]["chi2"] / max(
                 len(a.problem.base_features), 1),
-            "scatter_scale": r["gap"].get("scatter_scale"),
+            "scatter_scale": r["analysis"]["scatter_scale"],
             "ranking": [(e["effect"], round(e["log_bayes_factor"], 2)) for e in r["ranking"][:5]],
             "parameters": {k: (p_["value"], p_["sd"], p_["at_bound"]) for k, p_ in first["parameters"].items()}
             if first else {}}

@@ -104,7 +104,6 @@ def gap_map(a: Analysis, model_features: np.ndarray, model_h: Sequence[np.ndarra
     worst = int(np.argmax(np.abs(z)))
     return {"modes": modes, "bands": bands, "chi2": chi2, "n_features": int(z.size),
             "chi2_per_feature": chi2 / z.size, "p_value": p_value, "significant": bool(p_value < P_GAP),
-            "scatter_scale": a.like.scatter_scale(model_features),
             "max_abs_z": float(np.abs(z).max()), "worst": modes[worst], "db_rms": _db_rms(a, model_h)}
 
 
@@ -250,6 +249,7 @@ def build_response(a: Analysis) -> dict[str, Any]:
                      "ambiguity_window": a.request.options.ambiguity_window,
                      "tolerances": dict(a.request.tolerances),
                      "log_evidence_base": a.log_z0,
+                     "scatter_scale": a.scatter_scale,
                      "timings_s": {**a.timings_s, "response": time.perf_counter() - response_started}},
         "notes": notes,
         **spindle,

@@ -21,7 +21,14 @@ from typing import Any
 
 import numpy as np
 
-from rcsa.analysis.diagnosis.attribution import Decision, Fit, Likelihood, decide, fit_candidate
+from rcsa.analysis.diagnosis.attribution import (
+    MAX_SCATTER_SCALE,
+    Decision,
+    Fit,
+    Likelihood,
+    decide,
+    fit_candidate,
+)
 from rcsa.analysis.diagnosis.candidates import Candidate, catalogue, not_applicable
 from rcsa.analysis.diagnosis.discrepancy import Discrepancy
 from rcsa.analysis.diagnosis.perturbed_model import BaseReceptance, Knobs, PartsBuilder, Solver
@@ -124,6 +131,19 @@ class Analysis:
             self.fits.append(fit_candidate(c, self.features_at, self.like, self.log_z0))
             report(progress, len(self.fits) + 1, steps)
         self.decision: Decision = decide(self.fits, opts.claim_threshold, opts.ambiguity_window)
+        # The evidence is judged at the scatter the data still show once the best effect is in:
+        # tolerances understated by ŝ make every structured nuisance deviation look like an
+        # effect, so the claims are re-weighed with Σ·ŝ² (the model features are cached).
+        self.judge, self.scatter_scale = self.like, 1.0
+        if self.decision.status != "none":
+            best = self.decision.ranking[0]
+            self.scatter_scale = self.remainder_scale(self.features_at(best.candidate, best.map))
+        if self.scatter_scale > 1.0:
+            self.judge = Likelihood(p.measured_features, self.disc, np.arange(n_feat), opts.likelihood,
+                                    scale=self.scatter_scale)
+            self.log_z0 = float(self.judge(p.base_features))
+            self.fits = [fit_candidate(c, self.features_at, self.judge, self.log_z0) for c in self.candidates]
+            self.decision = decide(self.fits, opts.claim_threshold, opts.ambiguity_window)
         clock.mark("candidates")
         self.folds = folds([m.tool.stickout_m for m in self.request.measurements], opts.held_out)
         self.held: dict[str, HeldOut | None] = {}
@@ -236,9 +256,9 @@ class Analysis:
         first = self.decision.ranking[0]
         f1 = self.features_at(first.candidate, first.map)
         p = self.problem
-        like = self.like if form_error == 0.0 else Likelihood(
+        like = self.judge if form_error == 0.0 else Likelihood(
             p.measured_features, self.with_form_error(f1 - p.base_features, form_error),
-            np.arange(p.base_features.size), self.request.options.likelihood)
+            np.arange(p.base_features.size), self.request.options.likelihood, scale=self.scatter_scale)
         return self.residual_p_value(f1, like.w), like, f1
 
     def _second_fit(self, c2: Candidate, like: Likelihood, f1: np.ndarray) -> tuple[Fit, float, float]:
@@ -306,6 +326,19 @@ class Analysis:
             if improves:
                 best = (fit, ho, cos)
         return best
+
+    def remainder_scale(self, model_features: np.ndarray) -> float:
+        """How much more the data scatter about ``model_features`` than tolerances and noise allow.
+
+        ``ŝ = √(χ² / median χ²_MC)``, the Mahalanobis χ² of the remainder over the median of
+        the Monte-Carlo null's (which carries the features' own non-Gaussian spread), kept in
+        ``[1, MAX_SCATTER_SCALE]``.
+        """
+        w = self.like.w
+        r = self.problem.measured_features - (model_features + self.disc.mu)
+        null = np.sum((self.disc.samples @ w.T) ** 2, axis=1)
+        ratio = float(np.sum((w @ r) ** 2)) / max(float(np.median(null)), 1e-300)
+        return float(np.clip(np.sqrt(ratio), 1.0, MAX_SCATTER_SCALE))
 
     def spindle_share(self, model_features: np.ndarray) -> float:
         """Share of the expected scatter along the remainder that the measured spindle's own uncertainty makes.
