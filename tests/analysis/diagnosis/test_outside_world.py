@@ -215,3 +215,21 @@ def test_a_soft_layer_in_3d_is_named_on_the_point_base_and_corrected_toward_the_
     rec = run_solid_trial(0, "layer_k1e13", "point", 20260601)
     assert rec["status"] == "identified" and rec["verdict"] in {"holder_tool_joint", "insertion_depth"}, rec
     assert rec["corrected_db_error"] < 0.6 * rec["base_db_error"]
+
+
+@pytest.mark.slow
+def test_no_effect_scattering_twice_the_stated_tolerances_is_rarely_blamed_on_an_effect():
+    """Three no-effect FE truths with every tolerance doubled (4 Hz lines): at most one claim,
+    and none that takes more than half of the held-out gap."""
+    from rcsa.analysis.diagnosis.report import build_response
+
+    f = np.arange(50.0, 8000.0 + 1e-9, 4.0)
+    claims = []
+    for k in range(3):
+        trial = truth.make_trial(np.random.default_rng([20260602, k]), "none", frequency_hz=f, tolerance_scale=2.0,
+                                 with_null=False)
+        r = build_response(state.analyse(trial.request))
+        if r["verdict"]["status"] != "none":
+            claims.append((r["verdict"]["effect"], r["effects"][0]["held_out_gap_ratio"]))
+    assert len(claims) <= 1, claims
+    assert all(ratio is None or ratio > 0.5 for _, ratio in claims), claims
