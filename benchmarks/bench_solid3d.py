@@ -26,6 +26,7 @@ import os
 import time
 
 import numpy as np
+from filelock import FileLock
 from tests.oracles.solid3d.case import CARBIDE, STEEL, MeshSize
 from tests.oracles.solid3d.dataset import (
     BASES,
@@ -33,7 +34,9 @@ from tests.oracles.solid3d.dataset import (
     FREQUENCY_HZ,
     beam_tip_h,
     case_document,
+    load_case,
     reference_cases,
+    render_readme,
     spindle_base_receptance,
     standard_case,
     with_mesh,
@@ -131,20 +134,25 @@ def rods() -> list[tuple[str, np.ndarray, np.ndarray]]:
 # 2. convergence
 
 
-def richardson(values: list[float], factors: tuple[float, ...]) -> tuple[float, float, float]:
-    """Observed order p, extrapolated value and the finest value's remaining relative error.
+#: the order used for error estimates: the observed one, clipped to this range (a re-entrant,
+#: bonded corner where the shank leaves the bore makes the stress singular, so the smooth P2
+#: rates are not reached; with an irregular sequence the estimate falls back to first order)
+ORDER_RANGE = (1.0, 2.0)
 
-    From the last three levels (sizes in a constant ratio r): p = ln((f1−f2)/(f2−f3)) / ln r.
+
+def richardson(values: list[float], factors: tuple[float, ...]) -> tuple[float, float, float, float]:
+    """Observed order p, the order used, the extrapolated value and the finest value's relative error.
+
+    From the last three levels (sizes in a constant ratio r): p = ln((f1−f2)/(f2−f3)) / ln r; the
+    estimate uses p clipped to ``ORDER_RANGE`` (first order when p is undefined).
     """
     f1, f2, f3 = values[-3:]
-    r = factors[-3] / factors[-2]
+    r = factors[-2] / factors[-1]
     ratio = (f1 - f2) / (f2 - f3) if f2 != f3 else np.inf
-    p = float(np.log(ratio) / np.log(r)) if ratio > 0 else float("nan")
-    if not np.isfinite(p) or p <= 0:
-        return p, f3, abs(f3 - f2) / abs(f3)
-    r_last = factors[-2] / factors[-1]
-    extrapolated = f3 + (f3 - f2) / (r_last**p - 1)
-    return p, float(extrapolated), float(abs(f3 - extrapolated) / abs(extrapolated))
+    p = float(np.log(ratio) / np.log(r)) if ratio > 0 and np.isfinite(ratio) else float("nan")
+    used = float(np.clip(p, *ORDER_RANGE)) if np.isfinite(p) else ORDER_RANGE[0]
+    extrapolated = f3 + (f3 - f2) / (r**used - 1)
+    return p, used, float(extrapolated), float(abs(f3 - extrapolated) / abs(extrapolated))
 
 
 def convergence(case_name: str = "base_d10") -> dict[str, object]:
@@ -163,9 +171,10 @@ def convergence(case_name: str = "base_d10") -> dict[str, object]:
               f"{rows[-1]['wall_s']:6.1f} s ({load()})", flush=True)
     out: dict[str, object] = {"rows": rows}
     for key in ("tool_mode_hz", "peak_m_n", "static_m_n"):
-        p, extrapolated, err = richardson([float(r[key]) for r in rows], CONVERGENCE_FACTORS)
-        out[key] = {"order": p, "extrapolated": extrapolated, "remaining_rel": err}
-        print(f"  {key:13s}: observed order {p:5.2f}, Richardson {extrapolated:.6g}, finest within {err:.2%}")
+        p, used, extrapolated, err = richardson([float(r[key]) for r in rows], CONVERGENCE_FACTORS)
+        out[key] = {"observed_order": p, "order": used, "extrapolated": extrapolated, "remaining_rel": err}
+        print(f"  {key:13s}: observed order {p:5.2f} (used {used:.2f}), Richardson {extrapolated:.6g}, "
+              f"finest within {err:.2%}")
     finest = rows[-1]["h"]
     for r in rows[:-1]:
         print(f"  mean |dB| of size x{r['factor']:g} vs x{rows[-1]['factor']:g}: "
@@ -177,8 +186,14 @@ def convergence(case_name: str = "base_d10") -> dict[str, object]:
 # 3. cases
 
 
-def run_case(name: str, spindle: tuple[np.ndarray, np.ndarray], order: float, mesh_factor: float = 1.0
-             ) -> dict[str, object]:
+def run_case(name: str, spindle: tuple[np.ndarray, np.ndarray], order: float, mesh_factor: float = 1.0,
+             floor: float = 0.0) -> dict[str, object]:
+    """Compute one case at the data set's mesh and at the size x ``CHECK_FACTOR`` mesh.
+
+    The convergence estimate of a peak is the Richardson error from the two meshes with
+    ``order``, but never below ``floor`` (the base case's remaining error: two meshes of an
+    irregular sequence can agree by chance).
+    """
     case, description = reference_cases()[name]
     case = with_mesh(case, mesh_factor)
     t0 = time.perf_counter()
@@ -213,8 +228,9 @@ def run_case(name: str, spindle: tuple[np.ndarray, np.ndarray], order: float, me
             fc, mc = largest_peak(FREQUENCY_HZ[sel], c.h[sel])
             fb, mb = largest_peak(FREQUENCY_HZ[sel_beam], beam[sel_beam])
             peaks[label] = {"frequency_hz": round(f3, 3), "magnitude_m_n": m3,
-                            "convergence": {"frequency_rel": abs(f3 - fc) / f3 / scale,
-                                            "magnitude_rel": abs(m3 - mc) / m3 / scale},
+                            "convergence": {"frequency_rel": max(abs(f3 - fc) / f3 / scale, floor),
+                                            "magnitude_rel": abs(m3 - mc) / m3 / scale,
+                                            "coarser_frequency_hz": round(fc, 3), "coarser_magnitude_m_n": mc},
                             "beam": {"frequency_hz": round(fb, 3), "magnitude_m_n": mb,
                                      "frequency_error": fb / f3 - 1, "peak_error": mb / m3 - 1}}
         entry["bases"][b] = {  # type: ignore[index]
@@ -227,23 +243,25 @@ def run_case(name: str, spindle: tuple[np.ndarray, np.ndarray], order: float, me
     return {"entry": entry, "arrays": arrays, "model": coarse_model}
 
 
-def rigid_holder_share(results: dict[str, dict[str, object]]) -> None:
-    """Static tool-point compliance (clamped base): how much of the 3-D excess the holder accounts for."""
+def rigid_holder_share(h_base: complex, h_rigid: complex) -> dict[str, float]:
+    """Static tool-point compliance (clamped base): how much of the 3-D excess the holder accounts for.
+
+    ``h_base``, ``h_rigid``: the 3-D h at the grid's first line (100 Hz, quasi-static) of the
+    base case and of its rigid-holder variant.
+    """
     base = reference_cases()["base_d10"][0]
     f = FREQUENCY_HZ[:2]
-    c3 = abs(load_h(results, "base_d10")[0])
-    c3_rigid = abs(load_h(results, "rigid_holder")[0])
+    c3, c3_rigid = abs(h_base), abs(h_rigid)
     cb = abs(beam_tip_h(base, "clamped", f)[0])
     cb_rigid = abs(beam_tip_h(base, "clamped", f, rigid_holder=True)[0])
+    share = 1 - (c3_rigid - cb_rigid) / (c3 - cb)
     print(f"  h(100 Hz), clamped base: 3-D {c3:.4e}, 3-D rigid holder {c3_rigid:.4e}, beam {cb:.4e}, "
           f"beam with the tool clamped at the holder face {cb_rigid:.4e} m/N")
     print(f"  3-D excess over the beam: {c3 - cb:.3e} m/N ({(c3 - cb) / cb:+.1%});"
           f" with both holders rigid: {c3_rigid - cb_rigid:.3e} m/N ({(c3_rigid - cb_rigid) / cb_rigid:+.1%})")
-    print(f"  share of the excess removed by making the holder rigid: {1 - (c3_rigid - cb_rigid) / (c3 - cb):.0%}")
-
-
-def load_h(results: dict[str, dict[str, object]], name: str) -> np.ndarray:
-    return results[name]["arrays"]["h_clamped"]  # type: ignore[index,return-value]
+    print(f"  share of the excess removed by making the holder rigid: {share:.0%}")
+    return {"solid_m_n": c3, "solid_rigid_holder_m_n": c3_rigid, "beam_m_n": cb, "beam_rigid_holder_m_n": cb_rigid,
+            "share_removed": share}
 
 
 def read_index() -> dict[str, object]:
@@ -264,12 +282,14 @@ def write_index(index: dict[str, object]) -> None:
 
 
 def write_case(name: str, res: dict[str, object]) -> None:
-    """One case's arrays and its entry of cases.json (written as soon as it is computed)."""
+    """One case's arrays and its entry of cases.json (written as soon as it is computed; several
+    runs with disjoint ``--cases`` may write at once)."""
     DATA_DIR.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(DATA_DIR / f"{name}.npz", **res["arrays"])  # type: ignore[arg-type]
-    index = read_index()
-    index["cases"][name] = res["entry"]  # type: ignore[index]
-    write_index(index)
+    with FileLock(DATA_DIR / ".cases.lock"):
+        index = read_index()
+        index["cases"][name] = res["entry"]  # type: ignore[index]
+        write_index(index)
 
 
 def main() -> None:
@@ -279,6 +299,10 @@ def main() -> None:
     parser.add_argument("--skip-verification", action="store_true", help="no rod table")
     parser.add_argument("--skip-convergence", action="store_true", help="no convergence sequence (order 1)")
     parser.add_argument("--mesh-factor", type=float, default=1.0, help="all cases' element sizes times this")
+    parser.add_argument("--no-cases", action="store_true", help="verification and convergence only")
+    parser.add_argument("--order", type=float, help="with --skip-convergence: the order of the estimates")
+    parser.add_argument("--floor", type=float, default=0.0,
+                        help="with --skip-convergence: the base case's remaining relative error")
     args = parser.parse_args()
     t_start = time.perf_counter()
     print(f"3-D reference benchmark ({load()}, 2-core AMD EPYC VM shared with other work)")
@@ -290,12 +314,12 @@ def main() -> None:
                                                                                                 strict=False)))
         print(f"  ({load()})")
     print("\n2. Convergence of the base case (bonded, clamped base), mesh sizes × the data set's")
-    conv = {"rows": [], "tool_mode_hz": {"order": 1.0}} if args.skip_convergence else convergence()
+    conv = {"rows": [], "tool_mode_hz": {"order": args.order or 1.0, "remaining_rel": args.floor}} \
+        if args.skip_convergence else convergence()
     order = float(conv["tool_mode_hz"]["order"])  # type: ignore[index]
-    if not np.isfinite(order) or order <= 0.5:
-        order = 1.0
+    floor = float(conv["tool_mode_hz"].get("remaining_rel", 0.0))  # type: ignore[union-attr]
     damped, undamped = spindle_base_receptance()
-    names = args.cases or list(reference_cases())
+    names = [] if args.no_cases else args.cases or list(reference_cases())
     results: dict[str, dict[str, object]] = {}
     print(f"\n3. Cases (reference mesh: tool {standard_case().mesh.tool_m * 1e3:g} mm at d = 10 mm, 0.15 d in general;"
           f" convergence estimate = Richardson with order {order:.2f} from the size x{CHECK_FACTOR:g} mesh)")
@@ -304,7 +328,7 @@ def main() -> None:
     print(f"  {'':24s} {'':8s} {'':7s} | {'Hz':>8s} {'m/N':>10s} {'conv':>9s} | {'Hz':>8s} {'m/N':>10s} "
           f"{'conv':>9s} | {'df lp':>7s} {'dpk lp':>7s} {'df tm':>7s} {'dpk tm':>7s} {'dB':>5s} |")
     for name in names:
-        res = run_case(name, (damped, undamped), order, args.mesh_factor)
+        res = run_case(name, (damped, undamped), order, args.mesh_factor, floor)
         results[name] = res
         e = res["entry"]
         for b in BASES:
@@ -332,18 +356,29 @@ def main() -> None:
         if args.write_data:
             write_case(name, res)
         res.pop("model")
-    if "base_d10" in results and "rigid_holder" in results:
-        print("\n4. Rigid holder")
-        rigid_holder_share(results)
-    if args.write_data:
-        index = read_index()
-        index["convergence"] = {k: v for k, v in conv.items() if k != "rows"}
-        index["convergence"]["sequence"] = [{k: v for k, v in r.items() if k != "h"}  # type: ignore[union-attr]
-                                            for r in conv["rows"]]  # type: ignore[union-attr]
-        index["convergence"]["factors"] = list(CONVERGENCE_FACTORS)
-        write_index(index)
+    stored = {n: load_case(n)["h_clamped"][0] for n in ("base_d10", "rigid_holder")
+              if n not in results and args.write_data and (DATA_DIR / f"{n}.npz").exists()}
+    h0 = {**stored, **{n: r["arrays"]["h_clamped"][0] for n, r in results.items()}}  # type: ignore[index]
+    if "base_d10" in h0 and "rigid_holder" in h0:
+        print("\n4. Rigid holder (from this run's or the stored cases)")
+        share = rigid_holder_share(complex(h0["base_d10"]), complex(h0["rigid_holder"]))
+        if args.write_data:
+            with FileLock(DATA_DIR / ".cases.lock"):
+                index = read_index()
+                index["rigid_holder_share"] = share
+                write_index(index)
+    if args.write_data and not args.skip_convergence:
+        with FileLock(DATA_DIR / ".cases.lock"):
+            index = read_index()
+            index["convergence"] = {k: v for k, v in conv.items() if k != "rows"}
+            index["convergence"]["sequence"] = [{k: v for k, v in r.items() if k != "h"}  # type: ignore[union-attr]
+                                                for r in conv["rows"]]  # type: ignore[union-attr]
+            index["convergence"]["factors"] = list(CONVERGENCE_FACTORS)
+            write_index(index)
         np.savez_compressed(DATA_DIR / "spindle_base.npz", receptance=damped.astype(np.complex64),
                             undamped_receptance=undamped.real.astype(np.float32))
+    if args.write_data:
+        (DATA_DIR / "README.md").write_text(render_readme(read_index()))
         print(f"\nwrote {DATA_DIR} ({sum(p.stat().st_size for p in DATA_DIR.iterdir()) / 1e6:.2f} MB)")
     print(f"\ntotal {time.perf_counter() - t_start:.0f} s ({load()})")
 

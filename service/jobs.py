@@ -4,10 +4,12 @@ Whether a batch, library or sync is answered at once or queued is decided by
 :func:`rcsa.app.jobs.answer_or_queue` (size against ``RCSA_ASYNC_BATCH_THRESHOLD``, or
 ``Prefer: respond-async``); the job runners run the same :func:`rcsa.app.jobs.run_work`.
 Here: the ``Prefer`` header, the ``202 Accepted`` answer, the links a sync report carries,
-who a job belongs to (:func:`caller`: its API key, or an anonymous client's address — jobs
-are claimed round-robin across callers, and one caller may have at most
-``RCSA_JOB_MAX_UNFINISHED_PER_CALLER`` unfinished jobs: ``429`` beyond), and the public JSON
-of a job.
+who a job belongs to (:func:`caller`: its API key, or an anonymous client's address — one
+caller may have at most ``RCSA_JOB_MAX_UNFINISHED_PER_CALLER`` unfinished jobs, ``429``
+beyond), whose runners it shares (:func:`pool`: a keyed caller's own; every anonymous caller
+shares one pool, which runs at most ``RCSA_JOB_MAX_RUNNING_PER_CALLER`` jobs at once, so
+anonymous jobs never hold every runner; jobs are claimed round-robin across pools), and the
+public JSON of a job.
 """
 
 from __future__ import annotations
@@ -21,14 +23,16 @@ from starlette.responses import Response
 from rcsa.app import budget
 from rcsa.app.analyses import validate
 from rcsa.app.jobs import Outcome, Work, answer_or_queue
+from rcsa.app.results import Format
 from rcsa.infra.api_keys import Principal
 from rcsa.infra.job_queue import Job, QuotaExceeded
 
 from .errors import ProblemError
-from .responses import json_response
+from .responses import json_response, result_response
 from .state import AppState
 
-__all__ = ["accepted", "answer", "caller", "compute", "job_document", "present", "wants_async"]
+__all__ = ["ANONYMOUS_POOL", "accepted", "answer", "caller", "compute", "job_document", "pool", "present",
+           "wants_async"]
 
 
 def caller(who: Principal, request: Request) -> str:
@@ -37,6 +41,16 @@ def caller(who: Principal, request: Request) -> str:
         return who.key_id
     host = request.client.host if request.client is not None else "unknown"
     return f"anonymous@{host}"
+
+
+#: The pool of every anonymous caller's jobs.
+ANONYMOUS_POOL = "anonymous"
+
+
+def pool(owner: str | None) -> str | None:
+    """Whose runners a job of ``owner`` shares: :data:`ANONYMOUS_POOL` for anonymous callers,
+    else None (the owner's own)."""
+    return ANONYMOUS_POOL if owner is not None and owner.startswith("anonymous@") else None
 
 
 def wants_async(prefer: str | None) -> bool:
@@ -54,8 +68,13 @@ def present(outcome: Outcome) -> dict[str, Any]:
 
 
 def answer(state: AppState, work: Work, *, prefer: str | None, idempotency_key: str | None,
-           headers: Mapping[str, str] | None = None, owner: str | None = None) -> Response:
+           headers: Mapping[str, str] | None = None, owner: str | None = None, result_format: Format = "json"
+           ) -> Response:
     """Run ``work`` now (``200`` with its document) or queue it for ``owner`` (``202``, :func:`accepted`).
+
+    A batch or library answered now is sent in ``result_format`` (JSON, HDF5 or Parquet: the
+    client's ``Accept``, :func:`service.responses.result_form`); a job writes that form itself
+    (the work request names it).
 
     A request with an ``Idempotency-Key`` may be a retry whose first answer was lost: its
     submission reuses the unfinished job of the same request instead of queuing it twice.
@@ -69,13 +88,15 @@ def answer(state: AppState, work: Work, *, prefer: str | None, idempotency_key: 
         result = answer_or_queue(state.bench, state.jobs, work, respond_async=asked,
                                  async_threshold=state.settings.async_batch_threshold,
                                  reuse_unfinished=idempotency_key is not None, owner=owner,
-                                 max_unfinished=state.settings.job_max_unfinished_per_caller)
+                                 max_unfinished=state.settings.job_max_unfinished_per_caller, pool=pool(owner))
     except QuotaExceeded as exc:
         raise ProblemError(429, f"{exc}; poll the jobs you have (GET /v1/jobs/{{id}}) and submit again when one has "
                                 "finished", slug="too-many-jobs", title="Too many unfinished jobs",
                            headers={"Retry-After": str(max(state.settings.retry_after_s, 5))}) from None
     if isinstance(result, Job):
         return accepted(state, result, preference_applied=asked)
+    if result.kind in ("batch", "library"):
+        return result_response(result.document, result_format, result.kind, headers=headers)
     return json_response(present(result), headers=headers)
 
 

@@ -106,6 +106,7 @@ def scratch(tmp_path, monkeypatch) -> Path:
     return tmp_path
 
 
+@pytest.mark.slow
 def test_every_example_command_runs_as_written(scratch):
     runner = CliRunner()
     ran = []

@@ -61,7 +61,7 @@ from ..deps import StateDep
 from ..errors import ProblemError
 from ..idempotency import IDEMPOTENCY_PROBLEMS, IdempotencyKeyHeader, IdempotentRoute
 from ..jobs import answer, caller
-from ..responses import body_limit, json_response, problems
+from ..responses import body_limit, json_response, negotiate, problems, result_form
 from ..schemas import (
     Deleted,
     JobStatus,
@@ -74,6 +74,7 @@ from ..schemas import (
 )
 from ..security import ReadAccess, WriteAccess
 from ..state import AppState
+from .batches import BINARY_RESULT, ResultAccept
 
 router = APIRouter(prefix="/v1", tags=["tool libraries"], route_class=IdempotentRoute)
 
@@ -125,15 +126,19 @@ async def _library_inputs(request: Request, state: AppState) -> tuple[dict[str, 
 
 
 @router.post("/tool-libraries:predict", response_model=LibraryResult, openapi_extra=body_limit("library", _BODY), responses={
+    200: {"description": "The results (LibraryResult), or the same as HDF5 or Parquet (Accept).",
+          "content": BINARY_RESULT},
     202: {"model": JobStatus, "description": "Queued as a job; poll Location."},
-    **problems(400, 401, 413, 415, 422, 429), **IDEMPOTENCY_PROBLEMS}, summary="Tool-point FRFs of a Fusion tool library")
+    **problems(400, 401, 406, 413, 415, 422, 429), **IDEMPOTENCY_PROBLEMS},
+    summary="Tool-point FRFs of a Fusion tool library")
 async def predict_library(request: Request, state: StateDep, who: ReadAccess, prefer: PreferHeader = None,
-                          idempotency_key: IdempotencyKeyHeader = None) -> Response:
+                          idempotency_key: IdempotencyKeyHeader = None, accept: ResultAccept = None) -> Response:
     """One tool-point FRF per library tool that has a holder; the others skipped with a reason."""
+    fmt = result_form(accept)
     source, doc = await _library_inputs(request, state)
-    work = await run_in_threadpool(lambda: prepare_library(state.bench, **source, **doc))
+    work = await run_in_threadpool(lambda: prepare_library(state.bench, **source, result_format=fmt, **doc))
     return await run_in_threadpool(lambda: answer(state, work, prefer=prefer, idempotency_key=idempotency_key,
-                                                  owner=caller(who, request)))
+                                                  owner=caller(who, request), result_format=fmt))
 
 
 async def _from_form(form: Any, limit_bytes: int) -> tuple[dict[str, Any], dict[str, Any]]:
@@ -190,7 +195,7 @@ async def _from_form(form: Any, limit_bytes: int) -> tuple[dict[str, Any], dict[
 LibraryId = Annotated[str, Path(pattern=LIBRARY_ID_PATTERN.pattern, description=(
     "Your name for the library (1-128 letters, digits, '.', '_', '-'), e.g. the CAM library's name; each sync "
     "is compared with the previous sync under the same id."), examples=["bt40-mills"])]
-HDF5, ZIP, JSON = "application/x-hdf5", "application/zip", "application/json"
+HDF5, ZIP, JSON, PARQUET = "application/x-hdf5", "application/zip", "application/json", "application/vnd.apache.parquet"
 
 
 @router.post("/libraries/{library_id}:sync", response_model=SyncReport, openapi_extra=body_limit("library", _BODY), responses={
@@ -230,25 +235,30 @@ def get_library(library_id: LibraryId, state: StateDep, _: ReadAccess) -> Respon
 @router.get("/libraries/{library_id}/results", response_model=LibraryResult, responses={
     200: {"description": "application/json: the shape of a library prediction (one result per item, in library "
                          "order). application/x-hdf5: frequency_hz and each ok tool's complex h, l, n, p (schema "
-                         "rcsa.library-results). application/zip: index.json and one UFF 58 file (with a dataset "
-                         "164, SI) of the tool-point h per ok tool.",
+                         "rcsa.library-results). application/vnd.apache.parquet: one row per ok tool and line "
+                         "(needs the extra rcsa[parquet] on the server). application/zip: index.json and one UFF 58 "
+                         "file (with a dataset 164, SI) of the tool-point h per ok tool.",
           "content": {HDF5: {"schema": {"type": "string", "format": "binary"}},
+                      PARQUET: {"schema": {"type": "string", "format": "binary"}},
                       ZIP: {"schema": {"type": "string", "format": "binary"}}}},
-    **problems(401, 404, 406)}, summary="Results of a stored library (JSON, HDF5 or zip of UFF 58)")
+    **problems(401, 404, 406)}, summary="Results of a stored library (JSON, HDF5, Parquet or zip of UFF 58)")
 def get_library_results(
     library_id: LibraryId, state: StateDep, _: ReadAccess,
-    accept: Annotated[str | None, Header(description="application/json (default), application/x-hdf5 or "
-                                                     "application/zip.")] = None,
-    format: Annotated[Literal["json", "hdf5", "zip"] | None, Query(
+    accept: Annotated[str | None, Header(description="application/json (default), application/x-hdf5, "
+                                                     "application/vnd.apache.parquet or application/zip.")] = None,
+    format: Annotated[Literal["json", "hdf5", "zip", "parquet"] | None, Query(
         description="Instead of Accept (e.g. for a browser link).")] = None,
     tool_point: Annotated[str | None, Query(pattern=r"^[hlnp](,[hlnp]){0,3}$", description=(
         "JSON only: receptances to return in each result's tool_point, e.g. h; default h,l,n,p."))] = None,
 ) -> Response:
     """Every tool's stored result, fetched again by library id."""
-    media = {"json": JSON, "hdf5": HDF5, "zip": ZIP}[format] if format else _negotiate(accept)
+    media = {"json": JSON, "hdf5": HDF5, "zip": ZIP, "parquet": PARQUET}[format] if format else \
+        negotiate(accept, (JSON, HDF5, ZIP, PARQUET))
     if media == JSON:
         return json_response(state.bench.libraries.results(library_id, tool_point.split(",") if tool_point else None))
-    export = export_file(state.bench.libraries, library_id, "hdf5" if media == HDF5 else "zip")
+    if media == PARQUET:
+        result_form(PARQUET)  # 406 naming the extra when pyarrow is missing
+    export = export_file(state.bench.libraries, library_id, {HDF5: "hdf5", ZIP: "zip", PARQUET: "parquet"}[media])
     return Response(export.data, media_type=media,
                     headers={"Content-Disposition": f'attachment; filename="{export.file_name}"'})
 
@@ -258,30 +268,6 @@ def get_library_results(
 def delete_library(library_id: LibraryId, state: StateDep, _: WriteAccess) -> Response:
     """Forget a library and its per-tool status (the shared result cache keeps the results)."""
     return json_response(state.bench.libraries.delete(library_id))
-
-
-def _negotiate(accept: str | None, offered: tuple[str, ...] = (JSON, HDF5, ZIP), what: str = "results") -> str:
-    """The best of ``offered`` for an Accept header (the first when it says nothing); 406 when none."""
-    if not accept or not accept.strip():
-        return offered[0]
-    q: dict[str, float] = {}
-    for part in accept.split(","):
-        media, *params = [p.strip().lower() for p in part.split(";")]
-        weight = 1.0
-        for p in params:
-            if p.startswith("q="):
-                try:
-                    weight = float(p[2:])
-                except ValueError:
-                    weight = 0.0
-        q[media] = max(q.get(media, 0.0), weight)
-    wildcard = max(q.get("*/*", 0.0), q.get("application/*", 0.0))
-    ranked = [(q.get(m, wildcard), -i, m) for i, m in enumerate(offered)]
-    best = max(ranked)
-    if best[0] <= 0:
-        raise ProblemError(406, f"{what} are available as {' or '.join(offered)}; the Accept header {accept!r} "
-                                "allows none of them")
-    return best[2]
 
 
 # --------------------------------------------------------------------------- chatter-safe presets
@@ -378,7 +364,7 @@ async def recommend_presets(
     ``rcsa chatter-safe: <material>`` and its guid is fixed by the tool and the material, so that
     sending the returned file again replaces it; nothing else in the file changes.
     """
-    media = {"report": JSON, "file": OCTET}[format] if format else _negotiate(accept, (JSON, OCTET),
+    media = {"report": JSON, "file": OCTET}[format] if format else negotiate(accept, (JSON, OCTET),
                                                                                 "a recommendation's report and file")
     data, name, content_type, options = await _recommend_inputs(request, state.settings.max_upload_bytes)
     result = await run_in_threadpool(lambda: recommend_stored(state.bench, library_id, data, options,

@@ -109,8 +109,9 @@ def test_artifact_route_noise_free_is_exact(store, ra1_truth):
     f, frfs = blank_frfs()
     mid = put_blank(store, frfs, f)
     result = rcsa.predict(hybrid_doc(mid, holder=False), store=store)
-    # domain.md §4.6 / O14: exact method reproduces the tool point (8e-10 there); 1e-6 of peak here
-    assert max_error_of_peak(result.tool_point.values[:, 0, 0], ra1_truth[:, 0, 0]) < 1e-6
+    # domain.md §4.6 / O14: exact method reproduces the tool point (8e-10 there); measured 6.0e-10
+    # of peak over this grid (down to 5 Hz; 3.4e-12 over 300–5000 Hz in bench_hybrid.py), asserted at 2×
+    assert max_error_of_peak(result.tool_point.values[:, 0, 0], ra1_truth[:, 0, 0]) < 1.2e-9
     report = result["spindle_measurement"]
     assert report["method"] == "exact_three_frf"
     assert len(report["condition_number"]) == f.size and report["condition_number_max"] > 1
@@ -136,7 +137,7 @@ def test_finite_difference_fallback_is_labelled_and_biased(store, ra1_truth):
     assert result["spindle_measurement"]["method"] == "finite_difference_fallback"
     assert any("finite-difference" in n for n in result["notes"])
     err = max_error_of_peak(result.tool_point.h[f >= 300], ra1_truth[f >= 300, 0, 0])
-    assert 0.01 < err < 0.5  # domain.md §4.6: ≈0.12 of peak, noise-free
+    assert 0.058 < err < 0.23  # README and domain.md §4.6: 0.116 of peak, noise-free (within 2× either way)
 
 
 def test_holder_tip_requires_the_matching_shank(store):
@@ -162,8 +163,10 @@ def test_direct_frf_is_labelled_with_its_uncertainty(store, ra1_model, ra1_truth
     assert any("estimated" in n for n in result["notes"])
     # Honest labelling: on RA-1 the nominal estimate errs by ≈0.57 of the peak (the rotations of a
     # multi-mode spindle are not one cantilever), and the reported spread (≈0.99) covers it.
+    # The model is deterministic (no noise): both are pinned to the README's two digits.
     error = max_error_of_peak(result.tool_point.h, ra1_truth[:, 0, 0])
-    assert error < unc["max_relative_spread_of_peak"] < 1.5
+    assert error < unc["max_relative_spread_of_peak"]
+    assert error == pytest.approx(0.57, rel=0.01) and unc["max_relative_spread_of_peak"] == pytest.approx(0.99, rel=0.01)
 
 
 def test_band_outside_the_measurement_is_refused(store, ra1_model):

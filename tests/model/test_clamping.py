@@ -108,7 +108,7 @@ def test_wall_ratios_outside_the_calibration_are_noted():
     doc = _doc({"model": "bonded"})
     doc["holder"]["segments"][-1]["outer_diameter_m"] = 0.014  # a 0.7 mm wall around the 12.7 mm shank
     notes = assembly_notes(parse_assembly(doc))
-    assert any("outside the calibrated range" in n for n in notes), notes
+    assert any("outer diameter" in n and "outside the range it was calibrated on" in n for n in notes), notes
 
 
 def test_a_face_mounted_tool_sits_on_the_holders_face():

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 
+import rcsa.model.clamping as clamping
 from rcsa.model.assembly import build_model
 from rcsa.model.contract import parse_assembly
 from rcsa.physics.chain import undamped
@@ -25,6 +26,7 @@ from rcsa.physics.insertion import (
     Insertion,
     InsertionPiece,
     expm_stack,
+    insertion_fit,
     piece_fit,
     piece_stiffness,
     unit_stiffness,
@@ -104,8 +106,10 @@ COMPACT = {
 }
 
 
-@pytest.fixture(scope="module")
-def compact_bonded():
+@pytest.fixture
+def compact_bonded(monkeypatch):
+    """The compact assembly, its holder steps without the stiffness cone (the FE oracle has none)."""
+    monkeypatch.setattr(clamping, "BULK_COEFFICIENTS", replace(clamping.BULK_COEFFICIENTS, step_cone=0.0))
     spec = parse_assembly(COMPACT)
     fe_doc = copy.deepcopy(COMPACT)
     fe_doc["joints"].pop("holder_tool")
@@ -152,3 +156,14 @@ def test_stacked_insertions_give_each_tools_own_two_port():
     got = stacked.take_rows(rows).two_port(w)
     for line, row in enumerate(rows):
         assert _rel(got[line], items[row].two_port(w[line:line + 1])[0]) < 1e-12
+
+
+def test_the_whole_insertions_interpolant_is_its_exact_condensation(compact_bonded):
+    """Below its own clamped modes an insertion is evaluated whole; it equals the line-by-line
+    condensation of exact units, at frequencies between the interpolation nodes."""
+    spec, _ = compact_bonded
+    ins = build_model(spec).holder[-1]
+    w = 2 * np.pi * np.sort(np.random.default_rng(4).uniform(1.0, 8000.0, 60))
+    assert insertion_fit(ins, float(w.max())) is not None
+    exact = ins.condensed(w, exact=True)
+    assert _rel(ins.two_port(w), exact) < 1e-8

@@ -20,7 +20,8 @@ from tests.helpers import REPO
 pytestmark = pytest.mark.reference
 
 # domain.md §1.5, undamped natural frequencies (Hz) of RA-1 and its variants, printed to
-# 0.01 Hz; the issue asks for 0.01 % (1e-4 relative), which also covers the rounding.
+# 0.01 Hz. The issue asked for 0.01 % (1e-4 relative); they agree to <= 1e-5 (worst: the
+# rigid-joint variant, 7.2e-6; RA-1 itself 4.5e-6, its print rounding), so 2e-5 is asserted.
 EXACT = [599.85, 921.69, 1115.51, 1383.61, 1444.68, 3115.94, 4025.97, 5102.79, 6080.83, 7717.51]
 VARIANTS = {
     "euler_bernoulli": [607.77, 938.08, 1136.65, 1393.84, 1530.86, 3551.80, 4091.62, 6330.50, 7415.28],
@@ -28,7 +29,9 @@ VARIANTS = {
     "cowper": [599.56, 920.97, 1114.61, 1383.14, 1442.45, 3106.73, 4025.10, 5074.74, 6050.82, 7652.83],
     "flutes_equal_d": [590.33, 921.41, 1102.03, 1284.08, 1444.53, 3115.79, 3711.57, 5099.47, 6075.12, 7717.04],
 }
-RTOL_MODES = 1e-4
+RTOL_MODES = 2e-5
+#: max |h - h_csv| / max |h_csv| over 5-9999 Hz (measured 2.0e-8)
+RTOL_CSV_OF_PEAK = 5e-8
 
 
 def variant(name: str) -> dict:
@@ -94,13 +97,14 @@ def full_band():
 
 
 def test_tool_point_h_matches_reference_csv(full_band):
-    # Issue 2: within 2e-4 of the peak magnitude at every line of the reference CSV.
+    # Issue 2 asked for 2e-4 of the peak magnitude at every line of the reference CSV; the
+    # model and the CSV's exact RCSA prototype agree to 2.0e-8 (README), asserted at 5e-8.
     ref = np.loadtxt(REPO / "tests/data/ra1/ra1_tool_point_h.csv", delimiter=",")
     idx = np.searchsorted(full_band.frequency_hz, ref[:, 0])
     np.testing.assert_array_equal(full_band.frequency_hz[idx], ref[:, 0])
     h_ref = ref[:, 1] + 1j * ref[:, 2]
     err = np.abs(full_band.tool_point.h[idx] - h_ref) / np.abs(h_ref).max()
-    assert err.max() < 2e-4, f"worst line {ref[np.argmax(err), 0]} Hz: {err.max():.2e} of peak"
+    assert err.max() < RTOL_CSV_OF_PEAK, f"worst line {ref[np.argmax(err), 0]} Hz: {err.max():.2e} of peak"
 
 
 def test_peaks_and_stability_quantities(full_band):

@@ -154,3 +154,21 @@ def test_tool_point_selection_trims_the_result(client, assembly):
     assert set(only_h["tool_point"]) == {"h"} and only_h["tool_point"]["h"] == full["tool_point"]["h"]
     assert only_h["peaks"] == full["peaks"]
     assert_problem(client.post("/v1/tool-point-frf", json=assembly, params={"tool_point": "x"}), 422, "tool_point")
+
+
+def test_a_measurement_damaged_after_a_first_request_is_never_served_from_the_cache(make_client, store_path,
+                                                                                    assembly):
+    with make_client(seed_demo=True) as client:
+        mid = client.get("/v1/measurements", params={"spindle_id": "demo-ra1"}).json()["items"][0]["id"]
+        hybrid = {**assembly, "spindle": {"measurement_id": mid}}
+        assert client.post("/v1/tool-point-frf", json=hybrid).status_code == 200  # now in the cache
+        path = store_path / "measurements" / f"{mid}.h5"
+        raw = bytearray(path.read_bytes())
+        middle = len(raw) // 2
+        raw[middle:middle + 4096] = bytes(4096)  # damaged in place: same inode, same size
+        with path.open("r+b") as fh:
+            fh.write(raw)
+        damaged = client.post("/v1/tool-point-frf", json=hybrid)
+        problem = assert_problem(damaged, 422)
+        assert mid in problem["detail"]
+        assert_problem(client.get(f"/v1/measurements/{mid}"), 409)

@@ -15,16 +15,14 @@ import json
 import os
 import shutil
 import signal
-import socket
 import subprocess
-import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
-from tests.helpers import REPO
+from tests.helpers import REPO, start_uvicorn
 from tests.service.conftest import wait_until_ready
 
 webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed (pip install -e '.[test]')")
@@ -37,7 +35,7 @@ from selenium.webdriver.support.ui import Select, WebDriverWait  # noqa: E402
 #: (nothing is sent anywhere: the name lookup itself fails inside the browser).
 OFFLINE_ARGS = ("--no-proxy-server", "--host-resolver-rules=MAP * ~NOTFOUND , EXCLUDE 127.0.0.1")
 LIBRARY = REPO / "tests" / "data" / "tool-libraries" / "fusion-synthetic" / "synthetic_library.tools"
-WAIT_S = 30.0
+WAIT_S = 120.0  # generous: a loaded machine is slow, and a pass takes seconds
 
 
 def _executable(default: str, name: str) -> str | None:
@@ -56,26 +54,15 @@ pytestmark = [
 ]
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 @pytest.fixture(scope="module")
 def server(tmp_path_factory) -> Iterator[str]:
     """Base URL of ``uvicorn service.main:create_app`` on a free loopback port (demo store)."""
     tmp = tmp_path_factory.mktemp("web-server")
-    port = _free_port()
     env = {**os.environ, "RCSA_STORE": str(tmp / "store"), "RCSA_SEED_DEMO": "true", "RCSA_ANONYMOUS_READ": "true",
            "RCSA_JOB_POLL_S": "0.2", "MPLCONFIGDIR": str(tmp / "mpl")}
     env.pop("PROMETHEUS_MULTIPROC_DIR", None)
     log_path = tmp / "uvicorn.log"
-    with log_path.open("w") as log:
-        proc = subprocess.Popen([sys.executable, "-m", "uvicorn", "service.main:create_app", "--factory",
-                                 "--host", "127.0.0.1", "--port", str(port)], cwd=REPO, env=env, stdout=log,
-                                stderr=subprocess.STDOUT)
-    base = f"http://127.0.0.1:{port}"
+    proc, base = start_uvicorn(["service.main:create_app", "--factory"], env, log_path)
     try:
         wait_until_ready(base, proc, log_path)
         yield base

@@ -34,7 +34,8 @@ from rcsa.analysis.lobes.zoa import LobeResult
 from rcsa.errors import InputError
 from rcsa.physics.receptance import check_frequency_hz
 
-__all__ = ["SAVE_DPI", "FrfLayout", "effects_figure", "freeze_layout", "frf_figure", "lobes_figure", "new_figure", "percent_label",
+__all__ = ["SAVE_DPI", "FrfLayout", "checked_text", "effects_figure", "freeze_layout", "frf_figure", "lobes_figure",
+           "new_figure", "percent_label",
            "save_figure"]
 
 FrfLayout = Literal["full", "real_imag", "bode"]
@@ -44,6 +45,40 @@ MM_PER_M = 1e3
 _FORMATS = ("png", "svg")
 #: Resolution of saved PNGs, dots per inch (the layout is solved at it, :func:`freeze_layout`).
 SAVE_DPI = 150
+
+
+def checked_text(text: str, field: str) -> str:
+    """A text for a figure (title, label), refused now if matplotlib could not draw it.
+
+    Text between ``$`` signs is matplotlib mathtext (``$\\omega_n$``); an expression it cannot
+    parse would fail only when the figure is drawn. ``\\$`` is a literal dollar sign.
+
+    Raises
+    ------
+    InputError
+        Naming ``field``, with matplotlib's account of the expression.
+
+    Examples
+    --------
+    >>> checked_text("RA-1, $x_1$", "title")
+    'RA-1, $x_1$'
+    >>> checked_text("$x^{$", "title")
+    Traceback (most recent call last):
+    ...
+    rcsa.errors.InputError: title: is not a text matplotlib can draw: ...
+    """
+    dollars = text.count("$") - text.count("\\$")
+    if dollars == 0 or dollars % 2:  # matplotlib draws it as plain text
+        return text
+    from matplotlib.mathtext import MathTextParser
+
+    try:
+        MathTextParser("path").parse(text)
+    except (ValueError, RecursionError) as exc:
+        detail = " ".join(str(exc).split())
+        raise InputError(field, f"is not a text matplotlib can draw: {detail[:300]}; write a literal dollar sign "
+                                "as \\$") from None
+    return text
 
 
 def new_figure(width_in: float, height_in: float) -> Figure:
@@ -190,7 +225,7 @@ def frf_figure(
     if labels is not None:
         axes[0].legend(loc="best", fontsize="small")
     if title:
-        fig.suptitle(title)
+        fig.suptitle(checked_text(title, "title"))
     return freeze_layout(fig)
 
 
@@ -291,7 +326,8 @@ def lobes_figure(
     ax.legend(loc="upper left", fontsize="small")
     note = "Φyy = Φxx assumed (only x given)" if result.same_frf_in_y else None
     if title or note:
-        ax.set_title(" — ".join(t for t in (title, note) if t), fontsize="medium")
+        ax.set_title(" — ".join(t for t in (checked_text(title, "title") if title else None, note) if t),
+                     fontsize="medium")
     return freeze_layout(fig)
 
 

@@ -50,7 +50,7 @@ __all__ = ["GEOMETRY", "MeasuredSpindle", "TermsGrid", "ToolPointModel"]
 _TWO_PI = 2.0 * np.pi
 #: Parameters that change the holder and tool chains (the others change only the springs):
 #: the tool's, and those of a holder–tool clamping along the insertion (in the holder chain).
-GEOMETRY = ("tool.stickout_m", "tool.fluted_diameter_ratio", "holder_tool.interface_scale",
+GEOMETRY = ("tool.stickout_m", "tool.fluted_diameter_ratio", "holder_tool.interface_stiffness_scale",
             "holder_tool.interface_stiffness_n_m3")
 #: Grids whose condensations are kept per model (least recently used dropped first).
 _GRIDS_KEPT = 12

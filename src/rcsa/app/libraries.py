@@ -15,12 +15,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
-import orjson
-
 from rcsa.app.jobs import Work, Workbench
+from rcsa.app.results import RESULT_FORMAT_FIELD, Format, encode_result, json_bytes, require_format
 from rcsa.errors import InputError
 from rcsa.infra.atomic_files import atomic_write_bytes
-from rcsa.libraries.exports import library_hdf5, library_uff_zip
+from rcsa.libraries.exports import library_uff_zip
 from rcsa.libraries.formats import LibrarySource, import_library, read_library
 from rcsa.libraries.library_prediction import (
     LIBRARY_OPTIONS,
@@ -56,10 +55,17 @@ __all__ = [
 #: Frequency grid of a library prediction when neither the caller, the spindle's assembly
 #: nor a measured spindle gives one, Hz.
 DEFAULT_GRID = {"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 1.0}
+ExportFormat = Literal["hdf5", "zip", "json", "parquet"]
 #: Export formats of a stored library's results, by file suffix.
-EXPORT_FORMATS: dict[str, Literal["hdf5", "zip", "json"]] = {".h5": "hdf5", ".hdf5": "hdf5", ".zip": "zip",
-                                                             ".json": "json"}
-_SUFFIX = {"hdf5": ".h5", "zip": ".zip", "json": ".json"}
+EXPORT_FORMATS: dict[str, ExportFormat] = {".h5": "hdf5", ".hdf5": "hdf5", ".zip": "zip", ".json": "json",
+                                           ".parquet": "parquet"}
+_SUFFIX = {"hdf5": ".h5", "zip": ".zip", "json": ".json", "parquet": ".parquet"}
+
+
+def _with_format(request: dict[str, Any], result_format: Format) -> dict[str, Any]:
+    """The work request, naming the form its job writes when that is not JSON."""
+    require_format(result_format)
+    return request if result_format == "json" else {**request, RESULT_FORMAT_FIELD: result_format}
 
 
 def _check_tools(n: int, limit: int) -> None:
@@ -71,7 +77,7 @@ def _check_tools(n: int, limit: int) -> None:
 
 def prepare_batch(bench: Workbench, request: Mapping[str, Any],
                   refused: Mapping[int, Mapping[str, str]] | None = None,
-                  tool_point: list[str] | None = None) -> Work:
+                  tool_point: list[str] | None = None, result_format: Format = "json") -> Work:
     """A batch request (``contract.md`` "Batch"), read and sized: work of kind ``batch``.
 
     Parameters
@@ -84,23 +90,26 @@ def prepare_batch(bench: Workbench, request: Mapping[str, Any],
         ``error`` result in their place (:func:`rcsa.libraries.library_prediction.checked_batch`).
     tool_point : list of str, optional
         Keep only these receptances of each result (``["h"]``).
+    result_format : {"json", "hdf5", "parquet"}
+        The form a job of it writes its result in (:mod:`rcsa.app.results`).
 
     Raises
     ------
     InputError
-        Too many combinations, or the grid, spindle or materials they share are invalid.
+        Too many combinations, or the grid, spindle or materials they share are invalid;
+        Parquet without pyarrow.
     """
     combinations = request.get("combinations") if isinstance(request, Mapping) else None
     n = len(combinations) if isinstance(combinations, list) else 0
     if n > bench.max_combinations:
         raise InputError("combinations", f"at most {bench.max_combinations} per request, got {n}; split the batch")
-    checked = checked_batch(request, refused or {}, tool_point)
+    checked = _with_format(checked_batch(request, refused or {}, tool_point), result_format)
     return Work("batch", checked, n, check=lambda: check_common(request, store=bench.store, max_lines=bench.max_lines))
 
 
 def prepare_library(bench: Workbench, library: LibrarySource, *, file_name: str | None = None,
                     content_type: str | None = None, holder: Any = None, holder_name: str | None = None,
-                    **fields: Any) -> Work:
+                    result_format: Format = "json", **fields: Any) -> Work:
     """A Fusion or FreeCAD tool library on one spindle, imported and sized: work of kind ``library``.
 
     Parameters
@@ -115,6 +124,8 @@ def prepare_library(bench: Workbench, library: LibrarySource, *, file_name: str 
         A FreeCAD holder (``.fcholder``) for the toolbits; refused for Fusion.
     holder_name : str, optional
         The holder upload's file name.
+    result_format : {"json", "hdf5", "parquet"}
+        The form a job of it writes its result in (as in :func:`prepare_batch`).
     **fields
         Those of :func:`rcsa.libraries.library_prediction.library_request`: ``spindle``,
         ``frequency``, ``joints``, ``materials``, ``beam_theory``, ``shear_coefficient``,
@@ -123,7 +134,7 @@ def prepare_library(bench: Workbench, library: LibrarySource, *, file_name: str 
     """
     library = read_library(library, file_name=file_name, content_type=content_type, holder=holder,
                            holder_name=holder_name)
-    request = library_request(library, **_library_fields(fields))
+    request = _with_format(library_request(library, **_library_fields(fields)), result_format)
     n = len(request["batch"]["combinations"])
     _check_tools(n, bench.max_combinations)
     return Work("library", request, n,
@@ -295,21 +306,27 @@ class ExportFile:
     revision: int
 
 
-def export_file(libraries: LibraryStore, library_id: str, fmt: Literal["hdf5", "zip", "json"]) -> ExportFile:
-    """A stored library's results as HDF5, a zip of UFF 58 files, or JSON.
+def export_file(libraries: LibraryStore, library_id: str, fmt: ExportFormat) -> ExportFile:
+    """A stored library's results as HDF5, a zip of UFF 58 files, JSON or Parquet.
 
     Raises
     ------
     NotFoundError
         No such library.
+    InputError
+        An unknown format, or Parquet without pyarrow (naming the extra ``rcsa[parquet]``).
     """
     if fmt not in _SUFFIX:
         raise InputError("format", f"must be one of {', '.join(_SUFFIX)}, got {fmt!r}")
+    if fmt == "parquet":
+        require_format(fmt)
     results = libraries.results(library_id)
     if fmt == "json":
-        data = orjson.dumps(results, option=orjson.OPT_SERIALIZE_NUMPY)
+        data = json_bytes(results)
+    elif fmt == "zip":
+        data = library_uff_zip(results)
     else:
-        data = library_hdf5(results) if fmt == "hdf5" else library_uff_zip(results)
+        data = encode_result(results, fmt, "library-results")
     revision = int(results["library"]["revision"])
     return ExportFile(data, f"{library_id}-r{revision}{_SUFFIX[fmt]}", int(results["summary"]["ok"]), revision)
 
@@ -328,7 +345,7 @@ def write_export(libraries: LibraryStore, library_id: str, path: str | os.PathLi
     """
     suffix = Path(path).suffix.lower()
     if suffix not in EXPORT_FORMATS:
-        raise InputError("out", f"{path}: the file name must end in .h5, .hdf5, .zip or .json")
+        raise InputError("out", f"{path}: the file name must end in {', '.join(EXPORT_FORMATS)}")
     export = export_file(libraries, library_id, EXPORT_FORMATS[suffix])
     atomic_write_bytes(Path(path), export.data)
     return export

@@ -81,8 +81,12 @@ class CachedMeasurements:
     """Read-through cache of stored measurements for computations (per process).
 
     Stored measurements are immutable and ids are never reused, so a cached copy is exact
-    for as long as the file exists; each ``get`` checks that it still does (one ``stat``),
-    so a deleted measurement is never used by a request that starts after the delete.
+    for as long as its file is the one it was read from; each ``get`` checks that with one
+    ``stat`` (inode, size, modification time: :meth:`MeasurementStore.file_identity`), so a
+    deleted measurement is never used by a request that starts after the delete, and a file
+    damaged or replaced since it was cached is read again — and refused as damaged when its
+    checksum fails — instead of being served from memory. (A damage that keeps inode, size
+    and modification time alike, which no ordinary write does, is not noticed.)
 
     Parameters
     ----------
@@ -95,24 +99,35 @@ class CachedMeasurements:
         self.store = store
         self.path = store.path
         self.size = int(size)
-        self._items: OrderedDict[str, Measurement] = OrderedDict()
+        self._items: OrderedDict[str, tuple[Any, Measurement]] = OrderedDict()
         self._lock = threading.Lock()
 
     def get(self, measurement_id: str) -> Measurement:
-        """The measurement, from memory when possible (``NotFoundError`` if gone)."""
-        if self.size and measurement_id in self.store:
+        """The measurement, from memory when its file is unchanged (``NotFoundError`` if gone,
+        ``DamagedError`` if damaged)."""
+        identity = self._identity(measurement_id)
+        if self.size and identity is not None:
             with self._lock:
                 hit = self._items.get(measurement_id)
-                if hit is not None:
+                if hit is not None and hit[0] == identity:
                     self._items.move_to_end(measurement_id)
-                    return hit
+                    return hit[1]
         m = self.store.get(measurement_id)
-        if self.size:
+        if self.size and identity is not None:
             with self._lock:
-                self._items[measurement_id] = m
+                self._items[measurement_id] = (identity, m)
                 while len(self._items) > self.size:
                     self._items.popitem(last=False)
         return m
+
+    def __contains__(self, measurement_id: object) -> bool:
+        return measurement_id in self.store
+
+    def _identity(self, measurement_id: str) -> Any:
+        identity = getattr(self.store, "file_identity", None)
+        if identity is not None:
+            return identity(measurement_id)
+        return measurement_id if measurement_id in self.store else None
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self.store, name)

@@ -8,12 +8,11 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated, Any, TypeVar
 
-import orjson
 import typer
 
 from rcsa.errors import InputError, NotFoundError, RcsaError
 
-__all__ = ["QuietOption", "fail", "progress_callback", "read_json", "run_guarded", "write_json"]
+__all__ = ["QuietOption", "fail", "progress_callback", "read_json", "run_guarded", "write_json", "write_results"]
 
 #: ``--quiet/-q`` of the commands that draw a progress bar.
 QuietOption = Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar on stderr.")]
@@ -43,8 +42,15 @@ def read_json(path: Path) -> Any:
 
 
 def write_json(document: Any, out: Path | None) -> None:
-    """Write a JSON document to ``out``, or to stdout when ``out`` is None."""
-    data = orjson.dumps(document, option=orjson.OPT_SERIALIZE_NUMPY | orjson.OPT_INDENT_2)
+    """Write a JSON document to ``out``, or to stdout when ``out`` is None.
+
+    Indented; numpy arrays (and a Prediction) are written straight to bytes
+    (:func:`rcsa.app.results.json_bytes`).
+    """
+    # rcsa.app is imported when a command runs, not with the CLI: `rcsa --help` stays fast
+    from rcsa.app.results import json_bytes
+
+    data = json_bytes(document, indent=True)
     if out is None:
         sys.stdout.buffer.write(data + b"\n")
         sys.stdout.flush()
@@ -53,6 +59,20 @@ def write_json(document: Any, out: Path | None) -> None:
             out.write_bytes(data + b"\n")
         except OSError as exc:
             raise fail(f"cannot write {out}: {exc.strerror or exc}") from None
+
+
+def write_results(document: Any, out: Path | None, kind: str) -> None:
+    """Write a batch or library result to ``out`` in the form its suffix names (``.json``,
+    ``.h5``/``.hdf5``, ``.parquet``), or as JSON to stdout when ``out`` is None."""
+    if out is None or out.suffix.lower() == ".json":
+        write_json(document, out)
+        return
+    from rcsa.app.results import write_result  # when a command runs: `rcsa --help` stays fast
+
+    try:
+        run_guarded(lambda: write_result(document, out, kind))
+    except OSError as exc:
+        raise fail(f"cannot write {out}: {exc.strerror or exc}") from None
 
 
 def run_guarded(fn: Callable[[], T]) -> T:

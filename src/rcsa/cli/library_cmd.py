@@ -9,17 +9,19 @@ FreeCAD stores no stickout: ``--options '{"stickout_m": 0.04}'`` (or per toolbit
 of every tool of the library on one spindle, computed
 here (no service needed), with a progress bar on stderr. The result JSON (one entry per
 library item: ``ok``, ``skipped`` with a reason, or ``error``) goes to stdout or ``-o
-OUT.json``; the exit status is 1 when any tool errored.
+OUT.json`` (``-o OUT.h5`` or ``OUT.parquet``: the same as HDF5 or Parquet); the exit status is
+1 when any tool errored.
 
 ``rcsa library sync LIBRARY --spindle ID-or-SPINDLE.json [--library-id ID]``: keep the
 library in the store (:func:`rcsa.app.libraries.prepare_sync`, the same code as ``POST
 /v1/libraries/{id}:sync``): only tools whose result is not stored yet are computed; the
 added / changed / unchanged / removed summary goes to stderr, the sync report (JSON) to
-stdout; exit status 1 when any tool failed. ``--dask-scheduler tcp://HOST:8786`` (or
+stdout (``-o OUT.json``: there; ``-o OUT.h5|.parquet``: the synced results written there, the
+report to stdout); exit status 1 when any tool failed. ``--dask-scheduler tcp://HOST:8786`` (or
 ``RCSA_DASK_SCHEDULER``) computes on that Dask cluster instead of here; the results are
 written here, the same bytes either way. ``rcsa library show ID`` prints a stored
-library's summary and per-tool status; ``rcsa library export ID -o FILE.h5|.zip|.json``
-writes its results (HDF5, zip of UFF 58 files, or JSON).
+library's summary and per-tool status; ``rcsa library export ID -o FILE.h5|.parquet|.zip|.json``
+writes its results (HDF5, Parquet, zip of UFF 58 files, or JSON).
 
 ``rcsa library recommend LIBRARY --material M --max-rpm N (--spindle S | --measurement ID |
 --library-id ID) (-o OUT | --in-place)``: chatter-safe presets (:mod:`rcsa.app.presets`). Per
@@ -37,7 +39,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rcsa.cli._common import fail, read_json, run_guarded, write_json
+from rcsa.cli._common import fail, read_json, run_guarded, write_json, write_results
 from rcsa.errors import InputError
 
 if TYPE_CHECKING:
@@ -170,7 +172,9 @@ def predict(
     options: ImportOptions = None,
     natural_frequencies: NaturalFrequenciesOption = True,
     uncertainty: UncertaintyOption = None,
-    out: Annotated[Path | None, typer.Option("-o", "--out", help="Write the result here instead of stdout.")] = None,
+    out: Annotated[Path | None, typer.Option("-o", "--out", help=(
+        "Write the result here instead of stdout: OUT.json, OUT.h5 (HDF5) or OUT.parquet (needs "
+        "rcsa[parquet])."))] = None,
     store: Annotated[Path | None, typer.Option("--store", help="Measurement store (default: RCSA_STORE or "
                                                                "the per-user store).")] = None,
     quiet: QuietOption = False,
@@ -198,6 +202,9 @@ def predict(
             work.check()  # before the progress bar starts
         return bench, work
 
+    if out is not None:
+        from rcsa.app.results import format_of_suffix, require_format
+        run_guarded(lambda: require_format(format_of_suffix(out)))  # before computing anything
     bench, work = run_guarded(build)
     backend = run_guarded(lambda: compute_backend(dask_scheduler, connect_timeout_s=dask_connect_timeout))
     with _progress_bar(quiet) as bar:
@@ -211,7 +218,7 @@ def predict(
                                                   backend=backend)).document
         finally:
             backend.close()
-    write_json(result, out)
+    write_results(result, out, "library")
     s = result["summary"]
     typer.echo(f"{s['ok']} ok, {s['skipped']} skipped, {s['error']} error", err=True)
     if s["error"]:
@@ -239,8 +246,9 @@ def sync(
     options: ImportOptions = None,
     natural_frequencies: NaturalFrequenciesOption = True,
     uncertainty: UncertaintyOption = None,
-    out: Annotated[Path | None, typer.Option("-o", "--out", help="Write the sync report here instead of "
-                                                                 "stdout.")] = None,
+    out: Annotated[Path | None, typer.Option("-o", "--out", help=(
+        "OUT.json: write the sync report here instead of stdout. OUT.h5 or OUT.parquet: write the synced "
+        "library's results there (as rcsa library export does) and the report to stdout."))] = None,
     store: StoreOption = None,
     quiet: QuietOption = False,
     dask_scheduler: DaskOption = None,
@@ -268,6 +276,10 @@ def sync(
             work.check()  # before the progress bar starts
         return bench, work
 
+    binary = out is not None and out.suffix.lower() != ".json"
+    if binary:
+        from rcsa.app.results import format_of_suffix, require_format
+        run_guarded(lambda: require_format(format_of_suffix(out, allowed=("hdf5", "parquet"))))
     bench, work = run_guarded(build)
     ident = work.request["library_id"]
     backend = run_guarded(lambda: compute_backend(dask_scheduler if work.size else None,
@@ -283,7 +295,14 @@ def sync(
                                                   plan=work.plan, backend=backend)).document
         finally:
             backend.close()
-    write_json(report, out)
+    if binary:
+        from rcsa.app.libraries import write_export
+        from rcsa.app.stores import library_store
+        try:
+            run_guarded(lambda: write_export(library_store(store), ident, out))
+        except OSError as exc:
+            raise fail(f"cannot write {out}: {exc.strerror or exc}") from None
+    write_json(report, None if binary else out)
     c, s = report["counts"], report["summary"]
     typer.echo(f"{ident} revision {report['revision']}: {c['added']} added, {c['changed']} changed, "
                f"{c['unchanged']} unchanged, {c['removed']} removed ({report['computed']} computed, "
@@ -311,8 +330,8 @@ def show(
 @library_app.command("export")
 def export(
     library_id: Annotated[str, typer.Argument(help="Id of a stored library.")],
-    out: Annotated[Path, typer.Option("-o", "--out", help="FILE.h5 (HDF5), FILE.zip (one UFF 58 file per tool) "
-                                                          "or FILE.json.")],
+    out: Annotated[Path, typer.Option("-o", "--out", help="FILE.h5 (HDF5), FILE.parquet (needs rcsa[parquet]), "
+                                                          "FILE.zip (one UFF 58 file per tool) or FILE.json.")],
     store: StoreOption = None,
 ) -> None:
     """Write a stored library's results to a file; the format follows its suffix."""
@@ -320,7 +339,7 @@ def export(
     from rcsa.app.libraries import EXPORT_FORMATS, write_export
     from rcsa.app.stores import library_store
     if out.suffix.lower() not in EXPORT_FORMATS:
-        raise fail(f"{out}: the file name must end in .h5, .hdf5, .zip or .json")
+        raise fail(f"{out}: the file name must end in {', '.join(EXPORT_FORMATS)}")
     try:
         export = run_guarded(lambda: write_export(library_store(store), library_id, out))
     except OSError as exc:

@@ -105,7 +105,7 @@ def assembly_notes(spec: AssemblySpec) -> tuple[str, ...]:
     """
     face_mounted = spec.tool.inserted_length_m <= _TOL_M
     note = None if face_mounted else shallow_insertion_note(spec.tool.inserted_length_m, spec.tool.shank_diameter_m)
-    notes = () if note is None else (note,)
+    notes: tuple[str, ...] = () if note is None else (note,)
     if face_mounted and not isinstance(spec.holder_tool, ClampingSpec):
         notes += ("face-mounted tool (nothing inserted): it sits on the holder's face, joined by "
                   + ("the point joint given" if spec.holder_tool is not None else "a rigid point joint")

@@ -39,7 +39,7 @@ from rcsa.physics.insertion import Insertion, InsertionPiece, contact_per_length
 from rcsa.physics.materials import Material
 from rcsa.physics.sections import BeamTheory, Section, ShearModel, tube
 
-__all__ = ["BULK_COEFFICIENTS", "VALID_WALL_RATIO", "BulkCoefficients", "clamped_holder_chain", "clamping_notes", "face_contact", "interface_per_length"]
+__all__ = ["BULK_COEFFICIENTS", "CALIBRATED", "BulkCoefficients", "clamped_holder_chain", "clamping_notes", "face_contact", "interface_per_length"]
 
 _TOL_M = 1e-12
 
@@ -78,11 +78,12 @@ class BulkCoefficients:
 
 
 #: The fitted coefficients (``benchmarks/calibrate_clamping.py``).
-BULK_COEFFICIENTS = BulkCoefficients(a_h=1.5, b_h=2.0, a_s=2.0, c_theta=1.0, step_cone=0.0)
+BULK_COEFFICIENTS = BulkCoefficients(a_h=3.11, b_h=1.75, a_s=2.13, c_theta=2.04, step_cone=1.0)
 #: Pieces a step's stiffness cone is cut into (constant sections at their mid-diameters).
 CONE_PIECES = 4
-#: Holder outer diameter over bore diameter covered by the calibration cases.
-VALID_WALL_RATIO = (1.3, 4.0)
+#: The ranges the calibration cases cover (``tests/data/solid3d``): the nose's outer diameter over
+#: the shank's, the shank diameter (m) and the inserted length in shank diameters.
+CALIBRATED = {"wall_ratio": (1.6, 4.0), "shank_diameter_m": (0.006, 0.020), "insertion_diameters": (2.0, 5.0)}
 
 
 def interface_per_length(clamping: ClampingSpec, holder_outer_diameter_m: float, bore_diameter_m: float,
@@ -134,7 +135,7 @@ def interface_per_length(clamping: ClampingSpec, holder_outer_diameter_m: float,
     elif clamping.interface_loss_factor:  # bonded: a loss of the clamping itself (0 as parsed; analyses add it)
         loss = 1 + 1j * clamping.interface_loss_factor
         k_w, k_theta = k_w * loss, k_theta * loss
-    return complex(k_w * clamping.interface_scale), complex(k_theta * clamping.interface_scale)
+    return complex(k_w * clamping.interface_stiffness_scale), complex(k_theta * clamping.interface_stiffness_scale)
 
 
 @dataclass(frozen=True, slots=True)
@@ -281,7 +282,7 @@ def face_contact(holder: HolderSpec, tool: ToolSpec, clamping: ClampingSpec) -> 
     inner = min(last.inner_diameter_m, outer)
     area_m2 = math.pi * (outer**2 - inner**2) / 4.0
     inertia_m4 = math.pi * (outer**4 - inner**4) / 64.0
-    k_n = clamping.interface_stiffness_n_m3 * clamping.interface_scale
+    k_n = clamping.interface_stiffness_n_m3 * clamping.interface_stiffness_scale
     return Spring(clamping.interface_tangential_ratio * k_n * area_m2, 0.0, k_n * inertia_m4, 0.0)
 
 
@@ -304,17 +305,16 @@ def clamping_notes(holder: HolderSpec, tool: ToolSpec, clamping: ClampingSpec) -
                    "the face contact's normal and tangential stiffness (its loss factor is not carried)")
                 + "; face contacts are not calibrated on the 3-D reference",)
     notes = []
-    length = holder.length_m
-    start = length - min(tool.inserted_length_m, length)
-    x0 = 0.0
-    lo, hi = VALID_WALL_RATIO
-    for i, seg in enumerate(holder.segments):
-        x1 = x0 + seg.length_m
-        if x1 > start + 1e-9:
-            ratio = seg.outer_diameter_m / tool.shank_diameter_m
-            if not lo <= ratio <= hi:
-                notes.append(f"clamping model {clamping.model!r}: holder.segments[{i}] has an outer diameter "
-                             f"{ratio:.3g} times the shank's, outside the calibrated range {lo:g}–{hi:g}; "
-                             "the interface stiffness is extrapolated")
-        x0 = x1
+    d = tool.shank_diameter_m
+    inserted = min(tool.inserted_length_m, holder.length_m) / d
+    checks = [("the nose's outer diameter", holder.segments[-1].outer_diameter_m / d, "wall_ratio", "× the shank's"),
+              ("the shank diameter", d * 1e3, "shank_diameter_m", " mm"),
+              ("the inserted length", inserted, "insertion_diameters", " shank diameters")]
+    for what, value, key, unit in checks:
+        lo, hi = CALIBRATED[key]
+        scale = 1e3 if key == "shank_diameter_m" else 1.0
+        if not lo * scale * (1 - 1e-9) <= value <= hi * scale * (1 + 1e-9):
+            notes.append(f"clamping model {clamping.model!r}: {what} ({value:.3g}{unit}) is outside the range it was "
+                         f"calibrated on ({lo * scale:g}–{hi * scale:g}{unit}); its interface stiffness is "
+                         "extrapolated")
     return tuple(notes)

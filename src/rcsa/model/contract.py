@@ -20,9 +20,11 @@ from rcsa.model.bounds import (
     MAX_CONTACT_PRESSURE_PA,
     MAX_DAMPING,
     MAX_DENSITY_KG_M3,
+    MAX_DIAMETER_M,
     MAX_FREQUENCY_HZ,
     MAX_FREQUENCY_LINES,
     MAX_INTERFACE_STIFFNESS_N_M3,
+    MAX_INTERFACE_STIFFNESS_SCALE,
     MAX_INTERFACE_TANGENTIAL_RATIO,
     MAX_LENGTH_M,
     MAX_LOSS_FACTOR,
@@ -38,6 +40,7 @@ from rcsa.model.bounds import (
     MIN_FLUTED_DIAMETER_RATIO,
     MIN_FREQUENCY_HZ,
     MIN_INTERFACE_STIFFNESS_N_M3,
+    MIN_INTERFACE_STIFFNESS_SCALE,
     MIN_INTERFACE_TANGENTIAL_RATIO,
     MIN_JOINT_STIFFNESS,
     MIN_LENGTH_M,
@@ -297,10 +300,10 @@ class ClampingSpec:
     contact_pressure_pa, surface_roughness_m : float or None
         The contact model's inputs when ``interface_stiffness_n_m3`` was derived from them
         (kept for the result's notes), Pa and m.
-    interface_scale : float
-        A factor on the whole interface stiffness per unit length (dimensionless; 1 as
-        parsed). Not a contract field: the knob analyses vary (``holder_tool.interface_scale``:
-        effect analysis, tolerance draws, diagnosis candidates).
+    interface_stiffness_scale : float
+        A factor on the whole interface stiffness per unit length (dimensionless; default 1):
+        what an identification finds and analyses vary (``holder_tool.interface_stiffness_scale``:
+        identification, effect analysis, tolerance draws, diagnosis candidates).
     """
 
     model: str
@@ -310,7 +313,7 @@ class ClampingSpec:
     front_gap_length_m: float = 0.0
     contact_pressure_pa: float | None = None
     surface_roughness_m: float | None = None
-    interface_scale: float = 1.0
+    interface_stiffness_scale: float = 1.0
     contact_length_m: float | None = None
 
 
@@ -447,8 +450,8 @@ def _segments(value: object, path: str, materials: Mapping[str, Material]) -> tu
         o = Fields(raw, f"{path}[{i}]")
         o.only("length_m", "outer_diameter_m", "inner_diameter_m", "material")
         length = o.number("length_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
-        outer = o.number("outer_diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
-        inner = o.number("inner_diameter_m", ge=0.0, le=MAX_LENGTH_M, default=0.0)
+        outer = o.number("outer_diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_DIAMETER_M)
+        inner = o.number("inner_diameter_m", ge=0.0, le=MAX_DIAMETER_M, default=0.0)
         if inner >= outer:
             raise InputError(o.at("inner_diameter_m"),
                              f"must be smaller than outer_diameter_m ({outer:g}), got {inner:g}")
@@ -565,8 +568,8 @@ def parse_tool(value: object, materials: Mapping[str, Material], path: str = "to
     """
     o = Fields(value, path)
     o.only(*_TOOL_FIELDS)
-    diameter = o.number("diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
-    shank = o.number("shank_diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M, default=diameter)
+    diameter = o.number("diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_DIAMETER_M)
+    shank = o.number("shank_diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_DIAMETER_M, default=diameter)
     overall = o.number("overall_length_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
     stickout = o.number("stickout_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
     if stickout > overall:
@@ -577,7 +580,7 @@ def parse_tool(value: object, materials: Mapping[str, Material], path: str = "to
     ratio = o.number("fluted_diameter_ratio", gt=0.0, ge=MIN_FLUTED_DIAMETER_RATIO, le=1.0, default=0.8)
     mass_ratio = o.optional_number("fluted_mass_diameter_ratio", gt=0.0, ge=MIN_FLUTED_DIAMETER_RATIO, le=1.0)
     shoulder_length = o.optional_number("shoulder_length_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
-    shoulder_diameter = o.optional_number("shoulder_diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
+    shoulder_diameter = o.optional_number("shoulder_diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_DIAMETER_M)
     if (shoulder_length is None) != (shoulder_diameter is None):
         raise InputError(o.at("shoulder_length_m"), "shoulder_length_m and shoulder_diameter_m go together")
     if shoulder_length is not None and not flute <= shoulder_length <= stickout:
@@ -599,7 +602,7 @@ def _neck_segments(o: Fields, flute: float, stickout: float) -> tuple[tuple[floa
     for i, item in enumerate(raw):
         s = Fields(item, f"{o.at('neck_segments')}[{i}]", ("length_m", "diameter_m"))
         out.append((s.number("length_m", gt=0.0, ge=MIN_LENGTH_M),  # at most stickout − flute, below
-                    s.number("diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)))
+                    s.number("diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_DIAMETER_M)))
     total = math.fsum(length for length, _ in out)
     if total > (stickout - flute) * (1 + 1e-9) + 1e-12:
         raise InputError(o.at("neck_segments"), f"reach {total:g} m beyond the flutes, more than the "
@@ -630,7 +633,8 @@ def parse_joint(value: object, path: str) -> JointSpec | None:
 
 _POINT_FIELDS = ("stiffness_n_m", "damping_ns_m", "rotational_stiffness_nm_rad", "rotational_damping_nms_rad")
 _CLAMPING_FIELDS = ("interface_stiffness_n_m3", "interface_tangential_ratio", "interface_loss_factor",
-                    "front_gap_length_m", "contact_length_m", "contact_pressure_pa", "surface_roughness_m")
+                    "front_gap_length_m", "contact_length_m", "contact_pressure_pa", "surface_roughness_m",
+                    "interface_stiffness_scale")
 
 
 def parse_holder_tool(value: object, path: str = "joints.holder_tool") -> JointSpec | ClampingSpec | None:
@@ -638,7 +642,7 @@ def parse_holder_tool(value: object, path: str = "joints.holder_tool") -> JointS
 
     ``bonded`` takes no stiffness: the clamping follows from geometry and materials
     (optionally ``front_gap_length_m`` and ``contact_length_m``: where along the bore the shank
-    touches). ``contact`` takes ``interface_stiffness_n_m3``, or
+    touches; and ``interface_stiffness_scale``, a factor on it, as an identification finds). ``contact`` takes ``interface_stiffness_n_m3``, or
     ``contact_pressure_pa`` and ``surface_roughness_m`` from which it is derived
     (:func:`rcsa.physics.insertion.contact_stiffness_n_m3`), and optionally
     ``interface_tangential_ratio``, ``interface_loss_factor`` and ``front_gap_length_m``.
@@ -674,9 +678,11 @@ def parse_holder_tool(value: object, path: str = "joints.holder_tool") -> JointS
                                             " (use model \"contact\" with interface_stiffness_n_m3 for a softer one)"))
     gap = o.number("front_gap_length_m", ge=0.0, le=MAX_LENGTH_M, default=0.0)
     contact = o.optional_number("contact_length_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
+    scale = o.number("interface_stiffness_scale", gt=0.0, ge=MIN_INTERFACE_STIFFNESS_SCALE,
+                     le=MAX_INTERFACE_STIFFNESS_SCALE, default=1.0)
     if model == "bonded":
-        o.only("model", "front_gap_length_m", "contact_length_m")
-        return ClampingSpec("bonded", front_gap_length_m=gap, contact_length_m=contact)
+        o.only("model", "front_gap_length_m", "contact_length_m", "interface_stiffness_scale")
+        return ClampingSpec("bonded", front_gap_length_m=gap, contact_length_m=contact, interface_stiffness_scale=scale)
     o.only("model", *_CLAMPING_FIELDS)
     stiffness = o.optional_number("interface_stiffness_n_m3", gt=0.0, ge=MIN_INTERFACE_STIFFNESS_N_M3,
                                   le=MAX_INTERFACE_STIFFNESS_N_M3)
@@ -699,7 +705,7 @@ def parse_holder_tool(value: object, path: str = "joints.holder_tool") -> JointS
         "contact", stiffness, o.number("interface_tangential_ratio", gt=0.0, ge=MIN_INTERFACE_TANGENTIAL_RATIO,
                            le=MAX_INTERFACE_TANGENTIAL_RATIO, default=1.0),
         o.number("interface_loss_factor", ge=0.0, lt=MAX_LOSS_FACTOR, default=0.0), gap, pressure, roughness,
-        contact_length_m=contact)
+        interface_stiffness_scale=scale, contact_length_m=contact)
 
 
 @dataclass(frozen=True, slots=True)

@@ -4,7 +4,7 @@ joint identification and diagnoses vary.
 Names are stable strings: ``bearings[i].stiffness_n_m``, ``spindle_holder.damping_ns_m``,
 ``holder_tool.rotational_stiffness_nm_rad``, ``tool.stickout_m``,
 ``tool.fluted_diameter_ratio``; for a holder–tool clamping along the insertion (model
-``bonded``/``contact``) ``holder_tool.interface_scale`` (a factor on its whole interface
+``bonded``/``contact``) ``holder_tool.interface_stiffness_scale`` (a factor on its whole interface
 stiffness) and, for ``contact``, ``holder_tool.interface_stiffness_n_m3``. :func:`get_parameter` reads one from an
 :class:`~rcsa.model.contract.AssemblySpec`; :func:`set_parameter` returns a new spec with it changed.
 """
@@ -22,7 +22,7 @@ __all__ = ["get_parameter", "is_damping", "parameter_names", "set_parameter"]
 _JOINT_FIELDS = ("stiffness_n_m", "damping_ns_m", "rotational_stiffness_nm_rad", "rotational_damping_nms_rad")
 _BEARING_FIELDS = ("stiffness_n_m", "damping_ns_m")
 _TOOL_FIELDS = ("stickout_m", "fluted_diameter_ratio")
-_CLAMPING_FIELDS = ("interface_scale", "interface_stiffness_n_m3")
+_CLAMPING_FIELDS = ("interface_stiffness_scale", "interface_stiffness_n_m3")
 
 
 def parameter_names(spec: AssemblySpec) -> tuple[str, ...]:

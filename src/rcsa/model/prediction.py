@@ -173,6 +173,10 @@ class SubassemblyCache:
         self._store: dict[Chain, ComplexArray] = {}
         self._static: dict[Chain, FloatArray] = {}
 
+    def __len__(self) -> int:
+        """Condensed chains held (dynamic and static)."""
+        return len(self._store) + len(self._static)
+
     def static(self, chain: Chain) -> FloatArray:
         """Static undamped stiffness at the end of ``chain`` (cached), shape (2, 2).
 

@@ -44,7 +44,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Literal, TypeVar
+from typing import TYPE_CHECKING, Literal, TypeVar, overload
 
 import numpy as np
 
@@ -222,12 +222,21 @@ def apply_nuisance(base: _K, fields: Mapping[str, float]) -> _K:
                             for k, v in fields.items()})
 
 
+@overload
+def scaled_joint(joint: JointSpec | None, kt: float, kr: float, c: float) -> JointSpec | None: ...
+
+
+@overload
+def scaled_joint(joint: JointSpec | ClampingSpec | None, kt: float, kr: float, c: float
+                 ) -> JointSpec | ClampingSpec | None: ...
+
+
 def scaled_joint(joint: JointSpec | ClampingSpec | None, kt: float, kr: float, c: float
                  ) -> JointSpec | ClampingSpec | None:
     """A joint with its stiffnesses and dampers scaled (a rigid one stays rigid).
 
     A point joint: ``k_t`` by ``kt``, ``k_r`` by ``kr``, both dampers by ``c``. A clamping
-    along the insertion: its whole interface stiffness by ``kt`` (``interface_scale``) and its
+    along the insertion: its whole interface stiffness by ``kt`` (``interface_stiffness_scale``) and its
     interface loss factor by ``c``.
 
     Parameters
@@ -243,7 +252,7 @@ def scaled_joint(joint: JointSpec | ClampingSpec | None, kt: float, kr: float, c
     if joint is None:
         return None
     if isinstance(joint, ClampingSpec):
-        return replace(joint, interface_scale=joint.interface_scale * kt,
+        return replace(joint, interface_stiffness_scale=joint.interface_stiffness_scale * kt,
                        interface_loss_factor=joint.interface_loss_factor * c)
     return JointSpec(joint.stiffness_n_m * kt, joint.damping_ns_m * c,
                      None if joint.rotational_stiffness_nm_rad is None else joint.rotational_stiffness_nm_rad * kr,

@@ -51,7 +51,7 @@ import math
 import threading
 from collections import OrderedDict
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any, Self
 
 import numpy as np
@@ -158,7 +158,7 @@ class InsertionPiece:
     def undamped(self) -> InsertionPiece:
         """The piece with real moduli and a real interface."""
         return InsertionPiece(self.holder.undamped(), self.core.undamped(), self.length_m,
-                              np.real(self.interface_n_m2), np.real(self.interface_rotational_n))
+                              _real_part(self.interface_n_m2), _real_part(self.interface_rotational_n))
 
     def decay_per_m(self, omega_max_rad_s: float) -> float:
         """An upper estimate of the fastest spatial decay rate of the piece's waves up to ω_max, 1/m.
@@ -183,6 +183,14 @@ class InsertionPiece:
             if np.all(f > 0):
                 rates.append((1.0 / (f * ei)) ** 0.5)
         return float(max(np.max(r) for r in rates))
+
+
+def _real_part(value: ComplexParam) -> ComplexParam:
+    """The real part of a (stacked) complex parameter, kept complex."""
+    if isinstance(value, np.ndarray):
+        out: ComplexArray = value.real.astype(complex)
+        return out
+    return complex(complex(value).real)
 
 
 def _broadcast(value: Any, n: int) -> np.ndarray:
@@ -296,7 +304,9 @@ def piece_stiffness(omega_rad_s: FloatArray, piece: InsertionPiece) -> ComplexAr
     d[:, :4, 4:] = -g
     d[:, 4:, 4:] = tff @ g
     d[:, 4:, :4] = tfu - d[:, 4:, 4:] @ tuu
-    return 0.5 * (d + np.swapaxes(d, -1, -2))  # symmetric in exact arithmetic (reciprocity)
+    d += np.swapaxes(d, -1, -2).copy()  # symmetric in exact arithmetic (reciprocity)
+    d *= 0.5
+    return d
 
 
 def _report(pivots: Pivots | None, p: np.ndarray) -> None:
@@ -314,7 +324,8 @@ def _schur(m: np.ndarray, keep: np.ndarray, drop: np.ndarray, pivots: Pivots | N
     p = m[:, drop][:, :, drop]
     _report(pivots, p)
     mk = m[:, keep]
-    return mk[:, :, keep] - mk[:, :, drop] @ np.linalg.solve(p, m[:, drop][:, :, keep])
+    out: np.ndarray = mk[:, :, keep] - mk[:, :, drop] @ np.linalg.solve(p, m[:, drop][:, :, keep])
+    return out
 
 
 _ENDS = np.arange(4), np.arange(4, 8)
@@ -364,18 +375,18 @@ _DEGREES = (8, 16, 32, 64)
 
 @dataclass(frozen=True, slots=True)
 class _Interpolant:
-    """Chebyshev coefficients of a piece's dynamic stiffness in ``t = (ω/ω_fit)²`` on [0, 1]."""
+    """Chebyshev coefficients of a dynamic stiffness in ``t = (ω/ω_fit)²`` on [0, 1]."""
 
     omega_fit_rad_s: float
-    coefficients: ComplexArray  # (degree + 1, 8, 8)
+    coefficients: ComplexArray  # (degree + 1, k, k)
 
     def __call__(self, omega_rad_s: FloatArray) -> ComplexArray:
-        """The interpolant at ``omega_rad_s``, shape (nfreq, 8, 8): one product of the
+        """The interpolant at ``omega_rad_s``, shape (nfreq, k, k): one product of the
         Chebyshev–Vandermonde matrix with the coefficients."""
         x = 2.0 * (np.asarray(omega_rad_s, dtype=float) / self.omega_fit_rad_s) ** 2 - 1.0
         c = self.coefficients
         vander = np.polynomial.chebyshev.chebvander(x, c.shape[0] - 1)
-        out: ComplexArray = (vander @ c.reshape(c.shape[0], -1)).reshape(-1, 8, 8)
+        out: ComplexArray = (vander @ c.reshape(c.shape[0], -1)).reshape(-1, *c.shape[1:])
         return out
 
 
@@ -384,29 +395,31 @@ def _chebyshev(values: ComplexArray) -> ComplexArray:
     m = values.shape[0]
     j = np.arange(m)
     basis = np.cos(np.pi * np.outer(np.arange(m), j + 0.5) / m)  # (k, j)
-    coef = 2.0 / m * np.tensordot(basis, values, axes=(1, 0))
+    coef: ComplexArray = 2.0 / m * np.tensordot(basis, values, axes=(1, 0))
     coef[0] /= 2.0
     return coef
 
 
-def _interpolant(piece: InsertionPiece, omega_fit_rad_s: float) -> _Interpolant | None:
-    """A checked interpolant of :func:`unit_stiffness` on ``[0, ω_fit]``, or None if none converges."""
+def _interpolant(exact: Callable[[FloatArray], ComplexArray], omega_fit_rad_s: float) -> _Interpolant | None:
+    """A checked interpolant of ``exact(ω)`` (stiffness matrices of 2×2 blocks) on ``[0, ω_fit]``,
+    or None if none converges."""
     for m in _DEGREES:
         nodes = np.cos(np.pi * (np.arange(m) + 0.5) / m)
         mids = np.cos(np.pi * np.arange(1, m) / m)
         t = np.concatenate([nodes, mids])
-        exact = unit_stiffness(omega_fit_rad_s * np.sqrt((t + 1.0) / 2.0), piece)
-        fit = _Interpolant(omega_fit_rad_s, _chebyshev(exact[:m]))
-        scale = np.max(np.abs(exact).reshape(-1, 4, 2, 4, 2).max(axis=(2, 4)), axis=0)  # per 2×2 block
-        err = np.abs(fit(omega_fit_rad_s * np.sqrt((mids + 1.0) / 2.0)) - exact[m:])
-        if np.all(err.reshape(-1, 4, 2, 4, 2).max(axis=(2, 4)) <= INTERPOLATION_RTOL * scale):
+        values = exact(omega_fit_rad_s * np.sqrt((t + 1.0) / 2.0))
+        fit = _Interpolant(omega_fit_rad_s, _chebyshev(values[:m]))
+        k = values.shape[-1] // 2
+        scale = np.max(np.abs(values).reshape(-1, k, 2, k, 2).max(axis=(2, 4)), axis=0)  # per 2×2 block
+        err = np.abs(fit(omega_fit_rad_s * np.sqrt((mids + 1.0) / 2.0)) - values[m:])
+        if np.all(err.reshape(-1, k, 2, k, 2).max(axis=(2, 4)) <= INTERPOLATION_RTOL * scale):
             return fit
     return None
 
 
 def _fit_band_rad_s(omega_max_rad_s: float) -> float:
     """The interpolation band's top: the grid's highest frequency rounded up to 2^(k/2) rad/s."""
-    return 2.0 ** (math.ceil(2.0 * math.log2(max(omega_max_rad_s, 1.0))) / 2.0)
+    return float(2.0 ** (math.ceil(2.0 * math.log2(max(omega_max_rad_s, 1.0))) / 2.0))
 
 
 def _units(piece: InsertionPiece, omega_fit_rad_s: float) -> tuple[InsertionPiece, int]:
@@ -462,12 +475,53 @@ def piece_fit(piece: InsertionPiece, omega_max_rad_s: float) -> _PieceFit:
                 return min(usable, key=lambda f: f.omega_fit_rad_s)
     top = _fit_band_rad_s(omega_max_rad_s)
     unit, count = _units(piece, top)
-    fit = _PieceFit(top, unit, count, _interpolant(unit, top))
+    fit = _PieceFit(top, unit, count, _interpolant(lambda w: unit_stiffness(w, unit), top))
     with _FITS_LOCK:
         _FITS.setdefault(piece, []).append(fit)
         _FITS.move_to_end(piece)
         while len(_FITS) > _FITS_MAX:
             _FITS.popitem(last=False)
+    return fit
+
+
+#: An insertion is interpolated whole when its own clamped modes lie above this many band tops.
+_INTERNAL_MARGIN = 1.25
+#: Two-port fits of whole insertions: insertion → [(band top, interpolant or None)].
+_WHOLE: OrderedDict[Any, list[tuple[float, _Interpolant | None]]] = OrderedDict()
+
+
+def insertion_fit(insertion: Insertion, omega_max_rad_s: float) -> _Interpolant | None:
+    """The whole insertion's two-port as one checked interpolant up to ``omega_max_rad_s`` (cached), or None.
+
+    Only where the insertion, clamped at its entry and exit nodes, has no natural frequency of
+    its own below 1.25 times the band's top (counted by Wittrick–Williams on its exact units at
+    that frequency): then its two-port has no pole in or near the band (the interpolant in ω²
+    converges by a factor ≥ 4 per degree, and is checked), and no internal pivot turns negative
+    in it. Otherwise None, and the units are condensed line by line.
+
+    Parameters
+    ----------
+    insertion : Insertion
+        Scalar parameters.
+    omega_max_rad_s : float
+        Highest angular frequency it will be evaluated at, rad/s.
+    """
+    with _FITS_LOCK:
+        fits = _WHOLE.get(insertion)
+        if fits is not None:
+            _WHOLE.move_to_end(insertion)
+            usable = [f for f in fits if f[0] >= omega_max_rad_s]
+            if usable:
+                return min(usable, key=lambda f: f[0])[1]
+    top = _fit_band_rad_s(omega_max_rad_s)
+    count = Pivots(1)
+    insertion.undamped().condensed(np.array([_INTERNAL_MARGIN * top]), count, exact=True)
+    fit = None if count.negatives[0] else _interpolant(lambda w: insertion.condensed(w, exact=True), top)
+    with _FITS_LOCK:
+        _WHOLE.setdefault(insertion, []).append((top, fit))
+        _WHOLE.move_to_end(insertion)
+        while len(_WHOLE) > _FITS_MAX:
+            _WHOLE.popitem(last=False)
     return fit
 
 
@@ -488,14 +542,22 @@ class Insertion:
     shank node in the holder's tool-end face. The shank's inner end and the holder's front
     end are free; everything inside is condensed (:meth:`two_port`).
 
+    Stacked over several tools (:meth:`stack`), its pieces' parameters are arrays with one
+    value per tool, and ``line_rows`` (set by :meth:`take_rows`) says which tool each frequency
+    line is; each tool's two-port is then computed on its own lines.
+
     Parameters
     ----------
     pieces : tuple of InsertionPiece
         Uniform pieces from the insertion's inner end to the holder face (a new piece where
         the holder's section or the interface changes).
+    line_rows : numpy.ndarray of int, shape (nfreq,), optional
+        For a stacked insertion, the tool (row of the parameters) of each line; ``None``: line
+        ``i`` is row ``i``.
     """
 
     pieces: tuple[InsertionPiece, ...]
+    line_rows: IntArray | None = field(default=None, compare=False)
 
     # ------------------------------------------------------------------ the two-port
 
@@ -524,12 +586,38 @@ class Insertion:
         omega = np.asarray(omega_rad_s, dtype=float)
         if not all(_scalar(p) for p in self.pieces):
             return self._two_port_rows(omega, pivots)
+        whole = insertion_fit(self, float(np.max(omega, initial=0.0)))
+        if whole is not None:
+            return whole(omega)  # no internal mode in the band: its pivots have no negative (nor zero)
+        return self.condensed(omega, pivots)
+
+    def condensed(self, omega_rad_s: FloatArray, pivots: Pivots | None = None, exact: bool = False) -> ComplexArray:
+        """:meth:`two_port` by condensing its units line by line (scalar parameters).
+
+        Parameters
+        ----------
+        omega_rad_s : numpy.ndarray, shape (nfreq,)
+            Angular frequencies ≥ 0, rad/s.
+        pivots : Pivots, optional
+            Accumulator of the internal pivots (undamped items only).
+        exact : bool
+            Each unit by matrix exponentials (:func:`unit_stiffness`) instead of its interpolant.
+
+        Returns
+        -------
+        numpy.ndarray, shape (nfreq, 4, 4), complex
+        """
+        omega = np.asarray(omega_rad_s, dtype=float)
         top = float(np.max(omega, initial=0.0))
         carried: np.ndarray | None = None  # stiffness over [entry (2), current node (4)]
         for piece in self.pieces:
-            fit = piece_fit(piece, top)
-            d = fit.stiffness(omega)
-            for _ in range(fit.count):
+            if exact:
+                unit, count = _units(piece, top)
+                d = unit_stiffness(omega, unit)
+            else:
+                fit = piece_fit(piece, top)
+                d, count = fit.stiffness(omega), fit.count
+            for _ in range(count):
                 if carried is None:  # the first unit: its shank end (inner end) is free
                     carried = _schur(d, np.array([0, 1, 4, 5, 6, 7]), np.array([2, 3]), pivots)
                     continue
@@ -541,20 +629,14 @@ class Insertion:
         return _schur(carried, np.array([0, 1, 4, 5]), np.array([2, 3]), pivots)  # holder front end free
 
     def _two_port_rows(self, omega: FloatArray, pivots: Pivots | None) -> ComplexArray:
-        """:meth:`two_port` of a stacked insertion (parameters per line): one scalar insertion per
-        distinct set of parameters, each on its lines."""
+        """:meth:`two_port` of a stacked insertion: each tool's scalar insertion on its own lines."""
         n = omega.size
-        columns = [np.broadcast_to(np.asarray(v), (n,)) for p in self.pieces
-                   for v in (p.length_m, p.interface_n_m2, p.interface_rotational_n,
-                             *_section_values(p.holder), *_section_values(p.core))]
-        key = np.stack([c.real.astype(float) for c in columns] + [np.imag(c).astype(float) for c in columns], axis=1)
-        unique, inverse = np.unique(key, axis=0, return_inverse=True)
-        inverse = inverse.reshape(-1)
+        rows = np.arange(n) if self.line_rows is None else np.asarray(self.line_rows)
+        order = np.argsort(rows, kind="stable")
+        starts = np.flatnonzero(np.r_[True, np.diff(rows[order]) != 0])
         out = np.empty((n, 4, 4), dtype=complex)
-        for row in range(unique.shape[0]):
-            lines = np.flatnonzero(inverse == row)
-            item = self.take_rows(np.full(1, lines[0]))
-            scalar = Insertion(tuple(_squeeze(p) for p in item.pieces))
+        for lines in np.split(order, starts[1:]):
+            scalar = Insertion(tuple(_row_piece(p, int(rows[lines[0]])) for p in self.pieces))
             part = None if pivots is None else Pivots(lines.size)
             out[lines] = scalar.two_port(omega[lines], part)
             if pivots is not None and part is not None:
@@ -643,7 +725,7 @@ class Insertion:
 
     def undamped(self) -> Insertion:
         """The insertion with real moduli and interfaces."""
-        return Insertion(tuple(p.undamped() for p in self.pieces))
+        return Insertion(tuple(p.undamped() for p in self.pieces), self.line_rows)
 
     def subdivided(self, omega_max_rad_s: float) -> tuple[Insertion]:
         """Itself: its units are cut free of clamped–clamped modes below twice any grid's top.
@@ -663,7 +745,7 @@ class Insertion:
         fn : callable
             ``fn(section) -> Section``.
         """
-        return type(self)(tuple(replace(p, holder=fn(p.holder), core=fn(p.core)) for p in self.pieces))
+        return type(self)(tuple(replace(p, holder=fn(p.holder), core=fn(p.core)) for p in self.pieces), self.line_rows)
 
     def signature(self) -> tuple[object, ...]:
         """Insertions of equally many pieces stack."""
@@ -687,19 +769,15 @@ class Insertion:
         return Insertion(tuple(pieces))
 
     def take_rows(self, rows: IntArray) -> Insertion:
-        """A stacked insertion with its parameter arrays indexed by ``rows`` (scalars kept).
+        """The stacked insertion on lines ``rows`` (each a row of the parameters, or of its lines).
 
         Parameters
         ----------
         rows : numpy.ndarray of int
-            Rows (tools) to keep, in the order given.
+            Rows (tools, or lines of an insertion already on lines) to keep, in the order given.
         """
-        def pick(v: Any) -> Any:
-            return np.asarray(v)[rows] if np.ndim(v) else v
-
-        return Insertion(tuple(InsertionPiece(p.holder.take_rows(rows), p.core.take_rows(rows), pick(p.length_m),
-                                              pick(p.interface_n_m2), pick(p.interface_rotational_n))
-                               for p in self.pieces))
+        rows = np.asarray(rows)
+        return Insertion(self.pieces, rows if self.line_rows is None else np.asarray(self.line_rows)[rows])
 
     @property
     def is_stacked(self) -> bool:
@@ -707,10 +785,10 @@ class Insertion:
         return not all(_scalar(p) for p in self.pieces)
 
 
-def _squeeze(piece: InsertionPiece) -> InsertionPiece:
-    """A piece with one-element parameter arrays turned into numbers."""
+def _row_piece(piece: InsertionPiece, row: int) -> InsertionPiece:
+    """Row ``row`` of a stacked piece, as numbers."""
     def one(v: Any) -> Any:
-        return v.reshape(-1)[0].item() if np.ndim(v) else v
+        return np.asarray(v).reshape(-1)[row].item() if np.ndim(v) else v
 
     def sec(s: Section) -> Section:
         return Section(complex(one(s.ei)), complex(one(s.shear_flexibility)), float(np.real(one(s.rho_a))),

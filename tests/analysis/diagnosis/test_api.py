@@ -129,6 +129,7 @@ def test_too_few_lines_is_refused(small_request):
 
 
 # ------------------------------------------------------------------------- CLI
+@pytest.mark.slow
 def test_cli_diagnose_writes_json_and_png(tmp_path, mass_request):
     import typer
 
@@ -153,6 +154,7 @@ def test_cli_diagnose_writes_json_and_png(tmp_path, mass_request):
     assert result.exit_code == 1 and "measurements" in result.output
 
 
+@pytest.mark.slow
 def test_one_measurement_and_different_grids_work():
     from rcsa.analysis.diagnosis.perturbed_model import Knobs
     from tests.analysis.diagnosis.conftest import model_request

@@ -30,7 +30,7 @@ from tests.oracles.solid3d.case import (
 )
 
 __all__ = ["BASES", "DATA_DIR", "FREQUENCY_HZ", "beam_document", "beam_tip_h", "case_document", "load_case",
-           "reference_cases", "spindle_base_receptance", "standard_case", "with_mesh"]
+           "reference_cases", "render_readme", "spindle_base_receptance", "standard_case", "with_mesh"]
 
 DATA_DIR = Path(__file__).resolve().parents[2] / "data" / "solid3d"
 #: the data set's frequency grid, Hz
@@ -287,3 +287,51 @@ def with_mesh(case: SolidCase, factor: float) -> SolidCase:
     """The case with every element size times ``factor``."""
     return replace(case, mesh=case.mesh.scaled(factor))
 
+
+
+def render_readme(index: dict[str, Any]) -> str:
+    """The data set's README.md, from ``cases.json``.
+
+    Parameters
+    ----------
+    index : dict
+        The parsed ``cases.json``.
+
+    Returns
+    -------
+    str
+    """
+    conv = index.get("convergence", {}).get("tool_mode_hz", {})
+    lines = [
+        "# 3-D reference data set (holder + tool, linear elasticity)",
+        "",
+        "Written by `" + index.get("command", "python benchmarks/bench_solid3d.py --write-data") + "` (from the "
+        "repository root, with the test extra installed); read with `tests.oracles.solid3d.dataset.load_case(name)`.",
+        "Do not edit by hand.",
+        "",
+        "* `cases.json`: the frequency grid (100-6000 Hz, 1 Hz), the two bases, the base case's mesh-convergence "
+        "sequence, and per case: the geometry in the contract's terms (`holder.segments`, `tool`, `materials`), "
+        "the interface, `rigid_holder`, the mesh sizes, DOFs, elements, wall time, and per base the largest peak "
+        "and the tool-mode peak with their convergence estimates and rcsa's beam prediction of the same geometry.",
+        "* `<case>.npz`: `h_clamped`, `h_spindle` (tool-point receptance m/N, complex64, on the grid), "
+        "`natural_frequencies_clamped_hz`, `natural_frequencies_spindle_hz` (undamped, in the band).",
+        "* `spindle_base.npz`: the spindle base's 2x2 receptance at the gauge line (`receptance`, complex64; "
+        "`undamped_receptance`, float32), rcsa's convention.",
+        "",
+        "Bases: `clamped` = the holder's base face fixed; `spindle` = RA-1's spindle and spindle-holder joint, "
+        "condensed by rcsa to a 2x2 point receptance at the gauge line, coupled to the rigid base face in both "
+        "bending planes (axial and torsion held).",
+        "",
+        f"Convergence (base case, clamped, tool mode): observed order {conv.get('observed_order', float('nan')):.2f}, "
+        f"order used {conv.get('order', float('nan')):.2f}, remaining error of the data set's mesh "
+        f"{conv.get('remaining_rel', float('nan')):.2%}.",
+        "",
+        "| case | what | DOF | clamped tool mode, Hz | conv. | spindle tool mode, Hz | conv. | wall s |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for name, e in index["cases"].items():
+        c, sp_ = e["bases"]["clamped"]["tool_mode"], e["bases"]["spindle"]["tool_mode"]
+        lines.append(f"| `{name}` | {e['description']} | {e['n_dof']} | {c['frequency_hz']:.1f} | "
+                     f"{c['convergence']['frequency_rel']:.2%} | {sp_['frequency_hz']:.1f} | "
+                     f"{sp_['convergence']['frequency_rel']:.2%} | {e['wall_s']:.0f} |")
+    return "\n".join(lines) + "\n"

@@ -85,12 +85,12 @@ def test_the_base_rotation_sign_matters(spindle_base, rod_on_base):
 @pytest.fixture(scope="module")
 def small_case() -> SolidCase:
     return SolidCase((HolderSegment(0.020, 0.040, 0.010), HolderSegment(0.030, 0.024, 0.010)),
-                     ToolGeometry(0.010, 0.010, 0.060, 0.020, 0.035), mesh=MeshSize(0.003, 0.008, 0.5))
+                     ToolGeometry(0.010, 0.010, 0.060, 0.020, 0.035), mesh=MeshSize(0.005, 0.012, 0.8))
 
 
 @pytest.fixture(scope="module")
 def small_model(small_case):
-    return build(small_case, "clamped", 2.5 * FREQ_HZ[-1])
+    return build(small_case, "elastic", 2.5 * FREQ_HZ[-1])
 
 
 def test_tip_loads_are_a_unit_force_and_a_unit_moment(small_case):
@@ -113,8 +113,13 @@ def test_tip_receptance_is_reciprocal_and_damped(small_model):
     assert frf.natural_frequencies_hz is not None and frf.natural_frequencies_hz.size >= 1
 
 
-def test_reduced_model_matches_the_direct_sparse_solve(small_model):
-    assert truncation_error(small_model, np.array([300.0, 2500.0, 5900.0])) < 1e-4
+@pytest.mark.slow
+def test_reduced_model_matches_the_direct_sparse_solve(small_model, spindle_base):
+    """Clamped and on the spindle (1e-5 measured on the benchmark's base case)."""
+    probe = np.array([900.0, 5900.0])
+    assert truncation_error(small_model, probe) < 1e-4
+    damped = spindle_base[0][np.searchsorted(FREQ_HZ, probe)]
+    assert truncation_error(small_model, probe, ReceptanceBase(probe, damped)) < 1e-4
 
 
 def test_layer_matrix_of_a_rigid_jump_is_its_closed_form(small_case):
@@ -129,10 +134,12 @@ def test_layer_matrix_of_a_rigid_jump_is_its_closed_form(small_case):
     a = layer_matrix(FacetBasis(m, ElementTetP2(), facets=lateral, intorder=4), kn, kt, n)
     jump = (np.arange(n) % 3 == 0).astype(float)
     radius, length = small_case.tool.shank_diameter_m / 2, small_case.tool.inserted_length_m
-    assert jump @ (a @ jump) == pytest.approx((kn + kt) * np.pi * radius * length / 4, rel=1e-4)
+    # the quadratic faces carry the cylinder's area to 4e-4 with 5 mm elements on a Ø10 bore
+    assert jump @ (a @ jump) == pytest.approx((kn + kt) * np.pi * radius * length / 4, rel=1e-3)
     assert a.nnz and abs(a - a.T).max() <= 1e-12 * abs(a).max()
 
 
+@pytest.mark.slow
 def test_a_stiff_layer_tends_to_bonding_and_a_soft_one_lowers_the_tool_mode(small_case, small_model):
     bonded = largest_peak(FREQ_HZ, solve_model(small_model, FREQ_HZ).h)[0]
     layer = {}

@@ -276,11 +276,11 @@ def catalogue(spec: AssemblySpec, tools: Sequence[ToolSpec], solver: Solver,
     ht, sh = spec.holder_tool, spec.spindle_holder
 
     if "holder_tool_joint" not in excluded and isinstance(ht, ClampingSpec):
-        scale0 = ht.interface_scale
+        scale0 = ht.interface_stiffness_scale
         out.append(Candidate(  # interface softening over the whole insertion (a soft or worn clamp)
             "holder_tool_joint", (Parameter("log10_interface_stiffness_scale", -3.0, 0.5, 0.0, "1"),),
             lambda k, v: _mul(k, ht_translational_scale=10 ** v[0]),
-            lambda v: {"holder_tool.interface_scale": scale0 * 10 ** v[0]}))
+            lambda v: {"holder_tool.interface_stiffness_scale": scale0 * 10 ** v[0]}))
     elif "holder_tool_joint" not in excluded and isinstance(ht, JointSpec) \
             and ht.rotational_stiffness_nm_rad is not None:
         kr0 = ht.rotational_stiffness_nm_rad

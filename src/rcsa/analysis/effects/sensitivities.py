@@ -59,7 +59,12 @@ from rcsa.analysis.tool_point_model import MeasuredSpindle, ToolPointModel
 from rcsa.errors import InputError
 from rcsa.model import fields
 from rcsa.model.assembly import build_model
-from rcsa.model.bounds import MAX_FREQUENCY_HZ, MIN_FREQUENCY_HZ
+from rcsa.model.bounds import (
+    MAX_FREQUENCY_HZ,
+    MAX_RELATIVE_STEP,
+    MIN_FREQUENCY_HZ,
+    MIN_RELATIVE_STEP,
+)
 from rcsa.model.contract import AssemblySpec, MeasuredSpindleSpec, SpindleSpec, parse_assembly
 from rcsa.model.parameters import get_parameter, is_damping, parameter_names, set_parameter
 from rcsa.model.spindle_side import BaseResolver
@@ -170,7 +175,7 @@ def effect_analysis(assembly: Mapping[str, Any] | AssemblySpec, *, parameters: S
     parameters : sequence of str, optional
         Names as in :func:`parameter_names` (default: all of them).
     relative_step : float
-        δ of the central difference in ln(parameter), in (0, 0.1].
+        δ of the central difference in ln(parameter), in [1e-6, 0.1].
     band_hz : (float, float), optional
         Modes whose undamped natural frequency lies here (default: the assembly's grid range).
     resolve_base : BaseResolver, optional
@@ -191,8 +196,9 @@ def effect_analysis(assembly: Mapping[str, Any] | AssemblySpec, *, parameters: S
     if not isinstance(spec.spindle, SpindleSpec) and resolve_base is None:
         raise InputError("spindle", "an effect analysis on a measured spindle needs a measurement store: call "
                          "rcsa.app.analyses.effects (the CLI's --store, or the service), which knows it")
-    if not 0 < relative_step <= 0.1:
-        raise InputError("relative_step", f"must be in (0, 0.1], got {relative_step:g}")
+    if not MIN_RELATIVE_STEP <= relative_step <= MAX_RELATIVE_STEP:
+        raise InputError("relative_step", f"must be in [{MIN_RELATIVE_STEP:g}, {MAX_RELATIVE_STEP:g}] (below, the "
+                                          f"bisection's rounding swamps the difference), got {relative_step:g}")
     if isinstance(spec.spindle, MeasuredSpindleSpec) and resolve_base is not None:
         spindle = MeasuredSpindle.from_base(spec.frequency_hz, resolve_base(spec.spindle, spec.frequency_hz))
         tpm = ToolPointModel(spec, spindle)
@@ -264,7 +270,7 @@ def effects_report(request: Mapping[str, Any], resolve_base: BaseResolver | None
     params = request.get("parameters")
     if params is not None and (not isinstance(params, list) or not all(isinstance(p, str) for p in params)):
         raise InputError("parameters", "must be a list of parameter names")
-    step = o.number("relative_step", gt=0.0, le=0.1, default=DEFAULT_RELATIVE_STEP)
+    step = o.number("relative_step", gt=0.0, ge=MIN_RELATIVE_STEP, le=MAX_RELATIVE_STEP, default=DEFAULT_RELATIVE_STEP)
     band = request.get("band_hz")
     if band is not None and (not isinstance(band, list) or len(band) != 2
                              or not all(isinstance(b, int | float) and not isinstance(b, bool) for b in band)):

@@ -42,15 +42,18 @@ from rcsa.model.spindle_side import BaseResolver
 __all__ = [
     "CLAMPING_REASON",
     "HOLDER_TIP_REASON",
+    "POINT_REASON",
     "IDENTIFIABLE",
     "IdentificationRequest",
     "MeasurementData",
     "parse_identification_request",
 ]
 
-#: The parameters a joint identification estimates (translational stiffness and damping).
+#: The parameters a joint identification estimates: point joints' translational stiffness and
+#: damping; a holder–tool clamping along the insertion (model bonded/contact) its interface stiffness
+#: (a factor on it: below 1 a clamping softer than the model's).
 IDENTIFIABLE = ("spindle_holder.stiffness_n_m", "spindle_holder.damping_ns_m",
-                "holder_tool.stiffness_n_m", "holder_tool.damping_ns_m")
+                "holder_tool.stiffness_n_m", "holder_tool.damping_ns_m", "holder_tool.interface_stiffness_scale")
 
 _REQUEST_FIELDS = ("assembly", "measurements", "bounds", "max_residual_to_noise")
 MAX_MEASUREMENTS = MAX_TAP_TESTS
@@ -61,11 +64,11 @@ DEFAULT_MAX_RESIDUAL_TO_NOISE = 4.0
 #: Why the spindle–holder joint cannot be identified on a holder-tip measurement.
 HOLDER_TIP_REASON = ("not applicable: the measured spindle's plane is holder_tip, so the spindle–holder joint "
                      "is inside the measurement (measure at the spindle nose to identify it)")
-#: Why a holder–tool clamping along the insertion is held, not identified.
-CLAMPING_REASON = ("not identified: the holder–tool joint is a clamping along the insertion (model {model!r}), whose "
-                   "stiffness follows from the geometry and the interface; it is held as given while the point joints "
-                   "are identified (compare its prediction with the measurement in a diagnosis, whose holder_tool_joint "
-                   "candidate softens the interface)")
+#: Why a point joint's parameters are not identified on a clamping along the insertion, and back.
+CLAMPING_REASON = ("not applicable: the holder–tool joint is a clamping along the insertion (model {model!r}); its "
+                   "interface stiffness is identified (holder_tool.interface_stiffness_scale)")
+POINT_REASON = ("not applicable: the holder–tool joint is a point joint; a clamping along the insertion (model bonded "
+                "or contact) has an interface stiffness instead")
 
 
 @dataclass(frozen=True)
@@ -134,8 +137,8 @@ def _bounds(raw: object, base: AssemblySpec, names: tuple[str, ...], holder_tip:
         if holder_tip and key.startswith("spindle_holder."):
             raise InputError(f"bounds.{key}", HOLDER_TIP_REASON)
         if key not in names:
-            raise InputError(f"bounds.{key}", "this joint is rigid in the assembly, or a clamping along the insertion: "
-                                              "nothing to identify")
+            raise InputError(f"bounds.{key}", "this joint is rigid in the assembly, or of the other kind (a point joint "
+                                              "or a clamping along the insertion): nothing to identify")
     for name in names:
         start = float(get_parameter(base, name) or 0.0)
         lo, hi = start / DEFAULT_BOUND_FACTOR, start * DEFAULT_BOUND_FACTOR
@@ -226,10 +229,11 @@ def parse_identification_request(request: object, resolve_base: BaseResolver | N
     holder_tip = spindle is not None and spindle.plane == "holder_tip"
     not_applicable = {n: HOLDER_TIP_REASON for n in IDENTIFIABLE
                       if holder_tip and n.startswith("spindle_holder.") and base.spindle_holder is not None}
-    if isinstance(base.holder_tool, ClampingSpec):
-        not_applicable.update({n: CLAMPING_REASON.format(model=base.holder_tool.model)
-                               for n in IDENTIFIABLE if n.startswith("holder_tool.")})
-    names = tuple(n for n in IDENTIFIABLE if getattr(base, n.split(".")[0]) is not None and n not in not_applicable)
+    clamped = isinstance(base.holder_tool, ClampingSpec)
+    kind_of = {n: n.endswith("_scale") for n in IDENTIFIABLE if n.startswith("holder_tool.")}
+    other = {n for n, is_clamping in kind_of.items() if is_clamping != clamped}
+    names = tuple(n for n in IDENTIFIABLE if getattr(base, n.split(".")[0]) is not None and n not in not_applicable
+                  and n not in other)
     if not names:
         raise InputError("assembly.joints", "no elastic joint to identify: give starting values for the "
                          "holder–tool joint" + (" (the spindle–holder joint is inside the holder_tip measurement)"

@@ -69,6 +69,7 @@ from rcsa.analysis.lobes.zoa import (
     engagement_angles_rad,
     zoa_depth_limit,
 )
+from rcsa.analysis.progress import check_time
 from rcsa.errors import InputError
 from rcsa.model.wire import complex_to_wire, json_float, json_list
 
@@ -226,6 +227,7 @@ def _scan(evaluate: _Evaluator, g0: np.ndarray, start_m: float, ceiling_m: float
     b = np.full(n, start_m)
     active = np.arange(n)
     while active.size:
+        check_time()
         g = _log_modulus(evaluate(active, b[active]))
         up = g >= 0.0
         hi[active[up]], g_hi[active[up]] = b[active[up]], g[up]
@@ -249,6 +251,7 @@ def _refine(evaluate: _Evaluator, idx: np.ndarray, a: np.ndarray, ga: np.ndarray
     a, ga, c, gc = a.copy(), ga.copy(), c.copy(), gc.copy()
     side = np.zeros(idx.size, dtype=np.int8)
     for _ in range(_MAX_REFINE):
+        check_time()
         open_ = np.flatnonzero(c - a > rtol * c)
         if open_.size == 0:
             break
