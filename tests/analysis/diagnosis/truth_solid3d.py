@@ -61,7 +61,7 @@ from tests.oracles.solid3d.case import (
 from tests.oracles.solid3d.reduction import ReducedModel, tip_receptance
 
 __all__ = ["CLASSES", "DATA_DIR", "FREQUENCY_HZ", "STICKOUTS_M", "VARIANTS", "SolidTrial", "base_document",
-           "load_reduced", "make_solid_trial", "solid_case", "truth_h", "write_data"]
+           "load_reduced", "make_solid_trial", "nuisance_knobs", "solid_case", "truth_h", "write_data"]
 
 DATA_DIR = Path(__file__).resolve().parents[2] / "data" / "diagnosis_solid3d"
 STICKOUTS_M = (0.030, 0.040, 0.050)
@@ -227,6 +227,7 @@ class SolidTrial:
     request: dict[str, Any]
     clean: list[np.ndarray]        # the 3-D truth, no noise, per measurement
     clean_null: list[np.ndarray]   # the bonded 3-D truth under the same draw (SNR reference)
+    nuisance: SolidNuisance | None = None
 
 
 def make_solid_trial(rng: np.random.Generator, variant: str, *, model: str = "bonded",
@@ -251,4 +252,15 @@ def make_solid_trial(rng: np.random.Generator, variant: str, *, model: str = "bo
                                "measurements": measurements}
     if options:
         request["options"] = options
-    return SolidTrial(variant, VARIANTS[variant][0], request, clean, null)
+    return SolidTrial(variant, VARIANTS[variant][0], request, clean, null, nz)
+
+
+def nuisance_knobs(nz: SolidNuisance) -> Any:
+    """The draw as the diagnosis's knobs (all but the per-measurement layer scale, which no base has)."""
+    from rcsa.analysis.diagnosis.perturbed_model import Knobs
+
+    s = nz.shared
+    return Knobs(tool_youngs_scale=s["tool_e"], tool_density_scale=s["rho"], structure_youngs_scale=s["steel_e"],
+                 structure_density_scale=s["rho"], loss_factor_scale=s["loss"], bearing_stiffness_scale=s["bearing_k"],
+                 bearing_damping_scale=s["bearing_c"], sh_translational_scale=s["sh_kt"],
+                 sh_rotational_scale=s["sh_kr"], sh_damping_scale=s["sh_c"])
