@@ -41,10 +41,11 @@ from rcsa.app.results import json_bytes
 from rcsa.model.assembly import build_model
 from rcsa.model.contract import parse_assembly
 from rcsa.model.peaks import find_frf_peaks
-from rcsa.model.prediction import SubassemblyCache, count_lines_hz, tool_point_receptance
+from rcsa.model.prediction import count_lines_hz, tool_point_receptance
 from rcsa.physics.chain import Beam
 from rcsa.physics.elimination import static_tip_receptance, tip_receptance
 from rcsa.physics.natural_frequencies import natural_frequencies_batch
+from rcsa.physics.subassembly_cache import SubassemblyCache
 from rcsa.reference import ra1
 
 
@@ -136,7 +137,7 @@ def ra1_section(repeats: int, slow: bool) -> None:
         "parse the document + build the chain": lambda: build_model(parse_assembly(doc)),
         "FRF: spindle + holder condensed, tool marched, 2x2 inverse":
             lambda: tool_point_receptance(model, SubassemblyCache(omega)),
-        "  of which spindle + holder (cached across tools)": lambda: SubassemblyCache(omega).condensed(prefix),
+        "  of which spindle + holder (cached across tools)": lambda: SubassemblyCache(omega).stiffness(prefix),
         "natural frequencies: count on the grid + lockstep refinement":
             lambda: natural_frequencies_batch(prefix, [rest], float(f[0]), float(f[-1]), grid_hz=grid),
         "  of which the count on the grid (undamped, real)":

@@ -2,7 +2,7 @@
 
 * :func:`tip_receptance` — what one would write first with numpy, vectorised over frequency:
   every beam's exact Timoshenko dynamic stiffness as a (nfreq, 4, 4) array (closed form from
-  the transfer matrix, ``domain.md`` §2.3–2.4), joints and bearings added in, the global
+  the transfer matrix, ``docs/physics.md`` §2.3–2.4), joints and bearings added in, the global
   dynamic stiffness assembled as (nfreq, N, N) and ``np.linalg.solve`` for the tip's two DOFs.
 * :func:`block_sweep_receptance` — the stronger one: the same beam stiffnesses, but the
   chain swept from the spindle's rear to the tip as 2×2 blocks (static condensation of each

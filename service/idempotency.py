@@ -1,6 +1,6 @@
 """``Idempotency-Key`` on the POSTs that store or start something.
 
-Follows draft-ietf-httpapi-idempotency-key-header (``ecosystem.md`` §4.2). Routes of a
+Follows the IETF draft draft-ietf-httpapi-idempotency-key-header-06. Routes of a
 router built with ``route_class=IdempotentRoute`` honour the header on ``POST``:
 
 * **First request** with a key: it runs; a ``2xx`` answer is kept (status, body bytes and the

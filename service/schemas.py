@@ -1,4 +1,4 @@
-"""Request and response models of the REST API (pydantic), field names as in ``contract.md``.
+"""Request and response models of the REST API (pydantic), field names as in ``docs/contract.md``.
 
 SI units everywhere; every numeric field name ends in its unit and every description says
 it. Request models forbid unknown fields and refuse strings where numbers belong (strict

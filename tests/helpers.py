@@ -35,7 +35,7 @@ def assert_receptance_close(actual: np.ndarray, expected: np.ndarray, rtol: floa
 
 
 def max_error_of_peak(actual: np.ndarray, expected: np.ndarray) -> float:
-    """``max|actual − expected| / max|expected|`` — the error measure of ``domain.md`` §4.6."""
+    """``max|actual − expected| / max|expected|`` — the error measure of ``docs/physics.md`` §4.6."""
     return float(np.max(np.abs(np.asarray(actual) - expected)) / np.max(np.abs(expected)))
 
 

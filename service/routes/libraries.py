@@ -56,7 +56,7 @@ from rcsa.app.libraries import (
 from rcsa.app.presets import OPTION_FIELDS, recommend_stored
 from rcsa.errors import InputError
 
-from ..bodies import form_text, read_body, read_upload, validate_json
+from ..bodies import check_form_fields, form_json, form_text, form_uploads, read_body, validate_json
 from ..deps import StateDep
 from ..errors import ProblemError
 from ..idempotency import IDEMPOTENCY_PROBLEMS, IdempotencyKeyHeader, IdempotentRoute
@@ -141,22 +141,24 @@ async def predict_library(request: Request, state: StateDep, who: ReadAccess, pr
                                                   owner=caller(who, request), result_format=fmt))
 
 
+async def library_upload(form: Any, limit_bytes: int, *, holder: bool = True) -> dict[str, Any]:
+    """The library file of an upload form (and, with ``holder``, a FreeCAD holder file):
+    :func:`rcsa.app.libraries.prepare_library`'s ``library``, ``file_name``, ``content_type``,
+    ``holder`` and ``holder_name`` (also read by the web view's ``POST /v1/tool-libraries:entries``)."""
+    [(data, name, media)] = await form_uploads(form, "library", limit_bytes,
+                                               what="library file (.json, .tools, .fctb or a zip)")
+    source: dict[str, Any] = {"library": data, "file_name": name or None, "content_type": media}
+    if holder:
+        holders = await form_uploads(form, "holder", limit_bytes, least=0, most=1, what="holder file (.fcholder)")
+        if holders:
+            source["holder"], holder_name, _ = holders[0]
+            source["holder_name"] = holder_name or None
+    return source
+
+
 async def _from_form(form: Any, limit_bytes: int) -> tuple[dict[str, Any], dict[str, Any]]:
-    unknown = sorted(set(form.keys()) - set(_FORM_FIELDS))
-    if unknown:
-        raise InputError(unknown[0], f"unknown form field (allowed: {', '.join(_FORM_FIELDS)})")
-    files = form.getlist("library")
-    if len(files) != 1:
-        raise InputError("library", "send exactly one library file (.json, .tools, .fctb or a zip)")
-    data, name = await read_upload(files[0], "library", limit_bytes)
-    source: dict[str, Any] = {"library": data, "file_name": name or None,
-                              "content_type": getattr(files[0], "content_type", None)}
-    holders = form.getlist("holder")
-    if len(holders) > 1:
-        raise InputError("holder", "send at most one holder file (.fcholder)")
-    if holders:
-        source["holder"], holder_name = await read_upload(holders[0], "holder", limit_bytes)
-        source["holder_name"] = holder_name or None
+    check_form_fields(form, _FORM_FIELDS)
+    source = await library_upload(form, limit_bytes)
     doc: dict[str, Any] = {}
     for name in _FORM_FIELDS:
         text = form_text(form, name) if name not in ("library", "holder") else None
@@ -314,13 +316,8 @@ async def _recommend_inputs(request: Request, limit_bytes: int) -> tuple[bytes, 
                                 "options as text fields (the file's bytes are kept exactly, so it cannot travel "
                                 "inside JSON)")
     try:
-        unknown = sorted(set(form.keys()) - set(_RECOMMEND_FIELDS))
-        if unknown:
-            raise InputError(unknown[0], f"unknown form field (allowed: {', '.join(_RECOMMEND_FIELDS)})")
-        files = form.getlist("library")
-        if len(files) != 1:
-            raise InputError("library", "send exactly one Fusion library file (.json or .tools)")
-        data, name = await read_upload(files[0], "library", limit_bytes)
+        check_form_fields(form, _RECOMMEND_FIELDS)
+        source = await library_upload(form, limit_bytes, holder=False)
         options: dict[str, Any] = {}
         for field in OPTION_FIELDS:
             text = form_text(form, field)
@@ -330,13 +327,13 @@ async def _recommend_inputs(request: Request, limit_bytes: int) -> tuple[bytes, 
                 options[field] = text.strip()
                 continue
             if field == "uncertainty":
-                options[field] = decode_json(text, path=field, what="the uncertainty form field")
+                options[field] = form_json(form, field)
                 continue
             try:
                 options[field] = float(text)
             except ValueError:
                 raise InputError(field, f"must be a number, got {text!r}") from None
-        return data, name or None, getattr(files[0], "content_type", None), options
+        return source["library"], source["file_name"], source["content_type"], options
     finally:
         await form.close()
 

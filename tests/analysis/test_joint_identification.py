@@ -1,6 +1,6 @@
 """Joint identification on synthetic RA-1 measurements: accuracy, honesty, request checks, CLI.
 
-RA-1 is computed with the seed paper's Table 2 joint values (``domain.md`` §1.1 — they are
+RA-1 is computed with the seed paper's Table 2 joint values (``docs/physics.md`` §1.1 — they are
 RA-1's values), 1 % relative complex noise is added (seeded), and the identification starts
 3× off in both joints' k_t and c_t.
 """

@@ -1,8 +1,8 @@
 """Finite-element model of a spindle-holder-tool assembly given as a contract dict.
 
-Parses the assembly JSON of ``contract.md`` itself (no code shared with ``rcsa``) and builds a
+Parses the assembly JSON of ``docs/contract.md`` itself (no code shared with ``rcsa``) and builds a
 :class:`~tests.oracles.timoshenko_fe.BeamModel`. Geometry, with x = 0 at the gauge line
-(spindle nose face) and x growing toward the tool tip (``domain.md`` §2.1):
+(spindle nose face) and x growing toward the tool tip (``docs/physics.md`` §2.1):
 
 * spindle segments listed nose -> rear occupy ``[-L_spindle, 0]``; bearings at
   ``x = -position_m`` are spring-dampers to ground (translational, and rotational if given);
@@ -17,7 +17,7 @@ Parses the assembly JSON of ``contract.md`` itself (no code shared with ``rcsa``
   ``diag(k_t + i omega c_t, k_r + i omega c_r)``; a joint left out, or a stiffness left
   out, is rigid (the DOF is shared).
 
-Physical "effects" for the withheld-effect benchmark (``diagnosis.md`` §2, §5) are switched
+Physical "effects" for the withheld-effect benchmark (``docs/diagnosis.md`` §2, §5) are switched
 on by the ``effects`` mapping; every key is optional:
 
 ``"beam_theory"``: ``{"spindle" | "holder" | "tool": "timoshenko" | "euler_bernoulli"}``
@@ -343,7 +343,7 @@ def build_assembly_model(assembly: Mapping[str, Any], *, damped: bool = True,
     Parameters
     ----------
     assembly : mapping
-        Assembly in the contract format (``contract.md``, "Assembly").
+        Assembly in the contract format (``docs/contract.md``, "Assembly").
     damped : bool
         False sets every loss factor and damper to zero (for natural frequencies).
     effects : mapping, optional

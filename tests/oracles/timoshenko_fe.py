@@ -12,7 +12,7 @@ check of it. It provides
 * solvers: undamped natural frequencies (``scipy.linalg.eigh``) and harmonic receptances
   by a banded solve per frequency.
 
-Conventions (``domain.md`` §2.1): global axis x from the spindle rear to the tool tip; per
+Conventions (``docs/physics.md`` §2.1): global axis x from the spindle rear to the tool tip; per
 node a lateral displacement ``w`` (m) and a section rotation ``psi`` (rad, counter-clockwise
 positive, ``psi = dw/dx`` for Euler-Bernoulli); time dependence ``exp(i omega t)``. Material
 damping is hysteretic, ``E(1 + i eta)`` and ``G(1 + i eta)``, i.e. complex ``EI`` and
@@ -82,7 +82,7 @@ class Section:
     rotary_inertia_kg_m: float
 
     def __add__(self, other: Section) -> Section:
-        """Parallel (composite) stacking: every property adds (``domain.md`` §2.6)."""
+        """Parallel (composite) stacking: every property adds (``docs/physics.md`` §2.6)."""
         return Section(
             self.bending_stiffness_nm2 + other.bending_stiffness_nm2,
             self.shear_stiffness_n + other.shear_stiffness_n,
@@ -190,7 +190,7 @@ def shear_parameter(length_m: float, section: Section, theory: BeamTheory = "tim
 
 def element_stiffness(length_m: float, section: Section,
                       theory: BeamTheory = "timoshenko") -> np.ndarray:
-    """Static-exact two-node Timoshenko stiffness matrix (``domain.md`` §2.4).
+    """Static-exact two-node Timoshenko stiffness matrix (``docs/physics.md`` §2.4).
 
     Parameters
     ----------

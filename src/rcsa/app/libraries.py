@@ -78,7 +78,7 @@ def _check_tools(n: int, limit: int) -> None:
 def prepare_batch(bench: Workbench, request: Mapping[str, Any],
                   refused: Mapping[int, Mapping[str, str]] | None = None,
                   tool_point: list[str] | None = None, result_format: Format = "json") -> Work:
-    """A batch request (``contract.md`` "Batch"), read and sized: work of kind ``batch``.
+    """A batch request (``docs/contract.md`` "Batch"), read and sized: work of kind ``batch``.
 
     Parameters
     ----------

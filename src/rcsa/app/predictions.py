@@ -7,7 +7,6 @@ objects, validates at the edge, and never depends on how it was reached.
 from __future__ import annotations
 
 import threading
-from collections import OrderedDict
 from collections.abc import Mapping, Sequence
 from typing import Any, Literal
 
@@ -24,6 +23,7 @@ from rcsa.model.prediction import Prediction
 from rcsa.model.reference import ra1
 from rcsa.model.spindle_side import SpindleSide, ToolPointDraws
 from rcsa.model.uncertainty import UncertaintyOptions, parse_prediction_request, parse_uncertainty
+from rcsa.physics.subassembly_cache import LruStore
 
 __all__ = ["EXAMPLE_ASSEMBLIES", "PREFIXES_PER_SIDE", "SIDES", "SIDES_KEPT", "SpindleSides", "example_assembly",
            "predict", "predict_batch", "predict_draws", "prediction_document"]
@@ -58,6 +58,7 @@ def example_assembly(name: str, frequency: Mapping[str, Any] | None = None) -> d
         raise NotFoundError("example", name)
     return build(dict(frequency) if frequency is not None else None)
 
+
 #: Spindle sides :func:`predict` keeps across calls in a process (least recently used dropped).
 SIDES_KEPT = 8
 #: Condensed chains (spindle + holder prefixes) one kept side may hold before it is dropped.
@@ -86,7 +87,8 @@ class SpindleSides:
 
     def __init__(self, size: int = SIDES_KEPT) -> None:
         self.size = int(size)
-        self._items: OrderedDict[tuple[int, bytes], tuple[Any, SpindleSide]] = OrderedDict()
+        # the package's one eviction policy (least recently used first), as the sides' own caches
+        self._items: LruStore[tuple[int, bytes], tuple[Any, SpindleSide]] = LruStore(self.size)
         self._lock = threading.Lock()
 
     def side(self, document: Mapping[str, Any], common: CommonSpec,
@@ -109,20 +111,15 @@ class SpindleSides:
         # a measured spindle's file as it is now: a side computed from another state of it is not used
         identity = _identity(store, common.spindle.measurement_id) if measured else ()  # type: ignore[union-attr]
         with self._lock:
-            kept = self._items.get(key)
-            if kept is not None:
-                self._items.move_to_end(key)
+            kept = self._items.peek(key)
         hit = kept[1] if kept is not None and identity is not None and kept[0] == identity else None
         if hit is None:  # new, or deleted, replaced or damaged since: resolve again (as a fresh request would)
             hit = SpindleSide(common, resolver(store))
         with self._lock:
             if len(hit.cache) > PREFIXES_PER_SIDE or identity is None:
-                self._items.pop(key, None)
+                self._items.pop(key)
                 return hit
-            self._items[key] = (identity, hit)
-            self._items.move_to_end(key)
-            while len(self._items) > self.size:
-                self._items.popitem(last=False)
+            self._items.put(key, (identity, hit))
         return hit
 
 
@@ -142,7 +139,7 @@ SIDES = SpindleSides()
 
 def predict(assembly: Mapping[str, Any] | AssemblySpec, *, store: MeasurementStore | None = None,
             max_lines: int = MAX_FREQUENCY_LINES) -> Prediction:
-    """Tool-point prediction of one assembly (``contract.md`` "Python API").
+    """Tool-point prediction of one assembly (``docs/contract.md`` "Python API").
 
     Parameters
     ----------

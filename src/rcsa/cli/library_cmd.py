@@ -39,7 +39,15 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rcsa.cli._common import fail, read_json, run_guarded, write_json, write_results
+from rcsa.cli._common import (
+    command_group,
+    fail,
+    read_json,
+    run_guarded,
+    write_json,
+    write_results,
+    wrote,
+)
 from rcsa.errors import InputError
 
 if TYPE_CHECKING:
@@ -48,8 +56,9 @@ if TYPE_CHECKING:
 
 __all__ = ["library_app", "register"]
 
-library_app = typer.Typer(help="Tool-point FRFs of whole CAM tool libraries.", no_args_is_help=True,
-                          add_completion=False, pretty_exceptions_enable=False)
+library_app = command_group("Tool-point FRFs of whole CAM tool libraries (Autodesk Fusion, FreeCAD): predict them, "
+                            "keep them in the store, export them, write chatter-safe presets.",
+                            short_help="Tool-point FRFs and presets of whole CAM tool libraries.")
 
 
 def parse_frequency_option(text: str) -> dict[str, Any]:
@@ -69,6 +78,11 @@ def parse_frequency_option(text: str) -> dict[str, Any]:
         raise InputError("frequency", f"{text!r}: write START:STOP:STEP in Hz, e.g. 5:5000:1, or a JSON "
                                       'object {"values_hz": [...]}') from None
     return {"start_hz": start, "stop_hz": stop, "step_hz": step}
+
+
+def _wrote_to(out: Path | None, what: str) -> str:
+    """``"wrote <what> to <out>: "`` when a result went to a file, for a command's summary line."""
+    return "" if out is None else f"wrote {what} to {out}: "
 
 
 def _spindle_document(path: Path) -> dict[str, Any]:
@@ -152,13 +166,13 @@ DaskOption = Annotated[str | None, typer.Option(
 DaskTimeoutOption = Annotated[float, typer.Option(
     "--dask-connect-timeout", envvar="RCSA_DASK_CONNECT_TIMEOUT_S", min=0.1,
     help="Seconds to try to reach the Dask scheduler before giving up.")]
-LibraryArgument = Annotated[Path, typer.Argument(help="Fusion tool library (.json, .tools) or FreeCAD toolbits "
+LibraryArgument = Annotated[Path, typer.Argument(metavar="LIBRARY", help="Fusion tool library (.json, .tools) or FreeCAD toolbits "
                                                       "(.fctb, .fctl, a folder or a zip of them).")]
 HolderOption = Annotated[Path | None, typer.Option(help="FreeCAD holder (.fcholder) for the toolbits, when the "
                                                        "library has none.")]
 
 
-@library_app.command("predict")
+@library_app.command("predict", short_help="Tool-point FRFs of every tool of a library, now.")
 def predict(
     library: LibraryArgument,
     spindle: Annotated[Path | None, typer.Option(help="Spindle JSON (segments + bearings), or an assembly "
@@ -218,9 +232,10 @@ def predict(
                                                   backend=backend)).document
         finally:
             backend.close()
-    write_results(result, out, "library")
+    write_results(result, out, "library", None)  # the summary line below says where
     s = result["summary"]
-    typer.echo(f"{s['ok']} ok, {s['skipped']} skipped, {s['error']} error", err=True)
+    typer.echo(f"{_wrote_to(out, 'the library results')}{s['ok']} ok, {s['skipped']} skipped, {s['error']} error",
+               err=True)
     if s["error"]:
         for r in result["results"]:
             if r["status"] == "error":
@@ -232,7 +247,7 @@ StoreOption = Annotated[Path | None, typer.Option("--store", help="Store directo
                                                                    "per-user store).")]
 
 
-@library_app.command("sync")
+@library_app.command("sync", short_help="Keep a library's FRFs in the store; compute only changes.")
 def sync(
     library: LibraryArgument,
     spindle: Annotated[str, typer.Option(help="A stored measurement id (m-..., hybrid), or a spindle JSON "
@@ -302,9 +317,10 @@ def sync(
             run_guarded(lambda: write_export(library_store(store), ident, out))
         except OSError as exc:
             raise fail(f"cannot write {out}: {exc.strerror or exc}") from None
-    write_json(report, None if binary else out)
+    write_json(report, None if binary else out, None)  # the summary line below says where
     c, s = report["counts"], report["summary"]
-    typer.echo(f"{ident} revision {report['revision']}: {c['added']} added, {c['changed']} changed, "
+    written = _wrote_to(out, "the library results" if binary else "the sync report")
+    typer.echo(f"{written}{ident} revision {report['revision']}: {c['added']} added, {c['changed']} changed, "
                f"{c['unchanged']} unchanged, {c['removed']} removed ({report['computed']} computed, "
                f"{report['from_cache']} from cache; {s['ok']} ok, {s['skipped']} skipped, {s['error']} error)",
                err=True)
@@ -315,21 +331,21 @@ def sync(
         raise typer.Exit(1)
 
 
-@library_app.command("show")
+@library_app.command("show", short_help="A stored library's summary and every tool's status.")
 def show(
-    library_id: Annotated[str, typer.Argument(help="Id of a stored library.")],
+    library_id: Annotated[str, typer.Argument(metavar="LIBRARY_ID", help="Id of a stored library.")],
     store: StoreOption = None,
     out: Annotated[Path | None, typer.Option("-o", "--out", help="Write here instead of stdout.")] = None,
 ) -> None:
     """Print a stored library's summary and every tool's status (JSON)."""
     # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
     from rcsa.app.stores import library_store
-    write_json(run_guarded(lambda: library_store(store).get(library_id)), out)
+    write_json(run_guarded(lambda: library_store(store).get(library_id)), out, "the library summary")
 
 
-@library_app.command("export")
+@library_app.command("export", short_help="Write a stored library's results: HDF5, Parquet, UFF zip, JSON.")
 def export(
-    library_id: Annotated[str, typer.Argument(help="Id of a stored library.")],
+    library_id: Annotated[str, typer.Argument(metavar="LIBRARY_ID", help="Id of a stored library.")],
     out: Annotated[Path, typer.Option("-o", "--out", help="FILE.h5 (HDF5), FILE.parquet (needs rcsa[parquet]), "
                                                           "FILE.zip (one UFF 58 file per tool) or FILE.json.")],
     store: StoreOption = None,
@@ -345,12 +361,12 @@ def export(
     except OSError as exc:
         raise fail(f"cannot write {out}: {exc.strerror or exc}") from None
     ok = export.ok
-    typer.echo(f"{out}: {ok} tool{'s' if ok != 1 else ''} of {library_id} revision {export.revision}", err=True)
+    wrote(out, f"{ok} tool{'s' if ok != 1 else ''} of {library_id} revision {export.revision}")
 
 
-@library_app.command("recommend")
+@library_app.command("recommend", short_help="Write chatter-safe presets into a Fusion library.")
 def recommend(
-    library: Annotated[Path, typer.Argument(help="Autodesk Fusion tool library (.json or .tools).")],
+    library: Annotated[Path, typer.Argument(metavar="LIBRARY", help="Autodesk Fusion tool library (.json or .tools).")],
     material: Annotated[str, typer.Option(help="Workpiece material: a table entry (aluminium-7075, aluminium-6082, "
                                                "carbon-steel, ...; see the README) or your own name with "
                                                "--tangential-coefficient-n-m2 and --radial-ratio.")],
@@ -439,7 +455,7 @@ def recommend(
         write_preset_file(result, target)  # type: ignore[arg-type]
     except OSError as exc:
         raise fail(f"cannot write {target}: {exc.strerror or exc}") from None
-    write_json(result.report, report)
+    write_json(result.report, report, "the recommendation report")
     for t in result.report["tools"]:
         if t["status"] == "written":
             sd = t["stepdown"]
@@ -457,4 +473,4 @@ def recommend(
 
 def register(app: typer.Typer) -> None:
     """Add ``rcsa library ...`` to ``app``."""
-    app.add_typer(library_app, name="library", help="Tool-point FRFs of whole CAM tool libraries.")
+    app.add_typer(library_app, name="library")

@@ -14,7 +14,7 @@ import typer
 def register(app: typer.Typer) -> None:
     """Add the ``serve`` command to ``app``."""
 
-    @app.command()
+    @app.command(short_help="Run the REST service and its web view.")
     def serve(
         host: Annotated[str, typer.Option(help="Interface to bind.")] = "127.0.0.1",
         port: Annotated[int, typer.Option(help="TCP port.")] = 8000,
@@ -26,7 +26,7 @@ def register(app: typer.Typer) -> None:
         """Run the REST service (uvicorn) with the store from RCSA_STORE or the default location.
 
         The settings, the store and the Dask scheduler are checked once first (the service's
-        own start-up, ``python -m service.preflight``): a service that cannot start exits 1 with
+        own start-up, python -m service.preflight): a service that cannot start exits 1 with
         the reason instead of leaving its workers to fail (uvicorn then exits 0).
         """
         if dask_scheduler:

@@ -4,7 +4,7 @@ A Fusion library is ``{"data": [...], "version": n}`` (``.json``), or the same J
 ``tools.json`` in a zip (``.tools``). Each ``data`` item is a cutting tool, possibly with its
 holder embedded under ``"holder"``, or a standalone holder (``"type": "holder"``).
 :func:`library_combinations` turns every item into one :class:`Combination` whose ``holder``
-and ``tool`` are in the contract's assembly format (SI metres, ``contract.md``). This module
+and ``tool`` are in the contract's assembly format (SI metres, ``docs/contract.md``). This module
 reads the library and maps items; the geometry of one item is
 :mod:`rcsa.libraries.fusion_geometry`.
 

@@ -1,6 +1,6 @@
 """From a validated :class:`~rcsa.model.contract.AssemblySpec` to the beam chain that is solved.
 
-Modelling rules (``contract.md`` "Assembly", ``domain.md`` §1.3, §5):
+Modelling rules (``docs/contract.md`` "Assembly", ``docs/physics.md`` §1.3, §5):
 
 * Spindle segments are listed nose → rear; the chain runs rear → nose (global axis).
   Bearings are springs/dampers to ground at their position; a segment is split where a
@@ -271,7 +271,7 @@ def holder_chain(holder: HolderSpec, tool: ToolSpec, materials: Mapping[str, Mat
 
 def fluted_section(tool: ToolSpec, material: Material, shear: ShearModel | float,
                    theory: BeamTheory) -> Section:
-    """Equivalent section of the fluted part: stiffness from d_I, mass from d_A (``domain.md`` §5.1)."""
+    """Equivalent section of the fluted part: stiffness from d_I, mass from d_A (``docs/physics.md`` §5.1)."""
     d_i = tool.fluted_diameter_ratio * tool.diameter_m
     d_a = (tool.fluted_mass_diameter_ratio or tool.fluted_diameter_ratio) * tool.diameter_m
     stiff = tube(d_i, 0.0, material, shear, theory)

@@ -1,6 +1,6 @@
 """The contract's assembly document, parsed into immutable, validated specifications.
 
-Every rule of ``contract.md`` "Assembly" is checked here, once, at the edge; a violation
+Every rule of ``docs/contract.md`` "Assembly" is checked here, once, at the edge; a violation
 raises :class:`~rcsa.errors.InputError` naming the field (dotted path) and the rule. The
 numerical code downstream never sees an unchecked value.
 """
@@ -195,14 +195,14 @@ class HolderSpec:
 
 @dataclass(frozen=True, slots=True)
 class ToolSpec:
-    """Parametric tool (ISO 13399 / Fusion meaning; ``contract.md`` "Assembly").
+    """Parametric tool (ISO 13399 / Fusion meaning; ``docs/contract.md`` "Assembly").
 
     ``shoulder_length_m``/``shoulder_diameter_m`` (extension) describe a reduced neck from
     the flute end up to ``shoulder_length_m`` from the tip; ``neck_segments`` (extension,
     instead of them) a stepped neck as ``(length_m, diameter_m)`` pieces from the flute end
     toward the holder (a conical neck, stepped). ``fluted_mass_diameter_ratio``
     (extension) uses a separate equivalent diameter for the flutes' mass (default: the
-    stiffness one, ``domain.md`` §5.1).
+    stiffness one, ``docs/physics.md`` §5.1).
 
     Parameters
     ----------
@@ -319,7 +319,7 @@ class ClampingSpec:
 
 @dataclass(frozen=True, slots=True)
 class AssemblySpec:
-    """A validated assembly document (``contract.md`` "Assembly").
+    """A validated assembly document (``docs/contract.md`` "Assembly").
 
     Parameters
     ----------
@@ -841,7 +841,7 @@ def parse_assembly(document: object, max_lines: int = MAX_FREQUENCY_LINES) -> As
     Parameters
     ----------
     document : dict
-        The assembly as in ``contract.md`` "Assembly" (SI units).
+        The assembly as in ``docs/contract.md`` "Assembly" (SI units).
     max_lines : int
         Largest accepted number of frequency lines.
 

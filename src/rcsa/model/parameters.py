@@ -100,7 +100,7 @@ def set_parameter(spec: AssemblySpec, name: str, value: float) -> AssemblySpec:
 
     The value is set as given, so a derivative may be taken at a bound (e.g. a fluted
     diameter ratio of exactly 1). A stickout change keeps the overall length: the inserted
-    length changes with it (``contract.md`` "Assembly").
+    length changes with it (``docs/contract.md`` "Assembly").
 
     Parameters
     ----------

@@ -1,7 +1,7 @@
 """Nuisance tolerances: what the base model is known to be uncertain about, and draws of it.
 
-One definition shared by the diagnosis (its discrepancy covariance, ``diagnosis.md`` §4.3)
-and by predictions with uncertainty bands (``contract.md`` "Additions in v1.1"): the
+One definition shared by the diagnosis (its discrepancy covariance, ``docs/diagnosis.md`` §4.3)
+and by predictions with uncertainty bands (``docs/contract.md`` "Additions in v1.1"): the
 tolerance names, their defaults (one standard deviation), the order in which a random
 generator draws them, and how a draw changes an assembly.
 

@@ -4,7 +4,7 @@ Everything here is plain immutable data (SI units in every name) and its validat
 geometry is turned into solids by :mod:`tests.oracles.solid3d.geometry`.
 
 Axis and frames: z runs from the holder's base face (the gauge line, z = 0) toward the tool
-tip, i.e. rcsa's global axis (``domain.md`` §2.1, spindle rear → tool tip). The tool-point
+tip, i.e. rcsa's global axis (``docs/physics.md`` §2.1, spindle rear → tool tip). The tool-point
 FRF is taken in the x–z plane: w = u_x, ψ = dw/dz = rotation about +y.
 """
 
@@ -59,7 +59,7 @@ class SolidMaterial:
             raise ValueError("loss_factor must be >= 0")
 
 
-#: rcsa's built-in ``steel`` (contract.md "Materials")
+#: rcsa's built-in ``steel`` (docs/contract.md "Assembly": materials)
 STEEL = SolidMaterial(210e9, 0.30, 7850.0, 0.002)
 #: rcsa's built-in ``carbide``
 CARBIDE = SolidMaterial(600e9, 0.22, 14500.0, 0.002)
@@ -132,7 +132,7 @@ class Flutes:
 
 @dataclass(frozen=True, slots=True)
 class ToolGeometry:
-    """The tool, in the contract's meaning (``contract.md`` "Tool").
+    """The tool, in the contract's meaning (``docs/contract.md`` "Assembly": tool).
 
     Parameters
     ----------
@@ -269,7 +269,7 @@ class SolidCase:
     Parameters
     ----------
     holder_segments : tuple of HolderSegment
-        From the gauge line toward the tool end (``contract.md`` ``holder.segments``).
+        From the gauge line toward the tool end (``docs/contract.md`` "Assembly": ``holder.segments``).
     tool : ToolGeometry
     holder_material, tool_material : SolidMaterial
     interface : Interface

@@ -1,4 +1,4 @@
-"""The 3-D reference on plain rods against Timoshenko beam theory (``domain.md`` §6, O4, O5).
+"""The 3-D reference on plain rods against Timoshenko beam theory (``docs/physics.md`` §6, O4, O5).
 
 Free-free rods are meshed as quarter models (bending in x); their first three elastic
 natural frequencies must lie within 0.5 % of exact Timoshenko theory (Hutchinson's κ), the

@@ -3,7 +3,7 @@
 Each candidate has one or two physically bounded parameters with a uniform prior, a null
 value at which the model *is* the base model, and a pure ``apply(knobs, values) -> knobs``.
 Parameters are shared by all measurements (a joint stiffness does not change with the
-stickout). Bounds follow ``diagnosis.md`` §2:
+stickout). Bounds follow ``docs/diagnosis.md`` §2:
 
 ================================  =========================================  ==============
 effect                            parameters (prior range)                   null
@@ -37,7 +37,7 @@ spindle_rotational_receptance     residual compliance added to the spindle's   0
 Speed-dependent effects are listed in :data:`NOT_OBSERVABLE_AT_STANDSTILL`; they are never
 candidates for a standstill tap test.
 
-On a **measured spindle** (hybrid, ``domain.md`` §4) the catalogue changes where the
+On a **measured spindle** (hybrid, ``docs/physics.md`` §4) the catalogue changes where the
 physics does (:func:`not_applicable` gives each excluded effect its reason):
 
 * ``bearings`` is not applicable: the bearings are inside the measured receptance;

@@ -10,8 +10,9 @@ measurement's tool, knobs) into the three sub-chains that are solved one after t
     measured, holder_tip:   (measured receptance)           | corrections at the holder tip      | HT joint, tool, tip mass
 
 and :class:`Solver` condenses them item by item (each chain item's own elimination step; a
-measured receptance is absorbed, never inverted), caching the condensed state after the
-spindle and after the middle sub-chain and each beam's stiffness terms. The builder hands
+measured receptance is absorbed, never inverted), keeping the condensed state after the
+spindle and after the middle sub-chain and each beam's stiffness terms in the one
+subassembly cache (:class:`rcsa.physics.subassembly_cache.SubassemblyCache`). The builder hands
 out the very same sub-chain objects for equal inputs, so a change of a tool-side knob costs
 three beams per measurement, not the twenty of the whole chain.
 
@@ -21,7 +22,7 @@ different, physical realisations, see ``tests/analysis/diagnosis/truth.py``):
 * ``shear_scale`` multiplies the shear flexibility 1/(κGA) and the rotary inertia ρI of every
   Timoshenko section (0 = Euler–Bernoulli, 1 = Timoshenko with the assembly's κ).
 * ``fluted_stiffness_ratio`` / ``fluted_mass_ratio`` are the fluted section's equivalent
-  diameters over DC for EI (and ρI) and for ρA (``domain.md`` §5.1).
+  diameters over DC for EI (and ρI) and for ρA (``docs/physics.md`` §5.1).
 * ``tip_mass_kg`` is a point mass (no rotary inertia) on the tool, ``tip_mass_distance_m``
   behind the tip (the last beam is split there).
 * ``insertion_offset_m`` moves the clamping point that far into the holder: the holder's last
@@ -50,7 +51,6 @@ different, physical realisations, see ``tests/analysis/diagnosis/truth.py``):
 
 from __future__ import annotations
 
-from collections import OrderedDict
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from functools import lru_cache
@@ -69,13 +69,11 @@ from rcsa.model.contract import (
     ToolSpec,
 )
 from rcsa.model.tolerances import scaled_joint
-from rcsa.physics.algebra2x2 import inv2
 from rcsa.physics.arrays import ComplexArray, FloatArray, IntArray
-from rcsa.physics.chain import Beam, Chain, ChainItem, Grid, Ground, Sym
-from rcsa.physics.insertion import Insertion
+from rcsa.physics.chain import Beam, Chain, ChainItem, Ground
 from rcsa.physics.materials import Material
 from rcsa.physics.sections import Section
-from rcsa.physics.segments import SixTerms, Waves, segment_terms
+from rcsa.physics.subassembly_cache import Condensed, SubassemblyCache
 
 __all__ = ["AddedCompliance", "BaseReceptance", "Knobs", "Parts", "PartsBuilder", "RotationRescale", "Solver",
            "config_parts", "null_shear_scale"]
@@ -113,40 +111,6 @@ class Knobs:
     nose_rotational_residual_rad_nm: float = 0.0
     base_rotation_scale: float = 1.0
     base_rotation_shape: float = 1.0
-
-
-class _BeamTermsGrid(Grid):
-    """A grid that keeps the six stiffness terms of the most recently used beams, and the
-    wavenumbers of the most recently used sections (beams of one section share them: the
-    shank of every stickout, the pieces of a split segment)."""
-
-    def __init__(self, omega_rad_s: FloatArray, max_beams: int) -> None:
-        super().__init__(omega_rad_s)
-        self._terms = lru_cache(maxsize=max_beams)(self._segment_terms)
-        self._section_waves = lru_cache(maxsize=max_beams // 4)(lambda section: Waves(self.omega_rad_s, section))
-        self._two_ports = lru_cache(maxsize=max(max_beams // 8, 8))(self._insertion_two_port)
-
-    def _insertion_two_port(self, item: Insertion) -> ComplexArray:
-        d = item.two_port(self.omega_rad_s)
-        d.flags.writeable = False
-        return d
-
-    def insertion_two_port(self, item: Insertion) -> ComplexArray:
-        """A clamping's two-port dynamic stiffness (nfreq, 4, 4), cached by value: a candidate
-        that changes what lies before the holder (bearings, the spindle–holder joint, a nose
-        correction) re-uses it instead of re-condensing the insertion."""
-        return self._two_ports(item)  # type: ignore[no-any-return]
-
-    def waves(self, section: Section) -> Waves:
-        """Wavenumbers of ``section`` (bounded cache: the Monte Carlo makes new sections all the time)."""
-        return self._section_waves(section)  # type: ignore[no-any-return]
-
-    def _segment_terms(self, beam: Beam) -> SixTerms:
-        return segment_terms(self.omega_rad_s, beam.section, beam.length_m, self.waves(beam.section))
-
-    def beam_terms(self, beam: Beam) -> SixTerms:
-        """Six-term dynamic stiffness of ``beam``, cached by beam (section and length)."""
-        return self._terms(beam)
 
 
 def null_shear_scale(spec: AssemblySpec) -> float:
@@ -431,48 +395,6 @@ def config_parts(spec: AssemblySpec, tool: ToolSpec, k: Knobs, plane: str | None
     return PartsBuilder(spec, plane, base).parts(tool, k)
 
 
-#: Condensed state after a prefix of a chain: the stiffness seen from the right (a Sym), or —
-#: while no beam has turned a measured base into a stiffness yet — its receptance (nfreq, 2, 2).
-_State = tuple[Sym | None, ComplexArray | None]
-
-
-def _insertion_step(state: _State, d: ComplexArray) -> _State:
-    """Across a two-port ``d`` (nfreq, 4, 4): ``K ← D22 − D21 (K + D11)⁻¹ D12``, or from a
-    compliance ``S``: ``D22 − D21 S (I + D11 S)⁻¹ D12`` (never inverting ``S``)."""
-    k, s = state
-    if s is not None:
-        x = s @ inv2(np.eye(2) + d[:, :2, :2] @ s)
-    else:
-        assert k is not None
-        p = np.array(d[:, :2, :2])
-        p[:, 0, 0] += k[0]
-        p[:, 0, 1] += k[1]
-        p[:, 1, 0] += k[1]
-        p[:, 1, 1] += k[2]
-        x = inv2(p)
-    out = d[:, 2:, 2:] - d[:, 2:, :2] @ x @ d[:, :2, 2:]
-    return (out[:, 0, 0], 0.5 * (out[:, 0, 1] + out[:, 1, 0]), out[:, 1, 1]), None
-
-
-def _advance(state: _State, chain: Chain, grid: Grid) -> _State:
-    """Carry the condensed state across ``chain`` (each item's own elimination step)."""
-    k, s = state
-    for item in chain:
-        if isinstance(item, Insertion) and isinstance(grid, _BeamTermsGrid):
-            k, s = _insertion_step((k, s), grid.insertion_two_port(item))
-            continue
-        if s is not None:
-            out, is_stiffness = item.absorb_compliance(s, grid)
-            if is_stiffness:
-                k, s = (out[:, 0, 0], 0.5 * (out[:, 0, 1] + out[:, 1, 0]), out[:, 1, 1]), None
-            else:
-                s = out
-        else:
-            assert k is not None
-            k, _ = item.eliminate(k, grid)
-    return k, s
-
-
 class Solver:
     """Tool-point ``h`` of many configurations on one frequency grid, with caches.
 
@@ -480,10 +402,11 @@ class Solver:
     plane) to the tool tip, each item doing its own elimination step
     (:meth:`rcsa.physics.chain.ChainItem.eliminate`, and
     :meth:`~rcsa.physics.chain.ChainItem.absorb_compliance` on a measured base, which is never
-    inverted), with two caches: the condensed state after the spindle and after the middle
-    sub-chain (keyed by the identity of the base and of the sub-chain objects, which
-    :class:`PartsBuilder` shares), and the six stiffness terms of each beam (keyed by section
-    and length), so a changed joint or tool re-uses every beam.
+    inverted), on one :class:`~rcsa.physics.subassembly_cache.SubassemblyCache`: the condensed
+    state after the spindle and after the middle sub-chain (found by the identity of the base
+    and of the sub-chain objects, which :class:`PartsBuilder` shares), and the six stiffness
+    terms of each beam (keyed by section and length), so a changed joint or tool re-uses every
+    beam. What the cache hands out is read-only; nothing is copied to stay safe.
 
     Parameters
     ----------
@@ -496,53 +419,26 @@ class Solver:
     def __init__(self, frequency_hz: FloatArray, cache_size: int = 128) -> None:
         self.frequency_hz = np.asarray(frequency_hz, dtype=float)
         self.omega_rad_s = 2.0 * np.pi * self.frequency_hz
-        self._grid = _BeamTermsGrid(self.omega_rad_s, 4 * cache_size)
-        self._cache_size = cache_size
-        self._states: OrderedDict[tuple[int, ...], tuple[tuple[object, ...], _State]] = OrderedDict()
-        zero = np.zeros(self.omega_rad_s.size, dtype=complex)
-        zero.flags.writeable = False
-        self._free: _State = ((zero, zero, zero), None)
+        self._cache = SubassemblyCache(self.omega_rad_s, max_states=cache_size, max_beams=4 * cache_size)
         self.evaluations = 0
 
-    def _state(self, base: BaseReceptance | None, chains: tuple[Chain, ...]) -> _State:
-        """Condensed state after ``chains`` on ``base`` (cached by identity)."""
-        if not chains:
-            return self._free if base is None else (None, base.compliance)
-        objs = (base, *chains)
-        key = tuple(id(o) for o in objs)
-        hit = self._states.get(key)
-        if hit is not None and all(a is b for a, b in zip(hit[0], objs, strict=True)):
-            self._states.move_to_end(key)
-            return hit[1]
-        k, s = _advance(self._state(base, chains[:-1]), chains[-1], self._grid)
-        # an elimination step writes into the grid's work arrays, which the next step reuses:
-        # the cached state is a copy of them
-        k = None if k is None else (k[0].copy(), k[1].copy(), k[2].copy())
-        for arr in (*(k or ()), *(() if s is None else (s,))):
-            arr.flags.writeable = False  # shared by every later configuration with this prefix
-        self._states[key] = (objs, (k, s))
-        while len(self._states) > self._cache_size:
-            self._states.popitem(last=False)
-        return k, s
+    def _state(self, parts: Parts) -> Condensed:
+        """Condensed state after the spindle and the middle sub-chain (cached by identity)."""
+        base = None if parts.base is None else parts.base.compliance
+        return self._cache.condensed((parts.spindle, parts.middle), base)
 
     def tip_h(self, parts: Parts, lines: IntArray | slice = slice(None)) -> ComplexArray:
         """Driving-point tool-tip receptance ``h`` (m/N), shape (nlines,)."""
-        k, s = _advance(self._state(parts.base, (parts.spindle, parts.middle)), parts.tool, self._grid)
+        h = self._cache.tip_h(self._state(parts), parts.tool)
         self.evaluations += 1
-        if k is None:
-            assert s is not None
-            return s[:, 0, 0][lines]
-        k11, k12, k22 = k
-        return (k22 / (k11 * k22 - k12 * k12))[lines]
+        return h[lines]
 
     def tip_h_many(self, parts: Sequence[Parts], lines: IntArray | slice = slice(None)) -> ComplexArray:
         """:meth:`tip_h` of many configurations, shape (n, nlines)."""
         return np.stack([self.tip_h(p, lines) for p in parts])
 
     def nose_stiffness(self, parts: Parts) -> ComplexArray:
-        """Condensed dynamic stiffness of an analytical spindle at its nose, shape (nfreq, 2, 2)."""
-        k, _ = self._state(parts.base, (parts.spindle,))
+        """Condensed dynamic stiffness of an analytical spindle at its nose, shape (nfreq, 2, 2), read-only."""
+        k = self._cache.condensed((parts.spindle,)).stiffness
         assert k is not None
-        out = np.empty((self.omega_rad_s.size, 2, 2), dtype=complex)
-        out[:, 0, 0], out[:, 0, 1], out[:, 1, 0], out[:, 1, 1] = k[0], k[1], k[1], k[2]
-        return out
+        return k

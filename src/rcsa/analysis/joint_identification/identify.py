@@ -42,7 +42,7 @@ Speed: the model of each measurement is a
 terms kept once per grid, so a new joint value costs a few 2×2 operations per line — and
 every Jacobian is one stacked evaluation of all its finite-difference points.
 
-**Measured spindles** (``"spindle": {"measurement_id": ...}``, ``domain.md`` §4): the same
+**Measured spindles** (``"spindle": {"measurement_id": ...}``, ``docs/physics.md`` §4): the same
 procedure on the hybrid model. At ``spindle_nose`` both joints are identifiable; at
 ``holder_tip`` the spindle–holder joint is inside the measurement and is reported under
 ``not_applicable``. The measured base's own uncertainty enters twice. Its noise (an
@@ -560,7 +560,7 @@ def identify(request: Mapping[str, Any], resolve_base: BaseResolver | None = Non
     request : dict
         ``{"assembly": {...}, "measurements": [{"tool": {...}, "frequency_hz": [...],
         "h": {"real": [...], "imag": [...]}, "coherence": [...]}], "bounds": {...},
-        "max_residual_to_noise": 4.0}`` (``contract.md`` "Joint identification";
+        "max_residual_to_noise": 4.0}`` (``docs/contract.md`` "Joint identification";
         ``bounds`` and ``max_residual_to_noise`` optional). The assembly's spindle may be
         ``{"measurement_id": ...}`` when ``resolve_base`` is given.
     resolve_base : BaseResolver, optional

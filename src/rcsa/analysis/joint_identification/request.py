@@ -1,4 +1,4 @@
-"""Validation of a joint-identification request (``contract.md`` "Joint identification").
+"""Validation of a joint-identification request (``docs/contract.md`` "Joint identification").
 
 The request is a base assembly (its joints are the starting guess) and one or more measured
 tool-point FRFs, each of the base assembly with some ``tool`` fields overridden::
@@ -10,7 +10,7 @@ tool-point FRFs, each of the base assembly with some ``tool`` fields overridden:
      "max_residual_to_noise": 4.0}                              # optional
 
 The assembly's spindle may be a stored measurement (``"spindle": {"measurement_id": ...}``,
-``contract.md`` "Additions in v1.1"); the caller then passes a
+``docs/contract.md`` "Additions in v1.1"); the caller then passes a
 :data:`~rcsa.model.spindle_side.BaseResolver` (the application layer knows the store), and
 the spindle is resolved once on all the measurements' lines. On a ``holder_tip``
 measurement the spindle–holder joint is inside the measurement: it is not applicable
