@@ -57,7 +57,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from rcsa.analysis.diagnosis.chain_items import AddedCompliance, RotationRescale
+from rcsa.analysis.diagnosis.chain_items import AddedCompliance, CachedInsertion, RotationRescale
 from rcsa.model.assembly import holder_chain, joint_spring, spindle_chain, tool_chain
 from rcsa.model.contract import (
     AssemblySpec,
@@ -71,6 +71,7 @@ from rcsa.model.contract import (
 from rcsa.model.tolerances import scaled_joint
 from rcsa.physics.arrays import ComplexArray, FloatArray, IntArray
 from rcsa.physics.chain import Beam, Chain, ChainItem, Ground
+from rcsa.physics.insertion import Insertion
 from rcsa.physics.materials import Material
 from rcsa.physics.sections import Section
 from rcsa.physics.subassembly_cache import Condensed, SubassemblyCache
@@ -340,7 +341,8 @@ class PartsBuilder:
                                            k.sh_damping_scale))
             if sh is not None:
                 items.append(sh)
-            items.extend(shear_scaled(_holder_chain(holder, tool_of(), mats, shear, theory, clamping)))
+            items.extend(CachedInsertion(item) if isinstance(item, Insertion) else item
+                         for item in shear_scaled(_holder_chain(holder, tool_of(), mats, shear, theory, clamping)))
             if ring is not None:
                 items.append(ring)
             return tuple(items)
