@@ -157,8 +157,12 @@ def test_an_exact_spindle_is_not_blamed_for_the_first_effects_remainder(store, m
     The remainder after ``sensor_mass`` would go to ``spindle_rotational_receptance`` as a
     second effect (shown by forcing the spindle's share to 1); the stored spindle's 0.3 % noise
     accounts for about 1 % of the scatter expected along that remainder, so the gate refuses it.
-    (Catalogue restricted to the two, so the second-effect search sees the rotational one.)
+    (Catalogue restricted to the two, so the second-effect search sees the rotational one; the
+    claims judged at the stated tolerances — ``remainder_scale`` pinned to 1 — so that only the
+    spindle gate decides: with two effects at once the first one's remainder would otherwise
+    widen Σ.)
     """
+    monkeypatch.setattr(state.Analysis, "remainder_scale", lambda self, f: 1.0)
     st, ids = store
     r0 = nose_receptance()[0].real
     req = hybrid_request(ids, "point_receptance", "spindle_nose",
