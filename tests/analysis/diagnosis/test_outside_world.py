@@ -238,3 +238,17 @@ def test_no_effect_scattering_twice_the_stated_tolerances_is_rarely_blamed_on_an
             claims.append((r["verdict"]["effect"], r["effects"][0]["held_out_gap_ratio"]))
     assert len(claims) <= 1, claims
     assert all(ratio is None or ratio > 0.5 for _, ratio in claims), claims
+
+
+@pytest.mark.slow
+def test_a_stiff_given_joint_reaches_the_3d_clampings_rotational_compliance():
+    """3-D bonded truth, point base with a stiff joint (1e8 N·m/rad), only the joint as candidate:
+    the rotational stiffness's MAP lies inside the widened prior, below the old bound (1/100)."""
+    from benchmarks.diagnosis_outside import POINT_JOINT_STIFF
+
+    trial = truth_solid3d.make_solid_trial(np.random.default_rng([3, 0]), "bonded", model="point",
+                                           holder_tool=POINT_JOINT_STIFF,
+                                           options={"effects": ["holder_tool_joint"]})
+    fit = state.analyse(trial.request).fits[0]
+    assert fit.candidate.lo[1] < -4.0 and not fit.at_bound[1]
+    assert fit.map[1] < -2.2  # beyond the old lower bound (measured −2.46 ± 0.29)
