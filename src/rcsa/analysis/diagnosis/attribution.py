@@ -25,9 +25,11 @@ against the stated tolerances).
 A structured deviation — one nuisance parameter drawn beyond its stated tolerance — still
 looks like an effect under the marginal. So the verdict is then re-weighed at the scatter the
 data show once the best effect is in (``ŝ``: the remainder's χ² over the Monte-Carlo null's
-median, :meth:`rcsa.analysis.diagnosis.state.Analysis.remainder_scale`): every evidence again with Σ·ŝ²
-(``Likelihood(scale=ŝ)``). A right effect leaves ``ŝ ≈ 1`` and loses nothing; on data that
-scatter twice as stated, ``ŝ ≈ 1.5–2`` and a claim must clear τ with Σ that much wider.
+median, :meth:`rcsa.analysis.diagnosis.state.Analysis.remainder_scale`): its evidence again with Σ·ŝ²
+(``Likelihood(scale=ŝ)``) decides whether the best effect is claimed at all (and weighs a
+second effect); the ranking and the ambiguity between candidates stay at the stated Σ. A
+right effect leaves ``ŝ ≈ 1`` and loses nothing; on data that scatter twice as stated,
+``ŝ ≈ 1.5–2`` and a claim must clear τ with Σ that much wider.
 
 The integral is a trapezoid sum on a grid (25 points in 1-D, 11 × 11 in 2-D). When the
 posterior is narrower than the grid step it is redone on a fine grid over MAP ± 6 sd in 1-D

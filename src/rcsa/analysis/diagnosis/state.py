@@ -131,9 +131,11 @@ class Analysis:
             self.fits.append(fit_candidate(c, self.features_at, self.like, self.log_z0))
             report(progress, len(self.fits) + 1, steps)
         self.decision: Decision = decide(self.fits, opts.claim_threshold, opts.ambiguity_window)
-        # The evidence is judged at the scatter the data still show once the best effect is in:
+        # The claim is judged at the scatter the data still show once the best effect is in:
         # tolerances understated by ŝ make every structured nuisance deviation look like an
-        # effect, so the claims are re-weighed with Σ·ŝ² (the model features are cached).
+        # effect, so the best one must still clear τ with Σ·ŝ² (the model features are cached).
+        # The ranking and the ambiguity between candidates stay at the stated Σ: widening it
+        # would only compress the differences between them.
         self.judge, self.scatter_scale = self.like, 1.0
         if self.decision.status != "none":
             best = self.decision.ranking[0]
@@ -141,9 +143,13 @@ class Analysis:
         if self.scatter_scale > 1.0:
             self.judge = Likelihood(p.measured_features, self.disc, np.arange(n_feat), opts.likelihood,
                                     scale=self.scatter_scale)
-            self.log_z0 = float(self.judge(p.base_features))
-            self.fits = [fit_candidate(c, self.features_at, self.judge, self.log_z0) for c in self.candidates]
-            self.decision = decide(self.fits, opts.claim_threshold, opts.ambiguity_window)
+            log_z0 = float(self.judge(p.base_features))
+            best = self.decision.ranking[0]
+            if fit_candidate(best.candidate, self.features_at, self.judge, log_z0).log_bayes_factor \
+                    <= opts.claim_threshold:
+                self.log_z0 = log_z0
+                self.fits = [fit_candidate(c, self.features_at, self.judge, self.log_z0) for c in self.candidates]
+                self.decision = decide(self.fits, float("inf"), opts.ambiguity_window)
         clock.mark("candidates")
         self.folds = folds([m.tool.stickout_m for m in self.request.measurements], opts.held_out)
         self.held: dict[str, HeldOut | None] = {}
