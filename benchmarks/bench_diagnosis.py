@@ -34,6 +34,13 @@ Run::
     .venv/bin/python benchmarks/bench_diagnosis.py --trials 250 --seed 1 --workers 2
     .venv/bin/python benchmarks/bench_diagnosis.py --hybrid --trials-per-class 12 --seed 2 --workers 2
     .venv/bin/python benchmarks/bench_diagnosis.py --check-mesh
+    .venv/bin/python benchmarks/bench_diagnosis.py --solid3d --trials-per-class 4 --seed 3 --workers 2
+    .venv/bin/python benchmarks/bench_diagnosis.py --trials 100 --tolerance-scale 2 --seed 4 --workers 2 \
+        --out benchmarks/results/diagnosis_scatter2.json
+    .venv/bin/python benchmarks/bench_diagnosis.py --out-of-catalogue --trials-per-class 15 --seed 5 --workers 2
+
+The last three are the classes outside the diagnosis's own model world (issue 24;
+``benchmarks/diagnosis_outside.py`` says what each scores).
     .venv/bin/python benchmarks/bench_diagnosis.py --calibrate holder_tool
 
 The summary goes to stdout and, with every trial's record, to ``--out``
@@ -166,6 +173,14 @@ def run_hybrid_trial(index: int, effect: str, kind: str, seed: int,
     out["kind"] = kind
     out["not_applicable"] = [x["effect"] for x in r["not_applicable"]]
     return out
+
+
+def _false_claim(r: dict) -> bool:
+    """A claim (identified or ambiguous) naming no effect equivalent to the hidden one."""
+    if r["status"] == "none":
+        return False
+    named = [r["verdict"], *r["ambiguous_with"]]
+    return r["effect"] == "none" or not any(_equivalent(x, r["effect"]) for x in named)
 
 
 def _features(a: Analysis, hs: list[np.ndarray]) -> np.ndarray:
@@ -369,6 +384,10 @@ def summarise(records: list[dict]) -> dict:
         "set_accuracy_all": rate(eff, "in_set"), "set_accuracy_snr_ge_10": rate(strong, "in_set"),
         "best_ranked_snr_ge_10": float(np.mean([r["best_ranked"] == r["effect"] for r in strong])) if strong else None,
         "false_claims_on_null": float(np.mean([r["status"] != "none" for r in null])) if null else None,
+        # a verdict naming no effect of the hidden one's equivalence class (on no-effect data: any claim)
+        "false_claims_all_trials": float(np.mean([_false_claim(r) for r in records])) if records else None,
+        "false_claims_all_count": f"{sum(_false_claim(r) for r in records)}/{len(records)}",
+        "wrong_effect_claims": int(sum(_false_claim(r) for r in eff)),
         "false_claims_count": f"{sum(r['status'] != 'none' for r in null)}/{len(null)}",
         "miss_rate": float(np.mean([r["status"] == "none" for r in eff])) if eff else None,
         "by_snr": bins,
@@ -399,6 +418,7 @@ def print_summary(s: dict) -> None:
     print(f"equivalence-class: all {pct(s['equivalence_all'])}, SNR>=10 {pct(s['equivalence_snr_ge_10'])}; "
           f"set accuracy SNR>=10 {pct(s['set_accuracy_snr_ge_10'])}; best-ranked SNR>=10 "
           f"{pct(s['best_ranked_snr_ge_10'])}")
+    print(f"false claims, all trials (no effect of the hidden class named): {s['false_claims_all_count']}")
     print(f"false claims on no-effect data: {s['false_claims_count']} ({pct(s['false_claims_on_null'])}); "
           f"miss rate {pct(s['miss_rate'])}")
     for k, b in s["by_snr"].items():
@@ -536,9 +556,23 @@ def main() -> None:
                     help="only time the first diagnosis in fresh processes (examples/diagnosis.json, 5 stickouts, "
                          "3 stickouts per measured spindle), with a repeat and RA-1's prediction in each")
     ap.add_argument("--timing-child", choices=FRESH_CASES, help=argparse.SUPPRESS)
+    ap.add_argument("--solid3d", action="store_true",
+                    help="3-D reference truths, bonded and point base (writes diagnosis_solid3d.json)")
+    ap.add_argument("--solid3d-write-data", action="store_true",
+                    help="only build and store the 3-D truths' reduced models (tests/data/diagnosis_solid3d)")
+    ap.add_argument("--out-of-catalogue", action="store_true",
+                    help="holder crack, non-uniform layer, holder mass (writes diagnosis_out_of_catalogue.json)")
     ap.add_argument("--form-error", action="store_true",
                     help="only measure the candidates' form error on correct fits (--trials-per-class per effect)")
     args = ap.parse_args()
+    if args.solid3d_write_data:
+        from tests.analysis.diagnosis import truth_solid3d
+
+        truth_solid3d.write_data()
+        return
+    if args.solid3d or args.out_of_catalogue:
+        run_outside(args)
+        return
     if args.form_error:
         from benchmarks.diagnosis_calibration import form_error
 
@@ -582,11 +616,13 @@ def main() -> None:
     args.out.parent.mkdir(parents=True, exist_ok=True)
     partial = args.out.with_suffix(".partial.jsonl")  # as in run_hybrid: a run cut short can still be scored
     partial.write_text("")
+    load = [os.getloadavg()[0]]
     with ProcessPoolExecutor(max_workers=args.workers) as pool:
         futures = [pool.submit(run_trial, i, e, args.seed, args.tolerance_scale) for i, e in enumerate(plan)]
         for k, fut in enumerate(futures):
             rec = fut.result()
             records.append(rec)
+            load.append(os.getloadavg()[0])
             with partial.open("a") as fh:
                 fh.write(json.dumps(rec) + "\n")
             print(f"[{k + 1}/{len(plan)}] {rec['effect']:29s} -> {rec['status']:10s} {rec['verdict']:29s} "
@@ -598,11 +634,53 @@ def main() -> None:
     summary["settings"] = {"stickouts_m": list(truth.STICKOUTS_M), "band_hz": [50.0, 8000.0], "line_step_hz": 2.0,
                            "noise": "1 % + floor -50 dB of peak, 5 averages", "seed": args.seed,
                            "tolerance_scale": args.tolerance_scale, "workers": args.workers,
-                           "machine": machine()}
+                           "machine": machine(), "load_average": {"min": min(load), "max": max(load),
+                                                                  "median": float(np.median(load))}}
     print_summary(summary)
     args.out.write_text(json.dumps({"summary": summary, "trials": records}, indent=1))
     partial.unlink()
     print(f"wrote {args.out}")
+
+
+def run_outside(args: argparse.Namespace) -> None:
+    """The 3-D (``--solid3d``) or out-of-catalogue (``--out-of-catalogue``) trials, scored and written."""
+    from benchmarks import diagnosis_outside as outside
+    from tests.analysis.diagnosis import truth_solid3d
+
+    if args.solid3d:
+        variants = list(truth_solid3d.VARIANTS)
+        plan = [(v, m) for m in ("bonded", "point") for v in variants for _ in range(args.trials_per_class)]
+        name, fn = "diagnosis_solid3d.json", outside.run_solid_trial
+        jobs = [(i, v, m, args.seed, args.tolerance_scale) for i, (v, m) in enumerate(plan)]
+    else:
+        plan = [e for e in truth.OUT_OF_CATALOGUE for _ in range(args.trials_per_class)]
+        name, fn = "diagnosis_out_of_catalogue.json", outside.run_ooc_trial
+        jobs = [(i, e, args.seed) for i, e in enumerate(plan)]
+    out = args.out if args.out != DEFAULT_OUT else DEFAULT_OUT.with_name(name)
+    partial = out.with_suffix(".partial.jsonl")
+    partial.write_text("")
+    t0 = time.perf_counter()
+    load = [os.getloadavg()[0]]
+    records = []
+    with ProcessPoolExecutor(max_workers=args.workers) as pool:
+        futures = [pool.submit(fn, *job) for job in jobs]
+        for n, fut in enumerate(futures):
+            rec = fut.result()
+            records.append(rec)
+            load.append(os.getloadavg()[0])
+            with partial.open("a") as fh:
+                fh.write(json.dumps(rec) + "\n")
+            print(f"[{n + 1}/{len(jobs)}] {rec.get('variant', rec.get('effect')):18s} {rec.get('base_model', ''):6s} "
+                  f"-> {rec['status']:10s} {rec['verdict']:29s} dB {rec['base_db_error']:.2f} -> "
+                  f"{rec['corrected_db_error']:.2f} {rec['runtime_s']:.1f} s", flush=True)
+    summary = outside.summarise_solid(records) if args.solid3d else outside.summarise_ooc(records)
+    summary.update(command=" ".join(["benchmarks/bench_diagnosis.py", *sys.argv[1:]]),
+                   wall_time_s=time.perf_counter() - t0, machine=machine(), workers=args.workers, seed=args.seed,
+                   load_average={"min": min(load), "max": max(load), "median": float(np.median(load))})
+    print(json.dumps(summary, indent=1))
+    out.write_text(json.dumps({"summary": summary, "trials": records}, indent=1))
+    partial.unlink()
+    print(f"wrote {out}")
 
 
 def machine() -> str:

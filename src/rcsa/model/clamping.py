@@ -132,6 +132,9 @@ def interface_per_length(clamping: ClampingSpec, holder_outer_diameter_m: float,
         k_t = clamping.interface_tangential_ratio * k_n
         iw, itheta = contact_per_length(k_n, k_t, d)
         k_w, k_theta = 1.0 / (1.0 / k_w + 1.0 / iw), 1.0 / (1.0 / k_theta + 1.0 / itheta)
+    elif clamping.interface_loss_factor:  # bonded: a loss of the clamping itself (0 as parsed; analyses add it)
+        loss = 1 + 1j * clamping.interface_loss_factor
+        k_w, k_theta = k_w * loss, k_theta * loss
     return complex(k_w * clamping.interface_stiffness_scale), complex(k_theta * clamping.interface_stiffness_scale)
 
 

@@ -45,6 +45,21 @@ with ``rcsa``), with
                              modification of the FE assembly at the nose DOFs (the candidate
                              is a frequency-independent residual compliance, not this scaling)
    ========================  ==============================================================
+   Out of the catalogue (:data:`OUT_OF_CATALOGUE`; no candidate has their physics, issue 24):
+
+   ========================  ==============================================================
+   holder_crack              a partial crack in the holder nose, 10–30 mm behind its face: a
+                             2 mm length of the annulus whose bending stiffness is that of
+                             the annulus over the crack's equivalent length ΔL = c·D,
+                             c ∈ U(0.4, 1.5) (a deep crack, ~50–70 % of the wall, Dimarogonas-type
+                             local flexibility), the tool core intact
+   nonuniform_layer          the tool core held by springs per unit length in two bands — the
+                             front and the back fraction b ∈ U(0.15, 0.35) of the insertion —
+                             each 10^U(−1, 0) × the distributed contact closest to the base,
+                             and only 1 % of it between them (a clamp gripping at its ends)
+   holder_mass               a ring of m ∈ U(0.1, 0.4) kg (Ø50 × 12 mm steel-like, its own
+                             rotary inertia) on the holder's tool end (a clamping nut)
+   ========================  ==============================================================
 3. **measurement noise**: complex Gaussian, 1 % of |H| plus a floor at −50 dB of the peak,
    per real and imaginary part; the coherence passed to the diagnoser is the one this noise
    implies for 5 averages, γ² = 1 / (1 + 2·5·(σ/|H|)²) (Bendat & Piersol).
@@ -82,6 +97,8 @@ FREQUENCY_HZ = np.arange(50.0, 8000.0 + 1e-9, 2.0)
 MESH_M = 0.002
 EFFECTS = ("none", "holder_tool_joint", "spindle_holder_joint", "bearings", "shear_and_rotary_inertia",
            "fluted_section", "insertion_depth", "sensor_mass", "joint_damping", "spindle_rotational_receptance")
+#: Truths no candidate stands for (the diagnosis should say where, and how much is left).
+OUT_OF_CATALOGUE = ("holder_crack", "nonuniform_layer", "holder_mass")
 NOISE_REL = 0.01
 NOISE_FLOOR_DB = -50.0
 N_AVERAGES = 5
@@ -256,6 +273,12 @@ def draw_effect(rng: np.random.Generator, name: str) -> dict[str, float]:
         return {"eta_holder_tool": eta, "eta_spindle_holder": eta * u(0.5, 1.5)}
     if name == "spindle_rotational_receptance":
         return {"rotation_scale": u(1.25, 2.0)}
+    if name == "holder_crack":
+        return {"depth_from_face_m": u(0.010, 0.030), "equivalent_length_ratio": u(0.4, 1.5)}
+    if name == "nonuniform_layer":
+        return {"band_fraction": u(0.15, 0.35), "front_scale": 10 ** u(-1.0, 0.0), "back_scale": 10 ** u(-1.0, 0.0)}
+    if name == "holder_mass":
+        return {"mass_kg": u(0.1, 0.4)}
     if name == "none":
         return {}
     raise ValueError(f"unknown effect {name!r}")
@@ -301,7 +324,76 @@ def effect_frf(name: str, params: dict[str, float], doc: dict[str, Any], f: np.n
         return _insertion(doc, f, params["free_length_m"])
     if name == "spindle_rotational_receptance":
         return _scaled_spindle_rotation(doc, f, params["rotation_scale"])
+    if name == "holder_crack":
+        return _solve(_cracked(doc, params["depth_from_face_m"], params["equivalent_length_ratio"]), f)
+    if name == "nonuniform_layer":
+        return _nonuniform_layer(doc, f, params)
+    if name == "holder_mass":
+        m = params["mass_kg"]
+        radius, length = 0.025, 0.012
+
+        def ring(built, _doc) -> None:
+            holder_nodes = built.outer_nodes["holder"][0]
+            built.model.add_lumped_mass(holder_nodes[-1], m, m * (3 * radius**2 + length**2) / 12.0)
+        return _solve(doc, f, modify=ring)
     raise ValueError(f"unknown effect {name!r}")
+
+
+CRACK_LENGTH_M = 0.002
+
+
+def _cracked(doc: dict[str, Any], depth_m: float, ratio: float) -> dict[str, Any]:
+    """The holder with a crack ``depth_m`` behind its face: a short annulus of reduced bending stiffness.
+
+    Over ``CRACK_LENGTH_M`` the annulus's I is lowered to ``I ℓ / (ℓ + c D)``, so its extra
+    rotational compliance is that of ``c D`` more length (the crack's local flexibility).
+    """
+    d = copy.deepcopy(doc)
+    segs = d["holder"]["segments"]
+    total = sum(s["length_m"] for s in segs)
+    at = total - depth_m  # crack start, from the gauge line
+    x0, out = 0.0, []
+    for s in segs:
+        x1 = x0 + s["length_m"]
+        if x0 < at < x1:
+            outer, inner = s["outer_diameter_m"], s["inner_diameter_m"]
+            ell = min(CRACK_LENGTH_M, x1 - at)
+            i_full = outer**4 - inner**4
+            i_cut = i_full * ell / (ell + ratio * outer)
+            out += [dict(s, length_m=at - x0), dict(s, length_m=ell, outer_diameter_m=(i_cut + inner**4) ** 0.25)]
+            if x1 - at - ell > 1e-9:
+                out.append(dict(s, length_m=x1 - at - ell))
+        else:
+            out.append(s)
+        x0 = x1
+    d["holder"]["segments"] = out
+    return d
+
+
+def _nonuniform_layer(doc: dict[str, Any], f: np.ndarray, params: dict[str, float]) -> np.ndarray:
+    """Tool core held in two bands (front and back) of the insertion, barely in between."""
+    per = doc["_per"]
+    soft = 0.01
+    spec = _distributed(doc, HT_DISTRIBUTED, soft * per["ht_kt"], soft * per["ht_kr"], per["ht_c"])
+    nominal = _distributed(doc, HT_DISTRIBUTED, per["ht_kt"], per["ht_kr"], per["ht_c"])
+
+    def bands(built, d) -> None:
+        (hn, hx), (tn, tx) = built.outer_nodes["holder"], built.outer_nodes["tool"]
+        length = built.holder_length_m
+        inserted = min(d["tool"]["overall_length_m"] - d["tool"]["stickout_m"], length)
+        band = params["band_fraction"] * inserted
+        for lo, hi, scale in ((length - band, length, params["front_scale"]),
+                              (length - inserted, length - inserted + band, params["back_scale"])):
+            a = [n for n, x in zip(hn, hx, strict=True) if lo - 1e-9 <= x <= hi + 1e-9]
+            b = [n for n, x in zip(tn, tx, strict=True) if lo - 1e-9 <= x <= hi + 1e-9]
+            k = scale - soft
+            built.model.add_distributed_springs(
+                a, b, translational_n_m2=k * nominal["translational_stiffness_n_m2"],
+                translational_ns_m2=k * nominal["translational_damping_ns_m2"],
+                rotational_nm_rad_m=k * nominal["rotational_stiffness_nm_rad_m"],
+                rotational_nms_rad_m=k * nominal["rotational_damping_nms_rad_m"])
+
+    return _solve(doc, f, {"holder_tool_distributed": spec}, modify=bands)
 
 
 def _hysteretic_joints(built, doc: dict[str, Any], params: dict[str, float]) -> None:

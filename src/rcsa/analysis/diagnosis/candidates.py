@@ -8,16 +8,25 @@ stickout). Bounds follow ``docs/diagnosis.md`` §2:
 ================================  =========================================  ==============
 effect                            parameters (prior range)                   null
 ================================  =========================================  ==============
-holder_tool_joint                 log10 k_t/k_t0, log10 k_r/k_r0 ∈ [−2, 0.5]  0, 0
+holder_tool_joint                 log10 k_t/k_t0, log10 k_r/k_r0 ∈ [lo, 0.5]  0, 0
+                                  (point joint; lo = min(−2, a decade below
+                                  the shank's own stiffness over one
+                                  diameter: :func:`shank_joint_reference`);
+                                  on a clamping (bonded/contact): log10 of
+                                  the interface stiffness scale ∈ [−3, 0.5]
 spindle_holder_joint              log10 k_t/k_t0, log10 k_r/k_r0 ∈ [−2, 0.5]  0, 0
 bearings                          log10 of all bearing stiffnesses, [−1, 0.5]  0
 shear_and_rotary_inertia          shear/rotary-inertia scale s ∈ [0, 1.5]     0 (EB) / 1
 fluted_section                    D_I/DC, D_A/DC ∈ [0.6, 1.0]                 base ratios
 insertion_depth                   clamping point δ inside the holder,         0
-                                  [0, 0.3 · inserted length]
+                                  [0, 0.3 · inserted length]; on a clamping
+                                  contact lost over δ at the front of the
+                                  bore, [0, 0.6 · inserted length]
 sensor_mass                       mass m ∈ [0, m_max], d ∈ [0, 6 mm] behind   0, 0
                                   the tip
 joint_damping                     log10 scale of all joint dampers, [−1, 1.2]  0
+                                  (on a clamping also a loss factor added
+                                  to its interface, [0, 0.3])                  (0, 0)
 spindle_rotational_receptance     residual compliance added to the spindle's   0, 0
                                   nose receptance: c_wψ = a·l₀, c_ψψ = b·p₀
                                   (l₀, p₀ its own static values),
@@ -57,7 +66,7 @@ from rcsa.model.spindle_side import MeasuredBase
 from rcsa.physics.algebra2x2 import inv2
 
 __all__ = ["CANDIDATE_NAMES", "NOT_OBSERVABLE_AT_STANDSTILL", "STANDSTILL_SENTENCE", "Candidate",
-           "Parameter", "catalogue", "not_applicable"]
+           "Parameter", "catalogue", "not_applicable", "shank_joint_reference"]
 
 CANDIDATE_NAMES = ("holder_tool_joint", "spindle_holder_joint", "bearings", "shear_and_rotary_inertia",
                    "fluted_section", "insertion_depth", "sensor_mass", "joint_damping",
@@ -107,6 +116,47 @@ class Candidate:
     def hi(self) -> np.ndarray:
         """Upper bounds."""
         return np.array([p.hi for p in self.parameters])
+
+
+#: How far a point joint's prior reaches below a stiff given joint: a decade below the
+#: shank's own stiffness over one shank diameter (:func:`shank_joint_reference`), or 1/100 of
+#: the given joint, whichever is softer.
+JOINT_REACH_BELOW_SHANK = 1.0
+JOINT_MIN_DECADES = 2.0
+#: insertion_depth on a point joint: the clamping point up to this fraction of the shortest
+#: insertion inside the holder; on a clamping, the contact lost at the front up to this one.
+CLAMPING_POINT_MAX_FRACTION = 0.3
+FRONT_GAP_MAX_FRACTION = 0.6
+#: Largest loss factor joint_damping adds to a clamping's interface (micro-slip damping of
+#: shrink-fit and collet clamps: a few percent to tens of percent).
+INTERFACE_LOSS_MAX = 0.3
+
+
+def shank_joint_reference(spec: AssemblySpec, tools: Sequence[ToolSpec]) -> tuple[float, float]:
+    """Stiffnesses of one shank diameter of the tool's own shank, as a cantilever: ``(3EI/d³, EI/d)``.
+
+    A real clamping's compliance is of the order of the shank's over a diameter or so (the
+    tool pivots inside the bore); a prior that stops at 1/100 of a stiff given joint cannot
+    reach it (issue 24). N/m, N·m/rad; the thinnest shank of the measurements.
+
+    Parameters
+    ----------
+    spec : AssemblySpec
+    tools : sequence of ToolSpec
+
+    Returns
+    -------
+    (float, float)
+    """
+    d = min(t.shank_diameter_m for t in tools)
+    e = spec.materials[spec.tool.material].youngs_modulus_pa
+    ei = e * np.pi * d**4 / 64.0
+    return 3.0 * ei / d**3, ei / d
+
+
+def _joint_lower_bound(given: float, reference: float) -> float:
+    """log10 of the softest scale: 1/100 of the given joint, or a decade below the shank's reference."""
+    return float(min(-JOINT_MIN_DECADES, np.log10(reference / given) - JOINT_REACH_BELOW_SHANK))
 
 
 def _mul(k: Knobs, **scales: float) -> Knobs:
@@ -234,6 +284,7 @@ def catalogue(spec: AssemblySpec, tools: Sequence[ToolSpec], solver: Solver,
     elif "holder_tool_joint" not in excluded and isinstance(ht, JointSpec) \
             and ht.rotational_stiffness_nm_rad is not None:
         kr0 = ht.rotational_stiffness_nm_rad
+        kt_ref, kr_ref = shank_joint_reference(spec, tools)
 
         def ht_meaning(v: np.ndarray) -> dict[str, float]:
             assert ht is not None
@@ -241,8 +292,9 @@ def catalogue(spec: AssemblySpec, tools: Sequence[ToolSpec], solver: Solver,
                     "holder_tool.rotational_stiffness_nm_rad": kr0 * 10 ** v[1]}
         out.append(Candidate(
             "holder_tool_joint",
-            (Parameter("log10_translational_stiffness_scale", -2.0, 0.5, 0.0, "1"),
-             Parameter("log10_rotational_stiffness_scale", -2.0, 0.5, 0.0, "1")),
+            (Parameter("log10_translational_stiffness_scale", _joint_lower_bound(ht.stiffness_n_m, kt_ref), 0.5,
+                       0.0, "1"),
+             Parameter("log10_rotational_stiffness_scale", _joint_lower_bound(kr0, kr_ref), 0.5, 0.0, "1")),
             lambda k, v: _mul(k, ht_translational_scale=10 ** v[0], ht_rotational_scale=10 ** v[1]),
             ht_meaning))
 
@@ -289,8 +341,10 @@ def catalogue(spec: AssemblySpec, tools: Sequence[ToolSpec], solver: Solver,
     if "insertion_depth" not in excluded:
         holder_len = spec.holder.length_m if spec.holder is not None else float("inf")
         inserted = min(min(t.inserted_length_m for t in tools), holder_len)
+        # a clamping loses contact at the front: up to 0.6 of the shortest insertion (the rest still grips)
+        reach = (FRONT_GAP_MAX_FRACTION if isinstance(ht, ClampingSpec) else CLAMPING_POINT_MAX_FRACTION) * inserted
         out.append(Candidate(
-            "insertion_depth", (Parameter("clamping_point_inside_holder_m", 0.0, 0.3 * inserted, 0.0, "m"),),
+            "insertion_depth", (Parameter("clamping_point_inside_holder_m", 0.0, reach, 0.0, "m"),),
             lambda k, v: replace(k, insertion_offset_m=float(v[0])),
             (lambda v: {"front_gap_length_m": float(v[0])}) if isinstance(ht, ClampingSpec)
             else (lambda v: {"clamping_point_inside_holder_m": float(v[0])})))
@@ -302,7 +356,18 @@ def catalogue(spec: AssemblySpec, tools: Sequence[ToolSpec], solver: Solver,
         lambda k, v: replace(k, tip_mass_kg=float(v[0]), tip_mass_distance_m=float(v[1])),
         lambda v: {"tip_mass_kg": float(v[0]), "distance_from_tip_m": float(v[1])}))
 
-    if "joint_damping" not in excluded:
+    if "joint_damping" not in excluded and isinstance(ht, ClampingSpec) and spec.holder is not None:
+        # a clamping's own loss (micro-slip over the insertion) is a loss factor added to its
+        # interface; the point joints' dampers scale as for point joints
+        out.append(Candidate(
+            "joint_damping", (Parameter("log10_joint_damping_scale", -1.0, 1.2, 0.0, "1"),
+                              Parameter("added_interface_loss_factor", 0.0, INTERFACE_LOSS_MAX, 0.0, "1")),
+            lambda k, v: replace(_mul(k, sh_damping_scale=10 ** v[0], ht_damping_scale=10 ** v[0]),
+                                 ht_interface_loss_added=float(v[1])),
+            lambda v: {"joint_damping_scale": float(10 ** v[0]),
+                       "holder_tool.interface_loss_factor": ht.interface_loss_factor * float(10 ** v[0])
+                       + float(v[1])}))
+    elif "joint_damping" not in excluded:
         out.append(Candidate(
             "joint_damping", (Parameter("log10_joint_damping_scale", -1.0, 1.2, 0.0, "1"),),
             lambda k, v: _mul(k, sh_damping_scale=10 ** v[0], ht_damping_scale=10 ** v[0]),

@@ -11,20 +11,99 @@ undamped, eliminating no node), so they sit in a chain like a joint and stack li
   equivalent-cantilever estimate does (``N = 3H/2L``, ``P = 3H/L²``: ``L → L/s``), and ``c``
   its shape ``PH/N²``.
 
+And one wrapper, :class:`CachedInsertion`: a clamping along the insertion whose two-port is
+computed once per frequency grid and kept by value, so the many candidates that change only
+what lies before the holder (bearings, the spindle–holder joint, a nose correction) do not
+re-evaluate it (they were half of a diagnosis on a ``bonded`` base).
+
 Their parameters may be numbers or per-row arrays (a chain stacked over many variants,
 :mod:`rcsa.physics.stacking`).
 """
 
 from __future__ import annotations
 
+from collections.abc import Hashable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
+from rcsa.physics.algebra2x2 import inv2
 from rcsa.physics.arrays import ComplexArray, IntArray, RealParam
 from rcsa.physics.chain import Grid, Lumped, Sym
+from rcsa.physics.insertion import Insertion
+from rcsa.physics.subassembly_cache import LruStore
 
-__all__ = ["AddedCompliance", "RotationRescale"]
+__all__ = ["AddedCompliance", "CachedInsertion", "RotationRescale"]
+
+#: Two-ports kept (each nfreq × 4 × 4 complex: ~0.3 MB at 1 200 lines).
+TWO_PORTS_KEPT = 64
+_TWO_PORTS: LruStore[Hashable, ComplexArray] = LruStore(TWO_PORTS_KEPT)
+
+
+def _two_port(insertion: Insertion, omega_rad_s: np.ndarray) -> ComplexArray:
+    """The insertion's two-port on ``omega_rad_s``, kept by (insertion, grid) value; read-only."""
+    omega = np.asarray(omega_rad_s, dtype=float)
+    key = (insertion, omega.size, hash(omega.tobytes()))
+
+    def make() -> ComplexArray:
+        d = np.array(insertion.two_port(omega))
+        d.flags.writeable = False
+        return d
+    return _TWO_PORTS.get(key, make)
+
+
+@dataclass(frozen=True, slots=True)
+class CachedInsertion:
+    """An :class:`~rcsa.physics.insertion.Insertion` whose two-port is computed once per grid.
+
+    Carries a stiffness across the insertion exactly as the insertion does (``K ← D22 − D21
+    (K + D11)⁻¹ D12``, or from a grounded base's compliance ``S``: ``D22 − D21 S (I + D11 S)⁻¹
+    D12``), with ``D`` from a cache shared by value; everything else (counts, statics,
+    undamped copies, stacking) is the insertion's own.
+
+    Parameters
+    ----------
+    insertion : Insertion
+    """
+
+    insertion: Insertion
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.insertion, name)
+
+    def eliminate(self, k: Sym, grid: Grid, count: bool = False) -> tuple[Sym, IntArray | None]:
+        """See :meth:`rcsa.physics.insertion.Insertion.eliminate` (with ``count``: the insertion's own).
+
+        Parameters
+        ----------
+        k : Sym
+            Stiffness at the entry node, each (nfreq,).
+        grid : Grid
+        count : bool
+        """
+        if count:
+            return self.insertion.eliminate(k, grid, count)
+        d = _two_port(self.insertion, grid.omega_rad_s)
+        p = np.array(d[:, :2, :2], dtype=np.result_type(d, *k))
+        p[:, 0, 0] += k[0]
+        p[:, 0, 1] += k[1]
+        p[:, 1, 0] += k[1]
+        p[:, 1, 1] += k[2]
+        out = d[:, 2:, 2:] - d[:, 2:, :2] @ inv2(p) @ d[:, :2, 2:]
+        return (out[:, 0, 0], 0.5 * (out[:, 0, 1] + out[:, 1, 0]), out[:, 1, 1]), None
+
+    def absorb_compliance(self, compliance: ComplexArray, grid: Grid) -> tuple[ComplexArray, bool]:
+        """See :meth:`rcsa.physics.insertion.Insertion.absorb_compliance`.
+
+        Parameters
+        ----------
+        compliance : numpy.ndarray, shape (nfreq, 2, 2)
+        grid : Grid
+        """
+        d = _two_port(self.insertion, grid.omega_rad_s)
+        s = compliance
+        return d[:, 2:, 2:] - d[:, 2:, :2] @ s @ inv2(np.eye(2) + d[:, :2, :2] @ s) @ d[:, :2, 2:], True
 
 
 @dataclass(frozen=True, slots=True)

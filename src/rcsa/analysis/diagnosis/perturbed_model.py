@@ -44,7 +44,8 @@ different, physical realisations, see ``tests/analysis/diagnosis/truth.py``):
 * With a holder–tool clamping along the insertion (model ``bonded``/``contact``) the holder-tool
   knobs act on the clamping, which belongs to the holder chain: ``ht_translational_scale``
   scales its whole interface stiffness (softening over the insertion), ``ht_damping_scale``
-  its interface loss factor, and ``insertion_offset_m`` is contact lost over that length
+  its interface loss factor (``ht_interface_loss_added`` adds to it: a bonded clamping has none
+  of its own), and ``insertion_offset_m`` is contact lost over that length
   at the front of the bore (its ``front_gap_length_m``): holder and tool keep their geometry.
 """
 
@@ -56,7 +57,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from rcsa.analysis.diagnosis.chain_items import AddedCompliance, RotationRescale
+from rcsa.analysis.diagnosis.chain_items import AddedCompliance, CachedInsertion, RotationRescale
 from rcsa.model.assembly import holder_chain, joint_spring, spindle_chain, tool_chain
 from rcsa.model.contract import (
     AssemblySpec,
@@ -70,6 +71,7 @@ from rcsa.model.contract import (
 from rcsa.model.tolerances import scaled_joint
 from rcsa.physics.arrays import ComplexArray, FloatArray, IntArray
 from rcsa.physics.chain import Beam, Chain, ChainItem, Ground
+from rcsa.physics.insertion import Insertion
 from rcsa.physics.materials import Material
 from rcsa.physics.sections import Section
 from rcsa.physics.subassembly_cache import Condensed, SubassemblyCache
@@ -98,6 +100,7 @@ class Knobs:
     ht_translational_scale: float = 1.0
     ht_rotational_scale: float = 1.0
     ht_damping_scale: float = 1.0
+    ht_interface_loss_added: float = 0.0
     stickout_offset_m: float = 0.0
     shear_scale: float | None = None
     fluted_stiffness_ratio: float | None = None
@@ -306,6 +309,9 @@ class PartsBuilder:
         # a clamping along the insertion belongs to the holder chain, with the holder-tool knobs
         clamping = scaled_joint(spec.holder_tool, k.ht_translational_scale, k.ht_rotational_scale,
                                 k.ht_damping_scale) if isinstance(spec.holder_tool, ClampingSpec) else None
+        if clamping is not None and k.ht_interface_loss_added != 0.0:
+            clamping = replace(clamping, interface_loss_factor=clamping.interface_loss_factor
+                               + k.ht_interface_loss_added)
         front_gap = clamping is not None and self.plane != "holder_tip"
         if front_gap and k.insertion_offset_m > 0.0:
             assert isinstance(clamping, ClampingSpec)
@@ -335,7 +341,8 @@ class PartsBuilder:
                                            k.sh_damping_scale))
             if sh is not None:
                 items.append(sh)
-            items.extend(shear_scaled(_holder_chain(holder, tool_of(), mats, shear, theory, clamping)))
+            items.extend(CachedInsertion(item) if isinstance(item, Insertion) else item
+                         for item in shear_scaled(_holder_chain(holder, tool_of(), mats, shear, theory, clamping)))
             if ring is not None:
                 items.append(ring)
             return tuple(items)

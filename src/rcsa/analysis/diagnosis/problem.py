@@ -274,6 +274,41 @@ class Problem:
                 c[d] = h
         return out
 
+    def spindle_feature_covariance(self, n_draws: int = 60) -> np.ndarray | None:
+        """Covariance of the features under the measured spindle's own uncertainty alone.
+
+        The model at its base values on ``n_draws`` draws of the measured receptance (noise
+        through its identification) and, for estimated rotations, of the cantilever length and
+        shape — the part of Σ the spindle measurement is responsible for. None for an
+        analytical spindle; zeros when the measurement states no uncertainty.
+
+        Parameters
+        ----------
+        n_draws : int
+
+        Returns
+        -------
+        numpy.ndarray, shape (nfeat, nfeat), or None
+        """
+        m = self.measured
+        if m is None:
+            return None
+        opts, tol = self.request.options, self.request.tolerances
+        bases: list[BaseReceptance | None] = [None] * n_draws
+        if m.uncertainty is not None:
+            drawn = m.uncertainty.draw(np.random.default_rng([opts.seed, 5]), n_draws, tol["spindle_noise_rel"])
+            bases = [BaseReceptance(b) for b in drawn]
+        rng = np.random.default_rng([opts.seed, 6])
+        feats = []
+        for b in bases:
+            k = Knobs()
+            if m.effective_length_m is not None:
+                k = Knobs(base_rotation_scale=float(np.exp(-tol["spindle_effective_length_log"]
+                                                           * rng.standard_normal())),
+                          base_rotation_shape=float(np.exp(tol["spindle_rotation_shape_log"] * rng.standard_normal())))
+            feats.append(self.features(self.h(k, b)))
+        return np.cov(np.array(feats), rowvar=False)
+
     def spindle_uncertainty(self) -> dict[str, object] | None:
         """What the discrepancy assumes about the measured spindle's own uncertainty (None: analytical)."""
         m = self.measured

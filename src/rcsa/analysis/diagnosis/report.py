@@ -156,6 +156,11 @@ def _sentence(a: Analysis, effects: list[dict[str, Any]]) -> str:
         best = d.ranking[0] if d.ranking else None
         tail = (f" The best candidate, {best.candidate.name}, reaches ln BF = {best.log_bayes_factor:.1f}"
                 f" (a claim needs > {tau:g}).") if best else ""
+        p_gap = a.residual_p_value(a.problem.base_features)
+        if p_gap < P_GAP:
+            return ("The measurements depart from the base model beyond its tolerances and the noise "
+                    f"(p = {p_gap:.3f}), but no candidate effect explains the gap: it is left unexplained "
+                    "(the gap map says where it lies)." + tail)
         return "No unmodelled effect is needed to explain these measurements." + tail
     e = effects[0]
     held = ""
@@ -173,6 +178,9 @@ def _sentence(a: Analysis, effects: list[dict[str, Any]]) -> str:
     if e["residual_p_value"] < 0.05:
         flag += (f" It does not explain everything: the remainder is still beyond tolerances and noise "
                  f"(p = {e['residual_p_value']:.3f}).")
+    if a.scatter_scale > 1.0:
+        flag += (f" The remainder scatters {a.scatter_scale:.2g} times more than the stated tolerances and noise "
+                 "allow; the claim was weighed with them widened that much.")
     return (f"{d.effect} explains the gap (ln BF = {e['log_bayes_factor']:.1f} against the base model, "
             f"SNR {e['snr']:.1f}){held}.{flag}")
 
@@ -250,6 +258,7 @@ def build_response(a: Analysis) -> dict[str, Any]:
                      "ambiguity_window": a.request.options.ambiguity_window,
                      "tolerances": dict(a.request.tolerances),
                      "log_evidence_base": a.log_z0,
+                     "scatter_scale": a.scatter_scale,
                      "timings_s": {**a.timings_s, "response": time.perf_counter() - response_started}},
         "notes": notes,
         **spindle,
