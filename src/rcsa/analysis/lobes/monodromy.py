@@ -41,7 +41,9 @@ References
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
@@ -59,6 +61,7 @@ __all__ = [
     "monodromy_matrix",
     "period_maps",
     "state_space",
+    "state_spaces",
     "step_exponentials",
     "trajectory",
 ]
@@ -173,13 +176,17 @@ def cutting_plan(teeth: int, steps: int, phi_start_rad: float, phi_exit_rad: flo
 class StateSpace:
     """The modal model in scaled coordinates ``u = [ω q; q̇]``.
 
+    One system (arrays as below), or one per member of a batch (a leading axis of size
+    ``nb`` on every array: :func:`state_spaces`, then :meth:`take`), so that the period maps
+    of many tools are built and solved together.
+
     Attributes
     ----------
-    a0 : numpy.ndarray, shape (n, n)
+    a0 : numpy.ndarray, shape (n, n) or (nb, n, n)
         Free dynamics (block ``[[0, Ω], [−Ω, −2ZΩ]]``), 1/s.
-    c_out : numpy.ndarray, shape (2, n)
+    c_out : numpy.ndarray, shape (2, n) or (nb, 2, n)
         ``r = c_out u`` (m per scaled unit).
-    c_in : numpy.ndarray, shape (nmodes, 2)
+    c_in : numpy.ndarray, shape (nmodes, 2) or (nb, nmodes, 2)
         Modal force per N in x and y (``φ_r``, 1/√kg).
     """
 
@@ -190,7 +197,24 @@ class StateSpace:
     @property
     def n(self) -> int:
         """State size ``2·nmodes``."""
-        return int(self.a0.shape[0])
+        return int(self.a0.shape[-1])
+
+    @property
+    def batched(self) -> bool:
+        """One system per batch member (a leading axis)."""
+        return self.a0.ndim == 3
+
+    def take(self, idx: np.ndarray) -> StateSpace:
+        """The systems of the batch members ``idx`` (a single system is shared: itself)."""
+        if not self.batched:
+            return self
+        return StateSpace(self.a0[idx], self.c_out[idx], self.c_in[idx])
+
+    def per_step(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``a0``, ``c_out``, ``c_in`` shaped to broadcast against (nb, steps, ·, ·) arrays."""
+        if not self.batched:
+            return self.a0, self.c_out, self.c_in
+        return self.a0[:, None], self.c_out[:, None], self.c_in[:, None]
 
 
 def state_space(model: ModalModel) -> StateSpace:
@@ -208,6 +232,47 @@ def state_space(model: ModalModel) -> StateSpace:
     modes = np.arange(d)
     c_out[model.direction, modes] = phi / w
     c_in[modes, model.direction] = phi
+    return StateSpace(a0, c_out, c_in)
+
+
+#: Damping ratio of the inert modes that pad a smaller modal model in a stack of systems.
+PAD_DAMPING_RATIO = 0.5
+
+
+def state_spaces(models: Sequence[ModalModel]) -> StateSpace:
+    """The systems of several modal models stacked on a leading axis (one per model).
+
+    A model with fewer modes than the largest is padded with inert modes: no residue (no
+    force in, no displacement out), the model's lowest natural frequency and damping ratio
+    :data:`PAD_DAMPING_RATIO`, so their multipliers ``e^{−ζωT}`` stay far inside the unit
+    circle and the exponentials' norms do not grow.
+
+    Examples
+    --------
+    >>> a = ModalModel.of([500.0], [0.02], [1.0], [0])
+    >>> b = ModalModel.of([600.0, 900.0], [0.03, 0.02], [2.0, 1.0], [0, 1])
+    >>> s = state_spaces([a, b])
+    >>> s.a0.shape, s.c_out.shape, s.c_in.shape
+    ((2, 4, 4), (2, 2, 4), (2, 2, 2))
+    >>> bool(np.all(s.c_in[0, 1] == 0) and np.all(s.c_out[0][:, [1, 3]] == 0))
+    True
+    """
+    d = max(m.n_modes for m in models)
+    a0 = np.zeros((len(models), 2 * d, 2 * d))
+    c_out = np.zeros((len(models), 2, 2 * d))
+    c_in = np.zeros((len(models), d, 2))
+    for i, m in enumerate(models):  # a loop over models (tools), each a few small arrays
+        pad = d - m.n_modes
+        w = np.concatenate([_TWO_PI * m.frequency_hz, np.full(pad, _TWO_PI * float(m.frequency_hz.min()))])
+        z = np.concatenate([m.damping_ratio, np.full(pad, PAD_DAMPING_RATIO)])
+        one = state_space(m)
+        modes = np.arange(d)
+        a0[i, modes, d + modes] = w
+        a0[i, d + modes, modes] = -w
+        a0[i, d + modes, d + modes] = -2.0 * z * w
+        real = np.arange(m.n_modes)
+        c_out[i][:, real] = one.c_out[:, real]
+        c_in[i][real] = one.c_in
     return StateSpace(a0, c_out, c_in)
 
 
@@ -248,7 +313,6 @@ def step_exponentials(z: np.ndarray, beta: np.ndarray) -> tuple[np.ndarray, np.n
     bf = beta.reshape(-1, n, t)
     norm = np.abs(zf).sum(axis=-2).max(axis=-1)
     squarings = np.ceil(np.log2(np.maximum(norm, 1e-300))).clip(0).astype(np.int64)
-    eye = np.eye(n)
     e_out = np.empty_like(zf)
     x_out = np.empty_like(bf)
     y_out = np.empty_like(bf)
@@ -258,18 +322,24 @@ def step_exponentials(z: np.ndarray, beta: np.ndarray) -> tuple[np.ndarray, np.n
         zz = zf[idx] * c
         bb = bf[idx] * c
         z2 = zz @ zz
-        pw = (eye, zz, z2, z2 @ zz)  # Z^0..Z^3
+        z3 = z2 @ zz
         w = z2 @ z2  # Z^4
-        zb = (bb, zz @ bb, z2 @ bb, pw[3] @ bb)  # Z^i β
-        e = np.broadcast_to(eye / _FACT[12], zz.shape)
+        zb = (bb, zz @ bb, z2 @ bb, z3 @ bb)  # Z^i β
+        # the three blocks' polynomials Σ_{l=1..3} Z^l/(j+l)! in one product (the I/j! terms on the diagonal)
+        powers = np.stack([zz, z2, z3], axis=-1).reshape(-1, 3)
+        ce = (powers @ _BLOCK_COEF).reshape(zz.shape + (3,))
+        diag = np.arange(n)
+        ce[:, diag, diag, :] += _BLOCK_EYE
+        e = ce[..., 2] + w * (1.0 / _FACT[12])
         x = zb[0] * (1.0 / _FACT[13])
         y = zb[0] * (1.0 / _FACT[14])
         for block in (2, 1, 0):  # Horner in Z^4 over blocks of four Taylor terms
             j = 4 * block
-            ce = eye / _FACT[j] + zz / _FACT[j + 1] + z2 / _FACT[j + 2] + pw[3] / _FACT[j + 3]
             cx = zb[0] / _FACT[j + 1] + zb[1] / _FACT[j + 2] + zb[2] / _FACT[j + 3] + zb[3] / _FACT[j + 4]
             cy = zb[0] / _FACT[j + 2] + zb[1] / _FACT[j + 3] + zb[2] / _FACT[j + 4] + zb[3] / _FACT[j + 5]
-            e, x, y = ce + w @ e, cx + w @ x, cy + w @ y
+            if block < 2:
+                e = ce[..., block] + w @ e
+            x, y = cx + w @ x, cy + w @ y
         y = c * y
         for _ in range(s):
             y = e @ y + c * x + y
@@ -281,6 +351,9 @@ def step_exponentials(z: np.ndarray, beta: np.ndarray) -> tuple[np.ndarray, np.n
 
 
 _FACT = [float(math.factorial(j)) for j in range(_TAYLOR_DEGREE + 3)]
+# Coefficients of Z, Z², Z³ (rows) in the Horner blocks j = 0, 4, 8 (columns), and of I.
+_BLOCK_COEF = np.array([[1.0 / _FACT[4 * b + l] for b in range(3)] for l in (1, 2, 3)])
+_BLOCK_EYE = np.array([1.0 / _FACT[4 * b] for b in range(3)])
 
 
 @dataclass(frozen=True)
@@ -313,7 +386,7 @@ class PeriodMaps:
 def free_maps(system: StateSpace, plan: CuttingPlan, step_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Depth-free exponentials: each free stretch, shape (nb, nfree, n, n), and one step."""
     lengths = np.concatenate([plan.free_length, [1]]).astype(float)
-    z = system.a0 * (np.asarray(step_s, dtype=float)[:, None, None, None] * lengths[None, :, None, None])
+    z = system.per_step()[0] * (np.asarray(step_s, dtype=float)[:, None, None, None] * lengths[None, :, None, None])
     e = step_exponentials(z, np.zeros(z.shape[:-1] + (1,)))[0]
     return e[:, :-1], e[:, -1]
 
@@ -337,11 +410,12 @@ def period_maps(system: StateSpace, plan: CuttingPlan, tangential_coefficient_n_
         :func:`free_maps` of the same step lengths.
     """
     n, d = system.n, system.n // 2
+    a0, c_out, c_in = system.per_step()
     h = np.asarray(step_s, dtype=float)[:, None, None, None]
     kf = (tangential_coefficient_n_m2 * np.asarray(depth_m, dtype=float))[:, None, None, None] * plan.force[None]
-    coupling = system.c_in @ kf  # (nb, ncut, d, 2): modal force per delayed displacement
-    a = np.broadcast_to(system.a0, coupling.shape[:2] + (n, n)).copy()
-    a[..., d:, :] -= coupling @ system.c_out
+    coupling = c_in @ kf  # (nb, ncut, d, 2): modal force per delayed displacement
+    a = np.broadcast_to(a0, coupling.shape[:2] + (n, n)).copy()
+    a[..., d:, :] -= coupling @ c_out
     beta = np.zeros(coupling.shape[:2] + (n, 2))
     beta[..., d:, :] = h * coupling  # h B_i
     p, g1, g2 = step_exponentials(a * h, beta)
@@ -370,14 +444,44 @@ def apply_period(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps, z: np.
         states[:, start] = x
         x = maps.p[:, cut] @ x + inputs[:, cut] if cut >= 0 else maps.free[:, -1 - cut] @ x
     kept = np.flatnonzero(plan.slot >= 0)  # slots are numbered in step order
-    out = c @ states[:, kept]  # (nb, ns, 2, p)
+    out = system.per_step()[1] @ states[:, kept]  # (nb, ns, 2, p)
     return np.concatenate([x, out.reshape(nb, -1, cols)], axis=1)
 
 
 def monodromy_matrix(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps) -> np.ndarray:
-    """The reduced monodromy matrix, shape (nb, N, N), ``N = n + 2·n_samples``."""
-    size = system.n + 2 * plan.n_samples
-    return apply_period(system, plan, maps, np.broadcast_to(np.eye(size), (maps.batch, size, size)))
+    """The reduced monodromy matrix, shape (nb, N, N), ``N = n + 2·n_samples``.
+
+    :func:`apply_period` of the identity, written for it: the state block ``X`` (n × N) is
+    carried through the steps of one period (``X ← P_i X``, one product per step), each
+    delayed-sample input adds its ``G_i`` block to the two columns of that sample (the
+    sample ``r_0 = C u_0`` that closes the period adds ``G_i C`` to the ``u_0`` columns), and
+    every kept sample ``r_s = C X_s`` is written as it passes.
+    """
+    n, k = system.n, plan.steps
+    size = n + 2 * plan.n_samples
+    nb = maps.batch
+    c = system.c_out
+    x = np.zeros((nb, n, size))
+    x[:, :, :n] = np.eye(n)
+    phi = np.empty((nb, size, size))
+    slot = plan.slot
+    for cut, start, _ in plan.segments:  # the steps of one period
+        if slot[start] >= 0:
+            phi[:, n + 2 * slot[start] : n + 2 * slot[start] + 2] = c @ x
+        if cut < 0:
+            x = maps.free[:, -1 - cut] @ x
+            continue
+        g = maps.g[:, cut]
+        x = maps.p[:, cut] @ x
+        lo = n + 2 * slot[start]
+        x[:, :, lo : lo + 2] += g[:, :, :2]
+        if start + 1 < k:
+            nxt = n + 2 * slot[start + 1]
+            x[:, :, nxt : nxt + 2] += g[:, :, 2:]
+        else:
+            x[:, :, :n] += g[:, :, 2:] @ c
+    phi[:, :n] = x
+    return phi
 
 
 def trajectory(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps, z: np.ndarray) -> np.ndarray:
@@ -410,15 +514,27 @@ def trajectory(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps, z: np.nd
 
 
 def critical_multipliers(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps, *,
-                         vectors: bool = False) -> tuple[np.ndarray, np.ndarray | None]:
+                         vectors: bool | Literal["unstable"] = False) -> tuple[np.ndarray, np.ndarray | None]:
     """The multiplier of largest modulus of each map in the batch (and its eigenvector).
 
-    Reduced sizes ``N <= DENSE_MAX_SIZE`` are solved densely. Larger ones use
-    ``max(KRYLOV_DIM, n + 12)`` steps of Arnoldi on the implicit map (Gram–Schmidt twice,
-    fixed seeded start). A batch member is accepted when its leading Ritz value has a
-    residual below ``RITZ_TOL`` and no other Ritz value ``θ`` with residual ``ρ`` could hide
-    a larger eigenvalue (``|θ| + ρ`` not above the leading modulus); otherwise it falls back
-    to the dense solver, so the answer is always a converged eigenvalue.
+    The monodromy matrices are formed once (:func:`monodromy_matrix`: one pass over the
+    steps of a period for all columns). Reduced sizes ``N <= DENSE_MAX_SIZE`` are solved
+    densely. Larger ones use ``max(KRYLOV_DIM, n + 12)`` steps of Arnoldi on those matrices
+    (Gram–Schmidt twice, fixed seeded start). A batch member is accepted when its leading
+    Ritz value has a residual below ``RITZ_TOL`` and no other Ritz value ``θ`` with residual
+    ``ρ`` could hide a larger eigenvalue (``|θ| + ρ`` not above the leading modulus);
+    otherwise it falls back to the dense solver, so the answer is always a converged
+    eigenvalue.
+
+    Parameters
+    ----------
+    system : StateSpace
+    plan : CuttingPlan
+    maps : PeriodMaps
+    vectors : bool or "unstable"
+        Also the eigenvectors: of every member, or only of those with ``|μ| >= 1`` (the
+        others' rows are NaN; a dense member then costs one more eigen-decomposition only
+        when unstable).
 
     Returns
     -------
@@ -428,26 +544,26 @@ def critical_multipliers(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps
     size = system.n + 2 * plan.n_samples
     nb = maps.batch
     mu = np.empty(nb, dtype=complex)
-    vec = np.empty((nb, size), dtype=complex) if vectors else None
+    vec = np.full((nb, size), np.nan + 0j) if vectors else None
+    phi = monodromy_matrix(system, plan, maps)
     dense = np.ones(nb, dtype=bool)
     if size > DENSE_MAX_SIZE:
-        k_mu, k_vec, ok = _arnoldi(system, plan, maps, size, vectors)
+        k_mu, k_vec, ok = _arnoldi(phi, system.n, vectors is not False)
         mu[ok] = k_mu[ok]
         if vec is not None and k_vec is not None:
             vec[ok] = k_vec[ok]
         dense = ~ok
     if np.any(dense):
-        sub = _take(maps, np.flatnonzero(dense))
-        phi = monodromy_matrix(system, plan, sub)
-        if vectors:
-            ev, ew = np.linalg.eig(phi)
-        else:
-            ev, ew = np.linalg.eigvals(phi), None
-        i = np.argmax(np.abs(ev), axis=1)
-        rows = np.arange(ev.shape[0])
-        mu[dense] = ev[rows, i]
-        if vec is not None and ew is not None:
-            vec[dense] = ew[rows, :, i]
+        rows = np.flatnonzero(dense)
+        ev = np.linalg.eigvals(phi[rows])
+        mu[rows] = ev[np.arange(rows.size), np.argmax(np.abs(ev), axis=1)]
+        if vec is not None:
+            need = rows if vectors is True else rows[np.abs(mu[rows]) >= 1.0]
+            if need.size:
+                ev, ew = np.linalg.eig(phi[need])
+                i = np.argmax(np.abs(ev), axis=1)
+                mu[need] = ev[np.arange(need.size), i]
+                vec[need] = ew[np.arange(need.size), :, i]
     return mu, vec
 
 
@@ -455,16 +571,17 @@ def _take(maps: PeriodMaps, idx: np.ndarray) -> PeriodMaps:
     return PeriodMaps(maps.p[idx], maps.g[idx], maps.free[idx], maps.step[idx])
 
 
-def _arnoldi(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps, size: int,
-             vectors: bool) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
-    """Batched Arnoldi: leading Ritz value (and vector) and whether it converged."""
-    nb, p = maps.batch, min(max(KRYLOV_DIM, system.n + 12), size)
+def _arnoldi(phi: np.ndarray, n: int, vectors: bool) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
+    """Batched Arnoldi on monodromy matrices (nb, N, N) of state size ``n``: leading Ritz value
+    (and vector) and whether it converged."""
+    nb, size = phi.shape[0], phi.shape[-1]
+    p = min(max(KRYLOV_DIM, n + 12), size)
     basis = np.zeros((nb, size, p + 1))
     hess = np.zeros((nb, p + 1, p))
     start = np.random.default_rng(_KRYLOV_SEED).standard_normal(size)
     basis[:, :, 0] = start / np.linalg.norm(start)
     for j in range(p):
-        w = apply_period(system, plan, maps, basis[:, :, j : j + 1])[:, :, 0]
+        w = (phi @ basis[:, :, j : j + 1])[:, :, 0]
         v = basis[:, :, : j + 1]
         vt = v.transpose(0, 2, 1)
         coef = (vt @ w[:, :, None])[:, :, 0]
