@@ -11,7 +11,11 @@ fitted to the predicted FRF), 4 teeth, half-immersion down-milling, 500 speeds
   ``--baseline-every``-th speed and scaled to 500 (its depths are checked against the SDM's);
 * ZOA (Altintas–Budak) on the predicted FRF for the same speeds;
 * the SDM with the default 3 modes per direction, at low immersion (a/D = 0.05, 2 teeth),
-  and end to end through the application layer (prediction + exact modes + SDM).
+  and end to end through the application layer (prediction + exact modes + SDM);
+* the issue-22.4 yardstick: the SDM time over ``rcsa.predict`` of RA-1 at 10 000 lines in the
+  same process (target ≤ 25×), and the limits against those the replaced per-speed search gave
+  on the same three 500-speed cuts (``tests/data/lobes/sdm_reference.json``; target: within
+  0.5 %).
 
 BLAS runs single-threaded here (``OPENBLAS_NUM_THREADS=1`` unless set): on this shared 2-core
 VM, threaded OpenBLAS makes the baseline's small 88 × 88 products ~100× slower, which would
@@ -32,11 +36,14 @@ import sys  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
+import json  # noqa: E402
+
 import numpy as np  # noqa: E402
 from scipy.linalg import expm  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+import rcsa  # noqa: E402
 from rcsa import app  # noqa: E402
 from rcsa.analysis.lobes.modal_model import ModalModel, fit_modal_model  # noqa: E402
 from rcsa.analysis.lobes.semi_discretization import semi_discretization_lobes  # noqa: E402
@@ -147,6 +154,30 @@ def main() -> None:
                "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 500}}
     t_app, _ = _timed(lambda: app.stability_lobes(request), args.repeat)
     print(f"  end to end (predict + exact modes + SDM, 3 per direction) {t_app:6.2f} s")
+    big = ra1({"start_hz": 1.0, "stop_hz": 10000.0, "step_hz": 1.0})
+    t_pred, _ = _timed(lambda: rcsa.predict(big), 5 * args.repeat)
+    print(f"  rcsa.predict of RA-1, 10 000 lines             {t_pred * 1e3:8.1f} ms   SDM (4 modes) / prediction "
+          f"{t_sdm / t_pred:5.1f}x  (target <= 25x)")
+    _against_reference()
+
+
+def _against_reference() -> None:
+    """The three 500-speed cuts of tests/data/lobes/sdm_reference.json, solved again."""
+    reference = json.loads((Path(__file__).resolve().parents[1] / "tests" / "data" / "lobes" /
+                            "sdm_reference.json").read_text())
+    for case in (c for c in reference["cases"] if c["benchmark_only"]):
+        grid = case["spindle_speed_rpm"]
+        model = ModalModel.of(**case["modal_model"])
+        t0 = time.perf_counter()
+        r = semi_discretization_lobes(model, **{k: case[k] for k in ("teeth", "tangential_coefficient_n_m2",
+                                                                       "radial_ratio", "radial_immersion", "milling")},
+                                      spindle_speed_rpm=np.linspace(grid["start"], grid["stop"], grid["count"]))
+        elapsed = time.perf_counter() - t0
+        old = np.array([np.nan if x is None else x for x in case["depth_limit_m"]])
+        dev = np.nanmax(np.abs(r.depth_limit_m / old - 1))
+        same_kind = np.mean(r.instability == np.array(case["instability"]))
+        print(f"  vs the replaced solver, {case['name']:24s} {elapsed:6.2f} s   max |limit/old - 1| {dev:.1e}   "
+              f"same kind at {same_kind:.0%} of speeds")
 
 
 if __name__ == "__main__":
