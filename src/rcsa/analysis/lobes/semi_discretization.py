@@ -98,6 +98,9 @@ __all__ = [
     "MAX_STEPS_PER_PERIOD",
     "MIN_STEPS_PER_PERIOD",
     "SemiDiscretizationResult",
+    "MAX_RESOLVING_STEPS",
+    "RESOLVING_STEPS_PER_CYCLE",
+    "resolving_steps",
     "semi_discretization_lobes",
     "semi_discretization_lobes_many",
 ]
@@ -626,6 +629,46 @@ def semi_discretization_lobes(
         steps_per_period=steps_per_period, depth_rtol=depth_rtol)[0]
 
 
+#: :func:`resolving_steps`: steps per cycle of the chatter it aims at, and the largest step
+#: count it gives.
+RESOLVING_STEPS_PER_CYCLE = 10.0
+MAX_RESOLVING_STEPS = 320
+
+
+def resolving_steps(model: ModalModel, teeth: int, spindle_speed_rpm: np.ndarray, *,
+                    chatter_frequency_hz: np.ndarray | None = None,
+                    steps_per_cycle: float = RESOLVING_STEPS_PER_CYCLE,
+                    max_steps: int = MAX_RESOLVING_STEPS) -> np.ndarray:
+    """Steps per tooth period that resolve the chatter at each speed: a band per speed.
+
+    Chatter lies a little above a natural frequency: without ``chatter_frequency_hz`` the
+    mode with the largest peak (×1.2) sets the vibration cycles per tooth period ``c``; with it
+    (e.g. from an under-resolved first solve), that frequency does. The steps are
+    ``steps_per_cycle · c`` rounded up to a multiple of 20, between
+    ``DEFAULT_STEPS_PER_PERIOD`` and ``max_steps`` (speeds needing more keep ``max_steps`` and
+    are flagged by ``steps_per_chatter_cycle``). First-order SDM errs by about 2 % at 12 steps
+    per chatter cycle (module docstring); few bands keep the batches large.
+
+    Examples
+    --------
+    >>> m = ModalModel.of([1400.0, 4000.0], [0.02, 0.03], [1.0, 0.5], [0, 0])
+    >>> resolving_steps(m, 1, np.array([3000.0, 12000.0, 24000.0])).tolist()
+    [320, 100, 60]
+    >>> resolving_steps(m, 1, np.array([24000.0]), chatter_frequency_hz=np.array([4100.0])).tolist()
+    [120]
+    """
+    speed = np.asarray(spindle_speed_rpm, dtype=float)
+    if chatter_frequency_hz is None:
+        w = np.asarray(model.frequency_hz, dtype=float)
+        peak = np.asarray(model.residue_1_kg) / (2 * np.asarray(model.damping_ratio) * (2 * np.pi * w) ** 2)
+        f_top = np.full(speed.shape, 1.2 * float(w[np.argmax(peak)]))
+    else:
+        f_top = np.where(np.isfinite(chatter_frequency_hz), chatter_frequency_hz, 0.0)
+    cycles = f_top * 60.0 / (teeth * speed)
+    k = np.ceil(steps_per_cycle * cycles / 20.0) * 20
+    return np.clip(k, DEFAULT_STEPS_PER_PERIOD, max_steps).astype(np.int64)
+
+
 #: What :func:`semi_discretization_lobes_many` shares across its models (one cut).
 MANY_FIELDS = ("teeth", "tangential_coefficient_n_m2", "radial_ratio", "radial_immersion", "milling",
                "steps_per_period")
@@ -640,9 +683,10 @@ def semi_discretization_lobes_many(
     radial_immersion: float,
     milling: Milling,
     spindle_speed_rpm: Sequence[np.ndarray],
-    steps_per_period: int = DEFAULT_STEPS_PER_PERIOD,
+    steps_per_period: int | Sequence[np.ndarray] = DEFAULT_STEPS_PER_PERIOD,
     depth_rtol: float = DEPTH_RTOL,
     progress: Callable[[int, int], None] | None = None,
+    min_depth_search_max_m: Sequence[float] | None = None,
 ) -> list[SemiDiscretizationResult]:
     """SDM lobes of several modal models (tools) in one cut, solved together.
 
@@ -656,12 +700,20 @@ def semi_discretization_lobes_many(
     models : sequence of ModalModel
         The tools' modes (any numbers of modes: smaller models are padded with inert modes,
         :func:`~rcsa.analysis.lobes.monodromy.state_spaces`).
-    teeth, tangential_coefficient_n_m2, radial_ratio, radial_immersion, milling, steps_per_period, depth_rtol
+    teeth, tangential_coefficient_n_m2, radial_ratio, radial_immersion, milling, depth_rtol
         As in :func:`semi_discretization_lobes` (the same for every model).
+    steps_per_period : int or sequence of numpy.ndarray
+        One step count for all, or one per speed of each model (:func:`resolving_steps`): the
+        speeds of each step count are solved as one band; a result's ``steps_per_period`` is
+        then its largest.
     spindle_speed_rpm : sequence of numpy.ndarray
         One speed grid (rpm) per model.
     progress : callable, optional
         ``progress(done, total)`` after each level of the coarse-to-fine search.
+    min_depth_search_max_m : sequence of float, optional
+        Per model, search at least this deep (m): the ceiling is ``max(64 b_ref, this)``,
+        so a NaN limit then says "stable up to at least this depth" (a preset capped at the
+        flute length needs the search to reach it).
 
     Returns
     -------
@@ -688,12 +740,57 @@ def semi_discretization_lobes_many(
                                               f"{len(spindle_speed_rpm)}")
     kt = float(tangential_coefficient_n_m2)
     speeds = [np.array(s, dtype=float) for s in spindle_speed_rpm]  # copies: the results freeze their arrays
-    for speed in speeds:
-        _check_arguments(teeth, kt, radial_ratio, steps_per_period, speed)
+    per_speed = not isinstance(steps_per_period, (int, np.integer))
+    steps = ([np.asarray(k) for k in steps_per_period] if per_speed  # type: ignore[union-attr]
+             else [np.full(s.size, steps_per_period) for s in speeds])
+    if len(steps) != len(models) or any(k.shape != s.shape for k, s in zip(steps, speeds, strict=True)):
+        raise InputError("steps_per_period", "give one step count per speed of each model, or one for all")
+    for speed, k in zip(speeds, steps, strict=True):
+        for value in np.unique(k) if k.size else [DEFAULT_STEPS_PER_PERIOD]:
+            _check_arguments(teeth, kt, radial_ratio, value.item() if isinstance(value, np.generic) else value,
+                             speed)
     phi_st, phi_ex = engagement_angles_rad(radial_immersion, milling)
-    plan = md.cutting_plan(teeth, steps_per_period, phi_st, phi_ex, radial_ratio)
     alpha = directional_factors(phi_st, phi_ex, radial_ratio)
     b_ref = np.array([_reference_depth(m, teeth, kt, alpha) for m in models])
+    ceiling = _SCAN_CEILING * b_ref
+    if min_depth_search_max_m is not None:
+        floor = np.asarray(min_depth_search_max_m, dtype=float)
+        if floor.shape != b_ref.shape or not np.all(np.isfinite(floor)):
+            raise InputError("min_depth_search_max_m", "give one finite depth (m) per model")
+        ceiling = np.maximum(ceiling, floor)
+    fields = [{name: np.full(s.size, fill, dtype=dtype) for name, fill, dtype in _FIELDS} for s in speeds]
+    bands = sorted({int(k) for ks in steps for k in ks})
+    done = 0
+    total = sum(s.size for s in speeds)
+    for k in bands:  # one search per step count (a few bands)
+        members = [i for i in range(len(models)) if np.any(steps[i] == k)]
+        picks = [np.flatnonzero(steps[i] == k) for i in members]
+
+        def band_progress(part: int, _total: int, base: int = done) -> None:
+            if progress is not None:
+                progress(base + part, total)
+
+        solved = _solve_band([models[i] for i in members], [speeds[i][p] for i, p in zip(members, picks, strict=True)],
+                             k, teeth, kt, radial_ratio, phi_st, phi_ex, b_ref[members], ceiling[members], depth_rtol,
+                             band_progress)
+        for i, p, part in zip(members, picks, solved, strict=True):
+            for name, values in part.items():
+                fields[i][name][p] = values
+        done += sum(p.size for p in picks)
+    return [_result(models[i], speeds[i], fields[i], int(steps[i].max()) if steps[i].size else DEFAULT_STEPS_PER_PERIOD,
+                    float(ceiling[i])) for i in range(len(models))]
+
+
+# Per-speed arrays of a result: name, fill value, dtype.
+_FIELDS = (("depth", np.nan, float), ("mu", np.nan + 0j, complex), ("freq", np.nan, float), ("kind", "", "<U4"),
+           ("lobe", -1, np.int64), ("cycles", np.nan, float))
+
+
+def _solve_band(models: Sequence[ModalModel], speeds: Sequence[np.ndarray], steps: int, teeth: int, kt: float,
+                kr: float, phi_st: float, phi_ex: float, b_ref: np.ndarray, ceiling: np.ndarray, rtol: float,
+                progress: Callable[[int, int], None] | None) -> list[dict[str, np.ndarray]]:
+    """The search (:func:`_search`) for the given models and speeds at one step count; per-speed arrays."""
+    plan = md.cutting_plan(teeth, steps, phi_st, phi_ex, kr)
     sizes = np.array([s.size for s in speeds])
     system_of_pair = np.repeat(np.arange(len(models)), sizes)
     speed = np.concatenate(speeds)
@@ -703,11 +800,9 @@ def semi_discretization_lobes_many(
                           plan, kt, period)
     slowest = np.array([np.min(m.damping_ratio * 2 * np.pi * m.frequency_hz) for m in models])
     g0 = -slowest[system_of_pair] * period  # log|μ| at b = 0 (exact)
-    ceiling = _SCAN_CEILING * b_ref
     offsets = np.concatenate([[0], np.cumsum(sizes)])
     grids = [np.arange(offsets[i], offsets[i + 1]) for i in range(len(models))]
-    br = _search(evaluate, grids, g0, (_SCAN_START * b_ref)[system_of_pair], ceiling[system_of_pair], depth_rtol,
-                 progress)
+    br = _search(evaluate, grids, g0, (_SCAN_START * b_ref)[system_of_pair], ceiling[system_of_pair], rtol, progress)
     found = np.isfinite(br.hi)
     depth = np.where(found, br.lo, np.nan)
     mu = np.where(found, evaluate.mu_unstable, np.nan + 0j)
@@ -716,16 +811,14 @@ def semi_discretization_lobes_many(
     kind = np.where(found, np.where(real, np.where(mu.real < 0, "flip", "fold"), "hopf"), "").astype("<U4")
     lobe = np.where(np.isfinite(freq), np.floor(freq * period + 1e-9), -1).astype(np.int64)
     with np.errstate(divide="ignore", invalid="ignore"):  # a fold at 0 Hz is resolved by any step
-        steps_per_cycle = steps_per_period / (freq * period)
-    return [_result(models[i], speeds[i], slice(offsets[i], offsets[i + 1]), depth, mu, freq, kind, lobe,
-                    steps_per_cycle, int(steps_per_period), float(ceiling[i])) for i in range(len(models))]
+        cycles = steps / (freq * period)
+    return [{"depth": depth[a:b], "mu": mu[a:b], "freq": freq[a:b], "kind": kind[a:b], "lobe": lobe[a:b],
+             "cycles": cycles[a:b]} for a, b in zip(offsets[:-1], offsets[1:], strict=True)]
 
 
-def _result(model: ModalModel, speed: np.ndarray, part: slice, depth_all: np.ndarray, mu_all: np.ndarray,
-            freq_all: np.ndarray, kind_all: np.ndarray, lobe_all: np.ndarray, cycles_all: np.ndarray, steps: int,
+def _result(model: ModalModel, speed: np.ndarray, f: dict[str, np.ndarray], steps: int,
             ceiling: float) -> SemiDiscretizationResult:
-    depth, mu, freq = depth_all[part].copy(), mu_all[part].copy(), freq_all[part].copy()
-    kind, lobe, cycles = kind_all[part].copy(), lobe_all[part].copy(), cycles_all[part].copy()
+    depth, mu, freq, kind, lobe, cycles = (f[k] for k in ("depth", "mu", "freq", "kind", "lobe", "cycles"))
     lobes, kinds, lowest = _segments(speed, depth, kind, lobe)
     found = np.isfinite(depth)
     best = int(np.nanargmin(depth)) if found.any() else -1
