@@ -41,6 +41,7 @@ import numpy as np
 from rcsa.analysis.lobes.modal_model import ModalModel, fit_modal_model
 from rcsa.analysis.lobes.pockets import Pocket, PocketRule, best_pocket, pocket_speed_grid, window_minimum
 from rcsa.analysis.lobes.robust import robust_depth_limit
+from rcsa.analysis.lobes.robust_sdm import VERIFY_DRAWS, drawn_models, modal_ratios, robust_sdm_limits
 from rcsa.analysis.lobes.semi_discretization import (
     MIN_STEPS_PER_CHATTER_CYCLE,
     SemiDiscretizationResult,
@@ -384,15 +385,15 @@ def _sdm_pockets(tools: Sequence[ToolCut], settings: CutSettings, reasons: Seque
     coarse = semi_discretization_lobes_many(models, **kw, spindle_speed_rpm=grids, steps_per_period=steps,  # type: ignore[arg-type]
                                             progress=progress, min_depth_search_max_m=needed, depth_rtol=_SCREEN_RTOL)
     robust: list[np.ndarray | None] = [None] * len(cuts)
+    drawn: list[list[ModalModel] | None] = [None] * len(cuts)
     if settings.confidence is not None:
-        from rcsa.analysis.lobes.robust_sdm import robust_sdm_limits  # noqa: PLC0415 (scipy-free but heavier)
-
         solve = robust_sdm or robust_sdm_limits
         for j, (cut, model, lobes) in enumerate(zip(cuts, models, coarse, strict=True)):  # a loop over tools
             if cut.h_draws is None:
                 raise InputError("uncertainty", "no drawn FRFs for this tool: robust presets need them")
             robust[j] = solve(model, cut.frequency_hz, cut.h, cut.h_draws, lobes, settings.confidence, **kw)
-    verified = _verify(models, cuts, grids, coarse, robust, needed, settings, kw)
+            drawn[j] = drawn_models(model, modal_ratios(model, cut.frequency_hz, cut.h, cut.h_draws), VERIFY_DRAWS)
+    verified = _verify(models, cuts, grids, coarse, robust, needed, settings, kw, drawn)
     for j, i in enumerate(ok):
         out[i] = verified[j](reasons[i])
     return out
@@ -433,7 +434,8 @@ class _Dense:
 
 def _verify(models: Sequence[ModalModel], cuts: Sequence[ToolCut], grids: Sequence[np.ndarray],
             coarse: Sequence[SemiDiscretizationResult], robust: Sequence[np.ndarray | None], needed: Sequence[float],
-            settings: CutSettings, kw: dict[str, Any]) -> list[Callable[[str], ToolPocket]]:
+            settings: CutSettings, kw: dict[str, Any],
+            drawn: Sequence[list[ModalModel] | None]) -> list[Callable[[str], ToolPocket]]:
     """Choose each tool's pocket on its coarse grid, then verify the best windows densely.
 
     A speed's verified window limit is the smallest of its coarse window limit (the grid
@@ -442,7 +444,9 @@ def _verify(models: Sequence[ModalModel], cuts: Sequence[ToolCut], grids: Sequen
     one. Per round and tool the best unverified candidates (up to ``_VERIFY_PER_ROUND``
     distinct windows) are solved at ``_VERIFY_POINTS`` speeds across their window; every
     candidate whose window the dense speeds then cover is verified too. A tool is done when
-    its best verified score is at least every unverified candidate's coarse score.
+    its best verified score is at least every unverified candidate's coarse score. A robust
+    tool's dense speeds are also solved for its drawn modal models (``drawn``: every draw's own
+    modes), and their ``(1 − confidence)`` quantile, never above the nominal, is its limit there.
     """
     tol, sf = settings.rule.speed_tolerance, settings.rule.safety_factor
     nominal = [_pocket_limit(r.depth_limit_m, r.depth_search_max_m, need) for r, need in zip(coarse, needed,
@@ -477,13 +481,12 @@ def _verify(models: Sequence[ModalModel], cuts: Sequence[ToolCut], grids: Sequen
         if not todo:
             break
         solved = _solve_windows(models, todo, needed, kw, tol)
+        robust_dense = _robust_windows(drawn, solved, needed, kw, settings.confidence)
         for j, r in solved:  # a loop over tools
             nom = _pocket_limit(r.depth_limit_m, r.depth_search_max_m, needed[j])
             dense_nominal[j].add(r.spindle_speed_rpm, nom, r.steps_per_chatter_cycle)
-            if robust[j] is not None:  # the robust limit's shift below the nominal, carried to the dense speeds
-                with np.errstate(invalid="ignore", divide="ignore"):
-                    shift = np.where(np.isfinite(limits[j]) & np.isfinite(nominal[j]), limits[j] / nominal[j], 1.0)
-                nom = np.where(np.isfinite(nom), nom * np.interp(r.spindle_speed_rpm, grids[j], shift), nom)
+            if j in robust_dense:
+                nom = np.fmin(robust_dense[j], nom)
             dense[j].add(r.spindle_speed_rpm, nom, r.steps_per_chatter_cycle)
             g = grids[j]
             for i in np.flatnonzero(np.isfinite(score[j]) & np.isnan(verified[j])):  # candidates now covered
@@ -526,6 +529,36 @@ def _solve_windows(models: Sequence[ModalModel], todo: dict[int, list[float]], n
             keep = ~bad
             solved[i] = _merged(solved[i], keep, r)
     return list(zip(order, solved, strict=True))
+
+
+def _robust_windows(drawn: Sequence[list[ModalModel] | None], solved: list[tuple[int, SemiDiscretizationResult]],
+                    needed: Sequence[float], kw: dict[str, Any], confidence: float | None) -> dict[int, np.ndarray]:
+    """For robust tools, the ``(1 − confidence)`` quantile over their drawn models at the dense speeds just solved
+    (pocket form: inf where a draw is stable to the flute length)."""
+    if confidence is None:
+        return {}
+    jobs = [(j, r) for j, r in solved if drawn[j]]
+    if not jobs:
+        return {}
+    models, speeds, steps, depth, owner = [], [], [], [], []
+    for j, r in jobs:  # a loop over robust tools
+        for m in drawn[j] or []:
+            models.append(m)
+            speeds.append(r.spindle_speed_rpm)
+            steps.append(resolving_steps(m, kw["teeth"], r.spindle_speed_rpm))
+            depth.append(needed[j])
+            owner.append(j)
+    results = semi_discretization_lobes_many(models, **kw, spindle_speed_rpm=speeds, steps_per_period=steps,
+                                             min_depth_search_max_m=depth)
+    out = {}
+    for j, _ in jobs:  # a loop over robust tools
+        rows = [_pocket_limit(res.depth_limit_m, res.depth_search_max_m, needed[j])
+                for res, o in zip(results, owner, strict=True) if o == j]
+        table = np.where(np.isinf(np.array(rows)), 1e3, np.array(rows))
+        q = np.percentile(np.where(np.isnan(table), -np.inf, table), 100.0 * (1.0 - confidence), axis=0,
+                          method="lower")
+        out[j] = np.where(q >= 1e2, np.inf, q)
+    return out
 
 
 def _merged(first: SemiDiscretizationResult, keep: np.ndarray, second: SemiDiscretizationResult
