@@ -8,6 +8,14 @@ lobes speeds) it builds the largest request whose estimate fits the sync limits
 the estimate against the CPU time and the peak RSS measured. The stated bound
 (:data:`rcsa.app.budget.STATED_SYNC_BOUND`: 60 s CPU, 1.5 GiB) must hold for every one.
 Results go to ``benchmarks/results/budget.json``. ``--scale 0.1`` runs a tenth of the limit.
+
+``--fit-sdm`` fits the semi-discretization's cost model instead (:data:`rcsa.app.budget.SDM_COST`):
+it runs SDM lobes of RA-1 over a grid of speeds, ``steps_per_period`` and
+``modes_per_direction``, each in a fresh process (CPU seconds and peak RSS), fits the
+constants by non-negative least squares (on relative errors), prints the estimate against
+the measurement for every point and the ``SDM_COST = ...`` line to paste into
+``src/rcsa/app/budget.py``, and writes ``benchmarks/results/budget_sdm.json``.
+``--check-sdm`` runs the same grid and reports the current constants' ratios only.
 """
 
 from __future__ import annotations
@@ -27,12 +35,119 @@ from tests.service.budget_cases import worst_cases  # noqa: E402
 
 from rcsa.app import budget  # noqa: E402
 
+#: (speeds, steps_per_period, modes_per_direction, radial immersion) of the SDM fit.
+SDM_GRID = [(s, k, m, ae) for s, k, m, ae in (
+    (20, 10, 1, 0.5), (20, 40, 1, 0.5), (20, 80, 1, 0.5), (20, 40, 3, 0.5), (20, 80, 3, 0.5), (20, 40, 6, 0.5),
+    (20, 120, 2, 0.5), (80, 40, 3, 0.5), (200, 40, 3, 0.5), (200, 20, 1, 0.5), (400, 40, 3, 0.5),
+    (20, 40, 3, 0.05), (20, 160, 3, 0.05), (80, 200, 2, 0.05), (20, 40, 8, 1.0))]
+
+
+def _sdm_request(speeds: int, steps: int, modes: int, immersion: float) -> dict:
+    from rcsa.reference import ra1
+
+    return {"assembly": ra1({"start_hz": 100.0, "stop_hz": 5000.0, "step_hz": 5.0}), "teeth": 4,
+            "tangential_coefficient_n_m2": 6e8, "radial_ratio": 0.3, "radial_immersion": immersion,
+            "milling": "down", "method": "semi_discretization", "steps_per_period": steps,
+            "modes_per_direction": modes, "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": speeds}}
+
+
+def _measure_sdm() -> list[dict]:
+    """Each grid point in its own fresh process (its peak RSS is its own); warm-up first."""
+    rows = []
+    warm = _sdm_request(3, 10, 1, 0.5)
+    base = None
+    for speeds, steps, modes, immersion in SDM_GRID:
+        job = [{"label": f"sdm {speeds} speeds k={steps} m={modes} ae/D={immersion}", "operation": "lobes",
+                "request": _sdm_request(speeds, steps, modes, immersion), "warmup": warm}]
+        out = subprocess.run([sys.executable, "-m", "tests.service._budget_probe"], input=json.dumps(job),
+                             capture_output=True, text=True, cwd=REPO, check=True)
+        row = json.loads(out.stdout.splitlines()[-1])
+        if base is None:  # the process with the warm-up alone: what is not the request's
+            empty = subprocess.run([sys.executable, "-m", "tests.service._budget_probe"],
+                                   input=json.dumps([{**job[0], "request": warm}]), capture_output=True, text=True,
+                                   cwd=REPO, check=True)
+            base = json.loads(empty.stdout.splitlines()[-1])["peak_rss_bytes"]
+        row.update(speeds=speeds, steps=steps, modes=modes, immersion=immersion, base_rss_bytes=base)
+        rows.append(row)
+        print(f"  {row['label']:42s} CPU {row['cpu_seconds']:7.2f} s  peak RSS {row['peak_rss_bytes'] / 2**20:6.0f} MiB",
+              flush=True)
+    return rows
+
+
+def _fit_sdm(rows: list[dict]) -> budget.SdmCostModel:
+    """Non-negative least squares on relative errors, scaled so that no point is under-estimated."""
+    import numpy as np
+    from scipy.optimize import nnls
+
+    chunk = budget.SDM_COST.chunk
+    feats, mem_feats, cpu, mem = [], [], [], []
+    for r in rows:
+        req = _sdm_request(r["speeds"], r["steps"], r["modes"], r["immersion"])
+        steps, modes, fraction = budget.sdm_terms(req)
+        n, k_cut, d = budget.SDM_COST.sizes(steps, modes, fraction)
+        zoa = budget.estimate("lobes", {**req, "method": "zoa", "steps_per_period": None,
+                                        "modes_per_direction": None}).seconds  # the assembly's prediction
+        s = r["speeds"]
+        feats.append([steps, s * steps * n, s * k_cut, s * k_cut * n, s * d**3])
+        cpu.append(max(r["cpu_seconds"] - zoa, 1e-3))
+        c = min(s, chunk)
+        mem_feats.append([c * steps * n, c * k_cut * n, c * d * d, c])
+        mem.append(max(r["peak_rss_bytes"] - r["base_rss_bytes"], 1.0))
+    a, t = np.array(feats), np.array(cpu)
+    x, _ = nnls(a / t[:, None], np.ones_like(t))  # relative errors
+    x = x / np.min(a @ x / t)  # no calibration point above its estimate
+    am, m = np.array(mem_feats), np.array(mem)
+    y, _ = nnls(am / m[:, None], np.ones_like(m))
+    y = y / np.min(am @ y / m)
+    return budget.SdmCostModel(per_step_s=float(x[0]), per_state_s=float(x[1]), per_cut_s=float(x[2]),
+                               per_cut_state_s=float(x[3]), per_eig_s=float(x[4]), mem_state_bytes=float(y[0]),
+                               mem_cut_bytes=float(y[1]), mem_map_bytes=float(y[2]), mem_speed_bytes=float(y[3]),
+                               chunk=chunk)
+
+
+def sdm(fit: bool, out_path: Path, reuse: bool = False) -> None:
+    """``--fit-sdm`` / ``--check-sdm`` (``--reuse``: the measurements of the last run)."""
+    if reuse:
+        saved = json.loads(out_path.read_text())
+        load, rows = saved["load_average"], saved["rows"]
+        print(f"SDM cost model from the measurements in {out_path.name} (load average {load[0]:.2f})")
+    else:
+        load = os.getloadavg()
+        print(f"SDM cost model, load average {load[0]:.2f}, {load[1]:.2f}, {load[2]:.2f} on {os.cpu_count()} cores")
+        rows = _measure_sdm()
+    model = _fit_sdm(rows) if fit else budget.SDM_COST
+    if fit:
+        fields = ", ".join(f"{k}={v:.2g}" for k, v in model.__dict__.items() if k != "chunk")
+        print(f"SDM_COST = SdmCostModel({fields})")
+    worst_t, worst_m = 0.0, 0.0
+    for r in rows:
+        req = _sdm_request(r["speeds"], r["steps"], r["modes"], r["immersion"])
+        steps, modes, fraction = budget.sdm_terms(req)
+        est = budget.estimate("lobes", req).seconds - budget.SDM_COST.seconds(r["speeds"], steps, modes, fraction) \
+            + model.seconds(r["speeds"], steps, modes, fraction)
+        est_m = model.memory_bytes(r["speeds"], steps, modes, fraction) + r["base_rss_bytes"]
+        rt, rm = est / r["cpu_seconds"], est_m / r["peak_rss_bytes"]
+        worst_t, worst_m = max(worst_t, rt, 1 / rt), max(worst_m, rm, 1 / rm)
+        r.update(estimated_seconds=est, estimated_peak_bytes=est_m)
+        print(f"  {r['label']:42s} estimate/measured: CPU {rt:5.2f}  peak RSS {rm:5.2f}")
+    print(f"worst factor between estimate and measurement: CPU {worst_t:.2f}, peak RSS {worst_m:.2f}")
+    out_path.parent.mkdir(parents=True, exist_ok=True)
+    out_path.write_text(json.dumps({"load_average": list(load), "model": model.__dict__, "rows": rows,
+                                    "worst_factor": {"cpu": worst_t, "rss": worst_m}}, indent=1) + "\n")
+
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--scale", type=float, default=1.0, help="Fraction of the sync limits.")
     parser.add_argument("--out", type=Path, default=REPO / "benchmarks" / "results" / "budget.json")
+    parser.add_argument("--fit-sdm", action="store_true", help="Fit SDM_COST (see above).")
+    parser.add_argument("--check-sdm", action="store_true", help="Report SDM_COST against measurements.")
+    parser.add_argument("--reuse", action="store_true", help="With --fit-sdm/--check-sdm: refit the measurements "
+                                                             "of the last run instead of measuring again.")
     args = parser.parse_args()
+    if args.fit_sdm or args.check_sdm:
+        sdm(args.fit_sdm, REPO / "benchmarks" / "results" / "budget_sdm.json", reuse=args.reuse)
+        return
     cases = worst_cases(args.scale * budget.SYNC.seconds, args.scale * budget.SYNC.memory_bytes)
     out = subprocess.run([sys.executable, "-m", "tests.service._budget_probe"], input=json.dumps(cases),
                          capture_output=True, text=True, cwd=REPO, check=True)

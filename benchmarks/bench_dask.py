@@ -43,7 +43,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from bench_sync import synthetic_library  # noqa: E402
 from rcsa.cli.library_cmd import parse_frequency_option  # noqa: E402
-from rcsa.infra.compute import DaskBackend, LocalBackend  # noqa: E402
+from rcsa.infra.compute_backends import DaskBackend, LocalBackend  # noqa: E402
 from rcsa.libraries import chunks  # noqa: E402
 from rcsa.libraries import sync as library_sync  # noqa: E402
 from rcsa.reference import ra1  # noqa: E402

@@ -32,7 +32,6 @@ import numpy as np
 
 import rcsa
 from numpy_baseline import tip_receptance as numpy_tip_receptance
-from rcsa import app
 from rcsa.model.assembly import build_model
 from rcsa.model.contract import parse_assembly
 from rcsa.model.peaks import find_frf_peaks
@@ -132,17 +131,17 @@ def batch_section(n_tools: int, slow: bool) -> None:
               for t in tools(n_tools, rng)]
     request = {"frequency": grid, "spindle": doc["spindle"], "combinations": combos}
     # results kept as numpy arrays (what the service serialises with orjson)
-    app.predict_batch({**request, "combinations": combos[:10]}, arrays="numpy")
-    t_frf = median_time_s(lambda: app.predict_batch({**request, "natural_frequencies": False}, arrays="numpy"), 3,
+    rcsa.predict_batch({**request, "combinations": combos[:10]}, arrays="numpy")
+    t_frf = median_time_s(lambda: rcsa.predict_batch({**request, "natural_frequencies": False}, arrays="numpy"), 3,
                           warm=False)
-    t_full = median_time_s(lambda: app.predict_batch(request, arrays="numpy"), 3, warm=False)
-    n_modes = sum(len(r["natural_frequencies_hz"]) for r in app.predict_batch(request, arrays="numpy")["results"])
+    t_full = median_time_s(lambda: rcsa.predict_batch(request, arrays="numpy"), 3, warm=False)
+    n_modes = sum(len(r["natural_frequencies_hz"]) for r in rcsa.predict_batch(request, arrays="numpy")["results"])
     print(f"{n_tools} tools on one spindle + holder, 1 999 lines ({load()})")
     print(f"  batch, FRFs + peaks + static stiffness          {t_frf:7.2f} s")
     print(f"  batch, + every tool's exact natural frequencies {t_full:7.2f} s   ({n_modes} modes)")
     profile = cProfile.Profile()
     profile.enable()
-    app.predict_batch(request, arrays="numpy")
+    rcsa.predict_batch(request, arrays="numpy")
     profile.disable()
     stats = pstats.Stats(profile)
     total = max(v[3] for v in stats.stats.values())  # type: ignore[attr-defined]
@@ -161,7 +160,7 @@ def batch_section(n_tools: int, slow: bool) -> None:
             print(f"    {label:<52s} {seen[name]:6.2f} s  {100 * seen[name] / total:4.0f} %")
     if slow:
         n_base = max(20, n_tools // 20)
-        t_base = median_time_s(lambda: [app.predict({**ra1(grid), "tool": c["tool"]}) for c in combos[:n_base]], 1,
+        t_base = median_time_s(lambda: [rcsa.predict({**ra1(grid), "tool": c["tool"]}) for c in combos[:n_base]], 1,
                                warm=False) * n_tools / n_base
         print(f"  each tool as a full assembly (baseline)        {t_base:7.2f} s   ratio {t_base / t_full:5.1f}x")
 

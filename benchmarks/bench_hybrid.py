@@ -22,7 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from tests.helpers import max_error_of_peak  # noqa: E402
 from tests.test_hybrid import GRID, blank_frfs, hybrid_doc, put_blank  # noqa: E402
 
-from rcsa import app  # noqa: E402
+import rcsa  # noqa: E402
 from rcsa.measured.store import MeasurementStore  # noqa: E402
 from rcsa.reference import ra1  # noqa: E402
 
@@ -31,7 +31,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--seeds", type=int, default=10)
     args = parser.parse_args()
-    truth = app.predict(ra1(GRID)).tool_point.h
+    truth = rcsa.predict(ra1(GRID)).tool_point.h
     store = MeasurementStore(Path(tempfile.mkdtemp()) / "store")
     print("tool-point h error, fraction of the true peak, 300–5000 Hz (median over seeds)")
     print(f"{'noise':>8} {'exact 3-FRF':>12} {'FD fallback':>12}")
@@ -44,7 +44,7 @@ def main() -> None:
             for method in errors:
                 doc = hybrid_doc(mid, holder=False)
                 doc["spindle"]["artifact_method"] = method
-                h = app.predict(doc, store=store).tool_point.h
+                h = rcsa.predict(doc, store=store).tool_point.h
                 errors[method].append(max_error_of_peak(h[band], truth[band]))
         print(f"{noise * 100:7.1f}% {statistics.median(errors['exact']):12.2e} "
               f"{statistics.median(errors['finite_difference']):12.3f}")

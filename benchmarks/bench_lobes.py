@@ -31,12 +31,11 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # before numpy is imported
 
 import argparse  # noqa: E402
+import json  # noqa: E402
 import statistics  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
-
-import json  # noqa: E402
 
 import numpy as np  # noqa: E402
 from scipy.linalg import expm  # noqa: E402
@@ -44,7 +43,6 @@ from scipy.linalg import expm  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import rcsa  # noqa: E402
-from rcsa import app  # noqa: E402
 from rcsa.analysis.lobes.modal_model import ModalModel, fit_modal_model  # noqa: E402
 from rcsa.analysis.lobes.semi_discretization import semi_discretization_lobes  # noqa: E402
 from rcsa.analysis.lobes.zoa import (  # noqa: E402
@@ -122,7 +120,7 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--baseline-every", type=int, default=25)
     args = parser.parse_args()
-    prediction = app.predict(ra1(GRID))
+    prediction = rcsa.predict(ra1(GRID))
     f, h = prediction.frequency_hz, prediction.tool_point.h
     typical = fit_modal_model(f, h, modes_per_direction=2)
     default = fit_modal_model(f, h, modes_per_direction=3)
@@ -152,7 +150,7 @@ def main() -> None:
           f"({int(np.sum(low.instability == 'flip'))} speeds flip-limited)")
     request = {"assembly": ra1(GRID), **CUT, "method": "semi_discretization",
                "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 500}}
-    t_app, _ = _timed(lambda: app.stability_lobes(request), args.repeat)
+    t_app, _ = _timed(lambda: rcsa.stability_lobes(request), args.repeat)
     print(f"  end to end (predict + exact modes + SDM, 3 per direction) {t_app:6.2f} s")
     big = ra1({"start_hz": 1.0, "stop_hz": 10000.0, "step_hz": 1.0})
     t_pred, _ = _timed(lambda: rcsa.predict(big), 5 * args.repeat)

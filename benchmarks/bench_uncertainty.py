@@ -3,7 +3,7 @@
 RA-1 on 2 000 lines (2.5–5 000 Hz), the default tolerances. Printed (median of ``--repeat``
 runs, after one warm-up):
 
-* one plain prediction (with its exact natural frequencies), as ``rcsa.app.predict``;
+* one plain prediction (with its exact natural frequencies), as ``rcsa.predict``;
 * the same request with ``"uncertainty": {"draws": 200}`` (p05/p50/p95 of |h| and the
   natural frequencies' mean/sd over the draws: every draw's chain in one stacked march);
 * the ratio of the two (issue 15's target: ≤ 10×);
@@ -22,7 +22,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from rcsa import app  # noqa: E402
+import rcsa as app  # noqa: E402  (rcsa.predict, rcsa.stability_lobes: the application layer's calls)
 from rcsa.reference import ra1  # noqa: E402
 
 GRID = {"start_hz": 2.5, "stop_hz": 5000.0, "step_hz": 2.5}  # 2 000 lines

@@ -33,6 +33,9 @@ class Settings(BaseSettings):
     max_batch_combinations: int = Field(10_000, ge=1, description="Most combinations per batch request.")
     async_batch_threshold: int = Field(50, ge=0, description="Batches and libraries with more "
                                        "combinations than this run as jobs (202 Accepted).")
+    sync_time_limit_s: float = Field(120.0, ge=0, description="An answer given at once (a POST that computes "
+                                     "without storing anything) stops at this many seconds with a 503 problem; send "
+                                     "Prefer: respond-async for longer work (0: no limit).")
     job_workers: int = Field(1, ge=0, le=8, description="Job runner threads per process (0: this "
                              "process runs no jobs, another one must).")
     job_poll_s: float = Field(1.0, gt=0, description="How often an idle job runner looks for work, s.")
@@ -49,8 +52,9 @@ class Settings(BaseSettings):
                                        "0: no budget.")
     job_max_unfinished_per_caller: int = Field(10, ge=1, description="Queued or running jobs one caller (API key, "
                                                "or anonymous client address) may have; more answer 429.")
-    job_max_running_per_caller: int = Field(0, ge=0, description="Jobs of one caller running at once (0: no cap; "
-                                            "queued jobs are claimed round-robin across callers either way).")
+    job_max_running_per_caller: int = Field(1, ge=0, description="Jobs of one caller running at once, all "
+                                            "anonymous callers counting as one (0: no cap; queued jobs are claimed "
+                                            "round-robin across callers either way).")
     dask_scheduler: str | None = Field(None, description="Dask scheduler address (tcp://host:8786): jobs compute "
                                        "on that cluster (pip install 'rcsa[dask]'); unset, in this process.")
     dask_connect_timeout_s: float = Field(10.0, gt=0, description="How long to try to reach the Dask scheduler "

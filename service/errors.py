@@ -29,7 +29,14 @@ from starlette.responses import Response
 from starlette.routing import BaseRoute, Match
 
 from rcsa.app.budget import BudgetExceeded
-from rcsa.errors import ConflictError, DamagedError, InputError, NotFoundError, StoreError
+from rcsa.errors import (
+    ConflictError,
+    DamagedError,
+    InputError,
+    NotFoundError,
+    StoreError,
+    TimeLimitExceeded,
+)
 
 from .field_errors import pydantic_errors
 
@@ -206,6 +213,15 @@ async def _on_damaged(request: Request, exc: DamagedError) -> Response:
                             extra={"resource": exc.what, "id": exc.ident, "reason": exc.reason})
 
 
+async def _on_time_limit(request: Request, exc: TimeLimitExceeded) -> Response:
+    log.warning("time limit: %s %s stopped after %g s", request.method, request.url.path, exc.seconds)
+    return problem_response(request, 503, f"this request took longer than the {exc.seconds:g} s an answer given at "
+                                          "once may take (RCSA_SYNC_TIME_LIMIT_S) and was stopped; send it with the "
+                                          "header Prefer: respond-async to run it as a job, or make it smaller",
+                            slug="compute-time-limit", title="Computation time limit exceeded",
+                            extra={"time_limit_s": exc.seconds})
+
+
 async def _on_conflict(request: Request, exc: ConflictError) -> Response:
     return problem_response(request, 409, f"{exc.what} {exc.ident} {exc.reason}", slug="conflict",
                             extra={"resource": exc.what, "id": exc.ident})
@@ -274,5 +290,6 @@ def install_error_handlers(app: FastAPI) -> None:
     app.add_exception_handler(StoreError, _on_store)
     app.add_exception_handler(DamagedError, _on_damaged)
     app.add_exception_handler(ConflictError, _on_conflict)
+    app.add_exception_handler(TimeLimitExceeded, _on_time_limit)
     app.add_exception_handler(ProblemError, _on_problem)
     app.add_exception_handler(StarletteHTTPException, _on_http)

@@ -72,8 +72,10 @@ from fastapi import Header, Request
 from fastapi.concurrency import run_in_threadpool
 from starlette.responses import Response
 
-from rcsa.app.runtime import connect_sqlite, runner_is_dead, transaction
 from rcsa.errors import NotFoundError
+from rcsa.infra.job_queue import runner_is_dead
+from rcsa.infra.sqlite import connect as connect_sqlite
+from rcsa.infra.sqlite import transaction
 
 from .bodies import json_document
 from .errors import PROBLEM_MEDIA_TYPE, ProblemError

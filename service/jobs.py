@@ -4,10 +4,12 @@ Whether a batch, library or sync is answered at once or queued is decided by
 :func:`rcsa.app.jobs.answer_or_queue` (size against ``RCSA_ASYNC_BATCH_THRESHOLD``, or
 ``Prefer: respond-async``); the job runners run the same :func:`rcsa.app.jobs.run_work`.
 Here: the ``Prefer`` header, the ``202 Accepted`` answer, the links a sync report carries,
-who a job belongs to (:func:`caller`: its API key, or an anonymous client's address — jobs
-are claimed round-robin across callers, and one caller may have at most
-``RCSA_JOB_MAX_UNFINISHED_PER_CALLER`` unfinished jobs: ``429`` beyond), and the public JSON
-of a job.
+who a job belongs to (:func:`caller`: its API key, or an anonymous client's address — one
+caller may have at most ``RCSA_JOB_MAX_UNFINISHED_PER_CALLER`` unfinished jobs, ``429``
+beyond), whose runners it shares (:func:`pool`: a keyed caller's own; every anonymous caller
+shares one pool, which runs at most ``RCSA_JOB_MAX_RUNNING_PER_CALLER`` jobs at once, so
+anonymous jobs never hold every runner; jobs are claimed round-robin across pools), and the
+public JSON of a job.
 """
 
 from __future__ import annotations
@@ -20,14 +22,16 @@ from starlette.responses import Response
 
 from rcsa.app import budget
 from rcsa.app.analyses import validate
-from rcsa.app.jobs import Job, Outcome, QuotaExceeded, Work, answer_or_queue
-from rcsa.app.keys import Principal
+from rcsa.app.jobs import Outcome, Work, answer_or_queue
+from rcsa.infra.api_keys import Principal
+from rcsa.infra.job_queue import Job, QuotaExceeded
 
 from .errors import ProblemError
 from .responses import json_response
 from .state import AppState
 
-__all__ = ["accepted", "answer", "caller", "compute", "job_document", "present", "wants_async"]
+__all__ = ["ANONYMOUS_POOL", "accepted", "answer", "caller", "compute", "job_document", "pool", "present",
+           "wants_async"]
 
 
 def caller(who: Principal, request: Request) -> str:
@@ -36,6 +40,16 @@ def caller(who: Principal, request: Request) -> str:
         return who.key_id
     host = request.client.host if request.client is not None else "unknown"
     return f"anonymous@{host}"
+
+
+#: The pool of every anonymous caller's jobs.
+ANONYMOUS_POOL = "anonymous"
+
+
+def pool(owner: str | None) -> str | None:
+    """Whose runners a job of ``owner`` shares: :data:`ANONYMOUS_POOL` for anonymous callers,
+    else None (the owner's own)."""
+    return ANONYMOUS_POOL if owner is not None and owner.startswith("anonymous@") else None
 
 
 def wants_async(prefer: str | None) -> bool:
@@ -68,7 +82,7 @@ def answer(state: AppState, work: Work, *, prefer: str | None, idempotency_key: 
         result = answer_or_queue(state.bench, state.jobs, work, respond_async=asked,
                                  async_threshold=state.settings.async_batch_threshold,
                                  reuse_unfinished=idempotency_key is not None, owner=owner,
-                                 max_unfinished=state.settings.job_max_unfinished_per_caller)
+                                 max_unfinished=state.settings.job_max_unfinished_per_caller, pool=pool(owner))
     except QuotaExceeded as exc:
         raise ProblemError(429, f"{exc}; poll the jobs you have (GET /v1/jobs/{{id}}) and submit again when one has "
                                 "finished", slug="too-many-jobs", title="Too many unfinished jobs",

@@ -22,19 +22,13 @@ from pydantic.json_schema import models_json_schema
 from starlette.middleware.gzip import GZipMiddleware
 
 from rcsa._version import __version__
-from rcsa.app.jobs import (
-    Job,
-    JobRunner,
-    Workbench,
-    analysis_job_handlers,
-    compute_backend,
-    job_handlers,
-    job_store,
-)
+from rcsa.app.jobs import Workbench, analysis_job_handlers, job_handlers, job_store
 from rcsa.app.keys import key_ring
 from rcsa.app.measurements import seed_demo
 from rcsa.app.stores import CachedMeasurements, open_store
 from rcsa.errors import RcsaError
+from rcsa.infra.compute_backends import compute_backend
+from rcsa.infra.job_queue import Job, JobRunner
 
 from . import schemas
 from .config import Settings

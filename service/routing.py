@@ -18,11 +18,18 @@ puts the checks that must come first in front, in this order:
    document (:class:`ServiceRequest`), never the raw bytes again.
 
 Then the route's own handler runs (for :class:`service.idempotency.IdempotentRoute`, under
-its ``Idempotency-Key``).
+its ``Idempotency-Key``). A ``POST`` that only reads (every computation answered at once:
+predictions, batches, lobes, analyses, figures, exports, library predictions, file reads)
+runs under the **time limit** ``RCSA_SYNC_TIME_LIMIT_S`` (:func:`rcsa.app.budget.time_limited`):
+the computation stops at its next step boundary once the limit has passed, and the client gets
+a ``503`` problem (``compute-time-limit``) at the limit plus a short grace in any case — the
+request never holds the connection, or a shutdown (SIGTERM), for longer. Writes (uploads,
+syncs, deletes) are not cut short: they finish what they started.
 """
 
 from __future__ import annotations
 
+import asyncio
 from collections.abc import Awaitable, Callable
 from typing import Any
 
@@ -32,8 +39,10 @@ from fastapi.dependencies.models import Dependant
 from fastapi.routing import APIRoute
 from starlette.responses import Response
 
+from rcsa.app.budget import time_limited
 from rcsa.app.inputs import decode_json
-from rcsa.app.keys import Principal
+from rcsa.errors import TimeLimitExceeded
+from rcsa.infra.api_keys import Principal
 
 from .errors import BodyTooLarge
 from .middleware import BODY_LIMIT_KEY
@@ -96,6 +105,7 @@ class ServiceRoute(APIRoute):
         route_limit = int(limit_given) if limit_given is not None else None
         access = _access(self.dependant)
         where = f"{sorted(self.methods or ())[0] if self.methods else ''} {self.path}".strip()
+        timed = "POST" in (self.methods or set()) and access == "read"  # writes finish what they start
 
         async def handler(request: Request) -> Response:
             request = ServiceRequest(request.scope, request.receive)
@@ -113,9 +123,43 @@ class ServiceRoute(APIRoute):
                 media = request.headers.get("content-type", "").split(";")[0].strip().lower()
                 if is_json_media(media):
                     await request.json()
+            if timed and state.settings.sync_time_limit_s:
+                return await within(state.settings.sync_time_limit_s, inner(request))
             return await inner(request)
 
         return handler
+
+
+#: How long after its time limit an answer given at once is cut off, if the computation has
+#: not stopped by itself at a step boundary (a prediction has none), s.
+TIME_LIMIT_GRACE_S = 2.0
+
+
+async def within(seconds: float, answer: Awaitable[Response]) -> Response:
+    """``answer`` under a time limit of ``seconds`` (:func:`rcsa.app.budget.time_limited`).
+
+    The computation sees the limit and stops at its next step boundary (raising
+    :class:`~rcsa.errors.TimeLimitExceeded`); when it has none, the answer is not awaited
+    beyond ``seconds + TIME_LIMIT_GRACE_S`` (its thread finishes on its own; its result is
+    dropped).
+
+    Raises
+    ------
+    TimeLimitExceeded
+        The limit passed (the service answers 503).
+    """
+    with time_limited(seconds):  # the task (and the thread it starts) copy this context
+        task = asyncio.ensure_future(answer)
+    done, _ = await asyncio.wait({task}, timeout=seconds + TIME_LIMIT_GRACE_S)
+    if task in done:
+        return task.result()
+    task.add_done_callback(_drop)
+    raise TimeLimitExceeded(seconds)
+
+
+def _drop(task: asyncio.Future[Any]) -> None:
+    if not task.cancelled():
+        task.exception()  # retrieved: no "exception was never retrieved" warning
 
 
 def _authorize(state: Any, request: Request, access: str) -> Principal:

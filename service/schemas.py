@@ -48,6 +48,7 @@ from rcsa.app.bounds import (
     MAX_CUTTING_COEFFICIENT_N_M2,
     MAX_DAMPING,
     MAX_DENSITY_KG_M3,
+    MAX_DIAMETER_M,
     MAX_FREQUENCY_HZ,
     MAX_FREQUENCY_LINES,
     MAX_FRF_VALUE,
@@ -59,6 +60,7 @@ from rcsa.app.bounds import (
     MAX_POISSON_RATIO,
     MAX_RADIAL_RATIO,
     MAX_SEGMENTS,
+    MAX_SENSOR_MASS_KG,
     MAX_SHEAR_COEFFICIENT,
     MAX_SPEED_COUNT,
     MAX_SPEED_RPM,
@@ -77,6 +79,7 @@ from rcsa.app.bounds import (
     MIN_MODULUS_PA,
     MIN_POISSON_RATIO,
     MIN_RADIAL_IMMERSION,
+    MIN_RELATIVE_STEP,
     MIN_SHEAR_COEFFICIENT,
     MIN_SPEED_COUNT,
     MIN_SPEED_RPM,
@@ -89,7 +92,7 @@ from rcsa.app.bounds import (
     SDM_MIN_STEPS_PER_PERIOD,
     TOOL_OVERRIDES,
 )
-from rcsa.app.examples import ra1
+from rcsa.app.predictions import example_assembly
 
 from .field_errors import pydantic_errors
 
@@ -121,7 +124,7 @@ __all__ = [
 ]
 
 _EXAMPLE_GRID = {"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 5.0}
-_RA1 = ra1(_EXAMPLE_GRID)
+_RA1 = example_assembly("ra1", _EXAMPLE_GRID)
 
 
 class _Request(BaseModel):
@@ -195,8 +198,8 @@ class Segment(_Request):
     """A uniform (hollow) circular beam segment."""
 
     length_m: float = Field(ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Segment length, m.")
-    outer_diameter_m: float = Field(ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Outer diameter, m.")
-    inner_diameter_m: float = Field(0.0, ge=0, le=MAX_LENGTH_M, description="Bore diameter, m (0: solid); < outer_diameter_m.")
+    outer_diameter_m: float = Field(ge=MIN_LENGTH_M, le=MAX_DIAMETER_M, description="Outer diameter, m.")
+    inner_diameter_m: float = Field(0.0, ge=0, le=MAX_DIAMETER_M, description="Bore diameter, m (0: solid); < outer_diameter_m.")
     material: str = Field("steel", min_length=1, description="Material name: steel, carbide, or one of `materials`.")
 
 
@@ -258,15 +261,15 @@ class NeckSegment(_Request):
 
     length_m: float = Field(ge=MIN_LENGTH_M, description="Length of the piece, m (all pieces together at most "
                                                          "stickout_m − flute_length_m).")
-    diameter_m: float = Field(ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Its diameter, m.")
+    diameter_m: float = Field(ge=MIN_LENGTH_M, le=MAX_DIAMETER_M, description="Its diameter, m.")
 
 
 class Tool(_Request):
     """Parametric cutting tool (ISO 13399 / Fusion meaning)."""
 
     material: str = Field("carbide", min_length=1, description="Tool material name.")
-    diameter_m: float = Field(ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Cutting diameter DC, m.")
-    shank_diameter_m: float | None = Field(None, ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Shank diameter SFDM, m (default: diameter_m).")
+    diameter_m: float = Field(ge=MIN_LENGTH_M, le=MAX_DIAMETER_M, description="Cutting diameter DC, m.")
+    shank_diameter_m: float | None = Field(None, ge=MIN_LENGTH_M, le=MAX_DIAMETER_M, description="Shank diameter SFDM, m (default: diameter_m).")
     overall_length_m: float = Field(ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Overall length OAL, m.")
     flute_length_m: float = Field(ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Flute length LCF, m; <= stickout_m.")
     stickout_m: float = Field(ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Length from the holder's tool-end face to the tip (Fusion LB), m.")
@@ -276,7 +279,7 @@ class Tool(_Request):
                                                      "ratio for the flutes' mass (default: fluted_diameter_ratio).")
     shoulder_length_m: float | None = Field(None, ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Reduced neck: from the tip to the neck's end, "
                                             "m (with shoulder_diameter_m).")
-    shoulder_diameter_m: float | None = Field(None, ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description="Reduced neck diameter, m.")
+    shoulder_diameter_m: float | None = Field(None, ge=MIN_LENGTH_M, le=MAX_DIAMETER_M, description="Reduced neck diameter, m.")
     neck_segments: list[NeckSegment] | None = Field(None, max_length=MAX_NECK_SEGMENTS, description=(
         "Instead of shoulder_length_m/shoulder_diameter_m: a stepped neck, pieces listed from the flute end toward "
         "the holder (a conical neck as steps); together at most stickout_m − flute_length_m long."))
@@ -595,7 +598,8 @@ class MeasurementUpload(_Request):
     kind: Literal["point_receptance", "artifact_frfs", "direct_frf"]
     machine: str | None = Field(None, max_length=128, description="Machine tool name.")
     notes: str | None = Field(None, max_length=10_000)
-    frequency_hz: list[FrequencyValue] = Field(min_length=1, description="Frequency lines, Hz, strictly increasing, > 0.")
+    frequency_hz: list[FrequencyValue] = Field(min_length=1, max_length=MAX_FREQUENCY_LINES,
+                                               description="Frequency lines, Hz, strictly increasing, > 0.")
     h: ComplexArrayIn | None = Field(None, description="Receptance h, m/N (point_receptance, direct_frf).")
     l: ComplexArrayIn | None = Field(None, description="Receptance l, m/(N·m) (point_receptance).")  # noqa: E741
     n: ComplexArrayIn | None = Field(None, description="Receptance n, rad/N (point_receptance).")
@@ -700,7 +704,8 @@ class Deleted(_Response):
 class FrfIn(_Request):
     """An inline tool-point FRF."""
 
-    frequency_hz: list[FrequencyValue] = Field(min_length=1, description="Frequency lines, Hz.")
+    frequency_hz: list[FrequencyValue] = Field(min_length=1, max_length=MAX_FREQUENCY_LINES,
+                                               description="Frequency lines, Hz.")
     h: ComplexArrayIn = Field(description="Tool-point receptance, m/N.")
 
 
@@ -821,7 +826,7 @@ class DiagnosisMeasurement(TapTest):
     """One tap test of a diagnosis."""
 
     n_averages: float = Field(5.0, ge=1, description="Impacts averaged (sets the noise from the coherence).")
-    sensor_mass_kg: float | None = Field(None, ge=0, le=1, description="Accelerometer mass, kg (bounds the "
+    sensor_mass_kg: float | None = Field(None, ge=0, le=MAX_SENSOR_MASS_KG, description="Accelerometer mass, kg (bounds the "
                                          "sensor_mass effect).")
     label: str = Field(None, description="Name in the report and figure (default #<index>).")  # type: ignore[assignment]
 
@@ -941,7 +946,7 @@ class EffectAnalysisRequest(_AnalysisRequest):
     assembly: Assembly
     parameters: list[str] | None = Field(None, description="Parameter names, e.g. holder_tool.stiffness_n_m, "
                                          "bearings[0].damping_ns_m, tool.stickout_m (default: every non-zero one).")
-    relative_step: float = Field(0.001, gt=0, le=EFFECTS_MAX_RELATIVE_STEP,
+    relative_step: float = Field(0.001, ge=MIN_RELATIVE_STEP, le=EFFECTS_MAX_RELATIVE_STEP,
                                  description="Finite-difference step δ in ln(parameter).")
     band_hz: Annotated[list[Annotated[float, Field(ge=MIN_FREQUENCY_HZ)]], Field(
         min_length=2, max_length=2)] | None = Field(None, description="[start, stop] Hz: the modes analysed "

@@ -18,7 +18,7 @@ from typing import Annotated
 from fastapi import Depends, Security
 from fastapi.security import APIKeyHeader
 
-from rcsa.app.keys import Principal
+from rcsa.infra.api_keys import Principal
 
 from .deps import StateDep
 from .errors import ProblemError

@@ -5,9 +5,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from rcsa.app.jobs import JobRunner, JobStore, Workbench
-from rcsa.app.keys import KeyRing
-from rcsa.app.stores import CachedMeasurements, MeasurementStore
+from rcsa.app.jobs import Workbench
+from rcsa.app.stores import CachedMeasurements
+from rcsa.infra.api_keys import KeyRing
+from rcsa.infra.job_queue import JobRunner, JobStore
 
 from .config import Settings
 from .metrics import Metrics
@@ -24,7 +25,7 @@ class AppState:
     """
 
     settings: Settings
-    store: MeasurementStore
+    store: Any  # the measurement store the service opened (rcsa.app.stores.open_store)
     reader: CachedMeasurements
     keys: KeyRing
     jobs: JobStore

@@ -1,4 +1,4 @@
-"""Operations endpoints: ``/healthz`` (alive), ``/readyz`` (store writable), ``/metrics``."""
+"""Operations endpoints: ``/healthz`` (alive), ``/readyz`` (store writable, jobs, compute cluster), ``/metrics``."""
 
 from __future__ import annotations
 
@@ -29,7 +29,9 @@ def healthz() -> Response:
             responses={503: {"model": Ready, "description": "Not ready (see checks)."}})
 def readyz(state: StateDep) -> Response:
     """Ready when the store accepts a write (a probe file written and deleted), the job table
-    answers, and this process's job runners are alive; ``503`` otherwise."""
+    answers, this process's job runners are alive and the compute backend can compute (a
+    configured Dask scheduler answers and has a worker); ``503`` otherwise, each check saying
+    why."""
     checks = {"store": _probe_store(Path(state.store.path))}
     try:
         state.jobs.counts()
@@ -39,6 +41,9 @@ def readyz(state: StateDep) -> Response:
     if state.settings.job_workers:
         alive = all(r.alive for r in state.runners) and bool(state.runners)
         checks["job_runner"] = "ok" if alive else "error: job runner thread stopped"
+    backend = state.bench.backend
+    if getattr(backend, "name", "local") != "local":
+        checks["compute"] = backend.ready(timeout_s=min(2.0, state.settings.dask_connect_timeout_s))
     ready = all(v == "ok" for v in checks.values())
     return json_response({"status": "ready" if ready else "not ready", "checks": checks},
                          status_code=200 if ready else 503)

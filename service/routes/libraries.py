@@ -52,7 +52,6 @@ from rcsa.app.libraries import (
     export_file,
     prepare_library,
     prepare_sync,
-    read_library,
 )
 from rcsa.app.presets import OPTION_FIELDS, recommend_stored
 from rcsa.errors import InputError
@@ -110,12 +109,13 @@ PreferHeader = Annotated[str | None, Header(description="respond-async: always a
 
 
 async def _library_inputs(request: Request, state: AppState) -> tuple[dict[str, Any], dict[str, Any]]:
-    """What :func:`read_library` takes (the library and what the upload says it is), and the other fields."""
+    """The library and what the upload says it is (:func:`rcsa.app.libraries.prepare_library`'s
+    ``library``, ``file_name``, ``content_type``, ``holder``, ``holder_name``), and the other fields."""
     kind, body = await read_body(request)
     try:
         if kind == "json":
             doc = validate_json(LibraryPredictionRequest, body).model_dump(exclude_unset=True)
-            return {"source": doc.pop("library")}, doc
+            return {"library": doc.pop("library")}, doc
         return await _from_form(body, state.settings.max_upload_bytes)
     finally:
         if kind == "form":
@@ -129,7 +129,7 @@ async def predict_library(request: Request, state: StateDep, who: ReadAccess, pr
                           idempotency_key: IdempotencyKeyHeader = None) -> Response:
     """One tool-point FRF per library tool that has a holder; the others skipped with a reason."""
     source, doc = await _library_inputs(request, state)
-    work = await run_in_threadpool(lambda: prepare_library(state.bench, read_library(**source), **doc))
+    work = await run_in_threadpool(lambda: prepare_library(state.bench, **source, **doc))
     return await run_in_threadpool(lambda: answer(state, work, prefer=prefer, idempotency_key=idempotency_key,
                                                   owner=caller(who, request)))
 
@@ -142,7 +142,7 @@ async def _from_form(form: Any, limit_bytes: int) -> tuple[dict[str, Any], dict[
     if len(files) != 1:
         raise InputError("library", "send exactly one library file (.json, .tools, .fctb or a zip)")
     data, name = await read_upload(files[0], "library", limit_bytes)
-    source: dict[str, Any] = {"source": data, "file_name": name or None,
+    source: dict[str, Any] = {"library": data, "file_name": name or None,
                               "content_type": getattr(files[0], "content_type", None)}
     holders = form.getlist("holder")
     if len(holders) > 1:
@@ -203,7 +203,7 @@ async def sync_library(library_id: LibraryId, request: Request, state: StateDep,
     ``Idempotency-Key`` from automated (retrying) callers.
     """
     source, doc = await _library_inputs(request, state)
-    work = await run_in_threadpool(lambda: prepare_sync(state.bench, library_id, read_library(**source), **doc))
+    work = await run_in_threadpool(lambda: prepare_sync(state.bench, library_id, **source, **doc))
     return await run_in_threadpool(lambda: answer(state, work, prefer=prefer, idempotency_key=idempotency_key,
                                                   headers={"Location": f"/v1/libraries/{library_id}"},
                                                   owner=caller(who, request)))

@@ -108,13 +108,14 @@ async def _import(request: Request, kind: str, body: Any, fmt: str, state: AppSt
                 raise InputError("file", "is required: the measurement file as a multipart part")
             uploads = [await read_upload(f, "file", state.settings.max_upload_bytes) for f in files]
             (data, name), extra = uploads[0], [d for d, _ in uploads[1:]]
-            fmt = M.format_from_name(name, form_text(body, "format"))
+            stated = form_text(body, "format")
+            fmt = M.upload_format(name, stated)
             metadata = {k: form_text(body, k) for k in M.META_FIELDS}
             options = {k: form_text(body, k) for k in M.IMPORT_OPTIONS}
             measurement = await run_in_threadpool(lambda: M.import_measurement(
-                data, file_name=name, fmt=fmt, metadata=metadata, options=options, extra_taps=extra))
+                data, file_name=name, fmt=stated, metadata=metadata, options=options, extra_taps=extra))
     except (InputError, ProblemError):
-        state.metrics.import_failures.labels(fmt if fmt in M.FORMATS or fmt == "json-body" else "unknown").inc()
+        state.metrics.import_failures.labels(fmt).inc()
         raise
     held = reservation(request)
     if held is None:

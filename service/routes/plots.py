@@ -30,8 +30,7 @@ from starlette.responses import Response
 from rcsa.app import budget, exports, figures
 from rcsa.app.analyses import stability_lobes, stability_lobes_results
 from rcsa.app.bounds import MAX_LENGTH_M, MAX_SPEED_RPM, MIN_SPEED_RPM
-from rcsa.app.examples import ra1
-from rcsa.app.predictions import predict
+from rcsa.app.predictions import example_assembly, predict
 
 from ..bodies import require_json
 from ..deps import StateDep
@@ -64,7 +63,7 @@ def _csv_response(description: str) -> dict[int | str, dict[str, Any]]:
 
 
 _GRID = {"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 5.0}
-_RA1 = ra1(_GRID)
+_RA1 = example_assembly("ra1", _GRID)
 _STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
 
 

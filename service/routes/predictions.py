@@ -6,8 +6,7 @@ from fastapi import APIRouter, Depends
 from starlette.requests import Request
 from starlette.responses import Response
 
-from rcsa.app.libraries import select_tool_point
-from rcsa.app.predictions import predict
+from rcsa.app.predictions import predict, prediction_document
 
 from ..bodies import require_json
 from ..deps import StateDep
@@ -42,7 +41,6 @@ def predict_tool_point_frf(body: PredictionRequest, request: Request, state: Sta
         with state.metrics.timed("predict"):
             result = predict(doc, store=state.reader, max_lines=state.settings.max_frequency_lines)
         state.metrics.computed("predict", 1)
-        out = result.to_dict(arrays="numpy")
-        return json_response(select_tool_point(out, tool_point.split(",")) if tool_point else out)
+        return json_response(prediction_document(result, tool_point.split(",") if tool_point else None))
 
     return compute(state, "prediction", doc, prefer=prefer, run=run, owner=caller(who, request))

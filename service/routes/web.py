@@ -29,9 +29,9 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from starlette.responses import FileResponse, RedirectResponse, Response
 
 from rcsa.app import measurements as M
-from rcsa.app.examples import ra1
 from rcsa.app.inputs import decode_json
 from rcsa.app.libraries import library_entries as read_entries
+from rcsa.app.predictions import example_assembly
 from rcsa.errors import InputError
 
 from ..bodies import form_text, read_body, read_upload, validate_json
@@ -86,7 +86,7 @@ def example_ra1(_: ReadAccess) -> Response:
     """RA-1 (a BT40-class spindle on four bearings, a shrink-fit holder, a Ø12.7 mm carbide end
     mill at 74 mm stickout, the seed paper's joints) as an assembly document, SI units, grid
     5–10 000 Hz by 1 Hz. Its first natural frequency is 599.85 Hz."""
-    return json_response(ra1())
+    return json_response(example_assembly("ra1"))
 
 
 # --------------------------------------------------------------------------- library entries

@@ -15,6 +15,7 @@ __all__ = [
     "NotFoundError",
     "RcsaError",
     "StoreError",
+    "TimeLimitExceeded",
 ]
 
 
@@ -97,3 +98,17 @@ class DamagedError(StoreError):
         self.ident = ident
         self.reason = reason
         super().__init__(f"{what} {ident} is damaged: {reason}")
+
+
+class TimeLimitExceeded(RcsaError):
+    """A computation ran past the time limit set for it (:func:`rcsa.analysis.progress.time_limit`).
+
+    Parameters
+    ----------
+    seconds : float
+        The limit, s.
+    """
+
+    def __init__(self, seconds: float) -> None:
+        self.seconds = float(seconds)
+        super().__init__(f"the computation ran past its time limit of {self.seconds:g} s")

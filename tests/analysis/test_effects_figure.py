@@ -8,10 +8,9 @@ import numpy as np
 import pytest
 from matplotlib.text import Text
 
-from rcsa.analysis.effect_report import FEATURES, EffectReport
-from rcsa.analysis.figures import SAVE_DPI, percent_label, save_figure
-from rcsa.analysis.mode_features import ModeFeatures
-from rcsa.analysis.sensitivity import effects_figure
+from rcsa.analysis.effects.mode_features import ModeFeatures
+from rcsa.analysis.effects.report import FEATURES, EffectReport
+from rcsa.analysis.figures import SAVE_DPI, effects_figure, percent_label, save_figure
 
 
 def _report(n_modes: int, n_params: int, seed: int = 0) -> EffectReport:

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from rcsa.analysis.effects.sensitivities import effect_analysis, effects
 from rcsa.analysis.joint_identification.identify import identify
-from rcsa.analysis.sensitivity import effect_analysis, effects
 from rcsa.app import analyses
 from rcsa.app.predictions import predict
 from rcsa.app.stores import resolver

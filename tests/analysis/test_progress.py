@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from rcsa.analysis.sensitivity import effects
+from rcsa.analysis.effects.sensitivities import effects
 from rcsa.reference import ra1
 
 

@@ -96,7 +96,7 @@ def test_robust_lobes_on_the_command_line_with_their_plot(tmp_path):
 
 def test_plot_a_prediction_with_its_uncertainty_band(tmp_path):
     source = tmp_path / "prediction.json"
-    prediction = rcsa.app.predict({**ra1(GRID), "uncertainty": {"draws": 4}}).to_dict()
+    prediction = rcsa.predict({**ra1(GRID), "uncertainty": {"draws": 4}}).to_dict()
     source.write_text(json.dumps(prediction))
     picture = tmp_path / "frf.svg"
     result = runner.invoke(app, ["plot", str(source), "-o", str(picture)])

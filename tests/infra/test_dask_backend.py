@@ -18,19 +18,11 @@ import pytest
 
 distributed = pytest.importorskip("distributed", reason="dask.distributed is not installed (pip install 'rcsa[dask]')")
 
-from rcsa.app.jobs import (  # noqa: E402
-    ComputeUnavailable,
-    JobRunner,
-    LocalBackend,
-    Workbench,
-    compute_backend,
-    job_handlers,
-    job_store,
-    run_work,
-    stream_work,
-)
+from rcsa.app.jobs import Workbench, job_handlers, job_store, run_work, stream_work  # noqa: E402
 from rcsa.app.libraries import prepare_batch, prepare_sync  # noqa: E402
 from rcsa.app.measurements import demo_measurement  # noqa: E402
+from rcsa.infra.compute_backends import ComputeUnavailable, LocalBackend, compute_backend  # noqa: E402
+from rcsa.infra.job_queue import JobRunner  # noqa: E402
 from rcsa.libraries import chunks  # noqa: E402
 from rcsa.libraries import sync as library_sync  # noqa: E402
 from rcsa.measured.store import MeasurementStore  # noqa: E402
@@ -194,3 +186,23 @@ def test_service_and_cli_refuse_to_start_on_a_missing_scheduler(tmp_path, monkey
     r = CliRunner().invoke(cli, ["library", "sync", str(lib), "--spindle", str(spindle), "-q", "--dask-scheduler",
                                  address], env={"RCSA_DASK_CONNECT_TIMEOUT_S": "1"})
     assert r.exit_code == 1 and f"error: cannot reach the Dask scheduler at {address}" in r.stderr
+
+
+@pytest.mark.slow
+def test_readyz_says_not_ready_with_the_reason_when_the_scheduler_is_gone(tmp_path):
+    from service.main import create_app
+
+    from tests.service.conftest import TestClient, settings_for
+
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=_HTTP, silence_logs=50) as doomed:
+        app = create_app(settings_for(tmp_path / "store", dask_scheduler=doomed.scheduler_address,
+                                      dask_connect_timeout_s=2, job_workers=0))
+        with TestClient(app) as client:
+            ready = client.get("/readyz")
+            assert ready.status_code == 200 and ready.json()["checks"]["compute"] == "ok"
+            doomed.close()  # the scheduler goes away
+            gone = client.get("/readyz")
+    assert gone.status_code == 503, gone.text
+    assert gone.json()["status"] == "not ready"
+    assert doomed.scheduler_address.removeprefix("tcp://") in gone.json()["checks"]["compute"]

@@ -122,7 +122,7 @@ def test_outline_radius():
 
 
 def test_malformed_files_and_options(tmp_path):
-    with pytest.raises(InputError, match="not a FreeCAD JSON"):
+    with pytest.raises(InputError, match="FreeCAD file is not valid JSON"):
         load_freecad_object(b"{nope")
     with pytest.raises(InputError, match="JSON object"):
         load_freecad_object(b"[1]")

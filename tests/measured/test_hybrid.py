@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rcsa import app
+import rcsa
 from rcsa.errors import InputError
 from rcsa.measured.artifact_identification import finite_difference_slope_weights
 from rcsa.measured.store import Measurement, MeasurementMeta, MeasurementStore
@@ -39,7 +39,7 @@ def ra1_model():
 
 @pytest.fixture(scope="module")
 def ra1_truth():
-    return app.predict(ra1(GRID)).tool_point.values
+    return rcsa.predict(ra1(GRID)).tool_point.values
 
 
 def hybrid_doc(measurement_id: str, holder: bool = True) -> dict:
@@ -57,7 +57,7 @@ def test_point_receptance_at_the_nose_reproduces_the_analytical_model(store, ra1
     s = tip_receptance(ra1_model.spindle, 2 * np.pi * f)
     mid = store.put(Measurement(f, {"h": s[:, 0, 0], "l": s[:, 0, 1], "n": s[:, 1, 0], "p": s[:, 1, 1]},
                                 MeasurementMeta("ra1-spindle", "x", "spindle_nose", "point_receptance")))
-    result = app.predict(hybrid_doc(mid), store=store)
+    result = rcsa.predict(hybrid_doc(mid), store=store)
     assert max_error_of_peak(result.tool_point.values, ra1_truth) < 1e-8
     assert result["natural_frequencies_method"] == "modal_fit"
     assert result["static_stiffness_n_m"] is None
@@ -108,7 +108,7 @@ def put_blank(store, frfs, f, plane="holder_tip"):
 def test_artifact_route_noise_free_is_exact(store, ra1_truth):
     f, frfs = blank_frfs()
     mid = put_blank(store, frfs, f)
-    result = app.predict(hybrid_doc(mid, holder=False), store=store)
+    result = rcsa.predict(hybrid_doc(mid, holder=False), store=store)
     # domain.md §4.6 / O14: exact method reproduces the tool point (8e-10 there); 1e-6 of peak here
     assert max_error_of_peak(result.tool_point.values[:, 0, 0], ra1_truth[:, 0, 0]) < 1e-6
     report = result["spindle_measurement"]
@@ -122,7 +122,7 @@ def test_artifact_route_with_noise(store, ra1_truth, noise, bound):
     # bounds leave room for the noise draw. The README reports the benchmark figures.
     f, frfs = blank_frfs(noise)
     mid = put_blank(store, frfs, f)
-    h = app.predict(hybrid_doc(mid, holder=False), store=store).tool_point.h
+    h = rcsa.predict(hybrid_doc(mid, holder=False), store=store).tool_point.h
     band = f >= 300
     assert max_error_of_peak(h[band], ra1_truth[band, 0, 0]) < bound
 
@@ -132,7 +132,7 @@ def test_finite_difference_fallback_is_labelled_and_biased(store, ra1_truth):
     mid = put_blank(store, frfs, f)
     doc = hybrid_doc(mid, holder=False)
     doc["spindle"]["artifact_method"] = "finite_difference"
-    result = app.predict(doc, store=store)
+    result = rcsa.predict(doc, store=store)
     assert result["spindle_measurement"]["method"] == "finite_difference_fallback"
     assert any("finite-difference" in n for n in result["notes"])
     err = max_error_of_peak(result.tool_point.h[f >= 300], ra1_truth[f >= 300, 0, 0])
@@ -145,17 +145,17 @@ def test_holder_tip_requires_the_matching_shank(store):
     doc = hybrid_doc(mid, holder=False)
     doc["tool"]["shank_diameter_m"] = 0.012
     with pytest.raises(InputError, match="must match the shank"):
-        app.predict(doc, store=store)
+        rcsa.predict(doc, store=store)
     doc = hybrid_doc(mid, holder=True)
     with pytest.raises(InputError, match="holder: must be left out"):
-        app.predict(doc, store=store)
+        rcsa.predict(doc, store=store)
 
 
 def test_direct_frf_is_labelled_with_its_uncertainty(store, ra1_model, ra1_truth):
     f = parse_assembly(ra1(GRID)).frequency_hz
     s = tip_receptance(ra1_model.spindle, 2 * np.pi * f)
     mid = store.put(Measurement(f, {"h": s[:, 0, 0]}, MeasurementMeta("ra1", "x", "spindle_nose", "direct_frf")))
-    result = app.predict(hybrid_doc(mid), store=store)
+    result = rcsa.predict(hybrid_doc(mid), store=store)
     unc = result["uncertainty"]
     assert 0 < unc["max_relative_spread_of_peak"] < 5
     assert result["spindle_measurement"]["method"] == "equivalent_cantilever_rotations"
@@ -172,16 +172,16 @@ def test_band_outside_the_measurement_is_refused(store, ra1_model):
     mid = store.put(Measurement(f, {"h": s[:, 0, 0], "l": s[:, 0, 1], "n": s[:, 1, 0], "p": s[:, 1, 1]},
                                 MeasurementMeta("ra1", "x", "spindle_nose", "point_receptance")))
     with pytest.raises(InputError, match="extrapolation is refused"):
-        app.predict(hybrid_doc(mid), store=store)
+        rcsa.predict(hybrid_doc(mid), store=store)
     doc = hybrid_doc(mid)
     doc["frequency"] = {"start_hz": 200.0, "stop_hz": 2000.0, "step_hz": 0.5}
-    result = app.predict(doc, store=store)
+    result = rcsa.predict(doc, store=store)
     assert result["spindle_measurement"]["interpolated"] is True
 
 
 def test_unknown_measurement_is_an_input_error(store):
     with pytest.raises(InputError, match="no stored measurement"):
-        app.predict(hybrid_doc("m-000000000000"), store=store)
+        rcsa.predict(hybrid_doc("m-000000000000"), store=store)
 
 
 TAP = SHARED_DATA / "leekunhwee-tool-tap"

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rcsa import app
+import rcsa
 from rcsa.errors import InputError
 from rcsa.measured.store import Measurement, MeasurementMeta, MeasurementStore
 from rcsa.model.assembly import build_model
@@ -41,7 +41,7 @@ def banded(store, measurement_id, **tolerances):
     doc = ra1(GRID)
     doc["spindle"] = {"measurement_id": measurement_id}
     doc["uncertainty"] = {"draws": 24, "seed": 3, "tolerances": {**ZERO, **tolerances}}
-    return app.predict(doc, store=store)
+    return rcsa.predict(doc, store=store)
 
 
 def test_a_noise_free_measurement_without_tolerances_gives_no_band(stored):
@@ -75,5 +75,5 @@ def test_a_direct_frf_spindle_widens_the_band_by_its_rotation_estimate(stored):
 def test_spindle_tolerances_are_refused_on_a_modelled_spindle():
     doc = {**ra1(GRID), "uncertainty": {"tolerances": {"spindle_noise_rel": 0.01}}}
     with pytest.raises(InputError) as info:
-        app.predict(doc)
+        rcsa.predict(doc)
     assert info.value.field == "uncertainty.tolerances.spindle_noise_rel"

@@ -7,7 +7,7 @@ import copy
 import numpy as np
 import pytest
 
-from rcsa import app
+import rcsa
 from rcsa.model import prediction as prediction_module
 from rcsa.physics import elimination
 from rcsa.reference import ra1
@@ -38,7 +38,7 @@ def test_stacked_batch_equals_tools_predicted_one_by_one(monkeypatch, per_pass, 
     monkeypatch.setattr(elimination, "_BLOCK", block)
     doc, combos = _combos()
     seen: list[tuple[int, int]] = []
-    out = app.predict_batch({"frequency": GRID, "spindle": doc["spindle"], "combinations": combos},
+    out = rcsa.predict_batch({"frequency": GRID, "spindle": doc["spindle"], "combinations": combos},
                             progress=lambda done, total: seen.append((done, total)), arrays="numpy")
     assert out["summary"] == {"ok": 7, "error": 1}
     assert seen[-1] == (8, 8) and all(a[0] <= b[0] for a, b in zip(seen, seen[1:], strict=False))
@@ -47,7 +47,7 @@ def test_stacked_batch_equals_tools_predicted_one_by_one(monkeypatch, per_pass, 
         if combo["id"] == "bad":
             assert result["status"] == "error"
             continue
-        alone = app.predict({**doc, "holder": combo["holder"], "tool": combo["tool"]}).to_dict("numpy")
+        alone = rcsa.predict({**doc, "holder": combo["holder"], "tool": combo["tool"]}).to_dict("numpy")
         h = np.asarray(result["tool_point"]["h"]["real"]) + 1j * np.asarray(result["tool_point"]["h"]["imag"])
         h0 = np.asarray(alone["tool_point"]["h"]["real"]) + 1j * np.asarray(alone["tool_point"]["h"]["imag"])
         np.testing.assert_allclose(h, h0, rtol=1e-11, atol=1e-11 * np.abs(h0).max())
@@ -62,7 +62,7 @@ def test_stacked_batch_equals_tools_predicted_one_by_one(monkeypatch, per_pass, 
 
 def test_batch_without_natural_frequencies_leaves_them_empty():
     doc, combos = _combos()
-    out = app.predict_batch({"frequency": GRID, "spindle": doc["spindle"], "combinations": combos,
+    out = rcsa.predict_batch({"frequency": GRID, "spindle": doc["spindle"], "combinations": combos,
                              "natural_frequencies": False}, arrays="numpy")
     assert out["summary"] == {"ok": 7, "error": 1}
     assert all(len(r["natural_frequencies_hz"]) == 0 for r in out["results"] if r["status"] == "ok")
@@ -73,8 +73,8 @@ def test_a_tools_result_does_not_depend_on_its_companions():
     doc, combos = _combos()
     combos = [c for c in combos if c["id"] != "bad"]
     request = {"frequency": GRID, "spindle": doc["spindle"]}
-    everyone = app.predict_batch({**request, "combinations": combos}, arrays="numpy")["results"]
+    everyone = rcsa.predict_batch({**request, "combinations": combos}, arrays="numpy")["results"]
     for k in (0, 4):
-        alone = app.predict_batch({**request, "combinations": combos[k:k + 1]}, arrays="numpy")["results"][0]
+        alone = rcsa.predict_batch({**request, "combinations": combos[k:k + 1]}, arrays="numpy")["results"][0]
         assert list(alone["natural_frequencies_hz"]) == list(everyone[k]["natural_frequencies_hz"])
         assert alone["static_stiffness_n_m"] == everyone[k]["static_stiffness_n_m"]

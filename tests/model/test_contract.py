@@ -7,7 +7,7 @@ import copy
 import numpy as np
 import pytest
 
-from rcsa import app
+import rcsa
 from rcsa.errors import InputError
 from rcsa.model.contract import parse_assembly, parse_frequency
 from rcsa.reference import ra1
@@ -63,7 +63,7 @@ BAD = [
 @pytest.mark.parametrize("path, value, field, words", BAD, ids=[f"{b[0]}={b[1]!r}" for b in BAD])
 def test_bad_input_names_field_and_rule(path, value, field, words):
     with pytest.raises(InputError) as info:
-        app.predict(edited(path, value))
+        rcsa.predict(edited(path, value))
     assert info.value.field == field
     assert words in info.value.rule
 
@@ -79,7 +79,7 @@ def test_missing_required_parts(path, field):
 def test_shank_wider_than_bore_is_refused():
     doc = edited("tool.shank_diameter_m", 0.016)
     with pytest.raises(InputError, match="does not fit the bore"):
-        app.predict(doc)
+        rcsa.predict(doc)
 
 
 def test_frequency_line_limit():
@@ -96,7 +96,7 @@ def test_grid_includes_stop_and_avoids_accumulation():
 def test_valid_input_is_not_modified_and_gives_finite_results():
     doc = edited("tool.stickout_m", 0.06)
     before = copy.deepcopy(doc)
-    result = app.predict(doc)
+    result = rcsa.predict(doc)
     assert doc == before
     assert np.all(np.isfinite(result.tool_point.values))
 
@@ -112,5 +112,5 @@ def test_valid_input_is_not_modified_and_gives_finite_results():
 ])
 def test_absurd_magnitudes_are_refused_before_they_overflow(path, value, field):
     with pytest.raises(InputError) as info:
-        app.predict(edited(path, value))
+        rcsa.predict(edited(path, value))
     assert info.value.field == field

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rcsa import app
+import rcsa
 from rcsa.measured.importers import read_csv
 from rcsa.measured.store import MeasurementMeta, MeasurementStore
 from rcsa.model.modal_fit import modal_fit, rational_fit, refit_mode
@@ -84,7 +84,7 @@ def test_rational_fit_needs_enough_lines_and_refit_tracks_a_mode():
 
 
 def test_noise_free_ra1_frf_gives_its_dominant_modes():
-    exact = app.predict(ra1({"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 1.0}))
+    exact = rcsa.predict(ra1({"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 1.0}))
     fit = modal_fit(exact.frequency_hz, exact.tool_point.h)
     assert_sorted_and_distinct(fit)
     # the dominant damped resonances (599, 1386, 4034 Hz, domain.md §1.5), sharply determined
@@ -110,7 +110,7 @@ def test_real_tap_test_as_a_spindle_gives_sorted_distinct_frequencies(tmp_path, 
     if plane == "holder_tip":
         del doc["holder"]
         doc["joints"].pop("spindle_holder")
-    result = app.predict(doc, store=store)
+    result = rcsa.predict(doc, store=store)
     nat = np.array(result["natural_frequencies_hz"])
     sd = np.array(result["natural_frequencies_sd_hz"])
     assert result["natural_frequencies_method"] == "modal_fit"

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rcsa import app
+import rcsa
 from tests.helpers import max_error_of_peak
 from tests.oracles import fe_assembly
 
@@ -82,7 +82,7 @@ CASES = {"collet_steel": COLLET_STEEL, "slim_carbide": SLIM_CARBIDE}
 @pytest.mark.parametrize("name", list(CASES))
 def test_natural_frequencies_agree_with_fe(name):
     doc = CASES[name]
-    ours = app.predict(doc).natural_frequencies_hz
+    ours = rcsa.predict(doc).natural_frequencies_hz
     fe = fe_assembly.natural_frequencies_hz(doc, doc["frequency"]["stop_hz"])
     fe = fe[fe >= doc["frequency"]["start_hz"]]
     assert ours.size == fe.size >= 5, f"{name}: {ours} vs {fe}"
@@ -93,7 +93,7 @@ def test_natural_frequencies_agree_with_fe(name):
 @pytest.mark.parametrize("name", list(CASES))
 def test_tool_point_frf_agrees_with_fe(name):
     doc = CASES[name]
-    ours = app.predict(doc)
+    ours = rcsa.predict(doc)
     coarse = fe_assembly.tool_point_receptance(doc, ours.frequency_hz, max_element_length_m=0.002)
     fine = fe_assembly.tool_point_receptance(doc, ours.frequency_hz, max_element_length_m=0.001)
     assert max_error_of_peak(ours.tool_point.h, coarse[:, 0, 0]) < 1e-3

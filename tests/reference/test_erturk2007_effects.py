@@ -12,7 +12,7 @@ while damping moves the peak heights (also Özşahin et al., IJMTM 49 (2009) 25�
 
 In RA-1's terms (``domain.md`` §1.4–1.5; modes 599.85, 921.69, 1115.51, 1383.61, 1444.68,
 3115.94, 4025.97, … Hz; tip residues 2.02, 0.032, 1.28, 13.6, 0.063, 0.0035, 36.0 1/kg) the
-normalised sensitivities S = d ln(feature)/d ln(parameter) of :mod:`rcsa.analysis.sensitivity` show:
+normalised sensitivities S = d ln(feature)/d ln(parameter) of :mod:`rcsa.analysis.effects.sensitivities` show:
 
 1. **Bearings → lowest spindle modes.** Every bearing stiffness moves a mode below 1.2 kHz
    most: the front pair (85, 115 mm) the 1115.5 Hz mode (S = 0.15, 0.14), the rear pair
@@ -43,7 +43,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rcsa.analysis.sensitivity import effect_analysis
+from rcsa.analysis.effects.sensitivities import effect_analysis
 from rcsa.reference import ra1
 
 pytestmark = pytest.mark.reference

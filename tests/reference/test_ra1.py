@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rcsa import app
+import rcsa
 from rcsa.model.assembly import build_model
 from rcsa.model.contract import parse_assembly
 from rcsa.reference import ra1
@@ -45,14 +45,14 @@ def variant(name: str) -> dict:
 
 
 def test_o10_natural_frequencies():
-    result = app.predict(variant("exact"))
+    result = rcsa.predict(variant("exact"))
     np.testing.assert_allclose(result.natural_frequencies_hz, EXACT, rtol=RTOL_MODES,
                                err_msg="RA-1 undamped natural frequencies vs domain.md §1.5")
 
 
 @pytest.mark.parametrize("name", list(VARIANTS))
 def test_o11_variants(name):
-    found = app.predict(variant(name)).natural_frequencies_hz
+    found = rcsa.predict(variant(name)).natural_frequencies_hz
     expected = VARIANTS[name]
     # The EB column lists 9 of the modes below 10 kHz (its 10th mode is 10905 Hz, out of band).
     np.testing.assert_allclose(found[:len(expected)], expected, rtol=RTOL_MODES,
@@ -75,7 +75,7 @@ REGRESSION = [  # f_hz, H, L (= N), P
 @pytest.fixture(scope="module")
 def regression_result():
     doc = ra1({"values_hz": [row[0] for row in REGRESSION]})
-    return app.predict(doc)
+    return rcsa.predict(doc)
 
 
 @pytest.mark.parametrize("row", REGRESSION, ids=[f"{r[0]}Hz" for r in REGRESSION])
@@ -90,7 +90,7 @@ def test_o12_regression_table(regression_result, row):
 
 @pytest.fixture(scope="module")
 def full_band():
-    return app.predict(ra1())
+    return rcsa.predict(ra1())
 
 
 def test_tool_point_h_matches_reference_csv(full_band):
@@ -123,7 +123,7 @@ def test_o16_static_compliance_equals_low_frequency_limit():
     for b in doc["spindle"]["bearings"]:
         b["damping_ns_m"] = 0.0
     doc["materials"] = {"steel": {"loss_factor": 0.0}, "carbide": {"loss_factor": 0.0}}
-    h = app.predict(doc).tool_point.h[0]
+    h = rcsa.predict(doc).tool_point.h[0]
     assert h.real == pytest.approx(4.13738265e-7, rel=1e-8)
 
 

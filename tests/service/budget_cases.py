@@ -120,4 +120,13 @@ def worst_cases(seconds: float, memory: float, only: tuple[str, ...] | None = No
         k, request = _largest("lobes", lobes, seconds, memory, 2, 100_000)
         cases.append({"label": f"lobes: speeds = {k}", "operation": "lobes", "request": request,
                       "warmup": {**lobes(10), "assembly": ra1({"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 5.0})}})
+
+    def sdm(k: int) -> dict[str, Any]:
+        return {**lobes(k), "assembly": ra1({"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 5.0}),
+                "method": "semi_discretization", "steps_per_period": 40, "modes_per_direction": 3}
+
+    if wanted("lobes sdm"):
+        k, request = _largest("lobes", sdm, seconds, memory, 2, 5000)
+        cases.append({"label": f"lobes sdm: speeds = {k}", "operation": "lobes", "request": request,
+                      "warmup": sdm(3)})
     return cases

@@ -106,7 +106,7 @@ def _parse_identification(doc: dict[str, Any]) -> Any:
 
 def _parse_effects(doc: dict[str, Any]) -> Any:
     """The effect request's checks: the request itself, then the step (the band on a tiny run)."""
-    from rcsa.analysis.sensitivity import effects_report
+    from rcsa.analysis.effects.sensitivities import effects_report
 
     doc = {**doc, "assembly": ra1({"start_hz": 500.0, "stop_hz": 700.0, "step_hz": 100.0}),
            "parameters": ["holder_tool.stiffness_n_m"]}

@@ -10,7 +10,7 @@ import time
 import numpy as np
 import pytest
 
-from rcsa import app
+import rcsa
 from rcsa.errors import NotFoundError
 from rcsa.infra.job_queue import JobRunner, JobStore
 from rcsa.libraries import library_prediction as library_api
@@ -59,7 +59,7 @@ def test_batch_with_bad_combinations_among_good_ones(client, assembly):
     assert out["results"][5]["error"]["field"] == "combinations[5].tool.stickout_m"
     assert "overall_length_m" in out["results"][5]["error"]["detail"]
     assert out["summary"] == {"ok": 2, "error": 4}
-    expected = app.predict({**assembly, "tool": request["combinations"][2]["tool"]}).to_dict()
+    expected = rcsa.predict({**assembly, "tool": request["combinations"][2]["tool"]}).to_dict()
     np.testing.assert_allclose(out["results"][2]["tool_point"]["h"]["imag"], expected["tool_point"]["h"]["imag"],
                                rtol=1e-12)
 

@@ -80,7 +80,7 @@ def _probe(cases: list[dict]) -> list[dict]:
 @pytest.mark.slow
 def test_the_worst_requests_inside_the_budget_take_what_it_says():
     cases = worst_cases(SCALE * budget.SYNC.seconds, budget.SYNC.memory_bytes,
-                        only=("prediction: segments", "prediction: band top", "effects", "diagnosis"))
+                        only=("prediction: segments", "prediction: band top", "effects", "diagnosis", "lobes sdm"))
     memory = ra1({"start_hz": 1.0, "stop_hz": 200_000.0, "step_hz": 1.0})  # the most lines a request may have
     assert budget.check("prediction", memory).memory_bytes > 0.5 * budget.SYNC.memory_bytes
     cases.append({"label": "prediction: 200 000 lines", "operation": "prediction", "request": memory})
@@ -89,3 +89,37 @@ def test_the_worst_requests_inside_the_budget_take_what_it_says():
     for r in results:
         assert r["peak_rss_bytes"] <= budget.STATED_SYNC_BOUND.memory_bytes, r
     assert results[-1]["peak_rss_bytes"] <= results[-1]["estimated_memory_bytes"] + 256 * 2**20, results[-1]
+
+
+def test_semi_discretization_is_priced_by_speeds_steps_and_modes_not_as_zero_order():
+    base = {"assembly": ra1({"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 5.0}), "teeth": 4,
+            "tangential_coefficient_n_m2": 6e8, "radial_ratio": 0.3, "radial_immersion": 0.5, "milling": "down",
+            "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 1000}}
+    sdm = {**base, "method": "semi_discretization"}
+    zoa_s, sdm_cost = budget.estimate("lobes", base).seconds, budget.estimate("lobes", sdm)
+    model = budget.SDM_COST
+    steps, modes, fraction = budget.sdm_terms(sdm)
+    assert (steps, modes, fraction) == (40.0, 3.0, 1.0)  # the defaults; a/D = 0.5 with 4 teeth: always one cutting
+    assert sdm_cost.seconds == pytest.approx(zoa_s + model.seconds(1000, 40, 3, 1.0), rel=1e-12)
+    assert sdm_cost.seconds > 20 * zoa_s and sdm_cost.terms["period_map_dimension"] == 4 * 3 + 2 * 40
+    # linear in the speeds beyond the fixed per-step part, and growing with steps and modes
+    per_speed = model.seconds(2000, 40, 3, 1.0) - model.seconds(1000, 40, 3, 1.0)
+    assert model.seconds(1000, 40, 3, 1.0) == pytest.approx(model.per_step_s * 40 + 1000 * per_speed / 1000, rel=1e-12)
+    assert model.seconds(1000, 80, 3, 1.0) > model.seconds(1000, 40, 3, 1.0) > model.seconds(1000, 40, 1, 1.0)
+    # memory: one chunk of speeds at a time
+    assert model.memory_bytes(10 * model.chunk, 40, 3, 1.0) == model.memory_bytes(model.chunk, 40, 3, 1.0)
+    more = {**sdm, "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 5000}, "steps_per_period": 200}
+    with pytest.raises(budget.BudgetExceeded, match="steps_per_period"):
+        budget.check("lobes", more)
+    assert budget.check("lobes", more, mode="job").seconds > budget.SYNC.seconds
+
+
+def test_the_lobes_figure_and_csv_of_semi_discretization_are_under_the_budget(client):
+    sdm = {"assembly": ra1({"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 5.0}), "teeth": 4,
+           "tangential_coefficient_n_m2": 6e8, "radial_ratio": 0.3, "radial_immersion": 0.5, "milling": "down",
+           "method": "semi_discretization", "steps_per_period": 200, "modes_per_direction": 8,
+           "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 5000}}
+    for path in ("/v1/plots/lobes", "/v1/exports/lobes.csv", "/v1/stability-lobes"):
+        problem = assert_problem(client.post(path, json=sdm), 422)
+        assert problem["type"].endswith("compute-budget-exceeded"), (path, problem)
+        assert problem["budget"]["cost"]["terms"]["steps_per_period"] == 200

@@ -4,14 +4,17 @@ from __future__ import annotations
 
 import asyncio
 import io
+import sqlite3
 import time
 import tracemalloc
+from contextlib import closing
 
 import orjson
 import pytest
 
-from rcsa.app.jobs import LocalBackend, Workbench, run_work, stream_work
+from rcsa.app.jobs import Workbench, run_work, stream_work
 from rcsa.app.libraries import prepare_batch
+from rcsa.infra.compute_backends import LocalBackend
 from rcsa.infra.job_queue import JobRunner, JobStore, ResultEvicted
 from rcsa.libraries import chunks
 from rcsa.reference import ra1
@@ -77,6 +80,43 @@ def test_a_small_job_of_another_caller_is_claimed_before_a_flood_s_tail(store_pa
     one = [capped.submit("batch", {"n": i}, owner="a").id for i in range(3)]
     assert capped.claim("r", max_running_per_owner=1).id == one[0]
     assert capped.claim("r", max_running_per_owner=1) is None  # the owner's cap, with nobody else waiting
+
+
+def test_anonymous_callers_share_one_runner_and_a_keyed_caller_s_job_takes_the_other(store_path):
+    """Two runners: two anonymous jobs (two addresses) cannot hold both; a keyed caller's small
+    job is claimed by the second runner at once, and a keyed caller is capped on its own."""
+    jobs = JobStore(store_path / "jobs")
+    anon = [jobs.submit("batch", {"n": i}, owner=f"anonymous@10.0.0.{i}", pool="anonymous").id for i in range(2)]
+    assert jobs.claim("r0", max_running_per_owner=1).id == anon[0]
+    assert jobs.claim("r1", max_running_per_owner=1) is None  # the anonymous pool already runs one
+    keyed = jobs.submit("batch", {"small": True}, owner="k-0a1b2c3d").id
+    more = jobs.submit("batch", {"more": True}, owner="k-0a1b2c3d").id
+    assert jobs.claim("r1", max_running_per_owner=1).id == keyed
+    assert jobs.claim("r2", max_running_per_owner=1) is None  # the keyed caller's cap too
+    jobs.succeed(anon[0], "r0", b"{}")
+    assert jobs.claim("r0", max_running_per_owner=1).id == anon[1]  # the pool served least recently... tie
+    jobs.succeed(keyed, "r1", b"{}")
+    assert jobs.claim("r1", max_running_per_owner=1).id == more
+
+
+def test_the_service_puts_anonymous_jobs_in_one_pool_and_never_shares_a_job_across_callers(make_client,
+                                                                                            store_path):
+    from service.jobs import ANONYMOUS_POOL
+
+    body = _batch(2, {"start_hz": 5.0, "stop_hz": 500.0, "step_hz": 5.0})
+    asynchronous = {"Prefer": "respond-async", "Idempotency-Key": "same-body-1"}
+    with make_client(job_workers=0) as client:
+        anonymous = client.post("/v1/tool-point-frf/batch", json=body, headers=asynchronous)
+        keyed = client.post("/v1/tool-point-frf/batch", json=body, headers={**asynchronous, **READ})
+        again = client.post("/v1/tool-point-frf/batch", json=body, headers={**asynchronous, **READ,
+                                                                            "Idempotency-Key": "same-body-2"})
+        assert anonymous.status_code == keyed.status_code == again.status_code == 202
+        a, k, k2 = (r.json()["id"] for r in (anonymous, keyed, again))
+        assert a != k  # the same body from another caller is another job
+        assert k2 == k  # the same caller's retry of the same body reuses its unfinished job
+        with closing(sqlite3.connect(store_path / "jobs" / "jobs.sqlite")) as con:  # the pools as stored
+            pools = dict(con.execute("SELECT id, pool FROM jobs").fetchall())
+        assert pools[a] == ANONYMOUS_POOL and pools[k] is None
 
 
 def test_a_caller_with_too_many_unfinished_jobs_gets_429_and_others_do_not(make_client, assembly):

@@ -71,11 +71,11 @@ def test_analysis_routes_call_the_library(client, assembly):
 
 def test_diagnosis_over_rest_speaks_the_contract(client):
     # A measurement that is the base model itself (plus nothing): the verdict must be "none".
-    from rcsa import app as rcsa_app
+    import rcsa
     from rcsa.reference import ra1
 
     doc = ra1({"start_hz": 100.0, "stop_hz": 5000.0, "step_hz": 10.0})
-    h = rcsa_app.predict(doc).tool_point.h
+    h = rcsa.predict(doc).tool_point.h
     request = {"assembly": doc, "options": {"monte_carlo_draws": 50, "max_lines": 300},
                "measurements": [{"tool": {"stickout_m": 0.074}, "frequency_hz": doc_frequencies(doc),
                                  "h": {"real": h.real.tolist(), "imag": h.imag.tolist()}}]}

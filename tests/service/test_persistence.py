@@ -10,10 +10,11 @@ import pytest
 from service.idempotency import IdempotencyStore
 
 from rcsa.app.jobs import JOB_KINDS, Work, Workbench, answer_or_queue, job_handlers, job_store
-from rcsa.app.runtime import connect_sqlite, transaction
 from rcsa.app.stores import library_store, open_store
 from rcsa.infra.api_keys import KeyFile
 from rcsa.infra.clock import utc_iso
+from rcsa.infra.sqlite import connect as connect_sqlite
+from rcsa.infra.sqlite import transaction
 from rcsa.measured.store.catalogue import Catalogue
 
 MICROSECONDS = re.compile(r"^\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{6}Z$")

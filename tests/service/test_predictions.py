@@ -7,7 +7,7 @@ import gzip
 import numpy as np
 import pytest
 
-from rcsa import app
+import rcsa
 from rcsa.reference import ra1
 
 from .conftest import GRID, assert_problem
@@ -17,7 +17,7 @@ def test_prediction_matches_the_library(client, assembly):
     r = client.post("/v1/tool-point-frf", json=assembly)
     assert r.status_code == 200 and r.headers["content-type"] == "application/json"
     body = r.json()
-    expected = app.predict(assembly).to_dict()
+    expected = rcsa.predict(assembly).to_dict()
     assert body["frequency_hz"] == expected["frequency_hz"]
     np.testing.assert_array_equal(body["tool_point"]["h"]["real"], expected["tool_point"]["h"]["real"])
     np.testing.assert_array_equal(body["tool_point"]["p"]["imag"], expected["tool_point"]["p"]["imag"])
@@ -37,7 +37,7 @@ def test_hybrid_prediction_on_the_seeded_demo_spindle(make_client, assembly):
         assert body["natural_frequencies_method"] == "modal_fit"
         assert body["spindle_measurement"]["id"] == items[0]["id"]
         # the demo spindle is RA-1's own spindle: the hybrid FRF equals the analytical one
-        exact = np.array(app.predict(assembly).to_dict()["tool_point"]["h"]["real"])
+        exact = np.array(rcsa.predict(assembly).to_dict()["tool_point"]["h"]["real"])
         np.testing.assert_allclose(body["tool_point"]["h"]["real"], exact, rtol=1e-6, atol=1e-9 * np.abs(exact).max())
     with make_client(seed_demo=True) as client:  # seeding happens once in the store's life
         assert len(client.get("/v1/measurements").json()["items"]) == 1
@@ -138,7 +138,7 @@ def test_stability_lobes_from_an_assembly_and_inline(client, assembly):
     assert r.status_code == 200, r.text
     body = r.json()
     assert len(body["spindle_speed_rpm"]) == 200 and len(body["depth_limit_m"]) == 200 and body["lobes"]
-    assert body == app.stability_lobes({**base, "assembly": assembly})
+    assert body == rcsa.stability_lobes({**base, "assembly": assembly})
     pred = client.post("/v1/tool-point-frf", json=assembly).json()
     frf = {"frequency_hz": pred["frequency_hz"], "h": pred["tool_point"]["h"]}
     inline = client.post("/v1/stability-lobes", json={**base, "frf_x": frf}).json()
@@ -154,3 +154,21 @@ def test_tool_point_selection_trims_the_result(client, assembly):
     assert set(only_h["tool_point"]) == {"h"} and only_h["tool_point"]["h"] == full["tool_point"]["h"]
     assert only_h["peaks"] == full["peaks"]
     assert_problem(client.post("/v1/tool-point-frf", json=assembly, params={"tool_point": "x"}), 422, "tool_point")
+
+
+def test_a_measurement_damaged_after_a_first_request_is_never_served_from_the_cache(make_client, store_path,
+                                                                                    assembly):
+    with make_client(seed_demo=True) as client:
+        mid = client.get("/v1/measurements", params={"spindle_id": "demo-ra1"}).json()["items"][0]["id"]
+        hybrid = {**assembly, "spindle": {"measurement_id": mid}}
+        assert client.post("/v1/tool-point-frf", json=hybrid).status_code == 200  # now in the cache
+        path = store_path / "measurements" / f"{mid}.h5"
+        raw = bytearray(path.read_bytes())
+        middle = len(raw) // 2
+        raw[middle:middle + 4096] = bytes(4096)  # damaged in place: same inode, same size
+        with path.open("r+b") as fh:
+            fh.write(raw)
+        damaged = client.post("/v1/tool-point-frf", json=hybrid)
+        problem = assert_problem(damaged, 422)
+        assert mid in problem["detail"]
+        assert_problem(client.get(f"/v1/measurements/{mid}"), 409)

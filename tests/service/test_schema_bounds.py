@@ -25,6 +25,8 @@ from rcsa.analysis.lobes.robust import split_robust_request
 from rcsa.errors import InputError
 from rcsa.model.bounds import (
     MAX_CONFIDENCE,
+    MAX_DIAMETER_M,
+    MAX_LENGTH_M,
     MAX_UNCERTAINTY_DRAWS,
     MAX_UNCERTAINTY_SEED,
     MIN_CONFIDENCE,
@@ -97,11 +99,11 @@ def _document(path: Path, value: float) -> dict[str, Any]:
         doc["spindle"] = {"measurement_id": "m-0123456789ab", "effective_length_m": value}
     elif head in ("spindle", "holder") and path[1] == "segments":
         # a segment of its own at the end: solid, and as thick as allowed
-        segment = {"length_m": 0.05, "outer_diameter_m": 100.0, "inner_diameter_m": 0.0, "material": "steel"}
+        segment = {"length_m": 0.05, "outer_diameter_m": MAX_DIAMETER_M, "inner_diameter_m": 0.0, "material": "steel"}
         segment[field] = value
         doc[head]["segments"].append(segment)
     elif head == "spindle" and path[1] == "bearings":
-        doc["spindle"]["segments"].append({"length_m": 100.0, "outer_diameter_m": 0.05, "material": "steel"})
+        doc["spindle"]["segments"].append({"length_m": MAX_LENGTH_M, "outer_diameter_m": 0.05, "material": "steel"})
         doc["spindle"]["bearings"][0][field] = value
     elif head == "joints":
         doc["joints"][path[1]][field] = value
@@ -253,3 +255,46 @@ def test_schema_and_library_agree_on_the_uncertainty_bounds(option, value, accep
         parse_uncertainty(robust.uncertainty, lines=11)
 
     assert (_schema_accepts(LobesRequest, doc), _rcsa_accepts(library, doc)) == (accepted, accepted)
+
+
+def _openapi_bound(openapi: dict[str, Any], model: str, field: str, keyword: str) -> float:
+    schema = openapi["components"]["schemas"][model]["properties"][field]
+    for option in [schema, *schema.get("anyOf", ())]:
+        if keyword in option:
+            return float(option[keyword])
+    raise AssertionError(f"{model}.{field} states no {keyword}")
+
+
+def test_the_effects_step_and_the_sensor_mass_are_bounded_alike_in_schema_and_library(openapi, monkeypatch):
+    from service.schemas import DiagnosisRequest, EffectAnalysisRequest
+
+    from rcsa.analysis.diagnosis.request import parse_request
+    from rcsa.analysis.effects import sensitivities as sensitivity
+    from rcsa.measured.importers.sensor import remove_sensor_mass
+    from rcsa.model.bounds import MAX_RELATIVE_STEP, MAX_SENSOR_MASS_KG, MIN_RELATIVE_STEP
+
+    assert _openapi_bound(openapi, "EffectAnalysisRequest", "relative_step", "minimum") == MIN_RELATIVE_STEP
+    assert _openapi_bound(openapi, "EffectAnalysisRequest", "relative_step", "maximum") == MAX_RELATIVE_STEP
+    assert _openapi_bound(openapi, "DiagnosisMeasurement", "sensor_mass_kg", "maximum") == MAX_SENSOR_MASS_KG
+    monkeypatch.setattr(sensitivity, "effect_analysis", lambda *a, **k: "ran")  # parse only
+    asm = ra1({"start_hz": 100.0, "stop_hz": 200.0, "step_hz": 10.0})
+    for keyword, bound in (("minimum", MIN_RELATIVE_STEP), ("maximum", MAX_RELATIVE_STEP)):
+        inside, outside = _probe(keyword, bound)
+        for value, expected in ((inside, True), (outside, False)):
+            doc = {"assembly": asm, "relative_step": value}
+            assert _schema_accepts(EffectAnalysisRequest, doc) is expected, (value, expected)
+            assert _rcsa_accepts(sensitivity.effects_report, doc) is expected, (value, expected)
+    tap = {"tool": {"stickout_m": 0.074}, "frequency_hz": [100.0 + i for i in range(20)],
+           "h": {"real": [1e-7] * 20, "imag": [-1e-8] * 20}}
+    inside, outside = _probe("maximum", MAX_SENSOR_MASS_KG)
+    for value, expected in ((inside, True), (outside, False)):
+        doc = {"assembly": {k: v for k, v in asm.items() if k != "frequency"},
+               "measurements": [{**tap, "sensor_mass_kg": value}]}
+        assert _schema_accepts(DiagnosisRequest, doc) is expected, (value, expected)
+        assert _rcsa_accepts(parse_request, doc) is expected, (value, expected)
+        try:  # the importers' correction of an uploaded file takes the same bound
+            remove_sensor_mass([100.0], [1e-7 + 0j], value)
+            imported = True
+        except InputError:
+            imported = False
+        assert imported is expected, (value, expected)

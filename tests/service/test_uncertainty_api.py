@@ -7,7 +7,7 @@ import io
 
 import numpy as np
 
-from rcsa import app
+import rcsa
 
 from .conftest import assert_problem
 
@@ -20,7 +20,7 @@ def test_prediction_with_uncertainty_is_the_librarys_band(client, assembly):
     r = client.post("/v1/tool-point-frf", json={**assembly, "uncertainty": OPTION})
     assert r.status_code == 200, r.text
     band = r.json()["uncertainty"]
-    expected = app.predict({**assembly, "uncertainty": OPTION}).to_dict()["uncertainty"]
+    expected = rcsa.predict({**assembly, "uncertainty": OPTION}).to_dict()["uncertainty"]
     assert band["draws"] == 8
     for p in ("p05", "p50", "p95"):
         np.testing.assert_array_equal(band["h_magnitude_m_n"][p], expected["h_magnitude_m_n"][p])

@@ -1,4 +1,4 @@
-"""Headless figures: tool-point FRFs and stability lobe diagrams.
+"""Headless figures: tool-point FRFs, stability lobe diagrams and effect-analysis heat maps.
 
 Built on :class:`matplotlib.figure.Figure` with the Agg canvas — ``matplotlib.pyplot``
 is never imported, so no global figure registry, no GUI backend and no state shared
@@ -22,18 +22,20 @@ import io
 import math
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
 import matplotlib
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from rcsa.analysis.effects.report import EffectReport
 from rcsa.analysis.lobes.zoa import LobeResult
 from rcsa.errors import InputError
 from rcsa.physics.receptance import check_frequency_hz
 
-__all__ = ["SAVE_DPI", "FrfLayout", "freeze_layout", "frf_figure", "lobes_figure", "new_figure", "percent_label",
+__all__ = ["SAVE_DPI", "FrfLayout", "checked_text", "effects_figure", "freeze_layout", "frf_figure", "lobes_figure",
+           "new_figure", "percent_label",
            "save_figure"]
 
 FrfLayout = Literal["full", "real_imag", "bode"]
@@ -43,6 +45,40 @@ MM_PER_M = 1e3
 _FORMATS = ("png", "svg")
 #: Resolution of saved PNGs, dots per inch (the layout is solved at it, :func:`freeze_layout`).
 SAVE_DPI = 150
+
+
+def checked_text(text: str, field: str) -> str:
+    """A text for a figure (title, label), refused now if matplotlib could not draw it.
+
+    Text between ``$`` signs is matplotlib mathtext (``$\\omega_n$``); an expression it cannot
+    parse would fail only when the figure is drawn. ``\\$`` is a literal dollar sign.
+
+    Raises
+    ------
+    InputError
+        Naming ``field``, with matplotlib's account of the expression.
+
+    Examples
+    --------
+    >>> checked_text("RA-1, $x_1$", "title")
+    'RA-1, $x_1$'
+    >>> checked_text("$x^{$", "title")
+    Traceback (most recent call last):
+    ...
+    rcsa.errors.InputError: title: is not a text matplotlib can draw: ...
+    """
+    dollars = text.count("$") - text.count("\\$")
+    if dollars == 0 or dollars % 2:  # matplotlib draws it as plain text
+        return text
+    from matplotlib.mathtext import MathTextParser
+
+    try:
+        MathTextParser("path").parse(text)
+    except (ValueError, RecursionError) as exc:
+        detail = " ".join(str(exc).split())
+        raise InputError(field, f"is not a text matplotlib can draw: {detail[:300]}; write a literal dollar sign "
+                                "as \\$") from None
+    return text
 
 
 def new_figure(width_in: float, height_in: float) -> Figure:
@@ -189,7 +225,7 @@ def frf_figure(
     if labels is not None:
         axes[0].legend(loc="best", fontsize="small")
     if title:
-        fig.suptitle(title)
+        fig.suptitle(checked_text(title, "title"))
     return freeze_layout(fig)
 
 
@@ -290,7 +326,54 @@ def lobes_figure(
     ax.legend(loc="upper left", fontsize="small")
     note = "Φyy = Φxx assumed (only x given)" if result.same_frf_in_y else None
     if title or note:
-        ax.set_title(" — ".join(t for t in (title, note) if t), fontsize="medium")
+        ax.set_title(" — ".join(t for t in (checked_text(title, "title") if title else None, note) if t),
+                     fontsize="medium")
+    return freeze_layout(fig)
+
+
+def effects_figure(report: EffectReport, features: Sequence[str] = ("frequency_hz", "peak_magnitude_m_n",
+                                                                      "damping_ratio")) -> Any:
+    """Heat map of the sensitivities, modes × parameters, one panel per feature.
+
+    Uses :class:`matplotlib.figure.Figure` with the Agg canvas (never pyplot).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Save it with :func:`rcsa.analysis.figures.save_figure`.
+
+    Raises
+    ------
+    InputError
+        When the report holds no mode or no parameter.
+    """
+    from matplotlib.colors import TwoSlopeNorm
+
+    nm, npar = report.frequency_hz.size, len(report.parameters)
+    if nm == 0 or npar == 0:
+        raise InputError("band_hz", "the report has no mode (or no parameter) to draw")
+    fig = new_figure(max(6.0, 0.5 * npar + 2.5), 2.2 + len(features) * max(1.6, 0.3 * nm + 0.8))
+    axes = fig.subplots(len(features), 1, squeeze=False, sharex=True)[:, 0]
+    part = report.tip_participation
+    ylabels = [f"{f:.0f} Hz ({percent_label(p)})" for f, p in zip(report.frequency_hz, part, strict=True)]
+    titles = {"frequency_hz": "natural frequency", "peak_magnitude_m_n": "peak |h|",
+              "damping_ratio": "damping ratio", "peak_frequency_hz": "peak frequency"}
+    cmap = matplotlib.colormaps["RdBu_r"].with_extremes(bad="0.85")
+    for ax, q in zip(axes, features, strict=True):
+        s = np.asarray(report.sensitivity[q], dtype=float)
+        lim = float(np.nanmax(np.abs(s))) if np.any(np.isfinite(s)) else 1.0
+        lim = lim if lim > 0 else 1.0
+        image = ax.imshow(np.ma.masked_invalid(s), aspect="auto", cmap=cmap,
+                          norm=TwoSlopeNorm(0.0, -lim, lim), interpolation="nearest")
+        for (i, j), v in np.ndenumerate(s):
+            if math.isfinite(v) and abs(v) >= 0.01 * lim:
+                ax.text(j, i, f"{v:.2g}", ha="center", va="center", fontsize=6)
+        ax.set_yticks(range(nm), ylabels, fontsize=7)
+        ax.set_title(f"d ln({titles.get(q, q)}) / d ln(parameter)", fontsize=9)
+        fig.colorbar(image, ax=ax, shrink=0.9)
+    axes[-1].set_xticks(range(npar), report.parameters, rotation=60, ha="right", fontsize=7)
+    axes[0].text(0.0, 1.12, "modes: natural frequency (tip participation); grey: no peak at the tool point",
+                 transform=axes[0].transAxes, fontsize=7)
     return freeze_layout(fig)
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from rcsa.analysis.effects.sensitivities import effects as _effects
 from rcsa.analysis.lobes.modal_model import modal_model_from_assembly
 from rcsa.analysis.lobes.request import LobesRequest, parse_lobes_request
 from rcsa.analysis.lobes.robust import (
@@ -15,16 +16,16 @@ from rcsa.analysis.lobes.robust import (
 )
 from rcsa.analysis.lobes.zoa import LobeResult
 from rcsa.analysis.progress import Progress
-from rcsa.analysis.sensitivity import effects as _effects
 from rcsa.app.predictions import predict, predict_draws
-from rcsa.app.stores import MeasurementSource, resolver
+from rcsa.app.stores import resolver
 from rcsa.errors import InputError
+from rcsa.measured.hybrid import MeasurementSource
 from rcsa.measured.store import MeasurementStore
 from rcsa.model.bounds import MAX_FREQUENCY_LINES
 from rcsa.model.contract import SpindleSpec, parse_assembly
 from rcsa.model.uncertainty import parse_prediction_request
 
-__all__ = ["ANALYSIS_KINDS", "Progress", "diagnose", "effects", "identify", "run_analysis", "stability_lobes",
+__all__ = ["ANALYSIS_KINDS", "diagnose", "effects", "identify", "run_analysis", "stability_lobes",
            "stability_lobes_result", "stability_lobes_results", "validate"]
 
 #: Single computations that may also run as jobs (``Prefer: respond-async``), by the name of
@@ -119,7 +120,7 @@ def effects(request: Mapping[str, Any], *, store: MeasurementSource | None = Non
             progress: Progress | None = None) -> dict[str, Any]:
     """Effect analysis: sensitivity of each mode to every bearing and joint parameter.
 
-    See :func:`rcsa.analysis.sensitivity.effects` (request: an assembly, or ``{"assembly",
+    See :func:`rcsa.analysis.effects.sensitivities.effects` (request: an assembly, or ``{"assembly",
     "parameters", "relative_step", "band_hz"}``). ``store`` is where a measured spindle
     (``"spindle": {"measurement_id": ...}``) is looked up (the default store when omitted);
     ``progress(done, total)`` is called at each step (:mod:`rcsa.analysis.progress`).

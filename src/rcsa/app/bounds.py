@@ -57,4 +57,4 @@ IDENTIFICATION_MIN_LINES = 16
 IDENTIFIABLE_PARAMETERS = ("spindle_holder.stiffness_n_m", "spindle_holder.damping_ns_m",
                            "holder_tool.stiffness_n_m", "holder_tool.damping_ns_m")
 #: Largest finite-difference step of an effect analysis (``sensitivity.effect_analysis``).
-EFFECTS_MAX_RELATIVE_STEP = 0.1
+EFFECTS_MAX_RELATIVE_STEP = MAX_RELATIVE_STEP  # noqa: F405 (from rcsa.model.bounds)

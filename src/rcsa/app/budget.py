@@ -35,6 +35,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from rcsa.analysis.progress import time_limit
 from rcsa.errors import InputError
 from rcsa.model.assembly import build_model
 from rcsa.model.contract import AssemblySpec, SpindleSpec, parse_assembly, parse_frequency
@@ -46,18 +47,23 @@ __all__ = [
     "BODY_LIMITS",
     "JOB",
     "OPERATIONS",
+    "SDM_COST",
     "STATED_SYNC_BOUND",
     "SYNC",
     "BudgetExceeded",
     "Cost",
     "Limits",
     "Mode",
+    "SdmCostModel",
     "body_limit",
     "check",
     "check_work",
     "cost_model",
     "estimate",
+    "held_result_bytes",
     "natural_frequency_seconds",
+    "sdm_terms",
+    "time_limited",
 ]
 
 MiB = 1024 * 1024
@@ -109,6 +115,19 @@ K_NF_MODE_S = 4.2e-6
 MEM_LINE_BYTES = 3072.0
 #: Memory of the process that is not the request's (libraries, caches), bytes.
 MEM_BASE_BYTES = 64.0 * MiB
+#: Batches, fitted to the peaks ``benchmarks/bench_memory.py`` measures (10–2 000 tools,
+#: 1 000–20 000 lines, as jobs and answered at once) and raised ~10 % so that none is above
+#: its estimate: a chunk of tools is computed at a time (:func:`rcsa.libraries.chunks.chunk_size`),
+#: bytes per line (the spindle side's condensation, the grid), per tool and line of the
+#: chunk in flight (its receptances, the stacked march's workspaces, the results being
+#: written), per tool of the batch (its parsed combination and result summary), and, for an
+#: answer given at once, per tool and line of the whole result held (four complex
+#: receptances as arrays, then as JSON text while it is serialised).
+MEM_BATCH_FIXED_BYTES = 4.0 * MiB
+MEM_BATCH_LINE_BYTES = 2100.0
+MEM_CHUNK_TOOL_LINE_BYTES = 225.0
+MEM_TOOL_BYTES = 17_600.0
+MEM_RESULT_TOOL_LINE_BYTES = 240.0
 
 
 @dataclass(frozen=True)
@@ -231,6 +250,18 @@ def check(operation: str, request: Mapping[str, Any], *, mode: Mode = "sync",
     return cost
 
 
+def time_limited(seconds: float | None) -> Any:
+    """A context manager: what runs inside stops at its next step boundary once ``seconds``
+    have passed, raising :class:`~rcsa.errors.TimeLimitExceeded` (None: no limit). The
+    service runs every answer given at once inside it (``RCSA_SYNC_TIME_LIMIT_S``).
+
+    Returns
+    -------
+    contextlib.AbstractContextManager
+    """
+    return time_limit(seconds)
+
+
 def body_limit(operation: str) -> int:
     """Largest request body of ``operation``'s endpoint, bytes (:data:`BODY_LIMITS`)."""
     return BODY_LIMITS[operation]
@@ -340,6 +371,8 @@ def _batch(request: Mapping[str, Any]) -> Cost:
     combos = combos if isinstance(combos, list) else []
     if not combos:
         return Cost("batch", 0.0, MEM_BASE_BYTES, {"combinations": 0.0})
+    # memory: one chunk of tools in flight (the result is streamed; an answer given at once
+    # adds the whole result held, in check_work), plus one prediction's workspaces
     worst = max(range(len(combos)), key=lambda i: _holder_segments(combos[i]))
     base = {k: v for k, v in request.items() if k not in ("combinations", "options", "natural_frequencies",
                                                            "uncertainty")}
@@ -352,14 +385,33 @@ def _batch(request: Mapping[str, Any]) -> Cost:
         lines = float(parse_frequency(request.get("frequency")).size)
         elements = 30.0 + _holder_segments(combo)
         seconds = n * (K_LINE_S * elements * lines + natural_frequency_seconds(elements))
-        return Cost("batch", seconds, MEM_BASE_BYTES + n * MEM_LINE_BYTES * lines / 8.0,
+        return Cost("batch", seconds, MEM_BASE_BYTES + _chunk_bytes(n, lines),
                     {"combinations": n, "lines": lines, "elements": elements}, shrink)
     seconds, memory, terms = _with_draws(*_assembly_cost(spec, natural_frequencies=request.get(
         "natural_frequencies", True) is not False), _draws(request))
     if _draws(request):
         shrink = (*_DRAWS_SHRINK, *shrink)
-    return Cost("batch", seconds * n, memory + n * MEM_LINE_BYTES * terms["lines"] / 8.0,
+    from rcsa.libraries.chunks import chunk_size
+
+    draws_bytes = memory - MEM_BASE_BYTES - MEM_LINE_BYTES * terms["lines"]  # each tool's drawn FRFs, if any
+    in_flight = min(n, float(chunk_size(int(terms["lines"]))))
+    return Cost("batch", seconds * n, MEM_BASE_BYTES + _chunk_bytes(n, terms["lines"]) + draws_bytes * in_flight,
                 {"combinations": n, **terms}, shrink)
+
+
+def _chunk_bytes(tools: float, lines: float) -> float:
+    """Memory of a batch computed chunk by chunk (:func:`rcsa.libraries.chunks.chunk_size`),
+    its result streamed: the grid, the chunk of tools in flight and every tool's summary."""
+    from rcsa.libraries.chunks import chunk_size
+
+    in_flight = min(tools, float(chunk_size(int(lines))))
+    return (MEM_BATCH_FIXED_BYTES + lines * MEM_BATCH_LINE_BYTES + in_flight * lines * MEM_CHUNK_TOOL_LINE_BYTES
+            + tools * MEM_TOOL_BYTES)
+
+
+def held_result_bytes(tools: float, lines: float) -> float:
+    """Memory of a batch result held whole (an answer given at once), bytes."""
+    return tools * lines * MEM_RESULT_TOOL_LINE_BYTES
 
 
 @cost_model("library")
@@ -373,12 +425,94 @@ def _library(request: Mapping[str, Any]) -> Cost:
         else 1.0
     elements = 80.0
     seconds = n * (K_LINE_S * elements * lines + natural_frequency_seconds(elements))
-    return Cost("library", seconds, MEM_BASE_BYTES + MEM_LINE_BYTES * lines * (1.0 + n / 8.0),
+    return Cost("library", seconds, MEM_BASE_BYTES + _chunk_bytes(n, lines),
                 {"tools": n, "lines": lines, "elements": elements}, ("fewer tools", "fewer frequency lines"))
 
 
-#: Estimated seconds per speed and frequency line of each lobes method (``method``).
-LOBE_METHOD_S: dict[str, float] = {"zoa": 1.0e-9}
+#: Estimated seconds per speed and frequency line of each lobes method (``method``); the
+#: semi-discretization is priced by :data:`SDM_COST` on top of its line term.
+LOBE_METHOD_S: dict[str, float] = {"zoa": 1.0e-9, "semi_discretization": 1.0e-9}
+
+
+@dataclass(frozen=True)
+class SdmCostModel:
+    """What semi-discretization lobes cost, from the request's speeds, steps and modes.
+
+    The depth search evaluates the period map ~20 times per speed, all open speeds of a
+    chunk at once; each evaluation loops over the ``k`` steps of a tooth period (a Python
+    loop whose numpy calls cost about the same whatever the chunk), updates the modal state
+    ``n = 4 m`` (``m`` modes per direction, x and y, position and velocity) on every step,
+    couples the ``k_cut`` steps in cut to their delayed samples, and takes the eigenvalues of
+    the period map of dimension ``D = n + 2 k_cut``. Hence, for ``S`` speeds (and ``draws``
+    drawn assemblies, each a lobes run)::
+
+        seconds = (1 + draws) · (per_step_s · k
+                                 + S · (per_state_s · k·n + k_cut · (per_cut_s + per_cut_state_s · n)
+                                        + per_eig_s · D³))
+        memory  = min(S, chunk) · (mem_state_bytes · k·n + mem_cut_bytes · k_cut·n + mem_map_bytes · D²
+                                   + mem_speed_bytes)
+
+    The constants are fitted by ``.venv/bin/python benchmarks/bench_budget.py --fit-sdm``
+    (non-negative least squares on the relative error of measured CPU seconds and peak RSS
+    over a grid of speeds, ``steps_per_period``, ``modes_per_direction`` and immersions, then
+    scaled up so that no measured point exceeds its estimate), which prints the line to
+    paste here; refit after any change of the SDM solver (``--check-sdm`` compares the
+    constants in force with new measurements).
+    """
+
+    per_step_s: float
+    per_state_s: float
+    per_cut_s: float
+    per_cut_state_s: float
+    per_eig_s: float
+    mem_state_bytes: float
+    mem_cut_bytes: float
+    mem_map_bytes: float
+    mem_speed_bytes: float
+    chunk: int = 256
+
+    def sizes(self, steps: float, modes: float, cut_fraction: float) -> tuple[float, float, float]:
+        """``(n, k_cut, D)``: the modal state, the steps in cut and the period map's dimension."""
+        n = 4.0 * modes
+        k_cut = float(math.ceil(steps * min(1.0, max(cut_fraction, 1.0 / steps))))
+        return n, k_cut, n + 2.0 * k_cut
+
+    def seconds(self, speeds: float, steps: float, modes: float, cut_fraction: float, draws: float = 0.0) -> float:
+        """Estimated CPU seconds on the reference machine."""
+        n, k_cut, d = self.sizes(steps, modes, cut_fraction)
+        per_speed = (self.per_state_s * steps * n + k_cut * (self.per_cut_s + self.per_cut_state_s * n)
+                     + self.per_eig_s * d**3)
+        return (1.0 + draws) * (self.per_step_s * steps + speeds * per_speed)
+
+    def memory_bytes(self, speeds: float, steps: float, modes: float, cut_fraction: float) -> float:
+        """Estimated peak memory of the search, bytes (beyond the process's base)."""
+        n, k_cut, d = self.sizes(steps, modes, cut_fraction)
+        return min(speeds, self.chunk) * (self.mem_state_bytes * steps * n + self.mem_cut_bytes * k_cut * n
+                                          + self.mem_map_bytes * d * d + self.mem_speed_bytes)
+
+
+#: The semi-discretization's constants, fitted by ``benchmarks/bench_budget.py --fit-sdm`` on 15
+#: grid points (20–400 speeds, k = 10–200, 1–8 modes per direction, a/D = 0.05–1; load 9.6 on
+#: the 2-core VM): estimates 1.0–2.1× the measured CPU seconds, 1.0–1.7× the peak memory.
+SDM_COST = SdmCostModel(per_step_s=0.0001, per_state_s=1.2e-06, per_cut_s=5.6e-05, per_cut_state_s=1.4e-05,
+                        per_eig_s=2.9e-10, mem_state_bytes=820.0, mem_cut_bytes=1300.0, mem_map_bytes=0.0,
+                        mem_speed_bytes=0.0)
+
+
+def sdm_terms(request: Mapping[str, Any]) -> tuple[float, float, float]:
+    """``(steps_per_period, modes_per_direction, fraction of a tooth period in cut)`` of a lobes request."""
+    from rcsa.analysis.lobes.options import parse_method
+    from rcsa.analysis.lobes.zoa import engagement_angles_rad
+
+    method = parse_method(request)
+    try:
+        phi_st, phi_ex = engagement_angles_rad(float(request.get("radial_immersion", 1.0)),
+                                               str(request.get("milling", "down")))  # type: ignore[arg-type]
+        teeth = float(request.get("teeth", 1))
+        fraction = (phi_ex - phi_st) * teeth / (2.0 * math.pi)
+    except (InputError, TypeError, ValueError):  # the request's parser says why
+        fraction = 1.0
+    return float(method.steps_per_period), float(method.modes_per_direction), fraction
 
 
 @cost_model("lobes")
@@ -402,8 +536,16 @@ def _lobes(request: Mapping[str, Any]) -> Cost:
     per = LOBE_METHOD_S.get(str(name), LOBE_METHOD_S["zoa"])
     seconds += per * count * max(lines, 1.0) * (1.0 + _draws(request))
     memory += 64.0 * count * (1.0 + _draws(request))
-    return Cost("lobes", seconds, memory, {**terms, "speeds": count},
-                ("fewer speeds (spindle_speed_rpm.count)", "fewer frequency lines"))
+    shrink: tuple[str, ...] = ("fewer speeds (spindle_speed_rpm.count)", "fewer frequency lines")
+    if name == "semi_discretization":
+        steps, modes, fraction = sdm_terms(request)
+        seconds += SDM_COST.seconds(count, steps, modes, fraction, _draws(request))
+        memory += SDM_COST.memory_bytes(count, steps, modes, fraction)
+        terms = {**terms, "steps_per_period": steps, "modes_per_direction": modes,
+                 "period_map_dimension": SDM_COST.sizes(steps, modes, fraction)[2]}
+        shrink = ("fewer speeds (spindle_speed_rpm.count)", "fewer steps_per_period",
+                  "fewer modes_per_direction", "fewer frequency lines")
+    return Cost("lobes", seconds, memory, {**terms, "speeds": count}, shrink)
 
 
 @cost_model("effects")
@@ -510,10 +652,32 @@ def _diagnosis(request: Mapping[str, Any]) -> Cost:
                  "fewer measurements"))
 
 
-def check_work(kind: str, request: Mapping[str, Any], size: int, *, mode: Mode) -> Cost:
+def check_work(kind: str, request: Mapping[str, Any], size: int, *, mode: Mode,
+               limits: Limits | None = None) -> Cost:
     """:func:`check` for prepared batch, library and sync work (:class:`rcsa.app.jobs.Work`):
     its combinations form a batch (``request["batch"]``), of which ``size`` are computed (a
-    sync computes only tools not in its cache)."""
+    sync computes only tools not in its cache). A job streams its result (one chunk of tools
+    in memory); an answer given at once also holds the whole result (:func:`held_result_bytes`).
+
+    Parameters
+    ----------
+    kind : {"batch", "library", "library-sync"}
+    request : mapping
+        The prepared work's request.
+    size : int
+        Combinations computed.
+    mode : {"sync", "job"}
+    limits : Limits, optional
+        Default :data:`SYNC` or :data:`JOB`.
+
+    Returns
+    -------
+    Cost
+
+    Raises
+    ------
+    BudgetExceeded
+    """
     inner = request.get("batch")
     batch = inner if isinstance(inner, Mapping) else request  # prepared work: {"entries", "batch"}
     if not isinstance(batch, Mapping):
@@ -521,11 +685,14 @@ def check_work(kind: str, request: Mapping[str, Any], size: int, *, mode: Mode) 
     cost = estimate("batch", batch)
     combos = batch.get("combinations")
     n = len(combos) if isinstance(combos, list) else 0
+    lines = float(cost.terms.get("lines", 0.0))
     if n and size != n:  # only ``size`` of them are computed
-        scale = size / n
-        cost = Cost(kind, cost.seconds * scale, MEM_BASE_BYTES + (cost.memory_bytes - MEM_BASE_BYTES) * scale,
+        cost = Cost(kind, cost.seconds * size / n,
+                    cost.memory_bytes - _chunk_bytes(n, lines) + _chunk_bytes(size, lines),
                     {**cost.terms, "combinations": float(size)}, cost.shrink)
-    lim = SYNC if mode == "sync" else JOB
+    if mode == "sync" and kind != "library-sync":  # a sync's answer is its report, not the results
+        cost = Cost(kind, cost.seconds, cost.memory_bytes + held_result_bytes(size, lines), cost.terms, cost.shrink)
+    lim = limits if limits is not None else (SYNC if mode == "sync" else JOB)
     if cost.seconds > lim.seconds or cost.memory_bytes > lim.memory_bytes:
         raise BudgetExceeded(cost, lim, mode)
     return cost

@@ -12,6 +12,8 @@ import io
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from rcsa.model.wire import complex_from_wire
+
 __all__ = ["BAND_PERCENTILES", "FRF_COLUMNS", "LOBES_COLUMNS", "ROBUST_COLUMN", "frf_csv", "lobes_csv"]
 
 #: Columns of the FRF export: (receptance, SI unit suffix of its column names).
@@ -32,7 +34,8 @@ def frf_csv(result: Mapping[str, Any]) -> bytes:
     columns: list[Sequence[float | None]] = [result["frequency_hz"]]
     for name, unit in FRF_COLUMNS:
         header += [f"{name}_real_{unit}", f"{name}_imag_{unit}"]
-        columns += [result["tool_point"][name]["real"], result["tool_point"][name]["imag"]]
+        z = complex_from_wire(result["tool_point"][name], f"tool_point.{name}", finite=False)
+        columns += [z.real.tolist(), z.imag.tolist()]
     band = result.get("uncertainty")
     if band is not None:  # the band's percentiles of |h| (m/N) over the draws
         for p in BAND_PERCENTILES:

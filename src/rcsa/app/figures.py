@@ -16,15 +16,17 @@ from typing import Any, Literal
 
 import numpy as np
 
+from rcsa.analysis.effects.sensitivities import effects_report
+from rcsa.analysis.figures import effects_figure
 from rcsa.analysis.lobes.zoa import LobeResult
 from rcsa.analysis.progress import Progress
-from rcsa.analysis.sensitivity import effects_figure, effects_report
 from rcsa.app.analyses import stability_lobes_results
 from rcsa.app.predictions import predict
 from rcsa.app.stores import resolver
 from rcsa.errors import InputError
 from rcsa.measured.hybrid import MeasurementSource
 from rcsa.model.bounds import MAX_FREQUENCY_LINES
+from rcsa.model.input_policy import check_count
 from rcsa.model.wire import complex_from_wire, number_list
 
 __all__ = [
@@ -160,6 +162,8 @@ def tool_point_curve(*, frf: Mapping[str, Any] | None = None, assembly: Mapping[
     if (frf is None) == (assembly is None):
         raise InputError("frf", "give either frf (an inline FRF) or assembly, exactly one of them")
     if frf is not None:
+        if isinstance(frf.get("frequency_hz"), list):
+            check_count(len(frf["frequency_hz"]), "frf.frequency_hz", max_lines, "frequency lines")
         f = number_list(frf.get("frequency_hz"), "frf.frequency_hz", finite=False)
         return Curve(f, complex_from_wire(frf.get("h"), "frf.h", f.size, finite=False), "frf")
     result = predict(assembly, store=store, max_lines=max_lines)  # type: ignore[arg-type]

@@ -13,8 +13,9 @@ after the other into the job's result file, never the whole document in memory);
 are those :func:`run_work`'s document would serialise to.
 
 Where the work runs — the measurement source, the library store, the size limits, the
-compute backend (this process, or a Dask cluster: :func:`compute_backend`) and who is told
-about computations (metrics) — is a :class:`Workbench`. Work answered at once is computed
+compute backend (this process, or a Dask cluster: :mod:`rcsa.infra.compute_backends`, which
+the doors use directly) and who is told about computations (metrics) — is a
+:class:`Workbench`. Work answered at once is computed
 in the calling process; jobs and the CLI use the workbench's backend. Either way the work is
 cut into the same chunks, so the results are the same bytes.
 """
@@ -33,22 +34,8 @@ import orjson
 from rcsa.app.analyses import ANALYSIS_KINDS, run_analysis
 from rcsa.app.stores import library_store
 from rcsa.errors import InputError
-from rcsa.infra.compute import (
-    Backend,
-    ChunkFailed,
-    ComputeUnavailable,
-    LocalBackend,
-    compute_backend,
-)
-from rcsa.infra.job_queue import (
-    Handler,
-    Job,
-    JobRunner,
-    JobStore,
-    QuotaExceeded,
-    ResultEvicted,
-    StreamedResult,
-)
+from rcsa.infra.compute_backends import Backend, LocalBackend
+from rcsa.infra.job_queue import Handler, Job, JobStore, StreamedResult
 from rcsa.libraries.library_prediction import EntryResults, iter_entries, run_entries
 from rcsa.libraries.sync import LibraryStore, SyncPlan, run_sync
 from rcsa.measured.hybrid import MeasurementSource
@@ -57,25 +44,13 @@ from rcsa.model.bounds import MAX_BATCH_COMBINATIONS, MAX_FREQUENCY_LINES
 __all__ = [
     "JOBS_DIRECTORY",
     "JOB_KINDS",
-    "Backend",
-    "ChunkFailed",
-    "ComputeUnavailable",
-    "Handler",
-    "Job",
-    "JobRunner",
-    "JobStore",
     "Kind",
-    "LocalBackend",
     "Observer",
     "Outcome",
-    "QuotaExceeded",
-    "ResultEvicted",
-    "StreamedResult",
     "Work",
     "Workbench",
     "analysis_job_handlers",
     "answer_or_queue",
-    "compute_backend",
     "job_handlers",
     "job_store",
     "run_work",
@@ -313,7 +288,7 @@ def _write_entries(fh: BinaryIO, started: EntryResults) -> dict[str, Any]:
 
 def answer_or_queue(bench: Workbench, jobs: JobStore, work: Work, *, respond_async: bool, async_threshold: int,
                     reuse_unfinished: bool = False, owner: str | None = None,
-                    max_unfinished: int | None = None) -> Job | Outcome:
+                    max_unfinished: int | None = None, pool: str | None = None) -> Job | Outcome:
     """Queue ``work`` as a job (:meth:`Work.should_queue`), or run it now.
 
     Parameters
@@ -326,12 +301,15 @@ def answer_or_queue(bench: Workbench, jobs: JobStore, work: Work, *, respond_asy
     async_threshold : int
         Work computing more results than this is queued.
     reuse_unfinished : bool
-        A retried submission: return the unfinished job of the same request, if any,
-        instead of queuing it twice (:meth:`JobStore.submit`).
+        A retried submission: return the owner's unfinished job of the same request, if
+        any, instead of queuing it twice (:meth:`JobStore.submit`).
     owner : str, optional
-        Who asks (jobs are claimed fairly across owners).
+        Who asks.
     max_unfinished : int, optional
         Most queued or running jobs one owner may have.
+    pool : str, optional
+        Whose runners the job shares (jobs are claimed fairly across pools and the running
+        cap counts per pool; default: the owner's own).
 
     Returns
     -------
@@ -349,7 +327,7 @@ def answer_or_queue(bench: Workbench, jobs: JobStore, work: Work, *, respond_asy
         if work.check is not None:
             work.check()
         return jobs.submit(work.kind, work.request, reuse_unfinished=reuse_unfinished, owner=owner,
-                           max_unfinished=max_unfinished)
+                           max_unfinished=max_unfinished, pool=pool)
     return run_work(bench, work.kind, work.request, plan=work.plan, backend=LocalBackend())
 
 

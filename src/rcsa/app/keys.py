@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import os
 
-from rcsa.infra.api_keys import KeyFile, KeyRing, Principal, parse_key_list
+from rcsa.infra.api_keys import KeyFile, KeyRing, parse_key_list
 from rcsa.measured.store import MeasurementStore
 
-__all__ = ["KeyFile", "KeyRing", "Principal", "key_file", "key_ring"]
+__all__ = ["key_file", "key_ring"]
 
 
 def key_file(store_path: str | os.PathLike[str] | None = None) -> KeyFile:

@@ -27,7 +27,6 @@ from rcsa.libraries.library_prediction import (
     check_common,
     checked_batch,
     library_request,
-    select_tool_point,
 )
 from rcsa.libraries.sync import (
     LIBRARY_ID_PATTERN,
@@ -44,15 +43,11 @@ __all__ = [
     "LIBRARY_ID_PATTERN",
     "LIBRARY_OPTIONS",
     "ExportFile",
-    "LibraryStore",
     "export_file",
     "library_entries",
-    "library_id_from_name",
     "prepare_batch",
     "prepare_library",
     "prepare_sync",
-    "read_library",
-    "select_tool_point",
     "spindle_settings",
     "write_export",
 ]
@@ -102,16 +97,30 @@ def prepare_batch(bench: Workbench, request: Mapping[str, Any],
     return Work("batch", checked, n, check=lambda: check_common(request, store=bench.store, max_lines=bench.max_lines))
 
 
-def prepare_library(bench: Workbench, library: LibrarySource, **fields: Any) -> Work:
+def prepare_library(bench: Workbench, library: LibrarySource, *, file_name: str | None = None,
+                    content_type: str | None = None, holder: Any = None, holder_name: str | None = None,
+                    **fields: Any) -> Work:
     """A Fusion or FreeCAD tool library on one spindle, imported and sized: work of kind ``library``.
 
-    ``library`` as :func:`rcsa.libraries.formats.read_library` takes it, or already read by it
-    (an upload with its file name and media type, a FreeCAD holder given apart).
-
-    ``fields`` are those of :func:`rcsa.libraries.library_prediction.library_request`:
-    ``spindle``, ``frequency``, ``joints``, ``materials``, ``beam_theory``,
-    ``shear_coefficient``, ``natural_frequencies`` and ``options``.
+    Parameters
+    ----------
+    bench : Workbench
+    library : path, bytes or mapping
+        The library as :func:`rcsa.libraries.formats.read_library` reads it: a path (a folder
+        is a FreeCAD library), an upload's bytes or a JSON document.
+    file_name, content_type : str, optional
+        What an upload says it is.
+    holder : path, bytes or mapping, optional
+        A FreeCAD holder (``.fcholder``) for the toolbits; refused for Fusion.
+    holder_name : str, optional
+        The holder upload's file name.
+    **fields
+        Those of :func:`rcsa.libraries.library_prediction.library_request`: ``spindle``,
+        ``frequency``, ``joints``, ``materials``, ``beam_theory``, ``shear_coefficient``,
+        ``natural_frequencies``, ``options`` and ``uncertainty``.
     """
+    library = read_library(library, file_name=file_name, content_type=content_type, holder=holder,
+                           holder_name=holder_name)
     request = library_request(library, **fields)
     n = len(request["batch"]["combinations"])
     _check_tools(n, bench.max_combinations)
@@ -119,12 +128,20 @@ def prepare_library(bench: Workbench, library: LibrarySource, **fields: Any) -> 
                 check=lambda: check_common(request["batch"], store=bench.store, max_lines=bench.max_lines))
 
 
-def prepare_sync(bench: Workbench, library_id: str, library: LibrarySource, **fields: Any) -> Work:
+def prepare_sync(bench: Workbench, library_id: str | None, library: LibrarySource, *, file_name: str | None = None,
+                 content_type: str | None = None, holder: Any = None, holder_name: str | None = None,
+                 **fields: Any) -> Work:
     """A sync of the stored library ``library_id`` with this export: work of kind ``library-sync``.
 
     Its size is the number of results not in the result cache yet (only those are
-    computed). ``fields`` as in :func:`prepare_library`.
+    computed). ``library_id`` None: the library file's name without suffix, made id-safe
+    (``"Mill tools (BT40).tools"`` → ``Mill-tools-BT40``; the request's ``library_id`` says
+    which). The other arguments as in :func:`prepare_library`.
     """
+    if library_id is None:
+        library_id = library_id_from_name(str(library)) if isinstance(library, str | os.PathLike) else "library"
+    library = read_library(library, file_name=file_name, content_type=content_type, holder=holder,
+                           holder_name=holder_name)
     request = sync_request(library_id, library, **fields)
     _check_tools(len(request["batch"]["combinations"]), bench.max_combinations)
     plan = plan_sync(bench.libraries, request, store=bench.store, max_lines=bench.max_lines)

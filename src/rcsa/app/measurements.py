@@ -22,23 +22,19 @@ import numpy as np
 from rcsa.app.inputs import decode_json
 from rcsa.errors import ConflictError, InputError, NotFoundError, StoreError
 from rcsa.infra.atomic_files import atomic_write_bytes
-from rcsa.measured.importers import (
-    measurement_from_contract,
-    measurement_to_contract,
-    read_contract_json,
-    read_csv,
-    read_cutpro,
-    read_tap,
-    read_uff,
+from rcsa.measured.importers import measurement_from_contract, measurement_to_contract
+from rcsa.measured.importers.registry import (
+    FORMATS,
+    IMPORT_OPTIONS,
+    META_FIELDS,
+    format_from_name,
+    read_upload,
 )
 from rcsa.measured.store import Measurement, MeasurementMeta, Provenance, is_measurement_id
 from rcsa.measured.store import paths as P
 from rcsa.measured.store.schema import frf_unit
 from rcsa.model import fields
-from rcsa.model.assembly import build_model
-from rcsa.model.contract import parse_assembly
-from rcsa.physics.elimination import tip_receptance
-from rcsa.reference import ra1
+from rcsa.model.reference import ra1_spindle_receptance
 
 __all__ = [
     "DEMO_SPINDLE_ID",
@@ -48,122 +44,51 @@ __all__ = [
     "check_store",
     "delete_measurement",
     "demo_measurement",
-    "format_from_name",
     "import_measurement",
     "list_measurements",
     "measurement_document",
     "measurement_hdf5",
     "measurement_summary",
     "read_measurement",
-    "parse_points",
-    "parse_roles",
     "rebuild_catalogue",
     "seed_demo",
     "store_measurement",
     "store_measurement_once",
+    "upload_format",
 ]
 
-#: Import formats: UFF 58, CSV/TSV table, CutPro ``.frf``, the contract's JSON, raw tap.
-FORMATS = ("uff", "csv", "frf", "json", "tap")
-_BY_SUFFIX = {".uff": "uff", ".unv": "uff", ".csv": "csv", ".tsv": "csv", ".frf": "frf", ".json": "json"}
-#: Metadata of a measurement (``contract.md`` "Measured spindles").
-META_FIELDS = ("spindle_id", "direction", "plane", "kind", "machine", "notes", "points_m", "artifact")
-#: Importer options, with the formats they apply to.
-IMPORT_OPTIONS: dict[str, tuple[str, ...]] = {
-    "units": ("uff", "csv", "frf"),
-    "columns": ("csv", "tap"),
-    "frequency_unit": ("csv",),
-    "phase_unit": ("csv",),
-    "roles": ("uff",),
-    "scalar_direction": ("uff",),
-    "drop_nonpositive": ("uff", "csv", "frf", "json"),
-    "sensor_mass_kg": FORMATS,
-    "force_unit": ("tap",),
-    "response_unit": ("tap",),
-    "sample_rate_hz": ("tap",),
-    "force_window_s": ("tap",),
-    "exponential_tau_s": ("tap",),
-    "max_frequency_hz": ("tap",),
-}
 #: Spindle id of the demo measurement (RA-1's analytical spindle-nose receptance).
 DEMO_SPINDLE_ID = "demo-ra1"
 _DEMO_MARKER = ".demo-seeded"
 _MAX_PAGE = 1000
 
 
-def format_from_name(file_name: str, fmt: str | None = None) -> str:
-    """The import format: ``fmt`` if given, else from the file name's suffix.
+def upload_format(file_name: str, fmt: str | None = None) -> str:
+    """What an upload is, for messages and metrics: its import format, or ``"unknown"``.
 
-    Raises
-    ------
-    InputError
-        Field ``format``: unknown format, or a suffix that does not say.
+    The format is ``fmt`` if given, else the file name's suffix (as the importers decide,
+    :func:`rcsa.measured.importers.registry.format_from_name`); unlike reading the file,
+    this never raises.
+
+    Examples
+    --------
+    >>> upload_format("tip.csv"), upload_format("tip.dat"), upload_format("tip.dat", "tap")
+    ('csv', 'unknown', 'tap')
     """
-    form = (fmt or _BY_SUFFIX.get(Path(file_name or "").suffix.lower(), "")).strip().lower()
-    if form not in FORMATS:
-        given = f"{fmt!r} is not a format; " if fmt else f"cannot tell the format of {file_name or 'the upload'!r}; "
-        raise InputError("format", given + f"say which: one of {', '.join(FORMATS)}")
-    return form
+    try:
+        return format_from_name(file_name, fmt)
+    except InputError:
+        return "unknown"
 
 
-def parse_roles(text: str | Mapping[str, Any] | None) -> dict[str, tuple[int, int]] | None:
-    """UFF roles ``"h11=1:1,h21=2:1,h22=2:2"`` (or a mapping name → [rsp, ref]) as a dict."""
-    if text is None or text == "":
-        return None
-    if isinstance(text, Mapping):
-        items = [f"{k}={v[0]}:{v[1]}" if isinstance(v, list | tuple) and len(v) == 2 else f"{k}=?"
-                 for k, v in text.items()]
-    elif isinstance(text, str):
-        items = text.split(",")
-    else:
-        raise InputError("roles", "write NAME=RESPONSE_NODE:REFERENCE_NODE,..., e.g. h11=1:1,h21=2:1")
-    roles = {}
-    for item in items:
-        name, sep, nodes = item.partition("=")
-        rsp, sep2, ref = nodes.partition(":")
-        try:
-            if not (sep and sep2):
-                raise ValueError
-            roles[name.strip()] = (int(rsp), int(ref))
-        except ValueError:
-            raise InputError("roles", f"{item!r}: write NAME=RESPONSE_NODE:REFERENCE_NODE, e.g. h21=2:1") from None
-    return roles
-
-
-def parse_points(value: str | Sequence[float] | None) -> tuple[float, ...] | None:
-    """Artifact point positions from ``"0,0.025"``, ``"[0, 0.025]"`` or a list, m."""
-    if value is None or value == "":
-        return None
-    if isinstance(value, str):
-        text = value.strip()
-        try:
-            items = decode_json(text, path="points_m") if text.startswith("[") else text.split(",")
-            if not isinstance(items, list):
-                raise ValueError
-            return tuple(float(x) for x in items)
-        except (ValueError, TypeError):
-            raise InputError("points_m", f"{value!r}: write comma-separated metres, e.g. 0,0.025") from None
-    if isinstance(value, Sequence) and all(isinstance(x, int | float) and not isinstance(x, bool) for x in value):
-        return tuple(float(x) for x in value)
-    raise InputError("points_m", "must be a list of positions in metres")
-
-
-def _parse_artifact(value: str | Mapping[str, Any] | None) -> Mapping[str, Any] | None:
-    if value is None or value == "":
-        return None
-    if isinstance(value, Mapping):
-        return value
-    if not isinstance(value, str):
-        raise InputError("artifact", "must be a JSON object")
-    doc = decode_json(value, path="artifact", what="artifact")
-    if not isinstance(doc, dict):
-        raise InputError("artifact", "must be a JSON object")
-    return doc
-
-
-def _float(value: Any, field: str) -> float | None:
-    """A number from an option or form field; None when left out or empty."""
-    return None if value is None or value == "" else fields.number(value, field, text=True)
+def _artifact(value: Any) -> Any:
+    """An artifact given as JSON text (a form field or option) as a mapping."""
+    if isinstance(value, str) and value.strip():
+        doc = decode_json(value, path="artifact", what="artifact")
+        if not isinstance(doc, dict):
+            raise InputError("artifact", "must be a JSON object")
+        return doc
+    return value
 
 
 def import_measurement(
@@ -174,8 +99,13 @@ def import_measurement(
     metadata: Mapping[str, Any] | None = None,
     options: Mapping[str, Any] | None = None,
     extra_taps: Sequence[bytes] = (),
-):
-    """Read an uploaded measurement file (not yet stored).
+) -> Measurement:
+    """Read an uploaded measurement file (not yet stored), every field as text or value.
+
+    The importer registry (:func:`rcsa.measured.importers.registry.read_upload`) with what
+    the doors add: metadata and options arrive as form fields or command-line text, and an
+    ``artifact`` given as JSON text is decoded under the request policy
+    (:func:`rcsa.app.inputs.decode_json`).
 
     Parameters
     ----------
@@ -185,14 +115,10 @@ def import_measurement(
         Its name (recorded in the provenance; its suffix gives the format unless ``fmt``).
     fmt : {"uff", "csv", "frf", "json", "tap"}, optional
     metadata : mapping, optional
-        :data:`META_FIELDS`: ``spindle_id``, ``direction``, ``plane`` (required except for
-        JSON, which may carry them), ``kind`` (default ``direct_frf``), ``machine``,
-        ``notes``, ``points_m`` (list or ``"0,0.025"``) and ``artifact`` (object or JSON text).
+        :data:`META_FIELDS` (``points_m`` as a list or ``"0,0.025"``, ``artifact`` as an
+        object or JSON text).
     options : mapping, optional
-        :data:`IMPORT_OPTIONS`, strings accepted (form fields): ``units`` (e.g. ``"um/N"``),
-        ``columns``, ``frequency_unit``, ``phase_unit``, ``roles`` (``"h11=1:1,..."``),
-        ``scalar_direction`` (UFF), ``drop_nonpositive``, ``sensor_mass_kg`` and the tap
-        options. UFF files may leave ``direction`` out: the file's is used.
+        :data:`IMPORT_OPTIONS`, strings accepted.
     extra_taps : sequence of bytes
         Further tap files averaged with ``data`` (format ``tap`` only).
 
@@ -205,55 +131,10 @@ def import_measurement(
     InputError
         Naming the field: unknown format or option, missing metadata, unreadable file.
     """
-    form = format_from_name(file_name, fmt)
-    meta_in = dict(metadata or {})
-    unknown = sorted(set(meta_in) - set(META_FIELDS))
-    if unknown:
-        raise InputError(unknown[0], f"unknown metadata field (allowed: {', '.join(META_FIELDS)})")
-    opts = {k: v for k, v in (options or {}).items() if v is not None and v != ""}
-    for key in opts:
-        if key not in IMPORT_OPTIONS:
-            raise InputError(key, f"unknown import option (allowed: {', '.join(IMPORT_OPTIONS)})")
-        if form not in IMPORT_OPTIONS[key] and not (key == "drop_nonpositive" and not fields.boolean(opts[key], key, text=True)):
-            raise InputError(key, f"does not apply to format {form!r}")
-    if extra_taps and form != "tap":
-        raise InputError("file", f"several files can only be averaged for format 'tap', not {form!r}")
-    given = {k: v for k, v in meta_in.items() if v is not None and v != ""}
-    if "points_m" in given:
-        given["points_m"] = parse_points(given["points_m"])
-    if "artifact" in given:
-        given["artifact"] = _parse_artifact(given["artifact"])
-    common = {"sensor_mass_kg": _float(opts.get("sensor_mass_kg"), "sensor_mass_kg"), "file_name": file_name}
-    drop = fields.boolean(opts.get("drop_nonpositive", False), "drop_nonpositive", text=True)
-    if form == "json":
-        overrides = {k: (list(v) if isinstance(v, tuple) else v) for k, v in given.items()}
-        return read_contract_json(data, overrides=overrides, drop_nonpositive=drop, **common)
-    for key in ("spindle_id", "direction", "plane"):
-        if key not in given and not (key == "direction" and form == "uff"):  # UFF: the file says
-            raise InputError(key, f"is required for format {form!r}")
-    given.setdefault("kind", "direct_frf")
-    if form == "uff":
-        return read_uff(data, given, roles=parse_roles(opts.get("roles")), units=opts.get("units"),
-                        scalar_direction=opts.get("scalar_direction"), drop_nonpositive=drop, **common)
-    meta = MeasurementMeta(**given)
-    if form == "csv":
-        return read_csv(data, meta, units=opts.get("units"), columns=opts.get("columns"),  # default: the header
-                        frequency_unit=opts.get("frequency_unit"), phase_unit=opts.get("phase_unit"),
-                        drop_nonpositive=drop, **common)
-    if form == "frf":
-        return read_cutpro(data, meta, units=opts.get("units"), drop_nonpositive=drop, **common)
-    if drop:
-        raise InputError("drop_nonpositive", "a tap FFT always drops its 0 Hz bin; leave the option out")
-    for key in ("force_unit", "response_unit"):
-        if not opts.get(key):
-            raise InputError(key, "is required for format 'tap' (e.g. N and m/s^2)")
-    return read_tap(
-        [data, *extra_taps], meta, force_unit=opts["force_unit"], response_unit=opts["response_unit"],
-        columns=opts.get("columns") or "t,force,response",
-        sample_rate_hz=_float(opts.get("sample_rate_hz"), "sample_rate_hz"),
-        force_window_s=_float(opts.get("force_window_s"), "force_window_s"),
-        exponential_tau_s=_float(opts.get("exponential_tau_s"), "exponential_tau_s"),
-        max_frequency_hz=_float(opts.get("max_frequency_hz"), "max_frequency_hz"), **common)
+    meta = dict(metadata or {})
+    if "artifact" in meta:
+        meta["artifact"] = _artifact(meta["artifact"])
+    return read_upload(data, file_name=file_name, fmt=fmt, metadata=meta, options=options, extra_taps=extra_taps)
 
 
 #: Metadata of a file read only for its data (a tool-point tap test has no spindle to name).
@@ -488,23 +369,23 @@ def rebuild_catalogue(store: Any) -> dict[str, Any]:
     return {"store": str(store.path), "ok": not damaged, "measurements": n, "damaged": damaged}
 
 
-def demo_measurement(frequency: Mapping[str, float] | None = None):
+def demo_measurement(frequency: Mapping[str, float] | None = None) -> Measurement:
     """RA-1's analytical spindle-nose receptance as a ``point_receptance`` measurement.
 
     Spindle id :data:`DEMO_SPINDLE_ID`, plane ``spindle_nose``, direction ``x``, on
-    1…10 000 Hz in 1 Hz steps by default, so that a fresh user can try a hybrid prediction
-    (``"spindle": {"measurement_id": ...}``) with RA-1's holder and tool at once.
+    1…10 000 Hz in 1 Hz steps by default
+    (:func:`rcsa.model.reference.ra1_spindle_receptance`), so that a fresh user can try a
+    hybrid prediction (``"spindle": {"measurement_id": ...}``) with RA-1's holder and tool at
+    once.
     """
-    spec = parse_assembly(ra1(dict(frequency or {"start_hz": 1.0, "stop_hz": 10000.0, "step_hz": 1.0})))
-    r = tip_receptance(build_model(spec).spindle, 2.0 * np.pi * spec.frequency_hz)
+    r = ra1_spindle_receptance(dict(frequency) if frequency is not None else None)
     meta = MeasurementMeta(spindle_id=DEMO_SPINDLE_ID, direction="x", plane="spindle_nose",
                            kind="point_receptance", machine="RA-1 (analytical demo)",
                            notes="Demo data: the analytical spindle-nose receptance of the RA-1 reference "
                                  "spindle (rcsa.reference.ra1), not a measurement. Try a hybrid prediction "
                                  "with RA-1's holder and tool on it.")
     prov = Provenance(source_format="api", conversions=("computed by rcsa.physics.elimination.tip_receptance of RA-1's spindle",))
-    return Measurement(frequency_hz=spec.frequency_hz,
-                       frfs={"h": r[:, 0, 0], "l": r[:, 0, 1], "n": r[:, 1, 0], "p": r[:, 1, 1]},
+    return Measurement(frequency_hz=r.frequency_hz, frfs={"h": r.h, "l": r.l, "n": r.n, "p": r.p},
                        meta=meta, provenance=prov)
 
 

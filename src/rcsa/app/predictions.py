@@ -6,20 +6,52 @@ objects, validates at the edge, and never depends on how it was reached.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any, Literal
 
 from rcsa.app.stores import resolver
-from rcsa.errors import InputError
+from rcsa.errors import InputError, NotFoundError
+from rcsa.libraries.library_prediction import select_tool_point
 from rcsa.measured.store import MeasurementStore
 from rcsa.model import batch
 from rcsa.model.bounds import MAX_BATCH_COMBINATIONS, MAX_FREQUENCY_LINES
 from rcsa.model.contract import AssemblySpec, CommonSpec, MeasuredSpindleSpec
 from rcsa.model.prediction import Prediction
+from rcsa.model.reference import ra1
 from rcsa.model.spindle_side import SpindleSide, ToolPointDraws
 from rcsa.model.uncertainty import UncertaintyOptions, parse_prediction_request, parse_uncertainty
 
-__all__ = ["predict", "predict_batch", "predict_draws"]
+__all__ = ["EXAMPLE_ASSEMBLIES", "example_assembly", "predict", "predict_batch", "predict_draws", "prediction_document"]
+
+#: The example assemblies the doors offer by name (``GET /v1/examples/{name}``, the web
+#: page's defaults, the schemas' examples), each built by :mod:`rcsa.model.reference`.
+EXAMPLE_ASSEMBLIES = {"ra1": ra1}
+
+
+def example_assembly(name: str, frequency: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """An example assembly by name, as a contract document the caller may edit.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`EXAMPLE_ASSEMBLIES` (``"ra1"``: the reference assembly RA-1).
+    frequency : mapping, optional
+        Replaces the example's frequency grid.
+
+    Raises
+    ------
+    NotFoundError
+        No example of that name.
+
+    Examples
+    --------
+    >>> example_assembly("ra1", {"start_hz": 100.0, "stop_hz": 200.0, "step_hz": 50.0})["frequency"]
+    {'start_hz': 100.0, 'stop_hz': 200.0, 'step_hz': 50.0}
+    """
+    build = EXAMPLE_ASSEMBLIES.get(name)
+    if build is None:
+        raise NotFoundError("example", name)
+    return build(dict(frequency) if frequency is not None else None)
 
 
 def predict(assembly: Mapping[str, Any] | AssemblySpec, *, store: MeasurementStore | None = None,
@@ -56,6 +88,24 @@ def predict(assembly: Mapping[str, Any] | AssemblySpec, *, store: MeasurementSto
     common = CommonSpec(spec.frequency_hz, spec.beam_theory, spec.shear_coefficient, spec.materials,
                         spec.spindle)
     return SpindleSide(common, resolver(store)).predict(spec, uncertainty=uncertainty)
+
+
+def prediction_document(prediction: Prediction, tool_point: Sequence[str] | None = None) -> dict[str, Any]:
+    """A prediction as the contract's JSON mapping with numpy arrays (for orjson).
+
+    Parameters
+    ----------
+    prediction : Prediction
+    tool_point : sequence of str, optional
+        Keep only these receptances of ``tool_point`` (e.g. ``["h"]``: a third of the bytes).
+
+    Raises
+    ------
+    InputError
+        Field ``tool_point``: a name other than h, l, n, p.
+    """
+    out = prediction.to_dict(arrays="numpy")
+    return select_tool_point(out, list(tool_point)) if tool_point is not None else out
 
 
 def predict_draws(assembly: Mapping[str, Any], uncertainty: object, *, store: MeasurementStore | None = None,

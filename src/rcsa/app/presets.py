@@ -32,8 +32,7 @@ from rcsa.libraries.recommend import (
 )
 from rcsa.libraries.recommend_sources import FrfSource, predicted_frfs, stored_frfs
 
-__all__ = ["OPTION_FIELDS", "PRESET_PREFIX", "PresetFile", "check_recommendation", "parse_recommend_options",
-           "recommend_predicted", "recommend_stored", "write_preset_file"]
+__all__ = ["OPTION_FIELDS", "PRESET_PREFIX", "PresetFile", "check_recommendation", "recommend_predicted", "recommend_stored", "write_preset_file"]
 
 _FREECAD_REFUSAL = ("chatter-safe presets are written into Autodesk Fusion libraries (.json or .tools) only: "
                     "FreeCAD toolbits (.fctb) and libraries have no start-values presets to write them into")

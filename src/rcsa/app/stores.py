@@ -21,17 +21,7 @@ from rcsa.measured.hybrid import MeasurementSource, base_resolver
 from rcsa.measured.store import Measurement, MeasurementStore, is_measurement_id
 from rcsa.model.spindle_side import BaseResolver
 
-__all__ = [
-    "CachedMeasurements",
-    "Measurement",
-    "MeasurementSource",
-    "MeasurementStore",
-    "LibraryStore",
-    "is_measurement_id",
-    "library_store",
-    "open_store",
-    "resolver",
-]
+__all__ = ["CachedMeasurements", "library_store", "open_store", "resolver", "spindle_reference"]
 
 
 def open_store(path: str | os.PathLike[str] | None = None) -> MeasurementStore:
@@ -59,6 +49,22 @@ def library_store(store_path: str | os.PathLike[str] | None = None) -> LibrarySt
         return found
 
 
+def spindle_reference(text: str) -> dict[str, Any] | None:
+    """``{"spindle": {"measurement_id": text}}`` when ``text`` is a measurement id, else None.
+
+    How a door reads a ``--spindle`` that may name a stored measurement (``m-...``) or a
+    file (None: the caller reads the file).
+
+    Examples
+    --------
+    >>> spindle_reference("m-0123456789ab")
+    {'spindle': {'measurement_id': 'm-0123456789ab'}}
+    >>> spindle_reference("ra1.json") is None
+    True
+    """
+    return {"spindle": {"measurement_id": text}} if is_measurement_id(text) else None
+
+
 def resolver(store: MeasurementSource | None = None) -> BaseResolver:
     """Looks measured spindles up in ``store`` (the default store, opened on first use)."""
     opened: list[MeasurementSource] = []
@@ -75,8 +81,12 @@ class CachedMeasurements:
     """Read-through cache of stored measurements for computations (per process).
 
     Stored measurements are immutable and ids are never reused, so a cached copy is exact
-    for as long as the file exists; each ``get`` checks that it still does (one ``stat``),
-    so a deleted measurement is never used by a request that starts after the delete.
+    for as long as its file is the one it was read from; each ``get`` checks that with one
+    ``stat`` (inode, size, modification time: :meth:`MeasurementStore.file_identity`), so a
+    deleted measurement is never used by a request that starts after the delete, and a file
+    damaged or replaced since it was cached is read again — and refused as damaged when its
+    checksum fails — instead of being served from memory. (A damage that keeps inode, size
+    and modification time alike, which no ordinary write does, is not noticed.)
 
     Parameters
     ----------
@@ -89,24 +99,32 @@ class CachedMeasurements:
         self.store = store
         self.path = store.path
         self.size = int(size)
-        self._items: OrderedDict[str, Measurement] = OrderedDict()
+        self._items: OrderedDict[str, tuple[Any, Measurement]] = OrderedDict()
         self._lock = threading.Lock()
 
     def get(self, measurement_id: str) -> Measurement:
-        """The measurement, from memory when possible (``NotFoundError`` if gone)."""
-        if self.size and measurement_id in self.store:
+        """The measurement, from memory when its file is unchanged (``NotFoundError`` if gone,
+        ``DamagedError`` if damaged)."""
+        identity = self._identity(measurement_id)
+        if self.size and identity is not None:
             with self._lock:
                 hit = self._items.get(measurement_id)
-                if hit is not None:
+                if hit is not None and hit[0] == identity:
                     self._items.move_to_end(measurement_id)
-                    return hit
+                    return hit[1]
         m = self.store.get(measurement_id)
-        if self.size:
+        if self.size and identity is not None:
             with self._lock:
-                self._items[measurement_id] = m
+                self._items[measurement_id] = (identity, m)
                 while len(self._items) > self.size:
                     self._items.popitem(last=False)
         return m
+
+    def _identity(self, measurement_id: str) -> Any:
+        identity = getattr(self.store, "file_identity", None)
+        if identity is not None:
+            return identity(measurement_id)
+        return measurement_id if measurement_id in self.store else None
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self.store, name)

@@ -169,9 +169,10 @@ def predict(
 ) -> None:
     """Predict the tool-point FRF of every tool in a Fusion or FreeCAD library on one spindle."""
     # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
-    from rcsa.app.jobs import Workbench, compute_backend, run_work
-    from rcsa.app.libraries import prepare_library, read_library
+    from rcsa.app.jobs import Workbench, run_work
+    from rcsa.app.libraries import prepare_library
     from rcsa.app.stores import open_store
+    from rcsa.infra.compute_backends import compute_backend
     if (spindle is None) == (measurement is None):
         raise fail("give exactly one of --spindle SPINDLE.json or --measurement ID")
     base = _spindle_document(spindle) if spindle is not None else {"spindle": {"measurement_id": measurement}}
@@ -179,7 +180,7 @@ def predict(
     def build() -> tuple[Workbench, Any]:
         bench = Workbench(open_store(store) if (store is not None or measurement is not None) else None)
         settings = _settings(base, frequency, joints, bench.store if measurement is not None else None)
-        work = prepare_library(bench, read_library(library, holder=holder), **settings,
+        work = prepare_library(bench, library, holder=holder, **settings,
                                natural_frequencies=natural_frequencies, options=_options_json(options),
                                uncertainty=_uncertainty_json(uncertainty))
         if work.check is not None:
@@ -236,25 +237,27 @@ def sync(
 ) -> None:
     """Keep a library's tool-point FRFs in the store, computing only new or changed tools."""
     # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
-    from rcsa.app.jobs import Workbench, compute_backend, run_work
-    from rcsa.app.libraries import library_id_from_name, prepare_sync, read_library
-    from rcsa.app.stores import is_measurement_id, open_store
-    measurement = spindle if is_measurement_id(spindle) else None
-    base = {"spindle": {"measurement_id": measurement}} if measurement else _spindle_document(Path(spindle))
-    ident = library_id if library_id is not None else library_id_from_name(library)
+    from rcsa.app.jobs import Workbench, run_work
+    from rcsa.app.libraries import prepare_sync
+    from rcsa.app.stores import open_store, spindle_reference
+    from rcsa.infra.compute_backends import compute_backend
+    stored = spindle_reference(spindle)
+    measurement = spindle if stored is not None else None
+    base = stored if stored is not None else _spindle_document(Path(spindle))
 
     def build() -> tuple[Workbench, Any]:
         st = open_store(store)
         bench = Workbench(st, st.path)
         settings = _settings(base, frequency, joints, st if measurement is not None else None)
-        work = prepare_sync(bench, ident, read_library(library, holder=holder), **settings,
+        work = prepare_sync(bench, library_id, library, holder=holder, **settings,
                             natural_frequencies=natural_frequencies, options=_options_json(options),
-                               uncertainty=_uncertainty_json(uncertainty))
+                            uncertainty=_uncertainty_json(uncertainty))
         if work.size and work.check is not None:
             work.check()  # before the progress bar starts
         return bench, work
 
     bench, work = run_guarded(build)
+    ident = work.request["library_id"]
     backend = run_guarded(lambda: compute_backend(dask_scheduler if work.size else None,
                                                         connect_timeout_s=dask_connect_timeout))
     with _progress_bar(quiet) as bar:

@@ -175,8 +175,8 @@ def import_(
                    "response_unit": response_unit, "sample_rate_hz": sample_rate_hz,
                    "force_window_s": force_window_s, "exponential_tau_s": exponential_tau_s,
                    "max_frequency_hz": max_frequency_hz}
-        form = M.format_from_name(file.name, fmt)
-        if form != "json":
+        form = M.upload_format(file.name, fmt)
+        if form not in ("json", "unknown"):  # unknown: the importer says so
             for key in ("spindle_id", "direction", "plane"):
                 if metadata[key] is None and not (key == "direction" and form == "uff"):
                     flag = "--" + key.replace("_", "-")
@@ -186,7 +186,7 @@ def import_(
         if form == "csv":
             options["frequency_unit"] = frequency_unit
         m = M.import_measurement(
-            _read_bytes(file), file_name=file.name, fmt=form, metadata=metadata, options=options,
+            _read_bytes(file), file_name=file.name, fmt=fmt, metadata=metadata, options=options,
             extra_taps=[_read_bytes(t) for t in tap or ()],
         )
         return M.store_measurement(open_store(store), m)

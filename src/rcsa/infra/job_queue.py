@@ -28,12 +28,15 @@ Limits:
 * **time limit** — a :class:`JobRunner` with ``time_limit_s`` fails a job that runs longer
   (problem "Job time limit exceeded"); the job's status says so at once, and the computation
   stops at its next progress report;
-* **per-caller quota and fair claiming** — a job is submitted for an ``owner`` (whoever asked
-  for it); ``submit(..., max_unfinished=N)`` refuses the owner's N+1st unfinished job
-  (:class:`QuotaExceeded`), and :meth:`JobStore.claim` serves owners round-robin: the queued
-  job of the owner with the fewest running jobs, then the one served least recently, then
-  the oldest — so a flood of one caller's jobs never makes another caller's job wait for the
-  flood's tail (``max_running_per_owner`` can cap an owner's running jobs outright);
+* **per-caller quota, running cap and fair claiming** — a job is submitted for an ``owner``
+  (whoever asked for it) in a ``pool`` (whose runners it shares; default: its owner's own —
+  the service puts every anonymous caller in one pool); ``submit(..., max_unfinished=N)``
+  refuses the owner's N+1st unfinished job (:class:`QuotaExceeded`), ``claim(...,
+  max_running_per_owner=M)`` lets a pool run at most M jobs at once (so anonymous callers
+  share one runner and leave the others to keyed callers), and :meth:`JobStore.claim` serves
+  pools round-robin: the queued job of the pool with the fewest running jobs, then the one
+  served least recently, then the oldest — so a flood of one caller's jobs never makes
+  another caller's job wait for the flood's tail;
 * **disk budget** — ``max_result_bytes`` caps the total size of the kept result files: after
   each success the oldest results are evicted (file deleted, row kept with
   ``result_evicted_utc``) until the rest fit; the newest result is always kept.
@@ -41,7 +44,8 @@ Limits:
 
 Duplicates: every row carries ``request_sha256``, the SHA-256 of the request's canonical
 JSON (:func:`canonical_request`). ``submit(..., reuse_unfinished=True)`` returns the
-unfinished job of the same kind and request instead of queuing a copy — for callers that
+unfinished job of the same kind, request *and owner* instead of queuing a copy (a job is
+never shared with another caller who happens to send the same body) — for callers that
 retry a submission (the REST service does so for requests with an ``Idempotency-Key``;
 the key itself, and every other HTTP rule of idempotency, live in :mod:`service.idempotency`).
 Tables created by earlier versions get the new columns on first use; their
@@ -110,13 +114,14 @@ CREATE TABLE IF NOT EXISTS jobs (
     summary          TEXT,
     owner            TEXT,
     result_bytes     INTEGER,
-    result_evicted_utc TEXT
+    result_evicted_utc TEXT,
+    pool             TEXT
 );
 CREATE INDEX IF NOT EXISTS jobs_status ON jobs (status, created_utc);
 CREATE INDEX IF NOT EXISTS jobs_request ON jobs (request_sha256, kind);
 """
 #: Columns added since the first version (``ALTER TABLE`` on tables created before them).
-_ADDED_COLUMNS = {"owner": "TEXT", "result_bytes": "INTEGER", "result_evicted_utc": "TEXT"}
+_ADDED_COLUMNS = {"owner": "TEXT", "result_bytes": "INTEGER", "result_evicted_utc": "TEXT", "pool": "TEXT"}
 _INDEXES = """
 CREATE INDEX IF NOT EXISTS jobs_owner ON jobs (owner, status);
 CREATE INDEX IF NOT EXISTS jobs_kept ON jobs (status, finished_utc) WHERE result_file IS NOT NULL;
@@ -125,16 +130,20 @@ _COLUMNS = ("id, kind, status, progress, created_utc, started_utc, finished_utc,
             "error, summary, request_sha256, heartbeat_unix, result_bytes, result_evicted_utc")
 _BUSY_TIMEOUT_S = 30.0
 _PURGE_EVERY_S = 3600.0
-#: Fair choice of a queued job: fewest running jobs of its owner, then the owner served least
-#: recently, then the oldest job. Parameters: the per-owner running cap, twice (NULL: none).
+#: Fair choice of a queued job: fewest running jobs of its pool (its owner's own unless it was
+#: given one), then the pool served least recently, then its owner served least recently, then
+#: the oldest job. Parameters: the per-pool running cap, twice (NULL: none).
 _FAIR_CLAIM = """
-WITH running AS (SELECT owner, COUNT(*) AS n FROM jobs WHERE status = 'running' GROUP BY owner),
-     served AS (SELECT owner, MAX(started_utc) AS last FROM jobs WHERE started_utc IS NOT NULL GROUP BY owner)
-SELECT j.id, j.attempts FROM jobs AS j
-LEFT JOIN running AS r ON r.owner IS j.owner
-LEFT JOIN served AS s ON s.owner IS j.owner
+WITH keyed AS (SELECT *, COALESCE(pool, owner) AS k FROM jobs),
+     running AS (SELECT k, COUNT(*) AS n FROM keyed WHERE status = 'running' GROUP BY k),
+     served AS (SELECT k, MAX(started_utc) AS last FROM keyed WHERE started_utc IS NOT NULL GROUP BY k),
+     owner_served AS (SELECT owner, MAX(started_utc) AS last FROM jobs WHERE started_utc IS NOT NULL GROUP BY owner)
+SELECT j.id, j.attempts FROM keyed AS j
+LEFT JOIN running AS r ON r.k IS j.k
+LEFT JOIN served AS s ON s.k IS j.k
+LEFT JOIN owner_served AS o ON o.owner IS j.owner
 WHERE j.status = 'queued' AND (? IS NULL OR COALESCE(r.n, 0) < ?)
-ORDER BY COALESCE(r.n, 0), COALESCE(s.last, ''), j.created_utc, j.id
+ORDER BY COALESCE(r.n, 0), COALESCE(s.last, ''), COALESCE(o.last, ''), j.created_utc, j.id
 LIMIT 1
 """
 
@@ -327,7 +336,7 @@ class JobStore:
 
     # ------------------------------------------------------------------ submit / read
     def submit(self, kind: str, request: Mapping[str, Any], *, reuse_unfinished: bool = False,
-               owner: str | None = None, max_unfinished: int | None = None) -> Job:
+               owner: str | None = None, max_unfinished: int | None = None, pool: str | None = None) -> Job:
         """Queue a job; return its state.
 
         Parameters
@@ -338,11 +347,14 @@ class JobStore:
             JSON-ready request document (kept until the job is purged).
         reuse_unfinished : bool
             Return the queued or running job of this kind with the same request (same
-            ``request_sha256``), if there is one, instead of queuing a copy.
+            ``request_sha256``) and the same owner, if there is one, instead of queuing a copy.
         owner : str, optional
-            Who asked for it (claims are fair across owners; quotas count per owner).
+            Who asked for it (quotas count per owner).
         max_unfinished : int, optional
             Refuse the job when ``owner`` already has this many queued or running jobs.
+        pool : str, optional
+            Whose runners it shares: claims are fair across pools and the running cap counts
+            per pool (default: the owner's own).
 
         Raises
         ------
@@ -353,8 +365,9 @@ class JobStore:
         job_id = "j-" + secrets.token_hex(16)
         with closing(self._connect()) as con, transaction(con):
             if reuse_unfinished:
-                row = con.execute("SELECT id FROM jobs WHERE request_sha256 = ? AND kind = ? AND status IN "
-                                  "('queued', 'running') ORDER BY created_utc, id LIMIT 1", (sha, kind)).fetchone()
+                row = con.execute("SELECT id FROM jobs WHERE request_sha256 = ? AND kind = ? AND owner IS ? AND "
+                                  "status IN ('queued', 'running') ORDER BY created_utc, id LIMIT 1",
+                                  (sha, kind, owner)).fetchone()
                 if row is not None:
                     return self.get(row[0])
             if max_unfinished is not None:
@@ -363,8 +376,8 @@ class JobStore:
                 if n >= max_unfinished:
                     raise QuotaExceeded(owner or "this caller", int(max_unfinished))
             con.execute(
-                "INSERT INTO jobs (id, kind, status, request, request_sha256, created_utc, owner) "
-                "VALUES (?, ?, 'queued', ?, ?, ?, ?)", (job_id, kind, data, sha, utc_now_iso(), owner))
+                "INSERT INTO jobs (id, kind, status, request, request_sha256, created_utc, owner, pool) "
+                "VALUES (?, ?, 'queued', ?, ?, ?, ?, ?)", (job_id, kind, data, sha, utc_now_iso(), owner, pool))
         return self.get(job_id)
 
     def get(self, job_id: str) -> Job:
@@ -437,9 +450,10 @@ class JobStore:
     def claim(self, runner: str, *, max_running_per_owner: int | None = None) -> Job | None:
         """Atomically take a job for ``runner``: an abandoned running one first, else a queued one.
 
-        Queued jobs are served fairly across owners: the job of the owner with the fewest
-        running jobs, then of the owner served least recently, then the oldest. With
-        ``max_running_per_owner``, an owner's jobs wait while it has that many running.
+        Queued jobs are served fairly across pools (an owner's own, unless submitted in a
+        shared one): the job of the pool with the fewest running jobs, then of the pool served
+        least recently, then of its owner served least recently, then the oldest. With
+        ``max_running_per_owner``, a pool's jobs wait while it has that many running.
         """
         now = time.time()
         with closing(self._connect()) as con, transaction(con):

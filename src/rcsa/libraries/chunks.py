@@ -2,7 +2,7 @@
 
 Large work (a batch job, a tool library, a sync) is computed in chunks of tools: each chunk is
 one call of :func:`rcsa.model.batch.predict_batch` on a slice of the combinations. A chunk is
-run by a backend (:mod:`rcsa.infra.compute`): in this process, or on a Dask cluster whose
+run by a backend (:mod:`rcsa.infra.compute_backends`): in this process, or on a Dask cluster whose
 workers share nothing with the service but the network. So a chunk carries its inputs **by
 content**:
 

@@ -17,9 +17,9 @@ the options that apply to its format (a Fusion-only option given for FreeCAD, or
 from __future__ import annotations
 
 import io
-import json
 import os
 import zipfile
+import zlib
 from collections.abc import Mapping
 from pathlib import Path, PurePosixPath
 from typing import Any, Literal
@@ -33,6 +33,7 @@ from rcsa.libraries.freecad_library import (
     load_freecad_library,
 )
 from rcsa.libraries.fusion import FusionLibrary, library_combinations, load_fusion_library
+from rcsa.model.input_policy import load_json
 
 __all__ = ["FREECAD_OPTIONS", "FUSION_OPTIONS", "Library", "LibraryFormat", "LibrarySource", "detect_format",
            "import_library", "read_library"]
@@ -64,14 +65,14 @@ def _content_format(source: bytes | Mapping[str, Any]) -> LibraryFormat | None:
         try:
             with zipfile.ZipFile(io.BytesIO(source)) as zf:
                 names = [PurePosixPath(n).name.lower() for n in zf.namelist()]
-        except (zipfile.BadZipFile, RuntimeError, NotImplementedError, OSError):
+        except (zipfile.BadZipFile, RuntimeError, NotImplementedError, OSError, EOFError, zlib.error):
             return None
         if "tools.json" in names:
             return "fusion"
         return "freecad" if any(n.endswith(FREECAD_SUFFIXES) for n in names) else None
     try:
-        doc = json.loads(source.decode("utf-8-sig"))
-    except (UnicodeDecodeError, ValueError):
+        doc = load_json(source)
+    except InputError:  # the reader says why
         return None
     return _content_format(doc) if isinstance(doc, dict) else None
 

@@ -48,7 +48,8 @@ from rcsa.libraries.quantities import count_value, unit_to_metres
 from rcsa.libraries.tool_materials import tool_material
 from rcsa.model import fields
 from rcsa.model.assembly import shallow_insertion_note
-from rcsa.model.bounds import MAX_HOLDER_SEGMENTS_PER_CONE
+from rcsa.model.bounds import MAX_HOLDER_SEGMENTS_PER_CONE, MAX_LENGTH_M, MAX_TEETH
+from rcsa.model.input_policy import load_json
 
 __all__ = ["MAX_FILE_BYTES", "freecad_combination", "load_freecad_object", "map_toolbit", "parse_length_m"]
 
@@ -97,6 +98,8 @@ def parse_length_m(text: object, field: str) -> float:
         raise InputError(field, f"unknown length unit {m.group(2)!r} in {text!r}") from exc
     if not math.isfinite(value):
         raise InputError(field, f"must be finite, got {text!r}")
+    if abs(value) > MAX_LENGTH_M:
+        raise InputError(field, f"{text!r} is {value:g} m, longer than any machine-tool part ({MAX_LENGTH_M:g} m)")
     return value
 
 
@@ -135,10 +138,7 @@ def load_freecad_object(source: str | os.PathLike[str] | bytes | Mapping[str, An
             raw = bytes(source)
         else:
             raise InputError("source", f"expected a path, bytes or a mapping, got {type(source).__name__}")
-        try:
-            obj = json.loads(raw.decode("utf-8-sig"))
-        except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-            raise InputError("", f"not a FreeCAD JSON file ({exc})") from exc
+        obj = load_json(raw, what="the FreeCAD file")
     if not isinstance(obj, dict):
         raise InputError("", f"a FreeCAD toolbit or holder is a JSON object, got {type(obj).__name__}")
     if stem is None:
@@ -243,9 +243,9 @@ def _flutes(value: object, warnings: list[str]) -> int | None:
     if value is None:
         return None
     count = count_value(value)
-    if count is not None and count > 0:
+    if count is not None and 1 <= count <= MAX_TEETH:
         return count
-    warnings.append(f"Flutes {value!r} is not a positive integer; teeth unknown")
+    warnings.append(f"Flutes {value!r} is not an integer from 1 to {MAX_TEETH}; teeth unknown")
     return None
 
 
@@ -316,6 +316,9 @@ def _profile(holder: Mapping[str, Any]) -> tuple[list[tuple[float, float]], str]
         if not ok:
             raise InputError(f"holder.profile[{k}]", f"must be [r, z] with finite numbers ≥ 0, got {p!r}")
         pts.append((float(p[0]), float(p[1])))
+        if max(pts[-1]) * unit_to_metres(1.0, units) > MAX_LENGTH_M:
+            raise InputError(f"holder.profile[{k}]", f"{p!r} {units} lies {max(pts[-1]) * unit_to_metres(1.0, units):g} m "
+                                                     f"from the axis or the base, beyond any holder ({MAX_LENGTH_M:g} m)")
     return pts, units
 
 

@@ -29,6 +29,7 @@ import io
 import json
 import os
 import zipfile
+import zlib
 from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -194,7 +195,7 @@ def _from_zip(raw: bytes) -> tuple[list[Toolbit], tuple[str, dict[str, Any]] | N
                     if info.file_size > MAX_FILE_BYTES:
                         raise InputError("library", f"{info.filename}: larger than {MAX_FILE_BYTES} bytes")
                     files[name.suffix.lower()].append((name.stem, zf.read(info)))
-    except (zipfile.BadZipFile, RuntimeError, NotImplementedError, OSError) as exc:
+    except (zipfile.BadZipFile, RuntimeError, NotImplementedError, OSError, EOFError, zlib.error) as exc:
         raise InputError("library", f"not a readable zip archive ({exc})") from exc
     if not files[".fctb"]:
         raise InputError("library", "the zip holds no FreeCAD toolbit (.fctb) and no Fusion tools.json")

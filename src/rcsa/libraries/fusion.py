@@ -64,6 +64,7 @@ import io
 import json
 import os
 import zipfile
+import zlib
 from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -79,7 +80,8 @@ from rcsa.libraries.quantities import count_value, unit_to_metres
 from rcsa.libraries.tool_materials import tool_material
 from rcsa.model import fields
 from rcsa.model.assembly import shallow_insertion_note
-from rcsa.model.bounds import MAX_HOLDER_SEGMENTS_PER_CONE, MIN_FLUTED_DIAMETER_RATIO
+from rcsa.model.bounds import MAX_HOLDER_SEGMENTS_PER_CONE, MAX_TEETH, MIN_FLUTED_DIAMETER_RATIO
+from rcsa.model.input_policy import load_json
 
 __all__ = [
     "MAX_LIBRARY_BYTES",
@@ -177,19 +179,11 @@ def _parse_bytes(raw: bytes) -> object:
     if raw.startswith(b"PK"):
         raw = _tools_json_from_zip(raw)
     try:
-        text = raw.decode("utf-8-sig")
+        raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise InputError("", "not UTF-8 text: expected a Fusion tool-library JSON or a .tools zip"
                          ) from exc
-    try:
-        return json.loads(text, parse_constant=_reject_constant)
-    except json.JSONDecodeError as exc:
-        raise InputError("", f"not valid JSON ({exc.msg} at line {exc.lineno} column {exc.colno})"
-                         ) from exc
-
-
-def _reject_constant(name: str) -> float:
-    raise InputError("", f"not valid JSON: {name} is not a number")
+    return load_json(raw, what="the tool library")
 
 
 def tools_json_member(zf: zipfile.ZipFile) -> zipfile.ZipInfo:
@@ -221,7 +215,7 @@ def _tools_json_from_zip(raw: bytes) -> bytes:
         with zipfile.ZipFile(io.BytesIO(raw)) as zf:
             with zf.open(tools_json_member(zf)) as fh:
                 data = fh.read(MAX_LIBRARY_BYTES + 1)
-    except (zipfile.BadZipFile, RuntimeError, NotImplementedError, OSError) as exc:
+    except (zipfile.BadZipFile, RuntimeError, NotImplementedError, OSError, EOFError, zlib.error) as exc:
         raise InputError("", f"not a readable .tools zip archive ({exc})") from exc
     if len(data) > MAX_LIBRARY_BYTES:
         raise InputError("", f"tools.json is larger than {MAX_LIBRARY_BYTES} bytes")
@@ -393,10 +387,10 @@ def _combination(index: int, item: object, ident: str, occurrence: int, opts: _O
     tool_type = item.get("type") if isinstance(item.get("type"), str) else None
     nof = item.get("geometry", {}).get("NOF") if isinstance(item.get("geometry"), dict) else None
     teeth = count_value(nof)
-    if teeth is not None and teeth < 1:
+    if teeth is not None and not 1 <= teeth <= MAX_TEETH:
         teeth = None
     if nof is not None and teeth is None:
-        warnings.append(f"geometry.NOF {nof!r} is not a positive integer; teeth unknown")
+        warnings.append(f"geometry.NOF {nof!r} is not an integer from 1 to {MAX_TEETH}; teeth unknown")
     meta = {"description": desc if isinstance(desc, str) else "", "number": _t_number(item),
             "teeth": teeth, "tool_type": tool_type}
     try:

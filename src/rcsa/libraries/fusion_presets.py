@@ -26,12 +26,14 @@ import io
 import json
 import re
 import zipfile
+import zlib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, Literal
 
 from rcsa.errors import InputError, RcsaError
 from rcsa.libraries.fusion import MAX_LIBRARY_BYTES, tools_json_member
+from rcsa.model.input_policy import load_json
 
 __all__ = ["FusionFile", "is_replaced", "read_fusion_file", "with_presets", "write_presets"]
 
@@ -90,7 +92,7 @@ def read_fusion_file(raw: bytes) -> FusionFile:
                 info = tools_json_member(zf)
                 member = info.filename
                 data = zf.read(info)
-        except (zipfile.BadZipFile, RuntimeError, NotImplementedError, OSError) as exc:
+        except (zipfile.BadZipFile, RuntimeError, NotImplementedError, OSError, EOFError, zlib.error) as exc:
             raise InputError("library", f"not a readable .tools zip archive ({exc})") from exc
     try:
         text = data.decode("utf-8")
@@ -99,10 +101,7 @@ def read_fusion_file(raw: bytes) -> FusionFile:
     bom = text.startswith(_BOM)
     if bom:
         text = text[1:]
-    try:
-        json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise InputError("library", f"not valid JSON ({exc.msg} at line {exc.lineno})") from exc
+    load_json(text, path="library", what="the tool library")
     return FusionFile(raw, kind, text, bom, member)
 
 

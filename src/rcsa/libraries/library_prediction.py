@@ -20,8 +20,9 @@ from typing import Any
 
 import orjson
 
+from rcsa.analysis.progress import check_time
 from rcsa.errors import InputError
-from rcsa.infra.compute import Backend, LocalBackend
+from rcsa.infra.compute_backends import Backend, LocalBackend
 from rcsa.libraries.chunks import (
     Shared,
     chunk_ranges,
@@ -278,11 +279,13 @@ def _computed(combos: list[Any], shared: Shared | None, backend: Backend,
     done = 0
 
     def waiting() -> None:
+        check_time()
         if progress is not None:
             progress(done, total)
 
     for i, results in backend.map(partial(run_chunk, compute_chunk), [combos[a:b] for a, b in ranges],
                                   shared=shared, ordered=True, on_wait=waiting):
+        check_time()  # an answer given at once stops at its time limit, between chunks
         start = ranges[i][0]
         done += len(results)
         if progress is not None:

@@ -67,6 +67,8 @@ def cone_steps(lower: float, upper: float, *, tolerance: float = CONE_STEP_TOLER
     """
     if upper == lower:
         return 1
+    if not min(lower, upper) > 0.0:  # a cone to a point: as finely as allowed
+        return MAX_CONE_STEPS
     taper = abs(upper - lower) / min(lower, upper)
     return max(1, min(MAX_CONE_STEPS, math.ceil(math.sqrt(taper / tolerance) - 1e-9)))
 

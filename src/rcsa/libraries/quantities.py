@@ -23,8 +23,9 @@ import re
 
 from rcsa.errors import InputError
 from rcsa.model import fields
+from rcsa.model.bounds import MAX_LENGTH_M
 
-__all__ = ["UNIT_SPELLINGS", "Unit", "count_value", "length_value", "unit_fraction", "unit_to_metres"]
+__all__ = ["MAX_COUNT", "UNIT_SPELLINGS", "Unit", "count_value", "length_value", "unit_fraction", "unit_to_metres"]
 
 #: A length unit as an exact ratio to the metre: (numerator, denominator).
 Unit = tuple[int, int]
@@ -122,7 +123,11 @@ def length_value(value: object, field: str, unit: Unit, *, gt: float | None = 0.
     """
     if isinstance(value, str):
         value = _number_from_text(value, field, unit)
-    return fields.number(value, field, gt=gt)
+    number = fields.number(value, field, gt=gt)
+    metres = abs(number) * unit[0] / unit[1]
+    if metres > MAX_LENGTH_M:
+        raise InputError(field, f"{value!r} is {metres:g} m, longer than any machine-tool part ({MAX_LENGTH_M:g} m)")
+    return number
 
 
 def _number_from_text(text: str, field: str, unit: Unit) -> float:
@@ -144,13 +149,23 @@ def count_value(value: object) -> int | None:
     """An integer count (flutes, T number) from a JSON number or a string; None when not one.
 
     Integers, integer-valued floats and strings holding one integer (``"4"``) count; ``"4.5"``,
-    ``"four"``, ``true``, ``NaN`` do not (the caller decides whether that is a warning).
+    ``"four"``, ``true``, ``NaN`` and counts beyond :data:`MAX_COUNT` do not (the caller decides
+    whether that is a warning).
 
     Examples
     --------
     >>> count_value("4"), count_value(4.0), count_value("4.5")
     (4, 4, None)
     """
+    count = _count(value)
+    return count if count is not None and abs(count) <= MAX_COUNT else None
+
+
+#: Largest count (flutes, T number) read from a library: beyond a 32-bit integer it is no count.
+MAX_COUNT = 2**31 - 1
+
+
+def _count(value: object) -> int | None:
     if isinstance(value, str):
         m = _INTEGER.fullmatch(value)
         return int(m.group(1)) if m else None

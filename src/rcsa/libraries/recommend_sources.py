@@ -39,6 +39,7 @@ from rcsa.model.bounds import MAX_BATCH_COMBINATIONS, MAX_FREQUENCY_LINES
 from rcsa.model.contract import MeasuredSpindleSpec, assemble, parse_combination
 from rcsa.model.spindle_side import SpindleSide
 from rcsa.model.uncertainty import parse_uncertainty
+from rcsa.model.wire import complex_from_wire
 
 __all__ = ["MAX_DRAWN_LINES", "FrfSource", "SYNC_SETTINGS", "draw_frfs", "frfs_from_results", "predicted_frfs",
            "stored_frfs"]
@@ -93,7 +94,7 @@ def frfs_from_results(results: list[Mapping[str, Any]]) -> dict[str, Frf | str]:
         if r.get("status") == "ok" and "tool_point" in r and "h" in r["tool_point"]:
             h = r["tool_point"]["h"]
             out[ident] = Frf(np.asarray(r["frequency_hz"], dtype=float),
-                             np.asarray(h["real"], dtype=float) + 1j * np.asarray(h["imag"], dtype=float))
+                             complex_from_wire(h, f"results[{ident}].tool_point.h", finite=False))
         elif r.get("status") == "error":
             error = r.get("error") or {}
             out[ident] = FrfFailure(f"its tool-point FRF failed: {error.get('field', '')}: {error.get('detail', '')}")

@@ -55,7 +55,7 @@ import numpy as np
 from rcsa._version import __version__
 from rcsa.errors import InputError, NotFoundError, StoreError
 from rcsa.infra.clock import utc_now_iso
-from rcsa.infra.compute import Backend, LocalBackend
+from rcsa.infra.compute_backends import Backend, LocalBackend
 from rcsa.infra.sqlite import connect, transaction
 from rcsa.libraries.chunks import chunk_ranges, chunk_size, compute_chunk, prepare_shared, run_chunk
 from rcsa.libraries.formats import LibrarySource

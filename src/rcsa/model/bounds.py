@@ -1,7 +1,10 @@
 """Validation bounds of every request: the one source the library and the REST schemas share.
 
-Sanity bounds lie far outside any machine tool, so that no accepted value can overflow the
-arithmetic (2πf, d⁴, k/ω …); size limits bound the work a request may ask for. The parsers
+Physical bounds keep every field within what a machine tool can be (no 22 m holder segment,
+no 1e30 kg sensor), with a wide margin so that no real assembly is refused; sanity bounds of
+the other quantities lie far outside any machine tool, so that no accepted value can
+overflow the arithmetic (2πf, d⁴, k/ω …); size limits bound the work a request may ask
+for. Uploaded files meet the same numbers (:mod:`rcsa.model.input_policy`). The parsers
 (:mod:`rcsa.model.contract`, the lobes, diagnosis and identification requests) check them,
 and ``service/schemas.py`` publishes exactly these numbers in the OpenAPI document, so the
 REST schema accepts what the library accepts (``tests/service/test_schema_bounds.py``).
@@ -20,6 +23,7 @@ __all__ = [
     "MAX_CUTTING_COEFFICIENT_N_M2",
     "MAX_DAMPING",
     "MAX_DENSITY_KG_M3",
+    "MAX_DIAMETER_M",
     "MAX_FREQUENCY_HZ",
     "MAX_FREQUENCY_LINES",
     "MAX_FRF_VALUE",
@@ -32,10 +36,14 @@ __all__ = [
     "MAX_NECK_SEGMENTS",
     "MAX_POISSON_RATIO",
     "MAX_RADIAL_RATIO",
+    "MAX_RELATIVE_STEP",
     "MAX_SEGMENTS",
     "MAX_SHEAR_COEFFICIENT",
+    "MAX_SENSOR_MASS_KG",
     "MAX_SPEED_COUNT",
     "MAX_SPEED_RPM",
+    "MAX_TAP_SAMPLES",
+    "MAX_STRING_CHARS",
     "MAX_STIFFNESS",
     "MAX_TEETH",
     "MAX_TOLERANCE",
@@ -53,6 +61,7 @@ __all__ = [
     "MIN_MODULUS_PA",
     "MIN_POISSON_RATIO",
     "MIN_RADIAL_IMMERSION",
+    "MIN_RELATIVE_STEP",
     "MIN_SHEAR_COEFFICIENT",
     "MIN_SPEED_COUNT",
     "MIN_SPEED_RPM",
@@ -69,11 +78,19 @@ MAX_JSON_DEPTH = 32
 #: may take of an unchecked number (x^10 = 1e300) finite. Integers beyond 64 bits and
 #: NaN/Infinity tokens are refused by the decoder itself.
 MAX_JSON_NUMBER = 1.0e30
+#: Longest string (or object key) of a JSON document, characters: names, notes, vendor
+#: descriptions and expressions are far shorter; the stored metadata of a measurement is an
+#: HDF5 attribute, which holds at most 64 KiB.
+MAX_STRING_CHARS = 16_384
 
 # ---------------------------------------------------------------------------- sizes
 
-#: Frequency lines of one request.
+#: Frequency lines of one request, and rows of one measured FRF file (CSV/TSV, CutPro, UFF,
+#: measurement JSON): an analyser's longest FRF export is 25 600 lines (102 400 with zoom).
 MAX_FREQUENCY_LINES = 200_000
+#: Samples (rows) of one raw tap-test file: 10 s at 200 kHz, beyond any impact record
+#: (a hammer tap rings out in well under a second).
+MAX_TAP_SAMPLES = 2_000_000
 #: Tool–holder combinations of one batch.
 MAX_BATCH_COMBINATIONS = 10_000
 #: Segments of one spindle or one holder. Real spindle models have 10–60 and a CAM
@@ -86,8 +103,16 @@ MAX_BEARINGS = 100
 
 #: Lowest first line and highest line of a frequency grid, Hz (0 Hz is singular).
 MIN_FREQUENCY_HZ, MAX_FREQUENCY_HZ = 1.0e-3, 1.0e7
-#: Shortest and longest length or diameter, m.
-MIN_LENGTH_M, MAX_LENGTH_M = 1.0e-6, 100.0
+#: Shortest and longest length (segment, tool, stickout, bearing position) or diameter, m.
+#: The longest spindle shaft of a boring mill is about 2 m; holders and tools are shorter
+#: than 1 m.
+MIN_LENGTH_M, MAX_LENGTH_M = 1.0e-6, 3.0
+#: Largest diameter of a spindle, holder or tool section, m (a face-mill spindle nose is
+#: 0.2–0.3 m).
+MAX_DIAMETER_M = 1.0
+#: Largest accelerometer (with its mounting) on a tap-tested structure, kg: tap-test
+#: accelerometers weigh 0.2–50 g.
+MAX_SENSOR_MASS_KG = 1.0
 #: Young's modulus, Pa.
 MIN_MODULUS_PA, MAX_MODULUS_PA = 1.0, 1.0e13
 #: Density, kg/m³.
@@ -131,6 +156,13 @@ MIN_RADIAL_IMMERSION = 1.0e-4
 MIN_SPEED_RPM, MAX_SPEED_RPM = 1.0e-3, 1.0e6
 #: Speeds of a lobes grid.
 MIN_SPEED_COUNT, MAX_SPEED_COUNT = 2, 100_000
+
+# ---------------------------------------------------------------------------- effect analysis
+
+#: Relative step δ of the effect analysis' central differences in ln(parameter). Natural
+#: frequencies are bisected to 1e-11 relative, so below 1e-6 their rounding (1e-11/δ)
+#: would reach 1e-5 of a sensitivity; above 0.1 the truncation error (δ²) does.
+MIN_RELATIVE_STEP, MAX_RELATIVE_STEP = 1.0e-6, 0.1
 
 # ---------------------------------------------------------------------------- tool libraries
 

@@ -19,6 +19,7 @@ from rcsa.model.bounds import (
     MAX_BEARINGS,
     MAX_DAMPING,
     MAX_DENSITY_KG_M3,
+    MAX_DIAMETER_M,
     MAX_FREQUENCY_HZ,
     MAX_FREQUENCY_LINES,
     MAX_LENGTH_M,
@@ -384,8 +385,8 @@ def _segments(value: object, path: str, materials: Mapping[str, Material]) -> tu
         o = Fields(raw, f"{path}[{i}]")
         o.only("length_m", "outer_diameter_m", "inner_diameter_m", "material")
         length = o.number("length_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
-        outer = o.number("outer_diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
-        inner = o.number("inner_diameter_m", ge=0.0, le=MAX_LENGTH_M, default=0.0)
+        outer = o.number("outer_diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_DIAMETER_M)
+        inner = o.number("inner_diameter_m", ge=0.0, le=MAX_DIAMETER_M, default=0.0)
         if inner >= outer:
             raise InputError(o.at("inner_diameter_m"),
                              f"must be smaller than outer_diameter_m ({outer:g}), got {inner:g}")
@@ -502,8 +503,8 @@ def parse_tool(value: object, materials: Mapping[str, Material], path: str = "to
     """
     o = Fields(value, path)
     o.only(*_TOOL_FIELDS)
-    diameter = o.number("diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
-    shank = o.number("shank_diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M, default=diameter)
+    diameter = o.number("diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_DIAMETER_M)
+    shank = o.number("shank_diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_DIAMETER_M, default=diameter)
     overall = o.number("overall_length_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
     stickout = o.number("stickout_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
     if stickout > overall:
@@ -514,7 +515,7 @@ def parse_tool(value: object, materials: Mapping[str, Material], path: str = "to
     ratio = o.number("fluted_diameter_ratio", gt=0.0, ge=MIN_FLUTED_DIAMETER_RATIO, le=1.0, default=0.8)
     mass_ratio = o.optional_number("fluted_mass_diameter_ratio", gt=0.0, ge=MIN_FLUTED_DIAMETER_RATIO, le=1.0)
     shoulder_length = o.optional_number("shoulder_length_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
-    shoulder_diameter = o.optional_number("shoulder_diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
+    shoulder_diameter = o.optional_number("shoulder_diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_DIAMETER_M)
     if (shoulder_length is None) != (shoulder_diameter is None):
         raise InputError(o.at("shoulder_length_m"), "shoulder_length_m and shoulder_diameter_m go together")
     if shoulder_length is not None and not flute <= shoulder_length <= stickout:
@@ -536,7 +537,7 @@ def _neck_segments(o: Fields, flute: float, stickout: float) -> tuple[tuple[floa
     for i, item in enumerate(raw):
         s = Fields(item, f"{o.at('neck_segments')}[{i}]", ("length_m", "diameter_m"))
         out.append((s.number("length_m", gt=0.0, ge=MIN_LENGTH_M),  # at most stickout − flute, below
-                    s.number("diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)))
+                    s.number("diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_DIAMETER_M)))
     total = math.fsum(length for length, _ in out)
     if total > (stickout - flute) * (1 + 1e-9) + 1e-12:
         raise InputError(o.at("neck_segments"), f"reach {total:g} m beyond the flutes, more than the "

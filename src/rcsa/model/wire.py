@@ -17,6 +17,7 @@ array([1.+0.j, 2.-1.j])
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from typing import Any, Literal
 
@@ -24,7 +25,8 @@ import numpy as np
 
 from rcsa.errors import InputError
 
-__all__ = ["CONVENTION", "RECEPTANCE_UNITS", "WIRE_KEYS", "complex_from_wire", "complex_to_wire", "number_list"]
+__all__ = ["CONVENTION", "RECEPTANCE_UNITS", "WIRE_KEYS", "complex_from_wire", "complex_to_wire", "json_float",
+           "json_list", "number_list"]
 
 #: The two keys of a complex array on the wire.
 WIRE_KEYS = frozenset({"real", "imag"})
@@ -107,7 +109,8 @@ def complex_from_wire(value: object, field: str, n: int | None = None, *, nonemp
     return out
 
 
-def complex_to_wire(x: Any, arrays: Literal["list", "numpy"] = "list") -> dict[str, Any]:
+def complex_to_wire(x: Any, arrays: Literal["list", "numpy"] = "list", *,
+                    nonfinite_as_none: bool = False) -> dict[str, Any]:
     """A complex array as ``{"real": [...], "imag": [...]}``.
 
     Parameters
@@ -116,8 +119,48 @@ def complex_to_wire(x: Any, arrays: Literal["list", "numpy"] = "list") -> dict[s
     arrays : {"list", "numpy"}
         ``"list"``: JSON-ready Python lists. ``"numpy"``: contiguous float64 arrays (for
         serialisers such as orjson that write numpy directly).
+    nonfinite_as_none : bool
+        Write a part that is not finite (a value that does not exist, such as the multiplier
+        of a speed that never turns unstable) as ``null`` (:func:`json_list`); lists only.
+
+    Examples
+    --------
+    >>> complex_to_wire(np.array([1 - 2j, complex("nan")]), nonfinite_as_none=True)
+    {'real': [1.0, None], 'imag': [-2.0, 0.0]}
     """
     z = np.asarray(x)
+    if nonfinite_as_none:
+        return {"real": json_list(z.real), "imag": json_list(z.imag)}
     if arrays == "list":
         return {"real": z.real.tolist(), "imag": z.imag.tolist()}
     return {"real": np.ascontiguousarray(z.real), "imag": np.ascontiguousarray(z.imag)}
+
+
+def json_float(x: float) -> float | None:
+    """``x`` for JSON: a float, or None where it is not finite (no depth limit, no frequency).
+
+    Parameters
+    ----------
+    x : float
+
+    Examples
+    --------
+    >>> json_float(np.float64(0.5)), json_float(float("inf"))
+    (0.5, None)
+    """
+    return float(x) if math.isfinite(x) else None
+
+
+def json_list(a: Any) -> list[float | None]:
+    """A real array for JSON, non-finite entries as None (see :func:`json_float`).
+
+    Parameters
+    ----------
+    a : numpy.ndarray, shape (n,)
+
+    Examples
+    --------
+    >>> json_list(np.array([1.0, np.nan]))
+    [1.0, None]
+    """
+    return [float(x) if math.isfinite(x) else None for x in np.asarray(a, dtype=float).tolist()]

@@ -25,7 +25,7 @@ import pytest
 from scipy.linalg import expm
 from typer.testing import CliRunner
 
-from rcsa import app as rcsa_app
+import rcsa as rcsa_app
 from rcsa.analysis.lobes import monodromy as md
 from rcsa.analysis.lobes import semi_discretization as sdm
 from rcsa.analysis.lobes.modal_model import (

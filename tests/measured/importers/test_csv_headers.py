@@ -366,7 +366,10 @@ def test_absurd_and_non_finite_values_in_a_table_are_refused(tmp_path):
     re_ = H.real.copy()
     re_[10] = 1.7e308
     text = _text("f (Hz),re (m/N),im (m/N)", (F, re_, H.imag))
-    _refused(tmp_path, text, "h", "row 11 (line 12) at 150 Hz", "above 1 m/N")
+    _refused(tmp_path, text, "h", "row 11 (line 12), column 2", "out of range")  # the number policy (1e30)
+    re_[10] = 1.7e3
+    plausible = _text("f (Hz),re (m/N),im (m/N)", (F, re_, H.imag))
+    _refused(tmp_path, plausible, "h", "row 11 (line 12) at 150 Hz", "above 1 m/N")  # the FRF's plausibility bound
     big = f"{1.7e308:.17g}"
     for bad in ("inf", "nan", "-Infinity"):
         _refused(
@@ -384,7 +387,8 @@ def test_absurd_and_non_finite_values_in_a_table_are_refused(tmp_path):
         "h",
         "below 1e-15 m/N",
     )
-    _refused(tmp_path, text.replace("\n2040,", "\n1e300,"), "frequency_hz", "above 1e+06 Hz")
+    _refused(tmp_path, plausible.replace("\n2040,", "\n1e300,"), "frequency_hz", "line 201", "out of range")
+    _refused(tmp_path, plausible.replace("\n2040,", "\n2e6,"), "frequency_hz", "above 1e+06 Hz")
 
 
 def test_truncated_cutpro_and_tap_files_are_refused(tmp_path):

@@ -79,6 +79,14 @@ def _wait_ready(log: Path, proc: subprocess.Popen, timeout_s: float = 60.0) -> N
     raise AssertionError("writer did not start")
 
 
+def _wait_puts(log: Path, proc: subprocess.Popen, count: int) -> None:
+    """Until the writer has logged ``count`` committed puts (pytest-timeout guards a hang)."""
+    while log.read_text().count("\nput ") < count:
+        if proc.poll() is not None:
+            raise AssertionError(f"writer exited early: {proc.stderr.read().decode()}")
+        time.sleep(0.005)
+
+
 @pytest.mark.slow
 def test_writers_killed_at_random_moments_lose_nothing_committed(tmp_path):
     store_dir = tmp_path / "store"
@@ -106,8 +114,10 @@ def test_writers_killed_at_random_moments_lose_nothing_committed(tmp_path):
             )
         for p, log in procs:
             _wait_ready(log, p)
-        # kill each writer at its own random moment, 0-400 ms into its write loop
-        for p, _ in procs:
+        # kill each writer at its own random moment: once it has committed a few measurements
+        # (counted in its log, so a loaded machine only makes the round slower), then 0-130 ms on
+        for p, log in procs:
+            _wait_puts(log, p, int(rng.integers(2, 6)))
             time.sleep(rng.uniform(0.0, 0.4 / writers))
             p.send_signal(signal.SIGKILL)
         for p, _ in procs:

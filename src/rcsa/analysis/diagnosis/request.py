@@ -34,6 +34,7 @@ from rcsa.analysis.diagnosis.discrepancy import DEFAULT_TOLERANCES
 from rcsa.analysis.measured_tool_point import MAX_TAP_TESTS, TapTest, parse_tap_tests
 from rcsa.errors import InputError
 from rcsa.model import fields
+from rcsa.model.bounds import MAX_SENSOR_MASS_KG
 from rcsa.model.contract import AssemblySpec, MeasuredSpindleSpec, ToolSpec, parse_assembly
 from rcsa.model.spindle_side import BaseResolver
 
@@ -105,7 +106,7 @@ class Request:
 def _measurement(tap: TapTest, i: int) -> Measurement:
     extra = fields.Fields(tap.extra, tap.path)
     n_avg = extra.number("n_averages", ge=1.0, le=MAX_N_AVERAGES, default=DEFAULT_N_AVERAGES)
-    mass = extra.optional_number("sensor_mass_kg", ge=0.0, le=1.0)
+    mass = extra.optional_number("sensor_mass_kg", ge=0.0, le=MAX_SENSOR_MASS_KG)
     label = tap.extra.get("label", f"#{i}")
     if not isinstance(label, str):
         raise InputError(extra.at("label"), "must be a string")

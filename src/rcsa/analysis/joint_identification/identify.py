@@ -68,10 +68,10 @@ about 0.2 s for 4951 lines (``benchmarks/bench_jointid.py``; 1.2 s before the ev
 Examples
 --------
 >>> from rcsa.app.predictions import predict
+>>> from rcsa.model.wire import complex_to_wire
 >>> from rcsa.reference import ra1
 >>> p = predict(ra1({"start_hz": 300.0, "stop_hz": 4500.0, "step_hz": 2.0}))
->>> measurement = {"frequency_hz": p.frequency_hz.tolist(),
-...                "h": {"real": p.tool_point.h.real.tolist(), "imag": p.tool_point.h.imag.tolist()}}
+>>> measurement = {"frequency_hz": p.frequency_hz.tolist(), "h": complex_to_wire(p.tool_point.h)}
 >>> start = ra1()
 >>> start["joints"]["holder_tool"].update(stiffness_n_m=3.0e7, damping_ns_m=90.0)
 >>> out = identify({"assembly": start, "measurements": [measurement]})

@@ -21,14 +21,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rcsa.analysis.effects.mode_features import mode_windows
+from rcsa.analysis.effects.sensitivities import effect_analysis
 from rcsa.analysis.joint_identification.measured_peaks import (
     PEAK_PROMINENCE,
     MeasuredPeak,
     peaks_ln_hz,
 )
 from rcsa.analysis.joint_identification.request import IdentificationRequest
-from rcsa.analysis.mode_features import mode_windows
-from rcsa.analysis.sensitivity import effect_analysis
 from rcsa.analysis.tool_point_model import ToolPointModel
 from rcsa.model.contract import AssemblySpec
 from rcsa.model.modal_fit import local_relative_noise, rational_fit

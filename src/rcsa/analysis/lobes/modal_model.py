@@ -14,7 +14,7 @@ Two sources:
 * :func:`modal_model_from_assembly` — an analytical assembly: its exact undamped natural
   frequencies (Wittrick–Williams), the exact undamped tip residue of each mode and the
   damping ratio of a single-mode fit to the damped tool-point FRF around the peak
-  (:func:`rcsa.analysis.mode_features.mode_features`). Axisymmetric: the same modes in y.
+  (:func:`rcsa.analysis.effects.mode_features.mode_features`). Axisymmetric: the same modes in y.
 * :func:`fit_modal_model` — inline FRFs: the peaks of ``|h|`` give starting values
   (single-mode Levy fits, :func:`rcsa.model.peaks.single_mode_fit`), then all modes are
   fitted together by nonlinear least squares on the complex FRF near the peaks, with the
@@ -41,7 +41,7 @@ from typing import Any
 
 import numpy as np
 
-from rcsa.analysis.mode_features import mode_features
+from rcsa.analysis.effects.mode_features import mode_features
 from rcsa.errors import InputError
 from rcsa.model.assembly import build_model
 from rcsa.model.contract import AssemblySpec, SpindleSpec
@@ -355,7 +355,7 @@ def modal_model_from_assembly(spec: AssemblySpec, *, modes_per_direction: int = 
     Williams), and the ``modes_per_direction`` modes with the largest damped tool-point peaks
     are kept (none below ``MIN_PEAK_FRACTION`` of the largest; modes hidden at the tool point
     are left out), started from their damping ratio and exact undamped tip residue
-    (:func:`rcsa.analysis.mode_features.mode_features`). Joint and bearing damping are not
+    (:func:`rcsa.analysis.effects.mode_features.mode_features`). Joint and bearing damping are not
     proportional, so the damped peaks sit slightly off the undamped frequencies (RA-1: up to
     0.2 %, i.e. a 4–14 % misfit at the peaks); the kept modes are therefore refined together,
     as in :func:`fit_modal_model`, against the exact damped FRF of the chain on dense grids

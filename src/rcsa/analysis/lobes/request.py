@@ -20,12 +20,14 @@ from rcsa.analysis.lobes.zoa import LobeResult, Milling, check_cut, check_frf, s
 from rcsa.errors import FrequencyMismatch, InputError
 from rcsa.model import fields
 from rcsa.model.bounds import (
+    MAX_FREQUENCY_LINES,
     MAX_FRF_VALUE,
     MAX_SPEED_COUNT,
     MAX_SPEED_RPM,
     MIN_SPEED_COUNT,
     MIN_SPEED_RPM,
 )
+from rcsa.model.input_policy import check_count
 from rcsa.model.wire import complex_from_wire, number_list
 from rcsa.physics.receptance import check_frequency_hz
 
@@ -151,6 +153,8 @@ def _mapping(value: object, field: str, keys: set[str]) -> Mapping[str, Any]:
 
 def _parse_frf(value: object, field: str) -> tuple[np.ndarray, np.ndarray]:
     body = _mapping(value, field, {"frequency_hz", "h"})
+    if isinstance(body["frequency_hz"], list):
+        check_count(len(body["frequency_hz"]), f"{field}.frequency_hz", MAX_FREQUENCY_LINES, "frequency lines")
     f = check_frequency_hz(
         number_list(body["frequency_hz"], f"{field}.frequency_hz", finite=False), f"{field}.frequency_hz"
     )

@@ -86,11 +86,11 @@ from rcsa.analysis.lobes.zoa import (
     Milling,
     directional_factors,
     engagement_angles_rad,
-    json_float,
-    json_list,
     zoa_depth_limit,
 )
+from rcsa.analysis.progress import check_time
 from rcsa.errors import InputError
+from rcsa.model.wire import complex_to_wire, json_float, json_list
 
 __all__ = [
     "DEFAULT_STEPS_PER_PERIOD",
@@ -197,7 +197,7 @@ class SemiDiscretizationResult(LobeResult):
         out.update(
             method="semi_discretization",
             instability=[str(k) if k else None for k in self.instability.tolist()],
-            critical_multiplier={"real": json_list(mu.real), "imag": json_list(mu.imag)},
+            critical_multiplier=complex_to_wire(mu, nonfinite_as_none=True),
             steps_per_period=self.steps_per_period,
             steps_per_chatter_cycle=json_list(self.steps_per_chatter_cycle),
             depth_search_max_m=json_float(self.depth_search_max_m),
@@ -248,6 +248,7 @@ class _Evaluator:
                               (self.free[0][idx], self.free[1][idx]))
 
     def __call__(self, idx: np.ndarray, depth_m: np.ndarray) -> np.ndarray:
+        check_time()  # every round of evaluations: a sync request's time limit stops the search
         self.evaluations += idx.size
         mu = np.empty(idx.size, dtype=complex)
         for lo in range(0, idx.size, _CHUNK):
@@ -335,6 +336,7 @@ def _refine(evaluate: _Evaluator, idx: np.ndarray, br: _Brackets, rtol: float) -
     a, ga, c, gc = br.lo[idx], br.g_lo[idx], br.hi[idx], br.g_hi[idx]
     side = np.zeros(idx.size, dtype=np.int8)
     for _ in range(_MAX_REFINE):
+        check_time()
         open_ = np.flatnonzero(c - a > rtol * c)
         if open_.size == 0:
             break

@@ -53,6 +53,7 @@ from rcsa.model.bounds import (
     MIN_RADIAL_IMMERSION,
     MIN_SPEED_RPM,
 )
+from rcsa.model.wire import json_float, json_list
 from rcsa.physics.receptance import check_frequency_hz
 
 __all__ = [
@@ -66,8 +67,6 @@ __all__ = [
     "check_cut",
     "check_frf",
     "depth_limit_envelopes",
-    "json_float",
-    "json_list",
     "directional_factors",
     "engagement_angles_rad",
     "stability_lobes",
@@ -507,26 +506,6 @@ def _result_array(doc: dict[str, Any], key: str, n: int | None = None, where: st
     if n is not None and len(raw) != n:
         raise InputError(where + key, f"must have one value per speed ({n}), got {len(raw)}")
     return np.array([math.nan if v is None else v for v in raw], dtype=float)
-
-
-def json_float(x: float) -> float | None:
-    """``x`` for JSON: a float, or None where it is not finite (no depth limit, no frequency).
-
-    Parameters
-    ----------
-    x : float
-    """
-    return float(x) if math.isfinite(x) else None
-
-
-def json_list(a: np.ndarray) -> list[float | None]:
-    """An array for JSON, non-finite entries as None (see :func:`json_float`).
-
-    Parameters
-    ----------
-    a : numpy.ndarray
-    """
-    return [float(x) if math.isfinite(x) else None for x in a.tolist()]
 
 
 # --------------------------------------------------------------------------- public API

@@ -8,6 +8,10 @@ header's columns and units (:mod:`~rcsa.measured.importers.header`), a UFF's res
 direction and dataset types, a tap file's time stamps; what the caller declares must agree
 with it. Every array meets the plausibility bounds of :mod:`~rcsa.measured.importers.bounds`,
 and a truncated file is refused, never read as a shorter measurement.
+
+:func:`read_any` reads a file of any of these formats (the registry of
+:mod:`~rcsa.measured.importers.registry`: format from the suffix or stated, metadata and
+importer options by name).
 """
 
 from __future__ import annotations
@@ -19,6 +23,7 @@ from rcsa.measured.importers.contract_json import (
 )
 from rcsa.measured.importers.csv_table import read_csv
 from rcsa.measured.importers.cutpro import read_cutpro
+from rcsa.measured.importers.registry import read_any
 from rcsa.measured.importers.sensor import add_sensor_mass, correct_sensor_mass, remove_sensor_mass
 from rcsa.measured.importers.tap import h1_estimate, read_tap
 from rcsa.measured.importers.uff58 import read_uff
@@ -32,6 +37,7 @@ __all__ = [
     "measurement_from_contract",
     "measurement_to_contract",
     "parse_frf_unit",
+    "read_any",
     "read_contract_json",
     "read_csv",
     "read_cutpro",

@@ -19,6 +19,8 @@ from rcsa.measured.importers.bounds import row_label as _where
 from rcsa.measured.importers.sensor import correct_sensor_mass
 from rcsa.measured.importers.units import to_receptance
 from rcsa.measured.store.measurement import Measurement, MeasurementMeta, Provenance
+from rcsa.model.bounds import MAX_FREQUENCY_LINES, MAX_JSON_NUMBER
+from rcsa.model.input_policy import check_count, check_numbers
 
 __all__ = ["decode_text", "finish", "numeric_rows", "read_source", "split_line"]
 
@@ -62,7 +64,8 @@ def split_line(line: str, delimiter: str | None) -> list[str]:
 
 
 def numeric_rows(
-    text: str, *, delimiter: str | None = None, leading: int | None = None
+    text: str, *, delimiter: str | None = None, leading: int | None = None,
+    max_rows: int = MAX_FREQUENCY_LINES,
 ) -> tuple[list[list[float]], list[int]]:
     """Rows of numbers from a text table, with the 1-based line number of each row.
 
@@ -72,7 +75,9 @@ def numeric_rows(
     rest is ignored (CutPro's first line carries labels after its first triple). A file
     that ends without a newline in a last row that is short, or whose last value is written
     shorter than the same column in the other rows, is refused as truncated
-    (:mod:`rcsa.measured.importers._table`).
+    (:mod:`rcsa.measured.importers._table`). Every number meets the input policy
+    (:func:`rcsa.model.input_policy.check_numbers`: finite, magnitude at most 1e30) and a
+    file has at most ``max_rows`` rows.
     """
     rows: list[list[float]] = []
     lines: list[int] = []
@@ -100,9 +105,14 @@ def numeric_rows(
             raise InputError(
                 "file", f"line {ln} is not a row of numbers: {s[:80]!r}{cut}"
             ) from None
+        if not all(-MAX_JSON_NUMBER <= v <= MAX_JSON_NUMBER for v in vals):
+            check_numbers([vals], "file", lines=[ln], columns=None)
         rows.append(vals)
         lines.append(ln)
         tokens.append(toks)
+        if len(rows) > max_rows:
+            check_count(len(rows), "file", max_rows, "rows of numbers (the file goes on past line "
+                                                     f"{ln})")
     if not rows:
         raise InputError("file", "no rows of numbers found")
     if open_end and len(rows) > 2 and lines[-1] == last:

@@ -23,6 +23,8 @@ import re
 from dataclasses import dataclass
 
 from rcsa.errors import InputError
+from rcsa.model.bounds import MAX_FREQUENCY_LINES
+from rcsa.model.input_policy import check_count
 
 __all__ = ["COMMENTS", "TextTable", "cut_column", "read_table"]
 
@@ -178,7 +180,7 @@ def cut_column(last: list[str], rows_toks: list[list[str]]) -> int | None:
     return None
 
 
-def read_table(text: str, *, delimiter: str | None = None) -> TextTable:
+def read_table(text: str, *, delimiter: str | None = None, max_rows: int = MAX_FREQUENCY_LINES) -> TextTable:
     """Read a numeric table; see the module docstring for the rules.
 
     Parameters
@@ -187,6 +189,8 @@ def read_table(text: str, *, delimiter: str | None = None) -> TextTable:
         The whole file, decoded.
     delimiter : str, optional
         Forced delimiter (``","``, ``";"``, ``"\\t"``); default: detected.
+    max_rows : int
+        Most data rows (the input policy's row count): a longer file is refused.
 
     Raises
     ------
@@ -242,6 +246,8 @@ def read_table(text: str, *, delimiter: str | None = None) -> TextTable:
         rows.append(vals)
         lines.append(ln)
         toks_kept.append(toks)
+        if len(rows) > max_rows:
+            check_count(len(rows), "file", max_rows, f"rows of numbers (the file goes on past line {ln})")
     if not rows:
         raise InputError("file", "no rows of numbers found")
     if not ends_with_newline and len(rows) > 2:

@@ -15,7 +15,6 @@ back, so an exported measurement can be imported again (it gets a new id).
 
 from __future__ import annotations
 
-import json
 import os
 from collections.abc import Mapping
 from typing import Any
@@ -26,7 +25,9 @@ from rcsa.errors import InputError
 from rcsa.measured.importers._common import finish, read_source
 from rcsa.measured.store.measurement import Measurement, MeasurementMeta, Provenance
 from rcsa.measured.store.schema import ARTIFACT_FRF_NAME, CONVENTION, frf_unit
-from rcsa.model.wire import complex_from_wire, number_list
+from rcsa.model.bounds import MAX_FREQUENCY_LINES
+from rcsa.model.input_policy import check_count, load_json
+from rcsa.model.wire import complex_from_wire, complex_to_wire, number_list
 
 __all__ = ["measurement_from_contract", "measurement_to_contract", "read_contract_json"]
 
@@ -102,6 +103,8 @@ def measurement_from_contract(
     for key in ("spindle_id", "direction", "plane", "kind", "frequency_hz"):
         if key not in doc:
             raise InputError(key, "is required")
+    if isinstance(doc["frequency_hz"], list):  # the input policy's row count
+        check_count(len(doc["frequency_hz"]), "frequency_hz", MAX_FREQUENCY_LINES, "frequency lines")
     frf_keys = _frf_keys(doc["kind"], doc)
     unknown = sorted(
         set(doc) - set(_META_KEYS) - _OUTPUT_ONLY - set(frf_keys) - {"frequency_hz", "coherence"}
@@ -167,10 +170,7 @@ def read_contract_json(
 ) -> Measurement:
     """Import a measurement JSON file (or bytes); see :func:`measurement_from_contract`."""
     data, name, sha = read_source(source, file_name)
-    try:
-        doc = json.loads(data.decode("utf-8-sig"))
-    except (UnicodeDecodeError, ValueError) as e:
-        raise InputError("file", f"{name or 'upload'} is not valid JSON ({e})") from None
+    doc = load_json(data, path="file", what=f"{name or 'the upload'}")
     return measurement_from_contract(
         doc,
         overrides=overrides,
@@ -192,7 +192,7 @@ def measurement_to_contract(m: Measurement, *, include_data: bool = True) -> dic
     if include_data:
         out["frequency_hz"] = m.frequency_hz.tolist()
         for name, v in m.frfs.items():
-            out[name] = {"real": v.real.tolist(), "imag": v.imag.tolist()}
+            out[name] = complex_to_wire(v)
         if m.coherence:
             out["coherence"] = {k: v.tolist() for k, v in m.coherence.items()}
     return out

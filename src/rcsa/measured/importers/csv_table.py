@@ -53,6 +53,7 @@ from rcsa.measured.importers.units import (
     phase_factor_to_rad,
 )
 from rcsa.measured.store.measurement import Measurement, MeasurementMeta, Provenance
+from rcsa.model.bounds import MAX_JSON_NUMBER
 
 __all__ = ["parse_columns", "read_csv"]
 
@@ -466,13 +467,15 @@ def read_csv(
     ph_factor = _one_unit(cols, "phase", phase_unit, "phase_unit", phase_factor_to_rad)
     table_arr = np.array(table.rows, dtype=float)
     for j in range(table_arr.shape[1]):
-        bad = np.flatnonzero(~np.isfinite(table_arr[:, j]))
+        bad = np.flatnonzero(~(np.abs(table_arr[:, j]) <= MAX_JSON_NUMBER))
         if bad.size and cols[j].role != "skip":
             label = cols[j].header or f"{cols[j].name}.{cols[j].role}".lstrip(".")
+            x = float(table_arr[bad[0], j])
             raise InputError(
                 cols[j].name or ("frequency_hz" if cols[j].role == "f" else "file"),
-                f"{row_label(int(bad[0]), table.lines)}, column {j + 1} ({label}) is "
-                f"{table_arr[bad[0], j]!r}: not a finite number",
+                f"{row_label(int(bad[0]), table.lines)}, column {j + 1} ({label}) is {x!r}: "
+                + ("not a finite number" if not np.isfinite(x) else
+                   f"out of range (its magnitude must be <= {MAX_JSON_NUMBER:g})"),
             )
     col = {(c.name, c.role): table_arr[:, j] for j, c in enumerate(cols) if c.role != "skip"}
     freq = col[("", "f")] * f_factor

@@ -17,6 +17,7 @@ import numpy as np
 
 from rcsa.errors import InputError
 from rcsa.measured.store.measurement import Measurement
+from rcsa.model.bounds import MAX_SENSOR_MASS_KG
 
 __all__ = ["add_sensor_mass", "correct_sensor_mass", "remove_sensor_mass"]
 
@@ -25,6 +26,9 @@ def _mass(mass_kg: float) -> float:
     m = float(mass_kg)
     if not np.isfinite(m) or m <= 0:
         raise InputError("sensor_mass_kg", f"must be a finite mass > 0 kg, got {mass_kg!r}")
+    if m > MAX_SENSOR_MASS_KG:
+        raise InputError("sensor_mass_kg", f"must be <= {MAX_SENSOR_MASS_KG:g} kg (a tap-test accelerometer with its "
+                                           f"mounting weighs 0.2-50 g), got {m:g}")
     return m
 
 

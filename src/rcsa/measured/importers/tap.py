@@ -41,6 +41,7 @@ from rcsa.errors import InputError
 from rcsa.measured.importers._common import decode_text, finish, numeric_rows, read_source
 from rcsa.measured.importers.units import parse_signal_unit
 from rcsa.measured.store.measurement import Measurement, MeasurementMeta, Provenance
+from rcsa.model.bounds import MAX_TAP_SAMPLES
 
 __all__ = ["h1_estimate", "read_tap"]
 
@@ -259,7 +260,7 @@ def read_tap(
     for k, src in enumerate(srcs):
         data, name, sha = read_source(src, file_name if len(srcs) == 1 else "")
         label = name or f"tap {k + 1}"
-        rows, lines = numeric_rows(decode_text(data))
+        rows, lines = numeric_rows(decode_text(data), max_rows=MAX_TAP_SAMPLES)
         bad = next(
             (ln for row, ln in zip(rows, lines, strict=True) if len(row) != len(roles)), None
         )

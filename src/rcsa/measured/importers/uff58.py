@@ -55,6 +55,8 @@ from rcsa.errors import InputError
 from rcsa.measured.importers._common import finish, read_source
 from rcsa.measured.importers.units import FrfUnit, parse_frf_unit
 from rcsa.measured.store.measurement import Measurement, MeasurementMeta, Provenance
+from rcsa.model.bounds import MAX_FREQUENCY_LINES
+from rcsa.model.input_policy import check_count, check_number, check_numbers
 
 __all__ = ["read_uff"]
 
@@ -139,6 +141,12 @@ def _unit_from_file(
     from164 = None
     if u164:
         s = u164[0]
+        for key in ("length", "force"):
+            value = float(s[key])
+            check_number(value, "units")
+            if not value > 0.0:
+                raise InputError("units", f"dataset 164's {key} factor is {value:g}; unit factors are > 0 "
+                                          "(1 for SI): the file's unit dataset is damaged; declare the units")
         factor = float(s["force"]) / float(s["length"])
         text = f"UFF 164 code {s['units_code']} ({_UNIT_SYSTEMS.get(s['units_code'], '?')})"
         from164 = FrfUnit(text, quantity or "", factor)
@@ -460,7 +468,11 @@ def _read(
 
 
 def _full(uff: _File, k: int) -> dict[str, Any]:
-    """Dataset ``k`` with its data, checked against its header's point count."""
+    """Dataset ``k`` with its data, checked against its header's point count and the input
+    policy (at most ``MAX_FREQUENCY_LINES`` lines, every number finite and within range)."""
+    head = uff.read(k, header_only=True)
+    check_count(int(head.get("num_pts") or 0), "file", MAX_FREQUENCY_LINES,
+                f"frequency lines in {_describe(k, head)}")
     s = uff.read(k)
     n = int(s.get("num_pts") or 0)
     got = len(s["data"]) if s.get("data") is not None else 0
@@ -543,6 +555,9 @@ def _frfs_to_measurement(
             raise InputError(
                 "ord_data_type", f"{role} ({_frf_id(s)}) is not complex (ordinate data type 5 or 6)"
             )
+        data = np.asarray(s["data"])
+        check_numbers(x, "frequency_hz")
+        check_numbers(np.column_stack([data.real, data.imag]), role, columns=["real", "imag"])
         sign = int(np.sign(s["rsp_dir"] or 1) * np.sign(s["ref_dir"] or 1))
         if sign < 0:
             steps.append(f"{role}: sign flipped ({_frf_id(s)} -> +/+)")

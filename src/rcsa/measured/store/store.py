@@ -260,6 +260,20 @@ class MeasurementStore:
         except StoreError as exc:
             raise DamagedError("measurement", measurement_id, str(exc)) from None
 
+    def file_identity(self, measurement_id: str) -> tuple[int, int, int] | None:
+        """``(inode, size, mtime in ns)`` of a measurement's file, None when there is none.
+
+        A cache keyed by it notices a file replaced, rewritten or damaged in place (any
+        write changes the modification time) with one ``stat``.
+        """
+        if not P.is_measurement_id(measurement_id):
+            return None
+        try:
+            st = os.stat(self._file(measurement_id))
+        except OSError:
+            return None
+        return st.st_ino, st.st_size, st.st_mtime_ns
+
     def __contains__(self, measurement_id: object) -> bool:
         return P.is_measurement_id(measurement_id) and self._file(str(measurement_id)).is_file()
 

@@ -46,7 +46,7 @@ from rcsa.errors import RcsaError
 
 __all__ = ["Backend", "ChunkFailed", "ComputeUnavailable", "DaskBackend", "LocalBackend", "compute_backend"]
 
-log = logging.getLogger("rcsa.infra.compute")
+log = logging.getLogger("rcsa.infra.compute_backends")
 
 #: ``fn(chunk, shared) -> result``: a module-level function (or a ``functools.partial`` of one)
 #: so that a cluster's workers can import it.
@@ -80,6 +80,10 @@ class Backend(Protocol):
 
     def describe(self) -> dict[str, Any]:
         """JSON-ready description (name, address, workers) for logs and health checks."""
+        ...
+
+    def ready(self, timeout_s: float = 2.0) -> str:
+        """``"ok"`` when chunks can be computed now, else why not (a readiness check)."""
         ...
 
     def close(self) -> None:
@@ -120,6 +124,10 @@ class LocalBackend:
     def describe(self) -> dict[str, Any]:
         """``{"backend": "local"}``."""
         return {"backend": "local"}
+
+    def ready(self, timeout_s: float = 2.0) -> str:
+        """Always ``"ok"``: this process computes."""
+        return "ok"
 
     def close(self) -> None:
         """Nothing to release."""
@@ -209,6 +217,40 @@ class DaskBackend:
         return {"backend": "dask", "scheduler": self.address, "workers": len(threads),
                 "threads": int(sum(threads.values()))}
 
+    def ready(self, timeout_s: float = 2.0) -> str:
+        """``"ok"`` when the scheduler answers within ``timeout_s`` and has a worker, else why not.
+
+        Never raises and never waits longer than about ``timeout_s`` (the answer is read
+        from a helper thread; a connection lost since is tried again with that timeout).
+        """
+        def probe() -> str:
+            client = self._client
+            if client is None or client.status != "running":
+                try:
+                    from distributed import Client
+                except ImportError:
+                    return "error: dask.distributed is not installed"
+                with self._lock:
+                    if self._client is not None:
+                        with contextlib.suppress(Exception):
+                            self._client.close(timeout=1)
+                    self._client = None
+                    try:
+                        self._client = Client(self.address, timeout=timeout_s, set_as_default=False)
+                    except (OSError, TimeoutError, ValueError) as exc:
+                        return f"error: the Dask scheduler at {self.address} does not answer ({exc})"
+                client = self._client
+            workers = client.nthreads()
+            return "ok" if workers else f"error: the Dask scheduler at {self.address} has no worker"
+
+        result: list[str] = []
+        thread = threading.Thread(target=lambda: result.append(_quietly(probe, self.address)), daemon=True,
+                                  name="rcsa-dask-ready")
+        thread.start()
+        thread.join(timeout_s + 1.0)
+        return result[0] if result else f"error: the Dask scheduler at {self.address} did not answer within " \
+                                        f"{timeout_s:g} s"
+
     def close(self) -> None:
         """Close the connection to the scheduler (idempotent; the cluster keeps running)."""
         with self._lock:
@@ -293,6 +335,13 @@ class DaskBackend:
             if leftover and client.status == "running":
                 with contextlib.suppress(Exception):
                     client.cancel(leftover)
+
+
+def _quietly(probe: Callable[[], str], address: str) -> str:
+    try:
+        return probe()
+    except Exception as exc:  # a readiness check reports, it does not raise
+        return f"error: the Dask scheduler at {address} is unavailable ({type(exc).__name__}: {exc})"
 
 
 def compute_backend(scheduler: str | None, *, connect_timeout_s: float = 10.0, retries: int = 3) -> Backend:

@@ -48,18 +48,23 @@ from typing import Any
 
 import numpy as np
 
-from rcsa.analysis.effect_report import FEATURES, EffectReport
-from rcsa.analysis.hybrid_effects import hybrid_effect_analysis, split_parameters
-from rcsa.analysis.mode_features import (
+from rcsa.analysis.effects.measured_spindle import hybrid_effect_analysis, split_parameters
+from rcsa.analysis.effects.mode_features import (
     ModeFeatures,
     mode_features,
 )
+from rcsa.analysis.effects.report import FEATURES, EffectReport
 from rcsa.analysis.progress import Progress, report
 from rcsa.analysis.tool_point_model import MeasuredSpindle, ToolPointModel
 from rcsa.errors import InputError
 from rcsa.model import fields
 from rcsa.model.assembly import build_model
-from rcsa.model.bounds import MAX_FREQUENCY_HZ, MIN_FREQUENCY_HZ
+from rcsa.model.bounds import (
+    MAX_FREQUENCY_HZ,
+    MAX_RELATIVE_STEP,
+    MIN_FREQUENCY_HZ,
+    MIN_RELATIVE_STEP,
+)
 from rcsa.model.contract import AssemblySpec, MeasuredSpindleSpec, SpindleSpec, parse_assembly
 from rcsa.model.parameters import get_parameter, is_damping, parameter_names, set_parameter
 from rcsa.model.spindle_side import BaseResolver
@@ -67,12 +72,9 @@ from rcsa.physics.chain import Chain
 from rcsa.physics.natural_frequencies import natural_frequencies_hz
 
 __all__ = [
-    "FEATURES",
     "DEFAULT_RELATIVE_STEP",
-    "EffectReport",
     "effect_analysis",
     "effects",
-    "effects_figure",
     "effects_report",
     "nominal_features",
 ]
@@ -164,7 +166,7 @@ def effect_analysis(assembly: Mapping[str, Any] | AssemblySpec, *, parameters: S
 
     On a measured spindle (``"spindle": {"measurement_id": ...}``, with ``resolve_base``)
     the modes come from a modal fit of the hybrid model and bearings are not applicable
-    (:mod:`rcsa.analysis.hybrid_effects`).
+    (:mod:`rcsa.analysis.effects.measured_spindle`).
 
     Parameters
     ----------
@@ -173,7 +175,7 @@ def effect_analysis(assembly: Mapping[str, Any] | AssemblySpec, *, parameters: S
     parameters : sequence of str, optional
         Names as in :func:`parameter_names` (default: all of them).
     relative_step : float
-        δ of the central difference in ln(parameter), in (0, 0.1].
+        δ of the central difference in ln(parameter), in [1e-6, 0.1].
     band_hz : (float, float), optional
         Modes whose undamped natural frequency lies here (default: the assembly's grid range).
     resolve_base : BaseResolver, optional
@@ -194,8 +196,9 @@ def effect_analysis(assembly: Mapping[str, Any] | AssemblySpec, *, parameters: S
     if not isinstance(spec.spindle, SpindleSpec) and resolve_base is None:
         raise InputError("spindle", "an effect analysis on a measured spindle needs a measurement store: call "
                          "rcsa.app.analyses.effects (the CLI's --store, or the service), which knows it")
-    if not 0 < relative_step <= 0.1:
-        raise InputError("relative_step", f"must be in (0, 0.1], got {relative_step:g}")
+    if not MIN_RELATIVE_STEP <= relative_step <= MAX_RELATIVE_STEP:
+        raise InputError("relative_step", f"must be in [{MIN_RELATIVE_STEP:g}, {MAX_RELATIVE_STEP:g}] (below, the "
+                                          f"bisection's rounding swamps the difference), got {relative_step:g}")
     if isinstance(spec.spindle, MeasuredSpindleSpec) and resolve_base is not None:
         spindle = MeasuredSpindle.from_base(spec.frequency_hz, resolve_base(spec.spindle, spec.frequency_hz))
         tpm = ToolPointModel(spec, spindle)
@@ -267,7 +270,7 @@ def effects_report(request: Mapping[str, Any], resolve_base: BaseResolver | None
     params = request.get("parameters")
     if params is not None and (not isinstance(params, list) or not all(isinstance(p, str) for p in params)):
         raise InputError("parameters", "must be a list of parameter names")
-    step = o.number("relative_step", gt=0.0, le=0.1, default=DEFAULT_RELATIVE_STEP)
+    step = o.number("relative_step", gt=0.0, ge=MIN_RELATIVE_STEP, le=MAX_RELATIVE_STEP, default=DEFAULT_RELATIVE_STEP)
     band = request.get("band_hz")
     if band is not None and (not isinstance(band, list) or len(band) != 2
                              or not all(isinstance(b, int | float) and not isinstance(b, bool) for b in band)):
@@ -312,55 +315,3 @@ def effects(request: Mapping[str, Any], resolve_base: BaseResolver | None = None
         For a malformed request.
     """
     return effects_report(request, resolve_base, progress).to_dict()
-
-
-# ---------------------------------------------------------------------------- figure
-
-
-def effects_figure(report: EffectReport, features: Sequence[str] = ("frequency_hz", "peak_magnitude_m_n",
-                                                                      "damping_ratio")) -> Any:
-    """Heat map of the sensitivities, modes × parameters, one panel per feature.
-
-    Uses :class:`matplotlib.figure.Figure` with the Agg canvas (never pyplot).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        Save it with :func:`rcsa.analysis.figures.save_figure`.
-
-    Raises
-    ------
-    InputError
-        When the report holds no mode or no parameter.
-    """
-    import matplotlib
-    from matplotlib.colors import TwoSlopeNorm
-
-    from rcsa.analysis.figures import freeze_layout, new_figure, percent_label
-
-    nm, npar = report.frequency_hz.size, len(report.parameters)
-    if nm == 0 or npar == 0:
-        raise InputError("band_hz", "the report has no mode (or no parameter) to draw")
-    fig = new_figure(max(6.0, 0.5 * npar + 2.5), 2.2 + len(features) * max(1.6, 0.3 * nm + 0.8))
-    axes = fig.subplots(len(features), 1, squeeze=False, sharex=True)[:, 0]
-    part = report.tip_participation
-    ylabels = [f"{f:.0f} Hz ({percent_label(p)})" for f, p in zip(report.frequency_hz, part, strict=True)]
-    titles = {"frequency_hz": "natural frequency", "peak_magnitude_m_n": "peak |h|",
-              "damping_ratio": "damping ratio", "peak_frequency_hz": "peak frequency"}
-    cmap = matplotlib.colormaps["RdBu_r"].with_extremes(bad="0.85")
-    for ax, q in zip(axes, features, strict=True):
-        s = np.asarray(report.sensitivity[q], dtype=float)
-        lim = float(np.nanmax(np.abs(s))) if np.any(np.isfinite(s)) else 1.0
-        lim = lim if lim > 0 else 1.0
-        image = ax.imshow(np.ma.masked_invalid(s), aspect="auto", cmap=cmap,
-                          norm=TwoSlopeNorm(0.0, -lim, lim), interpolation="nearest")
-        for (i, j), v in np.ndenumerate(s):
-            if math.isfinite(v) and abs(v) >= 0.01 * lim:
-                ax.text(j, i, f"{v:.2g}", ha="center", va="center", fontsize=6)
-        ax.set_yticks(range(nm), ylabels, fontsize=7)
-        ax.set_title(f"d ln({titles.get(q, q)}) / d ln(parameter)", fontsize=9)
-        fig.colorbar(image, ax=ax, shrink=0.9)
-    axes[-1].set_xticks(range(npar), report.parameters, rotation=60, ha="right", fontsize=7)
-    axes[0].text(0.0, 1.12, "modes: natural frequency (tip participation); grey: no peak at the tool point",
-                 transform=axes[0].transAxes, fontsize=7)
-    return freeze_layout(fig)

@@ -1,7 +1,7 @@
 """The result of an effect analysis: modes, parameters and the sensitivity table.
 
-Shared by the analysis on analytical spindles (:mod:`rcsa.analysis.sensitivity`, exact
-modes) and on measured ones (:mod:`rcsa.analysis.hybrid_effects`, modal-fit modes).
+Shared by the analysis on analytical spindles (:mod:`rcsa.analysis.effects.sensitivities`, exact
+modes) and on measured ones (:mod:`rcsa.analysis.effects.measured_spindle`, modal-fit modes).
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from rcsa.analysis.mode_features import ModeFeatures
+from rcsa.analysis.effects.mode_features import ModeFeatures
 from rcsa.model.parameters import is_damping
 
 __all__ = ["FEATURES", "EffectReport"]
@@ -44,7 +44,7 @@ class EffectReport:
     notes : tuple of str
     modes_method : {"wittrick_williams", "modal_fit"}
         Exact natural frequencies (analytical spindle), or a modal fit of the predicted
-        tool-point ``h`` (measured spindle, :mod:`rcsa.analysis.hybrid_effects`).
+        tool-point ``h`` (measured spindle, :mod:`rcsa.analysis.effects.measured_spindle`).
     frequency_sd_hz : numpy.ndarray, shape (nmodes,), or None
         Standard uncertainty of each modal-fit natural frequency, Hz.
     not_applicable : dict of str to str

@@ -23,8 +23,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from rcsa.analysis.effect_report import FEATURES, EffectReport
-from rcsa.analysis.mode_features import ModeFeatures
+from rcsa.analysis.effects.mode_features import ModeFeatures
+from rcsa.analysis.effects.report import FEATURES, EffectReport
 from rcsa.analysis.progress import Progress, report
 from rcsa.analysis.tool_point_model import ToolPointModel
 from rcsa.errors import InputError

@@ -11,8 +11,9 @@ import pytest
 import typer
 from typer.testing import CliRunner
 
-from rcsa.analysis.figures import save_figure
-from rcsa.analysis.sensitivity import FEATURES, effect_analysis, effects, effects_figure
+from rcsa.analysis.effects.report import FEATURES
+from rcsa.analysis.effects.sensitivities import effect_analysis, effects
+from rcsa.analysis.figures import effects_figure, save_figure
 from rcsa.cli import effects_cmd
 from rcsa.errors import InputError
 from rcsa.model.contract import parse_assembly

@@ -4,7 +4,7 @@ For every undamped natural frequency in a band (exact, Wittrick–Williams) the 
 tool-point ``|h|`` is searched for its local maximum inside a window bounded by the
 neighbouring modes, refined on a dense local grid, and a single-mode Levy fit
 (:func:`rcsa.physics.natural_frequencies.single_mode_fit`) gives the damping ratio. Used by the effect analysis
-(:mod:`rcsa.analysis.sensitivity`) and the joint identification (:mod:`rcsa.analysis.joint_identification.identify`).
+(:mod:`rcsa.analysis.effects.sensitivities`) and the joint identification (:mod:`rcsa.analysis.joint_identification.identify`).
 """
 
 from __future__ import annotations
