@@ -54,7 +54,13 @@ from rcsa.analysis.lobes.pockets import (
     PocketRule,
 )
 from rcsa.analysis.lobes.robust import DEFAULT_CONFIDENCE
-from rcsa.analysis.lobes.tool_pockets import PRESET_METHODS, CutSettings, ToolCut, ToolPocket, tool_pockets
+from rcsa.analysis.lobes.tool_pockets import (
+    PRESET_METHODS,
+    CutSettings,
+    ToolCut,
+    ToolPocket,
+    tool_pockets,
+)
 from rcsa.analysis.lobes.workpiece_materials import (
     COEFFICIENT_MODEL,
     SPEED_SOURCE,
@@ -64,6 +70,7 @@ from rcsa.analysis.lobes.workpiece_materials import (
 )
 from rcsa.analysis.lobes.zoa import Milling, check_cut
 from rcsa.errors import InputError
+from rcsa.infra.compute_backends import Backend, LocalBackend
 from rcsa.libraries.fusion_geometry import tool_geometry
 from rcsa.libraries.fusion_presets import FusionFile, is_replaced, write_presets
 from rcsa.libraries.tool_materials import tool_material
@@ -72,6 +79,7 @@ from rcsa.model.bounds import MAX_CONFIDENCE, MAX_SPEED_RPM, MIN_CONFIDENCE
 
 __all__ = [
     "DEFAULT_MIN_RPM",
+    "POCKET_CHUNK_TOOLS",
     "LOBE_METHODS",
     "MILLING_TOOL_TYPES",
     "OPTION_FIELDS",
@@ -81,11 +89,16 @@ __all__ = [
     "Recommendation",
     "RecommendOptions",
     "parse_recommend_options",
+    "pocket_chunk",
+    "pockets_on",
     "preset_guid",
     "preset_name",
     "recommend_presets",
 ]
 
+#: Tools per chunk of pocket work (a chunk's semi-discretization runs as one batch; chunks run
+#: on the workbench's backend: this process, or a Dask cluster).
+POCKET_CHUNK_TOOLS = 25
 #: Name of every preset rcsa writes: ``"rcsa chatter-safe: <material>"``.
 PRESET_PREFIX = "rcsa chatter-safe: "
 #: Default lowest spindle speed, rpm.
@@ -325,8 +338,46 @@ class _Skip(Exception):
     """Internal: the tool gets no preset (status ``skipped``)."""
 
 
+def pocket_chunk(chunk: list[ToolCut], settings: CutSettings) -> list[ToolPocket]:
+    """The pockets of one chunk of tools (:func:`~rcsa.analysis.lobes.tool_pockets.tool_pockets`): a
+    module-level function, so that a cluster's workers can run it by name."""
+    return tool_pockets(chunk, settings)
+
+
+PocketFinder = Callable[[list[ToolCut], CutSettings, Callable[[int, int], None] | None], list[ToolPocket]]
+
+
+def pockets_on(backend: Backend | None = None, tools_per_chunk: int = POCKET_CHUNK_TOOLS) -> PocketFinder:
+    """Find pockets in chunks of tools on a compute backend (default: this process), with progress.
+
+    Tools are ordered by tooth count (a chunk of one count is one semi-discretization batch)
+    and cut into chunks of ``tools_per_chunk``; each chunk is :func:`pocket_chunk`, sent to
+    ``backend`` (:mod:`rcsa.infra.compute`). ``progress(done, total)`` is called as chunks finish.
+    The result is the same whichever backend computes it.
+    """
+    def run(cuts: list[ToolCut], settings: CutSettings,
+            progress: Callable[[int, int], None] | None = None) -> list[ToolPocket]:
+        order = sorted(range(len(cuts)), key=lambda i: cuts[i].teeth)
+        chunks = [order[a : a + tools_per_chunk] for a in range(0, len(order), tools_per_chunk)]
+        out: list[ToolPocket | None] = [None] * len(cuts)
+        done = 0
+        if progress is not None:
+            progress(0, len(cuts))
+        for i, found in (backend or LocalBackend()).map(pocket_chunk, [[cuts[j] for j in c] for c in chunks],
+                                                        shared=settings, ordered=False):
+            for j, pocket in zip(chunks[i], found, strict=True):
+                out[j] = pocket
+            done += len(chunks[i])
+            if progress is not None:
+                progress(done, len(cuts))
+        return [p for p in out if p is not None]
+
+    return run
+
+
 def recommend_presets(file: FusionFile, entries: list[Mapping[str, Any]], frfs: Mapping[str, Frf | str],
-                      options: RecommendOptions, progress: Callable[[int, int], None] | None = None) -> Recommendation:
+                      options: RecommendOptions, progress: Callable[[int, int], None] | None = None,
+                      pockets: PocketFinder | None = None) -> Recommendation:
     """Write a chatter-safe preset into every tool that has a stable pocket (module docstring).
 
     The tools are prepared one by one (import status, tool type, teeth, speed range, FRF),
@@ -347,6 +398,8 @@ def recommend_presets(file: FusionFile, entries: list[Mapping[str, Any]], frfs: 
     options : RecommendOptions
     progress : callable, optional
         ``progress(done, total)`` over the tools whose pockets are computed.
+    pockets : callable, optional
+        How the pockets are found (:func:`pockets_on` a backend; default: in this process).
 
     Returns
     -------
@@ -371,8 +424,8 @@ def recommend_presets(file: FusionFile, entries: list[Mapping[str, Any]], frfs: 
     settings = CutSettings(options.tangential_coefficient_n_m2, options.radial_ratio, options.radial_immersion,
                            options.milling, PocketRule(options.safety_factor, options.speed_tolerance),
                            method=options.method, confidence=options.confidence)  # type: ignore[arg-type]
-    pockets = tool_pockets([r.cut for _, r in prepared], settings, progress)
-    for (slot, ready), found in zip(prepared, pockets, strict=True):
+    found_all = (pockets or pockets_on())([r.cut for _, r in prepared], settings, progress)
+    for (slot, ready), found in zip(prepared, found_all, strict=True):
         head = tools[slot]
         if found.pocket is None:
             tools[slot] = {**head, "status": "skipped", "reason": found.refusal or "no stable pocket",

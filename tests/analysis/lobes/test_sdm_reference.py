@@ -17,7 +17,11 @@ import numpy as np
 import pytest
 
 from rcsa.analysis.lobes.modal_model import ModalModel
-from rcsa.analysis.lobes.semi_discretization import DEPTH_RTOL, semi_discretization_lobes, semi_discretization_lobes_many
+from rcsa.analysis.lobes.semi_discretization import (
+    DEPTH_RTOL,
+    semi_discretization_lobes,
+    semi_discretization_lobes_many,
+)
 
 REFERENCE = json.loads((Path(__file__).parents[2] / "data" / "lobes" / "sdm_reference.json").read_text())
 CASES = [c for c in REFERENCE["cases"] if not c["benchmark_only"]]

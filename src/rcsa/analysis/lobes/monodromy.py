@@ -352,7 +352,7 @@ def step_exponentials(z: np.ndarray, beta: np.ndarray) -> tuple[np.ndarray, np.n
 
 _FACT = [float(math.factorial(j)) for j in range(_TAYLOR_DEGREE + 3)]
 # Coefficients of Z, Z², Z³ (rows) in the Horner blocks j = 0, 4, 8 (columns), and of I.
-_BLOCK_COEF = np.array([[1.0 / _FACT[4 * b + l] for b in range(3)] for l in (1, 2, 3)])
+_BLOCK_COEF = np.array([[1.0 / _FACT[4 * b + p] for b in range(3)] for p in (1, 2, 3)])
 _BLOCK_EYE = np.array([1.0 / _FACT[4 * b] for b in range(3)])
 
 

@@ -39,9 +39,20 @@ from typing import Any, Literal
 import numpy as np
 
 from rcsa.analysis.lobes.modal_model import ModalModel, fit_modal_model
-from rcsa.analysis.lobes.pockets import Pocket, PocketRule, best_pocket, pocket_speed_grid, window_minimum
+from rcsa.analysis.lobes.pockets import (
+    Pocket,
+    PocketRule,
+    best_pocket,
+    pocket_speed_grid,
+    window_minimum,
+)
 from rcsa.analysis.lobes.robust import robust_depth_limit
-from rcsa.analysis.lobes.robust_sdm import VERIFY_DRAWS, drawn_models, modal_ratios, robust_sdm_limits
+from rcsa.analysis.lobes.robust_sdm import (
+    VERIFY_DRAWS,
+    drawn_models,
+    modal_ratios,
+    robust_sdm_limits,
+)
 from rcsa.analysis.lobes.semi_discretization import (
     MIN_STEPS_PER_CHATTER_CYCLE,
     SemiDiscretizationResult,
@@ -301,7 +312,6 @@ def _zoa_pocket(cut: ToolCut, settings: CutSettings, reason: str) -> ToolPocket:
                 "tool): it cannot judge the cut; use method semi_discretization (or auto)"))
         raise InputError(f"stability lobes: {err.field}", err.rule) from None
     limit = lobes.depth_limit_m
-    robust = None
     if settings.confidence is not None:
         if cut.h_draws is None:
             raise InputError("uncertainty", "no drawn FRFs for this tool: robust presets need them")
