@@ -13,7 +13,8 @@ import pytest
 from rcsa.analysis.lobes import tool_pockets as tp
 from rcsa.analysis.lobes.pockets import PocketRule
 from rcsa.analysis.lobes.semi_discretization import resolving_steps, semi_discretization_lobes_many
-from rcsa.analysis.lobes.tool_pockets import CutSettings, ToolCut, auto_method, teeth_in_cut, tool_pockets
+from rcsa.analysis.lobes.options import auto_method, teeth_in_cut
+from rcsa.analysis.lobes.tool_pockets import CutSettings, ToolCut, tool_pockets
 from rcsa.app.jobs import Workbench
 from rcsa.app.presets import recommend_predicted
 from rcsa.errors import InputError

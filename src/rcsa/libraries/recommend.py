@@ -104,7 +104,7 @@ PRESET_PREFIX = "rcsa chatter-safe: "
 #: Default lowest spindle speed, rpm.
 DEFAULT_MIN_RPM = 1000.0
 #: Lobe methods of a recommendation (contract v1.2): zero-order, semi-discretization, or the
-#: one :func:`rcsa.analysis.lobes.tool_pockets.auto_method` picks per tool (the default).
+#: one :func:`rcsa.analysis.lobes.options.auto_method` picks per tool (the default).
 LOBE_METHODS = PRESET_METHODS
 #: Fusion tool types that mill sideways (stability lobes of peripheral milling apply).
 MILLING_TOOL_TYPES = frozenset({

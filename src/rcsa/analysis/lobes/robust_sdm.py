@@ -53,7 +53,8 @@ from rcsa.analysis.lobes.semi_discretization import (
 )
 from rcsa.errors import InputError
 
-__all__ = ["VERIFY_DRAWS", "ModalRatios", "drawn_models", "modal_ratios", "robust_sdm_limits"]
+__all__ = ["REDUCED_COST_DIAGRAMS", "VERIFY_DRAWS", "ModalRatios", "drawn_models", "modal_ratios",
+           "robust_sdm_limits"]
 
 #: Drawn modal models a robust preset's chosen window is verified with (a seeded subset when
 #: there are more draws).
@@ -69,6 +70,10 @@ _DAMPING_LEVELS = 3
 # The stretched grid is this many times denser than the diagram's (its reading error shrinks
 # with the square of the spacing: 0.6 % median at 2×, single mode).
 _GRID_REFINE = 2.0
+#: What the reduced model costs beside the nominal diagram, in nominal diagrams: the damping
+#: levels on the stretched, denser grid (±10 % of frequency spread widens it by about 20 %),
+#: whatever the number of draws.
+REDUCED_COST_DIAGRAMS = (_DAMPING_LEVELS + 1) * _GRID_REFINE * 1.2
 _NO_LIMIT = 1e3  # m: a draw without a limit below its search depth, inside the quantile
 
 

@@ -22,7 +22,8 @@ reason is true. The method is chosen per tool:
   the flute length: the stepdown is then capped there (``limited_by: "flute_length"``, said in
   the tool's notes), never refused.
 * ``"auto"`` — semi-discretization where zero-order averaging is not trustworthy
-  (:func:`auto_method`), else zero-order.
+  (:func:`rcsa.analysis.lobes.options.auto_method`: fewer than one tooth in the cut on
+  average), else zero-order.
 
 Robust pockets (a confidence and drawn FRFs) use the robust limit of
 :mod:`rcsa.analysis.lobes.robust` (zero-order: every draw's envelope; semi-discretization:
@@ -39,6 +40,7 @@ from typing import Any, Literal
 import numpy as np
 
 from rcsa.analysis.lobes.modal_model import ModalModel, fit_modal_model
+from rcsa.analysis.lobes.options import auto_method
 from rcsa.analysis.lobes.pockets import (
     Pocket,
     PocketRule,
@@ -63,27 +65,18 @@ from rcsa.analysis.lobes.zoa import LobeResult, Milling, depth_limit_envelopes, 
 from rcsa.errors import InputError
 
 __all__ = [
-    "AUTO_MIN_TEETH_IN_CUT",
     "DEFAULT_SDM_SPEED_COUNT",
     "PRESET_METHODS",
     "CutSettings",
     "PresetMethod",
     "ToolCut",
     "ToolPocket",
-    "auto_method",
-    "teeth_in_cut",
     "tool_pockets",
 ]
 
 PresetMethod = Literal["zoa", "semi_discretization", "auto"]
 #: Lobe methods of a recommendation (contract v1.2).
 PRESET_METHODS: tuple[PresetMethod, ...] = ("zoa", "semi_discretization", "auto")
-#: ``"auto"`` uses zero-order averaging only when at least this many teeth are in the cut on
-#: average (``N (φex − φst) / 2π``): then the cutting force never drops to zero and its
-#: time variation is mild. Below it the force is a train of pulses and the zero-order limit
-#: is unsafe or far too cautious; measured in ``benchmarks/bench_zoa_vs_sdm.py`` (README,
-#: "Which method").
-AUTO_MIN_TEETH_IN_CUT = 1.0
 #: Speeds of the semi-discretization grid of each tool (geometric over the speed range).
 DEFAULT_SDM_SPEED_COUNT = 400
 #: Speeds solved densely across each verified ``±τ`` window.
@@ -100,34 +93,6 @@ _CAP_MARGIN = 1.02
 _SCREEN_RTOL = 0.05
 _SCREEN_MAX_STEPS = 80
 
-
-
-def teeth_in_cut(teeth: int, radial_immersion: float) -> float:
-    """Average number of teeth cutting at once, ``N (φex − φst) / 2π`` (same for up and down milling).
-
-    Examples
-    --------
-    >>> teeth_in_cut(4, 0.5), round(teeth_in_cut(1, 0.05), 4)
-    (1.0, 0.0718)
-    """
-    sweep = math.acos(1.0 - 2.0 * radial_immersion)  # φex − φst
-    return teeth * sweep / (2.0 * math.pi)
-
-
-def auto_method(teeth: int, radial_immersion: float) -> tuple[str, str]:
-    """The method ``"auto"`` picks for a cut, and why.
-
-    Examples
-    --------
-    >>> auto_method(4, 0.5)[0], auto_method(2, 0.5)[0], auto_method(1, 0.05)[0]
-    ('zoa', 'semi_discretization', 'semi_discretization')
-    """
-    inside = teeth_in_cut(teeth, radial_immersion)
-    if inside >= AUTO_MIN_TEETH_IN_CUT - 1e-9:
-        return "zoa", (f"auto: {inside:.2f} teeth in the cut on average (>= {AUTO_MIN_TEETH_IN_CUT:g}): the "
-                       "cutting force never vanishes and zero-order averaging holds")
-    return "semi_discretization", (f"auto: {inside:.2f} teeth in the cut on average (< {AUTO_MIN_TEETH_IN_CUT:g}): "
-                                   "the force is a train of pulses, zero-order averaging is not trustworthy")
 
 
 @dataclass(frozen=True)
