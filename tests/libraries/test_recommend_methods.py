@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from rcsa.analysis.lobes import tool_pockets as tp
+from rcsa.analysis.lobes.options import auto_method, teeth_in_cut
 from rcsa.analysis.lobes.pockets import PocketRule
 from rcsa.analysis.lobes.semi_discretization import resolving_steps, semi_discretization_lobes_many
-from rcsa.analysis.lobes.options import auto_method, teeth_in_cut
 from rcsa.analysis.lobes.tool_pockets import CutSettings, ToolCut, tool_pockets
 from rcsa.app.jobs import Workbench
 from rcsa.app.presets import recommend_predicted
@@ -171,6 +171,7 @@ def test_a_large_recommendation_runs_as_a_job_with_the_same_answer(tmp_path):
         warnings.simplefilter("ignore")
         from fastapi.testclient import TestClient
     from service.main import create_app
+
     from tests.service.conftest import WRITE, settings_for
 
     form = {"material": "aluminium-7075", "max_rpm": "24000", "method": "zoa"}
