@@ -313,6 +313,7 @@ def step_exponentials(z: np.ndarray, beta: np.ndarray) -> tuple[np.ndarray, np.n
     bf = beta.reshape(-1, n, t)
     norm = np.abs(zf).sum(axis=-2).max(axis=-1)
     squarings = np.ceil(np.log2(np.maximum(norm, 1e-300))).clip(0).astype(np.int64)
+    eye = np.eye(n)
     e_out = np.empty_like(zf)
     x_out = np.empty_like(bf)
     y_out = np.empty_like(bf)
@@ -322,24 +323,18 @@ def step_exponentials(z: np.ndarray, beta: np.ndarray) -> tuple[np.ndarray, np.n
         zz = zf[idx] * c
         bb = bf[idx] * c
         z2 = zz @ zz
-        z3 = z2 @ zz
+        pw = (eye, zz, z2, z2 @ zz)  # Z^0..Z^3
         w = z2 @ z2  # Z^4
-        zb = (bb, zz @ bb, z2 @ bb, z3 @ bb)  # Z^i β
-        # the three blocks' polynomials Σ_{l=1..3} Z^l/(j+l)! in one product (the I/j! terms on the diagonal)
-        powers = np.stack([zz, z2, z3], axis=-1).reshape(-1, 3)
-        ce = (powers @ _BLOCK_COEF).reshape(zz.shape + (3,))
-        diag = np.arange(n)
-        ce[:, diag, diag, :] += _BLOCK_EYE
-        e = ce[..., 2] + w * (1.0 / _FACT[12])
+        zb = (bb, zz @ bb, z2 @ bb, pw[3] @ bb)  # Z^i β
+        e = np.broadcast_to(eye / _FACT[12], zz.shape)
         x = zb[0] * (1.0 / _FACT[13])
         y = zb[0] * (1.0 / _FACT[14])
         for block in (2, 1, 0):  # Horner in Z^4 over blocks of four Taylor terms
             j = 4 * block
+            ce = eye / _FACT[j] + zz / _FACT[j + 1] + z2 / _FACT[j + 2] + pw[3] / _FACT[j + 3]
             cx = zb[0] / _FACT[j + 1] + zb[1] / _FACT[j + 2] + zb[2] / _FACT[j + 3] + zb[3] / _FACT[j + 4]
             cy = zb[0] / _FACT[j + 2] + zb[1] / _FACT[j + 3] + zb[2] / _FACT[j + 4] + zb[3] / _FACT[j + 5]
-            if block < 2:
-                e = ce[..., block] + w @ e
-            x, y = cx + w @ x, cy + w @ y
+            e, x, y = ce + w @ e, cx + w @ x, cy + w @ y
         y = c * y
         for _ in range(s):
             y = e @ y + c * x + y
@@ -351,9 +346,6 @@ def step_exponentials(z: np.ndarray, beta: np.ndarray) -> tuple[np.ndarray, np.n
 
 
 _FACT = [float(math.factorial(j)) for j in range(_TAYLOR_DEGREE + 3)]
-# Coefficients of Z, Z², Z³ (rows) in the Horner blocks j = 0, 4, 8 (columns), and of I.
-_BLOCK_COEF = np.array([[1.0 / _FACT[4 * b + p] for b in range(3)] for p in (1, 2, 3)])
-_BLOCK_EYE = np.array([1.0 / _FACT[4 * b] for b in range(3)])
 
 
 @dataclass(frozen=True)
