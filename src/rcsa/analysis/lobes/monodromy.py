@@ -72,6 +72,7 @@ _TAYLOR_DEGREE = 12
 # Reduced sizes up to this use a dense eigensolver; larger ones a Krylov (Arnoldi) basis.
 DENSE_MAX_SIZE = 48
 KRYLOV_DIM = 20
+KRYLOV_EXTRA = 12
 # A Ritz value is accepted when its residual is below this (relative to max(|μ|, 1)).
 RITZ_TOL = 1e-9
 _KRYLOV_SEED = 20040117
@@ -552,11 +553,22 @@ def critical_multipliers(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps
         if vec is not None:
             need = rows if vectors is True else rows[np.abs(mu[rows]) >= 1.0]
             if need.size:
-                ev, ew = np.linalg.eig(phi[need])
-                i = np.argmax(np.abs(ev), axis=1)
-                mu[need] = ev[np.arange(need.size), i]
-                vec[need] = ew[np.arange(need.size), :, i]
+                vec[need] = _inverse_iteration(phi[need], mu[need])
     return mu, vec
+
+
+def _inverse_iteration(phi: np.ndarray, mu: np.ndarray) -> np.ndarray:
+    """Eigenvectors of ``phi`` (nb, N, N) for its known eigenvalues ``mu`` (nb,): two steps of
+    inverse iteration, shifted by a relative 1e-10 so that the solve is never exactly singular
+    (an eigen-decomposition with vectors costs several times more)."""
+    size = phi.shape[-1]
+    shift = mu * (1.0 + 1e-10) + 1e-14
+    a = phi.astype(complex) - shift[:, None, None] * np.eye(size)
+    v = np.broadcast_to(np.random.default_rng(_KRYLOV_SEED).standard_normal(size) + 0j, (mu.size, size))
+    for _ in range(2):
+        v = np.linalg.solve(a, v[:, :, None])[:, :, 0]
+        v = v / np.linalg.norm(v, axis=1, keepdims=True)
+    return v
 
 
 def _take(maps: PeriodMaps, idx: np.ndarray) -> PeriodMaps:
@@ -567,7 +579,7 @@ def _arnoldi(phi: np.ndarray, n: int, vectors: bool) -> tuple[np.ndarray, np.nda
     """Batched Arnoldi on monodromy matrices (nb, N, N) of state size ``n``: leading Ritz value
     (and vector) and whether it converged."""
     nb, size = phi.shape[0], phi.shape[-1]
-    p = min(max(KRYLOV_DIM, n + 12), size)
+    p = min(max(KRYLOV_DIM, n + KRYLOV_EXTRA), size)
     basis = np.zeros((nb, size, p + 1))
     hess = np.zeros((nb, p + 1, p))
     start = np.random.default_rng(_KRYLOV_SEED).standard_normal(size)

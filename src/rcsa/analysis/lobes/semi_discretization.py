@@ -130,6 +130,8 @@ _CHUNK = 256
 _COARSE = 8
 _GUIDE_MAX_DELTA = 0.15
 _GUIDE_ROUNDS = 3
+#: Neighbours' slopes of log|μ| in log b that differ by more than this factor are not used.
+_SLOPE_SPREAD = 1.5
 
 # --------------------------------------------------------------------------- result
 
@@ -247,25 +249,30 @@ class _Evaluator:
         return md.period_maps(self._system(idx), self.plan, self.kt, self.step_s[idx], depth_m,
                               (self.free[0][idx], self.free[1][idx]))
 
-    def __call__(self, idx: np.ndarray, depth_m: np.ndarray) -> np.ndarray:
+    def __call__(self, idx: np.ndarray, depth_m: np.ndarray, record_stable: bool = False) -> np.ndarray:
+        """``μ`` of each (pair, depth); ``record_stable``: stable evaluations record theirs too
+        (moved onto the unit circle: the estimate of the crossing multiplier for a limit closed
+        from its stable side; used on pairs not evaluated before)."""
         check_time()  # every round of evaluations: a sync request's time limit stops the search
         self.evaluations += idx.size
         mu = np.empty(idx.size, dtype=complex)
         for lo in range(0, idx.size, _CHUNK):
             part = slice(lo, lo + _CHUNK)
-            mu[part] = self._chunk(idx[part], depth_m[part])
+            mu[part] = self._chunk(idx[part], depth_m[part], record_stable)
         return mu
 
-    def _chunk(self, idx: np.ndarray, depth_m: np.ndarray) -> np.ndarray:
+    def _chunk(self, idx: np.ndarray, depth_m: np.ndarray, record_stable: bool) -> np.ndarray:
         system, maps = self._system(idx), self.maps(idx, depth_m)
-        mu, vec = md.critical_multipliers(system, self.plan, maps, vectors="unstable")
+        mu, vec = md.critical_multipliers(system, self.plan, maps, vectors=True if record_stable else "unstable")
         assert vec is not None
-        up = np.flatnonzero(np.abs(mu) >= 1.0)
-        if up.size:
-            sub = md.PeriodMaps(maps.p[up], maps.g[up], maps.free[up], maps.step[up])
-            self.mu_unstable[idx[up]] = mu[up]
-            self.freq_unstable[idx[up]] = _chatter_frequency(system.take(up), self.plan, sub, mu[up], vec[up],
-                                                             self.period_s[idx[up]])
+        up = np.abs(mu) >= 1.0
+        keep = np.flatnonzero(up | record_stable)
+        if keep.size:
+            sub = md.PeriodMaps(maps.p[keep], maps.g[keep], maps.free[keep], maps.step[keep])
+            on_circle = np.where(mu[keep].imag == 0.0, np.sign(mu[keep].real) + 0j, np.exp(1j * np.angle(mu[keep])))
+            self.mu_unstable[idx[keep]] = np.where(up[keep], mu[keep], on_circle)
+            self.freq_unstable[idx[keep]] = _chatter_frequency(system.take(keep), self.plan, sub, mu[keep],
+                                                               vec[keep], self.period_s[idx[keep]])
         return mu
 
 
@@ -334,6 +341,7 @@ def _scan(evaluate: _Evaluator, idx: np.ndarray, br: _Brackets, first_m: np.ndar
 def _refine(evaluate: _Evaluator, idx: np.ndarray, br: _Brackets, rtol: float) -> None:
     """Illinois regula falsi on ``log|μ|`` until ``hi − lo <= rtol·hi`` for the pairs ``idx``."""
     a, ga, c, gc = br.lo[idx], br.g_lo[idx], br.hi[idx], br.g_hi[idx]
+    true_a, true_c = ga.copy(), gc.copy()  # log|μ| at the ends (ga, gc are halved by Illinois)
     side = np.zeros(idx.size, dtype=np.int8)
     for _ in range(_MAX_REFINE):
         check_time()
@@ -348,10 +356,10 @@ def _refine(evaluate: _Evaluator, idx: np.ndarray, br: _Brackets, rtol: float) -
         iu, id_ = open_[up], open_[~up]
         ga[iu[side[iu] > 0]] *= 0.5  # a kept twice: Illinois
         gc[id_[side[id_] < 0]] *= 0.5
-        c[iu], gc[iu] = x[up], gx[up]
-        a[id_], ga[id_] = x[~up], gx[~up]
+        c[iu], gc[iu], true_c[iu] = x[up], gx[up], gx[up]
+        a[id_], ga[id_], true_a[id_] = x[~up], gx[~up], gx[~up]
         side[iu], side[id_] = 1, -1
-    br.lo[idx], br.hi[idx] = a, c
+    br.lo[idx], br.hi[idx], br.g_lo[idx], br.g_hi[idx] = a, c, true_a, true_c
 
 
 def _reference_depth(model: ModalModel, teeth: int, kt: float, alpha: np.ndarray) -> float:
@@ -394,8 +402,15 @@ def _straddle_root(lo: np.ndarray, g_lo: np.ndarray, hi: np.ndarray, g_hi: np.nd
 
 
 def _guided(evaluate: _Evaluator, pairs: np.ndarray, guess: np.ndarray, delta: np.ndarray, br: _Brackets,
-            rtol: float, ceiling_m: np.ndarray) -> np.ndarray:
+            rtol: float, ceiling_m: np.ndarray, slope: np.ndarray) -> np.ndarray:
     """Bracket the pairs around their guessed limits; returns the pairs left to solve from scratch.
+
+    A precise guess (``delta <= rtol/4``) with a known slope ``s`` of ``log|μ|`` in ``log b``
+    (the neighbours') is first tried from its stable side alone: one evaluation at
+    ``x e^{−rtol/4}``; stable, with the crossing ``log|μ|/s`` within ``rtol/2`` above it, closes
+    the limit there (the depth reported is that stable one; the multiplier and chatter frequency
+    are its critical ones, the multiplier moved onto the unit circle). Otherwise the pair is
+    straddled around the crossing the slope gives, as below.
 
     A round evaluates ``x e^{∓δ}`` together. Stable below and unstable above: bracketed.
     Both on one side: the line through the two ``log|μ|`` values gives the next ``x``, and the
@@ -404,10 +419,22 @@ def _guided(evaluate: _Evaluator, pairs: np.ndarray, guess: np.ndarray, delta: n
     round continue the scan upwards. A bracket wider than ``rtol`` is then straddled once more
     at its own secant root, which closes it in nearly every case (the refinement does the rest).
     """
-    x, d = guess.copy(), delta.copy()
+    x, d = guess.copy(), np.maximum(delta, rtol / 2.2)
     active = np.arange(pairs.size)
     scratch, climb = [], []
     bracketed = np.zeros(pairs.size, dtype=bool)
+    one = np.flatnonzero((delta <= rtol / 4) & (slope > 0.0))  # NaN slope: False
+    if one.size:
+        p = pairs[one]
+        b = x[one] * np.exp(-rtol / 4)
+        g = _log_modulus(evaluate(p, b, record_stable=True))
+        root = b * np.exp(-g / slope[one])
+        stable = g < 0.0
+        close = stable & (np.log(root / b) <= rtol / 2)
+        br.lo[p[stable]], br.g_lo[p[stable]] = b[stable], g[stable]
+        br.hi[p[close]], br.g_hi[p[close]] = root[close], 0.0
+        x[one], d[one] = root, rtol / 2.2
+        active = np.setdiff1d(active, one[close])
     for rounds_left in range(_GUIDE_ROUNDS - 1, -1, -1):
         if not active.size:
             break
@@ -454,7 +481,8 @@ def _guided(evaluate: _Evaluator, pairs: np.ndarray, guess: np.ndarray, delta: n
 
 
 def _search(evaluate: _Evaluator, grids: list[np.ndarray], g0: np.ndarray, start_m: np.ndarray,
-            ceiling_m: np.ndarray, rtol: float, progress: Callable[[int, int], None] | None = None) -> _Brackets:
+            ceiling_m: np.ndarray, rtol: float, progress: Callable[[int, int], None] | None = None,
+            scan_from_neighbours: bool = False, scan_start_m: np.ndarray | None = None) -> _Brackets:
     """Depth brackets of every pair (module docstring), coarse to fine along each speed grid.
 
     ``grids[i]`` are the pair indices of system ``i`` in speed order. Coarse speeds are solved
@@ -471,6 +499,9 @@ def _search(evaluate: _Evaluator, grids: list[np.ndarray], g0: np.ndarray, start
     kind = np.zeros(g0.size, dtype=np.int8)  # 0 none, 1 hopf, 2 flip, 3 fold
     lobe = np.full(g0.size, -1, dtype=np.int64)
     root = np.full(g0.size, np.nan)  # best estimate of each solved limit: its bracket's secant root
+    slope = np.full(g0.size, np.nan)  # d log|μ| / d log b across each solved bracket
+    given = np.full(g0.size, np.nan) if scan_start_m is None else np.asarray(scan_start_m, dtype=float)
+    hint = given.copy()  # where a scratch pair's scan starts (NaN: start_m)
 
     def settle(idx: np.ndarray) -> None:
         _refine(evaluate, idx[np.isfinite(br.hi[idx])], br, rtol)
@@ -479,6 +510,9 @@ def _search(evaluate: _Evaluator, grids: list[np.ndarray], g0: np.ndarray, start
         est = _straddle_root(br.lo[idx], br.g_lo[idx], br.hi[idx], br.g_hi[idx])
         root[idx] = np.where(np.isfinite(est) & (est >= br.lo[idx]) & (est <= br.hi[idx]), est,
                              0.5 * (br.lo[idx] + br.hi[idx]))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s = (br.g_hi[idx] - br.g_lo[idx]) / np.log(br.hi[idx] / br.lo[idx])
+        slope[idx] = np.where(found & (s > 0.0), s, np.nan)
         kind[idx] = np.where(found, np.where(mu.imag == 0.0, np.where(mu.real < 0, 2, 3), 1), 0)
         lobe[idx] = np.where(found, np.floor(f * evaluate.period_s[idx] + 1e-9), -1).astype(np.int64)
 
@@ -489,7 +523,7 @@ def _search(evaluate: _Evaluator, grids: list[np.ndarray], g0: np.ndarray, start
     total = g0.size
     solved = 0
     for level in range(max(len(lv) for lv in depth_levels)):
-        scratch, guided, guess, delta = [], [], [], []
+        scratch, guided, guess, delta, slopes, ceiling_only = [], [], [], [], [], []
         for grid, lv in zip(grids, depth_levels, strict=True):  # a loop over systems (tools)
             if level >= len(lv):
                 continue
@@ -500,7 +534,15 @@ def _search(evaluate: _Evaluator, grids: list[np.ndarray], g0: np.ndarray, start
                 continue
             left, right = grid[pos - h], grid[np.minimum(pos + h, grid.size - 1)]
             ok = same(left, right)
-            scratch.append(pairs[~ok])
+            # both neighbours stable up to the ceiling: one evaluation there (stable: no limit either)
+            free = ~np.isfinite(br.hi[left]) & ~np.isfinite(br.hi[right])
+            ceiling_only.append(pairs[free])
+            scratch.append(pairs[~ok & ~free])
+            if scan_from_neighbours:
+                with np.errstate(invalid="ignore"):
+                    near = 0.5 * np.fmin(root[left], root[right])[~ok & ~free]
+                    hint[pairs[~ok & ~free]] = np.where(np.isfinite(given[pairs[~ok & ~free]]),
+                                                        given[pairs[~ok & ~free]], near)
             pos, pairs, left, right = pos[ok], pairs[ok], left[ok], right[ok]
             bl, bright = np.log(root[left]), np.log(root[right])
             linear = 0.5 * (bl + bright)
@@ -512,17 +554,34 @@ def _search(evaluate: _Evaluator, grids: list[np.ndarray], g0: np.ndarray, start
             # on RA-1: 3 % at adjacent speeds, 40 % four speeds apart); the line's, of the step
             err = np.where(cubic_ok, (0.1 + 0.1 * h) * np.abs(cubic - linear), 0.75 * np.abs(bl - bright))
             guided.append(pairs)
+            sl, sr = slope[left], slope[right]
+            consistent = np.maximum(sl, sr) <= _SLOPE_SPREAD * np.minimum(sl, sr)  # NaN: False
+            slopes.append(np.where(consistent, np.minimum(sl, sr), np.nan))
             guess.append(np.exp(np.where(cubic_ok, cubic, linear)))
-            delta.append(np.clip(err, rtol / 2.2, _GUIDE_MAX_DELTA))
+            delta.append(np.minimum(err, _GUIDE_MAX_DELTA))  # the straddles are at least rtol/2.2 wide
         fresh = [np.concatenate(scratch)] if scratch else []
+        top = np.concatenate(ceiling_only) if ceiling_only else np.empty(0, dtype=np.int64)
+        if top.size:
+            g_top = _log_modulus(evaluate(top, ceiling_m[top]))
+            stable = g_top < 0.0
+            br.lo[top[stable]], br.g_lo[top[stable]], br.hi[top[stable]] = ceiling_m[top[stable]], g_top[stable], np.nan
+            fresh.append(top[~stable])
+            scratch.append(top)  # settled with the others (no limit, or solved from scratch)
         if guided:
             pairs = np.concatenate(guided)
             fresh.append(_guided(evaluate, pairs, np.concatenate(guess), np.concatenate(delta), br, rtol,
-                                 ceiling_m))
+                                 ceiling_m, np.concatenate(slopes)))
         fresh_pairs = np.concatenate(fresh) if fresh else np.empty(0, dtype=np.int64)
         if fresh_pairs.size:
             br.lo[fresh_pairs], br.g_lo[fresh_pairs], br.hi[fresh_pairs] = 0.0, g0[fresh_pairs], np.nan
-            _scan(evaluate, fresh_pairs, br, start_m[fresh_pairs], ceiling_m[fresh_pairs])
+            hinted = np.isfinite(hint[fresh_pairs]) & (hint[fresh_pairs] > start_m[fresh_pairs])
+            plain, hp = fresh_pairs[~hinted], fresh_pairs[hinted]
+            _scan(evaluate, plain, br, start_m[plain], ceiling_m[plain])
+            if hp.size:
+                _scan(evaluate, hp, br, np.minimum(hint[hp], ceiling_m[hp]), ceiling_m[hp])
+                low = hp[br.hi[hp] == np.minimum(hint[hp], ceiling_m[hp])]  # unstable at the start: scan below it
+                br.lo[low], br.g_lo[low], br.hi[low] = 0.0, g0[low], np.nan
+                _scan(evaluate, low, br, start_m[low], np.minimum(hint[low], ceiling_m[low]))
         settled = np.concatenate([*guided, *scratch]) if (guided or scratch) else np.empty(0, dtype=np.int64)
         settle(settled)
         solved += settled.size
@@ -689,6 +748,8 @@ def semi_discretization_lobes_many(
     depth_rtol: float = DEPTH_RTOL,
     progress: Callable[[int, int], None] | None = None,
     min_depth_search_max_m: Sequence[float] | None = None,
+    scan_from_neighbours: bool = False,
+    scan_start_m: Sequence[np.ndarray] | None = None,
 ) -> list[SemiDiscretizationResult]:
     """SDM lobes of several modal models (tools) in one cut, solved together.
 
@@ -716,6 +777,15 @@ def semi_discretization_lobes_many(
         Per model, search at least this deep (m): the ceiling is ``max(64 b_ref, this)``,
         so a NaN limit then says "stable up to at least this depth" (a preset capped at the
         flute length needs the search to reach it).
+    scan_from_neighbours : bool
+        A screening search: a finer speed solved from scratch starts its scan at half the
+        smaller limit of its two solved neighbours instead of a quarter of the ZOA absolute
+        limit (when unstable there, it scans up to that depth from the usual start). Fewer
+        evaluations; an unstable band entirely below half the neighbours' limits is missed.
+    scan_start_m : sequence of numpy.ndarray, optional
+        Per model, per speed: where a speed solved from scratch starts its scan (m; NaN or
+        below the usual start: the usual start), e.g. half a limit known from a coarser
+        solution; the same caveat.
 
     Returns
     -------
@@ -760,6 +830,10 @@ def semi_discretization_lobes_many(
         if floor.shape != b_ref.shape or not np.all(np.isfinite(floor)):
             raise InputError("min_depth_search_max_m", "give one finite depth (m) per model")
         ceiling = np.maximum(ceiling, floor)
+    starts = ([np.asarray(x, dtype=float) for x in scan_start_m] if scan_start_m is not None
+              else [np.full(s.size, np.nan) for s in speeds])
+    if len(starts) != len(speeds) or any(x.shape != sp.shape for x, sp in zip(starts, speeds, strict=True)):
+        raise InputError("scan_start_m", "give one start depth per speed of each model")
     fields = [{name: np.full(s.size, fill, dtype=dtype) for name, fill, dtype in _FIELDS} for s in speeds]
     bands = sorted({int(k) for ks in steps for k in ks})
     done = 0
@@ -774,7 +848,8 @@ def semi_discretization_lobes_many(
 
         solved = _solve_band([models[i] for i in members], [speeds[i][p] for i, p in zip(members, picks, strict=True)],
                              k, teeth, kt, radial_ratio, phi_st, phi_ex, b_ref[members], ceiling[members], depth_rtol,
-                             band_progress)
+                             band_progress, scan_from_neighbours,
+                             np.concatenate([starts[i][p] for i, p in zip(members, picks, strict=True)]))
         for i, p, part in zip(members, picks, solved, strict=True):
             for name, values in part.items():
                 fields[i][name][p] = values
@@ -790,7 +865,8 @@ _FIELDS = (("depth", np.nan, float), ("mu", np.nan + 0j, complex), ("freq", np.n
 
 def _solve_band(models: Sequence[ModalModel], speeds: Sequence[np.ndarray], steps: int, teeth: int, kt: float,
                 kr: float, phi_st: float, phi_ex: float, b_ref: np.ndarray, ceiling: np.ndarray, rtol: float,
-                progress: Callable[[int, int], None] | None) -> list[dict[str, np.ndarray]]:
+                progress: Callable[[int, int], None] | None,
+                scan_from_neighbours: bool = False, scan_start_m: np.ndarray | None = None) -> list[dict[str, np.ndarray]]:
     """The search (:func:`_search`) for the given models and speeds at one step count; per-speed arrays."""
     plan = md.cutting_plan(teeth, steps, phi_st, phi_ex, kr)
     sizes = np.array([s.size for s in speeds])
@@ -804,7 +880,8 @@ def _solve_band(models: Sequence[ModalModel], speeds: Sequence[np.ndarray], step
     g0 = -slowest[system_of_pair] * period  # log|μ| at b = 0 (exact)
     offsets = np.concatenate([[0], np.cumsum(sizes)])
     grids = [np.arange(offsets[i], offsets[i + 1]) for i in range(len(models))]
-    br = _search(evaluate, grids, g0, (_SCAN_START * b_ref)[system_of_pair], ceiling[system_of_pair], rtol, progress)
+    br = _search(evaluate, grids, g0, (_SCAN_START * b_ref)[system_of_pair], ceiling[system_of_pair], rtol, progress,
+                 scan_from_neighbours, scan_start_m)
     found = np.isfinite(br.hi)
     depth = np.where(found, br.lo, np.nan)
     mu = np.where(found, evaluate.mu_unstable, np.nan + 0j)

@@ -83,15 +83,21 @@ DEFAULT_SDM_SPEED_COUNT = 400
 _VERIFY_POINTS = 31
 #: Windows verified per tool and round, and rounds at most.
 _VERIFY_PER_ROUND = 3
-_VERIFY_ROUNDS = 8
+_VERIFY_ROUNDS = 3
+#: A tool is done when its best verified ``n · stepdown`` is within this fraction of every
+#: unverified candidate's coarse score (the search's productivity slack).
+_VERIFY_SLACK = 0.05
 #: The search reaches this much deeper than ``safety_factor × flute length``.
 _CAP_MARGIN = 1.02
 #: The coarse grid screens candidates: its limits are bracketed to this relative width (the
-#: verified windows to ``DEPTH_RTOL``), with at most this many steps per tooth period (low
+#: verified windows to ``_VERIFY_RTOL``), with at most this many steps per tooth period (low
 #: speeds with many waves per tooth period are then under-resolved in the screening only;
 #: every verified window is solved with the steps that resolve its chatter).
 _SCREEN_RTOL = 0.05
 _SCREEN_MAX_STEPS = 80
+#: Relative width of the verified windows' brackets: the limit kept is the bracket's stable
+#: end, so a preset can only lose this fraction of its depth, never exceed the limit.
+_VERIFY_RTOL = 0.005
 
 
 
@@ -358,7 +364,8 @@ def _sdm_pockets(tools: Sequence[ToolCut], settings: CutSettings, reasons: Seque
     steps = [resolving_steps(m, cuts[0].teeth, g, max_steps=_SCREEN_MAX_STEPS) for m, g in zip(models, grids,
                                                                                                   strict=True)]
     coarse = semi_discretization_lobes_many(models, **kw, spindle_speed_rpm=grids, steps_per_period=steps,  # type: ignore[arg-type]
-                                            progress=progress, min_depth_search_max_m=needed, depth_rtol=_SCREEN_RTOL)
+                                            progress=progress, min_depth_search_max_m=needed, depth_rtol=_SCREEN_RTOL,
+                                            scan_from_neighbours=True)
     robust: list[np.ndarray | None] = [None] * len(cuts)
     drawn: list[list[ModalModel] | None] = [None] * len(cuts)
     if settings.confidence is not None:
@@ -402,9 +409,19 @@ class _Dense:
         return bool(np.max(np.diff(np.log(edges))) <= 1.5 * 2 * tol / (_VERIFY_POINTS - 1))
 
     def window_min(self, n: float, tol: float) -> float:
-        """Smallest limit at the dense speeds inside the window (NaN counts as unstable)."""
-        values = self.limit[(self.speed >= n * (1 - tol) * (1 - 1e-12)) & (self.speed <= n * (1 + tol) * (1 + 1e-12))]
-        return float(np.min(np.where(np.isnan(values), -np.inf, values))) if values.size else math.inf
+        """Smallest limit at the dense speeds inside the window and those just beyond its ends
+        (within one verification step: as the rule takes the grid's; NaN counts as unstable)."""
+        inside = np.flatnonzero((self.speed >= n * (1 - tol) * (1 - 1e-12)) & (self.speed <= n * (1 + tol) * (1 + 1e-12)))
+        if not inside.size:
+            return math.inf
+        gap = math.exp(1.5 * 2 * tol / (_VERIFY_POINTS - 1))  # a neighbour within one verification step
+        pick = list(inside)
+        if inside[0] > 0 and self.speed[inside[0] - 1] >= n * (1 - tol) / gap:
+            pick.append(inside[0] - 1)
+        if inside[-1] + 1 < self.speed.size and self.speed[inside[-1] + 1] <= n * (1 + tol) * gap:
+            pick.append(inside[-1] + 1)
+        values = self.limit[np.array(pick)]
+        return float(np.min(np.where(np.isnan(values), -np.inf, values)))
 
 
 def _verify(models: Sequence[ModalModel], cuts: Sequence[ToolCut], grids: Sequence[np.ndarray],
@@ -419,7 +436,8 @@ def _verify(models: Sequence[ModalModel], cuts: Sequence[ToolCut], grids: Sequen
     one. Per round and tool the best unverified candidates (up to ``_VERIFY_PER_ROUND``
     distinct windows) are solved at ``_VERIFY_POINTS`` speeds across their window; every
     candidate whose window the dense speeds then cover is verified too. A tool is done when
-    its best verified score is at least every unverified candidate's coarse score. A robust
+    its best verified score is at least ``1 − _VERIFY_SLACK`` of every unverified candidate's
+    coarse score (or after ``_VERIFY_ROUNDS`` rounds). A robust
     tool's dense speeds are also solved for its drawn modal models (``drawn``: every draw's own
     modes), and their ``(1 − confidence)`` quantile, never above the nominal, is its limit there.
     """
@@ -443,7 +461,7 @@ def _verify(models: Sequence[ModalModel], cuts: Sequence[ToolCut], grids: Sequen
         for j in open_:  # a loop over tools
             unverified = np.where(np.isnan(verified[j]), score[j], -np.inf)
             best = np.nanmax(np.where(np.isnan(verified[j]), -np.inf, verified[j]))
-            if not np.isfinite(np.max(unverified)) or best >= np.max(unverified):
+            if not np.isfinite(np.max(unverified)) or best >= (1.0 - _VERIFY_SLACK) * np.max(unverified):
                 continue
             chosen: list[float] = []
             for i in np.argsort(-unverified):
@@ -455,7 +473,7 @@ def _verify(models: Sequence[ModalModel], cuts: Sequence[ToolCut], grids: Sequen
             todo[j] = chosen
         if not todo:
             break
-        solved = _solve_windows(models, todo, needed, kw, tol)
+        solved = _solve_windows(models, todo, needed, kw, tol, [(g, lim) for g, lim in zip(grids, nominal, strict=True)])
         robust_dense = _robust_windows(drawn, solved, needed, kw, settings.confidence)
         for j, r in solved:  # a loop over tools
             nom = _pocket_limit(r.depth_limit_m, r.depth_search_max_m, needed[j])
@@ -480,15 +498,24 @@ def _verify(models: Sequence[ModalModel], cuts: Sequence[ToolCut], grids: Sequen
 
 
 def _solve_windows(models: Sequence[ModalModel], todo: dict[int, list[float]], needed: Sequence[float],
-                   kw: dict[str, Any], tol: float) -> list[tuple[int, SemiDiscretizationResult]]:
+                   kw: dict[str, Any], tol: float, coarse: Sequence[tuple[np.ndarray, np.ndarray]]
+                   ) -> list[tuple[int, SemiDiscretizationResult]]:
     """The windows ``n (1 ± tol)`` of ``todo`` (tool → centre speeds) solved densely, each speed
-    with the steps per period that resolve its chatter (:func:`resolving_steps`)."""
+    with the steps per period that resolve its chatter (:func:`resolving_steps`); a speed solved
+    from scratch starts its depth scan at half the coarse limit there (``coarse``: each tool's
+    grid and pocket-form limits; the smaller of the two grid speeds around it)."""
     order = sorted(todo)
-    speeds = [np.unique(np.concatenate([np.geomspace(n * (1 - tol), n * (1 + tol), _VERIFY_POINTS) for n in todo[j]]))
-              for j in order]
-    steps = [resolving_steps(models[j], kw["teeth"], sp) for j, sp in zip(order, speeds, strict=True)]
+    speeds, steps = [], []
+    for j in order:  # a loop over tools: each window in one step count (its largest), so it is one search
+        windows = [np.geomspace(n * (1 - tol), n * (1 + tol), _VERIFY_POINTS) for n in todo[j]]
+        ks = [np.full(w.size, resolving_steps(models[j], kw["teeth"], w).max()) for w in windows]
+        sp, first = np.unique(np.concatenate(windows), return_index=True)
+        speeds.append(sp)
+        steps.append(np.concatenate(ks)[first])
+    starts = [_coarse_start(*coarse[j], sp, needed[j]) for j, sp in zip(order, speeds, strict=True)]
     solved = semi_discretization_lobes_many([models[j] for j in order], **kw, steps_per_period=steps,
-                                            spindle_speed_rpm=speeds, min_depth_search_max_m=[needed[j] for j in order])
+                                            spindle_speed_rpm=speeds, min_depth_search_max_m=[needed[j] for j in order],
+                                            depth_rtol=_VERIFY_RTOL, scan_start_m=starts)
     # speeds whose chatter (another mode than the largest peak) the steps did not resolve: again, with its frequency
     redo = [(i, r.steps_per_chatter_cycle < MIN_STEPS_PER_CHATTER_CYCLE) for i, r in enumerate(solved)]
     redo = [(i, bad) for i, bad in redo if np.any(bad)]
@@ -499,11 +526,20 @@ def _solve_windows(models: Sequence[ModalModel], todo: dict[int, list[float]], n
                                               chatter_frequency_hz=solved[i].chatter_frequency_hz[bad])
                               for i, bad in redo],
             spindle_speed_rpm=[speeds[i][bad] for i, bad in redo],
-            min_depth_search_max_m=[needed[order[i]] for i, _ in redo])
+            min_depth_search_max_m=[needed[order[i]] for i, _ in redo], depth_rtol=_VERIFY_RTOL,
+            scan_start_m=[starts[i][bad] for i, bad in redo])
         for (i, bad), r in zip(redo, again, strict=True):  # a loop over the few tools concerned
             keep = ~bad
             solved[i] = _merged(solved[i], keep, r)
     return list(zip(order, solved, strict=True))
+
+
+def _coarse_start(grid: np.ndarray, limit: np.ndarray, speeds: np.ndarray, needed: float) -> np.ndarray:
+    """Half the smaller coarse limit of the two grid speeds around each speed (pocket form: inf is
+    "stable to ``needed``"); NaN where either is unsettled."""
+    i = np.clip(np.searchsorted(grid, speeds), 1, grid.size - 1)
+    around = np.minimum(np.minimum(limit[i - 1], limit[i]), needed)
+    return 0.5 * around
 
 
 def _robust_windows(drawn: Sequence[list[ModalModel] | None], solved: list[tuple[int, SemiDiscretizationResult]],
@@ -524,7 +560,7 @@ def _robust_windows(drawn: Sequence[list[ModalModel] | None], solved: list[tuple
             depth.append(needed[j])
             owner.append(j)
     results = semi_discretization_lobes_many(models, **kw, spindle_speed_rpm=speeds, steps_per_period=steps,
-                                             min_depth_search_max_m=depth)
+                                             min_depth_search_max_m=depth, depth_rtol=_VERIFY_RTOL)
     out = {}
     for j, _ in jobs:  # a loop over robust tools
         rows = [_pocket_limit(res.depth_limit_m, res.depth_search_max_m, needed[j])
