@@ -7,16 +7,18 @@ For a_e/D = 0.05 and 0.5 the library is recommended twice — ``method zoa`` (wh
 did before issue 20) and ``method auto`` (the default now) — and every tool is judged:
 
 * **unstable preset**: the preset's depth exceeds the semi-discretization limit somewhere in
-  its ±3 % window, solved densely (121 speeds, steps per period that resolve the chatter, the
-  tool's modes fitted to its FRF as the recommendation does);
+  its ±3 % window, solved densely (121 speeds, twice the steps per period the recommendation
+  uses to resolve the chatter — 20 per cycle —, the tool's modes fitted to its FRF as the
+  recommendation does);
 * **false refusal**: a tool refused with "cannot chatter", or refused while the dense
   semi-discretization finds a stable pocket under the same rule;
 * **productivity**: ``n · stepdown`` over the best the dense semi-discretization allows under
   the same rule (window, safety factor, speed range, flute length), on the fine pocket grid
   (relative spacing τ/10) over the whole speed range;
 * **time-domain**: a sample of stability-limited presets simulated by the independent oracle
-  (``tests/oracles/milling_time_domain``): the preset must not chatter, 1.25 × its window's
-  limit (at the window's weakest speed) must.
+  (``tests/oracles/milling_time_domain``, 30 time steps per cycle of 1.2 × the highest mode):
+  the preset must not chatter, 1.25 × its window's limit (at the window's weakest speed, same
+  fine solution) must.
 
 It also times the recommendation (prediction + pockets; 400 semi-discretization speeds per
 tool), and with ``--job-tools N`` runs a library of N tools (the 25, repeated with stickouts
@@ -45,11 +47,12 @@ import numpy as np  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from tests.oracles.milling_time_domain import Cut, Mode, simulate  # noqa: E402
+from tests.oracles.milling_time_domain import Cut, Mode, resolving_steps, simulate  # noqa: E402
 
 from rcsa.analysis.lobes.modal_model import ModalModel, fit_modal_model  # noqa: E402
 from rcsa.analysis.lobes.pockets import PocketRule, best_pocket, pocket_speed_grid  # noqa: E402
-from rcsa.analysis.lobes.semi_discretization import resolving_steps, semi_discretization_lobes_many  # noqa: E402
+from rcsa.analysis.lobes.semi_discretization import resolving_steps as sdm_steps  # noqa: E402
+from rcsa.analysis.lobes.semi_discretization import semi_discretization_lobes_many  # noqa: E402
 from rcsa.app.jobs import Workbench  # noqa: E402
 from rcsa.app.presets import recommend_predicted  # noqa: E402
 from rcsa.libraries.formats import read_library  # noqa: E402
@@ -72,10 +75,10 @@ def _recommend(data: bytes, immersion: float, method: str) -> tuple[dict, float,
     return result.report, time.perf_counter() - t0, time.process_time() - c0
 
 
-def _limits(model, teeth, immersion, speeds, floor_m):
+def _limits(model, teeth, immersion, speeds, floor_m, finer=1):
     r = semi_discretization_lobes_many([model], teeth=teeth, tangential_coefficient_n_m2=KT, radial_ratio=KR,
                                        radial_immersion=immersion, milling="down", spindle_speed_rpm=[speeds],
-                                       steps_per_period=[resolving_steps(model, teeth, speeds)],
+                                       steps_per_period=[finer * sdm_steps(model, teeth, speeds)],
                                        min_depth_search_max_m=[floor_m])[0]
     return r, np.where(np.isfinite(r.depth_limit_m), r.depth_limit_m,
                        np.inf if r.depth_search_max_m >= floor_m else r.depth_search_max_m)
@@ -106,7 +109,7 @@ def _judge(report: dict, frfs: dict, immersion: float, rule: PocketRule) -> list
         if tool["status"] == "written":
             n, step = float(tool["spindle_speed_rpm"]), float(tool["stepdown_m"])
             window = np.geomspace(n * (1 - rule.speed_tolerance), n * (1 + rule.speed_tolerance), 121)
-            _, dense = _limits(model, teeth, immersion, window, need)
+            _, dense = _limits(model, teeth, immersion, window, need, finer=2)
             row.update(spindle_speed_rpm=n, stepdown_m=step, window_min_m=float(np.min(dense)),
                        unstable=bool(np.min(dense) < step), productivity=None if best is None else
                        n * step / best.removal_index_rpm_m, limited_by=tool.get("limited_by"),
@@ -127,11 +130,11 @@ def _time_domain(rows: list[dict], immersion: float, sample: int) -> list[dict]:
         n, step = r["spindle_speed_rpm"], r["stepdown_m"]
         window = np.geomspace(n * 0.97, n * 1.03, 61)
         f, z, mass, d = (np.array([x[i] for x in r["modes"]]) for i in range(4))
-        _, dense = _limits(ModalModel.of(f, z, 1.0 / mass, d.astype(int)), 1, immersion, window, 1.0)
+        _, dense = _limits(ModalModel.of(f, z, 1.0 / mass, d.astype(int)), 1, immersion, window, 1.0, finer=2)
         weakest = float(window[int(np.argmin(dense))])
         up = 1.25 * float(np.min(dense))
-        sim = simulate(modes, [Cut(n, step, 1, KT, KR, immersion, "down", 5e-5),
-                               Cut(weakest, up, 1, KT, KR, immersion, "down", 5e-5)])
+        cuts = [Cut(n, step, 1, KT, KR, immersion, "down", 5e-5), Cut(weakest, up, 1, KT, KR, immersion, "down", 5e-5)]
+        sim = simulate(modes, cuts, steps_per_period=resolving_steps(modes, cuts))
         out.append({"id": r["id"], "spindle_speed_rpm": n, "stepdown_m": step, "preset_stable": bool(sim.stable[0]),
                     "next_step_up_m": up, "at_rpm": weakest, "next_step_up_chatters": bool(sim.chatter[1]),
                     "ratios": [float(x) for x in sim.ratio]})

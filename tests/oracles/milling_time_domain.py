@@ -47,7 +47,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Cut", "Mode", "Outcome", "simulate"]
+__all__ = ["Cut", "Mode", "Outcome", "resolving_steps", "simulate"]
 
 
 @dataclass(frozen=True)
@@ -96,6 +96,15 @@ def _angles(immersion: float, milling: str) -> tuple[float, float]:
     if milling == "down":
         return math.acos(2.0 * immersion - 1.0), math.pi
     return 0.0, math.acos(1.0 - 2.0 * immersion)
+
+
+def resolving_steps(modes: list[Mode], cuts: list[Cut], per_cycle: float = 30.0, least: int = 192) -> int:
+    """Time steps per tooth period that put ``per_cycle`` steps in a cycle of 1.2 × the highest
+    mode's frequency at the slowest cut (the force is held over a step: a chatter cycle of
+    fewer than ~20 steps shifts the limit by several %), at least ``least``."""
+    top = 1.2 * max(m.frequency_hz for m in modes)
+    period = max(60.0 / (c.speed_rpm * c.teeth) for c in cuts)
+    return max(least, math.ceil(per_cycle * top * period))
 
 
 def _transition(w: np.ndarray, z: np.ndarray, dt: np.ndarray) -> tuple[np.ndarray, ...]:

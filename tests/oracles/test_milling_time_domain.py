@@ -17,7 +17,7 @@ import pytest
 from rcsa.analysis.lobes.pockets import PocketRule
 from rcsa.analysis.lobes.tool_pockets import CutSettings, ToolCut, tool_pockets
 from rcsa.reference import ra1
-from tests.oracles.milling_time_domain import Cut, Mode, simulate
+from tests.oracles.milling_time_domain import Cut, Mode, resolving_steps, simulate
 
 BENCHMARK = [Mode(922.0, 0.011, 0.03993, 0)]  # Insperger & Stépán (2004): m 0.03993 kg, 922 Hz, ζ 0.011, in x
 AL7075 = {"kt": 1319.41e6, "kr": 788.83 / 1319.41}  # the README's aluminium 7075 row
@@ -62,8 +62,8 @@ def test_a_semi_discretization_preset_is_stable_and_the_next_step_up_chatters(to
     model = lobes.modal_model
     modes = [Mode(float(fr), float(z), 1.0 / float(r), int(d)) for fr, z, r, d in
              zip(model.frequency_hz, model.damping_ratio, model.residue_1_kg, model.direction, strict=True)]
-    out = simulate(modes, [Cut(n, pocket.stepdown_m, 1, AL7075["kt"], AL7075["kr"], immersion, "down", 5e-5),
-                           Cut(float(weakest), 1.25 * pocket.depth_limit_m, 1, AL7075["kt"], AL7075["kr"], immersion,
-                               "down", 5e-5)])
+    cuts = [Cut(n, pocket.stepdown_m, 1, AL7075["kt"], AL7075["kr"], immersion, "down", 5e-5),
+            Cut(float(weakest), 1.25 * pocket.depth_limit_m, 1, AL7075["kt"], AL7075["kr"], immersion, "down", 5e-5)]
+    out = simulate(modes, cuts, steps_per_period=resolving_steps(modes, cuts))
     assert out.stable[0], ("the preset chatters", n, pocket.stepdown_m, out.ratio)
     assert out.chatter[1], ("1.25 x the window limit does not chatter", weakest, pocket.depth_limit_m, out.ratio)

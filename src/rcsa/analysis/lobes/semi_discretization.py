@@ -24,11 +24,15 @@ whose two neighbours lie on the same lobe segment (same lobe number, same kind) 
 its limit is interpolated (cubic in ``log b`` from four neighbours on the segment, else
 linear) and bracketed directly around the guess — two depths ``g e^{∓δ}`` evaluated together,
 ``δ`` from the interpolation's own error estimate, ``DEPTH_RTOL/2.2`` at adjacent speeds, where
-one pair of evaluations usually closes the bracket. A guess that misses (the lower depth
-unstable, or a root farther than 15 %) is solved from scratch. This needs about half the
-evaluations of scanning every speed and gives the same brackets (tests/analysis/lobes/
-test_sdm_reference.py compares with the limits of the per-speed search it replaced: within
-2·DEPTH_RTOL, same kinds).
+one pair of evaluations usually closes the bracket. A precise guess whose neighbours agree
+on the slope of ``log|μ|`` in ``log b`` is tried from its stable side alone: one evaluation
+just below the guess, and when the slope puts the crossing within ``DEPTH_RTOL/2`` above it,
+that stable depth is the limit (its critical multiplier, moved onto the unit circle, and its
+chatter frequency are reported). A guess that misses (the lower depth unstable, or a root
+farther than 15 %) is solved from scratch; a speed between two neighbours stable up to the
+ceiling is evaluated once, at the ceiling. This needs under half the evaluations of scanning
+every speed and gives the same limits (tests/analysis/lobes/test_sdm_reference.py compares
+with the limits of the per-speed search it replaced: within 2·DEPTH_RTOL, same kinds).
 
 Every evaluation runs for all open (tool, speed) pairs at once — one batch of period maps,
 one monodromy matrix per pair built in a single pass over the steps of a period, Arnoldi on
@@ -152,7 +156,8 @@ class SemiDiscretizationResult(LobeResult):
     instability : numpy.ndarray of str, shape (nspeed,)
         ``"hopf"``, ``"flip"``, ``"fold"``, or ``""`` where no limit was found.
     critical_multiplier : numpy.ndarray, shape (nspeed,), complex
-        The multiplier that crosses the unit circle (at the unstable end of the bracket).
+        The multiplier that crosses the unit circle (at the unstable end of the bracket; for a
+        limit closed from its stable side, that side's critical multiplier moved onto the circle).
     lobe_kinds : tuple of str
         Kind of each entry of ``lobes``.
     steps_per_period : int
