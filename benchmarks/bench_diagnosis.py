@@ -1,9 +1,9 @@
-"""Withheld-effect benchmark of the sim-to-real diagnosis (issue 6, ``diagnosis.md`` §5).
+"""Withheld-effect benchmark of the sim-to-real diagnosis (issue 6, ``docs/diagnosis.md`` §5).
 
 Each trial draws a hidden effect (or none), realises it physically in the independent FE
 truth (``tests/analysis/diagnosis/truth.py``) with in-tolerance scatter of the nominal parameters and
 1 % noise, measures five stickouts (50–82 mm, 50–8000 Hz, 2 Hz lines) and asks
-``rcsa.analysis.diagnosis`` for a verdict against the RA-1 base model. Scores (``diagnosis.md`` §5.2):
+``rcsa.analysis.diagnosis`` for a verdict against the RA-1 base model. Scores (``docs/diagnosis.md`` §5.2):
 
 * top-1 attribution: ``status == identified`` and the named effect is the hidden one
   (an ``ambiguous`` verdict never counts as a top-1 hit); also the best-ranked effect, set
@@ -194,7 +194,7 @@ def timing(repeats: int = 3) -> dict:
 
 
 def summarise(records: list[dict]) -> dict:
-    """Scores of ``diagnosis.md`` §5.2 from the trial records."""
+    """Scores of ``docs/diagnosis.md`` §5.2 from the trial records."""
     eff = [r for r in records if r["effect"] != "none"]
     null = [r for r in records if r["effect"] == "none"]
     strong = [r for r in eff if r["snr_true"] >= 10]

@@ -5,8 +5,11 @@ over repeats with the machine's load, and the ratios against baselines run in th
 process:
 
 * ``rcsa.predict`` of RA-1 at 10 000 lines (FRF + exact natural frequencies + peaks + static
-  stiffness, from the contract document) against a straightforward vectorised numpy FRF
-  (``numpy_baseline.py``: global dynamic stiffness and ``np.linalg.solve``, the FRF alone);
+  stiffness, from the contract document; cold: no spindle side kept from an earlier call)
+  against two vectorised numpy FRFs (``numpy_baseline.py``, the FRF alone): the dense one
+  (global dynamic stiffness and ``np.linalg.solve``) and the stronger 2×2 block sweep over the
+  chain; where the floor is (the exact beam terms' transcendental functions); and the same
+  prediction warm (the next tool on a spindle + holder kept from the call before);
 * 1 000 tools × 1 999 lines on one spindle + holder with every tool's exact modes;
 * where the time goes: each part of a prediction timed on its own, and cProfile of the batch;
 * ``import rcsa`` and ``rcsa --help`` in fresh interpreters.
@@ -31,13 +34,18 @@ from pathlib import Path
 import numpy as np
 
 import rcsa
+from numpy_baseline import beam_dynamic_stiffness, block_sweep_receptance
 from numpy_baseline import tip_receptance as numpy_tip_receptance
+from rcsa.app import predictions
+from rcsa.app.results import json_bytes
 from rcsa.model.assembly import build_model
 from rcsa.model.contract import parse_assembly
 from rcsa.model.peaks import find_frf_peaks
-from rcsa.model.prediction import SubassemblyCache, count_lines_hz, tool_point_receptance
+from rcsa.model.prediction import count_lines_hz, tool_point_receptance
+from rcsa.physics.chain import Beam
 from rcsa.physics.elimination import static_tip_receptance, tip_receptance
 from rcsa.physics.natural_frequencies import natural_frequencies_batch
+from rcsa.physics.subassembly_cache import SubassemblyCache
 from rcsa.reference import ra1
 
 
@@ -86,35 +94,63 @@ def ra1_section(repeats: int, slow: bool) -> None:
     chain = model.chain()
     f = spec.frequency_hz
     omega = 2 * np.pi * f
-    err = np.max(np.abs(numpy_tip_receptance(chain, omega)[:, 0, 0] - rcsa.predict(doc).tool_point.h))
+    h = rcsa.predict(doc).tool_point.h
+    err = np.max(np.abs(numpy_tip_receptance(chain, omega)[:, 0, 0] - h)) / np.max(np.abs(h))
+    err_block = np.max(np.abs(block_sweep_receptance(chain, omega)[:, 0, 0] - h)) / np.max(np.abs(h))
     t_pred = median_time_s(lambda: rcsa.predict(doc), repeats)
     t_numpy = median_time_s(lambda: numpy_tip_receptance(chain, omega), max(3, repeats // 3))
+    t_block = median_time_s(lambda: block_sweep_receptance(chain, omega), repeats)
     print(f"RA-1 tool point, 10 000 lines ({load()})")
-    print(f"  rcsa.predict (FRF + exact modes + peaks + static)  {t_pred * 1e3:8.1f} ms")
-    print(f"  vectorised numpy FRF alone (numpy_baseline.py)      {t_numpy * 1e3:8.1f} ms   "
-          f"ratio {t_numpy / t_pred:5.1f}x   (|h| agree to {err / np.max(np.abs(rcsa.predict(doc).tool_point.h)):.0e})")
+    print(f"  rcsa.predict, cold (FRF + exact modes + peaks + static) {t_pred * 1e3:8.1f} ms")
+    print(f"  dense numpy FRF alone (numpy_baseline.tip_receptance)   {t_numpy * 1e3:8.1f} ms   "
+          f"ratio {t_numpy / t_pred:5.1f}x   (|h| agree to {err:.0e})")
+    print(f"  numpy 2x2 block sweep FRF alone (block_sweep_receptance) {t_block * 1e3:7.1f} ms   "
+          f"ratio {t_block / t_pred:5.1f}x   (|h| agree to {err_block:.0e})")
+    beams = [item for item in chain if isinstance(item, Beam)]
+    t_bterms = median_time_s(lambda: [beam_dynamic_stiffness(omega, b.section, b.length_m) for b in beams], repeats)
+    x = np.linspace(0.0, 3.0, 2 * omega.size).reshape(2, -1)
+    sections = {b.section for b in beams}  # equal sections share their wavenumbers
+    z = x + 0.5j
+
+    def transcendentals() -> None:  # what any exact solver evaluates: per beam sin, cos, sinh, cosh of both waves
+        for _ in beams:
+            np.sin(x), np.cos(x), np.sinh(x), np.cosh(x)
+        for _ in sections:  # per section the two wavenumbers' square roots (complex)
+            np.sqrt(z)
+
+    t_floor = median_time_s(transcendentals, repeats)
+    print(f"  where the floor is (RA-1: {len(chain)} items, {len(beams)} beams of {len(sections)} sections):")
+    print(f"    block sweep: its {len(beams)} beam stiffnesses alone                      {t_bterms * 1e3:7.1f} ms")
+    print(f"    transcendentals alone (sin, cos, sinh, cosh per beam, sqrt per section) {t_floor * 1e3:7.1f} ms")
+    predictions.SIDES.size = predictions.SIDES_KEPT
+    t_warm = median_time_s(lambda: rcsa.predict(doc), repeats)
+    predictions.SIDES.size = 0
+    print(f"  rcsa.predict, warm (spindle + holder kept from the call before)  {t_warm * 1e3:7.1f} ms   "
+          f"block sweep ratio {t_block / t_warm:5.1f}x")
 
     # where the time goes: each part of rcsa.predict timed on its own
     prefix, rest = model.to_holder_tip(), model.tool_side()
     grid = count_lines_hz(f)
     g = tool_point_receptance(model, SubassemblyCache(omega))
+    result = rcsa.predict(doc)
     parts = {
         "parse the document + build the chain": lambda: build_model(parse_assembly(doc)),
         "FRF: spindle + holder condensed, tool marched, 2x2 inverse":
             lambda: tool_point_receptance(model, SubassemblyCache(omega)),
-        "  of which spindle + holder (cached across tools)": lambda: SubassemblyCache(omega).condensed(prefix),
+        "  of which spindle + holder (cached across tools)": lambda: SubassemblyCache(omega).stiffness(prefix),
         "natural frequencies: count on the grid + lockstep refinement":
             lambda: natural_frequencies_batch(prefix, [rest], float(f[0]), float(f[-1]), grid_hz=grid),
         "  of which the count on the grid (undamped, real)":
             lambda: natural_frequencies_batch(prefix, [rest], float(f[0]), float(f[-1]), grid_hz=grid, rtol=0.5),
         "peaks of h": lambda: find_frf_peaks(f, g[:, 0, 0]),
         "static stiffness": lambda: static_tip_receptance(rest, SubassemblyCache(omega).static(prefix)),
-        "contract document (to_dict, lists)": lambda: rcsa.predict(spec).to_dict(),
+        "contract document alone (to_dict, lists)": lambda: result.to_dict(),
+        "its JSON bytes from the arrays (rcsa.app.results.json_bytes)": lambda: json_bytes(result),
     }
     print("  where the time goes (each part alone, median):")
     for name, fn in parts.items():
         print(f"    {name:<64s} {median_time_s(fn, repeats) * 1e3:7.1f} ms")
-    print("    (rcsa.predict returns the Prediction; to_dict runs when a caller serialises it and is in neither figure)")
+    print("    (rcsa.predict returns the Prediction; the document and its bytes are made when a caller serialises it)")
     if slow:
         sub = omega[::20]  # the loop is timed on 500 lines and scaled to 10 000
         t_vec = median_time_s(lambda: tip_receptance(chain, omega), repeats)
@@ -184,6 +220,7 @@ def main() -> None:
     parser.add_argument("--slow-baselines", action="store_true", help="also the per-line loop and full assemblies")
     args = parser.parse_args()
     print(f"python {sys.version.split()[0]}, numpy {np.__version__}, {os.uname().machine}")
+    predictions.SIDES.size = 0  # cold predictions: no spindle side kept across calls (the warm row says so)
     ra1_section(args.repeats, args.slow_baselines)
     batch_section(args.tools, args.slow_baselines)
     startup_section(7)

@@ -4,7 +4,7 @@ Synthetic tap test: h11, h21, h22 at the tip and 15 mm below it on a Ø12.7 × 6
 blank in RA-1's holder (exact dynamic-stiffness truth), complex Gaussian relative noise,
 identification by the exact three-FRF method and by the finite-difference fallback, then
 the 74 mm tool coupled to the identified holder-tip receptance. Error = max |h − h_true|
-over 300–5000 Hz divided by the true peak (``domain.md`` §4.6). Median over seeds.
+over 300–5000 Hz divided by the true peak (``docs/physics.md`` §4.6). Median over seeds.
 
 Run: ``.venv/bin/python benchmarks/bench_hybrid.py [--seeds 10]``
 """
@@ -20,7 +20,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from tests.helpers import max_error_of_peak  # noqa: E402
-from tests.test_hybrid import GRID, blank_frfs, hybrid_doc, put_blank  # noqa: E402
+from tests.measured.test_hybrid import GRID, blank_frfs, hybrid_doc, put_blank  # noqa: E402
 
 import rcsa  # noqa: E402
 from rcsa.measured.store import MeasurementStore  # noqa: E402

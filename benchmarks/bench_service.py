@@ -14,6 +14,14 @@ a ``point_receptance`` measurement (5 000 lines, 1–5 000 Hz), then measures
   result), wall time from the POST to the last byte of the result (target <= 5 s), with the
   full tool_point (h, l, n, p) and with ``?tool_point=h``.
 
+The single predictions are measured twice: the same request over and over (the figure of
+earlier runs), and a different tool (stickout) in every request on the same spindle and holder
+(what a CAM system asking tool after tool sends). ``--stages`` first times, in this process and
+without HTTP, each stage of one such request — JSON decoding and schema validation, the
+prediction (spindle side kept or cold; of it the modal fit), the result document and its JSON
+bytes, gzip — and the whole ASGI app (routing, middleware) called in-process: where the time
+goes, and so where the floor is.
+
 ``--largest``: only the largest batch the default limits allow per request in lines, 1 000
 combinations at 20 000 lines (``RCSA_MAX_FREQUENCY_LINES``; a 3.7 GB JSON result), as a job on
 the 2-worker service: it must complete in one attempt (no worker killed for missing uvicorn's
@@ -89,8 +97,10 @@ def _percentile(values: list[float], q: float) -> float:
     return values[k]
 
 
-def load(base: str, body: bytes, *, threads: int, requests: int, headers: dict[str, str]) -> dict[str, float]:
-    """``requests`` POSTs of ``body`` from ``threads`` client threads; latencies in ms."""
+def load(base: str, body: bytes | list[bytes], *, threads: int, requests: int, headers: dict[str, str]
+         ) -> dict[str, float]:
+    """``requests`` POSTs of ``body`` (or of the bodies in turn) from ``threads`` client threads; ms."""
+    bodies = body if isinstance(body, list) else [body]
     latencies: list[float] = []
     lock = threading.Lock()
     todo = iter(range(requests))
@@ -100,10 +110,12 @@ def load(base: str, body: bytes, *, threads: int, requests: int, headers: dict[s
         with httpx.Client(base_url=base, timeout=60, headers=headers) as client:
             while True:
                 with lock:
-                    if next(todo, None) is None:
+                    k = next(todo, None)
+                    if k is None:
                         return
                 t0 = time.perf_counter()
-                r = client.post("/v1/tool-point-frf", content=body, headers={"content-type": "application/json"})
+                r = client.post("/v1/tool-point-frf", content=bodies[k % len(bodies)],
+                                headers={"content-type": "application/json"})
                 r.read()
                 dt = (time.perf_counter() - t0) * 1e3
                 if r.status_code != 200:
@@ -240,6 +252,88 @@ def largest(base: str, mid: str, n: int, grid: dict[str, float], proc: subproces
             "worker_peak_rss_mb": _worker_peaks(proc.pid)}
 
 
+def tool_bodies(mid: str, n: int = 50) -> list[bytes]:
+    """RA-1's holder and tool on the stored spindle, stickouts 50–80 mm: one body per tool."""
+    doc = ra1(GRID_5000)
+    return [json.dumps({**doc, "spindle": {"measurement_id": mid},
+                        "tool": {**doc["tool"], "stickout_m": round(0.050 + 0.030 * i / n, 6)}}).encode()
+            for i in range(n)]
+
+
+def stages(repeats: int = 30) -> dict[str, float]:
+    """Each stage of one hybrid prediction request at 5 000 lines, in this process; median ms."""
+    import gzip
+    import warnings
+
+    from rcsa.app import predictions
+    from rcsa.app.inputs import decode_json
+    from rcsa.app.results import json_bytes
+    from rcsa.model import modal_fit as modal_fit_module
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        from fastapi.testclient import TestClient
+    from service.config import Settings
+    from service.main import create_app
+    from service.schemas import PredictionRequest
+
+    def median_ms(fn: object) -> float:
+        fn()  # type: ignore[operator]
+        times = []
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            fn()  # type: ignore[operator]
+            times.append(time.perf_counter() - t0)
+        return statistics.median(times) * 1e3
+
+    store = Path(tempfile.mkdtemp(prefix="rcsa-stages-")) / "store"
+    app = create_app(Settings(store=store, api_keys=f"{KEY}:write", seed_demo=False, access_log=False))
+    out: dict[str, float] = {}
+    with TestClient(app) as client:
+        spindle = measurement_to_contract(demo_measurement(GRID_5000))
+        spindle = {k: v for k, v in spindle.items() if k not in ("id", "source", "created_utc")}
+        mid = client.post("/v1/measurements", json=spindle, headers={"X-API-Key": KEY}).json()["id"]
+        bodies = tool_bodies(mid)
+        docs = [decode_json(b) for b in bodies]
+        state = app.state.rcsa_state if hasattr(app.state, "rcsa_state") else None
+        from service.state import ensure_state
+        reader = (state or ensure_state(app)).reader
+        counter = iter(range(10**9))
+
+        def next_doc() -> dict:
+            return docs[next(counter) % len(docs)]
+
+        result = predictions.predict(docs[0], store=reader)
+        h, f = result.tool_point.h, result.frequency_hz
+        out["decode JSON body (JSON policy)"] = median_ms(lambda: decode_json(bodies[0]))
+        out["validate (pydantic schema) + model_dump"] = median_ms(
+            lambda: PredictionRequest.model_validate(docs[0]).model_dump(exclude_unset=True))
+        out["predict, spindle side kept (another tool)"] = median_ms(lambda: predictions.predict(next_doc(),
+                                                                                                   store=reader))
+        predictions.SIDES.size = 0
+        out["predict, cold (spindle side rebuilt)"] = median_ms(lambda: predictions.predict(next_doc(), store=reader))
+        predictions.SIDES.size = predictions.SIDES_KEPT
+        out["  of which the modal fit of h (hybrid natural frequencies)"] = median_ms(
+            lambda: modal_fit_module.modal_fit(f, h))
+        out["result document + JSON bytes (json_bytes)"] = median_ms(lambda: json_bytes(result.to_dict("numpy")))
+        body = json_bytes(result.to_dict("numpy"))
+        out["gzip of the body (level 1, when asked)"] = median_ms(lambda: gzip.compress(body, 1))
+        headers = {"content-type": "application/json", "accept-encoding": "identity"}
+        out["whole app in-process (TestClient: routing, middleware, all of the above)"] = median_ms(
+            lambda: client.post("/v1/tool-point-frf", content=next_doc_body(bodies, counter), headers=headers))
+    shutil.rmtree(store.parent, ignore_errors=True)
+    print(f"stages of one hybrid prediction request, 5 000 lines, median of {repeats} "
+          f"(load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores):")
+    for name, ms in out.items():
+        print(f"  {name:72s} {ms:6.2f} ms")
+    return out
+
+
+def next_doc_body(bodies: list[bytes], counter: object) -> bytes:
+    """The next of ``bodies`` in turn."""
+    return bodies[next(counter) % len(bodies)]  # type: ignore[call-overload]
+
+
 def _lines(grid: dict[str, float]) -> int:
     return int(round((grid["stop_hz"] - grid["start_hz"]) / grid["step_hz"])) + 1
 
@@ -252,18 +346,23 @@ def main() -> None:
     parser.add_argument("--batch", type=int, default=1000)
     parser.add_argument("--keepalive-only", action="store_true", help="Measure only the keep-alive latency.")
     parser.add_argument("--largest", action="store_true", help="only the largest batch the limits allow")
+    parser.add_argument("--stages", action="store_true", help="first time each stage of a request in-process")
+    parser.add_argument("--skip-batch", action="store_true", help="single predictions only (no batch jobs)")
     parser.add_argument("--out", type=Path, default=None)
     args = parser.parse_args()
     if args.largest:
         main_largest(args)
         return
     args.out = args.out or REPO / "benchmarks" / "results" / "service.json"
+    staged = stages() if args.stages else None
 
     store = Path(tempfile.mkdtemp(prefix="rcsa-bench-")) / "store"
     proc, base = _start(store, args.workers)
     results: dict[str, object] = {"machine": {"cpus": os.cpu_count(), "python": platform.python_version(),
                                               "platform": platform.platform()},
-                                  "uvicorn_workers": args.workers}
+                                  "uvicorn_workers": args.workers, "load_average_start": os.getloadavg()[0]}
+    if staged is not None:
+        results["stages_ms"] = staged
     try:
         results["keepalive_healthz"] = [keepalive(base), keepalive(base, requests=100, connections=8)]
         for row in results["keepalive_healthz"]:
@@ -282,10 +381,15 @@ def main() -> None:
                                        headers={"Accept-Encoding": "identity"}) for n in args.threads}
         single["2_threads_gzip"] = load(base, body, threads=2, requests=max(40, args.requests // 4),
                                         headers={"Accept-Encoding": "gzip"})
+        tools = tool_bodies(mid)
+        load(base, tools, threads=2, requests=len(tools), headers={})  # warm-up
+        for n in args.threads:
+            single[f"{n}_threads_tool_per_request"] = load(base, tools, threads=n, requests=args.requests,
+                                                           headers={"Accept-Encoding": "identity"})
         results["single_prediction_5000_lines"] = single
         results["server_side"] = _server_side(base)
         grid_1000 = {"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 5.0}
-        results["batch"] = [
+        results["batch"] = [] if args.skip_batch else [
             batch(base, mid, args.batch, grid_1000, tool_point=None, accept_encoding="identity"),
             batch(base, mid, args.batch, grid_1000, tool_point="h", accept_encoding="identity"),
             batch(base, mid, args.batch, grid_1000, tool_point="h", accept_encoding="gzip"),

@@ -18,6 +18,10 @@ files are the same on every run (to rounding):
 * ``batch.json`` — three tools on RA-1's spindle (``POST /v1/tool-point-frf/batch``).
 * ``effects.json`` — an effect analysis of RA-1: four joint, bearing and tool parameters,
   modes between 300 and 1500 Hz.
+* ``ra1-uncertainty.json`` — RA-1 with an uncertainty band (``"uncertainty"``: 50 drawn
+  assemblies under the default tolerances); ``lobes-robust.json`` — the lobes of
+  ``lobes-assembly.json`` with robust limits over 50 draws; ``lobes-sdm.json`` — a thin
+  finishing cut (2 teeth, a/D = 0.05) by semi-discretization.
 
 ``tests/test_examples.py`` runs this script and compares what it writes with the committed
 files.
@@ -129,6 +133,31 @@ def effects() -> dict:
                            "tool.stickout_m"]}
 
 
+def ra1_with_uncertainty() -> dict:
+    """RA-1 with an uncertainty band: 50 drawn assemblies under the default tolerances."""
+    return {**ra1(GRID), "uncertainty": {"draws": 50, "seed": 1}}
+
+
+def ra1_bonded() -> dict:
+    """RA-1 with its tool bonded along the insertion (``joints.holder_tool.model``) instead of the point joint."""
+    doc = ra1(GRID)
+    doc["joints"]["holder_tool"] = {"model": "bonded"}
+    return doc
+
+
+def lobes_robust() -> dict:
+    """The cut of :func:`lobes_with_assembly` with robust limits at 95 % over 50 drawn assemblies."""
+    return {**lobes_with_assembly(), "uncertainty": {"draws": 50, "seed": 1}, "robust": {"confidence": 0.95}}
+
+
+def lobes_semi_discretization() -> dict:
+    """A thin finishing cut (2 teeth, a/D = 0.05) where the zero-order solution is wrong: SDM."""
+    return {"assembly": ra1(GRID), "teeth": 2, "tangential_coefficient_n_m2": 6.0e8, "radial_ratio": 0.3,
+            "radial_immersion": 0.05, "milling": "down", "spindle_speed_rpm": {"start": 6000, "stop": 24000,
+                                                                                 "count": 120},
+            "method": "semi_discretization", "steps_per_period": 24, "modes_per_direction": 2}
+
+
 def write(folder: Path) -> list[Path]:
     """Write every generated example into ``folder``; returns the paths."""
     folder.mkdir(parents=True, exist_ok=True)
@@ -136,7 +165,10 @@ def write(folder: Path) -> list[Path]:
     measurement, csv_text = spindle_measurement()
     files = {"diagnosis.json": diagnosis(taps), "identification.json": identification(taps),
              "measurement.json": measurement, "lobes-frf.json": lobes_with_inline_frf(),
-             "lobes-assembly.json": lobes_with_assembly(), "batch.json": batch(), "effects.json": effects()}
+             "lobes-assembly.json": lobes_with_assembly(), "batch.json": batch(), "effects.json": effects(),
+             "ra1-uncertainty.json": ra1_with_uncertainty(), "ra1-bonded.json": ra1_bonded(),
+             "lobes-robust.json": lobes_robust(),
+             "lobes-sdm.json": lobes_semi_discretization()}
     paths = []
     for name, doc in files.items():
         path = folder / name

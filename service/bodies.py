@@ -7,6 +7,7 @@ problems as ordinary routes.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from typing import Any, TypeVar
 
 from fastapi import Request
@@ -20,7 +21,8 @@ from rcsa.errors import InputError
 from .errors import ProblemError
 from .routing import ServiceRequest, is_json_media
 
-__all__ = ["form_text", "json_document", "read_body", "read_upload", "require_json", "validate_json"]
+__all__ = ["check_form_fields", "form_json", "form_text", "form_uploads", "json_document", "read_body", "read_upload",
+           "require_json", "validate_json"]
 
 M = TypeVar("M", bound=BaseModel)
 
@@ -69,6 +71,51 @@ async def read_upload(item: Any, field: str, limit_bytes: int) -> tuple[bytes, s
         raise ProblemError(413, f"{field}: the file {item.filename!r} exceeds the upload limit of {limit_bytes} "
                                 "bytes (RCSA_MAX_UPLOAD_BYTES)", errors=[{"field": field, "detail": "too large"}])
     return data, item.filename or ""
+
+
+def check_form_fields(form: FormData, allowed: Iterable[str]) -> None:
+    """Refuse a form field the route does not know (422 naming it and listing the allowed ones)."""
+    names = list(allowed)
+    unknown = sorted(set(form.keys()) - set(names))
+    if unknown:
+        raise InputError(unknown[0], f"unknown form field (allowed: {', '.join(names)})")
+
+
+async def form_uploads(form: FormData, name: str, limit_bytes: int, *, least: int = 1, most: int | None = 1,
+                       what: str = "file") -> list[tuple[bytes, str, str | None]]:
+    """The files of a form field: ``(bytes, file name, media type)`` each (413 above ``limit_bytes``).
+
+    Parameters
+    ----------
+    form : FormData
+    name : str
+        The field.
+    limit_bytes : int
+        Largest file.
+    least, most : int
+        How many files the field must have (``most`` None: any number).
+    what : str
+        What the files are, for the message (e.g. ``"library file (.json or .tools)"``).
+    """
+    items = form.getlist(name)
+    if len(items) < least or (most is not None and len(items) > most):
+        count = ("exactly one" if least == most == 1 else f"at most {most}" if not least else
+                 f"at least {least}" if most is None else f"{least} to {most}")
+        raise InputError(name, f"send {count} {what}" if items or not least else
+                         f"is required: the {what} as a multipart part")
+    out = []
+    for item in items:
+        data, file_name = await read_upload(item, name, limit_bytes)
+        out.append((data, file_name, getattr(item, "content_type", None)))
+    return out
+
+
+def form_json(form: FormData, name: str) -> Any:
+    """A form field holding JSON, decoded under the JSON policy (None when absent or empty)."""
+    text = form_text(form, name)
+    if text is None or text == "":
+        return None
+    return decode_json(text, path=name, what=f"form field {name}")
 
 
 def form_text(form: FormData, name: str) -> str | None:

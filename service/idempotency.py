@@ -1,6 +1,6 @@
 """``Idempotency-Key`` on the POSTs that store or start something.
 
-Follows draft-ietf-httpapi-idempotency-key-header (``ecosystem.md`` §4.2). Routes of a
+Follows the IETF draft draft-ietf-httpapi-idempotency-key-header-06. Routes of a
 router built with ``route_class=IdempotentRoute`` honour the header on ``POST``:
 
 * **First request** with a key: it runs; a ``2xx`` answer is kept (status, body bytes and the
@@ -24,7 +24,8 @@ router built with ``route_class=IdempotentRoute`` honour the header on ``POST``:
   but before the answer is kept, the retry takes the dead process's reservation over, finds
   the recorded id and answers with the object that was written: no second copy, nothing lost.
 
-"Same request" means the same method, path, query, media type, ``Prefer`` header and body;
+"Same request" means the same method, path, query, media type, ``Prefer`` and ``Accept`` headers
+(the result's form) and body;
 JSON bodies are compared after parsing (key order and spacing do not matter), multipart bodies
 with the boundary taken out (a retry with a new boundary is the same request).
 
@@ -194,7 +195,7 @@ async def request_fingerprint(request: Request) -> str:
     digest = hashlib.sha256()
     query = sorted((k, v) for k, v in request.query_params.multi_items())
     for part in (request.method, request.url.path, orjson.dumps(query).decode(), media,
-                 request.headers.get("prefer", "")):
+                 request.headers.get("prefer", ""), request.headers.get("accept", "")):
         data = part.encode()
         digest.update(len(data).to_bytes(8, "big") + data)
     digest.update(body)

@@ -23,11 +23,12 @@ from starlette.responses import Response
 from rcsa.app import budget
 from rcsa.app.analyses import validate
 from rcsa.app.jobs import Outcome, Work, answer_or_queue
+from rcsa.app.results import Format
 from rcsa.infra.api_keys import Principal
 from rcsa.infra.job_queue import Job, QuotaExceeded
 
 from .errors import ProblemError
-from .responses import json_response
+from .responses import json_response, result_response
 from .state import AppState
 
 __all__ = ["ANONYMOUS_POOL", "accepted", "answer", "caller", "compute", "job_document", "pool", "present",
@@ -67,8 +68,13 @@ def present(outcome: Outcome) -> dict[str, Any]:
 
 
 def answer(state: AppState, work: Work, *, prefer: str | None, idempotency_key: str | None,
-           headers: Mapping[str, str] | None = None, owner: str | None = None) -> Response:
+           headers: Mapping[str, str] | None = None, owner: str | None = None, result_format: Format = "json"
+           ) -> Response:
     """Run ``work`` now (``200`` with its document) or queue it for ``owner`` (``202``, :func:`accepted`).
+
+    A batch or library answered now is sent in ``result_format`` (JSON, HDF5 or Parquet: the
+    client's ``Accept``, :func:`service.responses.result_form`); a job writes that form itself
+    (the work request names it).
 
     A request with an ``Idempotency-Key`` may be a retry whose first answer was lost: its
     submission reuses the unfinished job of the same request instead of queuing it twice.
@@ -89,6 +95,8 @@ def answer(state: AppState, work: Work, *, prefer: str | None, idempotency_key: 
                            headers={"Retry-After": str(max(state.settings.retry_after_s, 5))}) from None
     if isinstance(result, Job):
         return accepted(state, result, preference_applied=asked)
+    if result.kind in ("batch", "library"):
+        return result_response(result.document, result_format, result.kind, headers=headers)
     return json_response(present(result), headers=headers)
 
 

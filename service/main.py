@@ -65,7 +65,10 @@ measurements and stability lobes.
   first is still running (or its job is) is a 409 with `Retry-After`.
 * Stored libraries: `POST /v1/libraries/{id}:sync` computes only new or changed tools and
   reports `added`, `changed`, `unchanged`, `removed` tool ids; `GET /v1/libraries/{id}/results`
-  gives the results again as JSON, HDF5 or a zip of UFF 58 files.
+  gives the results again as JSON, HDF5, Parquet or a zip of UFF 58 files.
+* Batch and library results may be asked for as HDF5 (`Accept: application/x-hdf5`) or Apache
+  Parquet (`Accept: application/vnd.apache.parquet`, when the server has `rcsa[parquet]`): the
+  same numbers as the JSON to the last bit.
 * Every response carries `X-Request-ID` (yours if you sent one).
 """
 

@@ -1,18 +1,24 @@
-"""Fast JSON responses (orjson, numpy arrays as lists) and the documented error responses."""
+"""JSON responses written straight from arrays (rcsa.app.results.json_bytes) and the documented error responses."""
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 from typing import Any
 
-import orjson
 from starlette.responses import Response
 
 from rcsa.app import budget
+from rcsa.app.results import MEDIA_TYPES, Format, encode_result, json_bytes, missing_extra
 
-from .errors import PROBLEM_MEDIA_TYPE
+from .errors import PROBLEM_MEDIA_TYPE, ProblemError
 
-__all__ = ["ASYNC_ACCEPTED", "body_limit", "json_response", "problems"]
+__all__ = ["ASYNC_ACCEPTED", "RESULT_FORMS", "RESULT_MEDIA", "body_limit", "json_response", "negotiate", "problems",
+           "result_form", "result_response"]
+
+#: Media types of the forms a batch or library result may take (``Accept``), JSON first.
+RESULT_MEDIA: tuple[str, ...] = tuple(MEDIA_TYPES.values())
+#: The form of each result media type.
+RESULT_FORMS: dict[str, Format] = {media: fmt for fmt, media in MEDIA_TYPES.items()}
 
 #: OpenAPI ``responses`` entry of a computation that may run as a job.
 ASYNC_ACCEPTED: dict[int | str, dict[str, Any]] = {
@@ -26,13 +32,56 @@ def body_limit(operation: str, extra: Mapping[str, Any] | None = None) -> dict[s
     :class:`service.routing.ServiceRoute` enforces (413 above)."""
     return {**(extra or {}), "x-max-body-bytes": budget.body_limit(operation)}
 
-_OPTIONS = orjson.OPT_SERIALIZE_NUMPY
-
 
 def json_response(document: Any, status_code: int = 200, headers: Mapping[str, str] | None = None) -> Response:
-    """``application/json`` built by orjson (numpy arrays must be C-contiguous)."""
-    return Response(orjson.dumps(document, option=_OPTIONS), status_code=status_code,
-                    media_type="application/json", headers=dict(headers or {}))
+    """``application/json`` written straight from the document's arrays (:func:`rcsa.app.results.json_bytes`)."""
+    return Response(json_bytes(document), status_code=status_code, media_type="application/json",
+                    headers=dict(headers or {}))
+
+
+def negotiate(accept: str | None, offered: tuple[str, ...], what: str = "results") -> str:
+    """The best of ``offered`` for an Accept header (the first when it says nothing); 406 when none."""
+    if not accept or not accept.strip():
+        return offered[0]
+    q: dict[str, float] = {}
+    for part in accept.split(","):
+        media, *params = [p.strip().lower() for p in part.split(";")]
+        weight = 1.0
+        for p in params:
+            if p.startswith("q="):
+                try:
+                    weight = float(p[2:])
+                except ValueError:
+                    weight = 0.0
+        q[media] = max(q.get(media, 0.0), weight)
+    wildcard = max(q.get("*/*", 0.0), q.get("application/*", 0.0))
+    ranked = [(q.get(m, wildcard), -i, m) for i, m in enumerate(offered)]
+    best = max(ranked)
+    if best[0] <= 0:
+        raise ProblemError(406, f"{what} are available as {' or '.join(offered)}; the Accept header {accept!r} "
+                                "allows none of them")
+    return best[2]
+
+
+def result_form(accept: str | None, what: str = "batch and library results") -> Format:
+    """The result form (JSON, HDF5, Parquet) an Accept header asks for; 406 when the server lacks its extra."""
+    fmt = RESULT_FORMS[negotiate(accept, RESULT_MEDIA, what)]
+    missing = missing_extra(fmt)
+    if missing is None:
+        return fmt
+    available = tuple(m for m in RESULT_MEDIA if missing_extra(RESULT_FORMS[m]) is None)
+    try:  # the next best form the client accepts
+        return RESULT_FORMS[negotiate(accept, available, what)]
+    except ProblemError:
+        raise ProblemError(406, f"{MEDIA_TYPES[fmt]} is not available on this server: {missing}; ask for "
+                                f"{' or '.join(available)}") from None
+
+
+def result_response(document: Any, fmt: Format, kind: str, headers: Mapping[str, str] | None = None) -> Response:
+    """A batch or library result in the form asked for (:func:`rcsa.app.results.encode_result`)."""
+    if fmt == "json":
+        return json_response(document, headers=headers)
+    return Response(encode_result(document, fmt, kind), media_type=MEDIA_TYPES[fmt], headers=dict(headers or {}))
 
 
 _DESCRIPTIONS = {
@@ -40,6 +89,8 @@ _DESCRIPTIONS = {
     401: "No API key, or an unknown or revoked one, where one is needed.",
     403: "The API key's scope does not allow this (writes need scope write).",
     404: "No such resource.",
+    406: "The Accept header asks for no form this endpoint gives (or for Parquet on a server without pyarrow, "
+         "the extra rcsa[parquet]).",
     409: "Conflict with the stored state: the job has not succeeded (still running, or failed), or the stored "
          "object is damaged (its id and the reason are given; retrying does not help).",
     413: "The request body (above the endpoint's x-max-body-bytes) or an uploaded file is too large.",

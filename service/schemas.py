@@ -1,4 +1,4 @@
-"""Request and response models of the REST API (pydantic), field names as in ``contract.md``.
+"""Request and response models of the REST API (pydantic), field names as in ``docs/contract.md``.
 
 SI units everywhere; every numeric field name ends in its unit and every description says
 it. Request models forbid unknown fields and refuse strings where numbers belong (strict
@@ -45,6 +45,7 @@ from rcsa.app.bounds import (
     MAX_BEARINGS,
     MAX_COHERENCE,
     MAX_CONFIDENCE,
+    MAX_CONTACT_PRESSURE_PA,
     MAX_CUTTING_COEFFICIENT_N_M2,
     MAX_DAMPING,
     MAX_DENSITY_KG_M3,
@@ -53,6 +54,9 @@ from rcsa.app.bounds import (
     MAX_FREQUENCY_LINES,
     MAX_FRF_VALUE,
     MAX_HOLDER_SEGMENTS_PER_CONE,
+    MAX_INTERFACE_STIFFNESS_N_M3,
+    MAX_INTERFACE_STIFFNESS_SCALE,
+    MAX_INTERFACE_TANGENTIAL_RATIO,
     MAX_LENGTH_M,
     MAX_LOSS_FACTOR,
     MAX_MODULUS_PA,
@@ -65,15 +69,20 @@ from rcsa.app.bounds import (
     MAX_SPEED_COUNT,
     MAX_SPEED_RPM,
     MAX_STIFFNESS,
+    MAX_SURFACE_ROUGHNESS_M,
     MAX_TEETH,
     MAX_TOLERANCE,
     MAX_UNCERTAINTY_DRAWS,
     MAX_UNCERTAINTY_SEED,
     MIN_CONFIDENCE,
+    MIN_CONTACT_PRESSURE_PA,
     MIN_CUTTING_COEFFICIENT_N_M2,
     MIN_DENSITY_KG_M3,
     MIN_FLUTED_DIAMETER_RATIO,
     MIN_FREQUENCY_HZ,
+    MIN_INTERFACE_STIFFNESS_N_M3,
+    MIN_INTERFACE_STIFFNESS_SCALE,
+    MIN_INTERFACE_TANGENTIAL_RATIO,
     MIN_JOINT_STIFFNESS,
     MIN_LENGTH_M,
     MIN_MODULUS_PA,
@@ -83,6 +92,7 @@ from rcsa.app.bounds import (
     MIN_SHEAR_COEFFICIENT,
     MIN_SPEED_COUNT,
     MIN_SPEED_RPM,
+    MIN_SURFACE_ROUGHNESS_M,
     MIN_UNCERTAINTY_DRAWS,
     SDM_DEFAULT_MODES_PER_DIRECTION,
     SDM_DEFAULT_STEPS_PER_PERIOD,
@@ -294,11 +304,49 @@ class Joint(_Request):
     rotational_damping_nms_rad: float = Field(0.0, ge=0, le=MAX_DAMPING, description="Rotational damping c_r, N·m·s/rad.")
 
 
+class HolderToolJoint(_Request):
+    """The holder–tool joint (contract v1.2): a point joint at the holder face (``model`` "point", the
+    default: the fields of Joint), or a clamping along the inserted length — ``bonded`` (ideal, from
+    geometry and materials, calibrated on 3-D elasticity) or ``contact`` (the same with a finite
+    interface stiffness per unit area)."""
+
+    model: Literal["point", "bonded", "contact"] = Field("point", description=(
+        "point: elastic joint diag(k_t + iωc_t, k_r + iωc_r) at the holder face; bonded: the shank bonded to "
+        "the bore over the insertion (no stiffness fields); contact: bonded plus interface_stiffness_n_m3."))
+    stiffness_n_m: float | None = Field(None, ge=MIN_JOINT_STIFFNESS, le=MAX_STIFFNESS, description="point: "
+                                        "translational stiffness k_t, N/m (required).")
+    damping_ns_m: float | None = Field(None, ge=0, le=MAX_DAMPING, description="point: translational damping c_t, N·s/m.")
+    rotational_stiffness_nm_rad: float | None = Field(None, ge=MIN_JOINT_STIFFNESS, le=MAX_STIFFNESS, description=(
+        "point: rotational stiffness k_r, N·m/rad (left out: rigid)."))
+    rotational_damping_nms_rad: float | None = Field(None, ge=0, le=MAX_DAMPING, description="point: rotational "
+                                                     "damping c_r, N·m·s/rad.")
+    interface_stiffness_n_m3: float | None = Field(None, ge=MIN_INTERFACE_STIFFNESS_N_M3,
+                                                   le=MAX_INTERFACE_STIFFNESS_N_M3, description=(
+        "contact: normal interface stiffness per unit area, N/m³ (or contact_pressure_pa with surface_roughness_m)."))
+    contact_pressure_pa: float | None = Field(None, ge=MIN_CONTACT_PRESSURE_PA, le=MAX_CONTACT_PRESSURE_PA,
+                                              description="contact: nominal clamping pressure p, Pa (k_n = p/σ).")
+    surface_roughness_m: float | None = Field(None, ge=MIN_SURFACE_ROUGHNESS_M, le=MAX_SURFACE_ROUGHNESS_M,
+                                              description="contact: asperity height scale σ, m (k_n = p/σ).")
+    interface_tangential_ratio: float | None = Field(None, ge=MIN_INTERFACE_TANGENTIAL_RATIO,
+                                                     le=MAX_INTERFACE_TANGENTIAL_RATIO, description=(
+        "contact: tangential over normal interface stiffness (default 1)."))
+    interface_loss_factor: float | None = Field(None, ge=0, lt=MAX_LOSS_FACTOR, description="contact: hysteretic "
+                                                "loss factor of the interface (default 0).")
+    front_gap_length_m: float | None = Field(None, ge=0, le=MAX_LENGTH_M, description=(
+        "bonded/contact: length from the holder face into the bore over which the shank does not touch, m."))
+    contact_length_m: float | None = Field(None, ge=MIN_LENGTH_M, le=MAX_LENGTH_M, description=(
+        "bonded/contact: length of the contact behind the front gap, m (default: the rest of the insertion)."))
+    interface_stiffness_scale: float | None = Field(None, ge=MIN_INTERFACE_STIFFNESS_SCALE,
+                                                    le=MAX_INTERFACE_STIFFNESS_SCALE, description=(
+        "bonded/contact: a factor on the whole interface stiffness (default 1; what an identification finds)."))
+
+
 class Joints(_Request):
     """The two joints; one left out is rigid."""
 
     spindle_holder: Joint | None = Field(None, description="Spindle nose ↔ holder base (gauge line).")
-    holder_tool: Joint | None = Field(None, description="Holder tip ↔ tool base (holder face).")
+    holder_tool: HolderToolJoint | None = Field(None, description="Holder tip ↔ tool base (holder face): a point "
+                                                "joint, or a clamping along the insertion (model bonded/contact).")
 
 
 BeamTheory = Literal["timoshenko", "euler_bernoulli"]
@@ -538,6 +586,9 @@ class LibraryPredictionRequest(_Request):
     frequency: Frequency
     joints: Joints | None = Field(None, description="Joints applied to every tool (the library has none); "
                                   "rigid when left out.")
+    holder_tool: Literal["point", "bonded"] | HolderToolJoint | None = Field(None, description=(
+        "Every tool's holder–tool clamping, replacing the joints' own: a model name, or a joints.holder_tool "
+        "object (contact with its interface stiffness)."))
     materials: dict[str, Material] | None = None
     beam_theory: BeamTheory | None = None
     shear_coefficient: ShearCoefficient | None = None

@@ -15,6 +15,9 @@ settings.register_profile("ci", derandomize=True, max_examples=30, deadline=None
 settings.register_profile("dev", max_examples=30, deadline=None)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
+#: ``RCSA_*`` variables the suite keeps: where the tests find data, not settings of rcsa.
+SUITE_SETTINGS = frozenset({"RCSA_SHARED_DATA"})
+
 _SAVED_ENV = pytest.StashKey[dict[str, str | None]]()
 _PRIVATE_XDG = pytest.StashKey[str]()
 
@@ -22,13 +25,15 @@ _PRIVATE_XDG = pytest.StashKey[str]()
 def pytest_configure(config: pytest.Config) -> None:
     """The suite runs in an environment of its own, whoever starts it.
 
-    ``RCSA_*`` variables of the caller's shell (a store, API keys, limits) are removed, and
+    ``RCSA_*`` variables of the caller's shell (a store, API keys, limits) are removed — all
+    but ``RCSA_SHARED_DATA``, which says where the suite finds the shared research data and
+    changes nothing of what rcsa does (``tests/helpers.py``) — and
     ``$XDG_DATA_HOME`` (where the default store lives when ``$RCSA_STORE`` is unset) points
     at a private directory of this process, i.e. of each xdist worker: a test that forgets
     ``tmp_store_path`` can neither write into the user's store nor share one with another
     worker. Tests of the default location set ``XDG_DATA_HOME``/``HOME`` with monkeypatch.
     """
-    names = [k for k in os.environ if k.startswith("RCSA_")] + ["XDG_DATA_HOME"]
+    names = [k for k in os.environ if k.startswith("RCSA_") and k not in SUITE_SETTINGS] + ["XDG_DATA_HOME"]
     config.stash[_SAVED_ENV] = {k: os.environ.get(k) for k in names}
     for k in names:
         os.environ.pop(k, None)

@@ -7,6 +7,10 @@ absolute floor scaled to the magnitude of the expected data (never numpy's defau
 from __future__ import annotations
 
 import os
+import re
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -31,5 +35,36 @@ def assert_receptance_close(actual: np.ndarray, expected: np.ndarray, rtol: floa
 
 
 def max_error_of_peak(actual: np.ndarray, expected: np.ndarray) -> float:
-    """``max|actual − expected| / max|expected|`` — the error measure of ``domain.md`` §4.6."""
+    """``max|actual − expected| / max|expected|`` — the error measure of ``docs/physics.md`` §4.6."""
     return float(np.max(np.abs(np.asarray(actual) - expected)) / np.max(np.abs(expected)))
+
+
+#: how many times the log of a starting uvicorn is read, 0.1 s apart, for the port it bound
+BIND_ATTEMPTS = 1200
+
+
+def start_uvicorn(args: list[str], env: dict[str, str], log_path: Path,
+                  workers: int = 1) -> tuple[subprocess.Popen, str]:
+    """Start ``python -m uvicorn ARGS --host 127.0.0.1 --port 0``: the process and its base URL,
+    once all ``workers`` have logged "Application startup complete.".
+
+    Port 0 lets the kernel pick a free port at the moment uvicorn binds it, and the port is
+    read back from uvicorn's "Uvicorn running on" line. A port chosen in advance (bound,
+    closed, then handed to the server) can be taken in between by any process on a shared
+    machine — another suite's server, whose ``/readyz`` then answers for ours while ours
+    failed to bind. Counts attempts, not seconds; fails with the log if uvicorn exits first.
+    """
+    with log_path.open("w") as log:
+        proc = subprocess.Popen([sys.executable, "-m", "uvicorn", *args, "--host", "127.0.0.1", "--port", "0"],
+                                cwd=REPO, env=env, stdout=log, stderr=subprocess.STDOUT)
+    for _ in range(BIND_ATTEMPTS):
+        text = log_path.read_text()
+        found = re.search(r"Uvicorn running on http://127\.0\.0\.1:(\d+)", text)
+        if found and text.count("Application startup complete.") >= workers:
+            return proc, f"http://127.0.0.1:{found.group(1)}"
+        if proc.poll() is not None:
+            break
+        time.sleep(0.1)
+    proc.kill()
+    proc.wait()
+    raise AssertionError("uvicorn did not bind a port:\n" + log_path.read_text())

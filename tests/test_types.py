@@ -30,6 +30,7 @@ def test_physics_and_model_are_configured_strict():
     assert {"src/rcsa/physics", "src/rcsa/model"} <= set(config["files"])
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(importlib.util.find_spec("mypy") is None,
                     reason="mypy is not installed (it comes with the test extra: pip install -e '.[test]')")
 def test_physics_and_model_pass_mypy_strict():

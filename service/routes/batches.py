@@ -13,13 +13,14 @@ from fastapi import APIRouter, Depends, Header, Path, Query, Request
 from starlette.responses import FileResponse, Response
 
 from rcsa.app.libraries import prepare_batch
+from rcsa.app.results import MEDIA_TYPES, RESULT_FORMAT_FIELD
 
 from ..bodies import require_json
 from ..deps import StateDep
 from ..errors import ProblemError
 from ..idempotency import IDEMPOTENCY_PROBLEMS, IdempotencyKeyHeader, IdempotentRoute
 from ..jobs import answer, caller, job_document
-from ..responses import body_limit, json_response, problems
+from ..responses import body_limit, json_response, negotiate, problems, result_form
 from ..schemas import BatchRequest, BatchResult, JobStatus
 from ..security import ReadAccess
 
@@ -30,23 +31,34 @@ JobId = Annotated[str, Path(description="Job id from the Location header of a 20
 PreferHeader = Annotated[str | None, Header(description="respond-async: always answer 202 with a job.")]
 ToolPointQuery = Annotated[str | None, Query(pattern=r"^[hlnp](,[hlnp]){0,3}$", description=(
     "Receptances to return in each result's tool_point, e.g. h (a third of the size); default h,l,n,p."))]
+ResultAccept = Annotated[str | None, Header(alias="accept", description=(
+    "The result's form: application/json (default), application/x-hdf5 or application/vnd.apache.parquet "
+    "(the server needs the extra rcsa[parquet]); the same numbers to the last bit. A job writes the form asked "
+    "for when it was submitted."))]
+#: OpenAPI ``content`` of a result that may be binary.
+BINARY_RESULT = {MEDIA_TYPES["hdf5"]: {"schema": {"type": "string", "format": "binary"}},
+                 MEDIA_TYPES["parquet"]: {"schema": {"type": "string", "format": "binary"}}}
 
 
 @router.post("/tool-point-frf/batch", dependencies=[Depends(require_json)], response_model=BatchResult,
              openapi_extra=body_limit("batch"), responses={
-    202: {"model": JobStatus, "description": "Queued as a job; poll Location."}, **problems(401, 413, 415, 422),
+    200: {"description": "The results (BatchResult), or the same as HDF5 or Parquet (Accept).", "content": BINARY_RESULT},
+    202: {"model": JobStatus, "description": "Queued as a job; poll Location."}, **problems(401, 406, 413, 415, 422),
     **problems(429), **IDEMPOTENCY_PROBLEMS}, summary="Tool-point FRFs of many combinations")
 def predict_batch(body: BatchRequest, request: Request, state: StateDep, who: ReadAccess, prefer: PreferHeader = None,
-                  tool_point: ToolPointQuery = None, idempotency_key: IdempotencyKeyHeader = None) -> Response:
+                  tool_point: ToolPointQuery = None, idempotency_key: IdempotencyKeyHeader = None,
+                  accept: ResultAccept = None) -> Response:
     """One result per combination, in input order, each with its own ``status``.
 
     The spindle (and each distinct spindle + holder) is condensed once and reused. A bad
     combination gets ``status: error`` with the offending field and never fails the others.
     With ``Idempotency-Key``, a retry gets the first answer (the same job, for a large batch).
     """
+    fmt = result_form(accept)
     batch, refused = body.to_request()
-    work = prepare_batch(state.bench, batch, refused, tool_point.split(",") if tool_point else None)
-    return answer(state, work, prefer=prefer, idempotency_key=idempotency_key, owner=caller(who, request))
+    work = prepare_batch(state.bench, batch, refused, tool_point.split(",") if tool_point else None, fmt)
+    return answer(state, work, prefer=prefer, idempotency_key=idempotency_key, owner=caller(who, request),
+                  result_format=fmt)
 
 
 @router.get("/jobs/{job_id}", response_model=JobStatus, responses=problems(401, 404), summary="Job status")
@@ -58,15 +70,22 @@ def get_job(job_id: JobId, state: StateDep, _: ReadAccess) -> Response:
 
 
 @router.get("/jobs/{job_id}/result", response_class=FileResponse, responses={
-    200: {"description": "The job's result: a batch result (BatchResult) or a library result (LibraryResult).",
+    200: {"description": "The job's result: a batch result (BatchResult) or a library result (LibraryResult), "
+                         "or the same as HDF5 or Parquet when the job was submitted with that Accept.",
           "content": {"application/json": {"schema": {"oneOf": [{"$ref": "#/components/schemas/BatchResult"},
-                                                                {"$ref": "#/components/schemas/LibraryResult"}]}}}},
-    **problems(401, 404, 409, 410)}, summary="Result of a finished job")
-def get_job_result(job_id: JobId, state: StateDep, _: ReadAccess) -> Response:
+                                                                {"$ref": "#/components/schemas/LibraryResult"}]}},
+                      **BINARY_RESULT}},
+    **problems(401, 404, 406, 409, 410)}, summary="Result of a finished job")
+def get_job_result(job_id: JobId, state: StateDep, _: ReadAccess,
+                   accept: Annotated[str | None, Header(description=(
+                       "Any Accept that allows the form the job wrote (the Accept of the POST that started it: "
+                       "JSON, HDF5 or Parquet); 406 otherwise."))] = None) -> Response:
     """The result document of a succeeded job (``409`` while it runs or when it failed; ``410``
     once it was deleted to keep the kept results within their disk budget).
 
-    The file is sent in pieces as it is read (and ranges of it on request), never loaded whole.
+    The file is sent in pieces as it is read (and ranges of it on request), never loaded whole,
+    in the form the job was asked for when it was submitted (JSON unless its POST's ``Accept``
+    named HDF5 or Parquet).
     """
     job = state.jobs.get(job_id)
     if job.status == "succeeded" and job.result_evicted_utc is not None:
@@ -74,7 +93,13 @@ def get_job_result(job_id: JobId, state: StateDep, _: ReadAccess) -> Response:
                                 "job results within their disk budget (oldest first); submit the job again",
                            slug="job-result-evicted", title="Job result deleted", extra={"job": job_document(job)})
     if job.status == "succeeded":
-        return FileResponse(state.jobs.result_path(job_id), media_type="application/json")
+        written = state.jobs.request(job_id).get(RESULT_FORMAT_FIELD, "json") if job.kind in ("batch", "library") \
+            else "json"
+        media = MEDIA_TYPES[written]
+        negotiate(accept, (media,), f"the result of job {job_id} (written as asked when it was submitted)")
+        suffix = {"hdf5": ".h5", "parquet": ".parquet"}.get(written)
+        return FileResponse(state.jobs.result_path(job_id), media_type=media,
+                            filename=f"{job_id}{suffix}" if suffix else None)
     if job.status == "failed":
         error = job.error or {}
         raise ProblemError(409, f"job {job_id} failed: {error.get('detail', 'see its status')}", slug="job-failed",

@@ -61,12 +61,12 @@ from rcsa.app.presets import (
 from rcsa.errors import InputError
 from rcsa.infra.job_queue import QuotaExceeded
 
-from ..bodies import form_text, read_body, read_upload, validate_json
+from ..bodies import check_form_fields, form_json, form_text, form_uploads, read_body, validate_json
 from ..deps import StateDep
 from ..errors import ProblemError
 from ..idempotency import IDEMPOTENCY_PROBLEMS, IdempotencyKeyHeader, IdempotentRoute
 from ..jobs import accepted, answer, caller, pool, wants_async
-from ..responses import body_limit, json_response, problems
+from ..responses import body_limit, json_response, negotiate, problems, result_form
 from ..schemas import (
     Deleted,
     JobStatus,
@@ -79,6 +79,7 @@ from ..schemas import (
 )
 from ..security import ReadAccess, WriteAccess
 from ..state import AppState
+from .batches import BINARY_RESULT, ResultAccept
 
 router = APIRouter(prefix="/v1", tags=["tool libraries"], route_class=IdempotentRoute)
 
@@ -91,6 +92,8 @@ _FORM_FIELDS = {
     "measurement_id": "Instead of spindle: a stored measurement's id (hybrid).",
     "frequency": 'JSON: {"start_hz", "stop_hz", "step_hz"} or {"values_hz": [...]}, Hz.',
     "joints": 'JSON: {"spindle_holder": {...}, "holder_tool": {...}} applied to every tool (default rigid).',
+    "holder_tool": 'Every tool\'s holder-tool clamping, replacing the joints\' own: bonded, point, or JSON '
+                   '{"model": "contact", "interface_stiffness_n_m3": 5e13}.',
     "materials": "JSON: materials by name (added to steel and carbide).",
     "beam_theory": "timoshenko | euler_bernoulli.",
     "shear_coefficient": "hutchinson | cowper | a number.",
@@ -128,39 +131,48 @@ async def _library_inputs(request: Request, state: AppState) -> tuple[dict[str, 
 
 
 @router.post("/tool-libraries:predict", response_model=LibraryResult, openapi_extra=body_limit("library", _BODY), responses={
+    200: {"description": "The results (LibraryResult), or the same as HDF5 or Parquet (Accept).",
+          "content": BINARY_RESULT},
     202: {"model": JobStatus, "description": "Queued as a job; poll Location."},
-    **problems(400, 401, 413, 415, 422, 429), **IDEMPOTENCY_PROBLEMS}, summary="Tool-point FRFs of a Fusion tool library")
+    **problems(400, 401, 406, 413, 415, 422, 429), **IDEMPOTENCY_PROBLEMS},
+    summary="Tool-point FRFs of a Fusion tool library")
 async def predict_library(request: Request, state: StateDep, who: ReadAccess, prefer: PreferHeader = None,
-                          idempotency_key: IdempotencyKeyHeader = None) -> Response:
+                          idempotency_key: IdempotencyKeyHeader = None, accept: ResultAccept = None) -> Response:
     """One tool-point FRF per library tool that has a holder; the others skipped with a reason."""
+    fmt = result_form(accept)
     source, doc = await _library_inputs(request, state)
-    work = await run_in_threadpool(lambda: prepare_library(state.bench, **source, **doc))
+    work = await run_in_threadpool(lambda: prepare_library(state.bench, **source, result_format=fmt, **doc))
     return await run_in_threadpool(lambda: answer(state, work, prefer=prefer, idempotency_key=idempotency_key,
-                                                  owner=caller(who, request)))
+                                                  owner=caller(who, request), result_format=fmt))
+
+
+async def library_upload(form: Any, limit_bytes: int, *, holder: bool = True) -> dict[str, Any]:
+    """The library file of an upload form (and, with ``holder``, a FreeCAD holder file):
+    :func:`rcsa.app.libraries.prepare_library`'s ``library``, ``file_name``, ``content_type``,
+    ``holder`` and ``holder_name`` (also read by the web view's ``POST /v1/tool-libraries:entries``)."""
+    [(data, name, media)] = await form_uploads(form, "library", limit_bytes,
+                                               what="library file (.json, .tools, .fctb or a zip)")
+    source: dict[str, Any] = {"library": data, "file_name": name or None, "content_type": media}
+    if holder:
+        holders = await form_uploads(form, "holder", limit_bytes, least=0, most=1, what="holder file (.fcholder)")
+        if holders:
+            source["holder"], holder_name, _ = holders[0]
+            source["holder_name"] = holder_name or None
+    return source
 
 
 async def _from_form(form: Any, limit_bytes: int) -> tuple[dict[str, Any], dict[str, Any]]:
-    unknown = sorted(set(form.keys()) - set(_FORM_FIELDS))
-    if unknown:
-        raise InputError(unknown[0], f"unknown form field (allowed: {', '.join(_FORM_FIELDS)})")
-    files = form.getlist("library")
-    if len(files) != 1:
-        raise InputError("library", "send exactly one library file (.json, .tools, .fctb or a zip)")
-    data, name = await read_upload(files[0], "library", limit_bytes)
-    source: dict[str, Any] = {"library": data, "file_name": name or None,
-                              "content_type": getattr(files[0], "content_type", None)}
-    holders = form.getlist("holder")
-    if len(holders) > 1:
-        raise InputError("holder", "send at most one holder file (.fcholder)")
-    if holders:
-        source["holder"], holder_name = await read_upload(holders[0], "holder", limit_bytes)
-        source["holder_name"] = holder_name or None
+    check_form_fields(form, _FORM_FIELDS)
+    source = await library_upload(form, limit_bytes)
     doc: dict[str, Any] = {}
     for name in _FORM_FIELDS:
         text = form_text(form, name) if name not in ("library", "holder") else None
         if text is None or text == "":
             continue
-        if name in _JSON_FIELDS:
+        if name == "holder_tool":
+            doc[name] = decode_json(text, path=name, what="form field holder_tool") if text.lstrip().startswith("{") \
+                else text
+        elif name in _JSON_FIELDS:
             try:
                 doc[name] = decode_json(text, path=name, what=f"form field {name}")
             except InputError:
@@ -190,7 +202,7 @@ async def _from_form(form: Any, limit_bytes: int) -> tuple[dict[str, Any], dict[
 LibraryId = Annotated[str, Path(pattern=LIBRARY_ID_PATTERN.pattern, description=(
     "Your name for the library (1-128 letters, digits, '.', '_', '-'), e.g. the CAM library's name; each sync "
     "is compared with the previous sync under the same id."), examples=["bt40-mills"])]
-HDF5, ZIP, JSON = "application/x-hdf5", "application/zip", "application/json"
+HDF5, ZIP, JSON, PARQUET = "application/x-hdf5", "application/zip", "application/json", "application/vnd.apache.parquet"
 
 
 @router.post("/libraries/{library_id}:sync", response_model=SyncReport, openapi_extra=body_limit("library", _BODY), responses={
@@ -230,25 +242,30 @@ def get_library(library_id: LibraryId, state: StateDep, _: ReadAccess) -> Respon
 @router.get("/libraries/{library_id}/results", response_model=LibraryResult, responses={
     200: {"description": "application/json: the shape of a library prediction (one result per item, in library "
                          "order). application/x-hdf5: frequency_hz and each ok tool's complex h, l, n, p (schema "
-                         "rcsa.library-results). application/zip: index.json and one UFF 58 file (with a dataset "
-                         "164, SI) of the tool-point h per ok tool.",
+                         "rcsa.library-results). application/vnd.apache.parquet: one row per ok tool and line "
+                         "(needs the extra rcsa[parquet] on the server). application/zip: index.json and one UFF 58 "
+                         "file (with a dataset 164, SI) of the tool-point h per ok tool.",
           "content": {HDF5: {"schema": {"type": "string", "format": "binary"}},
+                      PARQUET: {"schema": {"type": "string", "format": "binary"}},
                       ZIP: {"schema": {"type": "string", "format": "binary"}}}},
-    **problems(401, 404, 406)}, summary="Results of a stored library (JSON, HDF5 or zip of UFF 58)")
+    **problems(401, 404, 406)}, summary="Results of a stored library (JSON, HDF5, Parquet or zip of UFF 58)")
 def get_library_results(
     library_id: LibraryId, state: StateDep, _: ReadAccess,
-    accept: Annotated[str | None, Header(description="application/json (default), application/x-hdf5 or "
-                                                     "application/zip.")] = None,
-    format: Annotated[Literal["json", "hdf5", "zip"] | None, Query(
+    accept: Annotated[str | None, Header(description="application/json (default), application/x-hdf5, "
+                                                     "application/vnd.apache.parquet or application/zip.")] = None,
+    format: Annotated[Literal["json", "hdf5", "zip", "parquet"] | None, Query(
         description="Instead of Accept (e.g. for a browser link).")] = None,
     tool_point: Annotated[str | None, Query(pattern=r"^[hlnp](,[hlnp]){0,3}$", description=(
         "JSON only: receptances to return in each result's tool_point, e.g. h; default h,l,n,p."))] = None,
 ) -> Response:
     """Every tool's stored result, fetched again by library id."""
-    media = {"json": JSON, "hdf5": HDF5, "zip": ZIP}[format] if format else _negotiate(accept)
+    media = {"json": JSON, "hdf5": HDF5, "zip": ZIP, "parquet": PARQUET}[format] if format else \
+        negotiate(accept, (JSON, HDF5, ZIP, PARQUET))
     if media == JSON:
         return json_response(state.bench.libraries.results(library_id, tool_point.split(",") if tool_point else None))
-    export = export_file(state.bench.libraries, library_id, "hdf5" if media == HDF5 else "zip")
+    if media == PARQUET:
+        result_form(PARQUET)  # 406 naming the extra when pyarrow is missing
+    export = export_file(state.bench.libraries, library_id, {HDF5: "hdf5", ZIP: "zip", PARQUET: "parquet"}[media])
     return Response(export.data, media_type=media,
                     headers={"Content-Disposition": f'attachment; filename="{export.file_name}"'})
 
@@ -258,30 +275,6 @@ def get_library_results(
 def delete_library(library_id: LibraryId, state: StateDep, _: WriteAccess) -> Response:
     """Forget a library and its per-tool status (the shared result cache keeps the results)."""
     return json_response(state.bench.libraries.delete(library_id))
-
-
-def _negotiate(accept: str | None, offered: tuple[str, ...] = (JSON, HDF5, ZIP), what: str = "results") -> str:
-    """The best of ``offered`` for an Accept header (the first when it says nothing); 406 when none."""
-    if not accept or not accept.strip():
-        return offered[0]
-    q: dict[str, float] = {}
-    for part in accept.split(","):
-        media, *params = [p.strip().lower() for p in part.split(";")]
-        weight = 1.0
-        for p in params:
-            if p.startswith("q="):
-                try:
-                    weight = float(p[2:])
-                except ValueError:
-                    weight = 0.0
-        q[media] = max(q.get(media, 0.0), weight)
-    wildcard = max(q.get("*/*", 0.0), q.get("application/*", 0.0))
-    ranked = [(q.get(m, wildcard), -i, m) for i, m in enumerate(offered)]
-    best = max(ranked)
-    if best[0] <= 0:
-        raise ProblemError(406, f"{what} are available as {' or '.join(offered)}; the Accept header {accept!r} "
-                                "allows none of them")
-    return best[2]
 
 
 # --------------------------------------------------------------------------- chatter-safe presets
@@ -329,13 +322,8 @@ async def _recommend_inputs(request: Request, limit_bytes: int) -> tuple[bytes, 
                                 "options as text fields (the file's bytes are kept exactly, so it cannot travel "
                                 "inside JSON)")
     try:
-        unknown = sorted(set(form.keys()) - set(_RECOMMEND_FIELDS))
-        if unknown:
-            raise InputError(unknown[0], f"unknown form field (allowed: {', '.join(_RECOMMEND_FIELDS)})")
-        files = form.getlist("library")
-        if len(files) != 1:
-            raise InputError("library", "send exactly one Fusion library file (.json or .tools)")
-        data, name = await read_upload(files[0], "library", limit_bytes)
+        check_form_fields(form, _RECOMMEND_FIELDS)
+        source = await library_upload(form, limit_bytes, holder=False)
         options: dict[str, Any] = {}
         for field in OPTION_FIELDS:
             text = form_text(form, field)
@@ -345,13 +333,13 @@ async def _recommend_inputs(request: Request, limit_bytes: int) -> tuple[bytes, 
                 options[field] = text.strip()
                 continue
             if field == "uncertainty":
-                options[field] = decode_json(text, path=field, what="the uncertainty form field")
+                options[field] = form_json(form, field)
                 continue
             try:
                 options[field] = float(text)
             except ValueError:
                 raise InputError(field, f"must be a number, got {text!r}") from None
-        return data, name or None, getattr(files[0], "content_type", None), options
+        return source["library"], source["file_name"], source["content_type"], options
     finally:
         await form.close()
 
@@ -385,7 +373,7 @@ async def recommend_presets(
     pockets are found (in chunks, on the Dask cluster when one is configured), and its result is
     the JSON report with the file.
     """
-    media = {"report": JSON, "file": OCTET}[format] if format else _negotiate(accept, (JSON, OCTET),
+    media = {"report": JSON, "file": OCTET}[format] if format else negotiate(accept, (JSON, OCTET),
                                                                                 "a recommendation's report and file")
     data, name, content_type, options = await _recommend_inputs(request, state.settings.max_upload_bytes)
     owner = caller(who, request)

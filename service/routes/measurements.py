@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Header, Path, Query, Request
@@ -11,7 +13,7 @@ from starlette.responses import Response
 from rcsa.app import measurements as M
 from rcsa.errors import InputError
 
-from ..bodies import form_text, read_body, read_upload, validate_json
+from ..bodies import check_form_fields, form_text, form_uploads, read_body, validate_json
 from ..deps import StateDep
 from ..errors import ProblemError
 from ..idempotency import IDEMPOTENCY_PROBLEMS, IdempotencyKeyHeader, IdempotentRoute, reservation
@@ -31,7 +33,8 @@ router = APIRouter(prefix="/v1/measurements", tags=["measurements"], route_class
 MeasurementId = Annotated[str, Path(description="Measurement id.", examples=["m-0123456789ab"])]
 HDF5 = "application/x-hdf5"
 
-_FORM_FIELDS = {
+#: The fields of a measurement upload form (also those of ``POST /v1/measurements:read``).
+UPLOAD_FIELDS = {
     "file": "The measurement file (repeat for several taps of format tap).",
     "format": "uff | csv | frf | json | tap (default: from the file name: .uff/.unv, .csv/.tsv, .frf, .json).",
     "spindle_id": "Spindle id (required except for JSON files that carry it).",
@@ -64,7 +67,7 @@ _UPLOAD_BODY = {"requestBody": {"required": True, "content": {
     "multipart/form-data": {"schema": {
         "type": "object", "required": ["file"],
         "properties": {name: ({"type": "string", "format": "binary", "description": text} if name == "file"
-                              else {"type": "string", "description": text}) for name, text in _FORM_FIELDS.items()},
+                              else {"type": "string", "description": text}) for name, text in UPLOAD_FIELDS.items()},
         "additionalProperties": False}}}}}
 
 
@@ -94,26 +97,60 @@ async def upload_measurement(request: Request, state: StateDep, _: WriteAccess,
     return json_response(info, status_code=201, headers={"Location": f"/v1/measurements/{info['id']}"})
 
 
+@dataclass(frozen=True)
+class MeasurementForm:
+    """A measurement file upload as a multipart form gives it (``POST /v1/measurements`` and
+    ``POST /v1/measurements:read``: one form, one reading).
+
+    Attributes
+    ----------
+    data : bytes
+        The (first) file.
+    file_name : str
+    format : str or None
+        The ``format`` field as sent.
+    extra_taps : list of bytes
+        Further files (taps averaged with the first).
+    metadata, options : dict
+        The metadata fields and the importer options as sent (text, None when absent).
+    """
+
+    data: bytes
+    file_name: str
+    format: str | None
+    extra_taps: list[bytes]
+    metadata: dict[str, str | None]
+    options: dict[str, str | None]
+
+    @property
+    def reading(self) -> dict[str, Any]:
+        """Keyword arguments of :func:`rcsa.app.measurements.import_measurement` (and
+        ``read_measurement``) besides the bytes."""
+        return {"file_name": self.file_name, "fmt": self.format, "metadata": self.metadata,
+                "options": self.options, "extra_taps": self.extra_taps}
+
+
+async def measurement_form(form: Any, allowed: Mapping[str, str], limit_bytes: int) -> MeasurementForm:
+    """Read a measurement upload form: unknown fields refused, the files (413 above
+    ``limit_bytes``), the metadata (:data:`rcsa.app.measurements.META_FIELDS`) and the importer
+    options (:data:`rcsa.app.measurements.IMPORT_OPTIONS`) as text."""
+    check_form_fields(form, allowed)
+    uploads = await form_uploads(form, "file", limit_bytes, most=None, what="measurement file")
+    (data, name, _), extra = uploads[0], [d for d, _, _ in uploads[1:]]
+    return MeasurementForm(data, name, form_text(form, "format"), extra,
+                           {k: form_text(form, k) for k in M.META_FIELDS},
+                           {k: form_text(form, k) for k in M.IMPORT_OPTIONS})
+
+
 async def _import(request: Request, kind: str, body: Any, fmt: str, state: AppState) -> dict[str, Any]:
     try:
         if kind == "json":
             upload = validate_json(MeasurementUpload, body)
             measurement = await run_in_threadpool(M.measurement_from_document, upload.to_document())
         else:
-            unknown = sorted(set(body.keys()) - set(_FORM_FIELDS))
-            if unknown:
-                raise InputError(unknown[0], f"unknown form field (allowed: {', '.join(_FORM_FIELDS)})")
-            files = body.getlist("file")
-            if not files:
-                raise InputError("file", "is required: the measurement file as a multipart part")
-            uploads = [await read_upload(f, "file", state.settings.max_upload_bytes) for f in files]
-            (data, name), extra = uploads[0], [d for d, _ in uploads[1:]]
-            stated = form_text(body, "format")
-            fmt = M.upload_format(name, stated)
-            metadata = {k: form_text(body, k) for k in M.META_FIELDS}
-            options = {k: form_text(body, k) for k in M.IMPORT_OPTIONS}
-            measurement = await run_in_threadpool(lambda: M.import_measurement(
-                data, file_name=name, fmt=stated, metadata=metadata, options=options, extra_taps=extra))
+            upload = await measurement_form(body, UPLOAD_FIELDS, state.settings.max_upload_bytes)
+            fmt = M.upload_format(upload.file_name, upload.format)
+            measurement = await run_in_threadpool(lambda: M.import_measurement(upload.data, **upload.reading))
     except (InputError, ProblemError):
         state.metrics.import_failures.labels(fmt).inc()
         raise

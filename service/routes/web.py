@@ -29,18 +29,18 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from starlette.responses import FileResponse, RedirectResponse, Response
 
 from rcsa.app import measurements as M
-from rcsa.app.inputs import decode_json
 from rcsa.app.libraries import library_entries as read_entries
 from rcsa.app.predictions import example_assembly
-from rcsa.errors import InputError
 
-from ..bodies import form_text, read_body, read_upload, validate_json
+from ..bodies import check_form_fields, form_json, read_body, validate_json
 from ..deps import StateDep
 from ..errors import ProblemError
 from ..responses import body_limit, json_response, problems
 from ..routing import ServiceRoute
 from ..schemas import Assembly, ComplexArray, LibraryOptions, MeasurementSource
 from ..security import ReadAccess
+from .libraries import library_upload
+from .measurements import UPLOAD_FIELDS, measurement_form
 
 router = APIRouter(route_class=ServiceRoute)
 
@@ -169,23 +169,17 @@ async def library_entries(request: Request, state: StateDep, _: ReadAccess) -> R
 
 
 async def _entries_form(form: Any, limit_bytes: int) -> tuple[bytes, str, LibraryOptions | None]:
-    unknown = sorted(set(form.keys()) - set(_ENTRIES_FIELDS))
-    if unknown:
-        raise InputError(unknown[0], f"unknown form field (allowed: {', '.join(_ENTRIES_FIELDS)})")
-    files = form.getlist("library")
-    if len(files) != 1:
-        raise InputError("library", "send exactly one library file (.json or .tools)")
-    data, name = await read_upload(files[0], "library", limit_bytes)
-    text = form_text(form, "options")
-    if not text:
-        return data, name, None
+    """The library upload of ``POST /v1/tool-libraries:predict`` (:func:`.libraries.library_upload`)
+    and its ``options`` field, validated by the same schema as the JSON body's."""
+    check_form_fields(form, _ENTRIES_FIELDS)
+    source = await library_upload(form, limit_bytes, holder=False)
+    options = form_json(form, "options")
+    if options is None:
+        return source["library"], source["file_name"], None
     try:
-        return data, name, LibraryOptions.model_validate(decode_json(text, path="options", what="form field options"))
-    except ValueError as exc:
-        if isinstance(exc, ValidationError):
-            raise RequestValidationError([{**e, "loc": ("body", "options", *e["loc"])}
-                                          for e in exc.errors()]) from None
-        raise InputError("options", f"must be a JSON object ({exc})") from None
+        return source["library"], source["file_name"], LibraryOptions.model_validate(options)
+    except ValidationError as exc:
+        raise RequestValidationError([{**e, "loc": ("body", "options", *e["loc"])} for e in exc.errors()]) from None
 
 
 # --------------------------------------------------------------------------- measurement files, not stored
@@ -206,14 +200,12 @@ class MeasurementRead(BaseModel):
     summary: dict[str, Any] = Field(description="Peak magnitude and frequency of every FRF.")
 
 
-_READ_FIELDS = {"file": "The measurement file (repeat for several taps of format tap).",
-                "format": "uff | csv | frf | json | tap (default: from the file name).",
-                **{k: f"As for POST /v1/measurements (optional here; default {v})." for k, v in
-                   (("spindle_id", "tap-test"), ("direction", "x, or a UFF file's own"),
-                    ("plane", "spindle_nose"), ("kind", "direct_frf"))},
-                **{k: "As for POST /v1/measurements." for k in M.META_FIELDS
-                   if k not in ("spindle_id", "direction", "plane", "kind")},
-                **dict.fromkeys(M.IMPORT_OPTIONS, "Importer option, as for POST /v1/measurements.")}
+#: The form of POST /v1/measurements, field for field (the same reading: :func:`.measurements.measurement_form`);
+#: the metadata a stored measurement needs is optional here.
+_READ_DEFAULTS = {"spindle_id": "tap-test", "direction": "x, or a UFF file's own", "plane": "spindle_nose",
+                  "kind": "direct_frf"}
+_READ_FIELDS = {name: (f"{text} Optional here; default {_READ_DEFAULTS[name]}." if name in _READ_DEFAULTS else text)
+                for name, text in UPLOAD_FIELDS.items()}
 _READ_BODY = {"requestBody": {"required": True, "content": {"multipart/form-data": {"schema": {
     "type": "object", "required": ["file"],
     "properties": {name: ({"type": "string", "format": "binary", "description": text} if name == "file"
@@ -234,18 +226,7 @@ async def read_measurement_file(request: Request, state: StateDep, _: ReadAccess
         raise ProblemError(415, "send the file as multipart/form-data (field file, and the importer options as "
                                 "form fields)")
     try:
-        unknown = sorted(set(form.keys()) - set(_READ_FIELDS))
-        if unknown:
-            raise InputError(unknown[0], f"unknown form field (allowed: {', '.join(_READ_FIELDS)})")
-        files = form.getlist("file")
-        if not files:
-            raise InputError("file", "is required: the measurement file as a multipart part")
-        uploads = [await read_upload(f, "file", state.settings.max_upload_bytes) for f in files]
-        (data, name), extra = uploads[0], [d for d, _ in uploads[1:]]
-        fmt = form_text(form, "format")
-        metadata = {k: form_text(form, k) for k in M.META_FIELDS}
-        options = {k: form_text(form, k) for k in M.IMPORT_OPTIONS}
+        upload = await measurement_form(form, _READ_FIELDS, state.settings.max_upload_bytes)
     finally:
         await form.close()
-    return json_response(await run_in_threadpool(lambda: M.read_measurement(
-        data, file_name=name, fmt=fmt, metadata=metadata, options=options, extra_taps=extra)))
+    return json_response(await run_in_threadpool(lambda: M.read_measurement(upload.data, **upload.reading)))

@@ -250,6 +250,14 @@
     if (!(option && option.dataset.plane === "holder_tip")) a.holder = holder;
     a.tool = entry ? entry.tool : ra1.tool;
     if ($("joints-ra1").checked) a.joints = ra1.joints;
+    const clamping = $("clamping").value;
+    if (clamping !== "point") {
+      a.joints = Object.assign({}, a.joints || {});
+      a.joints.holder_tool = clamping === "bonded" ? { model: "bonded" } : {
+        model: "contact",
+        interface_stiffness_n_m3: numberFrom("interface-stiffness", "Interface stiffness"),
+      };
+    }
     return a;
   }
 

@@ -33,12 +33,15 @@ from rcsa.physics.materials import BUILTIN_MATERIALS
 from rcsa.physics.sections import tube
 from rcsa.physics.segments import dynamic_stiffness
 from rcsa.reference import ra1
-from tests.analysis.test_joint_identification import RTOL_DAMPING, RTOL_STIFFNESS, TRUE
+from tests.analysis.test_joint_identification import TRUE
 
 GRID = {"start_hz": 300.0, "stop_hz": 4500.0, "step_hz": 2.0}
 SPEC = parse_assembly(ra1(GRID))
 F = SPEC.frequency_hz
 W = 2 * np.pi * F
+#: joint identification on a measured RA-1 spindle, 2x the README's figures (worst of the
+#: spindle kinds here: stiffness 1.2e-4, damping 9.2e-3 on artifact FRFs)
+RTOL_STIFFNESS, RTOL_DAMPING = 2.5e-4, 2e-2
 #: relative noise of the artifact FRFs (the exact identification amplifies it ~60× in places)
 ARTIFACT_NOISE = 0.0002
 

@@ -1,6 +1,6 @@
 """Joint identification on synthetic RA-1 measurements: accuracy, honesty, request checks, CLI.
 
-RA-1 is computed with the seed paper's Table 2 joint values (``domain.md`` §1.1 — they are
+RA-1 is computed with the seed paper's Table 2 joint values (``docs/physics.md`` §1.1 — they are
 RA-1's values), 1 % relative complex noise is added (seeded), and the identification starts
 3× off in both joints' k_t and c_t.
 """
@@ -23,8 +23,9 @@ from rcsa.reference import ra1
 TRUE = {"spindle_holder": {"stiffness_n_m": 3.05e7, "damping_ns_m": 365.0},
         "holder_tool": {"stiffness_n_m": 1.14e7, "damping_ns_m": 34.0}}
 NOISE = 0.01
-#: the brief's acceptance: stiffness within 5 %, damping within 20 %
-RTOL_STIFFNESS, RTOL_DAMPING = 0.05, 0.20
+#: 2x what the README states for these seeded cases (stiffnesses within 1e-4, dampings within
+#: 4e-3; measured 4.4e-5 and 3.1e-3) — far inside the brief's acceptance of 5 % and 20 %
+RTOL_STIFFNESS, RTOL_DAMPING = 2e-4, 8e-3
 
 
 def measured(stickout_m: float = 0.074, band_hz=(50.0, 5000.0), seed: int = 0, noise: float = NOISE,
@@ -246,3 +247,36 @@ def test_cli_bad_request_is_one_line(tmp_path):
     assert result.exit_code == 1
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: extra")
+
+
+@pytest.mark.slow
+def test_a_clamping_along_the_insertion_has_its_interface_stiffness_identified():
+    """A bonded base, tapped on a clamp three times softer than bonded (interface stiffness ×0.3):
+    the identification returns it as a reusable holder_tool joint, within its stated uncertainty."""
+    from rcsa.model.assembly import build_model
+    from rcsa.model.contract import parse_assembly
+    from rcsa.model.parameters import set_parameter
+    from rcsa.physics.elimination import tip_receptance
+
+    rng = np.random.default_rng(7)
+    base = ra1({"start_hz": 800.0, "stop_hz": 4500.0, "step_hz": 4.0})
+    base["joints"]["holder_tool"] = {"model": "bonded"}
+    measurements = []
+    for stickout in (0.060, 0.090):
+        doc = json.loads(json.dumps(base))
+        doc["tool"]["stickout_m"] = stickout
+        spec = set_parameter(parse_assembly(doc), "holder_tool.interface_stiffness_scale", 0.3)
+        h = tip_receptance(build_model(spec).chain(), 2 * np.pi * spec.frequency_hz)[:, 0, 0]
+        h = h * (1 + 0.01 * (rng.standard_normal(h.size) + 1j * rng.standard_normal(h.size)) / np.sqrt(2))
+        measurements.append({"tool": {"stickout_m": stickout}, "frequency_hz": spec.frequency_hz.tolist(),
+                             "h": {"real": h.real.tolist(), "imag": h.imag.tolist()}})
+    out = identify({"assembly": base, "measurements": measurements})
+    assert out["status"] == "identified", out.get("detail")
+    got = out["joints"]["holder_tool"]
+    assert got["model"] == "bonded" and got["interface_stiffness_scale"] == pytest.approx(0.3, rel=2e-3)
+    assert abs(got["interface_stiffness_scale"] - 0.3) <= 5 * got["uncertainty"]["interface_stiffness_scale"]
+    assert "stiffness_n_m" not in got
+    # the identified joint is a valid holder_tool joint of the contract: predicting with it reproduces the tap
+    reuse = json.loads(json.dumps(base))
+    reuse["joints"]["holder_tool"] = {k: v for k, v in got.items() if k != "uncertainty"}
+    assert predict(reuse).tool_point.h.shape == (926,)

@@ -12,6 +12,7 @@ import os
 import socket
 import threading
 import time
+from collections.abc import Iterator
 
 import orjson
 import pytest
@@ -48,10 +49,13 @@ class _LockedStore:
             return self._store.get(measurement_id)
 
 
-def _free_port() -> int:
+@pytest.fixture
+def nobody_listens() -> Iterator[str]:
+    """A loopback address where connections are refused for the whole test: its port stays
+    bound by this socket, which never listens, so no other process can start a server there."""
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+        yield f"tcp://127.0.0.1:{s.getsockname()[1]}"
 
 
 @pytest.fixture(scope="module")
@@ -135,6 +139,7 @@ def test_a_sync_on_dask_is_bit_identical_and_a_killed_worker_loses_nothing(tmp_p
         orjson.dumps(local_libs.results("shop")["results"], option=orjson.OPT_SERIALIZE_NUMPY)
 
 
+@pytest.mark.slow
 def test_losing_the_scheduler_fails_the_job_with_the_reason(tmp_path, monkeypatch):
     monkeypatch.setattr(library_sync, "compute_chunk", dask_helpers.compute_chunk_slowly)
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
@@ -148,7 +153,7 @@ def test_losing_the_scheduler_fails_the_job_with_the_reason(tmp_path, monkeypatc
         runner = JobRunner(jobs, job_handlers(bench), heartbeat_s=0.2)
         worker = threading.Thread(target=runner.run_one)
         worker.start()
-        deadline = time.monotonic() + 20
+        deadline = time.monotonic() + 300
         while jobs.get(job.id).status == "queued" and time.monotonic() < deadline:
             time.sleep(0.05)
         time.sleep(0.5)
@@ -161,20 +166,20 @@ def test_losing_the_scheduler_fails_the_job_with_the_reason(tmp_path, monkeypatc
     backend.close()
 
 
-def test_a_missing_scheduler_is_a_clear_error_not_a_hang():
-    address = f"tcp://127.0.0.1:{_free_port()}"
+def test_a_missing_scheduler_is_a_clear_error_not_a_hang(nobody_listens):
+    address = nobody_listens
     with pytest.raises(ComputeUnavailable, match=f"cannot reach the Dask scheduler at {address} within 1 s"):
         compute_backend(address, connect_timeout_s=1)
 
 
-def test_service_and_cli_refuse_to_start_on_a_missing_scheduler(tmp_path, monkeypatch):
+def test_service_and_cli_refuse_to_start_on_a_missing_scheduler(tmp_path, monkeypatch, nobody_listens):
     from service.main import create_app
     from typer.testing import CliRunner
 
     from rcsa.cli import app as cli
     from tests.service.conftest import TestClient, settings_for
 
-    address = f"tcp://127.0.0.1:{_free_port()}"
+    address = nobody_listens
     app = create_app(settings_for(tmp_path / "store", dask_scheduler=address, dask_connect_timeout_s=1))
     with pytest.raises(ComputeUnavailable, match="cannot reach the Dask scheduler"), TestClient(app):
         pass

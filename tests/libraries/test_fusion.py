@@ -378,7 +378,6 @@ def test_default_holder_by_guid_for_tools_without_one():
 
 @pytest.mark.parametrize(("geometry", "field"), [
     ({"LB": 80}, "geometry.LB"),                       # LB > OAL 72
-    ({"LB": 72}, "geometry.LB"),                       # nothing left to clamp
     ({"LCF": 45}, "geometry.LCF"),                     # LCF > LB 40
     ({"DC": None}, "geometry.DC"),
     ({"OAL": None}, "geometry.OAL"),
@@ -393,6 +392,17 @@ def test_validation_failures_name_the_field_and_spare_the_others(geometry, field
     bad, good = result.combinations
     assert bad.status == "error" and bad.reason.startswith(f"{field}:"), bad.reason
     assert good.status == "ok"
+
+
+def test_a_tool_whose_whole_length_is_below_the_holder_is_face_mounted():
+    """LB = OAL: a shell or face mill on an arbor, on the holder's face (joints.holder_tool: the face
+    contact); the holder is solid (no bore for a shank that is not there)."""
+    item = tool_item(LB=72)
+    face = library_combinations(lib(item)).combinations[0]
+    assert face.status == "ok" and any("face-mounted" in w for w in face.warnings)
+    assert face.tool["stickout_m"] == face.tool["overall_length_m"]
+    assert all(s["inner_diameter_m"] == 0.0 for s in face.holder["segments"])
+    assert not any("shallow insertion" in w for w in face.warnings)
 
 
 def test_inch_tool_missing_oal_is_an_error():

@@ -1,8 +1,10 @@
-"""The result-cache key follows the physics by itself: the model fingerprint is the source.
+"""The result-cache key follows the physics by itself: the model fingerprint is the code's meaning.
 
-``model_fingerprint(root)`` hashes every module that determines a prediction; a copy of the
-package with one byte changed in the segment solver must give another fingerprint (and so
-other result keys), an unchanged copy the same one.
+``model_fingerprint(root)`` hashes the syntax tree (docstrings left out) of every module that
+determines a prediction; a copy of the package with one number changed in the segment solver
+must give another fingerprint (and so other result keys), an unchanged copy the same one, and
+a copy whose docstrings, comments or layout changed the same one too (stored results stay
+valid across a documentation commit).
 """
 
 from __future__ import annotations
@@ -64,7 +66,33 @@ def test_every_model_source_counts(copy, path):
     target = copy / path
     target.parent.mkdir(parents=True, exist_ok=True)
     with target.open("a", encoding="utf-8") as fh:
-        fh.write("\n# changed\n")
+        fh.write("\nCHANGED = 1\n")
+    assert model_fingerprint(copy) != before
+
+
+def test_a_docstring_comment_or_layout_change_keeps_the_fingerprint_and_the_keys(copy, monkeypatch):
+    before = model_fingerprint(copy)
+    segments = copy / "physics" / "segments.py"
+    text = segments.read_text(encoding="utf-8")
+    first_def = text.index('    """', text.index("\ndef segment_terms("))
+    text = text[:first_def] + '    """Reworded: a docstring says nothing the interpreter runs.\n\n' + \
+        text[first_def + len('    """'):]
+    text = text.replace('"""Exact', '"""Exactly', 1)                 # the module docstring
+    text = text.replace("MAX_DECAY_PER_PIECE = 3.0", "MAX_DECAY_PER_PIECE = (  # a comment\n    3.0\n)")
+    segments.write_text("# a new first comment line\n" + text, encoding="utf-8")
+    assert segments.read_text(encoding="utf-8") != (PACKAGE / "physics" / "segments.py").read_text(encoding="utf-8")
+    assert model_fingerprint(copy) == before
+    assert _key(monkeypatch, model_fingerprint(copy)) == _key(monkeypatch, before)
+
+
+@pytest.mark.parametrize(("old", "new"), [("MAX_DECAY_PER_PIECE = 3.0", "MAX_DECAY_PER_PIECE = 3.5"),
+                                          ("MAX_DECAY_PER_PIECE = 3.0", "MAX_DECAY_PER_PIECE = 3"),
+                                          ("MAX_DECAY_PER_PIECE = 3.0", 'MAX_DECAY_PER_PIECE = 3.0\n"""a string"""')])
+def test_a_change_of_meaning_changes_the_fingerprint(copy, old, new):
+    # an int for a float, or a string statement that is not a docstring, are changes of meaning
+    before = model_fingerprint(copy)
+    segments = copy / "physics" / "segments.py"
+    segments.write_text(segments.read_text(encoding="utf-8").replace(old, new, 1), encoding="utf-8")
     assert model_fingerprint(copy) != before
 
 

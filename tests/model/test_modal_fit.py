@@ -87,7 +87,7 @@ def test_noise_free_ra1_frf_gives_its_dominant_modes():
     exact = rcsa.predict(ra1({"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 1.0}))
     fit = modal_fit(exact.frequency_hz, exact.tool_point.h)
     assert_sorted_and_distinct(fit)
-    # the dominant damped resonances (599, 1386, 4034 Hz, domain.md §1.5), sharply determined
+    # the dominant damped resonances (599, 1386, 4034 Hz, docs/physics.md §1.5), sharply determined
     for peak in (599.0, 1386.0, 4034.0):
         k = int(np.argmin(np.abs(fit.frequency_hz - peak)))
         assert abs(fit.frequency_hz[k] - peak) < 3.0 and fit.sd_hz[k] < 0.5
@@ -99,7 +99,7 @@ TAP = SHARED_DATA / "leekunhwee-tool-tap" / "Point_1_Channel_1_CH1.txt"
 
 
 @pytest.mark.skipif(not TAP.is_file(), reason=f"third-party tap-test data not present at {TAP.parent} "
-                                              "(unlicensed, kept outside the repository)")
+                                              "(unlicensed, kept outside the repository; set RCSA_SHARED_DATA)")
 @pytest.mark.parametrize("plane", ["holder_tip", "spindle_nose"])
 def test_real_tap_test_as_a_spindle_gives_sorted_distinct_frequencies(tmp_path, plane):
     store = MeasurementStore(tmp_path / "store")

@@ -6,6 +6,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 
 from rcsa.model.peaks import find_frf_peaks, peak_lines
 
@@ -26,6 +27,7 @@ def test_frf_peaks_are_relative_to_the_largest_peak():
     assert find_frf_peaks(f[:2], h[:2]) == []
 
 
+@pytest.mark.slow
 def test_import_rcsa_does_not_import_scipy_signal():
     code = "import sys, rcsa, rcsa.analysis.diagnosis; sys.exit('scipy.signal' in sys.modules)"
     assert subprocess.run([sys.executable, "-c", code], check=False).returncode == 0

@@ -1,6 +1,6 @@
 """Self-tests of the independent Timoshenko FE oracle against textbook and verified values.
 
-References: ``domain.md`` §6 (oracles O1-O5, O10-O12, O16), §1.4-1.5 (RA-1), §2.9. The FE
+References: ``docs/physics.md`` §6 (oracles O1-O5, O10-O12, O16), §1.4-1.5 (RA-1), §2.9. The FE
 converges as h^4 for Euler-Bernoulli and as h^2 for Timoshenko (interdependent interpolation
 with consistent mass), which sets the tolerances below; Richardson extrapolation
 ``(4 f(h/2) - f(h)) / 3`` removes the h^2 term and shows convergence to the exact values.
@@ -18,12 +18,11 @@ import pytest
 from tests.oracles import fe_assembly as fa
 from tests.oracles import timoshenko_fe as fe
 
-# RA-1 files: the copy in the repository (tests/data/ra1), else the shared research data
-_DATA_CANDIDATES = (Path(__file__).resolve().parents[1] / "data" / "ra1", Path("/work/shared/data/ra1"))
-DATA = next((p for p in _DATA_CANDIDATES if (p / "ra1_tool_point_h.csv").is_file()), _DATA_CANDIDATES[0])
+# RA-1 files: the copy in the repository (tests/data/ra1/README.md says where they come from)
+DATA = Path(__file__).resolve().parents[1] / "data" / "ra1"
 STEEL = {"youngs_modulus_pa": 210e9, "poisson_ratio": 0.30, "density_kg_m3": 7850.0}
 
-# domain.md §1.5, undamped natural frequencies of RA-1 (Hz)
+# docs/physics.md §1.5, undamped natural frequencies of RA-1 (Hz)
 RA1_FE_HZ = [599.85, 921.69, 1115.51, 1383.61, 1444.68, 3115.97, 4025.99, 5102.89, 6080.99, 7717.86]
 RA1_EXACT_HZ = [599.85, 921.69, 1115.51, 1383.61, 1444.68, 3115.94, 4025.97, 5102.79, 6080.83, 7717.51]
 RA1_VARIANTS_HZ = {  # each variant's own modes (exact RCSA), ascending, below 10 kHz
@@ -33,7 +32,7 @@ RA1_VARIANTS_HZ = {  # each variant's own modes (exact RCSA), ascending, below 1
     "flutes_equal_d": [590.33, 921.41, 1102.03, 1284.08, 1444.53, 3115.79, 3711.57, 5099.47, 6075.12,
                        7717.04],
 }
-# domain.md §1.5 regression table: f_hz, H, L (= N), P (damped tool point, 5 significant digits)
+# docs/physics.md §1.5 regression table: f_hz, H, L (= N), P (damped tool point, 5 significant digits)
 RA1_TOOL_POINT_TABLE = [
     (100, 4.1901e-7 - 1.3918e-9j, 4.9194e-6 - 1.2373e-8j, 1.5062e-4 - 3.2210e-7j),
     (500, 7.6894e-7 - 3.9965e-8j, 6.4028e-6 - 1.4069e-7j, 1.5856e-4 - 8.1761e-7j),
@@ -89,7 +88,7 @@ def ra1_fe_h(ra1_reference_h):
 
 
 def test_shear_coefficients_match_closed_forms():
-    # solid circle, nu = 0.3: Hutchinson 6 * 1.69 / 10.96 = 0.9251825 (domain.md §2.6 prints
+    # solid circle, nu = 0.3: Hutchinson 6 * 1.69 / 10.96 = 0.9251825 (docs/physics.md §2.6 prints
     # 0.925185, 3e-6 higher: a rounding slip there), Cowper 7.8 / 8.8 = 0.8864 (printed)
     np.testing.assert_allclose(fe.hutchinson_shear_coefficient(0.3), 6 * 1.69 / 10.96, rtol=1e-14, atol=0.0)
     np.testing.assert_allclose(fe.hutchinson_shear_coefficient(0.3), 0.925185, rtol=5e-6, atol=0.0)
@@ -138,7 +137,7 @@ def test_mass_matrix_reduces_to_the_classical_hermite_matrices():
 
 
 # ---------------------------------------------------------------------------------------
-# Textbook beams (domain.md §6, O1-O5)
+# Textbook beams (docs/physics.md §6, O1-O5)
 # ---------------------------------------------------------------------------------------
 
 
@@ -158,7 +157,7 @@ def test_o2_euler_bernoulli_clamped_free():
 
 
 def _hinged_hinged_timoshenko_hz(diameter_m: float, length_m: float, modes: int) -> np.ndarray:
-    """Closed form of domain.md §2.9 (code_aster V2.04.302)."""
+    """Closed form of docs/physics.md §2.9 (code_aster V2.04.302)."""
     area, second_moment = fe.solid_circle_section_properties(diameter_m)
     e, rho = STEEL["youngs_modulus_pa"], STEEL["density_kg_m3"]
     kga = fe.hutchinson_shear_coefficient(0.3) * e / 2.6 * area
@@ -206,7 +205,7 @@ def test_o4_o5_free_free(diameter_m, length_m, theory, fmax_hz, expected_hz):
 
 
 # ---------------------------------------------------------------------------------------
-# RA-1 (domain.md §1.4-1.5, O10-O12, O16)
+# RA-1 (docs/physics.md §1.4-1.5, O10-O12, O16)
 # ---------------------------------------------------------------------------------------
 
 
@@ -219,7 +218,7 @@ def test_ra1_component_masses():
         u[[built.model.node_dofs[n][0] for n in built.outer_nodes[component][0]]] = 1.0
         return u @ mass @ u
 
-    # domain.md §1.4 prints 14.41, 1.073 and 0.119 kg: tolerances are half a printed unit
+    # docs/physics.md §1.4 prints 14.41, 1.073 and 0.119 kg: tolerances are half a printed unit
     np.testing.assert_allclose(translation_mass_kg("spindle"), 14.41, rtol=0.0, atol=0.005)
     np.testing.assert_allclose(translation_mass_kg("holder"), 1.073, rtol=0.0, atol=0.0005)
     np.testing.assert_allclose(translation_mass_kg("tool"), 0.119, rtol=0.0, atol=0.0005)
@@ -285,7 +284,7 @@ def test_o12_ra1_tool_point_table(ra1_reference_h, ra1_fe_h, row):
                                   ("N", g[1, 0], row[2]), ("P", g[1, 1], row[3])):
         # 5 significant digits on each part: compare at 2e-4 of the entry's magnitude
         np.testing.assert_allclose(value, expected, rtol=0.0, atol=2e-4 * abs(expected),
-                                   err_msg=f"{name} at {row[0]} Hz vs domain.md §1.5")
+                                   err_msg=f"{name} at {row[0]} Hz vs docs/physics.md §1.5")
 
 
 def test_ra1_receptance_is_reciprocal_and_passive(ra1_fe_h):

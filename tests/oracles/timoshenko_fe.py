@@ -12,7 +12,7 @@ check of it. It provides
 * solvers: undamped natural frequencies (``scipy.linalg.eigh``) and harmonic receptances
   by a banded solve per frequency.
 
-Conventions (``domain.md`` §2.1): global axis x from the spindle rear to the tool tip; per
+Conventions (``docs/physics.md`` §2.1): global axis x from the spindle rear to the tool tip; per
 node a lateral displacement ``w`` (m) and a section rotation ``psi`` (rad, counter-clockwise
 positive, ``psi = dw/dx`` for Euler-Bernoulli); time dependence ``exp(i omega t)``. Material
 damping is hysteretic, ``E(1 + i eta)`` and ``G(1 + i eta)``, i.e. complex ``EI`` and
@@ -28,7 +28,7 @@ Hutchinson J.R., J. Appl. Mech. 68 (2001) 87-92; Cowper G.R., J. Appl. Mech. 33 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Literal
 
@@ -82,7 +82,7 @@ class Section:
     rotary_inertia_kg_m: float
 
     def __add__(self, other: Section) -> Section:
-        """Parallel (composite) stacking: every property adds (``domain.md`` §2.6)."""
+        """Parallel (composite) stacking: every property adds (``docs/physics.md`` §2.6)."""
         return Section(
             self.bending_stiffness_nm2 + other.bending_stiffness_nm2,
             self.shear_stiffness_n + other.shear_stiffness_n,
@@ -190,7 +190,7 @@ def shear_parameter(length_m: float, section: Section, theory: BeamTheory = "tim
 
 def element_stiffness(length_m: float, section: Section,
                       theory: BeamTheory = "timoshenko") -> np.ndarray:
-    """Static-exact two-node Timoshenko stiffness matrix (``domain.md`` §2.4).
+    """Static-exact two-node Timoshenko stiffness matrix (``docs/physics.md`` §2.4).
 
     Parameters
     ----------
@@ -466,8 +466,16 @@ class BeamModel:
     def add_distributed_springs(self, nodes_a: Sequence[int], nodes_b: Sequence[int], *,
                                 translational_n_m2: complex = 0.0, translational_ns_m2: float = 0.0,
                                 rotational_nm_rad_m: complex = 0.0,
-                                rotational_nms_rad_m: float = 0.0) -> None:
+                                rotational_nms_rad_m: float = 0.0,
+                                sections: tuple[Section, Section] | Callable[[float], tuple[Section, Section]]
+                                | None = None,
+                                theory: BeamTheory = "timoshenko") -> None:
         """Distributed spring layer between two parallel, identically meshed beams.
+
+        The layer's energy is ``½∫ k (w_a − w_b)² + k_r (psi_a − psi_b)² dx``, each beam's
+        ``w`` and ``psi`` interpolated with its own element's functions (:func:`shape_functions`
+        with its shear parameter, given ``sections``; the cubic Hermite functions without, which
+        act on the slope ``w'`` rather than the section rotation of a shear-flexible beam).
 
         Parameters
         ----------
@@ -477,6 +485,11 @@ class BeamModel:
             Stiffness and viscous damping per unit length of the lateral contact.
         rotational_nm_rad_m, rotational_nms_rad_m : complex, float
             Stiffness and damping per unit length acting on the relative section rotation.
+        sections : (Section, Section) or callable, optional
+            The two beams' sections over the contact (their interpolations), or a function of
+            an element's mid-point x (m) giving them.
+        theory : {"timoshenko", "euler_bernoulli"}
+            Beam theory of both beams.
         """
         if len(nodes_a) != len(nodes_b) or len(nodes_a) < 2:
             raise ValueError("distributed springs need two node chains of equal length >= 2")
@@ -486,11 +499,21 @@ class BeamModel:
             raise ValueError("distributed springs need the two beams meshed at the same x positions")
         for i in range(len(nodes_a) - 1):
             ell = xa[i + 1] - xa[i]
-            stiff = element_winkler(ell, translational_n_m2, rotational_nm_rad_m)
-            damp = element_winkler(ell, translational_ns_m2, rotational_nms_rad_m).real
+            pair = sections(0.5 * (xa[i] + xa[i + 1])) if callable(sections) else sections
+            phis = (0.0, 0.0) if pair is None else tuple(
+                float(np.real(shear_parameter(ell, Section(s.bending_stiffness_nm2.real, s.shear_stiffness_n.real,
+                                                           0.0, 0.0), theory))) for s in pair)
+            n_w_a, n_psi_a = shape_functions(_GAUSS_XI, ell, phis[0])
+            n_w_b, n_psi_b = shape_functions(_GAUSS_XI, ell, phis[1])
+            # relative motion w_a − w_b and psi_a − psi_b over the 8 DOFs (beam a's 4, then b's 4)
+            rel_w = np.concatenate([n_w_a, -n_w_b], axis=1)
+            rel_psi = np.concatenate([n_psi_a, -n_psi_b], axis=1)
+            q = _GAUSS_W * ell
+            ww = np.einsum("q,qi,qj->ij", q, rel_w, rel_w)
+            pp = np.einsum("q,qi,qj->ij", q, rel_psi, rel_psi)
             dofs = self.dofs_of(nodes_a[i:i + 2]) + self.dofs_of(nodes_b[i:i + 2])
-            self.add_stiffness(dofs, np.block([[stiff, -stiff], [-stiff, stiff]]))
-            self.add_damping(dofs, np.block([[damp, -damp], [-damp, damp]]))
+            self.add_stiffness(dofs, translational_n_m2 * ww + rotational_nm_rad_m * pp)
+            self.add_damping(dofs, (translational_ns_m2 * ww + rotational_nms_rad_m * pp).real)
 
     def fix(self, node: int, *, w: bool = True, psi: bool = True) -> None:
         """Clamp (remove) the node's ``w`` and/or ``psi`` DOF."""

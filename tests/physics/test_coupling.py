@@ -1,9 +1,10 @@
 """Coupling functions against assembled truth systems and against each other.
 
-* SDynPy-style truth (style.md §9.11): random lumped M/C/K substructures with 2 DOFs per
-  node; coupled receptances must equal the inverse of the directly assembled system.
+* SDynPy-style truth (a system assembled directly, as SDynPy's tests do): random lumped M/C/K
+  substructures with 2 DOFs per node; coupled receptances must equal the inverse of the
+  directly assembled system.
 * O8 split-beam identity, O9 Budak form vs general LM-FBS, O13 RCSA path vs dynamic
-  stiffness on RA-1 (``domain.md`` §6).
+  stiffness on RA-1 (``docs/physics.md`` §6).
 """
 
 from __future__ import annotations
@@ -100,7 +101,7 @@ def test_modify_equals_added_stiffness(rng):
 
 
 def test_o8_split_beam_identity():
-    # Rigid coupling of 150 + 250 mm equals one 400 mm beam (domain.md O8: ≤1e-10).
+    # Rigid coupling of 150 + 250 mm equals one 400 mm beam (docs/physics.md O8: ≤1e-10).
     section = tube(0.05, 0.0, BUILTIN_MATERIALS["steel"])
     w = 2 * np.pi * np.array([5.0, 90.0, 1500.0, 7000.0, 30000.0])
     whole = free_free_receptance(w, section, 0.4)
@@ -109,7 +110,7 @@ def test_o8_split_beam_identity():
 
 
 def test_reversed_piece_needs_the_frame_flip():
-    # domain.md §3.6: a component described with its own axis reversed must be transformed by
+    # docs/physics.md §3.6: a component described with its own axis reversed must be transformed by
     # J T R T J (node order reversed, rotations negated) before coupling; then it is exact.
     steel = BUILTIN_MATERIALS["steel"]
     w = 2 * np.pi * np.array([40.0, 2200.0])
@@ -145,18 +146,20 @@ def ra1_model():
     return build_model(parse_assembly(ra1()))
 
 
-@pytest.mark.parametrize("f_hz, rtol", [(10.0, 1e-8), (100.0, 1e-10), (900.0, 1e-10), (2500.0, 1e-10),
-                                        (6000.0, 1e-10)])
+@pytest.mark.parametrize("f_hz, rtol", [(10.0, 1e-8), (100.0, 5e-11), (900.0, 1e-12), (2500.0, 1e-12),
+                                        (6000.0, 1e-12)])
 def test_o13_receptance_path_equals_dynamic_stiffness(ra1_model, f_hz, rtol):
     # RCSA path (free-free receptances, LM-FBS spindle, Özgüven bearings, Budak joints) vs
-    # the dynamic-stiffness elimination: 1e-8 at ≥10 Hz, 1e-10 at ≥100 Hz (domain.md O13).
+    # the dynamic-stiffness elimination. docs/physics.md §6 O13 asks for 1e-8 at ≥10 Hz, 1e-10 at
+    # ≥100 Hz; measured elementwise 9.2e-9 at 10 Hz, 2.0e-11 at 100 Hz, ≤ 7.8e-14 from 900 Hz
+    # on (README), asserted at 1e-8, 5e-11 and 1e-12 (rounding of a 2×2 inverse chain).
     w = np.array([2 * np.pi * f_hz])
     assert_receptance_close(tool_point_receptance(ra1_model, w), tip_receptance(ra1_model.chain(), w),
                             rtol=rtol, atol_scale=rtol)
 
 
 def test_spindle_nose_stiffness(ra1_model):
-    # domain.md §1.5: quasi-static (5 Hz) spindle-nose stiffness 1.088e8 N/m, holder tip 1.560e7.
+    # docs/physics.md §1.5: quasi-static (5 Hz) spindle-nose stiffness 1.088e8 N/m, holder tip 1.560e7.
     w = np.array([2 * np.pi * 5.0])
     s = spindle_nose_receptance(ra1_model.spindle, w)
     assert 1 / s[0, 0, 0].real == pytest.approx(1.088e8, rel=1e-3)

@@ -1,5 +1,5 @@
 """Segment receptances against independent forms: matrix exponential, static stiffness,
-Euler–Bernoulli closed forms (Bishop & Johnson, ``domain.md`` §2.5) and rigid-body limits."""
+Euler–Bernoulli closed forms (Bishop & Johnson, ``docs/physics.md`` §2.5) and rigid-body limits."""
 
 from __future__ import annotations
 
@@ -22,7 +22,7 @@ DAMPED_STEEL = Material(210e9, 0.30, 7850.0, 0.01)
 
 
 def expm_transfer(omega: float, section, length_m: float) -> np.ndarray:
-    """T = expm(A L) of the first-order state equations (``domain.md`` §2.3), scaled state."""
+    """T = expm(A L) of the first-order state equations (``docs/physics.md`` §2.3), scaled state."""
     ei, fs, ra, ri = section.ei, section.shear_flexibility, section.rho_a, section.rho_i
     a = np.array([[0, 1, fs, 0], [0, 0, 0, 1 / ei], [-ra * omega**2, 0, 0, 0], [0, -ri * omega**2, -1, 0]],
                  dtype=complex)
@@ -33,7 +33,7 @@ def expm_transfer(omega: float, section, length_m: float) -> np.ndarray:
 
 @pytest.mark.parametrize("material", [STEEL, DAMPED_STEEL], ids=["undamped", "eta=0.01"])
 def test_transfer_matrix_equals_matrix_exponential_across_cutoff(material):
-    # Ø50×400 mm steel, 10 Hz–60 kHz, across its 39.3 kHz shear cut-off (domain.md §2.9:
+    # Ø50×400 mm steel, 10 Hz–60 kHz, across its 39.3 kHz shear cut-off (docs/physics.md §2.9:
     # 3.5e-9 agreement); expm is accurate to ~1e-12 on the scaled state, so 1e-8 leaves margin.
     section = tube(0.05, 0.0, material)
     f_hz = np.array([10.0, 100.0, 1e3, 5e3, 2e4, 39e3, 39.3e3, 39.4e3, 6e4])
@@ -69,14 +69,14 @@ def test_receptance_inverts_dynamic_stiffness_and_both_are_symmetric(material):
 
 
 def test_dynamic_stiffness_tends_to_the_static_timoshenko_matrix():
-    # domain.md §2.4: D(ω→0) equals the exact static stiffness (3e-9 at 0.01 Hz there).
+    # docs/physics.md §2.4: D(ω→0) equals the exact static stiffness (3e-9 at 0.01 Hz there).
     section = tube(0.05, 0.0, STEEL)
     d = dynamic_stiffness(np.array([2 * np.pi * 0.01]), section, 0.3)[0]
     assert_receptance_close(d, static_stiffness(section, 0.3), rtol=1e-7, atol_scale=1e-9)
 
 
 def bishop_eb_receptance(omega: np.ndarray, ei: float, rho_a: float, length_m: float) -> np.ndarray:
-    """Closed-form Euler–Bernoulli free-free receptance in our convention (``domain.md`` §2.5)."""
+    """Closed-form Euler–Bernoulli free-free receptance in our convention (``docs/physics.md`` §2.5)."""
     lam = (rho_a * omega**2 / ei) ** 0.25
     ell = lam * length_m
     c, s, ch, sh = np.cos(ell), np.sin(ell), np.cosh(ell), np.sinh(ell)
@@ -110,7 +110,7 @@ def test_euler_bernoulli_equals_bishop_closed_form():
 
 
 def test_rigid_body_limits_of_a_uniform_beam():
-    # domain.md §2.7 / O6: H00·mω² → −4, N00·mLω² → +6, P00·mL²ω² → −12, H_L0·mω² → +2.
+    # docs/physics.md §2.7 / O6: H00·mω² → −4, N00·mLω² → +6, P00·mL²ω² → −12, H_L0·mω² → +2.
     section = tube(0.05, 0.0, STEEL, theory="euler_bernoulli")
     length = 0.4
     mass = section.rho_a * length

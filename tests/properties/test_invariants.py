@@ -1,4 +1,4 @@
-"""Property-based invariants (hypothesis; derandomized in CI, ``style.md`` §9.14).
+"""Property-based invariants (hypothesis; derandomized in CI: the ``ci`` profile, tests/conftest.py).
 
 Reciprocity, split-beam identity, rigid joint = limit of a stiff elastic joint,
 Timoshenko → Euler–Bernoulli in the slender limit, passivity of damped assemblies, and

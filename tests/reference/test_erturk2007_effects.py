@@ -3,14 +3,14 @@
 Source: Ertürk A., Özgüven H.N., Budak E., "Effect analysis of bearing and interface
 dynamics on tool point FRF for chatter stability in machine tools by using a new analytical
 model for spindle–tool assemblies", Int. J. Machine Tools & Manufacture 47 (2007) 23–32, as
-summarised in ``diagnosis.md`` §2 (rows 1, 2, 8, 10) and §3.3: varying one parameter at a
+summarised in ``docs/diagnosis.md`` §2 (rows 1, 2, 8, 10) and §3.3: varying one parameter at a
 time, (a) the bearing parameters act mainly on the lowest (spindle) modes, (b) the interface
 (joint) parameters act on the higher, holder/tool-related modes, (c) the rotational contact
 parameters matter far less than the translational ones (which is why the paper holds them at
 average values when identifying the joints), and (d) stiffness moves the natural frequencies
 while damping moves the peak heights (also Özşahin et al., IJMTM 49 (2009) 25–35).
 
-In RA-1's terms (``domain.md`` §1.4–1.5; modes 599.85, 921.69, 1115.51, 1383.61, 1444.68,
+In RA-1's terms (``docs/physics.md`` §1.4–1.5; modes 599.85, 921.69, 1115.51, 1383.61, 1444.68,
 3115.94, 4025.97, … Hz; tip residues 2.02, 0.032, 1.28, 13.6, 0.063, 0.0035, 36.0 1/kg) the
 normalised sensitivities S = d ln(feature)/d ln(parameter) of :mod:`rcsa.analysis.effects.sensitivities` show:
 
@@ -71,7 +71,7 @@ def test_the_modes_analysed_are_ra1s(report):
     np.testing.assert_allclose(report.frequency_hz,
                                [599.85, 921.69, 1115.51, 1383.61, 1444.68, 3115.94, 4025.97, 5102.79, 6080.83],
                                atol=0.01, err_msg=f"natural frequencies ({SOURCE})")
-    # the two tool modes dominate the tool point (domain.md §1.5 tip residues 13.6 and 36.0)
+    # the two tool modes dominate the tool point (docs/physics.md §1.5 tip residues 13.6 and 36.0)
     np.testing.assert_allclose(report.modes.tip_residue_1_kg[[mode(report, f) for f in TOOL_MODES_HZ]],
                                [13.6, 36.0], rtol=0.01)
 
@@ -122,6 +122,8 @@ def test_rotational_stiffness_matters_an_order_of_magnitude_less(report, joint):
     trans = np.max(np.abs(report.column(f"{joint}.stiffness_n_m")[visible]))
     assert trans >= 0.2
     assert rot < 0.1 * trans, f"finding 4 ({SOURCE}): {joint} k_r {rot:.3g} vs k_t {trans:.3g}"
+    # the README's figure: |S| <= 0.012 for either rotational stiffness on the visible modes
+    assert rot <= 0.024, f"{joint} k_r {rot:.3g} (README: <= 0.012)"
 
 
 def test_caveat_the_6081_hz_mode_is_a_rotational_one(report):

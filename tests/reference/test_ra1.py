@@ -1,4 +1,4 @@
-"""RA-1, the project's verified reference assembly (``domain.md`` §1.4–1.5, §6 O10–O12, O16).
+"""RA-1, the project's verified reference assembly (``docs/physics.md`` §1.4–1.5, §6 O10–O12, O16).
 
 RA-1: BT40-class spindle (9 segments, 4 bearings), shrink-fit holder with the Ø12.7 mm
 carbide shank inside (composite sections), 74 mm stickout, the seed paper's Table 2 joint
@@ -19,8 +19,9 @@ from tests.helpers import REPO
 
 pytestmark = pytest.mark.reference
 
-# domain.md §1.5, undamped natural frequencies (Hz) of RA-1 and its variants, printed to
-# 0.01 Hz; the issue asks for 0.01 % (1e-4 relative), which also covers the rounding.
+# docs/physics.md §1.5, undamped natural frequencies (Hz) of RA-1 and its variants, printed to
+# 0.01 Hz. The issue asked for 0.01 % (1e-4 relative); they agree to <= 1e-5 (worst: the
+# rigid-joint variant, 7.2e-6; RA-1 itself 4.5e-6, its print rounding), so 2e-5 is asserted.
 EXACT = [599.85, 921.69, 1115.51, 1383.61, 1444.68, 3115.94, 4025.97, 5102.79, 6080.83, 7717.51]
 VARIANTS = {
     "euler_bernoulli": [607.77, 938.08, 1136.65, 1393.84, 1530.86, 3551.80, 4091.62, 6330.50, 7415.28],
@@ -28,7 +29,9 @@ VARIANTS = {
     "cowper": [599.56, 920.97, 1114.61, 1383.14, 1442.45, 3106.73, 4025.10, 5074.74, 6050.82, 7652.83],
     "flutes_equal_d": [590.33, 921.41, 1102.03, 1284.08, 1444.53, 3115.79, 3711.57, 5099.47, 6075.12, 7717.04],
 }
-RTOL_MODES = 1e-4
+RTOL_MODES = 2e-5
+#: max |h - h_csv| / max |h_csv| over 5-9999 Hz (measured 2.0e-8)
+RTOL_CSV_OF_PEAK = 5e-8
 
 
 def variant(name: str) -> dict:
@@ -47,7 +50,7 @@ def variant(name: str) -> dict:
 def test_o10_natural_frequencies():
     result = rcsa.predict(variant("exact"))
     np.testing.assert_allclose(result.natural_frequencies_hz, EXACT, rtol=RTOL_MODES,
-                               err_msg="RA-1 undamped natural frequencies vs domain.md §1.5")
+                               err_msg="RA-1 undamped natural frequencies vs docs/physics.md §1.5")
 
 
 @pytest.mark.parametrize("name", list(VARIANTS))
@@ -56,10 +59,10 @@ def test_o11_variants(name):
     expected = VARIANTS[name]
     # The EB column lists 9 of the modes below 10 kHz (its 10th mode is 10905 Hz, out of band).
     np.testing.assert_allclose(found[:len(expected)], expected, rtol=RTOL_MODES,
-                               err_msg=f"RA-1 variant {name} vs domain.md §1.5")
+                               err_msg=f"RA-1 variant {name} vs docs/physics.md §1.5")
 
 
-# domain.md §1.5 regression table: damped tool-point 2×2 at seven frequencies, printed to
+# docs/physics.md §1.5 regression table: damped tool-point 2×2 at seven frequencies, printed to
 # 5 significant digits → compared at 2e-4 relative (the table's own rounding is ≤5e-5).
 REGRESSION = [  # f_hz, H, L (= N), P
     (100, 4.1901e-7 - 1.3918e-9j, 4.9194e-6 - 1.2373e-8j, 1.5062e-4 - 3.2210e-7j),
@@ -85,7 +88,7 @@ def test_o12_regression_table(regression_result, row):
     for name, value, expected in (("H", tp.h[i], row[1]), ("L", tp.l[i], row[2]),
                                   ("N", tp.n[i], row[2]), ("P", tp.p[i], row[3])):
         # each part rounded to 5 digits: compare complex values at 2e-4 of their modulus
-        assert abs(value - expected) <= 2e-4 * abs(expected), f"{name} at {row[0]} Hz vs domain.md §1.5"
+        assert abs(value - expected) <= 2e-4 * abs(expected), f"{name} at {row[0]} Hz vs docs/physics.md §1.5"
 
 
 @pytest.fixture(scope="module")
@@ -94,17 +97,18 @@ def full_band():
 
 
 def test_tool_point_h_matches_reference_csv(full_band):
-    # Issue 2: within 2e-4 of the peak magnitude at every line of the reference CSV.
+    # Issue 2 asked for 2e-4 of the peak magnitude at every line of the reference CSV; the
+    # model and the CSV's exact RCSA prototype agree to 2.0e-8 (README), asserted at 5e-8.
     ref = np.loadtxt(REPO / "tests/data/ra1/ra1_tool_point_h.csv", delimiter=",")
     idx = np.searchsorted(full_band.frequency_hz, ref[:, 0])
     np.testing.assert_array_equal(full_band.frequency_hz[idx], ref[:, 0])
     h_ref = ref[:, 1] + 1j * ref[:, 2]
     err = np.abs(full_band.tool_point.h[idx] - h_ref) / np.abs(h_ref).max()
-    assert err.max() < 2e-4, f"worst line {ref[np.argmax(err), 0]} Hz: {err.max():.2e} of peak"
+    assert err.max() < RTOL_CSV_OF_PEAK, f"worst line {ref[np.argmax(err), 0]} Hz: {err.max():.2e} of peak"
 
 
 def test_peaks_and_stability_quantities(full_band):
-    # domain.md §1.5: peaks at 599/1103/1386/4034 Hz (|H| 4.273e-6, 8.27e-7, 5.837e-6, 2.062e-6),
+    # docs/physics.md §1.5: peaks at 599/1103/1386/4034 Hz (|H| 4.273e-6, 8.27e-7, 5.837e-6, 2.062e-6),
     # most negative Re H −3.007e-6 m/N at 1407 Hz; static stiffness O16.
     peaks = full_band["peaks"]
     assert [p["frequency_hz"] for p in peaks] == [599.0, 1103.0, 1386.0, 4034.0]
@@ -116,7 +120,7 @@ def test_peaks_and_stability_quantities(full_band):
 
 
 def test_o16_static_compliance_equals_low_frequency_limit():
-    # The dynamic-stiffness path at 0.01 Hz is the static FE value to 1e-10 (domain.md §2.7).
+    # The dynamic-stiffness path at 0.01 Hz is the static FE value to 1e-10 (docs/physics.md §2.7).
     doc = ra1({"values_hz": [0.01]})
     for j in doc["joints"].values():
         j["damping_ns_m"] = j["rotational_damping_nms_rad"] = 0.0
@@ -127,7 +131,7 @@ def test_o16_static_compliance_equals_low_frequency_limit():
     assert h.real == pytest.approx(4.13738265e-7, rel=1e-8)
 
 
-# domain.md §1.4 section table (real parts, SI), printed to 4 significant digits → 6e-4.
+# docs/physics.md §1.4 section table (real parts, SI), printed to 4 significant digits → 6e-4.
 SECTIONS = [  # (chain index in build order, EI, κGA, ρA, ρI)
     ("S1 Ø90", 0.0, 6.763e5, 4.754e8, 49.94, 2.528e-2),
     ("H1 composite", None, 1.629e5, 2.323e8, 25.31, 6.079e-3),
@@ -144,11 +148,11 @@ def test_section_table():
     for name, _, ei, kga, ra, ri in SECTIONS:
         s = sections[name]
         np.testing.assert_allclose([s.ei.real, 1 / s.shear_flexibility.real, s.rho_a, s.rho_i],
-                                   [ei, kga, ra, ri], rtol=6e-4, err_msg=f"{name} vs domain.md §1.4")
+                                   [ei, kga, ra, ri], rtol=6e-4, err_msg=f"{name} vs docs/physics.md §1.4")
 
 
 def test_masses():
-    # domain.md §1.4: spindle 14.41 kg, holder incl. tool core 1.073 kg, overhang 0.119 kg.
+    # docs/physics.md §1.4: spindle 14.41 kg, holder incl. tool core 1.073 kg, overhang 0.119 kg.
     model = build_model(parse_assembly(ra1()))
 
     def mass(chain):

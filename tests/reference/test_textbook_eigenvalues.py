@@ -1,6 +1,6 @@
 """Natural frequencies of single beams against textbook and closed-form values.
 
-Sources (``domain.md`` §6): O1/O2 Euler–Bernoulli βL eigenvalues (Blevins, *Formulas for
+Sources (``docs/physics.md`` §6): O1/O2 Euler–Bernoulli βL eigenvalues (Blevins, *Formulas for
 Natural Frequency and Mode Shape*: free-free 4.7300407, 7.8532046, 10.9956078; clamped-free
 1.8751041, 4.6940911, 7.8547574); O3 hinged–hinged Timoshenko closed form (code_aster
 V2.04.302); O4/O5 free-free Timoshenko frequencies verified exact-vs-FE (400 elements,

@@ -31,7 +31,7 @@ def _batch(assembly, n_good=2, bad=True):
     return {"frequency": GRID, "spindle": assembly["spindle"], "combinations": combos}
 
 
-def _wait(client, location, timeout_s=60.0):
+def _wait(client, location, timeout_s=300.0):
     t0 = time.monotonic()
     while time.monotonic() - t0 < timeout_s:
         r = client.get(location)

@@ -26,7 +26,10 @@ def _example(name: str):
 @pytest.mark.parametrize(("name", "path", "model"), [
     ("ra1.json", "/v1/tool-point-frf", schemas.PredictionResult),
     ("batch.json", "/v1/tool-point-frf/batch", schemas.BatchResult),
+    ("ra1-uncertainty.json", "/v1/tool-point-frf", schemas.PredictionResult),
     ("lobes-frf.json", "/v1/stability-lobes", schemas.LobesResult),
+    ("lobes-robust.json", "/v1/stability-lobes", schemas.LobesResult),
+    ("lobes-sdm.json", "/v1/stability-lobes", schemas.LobesResult),
     ("effects.json", "/v1/effects", schemas.EffectsResult),
     ("identification.json", "/v1/identifications", schemas.IdentificationResult),
     ("diagnosis.json", "/v1/diagnoses", schemas.DiagnosisResult),

@@ -31,6 +31,10 @@ from service.main import create_app
 
 from .conftest import WRITE_KEY, settings_for
 
+#: pytest-timeout's 600 s is the hang guard; a test of this module takes about a
+#: minute on a 2-core machine at load 4 and can take ten times that at load 12-14
+pytestmark = pytest.mark.timeout(1800)
+
 load_all_checks()
 CHECKS = [check for check in REGISTRY.get_all() if check not in (positive_data_acceptance, ignored_auth)]
 EXAMPLES = 50

@@ -384,3 +384,23 @@ def test_measurement_file_is_read_not_stored(client):
     assert_problem(r, 422, "colour")
     assert_problem(client.post("/v1/measurements:read", json={"frequency_hz": [1.0]}), 415)
     assert_problem(client.post("/v1/measurements:read", files={"units": (None, "m/N")}), 422, "file")
+
+
+def test_the_web_endpoints_read_their_forms_as_the_api_routes_do(client):
+    # one reading of a measurement form (POST /v1/measurements and :read) and of a library
+    # upload (POST /v1/tool-libraries:predict and :entries): the same refusals, word for word
+    from tests.service.conftest import WRITE
+
+    def detail(path, headers=None, **form):
+        r = client.post(path, headers=headers or {}, **form)
+        assert r.status_code == 422, r.text
+        return r.json()["errors"][0]
+
+    unknown = {"files": {"file": ("x.csv", b"f,re,im\n", "text/csv")}, "data": {"colour": "red"}}
+    assert detail("/v1/measurements:read", **unknown) == detail("/v1/measurements", WRITE, **unknown)
+    no_file = {"files": {"format": (None, "csv")}}  # multipart, with no file in it
+    assert detail("/v1/measurements:read", **no_file) == detail("/v1/measurements", WRITE, **no_file) == \
+        {"field": "file", "detail": "is required: the measurement file as a multipart part"}
+    two = {"files": [("library", ("a.json", b"{}", "application/json")), ("library", ("b.json", b"{}", "application/json"))]}
+    entries, predict = detail("/v1/tool-libraries:entries", **two), detail("/v1/tool-libraries:predict", **two)
+    assert entries == predict and entries["field"] == "library"

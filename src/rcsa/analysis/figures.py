@@ -35,7 +35,7 @@ from rcsa.errors import InputError
 from rcsa.physics.receptance import check_frequency_hz
 
 __all__ = ["SAVE_DPI", "FrfLayout", "checked_text", "effects_figure", "freeze_layout", "frf_figure", "lobes_figure",
-           "new_figure", "percent_label",
+           "log_frequency_ticks", "new_figure", "percent_label",
            "save_figure"]
 
 FrfLayout = Literal["full", "real_imag", "bode"]
@@ -116,6 +116,51 @@ def freeze_layout(fig: Figure) -> Figure:
     fig.set_layout_engine("none")
     fig.set_dpi(nominal)
     return fig
+
+
+def log_frequency_ticks(ax: Any, f_min_hz: float, f_max_hz: float) -> list[float]:
+    """Label a logarithmic frequency axis with plain numbers that never collide.
+
+    Matplotlib labels a log axis that spans less than a decade with its minor ticks
+    ("2×10², 3×10², …"), which overlap at small sizes. Here the labelled ticks are the
+    1–2–5 numbers inside the band (1–2–3–5 when fewer than three fall in it), written as
+    plain numbers (``200``, ``500``, ``1000``); minor ticks stay, unlabelled.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        With a logarithmic x axis.
+    f_min_hz, f_max_hz : float
+        The band drawn, Hz.
+
+    Returns
+    -------
+    list of float
+        The labelled ticks, Hz.
+
+    Examples
+    --------
+    >>> fig = new_figure(3, 2)
+    >>> ax = fig.add_subplot()
+    >>> ax.set_xscale("log")
+    >>> log_frequency_ticks(ax, 200.0, 3000.0)
+    [200.0, 500.0, 1000.0, 2000.0]
+    >>> log_frequency_ticks(ax, 300.0, 800.0)
+    [300.0, 500.0]
+    """
+    from matplotlib.ticker import FixedLocator, FuncFormatter, NullFormatter
+
+    ticks: list[float] = []
+    for mantissas in ((1.0, 2.0, 5.0), (1.0, 2.0, 3.0, 5.0), (1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 7.0)):
+        decades = range(math.floor(math.log10(f_min_hz)), math.ceil(math.log10(f_max_hz)) + 1)
+        ticks = [m * 10.0**d for d in decades for m in mantissas if f_min_hz * (1 - 1e-9) <= m * 10.0**d
+                 <= f_max_hz * (1 + 1e-9)]
+        if len(ticks) >= 2:
+            break
+    ax.xaxis.set_major_locator(FixedLocator(ticks))
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda x, _: f"{x:g}"))
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    return ticks
 
 
 def percent_label(fraction: float) -> str:

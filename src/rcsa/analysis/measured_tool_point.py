@@ -1,6 +1,6 @@
 """Measured tool-point FRFs in requests: the ``measurements`` list of identifications and diagnoses.
 
-Both ``contract.md`` "Joint identification" and "Diagnosis" send a base assembly and tap
+Both ``docs/contract.md`` "Joint identification" and "Diagnosis" send a base assembly and tap
 tests of it, each with some ``tool`` fields overridden (typically several stickouts)::
 
     {"tool": {"stickout_m": 0.050}, "frequency_hz": [...],

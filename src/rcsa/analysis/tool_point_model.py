@@ -11,9 +11,10 @@ and joint parameters change only the two springs. So, per frequency grid:
   dynamic stiffness at the nose; a measured spindle is its receptance at its plane
   (``spindle_nose`` or ``holder_tip``), to which the joints in front of the first beam
   just add their compliance (it is never inverted: rotations may be estimates);
-* the beam terms of holder and tool are computed once (:class:`TermsGrid`);
+* the beam terms of holder and tool are computed once;
 
-and a new set of joint values costs a few 2×2 operations per item and line. Several sets
+(both kept in a :class:`rcsa.physics.subassembly_cache.SubassemblyCache` per grid), and a
+new set of joint values costs a few 2×2 operations per item and line. Several sets
 are evaluated in one pass by stacking them along the frequency axis (the springs' values
 become arrays, one per row), which is how the identification's finite-difference
 Jacobians are vectorised. A tool parameter (stickout, fluted diameter ratio) rebuilds the
@@ -27,7 +28,6 @@ extrapolated, as :mod:`rcsa.measured.hybrid` does for predictions.
 from __future__ import annotations
 
 import hashlib
-from collections import OrderedDict
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -39,38 +39,21 @@ from rcsa.model.assembly import AssemblyModel, build_model
 from rcsa.model.contract import AssemblySpec
 from rcsa.model.parameters import set_parameter
 from rcsa.model.spindle_side import MeasuredBase
-from rcsa.physics.algebra2x2 import inv2
 from rcsa.physics.arrays import ComplexArray, FloatArray
-from rcsa.physics.chain import Beam, Chain, Grid, Spring
-from rcsa.physics.elimination import march
-from rcsa.physics.segments import SixTerms
+from rcsa.physics.chain import Chain, Spring
+from rcsa.physics.subassembly_cache import DEFAULT_BEAMS, LruStore, SubassemblyCache
 
-__all__ = ["GEOMETRY", "MeasuredSpindle", "TermsGrid", "ToolPointModel"]
+__all__ = ["GEOMETRY", "MeasuredSpindle", "ToolPointModel"]
 
 _TWO_PI = 2.0 * np.pi
-#: Parameters that change the holder and tool chains (the others change only the springs).
-GEOMETRY = ("tool.stickout_m", "tool.fluted_diameter_ratio")
+#: Parameters that change the holder and tool chains (the others change only the springs):
+#: the tool's, and those of a holder–tool clamping along the insertion (in the holder chain).
+GEOMETRY = ("tool.stickout_m", "tool.fluted_diameter_ratio", "holder_tool.interface_stiffness_scale",
+            "holder_tool.interface_stiffness_n_m3")
 #: Grids whose condensations are kept per model (least recently used dropped first).
 _GRIDS_KEPT = 12
-
-
-class TermsGrid(Grid):
-    """A :class:`~rcsa.physics.chain.Grid` that keeps every beam's six terms (beams are hashable)."""
-
-    def __init__(self, omega_rad_s: FloatArray) -> None:
-        super().__init__(omega_rad_s)
-        self._terms: dict[Beam, SixTerms] = {}
-
-    def beam_terms(self, beam: Beam) -> SixTerms:
-        """The beam's terms on this grid, computed once.
-
-        Copied: :meth:`Grid.beam_terms` returns the grid's work arrays, valid until its next call.
-        """
-        hit = self._terms.get(beam)
-        if hit is None:
-            a, b, c, e, f, g = (x.copy() for x in super().beam_terms(beam))
-            hit = self._terms[beam] = (a, b, c, e, f, g)
-        return hit
+#: Chain models (tool geometries) kept per model.
+_MODELS_KEPT = 64
 
 
 @dataclass(frozen=True)
@@ -140,12 +123,6 @@ def _key(frequency_hz: FloatArray, rows: int) -> tuple[int, int, bytes]:
     return frequency_hz.size, rows, hashlib.blake2b(frequency_hz.tobytes(), digest_size=16).digest()
 
 
-@dataclass
-class _GridState:
-    grid: TermsGrid
-    start: ComplexArray  # analytical: stiffness at the nose; measured: receptance at the plane
-
-
 class ToolPointModel:
     """Tool-point ``h`` of one assembly at given joint and tool parameters.
 
@@ -172,18 +149,14 @@ class ToolPointModel:
         self.spec = spec
         self.base = base
         self.plane = None if base is None else base.plane
-        self._models: dict[tuple[float, ...], AssemblyModel] = {}
-        self._grids: OrderedDict[tuple[int, int, bytes], _GridState] = OrderedDict()
+        self._models: LruStore[tuple[float, ...], AssemblyModel] = LruStore(_MODELS_KEPT)
+        self._caches: LruStore[tuple[int, int, bytes], SubassemblyCache] = LruStore(_GRIDS_KEPT)
         self._spindle = self._model({}).spindle
 
     @property
     def hybrid(self) -> bool:
         """True on a measured spindle."""
         return self.base is not None
-
-    def with_base(self, base: MeasuredSpindle) -> ToolPointModel:
-        """The same assembly on another measured base (e.g. a bounding estimate)."""
-        return ToolPointModel(self.spec, base)
 
     def spec_at(self, values: Mapping[str, float]) -> AssemblySpec:
         """The assembly with the named parameters set (SI)."""
@@ -199,14 +172,12 @@ class ToolPointModel:
 
     def _model(self, values: Mapping[str, float]) -> AssemblyModel:
         geometry = tuple(float(values[g]) if g in values else float("nan") for g in GEOMETRY)
-        hit = self._models.get(geometry)
-        if hit is None:
+
+        def build() -> AssemblyModel:
             spec = self.spec_at({g: values[g] for g in GEOMETRY if g in values})
-            hit = build_model(spec, self.plane) if self.hybrid else build_model(spec)
-            if len(self._models) > 64:
-                self._models.clear()
-            self._models[geometry] = hit
-        return hit
+            return build_model(spec, self.plane) if self.hybrid else build_model(spec)
+
+        return self._models.get(geometry, build)
 
     def _springs(self, values_sets: Sequence[Mapping[str, float]], model: AssemblyModel, nf: int
                  ) -> tuple[Spring | None, Spring | None]:
@@ -230,46 +201,19 @@ class ToolPointModel:
             out.append(Spring(**cols))
         return out[0], out[1]
 
-    def _state(self, frequency_hz: FloatArray, rows: int) -> _GridState:
-        key = _key(frequency_hz, rows)
-        hit = self._grids.get(key)
-        if hit is not None:
-            self._grids.move_to_end(key)
-            return hit
-        omega = np.tile(_TWO_PI * frequency_hz, rows)
-        grid = TermsGrid(omega)
-        if self.base is not None:
-            start = np.tile(self.base.at(frequency_hz), (rows, 1, 1))
-        else:
-            start = march(self._spindle, omega, grid=grid)[0]
-        hit = self._grids[key] = _GridState(grid, start)
-        while len(self._grids) > _GRIDS_KEPT:
-            self._grids.popitem(last=False)
-        return hit
+    def _cache(self, frequency_hz: FloatArray, rows: int) -> SubassemblyCache:
+        """The spindle condensed (or the measured receptance read) on this grid, ``rows`` times over."""
+        def make() -> SubassemblyCache:
+            omega = np.tile(_TWO_PI * frequency_hz, rows)
+            base = None if self.base is None else np.tile(self.base.at(frequency_hz), (rows, 1, 1))
+            return SubassemblyCache(omega, base, max_states=2, max_beams=DEFAULT_BEAMS)
 
-    def _tip(self, state: _GridState, chain: Chain) -> ComplexArray:
-        """``h`` at the tip of ``chain`` attached to the condensed start."""
-        grid, omega = state.grid, state.grid.omega_rad_s
-        if self.base is None:
-            k = march(chain, omega, start=state.start, grid=grid)[0]
-            return inv2(k)[:, 0, 0]
-        s = state.start
-        for i, item in enumerate(chain):
-            if isinstance(item, Spring):
-                s = s + item.compliance(omega)
-                continue
-            if not isinstance(item, Beam):  # a measured base is followed by joints and beams only
-                raise InputError("spindle", "a measured spindle must be followed by joints and beams")
-            a, b, c, e, f, g = grid.beam_terms(item)
-            d11 = np.stack([np.stack([a, b], -1), np.stack([b, c], -1)], -2)
-            d12 = np.stack([np.stack([e, f], -1), np.stack([-f, g], -1)], -2)
-            d22 = np.stack([np.stack([a, -b], -1), np.stack([-b, c], -1)], -2)
-            d21 = np.swapaxes(d12, -1, -2)
-            eye = np.eye(2)
-            k = d22 - d21 @ s @ inv2(eye + d11 @ s) @ d12  # never inverting S (Beam.absorb_compliance)
-            k = march(chain[i + 1:], omega, start=k, grid=grid)[0]
-            return inv2(k)[:, 0, 0]
-        return s[:, 0, 0]
+        return self._caches.get(_key(frequency_hz, rows), make)
+
+    def _tip(self, cache: SubassemblyCache, chain: Chain) -> ComplexArray:
+        """``h`` at the tip of ``chain`` attached to the condensed spindle (or the measured base)."""
+        start = cache.condensed(()) if self.base is not None else cache.condensed((self._spindle,))
+        return cache.tip_h(start, chain)
 
     def h_sets(self, frequency_hz: FloatArray, value_sets: Sequence[Mapping[str, float]]) -> ComplexArray:
         """Tool-point ``h`` for several parameter sets, shape (nsets, nfreq), m/N.
@@ -298,7 +242,7 @@ class ToolPointModel:
             rows = len(sets) if stacked else 1
             chain: Chain = (*(() if sh is None else (sh,)), *model.holder, *(() if ht is None else (ht,)),
                             *model.tool)
-            h = self._tip(self._state(f, rows), chain)
+            h = self._tip(self._cache(f, rows), chain)
             out[idx] = h.reshape(rows, f.size) if stacked else h[None, :]
         return out
 

@@ -102,7 +102,7 @@ def _modes(parsed: LobesRequest, spec: Any, frequency_hz: np.ndarray, h: np.ndar
 
 def stability_lobes_answer(request: Mapping[str, Any], *, store: MeasurementStore | None = None,
                            max_lines: int = MAX_FREQUENCY_LINES) -> LobesAnswer:
-    """Stability lobes (``contract.md`` "Stability lobes"), robust ones when asked for, and notes.
+    """Stability lobes (``docs/contract.md`` "Stability lobes"), robust ones when asked for, and notes.
 
     With an ``assembly``, its tool-point ``h`` is predicted first and used in x and y (the
     result says so: ``same_frf_in_y``). With ``"method": "semi_discretization"`` an
@@ -215,7 +215,7 @@ def effects(request: Mapping[str, Any], *, store: MeasurementSource | None = Non
 
 def identify(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
              progress: Progress | None = None) -> dict[str, Any]:
-    """Joint identification from measured tool-point FRFs (``contract.md`` "Joint identification").
+    """Joint identification from measured tool-point FRFs (``docs/contract.md`` "Joint identification").
 
     See :func:`rcsa.analysis.joint_identification.identify.identify`; ``store`` is where a
     measured spindle is looked up (the default store when omitted); ``progress(done, total)``
@@ -229,7 +229,7 @@ def identify(request: Mapping[str, Any], *, store: MeasurementSource | None = No
 
 def diagnose(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
              progress: Progress | None = None) -> dict[str, Any]:
-    """Sim-to-real gap diagnosis (``contract.md`` "Diagnosis").
+    """Sim-to-real gap diagnosis (``docs/contract.md`` "Diagnosis").
 
     Parameters
     ----------

@@ -55,6 +55,7 @@ DIAGNOSIS_OPTION_BOUNDS = {"monte_carlo_draws": (50.0, 5000.0), "claim_threshold
 IDENTIFICATION_MIN_LINES = 16
 #: Joint parameters an identification estimates (``joint_identification.request.IDENTIFIABLE``).
 IDENTIFIABLE_PARAMETERS = ("spindle_holder.stiffness_n_m", "spindle_holder.damping_ns_m",
-                           "holder_tool.stiffness_n_m", "holder_tool.damping_ns_m")
+                           "holder_tool.stiffness_n_m", "holder_tool.damping_ns_m",
+                           "holder_tool.interface_stiffness_scale")
 #: Largest finite-difference step of an effect analysis (``sensitivity.effect_analysis``).
 EFFECTS_MAX_RELATIVE_STEP = MAX_RELATIVE_STEP  # noqa: F405 (from rcsa.model.bounds)

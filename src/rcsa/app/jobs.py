@@ -29,9 +29,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, BinaryIO, Literal, Protocol
 
-import orjson
-
 from rcsa.app.analyses import ANALYSIS_KINDS, run_analysis
+from rcsa.app.results import RESULT_FORMAT_FIELD, binary_writer, json_bytes
 from rcsa.app.stores import library_store
 from rcsa.errors import InputError
 from rcsa.infra.compute_backends import Backend, LocalBackend
@@ -55,6 +54,7 @@ __all__ = [
     "job_store",
     "run_work",
     "stream_work",
+    "write_entries",
 ]
 
 #: What may run as a job: batches, libraries and syncs (:data:`JOB_KINDS`), and single
@@ -238,7 +238,9 @@ def stream_work(bench: Workbench, kind: str, request: Mapping[str, Any], *,
     ``write(fh)`` writes the JSON document :func:`run_work` would answer — the same bytes —
     one result at a time, and returns the summary. At most a chunk's results (a window of
     them on a cluster) are held in memory, and no serialisation holds the interpreter for
-    longer than one result takes.
+    longer than one result takes. A request whose ``result_format`` (:data:`RESULT_FORMAT_FIELD`)
+    is ``hdf5`` or ``parquet`` is written in that form instead, result by result too
+    (:func:`rcsa.app.results.binary_writer`); ``fh`` must then be readable and seekable.
 
     Raises
     ------
@@ -248,26 +250,41 @@ def stream_work(bench: Workbench, kind: str, request: Mapping[str, Any], *,
     if kind not in ("batch", "library"):
         raise InputError("kind", f"only batch and library results are streamed, not {kind!r}")
     backend = backend if backend is not None else bench.backend
+    fmt = request.get(RESULT_FORMAT_FIELD, "json")
 
     def write(fh: BinaryIO) -> dict[str, Any]:
         with bench.observer.timed(kind):
             started = iter_entries(request, store=bench.store, max_lines=bench.max_lines,
                                    max_combinations=bench.max_combinations, progress=progress, backend=backend)
-            summary = _write_entries(fh, started)
+            summary = write_entries(fh, started, fmt, kind)
         bench.observer.computed(kind, int(summary.get("ok", 0)))
         return summary
 
     return StreamedResult(write)
 
 
-_NUMPY = orjson.OPT_SERIALIZE_NUMPY
+def write_entries(fh: BinaryIO, started: EntryResults, fmt: str = "json", kind: str = "batch") -> dict[str, Any]:
+    """Write a started batch or library result to ``fh`` result by result, in a form; its summary.
+
+    Parameters
+    ----------
+    fh : binary file
+        Readable and seekable for HDF5.
+    started : EntryResults
+        :func:`rcsa.libraries.library_prediction.iter_entries` of the request.
+    fmt : {"json", "hdf5", "parquet"}
+        JSON: the bytes :func:`json_bytes` gives the whole document.
+    kind : {"batch", "library"}
+        What the document is (a binary file's schema).
+    """
+    return _write_json(fh, started) if fmt == "json" else _write_binary(fh, started, fmt, kind)
 
 
-def _write_entries(fh: BinaryIO, started: EntryResults) -> dict[str, Any]:
-    """Write ``{**head, "results": [...], "summary": {...}}`` as orjson would, result by result."""
+def _write_json(fh: BinaryIO, started: EntryResults) -> dict[str, Any]:
+    """Write ``{**head, "results": [...], "summary": {...}}`` as :func:`json_bytes` would, result by result."""
     fh.write(b"{")
     for name, value in started.head.items():
-        fh.write(orjson.dumps(name) + b":" + orjson.dumps(value, option=_NUMPY) + b",")
+        fh.write(json_bytes(name) + b":" + json_bytes(value) + b",")
     fh.write(b'"results":[')
     counts: dict[str, int] = {}
     results = started.results
@@ -275,14 +292,33 @@ def _write_entries(fh: BinaryIO, started: EntryResults) -> dict[str, Any]:
         for i, result in enumerate(results):
             if i:
                 fh.write(b",")
-            fh.write(orjson.dumps(result, option=_NUMPY))
+            fh.write(json_bytes(result))
             counts[result["status"]] = counts.get(result["status"], 0) + 1
     finally:
         close = getattr(results, "close", None)
         if close is not None:
             close()  # stops the chunks still in flight when writing failed
     summary = started.summary(counts)
-    fh.write(b'],"summary":' + orjson.dumps(summary) + b"}")
+    fh.write(b'],"summary":' + json_bytes(summary) + b"}")
+    return summary
+
+
+def _write_binary(fh: BinaryIO, started: EntryResults, fmt: str, kind: str) -> dict[str, Any]:
+    """Write the same document as :func:`_write_json` in a binary form, result by result."""
+    counts: dict[str, int] = {}
+    results = started.results
+    with binary_writer(fmt, fh, kind) as writer:  # type: ignore[arg-type]
+        writer.head(started.head)
+        try:
+            for result in results:
+                writer.result(result)
+                counts[result["status"]] = counts.get(result["status"], 0) + 1
+        finally:
+            close = getattr(results, "close", None)
+            if close is not None:
+                close()
+        summary = started.summary(counts)
+        writer.summary(summary)
     return summary
 
 

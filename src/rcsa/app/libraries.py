@@ -15,12 +15,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
-import orjson
-
 from rcsa.app.jobs import Work, Workbench
+from rcsa.app.results import RESULT_FORMAT_FIELD, Format, encode_result, json_bytes, require_format
 from rcsa.errors import InputError
 from rcsa.infra.atomic_files import atomic_write_bytes
-from rcsa.libraries.exports import library_hdf5, library_uff_zip
+from rcsa.libraries.exports import library_uff_zip
 from rcsa.libraries.formats import LibrarySource, import_library, read_library
 from rcsa.libraries.library_prediction import (
     LIBRARY_OPTIONS,
@@ -36,6 +35,7 @@ from rcsa.libraries.sync import (
     sync_request,
 )
 from rcsa.measured.hybrid import MeasurementSource
+from rcsa.model.contract import CLAMPING_MODELS
 
 __all__ = [
     "DEFAULT_GRID",
@@ -55,10 +55,17 @@ __all__ = [
 #: Frequency grid of a library prediction when neither the caller, the spindle's assembly
 #: nor a measured spindle gives one, Hz.
 DEFAULT_GRID = {"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 1.0}
+ExportFormat = Literal["hdf5", "zip", "json", "parquet"]
 #: Export formats of a stored library's results, by file suffix.
-EXPORT_FORMATS: dict[str, Literal["hdf5", "zip", "json"]] = {".h5": "hdf5", ".hdf5": "hdf5", ".zip": "zip",
-                                                             ".json": "json"}
-_SUFFIX = {"hdf5": ".h5", "zip": ".zip", "json": ".json"}
+EXPORT_FORMATS: dict[str, ExportFormat] = {".h5": "hdf5", ".hdf5": "hdf5", ".zip": "zip", ".json": "json",
+                                           ".parquet": "parquet"}
+_SUFFIX = {"hdf5": ".h5", "zip": ".zip", "json": ".json", "parquet": ".parquet"}
+
+
+def _with_format(request: dict[str, Any], result_format: Format) -> dict[str, Any]:
+    """The work request, naming the form its job writes when that is not JSON."""
+    require_format(result_format)
+    return request if result_format == "json" else {**request, RESULT_FORMAT_FIELD: result_format}
 
 
 def _check_tools(n: int, limit: int) -> None:
@@ -70,8 +77,8 @@ def _check_tools(n: int, limit: int) -> None:
 
 def prepare_batch(bench: Workbench, request: Mapping[str, Any],
                   refused: Mapping[int, Mapping[str, str]] | None = None,
-                  tool_point: list[str] | None = None) -> Work:
-    """A batch request (``contract.md`` "Batch"), read and sized: work of kind ``batch``.
+                  tool_point: list[str] | None = None, result_format: Format = "json") -> Work:
+    """A batch request (``docs/contract.md`` "Batch"), read and sized: work of kind ``batch``.
 
     Parameters
     ----------
@@ -83,23 +90,26 @@ def prepare_batch(bench: Workbench, request: Mapping[str, Any],
         ``error`` result in their place (:func:`rcsa.libraries.library_prediction.checked_batch`).
     tool_point : list of str, optional
         Keep only these receptances of each result (``["h"]``).
+    result_format : {"json", "hdf5", "parquet"}
+        The form a job of it writes its result in (:mod:`rcsa.app.results`).
 
     Raises
     ------
     InputError
-        Too many combinations, or the grid, spindle or materials they share are invalid.
+        Too many combinations, or the grid, spindle or materials they share are invalid;
+        Parquet without pyarrow.
     """
     combinations = request.get("combinations") if isinstance(request, Mapping) else None
     n = len(combinations) if isinstance(combinations, list) else 0
     if n > bench.max_combinations:
         raise InputError("combinations", f"at most {bench.max_combinations} per request, got {n}; split the batch")
-    checked = checked_batch(request, refused or {}, tool_point)
+    checked = _with_format(checked_batch(request, refused or {}, tool_point), result_format)
     return Work("batch", checked, n, check=lambda: check_common(request, store=bench.store, max_lines=bench.max_lines))
 
 
 def prepare_library(bench: Workbench, library: LibrarySource, *, file_name: str | None = None,
                     content_type: str | None = None, holder: Any = None, holder_name: str | None = None,
-                    **fields: Any) -> Work:
+                    result_format: Format = "json", **fields: Any) -> Work:
     """A Fusion or FreeCAD tool library on one spindle, imported and sized: work of kind ``library``.
 
     Parameters
@@ -114,14 +124,17 @@ def prepare_library(bench: Workbench, library: LibrarySource, *, file_name: str 
         A FreeCAD holder (``.fcholder``) for the toolbits; refused for Fusion.
     holder_name : str, optional
         The holder upload's file name.
+    result_format : {"json", "hdf5", "parquet"}
+        The form a job of it writes its result in (as in :func:`prepare_batch`).
     **fields
         Those of :func:`rcsa.libraries.library_prediction.library_request`: ``spindle``,
         ``frequency``, ``joints``, ``materials``, ``beam_theory``, ``shear_coefficient``,
-        ``natural_frequencies``, ``options`` and ``uncertainty``.
+        ``natural_frequencies``, ``options`` and ``uncertainty``; and ``holder_tool``, every
+        tool's holder–tool joint (:func:`every_tool_joints`).
     """
     library = read_library(library, file_name=file_name, content_type=content_type, holder=holder,
                            holder_name=holder_name)
-    request = library_request(library, **fields)
+    request = _with_format(library_request(library, **_library_fields(fields)), result_format)
     n = len(request["batch"]["combinations"])
     _check_tools(n, bench.max_combinations)
     return Work("library", request, n,
@@ -142,15 +155,69 @@ def prepare_sync(bench: Workbench, library_id: str | None, library: LibrarySourc
         library_id = library_id_from_name(str(library)) if isinstance(library, str | os.PathLike) else "library"
     library = read_library(library, file_name=file_name, content_type=content_type, holder=holder,
                            holder_name=holder_name)
-    request = sync_request(library_id, library, **fields)
+    request = sync_request(library_id, library, **_library_fields(fields))
     _check_tools(len(request["batch"]["combinations"]), bench.max_combinations)
     plan = plan_sync(bench.libraries, request, store=bench.store, max_lines=bench.max_lines)
     return Work("library-sync", request, len(plan.pending), plan,
                 check=lambda: check_common(request["batch"], store=bench.store, max_lines=bench.max_lines))
 
 
+def every_tool_joints(joints: Mapping[str, Any] | None, holder_tool: str | Mapping[str, Any] | None
+                      ) -> Mapping[str, Any] | None:
+    """The joints applied to every tool of a library, with ``holder_tool`` replacing their own.
+
+    Parameters
+    ----------
+    joints : mapping or None
+        ``{"spindle_holder": {...}, "holder_tool": {...}}`` (either may be left out).
+    holder_tool : str or mapping or None
+        A clamping model name (``"bonded"``; ``"point"`` = a rigid point joint) or a whole
+        ``joints.holder_tool`` object (``{"model": "contact", "interface_stiffness_n_m3": 5e13}``);
+        ``None`` keeps the joints as they are.
+
+    Returns
+    -------
+    mapping or None
+
+    Raises
+    ------
+    InputError
+        ``holder_tool`` is neither a model name nor an object.
+
+    Examples
+    --------
+    >>> every_tool_joints({"holder_tool": {"stiffness_n_m": 1e7}}, "bonded")
+    {'holder_tool': {'model': 'bonded'}}
+    """
+    if holder_tool is None:
+        return joints
+    if isinstance(holder_tool, str):
+        if holder_tool not in CLAMPING_MODELS:
+            raise InputError("holder_tool", f"must be one of {', '.join(CLAMPING_MODELS)} or a holder_tool object, "
+                                            f"got {holder_tool!r}")
+        if holder_tool == "contact":
+            raise InputError("holder_tool", 'a contact clamping needs its interface stiffness: give the object '
+                                            '{"model": "contact", "interface_stiffness_n_m3": ...}')
+        holder_tool = {} if holder_tool == "point" else {"model": holder_tool}
+    elif not isinstance(holder_tool, Mapping):
+        raise InputError("holder_tool", "must be a clamping model name or a joints.holder_tool object")
+    out = {k: v for k, v in dict(joints or {}).items() if k != "holder_tool"}
+    if holder_tool:
+        out["holder_tool"] = dict(holder_tool)
+    return out
+
+
+def _library_fields(fields: dict[str, Any]) -> dict[str, Any]:
+    """The fields of a library request with a ``holder_tool`` shortcut merged into its joints."""
+    if "holder_tool" not in fields:
+        return fields
+    rest = dict(fields)
+    rest["joints"] = every_tool_joints(rest.get("joints"), rest.pop("holder_tool"))
+    return rest
+
+
 def spindle_settings(base: Mapping[str, Any], *, frequency: Mapping[str, Any] | None = None,
-                     joints: Mapping[str, Any] | None = None,
+                     joints: Mapping[str, Any] | None = None, holder_tool: str | Mapping[str, Any] | None = None,
                      store: MeasurementSource | None = None) -> dict[str, Any]:
     """The spindle, grid, joints and materials of a library prediction from a base document.
 
@@ -164,6 +231,11 @@ def spindle_settings(base: Mapping[str, Any], *, frequency: Mapping[str, Any] | 
         :data:`DEFAULT_GRID`.
     joints : mapping, optional
         Joints for every tool; default the base's (rigid when it has none).
+    holder_tool : str or mapping, optional
+        The holder–tool joint of every tool, replacing the joints' own: a clamping model name
+        (``"bonded"``, ``"point"`` = rigid point joint) or a whole ``joints.holder_tool`` object
+        (e.g. ``{"model": "contact", "interface_stiffness_n_m3": 5e13}``): how a whole library
+        is switched to a clamping model.
     store : MeasurementSource, optional
         Where a measured spindle's lines are read.
 
@@ -171,6 +243,11 @@ def spindle_settings(base: Mapping[str, Any], *, frequency: Mapping[str, Any] | 
     -------
     dict
         Keyword arguments of :func:`prepare_library` / :func:`prepare_sync`.
+
+    Raises
+    ------
+    InputError
+        ``holder_tool`` is neither a model name nor an object.
     """
     spindle = base["spindle"]
     if frequency is not None:
@@ -181,7 +258,8 @@ def spindle_settings(base: Mapping[str, Any], *, frequency: Mapping[str, Any] | 
         grid = {"values_hz": store.get(spindle["measurement_id"]).frequency_hz.tolist()}
     else:
         grid = dict(DEFAULT_GRID)
-    return {"spindle": spindle, "frequency": grid, "joints": joints if joints is not None else base.get("joints"),
+    chosen = every_tool_joints(joints if joints is not None else base.get("joints"), holder_tool)
+    return {"spindle": spindle, "frequency": grid, "joints": chosen,
             "materials": base.get("materials"), "beam_theory": base.get("beam_theory"),
             "shear_coefficient": base.get("shear_coefficient")}
 
@@ -228,21 +306,27 @@ class ExportFile:
     revision: int
 
 
-def export_file(libraries: LibraryStore, library_id: str, fmt: Literal["hdf5", "zip", "json"]) -> ExportFile:
-    """A stored library's results as HDF5, a zip of UFF 58 files, or JSON.
+def export_file(libraries: LibraryStore, library_id: str, fmt: ExportFormat) -> ExportFile:
+    """A stored library's results as HDF5, a zip of UFF 58 files, JSON or Parquet.
 
     Raises
     ------
     NotFoundError
         No such library.
+    InputError
+        An unknown format, or Parquet without pyarrow (naming the extra ``rcsa[parquet]``).
     """
     if fmt not in _SUFFIX:
         raise InputError("format", f"must be one of {', '.join(_SUFFIX)}, got {fmt!r}")
+    if fmt == "parquet":
+        require_format(fmt)
     results = libraries.results(library_id)
     if fmt == "json":
-        data = orjson.dumps(results, option=orjson.OPT_SERIALIZE_NUMPY)
+        data = json_bytes(results)
+    elif fmt == "zip":
+        data = library_uff_zip(results)
     else:
-        data = library_hdf5(results) if fmt == "hdf5" else library_uff_zip(results)
+        data = encode_result(results, fmt, "library-results")
     revision = int(results["library"]["revision"])
     return ExportFile(data, f"{library_id}-r{revision}{_SUFFIX[fmt]}", int(results["summary"]["ok"]), revision)
 
@@ -261,7 +345,7 @@ def write_export(libraries: LibraryStore, library_id: str, path: str | os.PathLi
     """
     suffix = Path(path).suffix.lower()
     if suffix not in EXPORT_FORMATS:
-        raise InputError("out", f"{path}: the file name must end in .h5, .hdf5, .zip or .json")
+        raise InputError("out", f"{path}: the file name must end in {', '.join(EXPORT_FORMATS)}")
     export = export_file(libraries, library_id, EXPORT_FORMATS[suffix])
     atomic_write_bytes(Path(path), export.data)
     return export

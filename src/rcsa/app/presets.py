@@ -1,4 +1,4 @@
-"""Chatter-safe presets as the CLI and the REST service ask for them (``contract.md`` v1.1).
+"""Chatter-safe presets as the CLI and the REST service ask for them (``docs/contract.md`` "Additions in v1.1").
 
 ``rcsa library recommend LIBRARY ...`` and ``POST /v1/libraries/{id}:recommend`` read a Fusion
 library (``.json`` or ``.tools``), find each milling tool's best stable pocket from its

@@ -120,6 +120,9 @@ class CachedMeasurements:
                     self._items.popitem(last=False)
         return m
 
+    def __contains__(self, measurement_id: object) -> bool:
+        return measurement_id in self.store
+
     def _identity(self, measurement_id: str) -> Any:
         identity = getattr(self.store, "file_identity", None)
         if identity is not None:

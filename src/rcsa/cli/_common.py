@@ -8,17 +8,30 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated, Any, TypeVar
 
-import orjson
 import typer
 
 from rcsa.errors import InputError, NotFoundError, RcsaError
 
-__all__ = ["QuietOption", "fail", "progress_callback", "read_json", "run_guarded", "write_json"]
+__all__ = ["QuietOption", "command_group", "fail", "progress_callback", "read_json", "run_guarded", "wrote",
+           "write_json", "write_results"]
 
 #: ``--quiet/-q`` of the commands that draw a progress bar.
 QuietOption = Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar on stderr.")]
 
 T = TypeVar("T")
+
+
+def command_group(help: str, **settings: Any) -> typer.Typer:  # noqa: A002 (typer's name)
+    """A ``typer.Typer`` as every rcsa command group is made: help as written (no Rich
+    markup: ``rcsa[dask]`` stays as it is, option names are never cut), no shell-completion
+    options, errors as one line (``run_guarded``), the group's help when called bare."""
+    return typer.Typer(help=help, no_args_is_help=True, add_completion=False, pretty_exceptions_enable=False,
+                       rich_markup_mode=None, **settings)
+
+
+def wrote(path: Path | str, what: str) -> None:
+    """Say on stderr, in one line, what a command wrote where (stdout stays the result's)."""
+    typer.echo(f"wrote {what} to {path}", err=True)
 
 
 def fail(message: str, code: int = 1) -> typer.Exit:
@@ -42,9 +55,17 @@ def read_json(path: Path) -> Any:
         raise fail(f"{path}: {exc}") from None
 
 
-def write_json(document: Any, out: Path | None) -> None:
-    """Write a JSON document to ``out``, or to stdout when ``out`` is None."""
-    data = orjson.dumps(document, option=orjson.OPT_SERIALIZE_NUMPY | orjson.OPT_INDENT_2)
+def write_json(document: Any, out: Path | None, what: str | None = "the result") -> None:
+    """Write a JSON document to ``out`` (saying so on stderr, unless ``what`` is None), or to
+    stdout when ``out`` is None.
+
+    Indented; numpy arrays (and a Prediction) are written straight to bytes
+    (:func:`rcsa.app.results.json_bytes`).
+    """
+    # rcsa.app is imported when a command runs, not with the CLI: `rcsa --help` stays fast
+    from rcsa.app.results import json_bytes
+
+    data = json_bytes(document, indent=True)
     if out is None:
         sys.stdout.buffer.write(data + b"\n")
         sys.stdout.flush()
@@ -53,6 +74,25 @@ def write_json(document: Any, out: Path | None) -> None:
             out.write_bytes(data + b"\n")
         except OSError as exc:
             raise fail(f"cannot write {out}: {exc.strerror or exc}") from None
+        if what is not None:
+            wrote(out, what)
+
+
+def write_results(document: Any, out: Path | None, kind: str, what: str | None = "the result") -> None:
+    """Write a batch or library result to ``out`` in the form its suffix names (``.json``,
+    ``.h5``/``.hdf5``, ``.parquet``), or as JSON to stdout when ``out`` is None; say so on
+    stderr (``what``; None when the caller's own summary line says it)."""
+    if out is None or out.suffix.lower() == ".json":
+        write_json(document, out, what)
+        return
+    from rcsa.app.results import write_result  # when a command runs: `rcsa --help` stays fast
+
+    try:
+        run_guarded(lambda: write_result(document, out, kind))
+    except OSError as exc:
+        raise fail(f"cannot write {out}: {exc.strerror or exc}") from None
+    if what is not None:
+        wrote(out, what)
 
 
 def run_guarded(fn: Callable[[], T]) -> T:

@@ -14,6 +14,7 @@ from rcsa.cli._common import (
     read_json,
     run_guarded,
     write_json,
+    wrote,
 )
 from rcsa.cli.predict_cmd import StoreOption
 
@@ -21,9 +22,9 @@ from rcsa.cli.predict_cmd import StoreOption
 def register(app: typer.Typer) -> None:
     """Add the ``diagnose`` command to ``app``."""
 
-    @app.command()
+    @app.command(short_help="Where tap tests and model part, and which effect explains it.")
     def diagnose(
-        request: Annotated[Path, typer.Argument(help="Diagnosis request JSON (contract format, SI units); '-' for stdin.")],
+        request: Annotated[Path, typer.Argument(metavar="REQUEST.json", help="Diagnosis request JSON (contract format, SI units); '-' for stdin.")],
         out: Annotated[Path | None, typer.Option("-o", "--out", help="Write the result here instead of stdout.")] = None,
         plot: Annotated[Path | None, typer.Option("--plot", help="Also draw measured/base/corrected FRFs and the "
                                                                   "gap map to this .png or .svg file.")] = None,
@@ -47,4 +48,6 @@ def register(app: typer.Typer) -> None:
                     doc, plot, store=open_store(store) if store else None, progress=progress))
         except OSError as exc:
             raise fail(f"cannot write {plot}: {exc.strerror or exc}") from None
-        write_json(response, out)
+        if plot is not None:
+            wrote(plot, "the diagnosis picture (FRFs and gap map)")
+        write_json(response, out, "the diagnosis")

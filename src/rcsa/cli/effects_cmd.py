@@ -7,15 +7,23 @@ from typing import Annotated
 
 import typer
 
-from rcsa.cli._common import QuietOption, progress_callback, read_json, run_guarded, write_json
+from rcsa.cli._common import (
+    QuietOption,
+    progress_callback,
+    read_json,
+    run_guarded,
+    write_json,
+    wrote,
+)
 
 
 def register(app: typer.Typer) -> None:
     """Add the ``effects`` command to ``app``."""
 
-    @app.command()
+    @app.command(short_help="Sensitivities of every mode to bearings, joints and tool.")
     def effects(
         assembly: Annotated[Path, typer.Argument(
+            metavar="ASSEMBLY.json",
             help="Assembly JSON (contract format), or {\"assembly\", \"parameters\", \"relative_step\", "
                  "\"band_hz\"}; '-' for stdin.")],
         out: Annotated[Path | None, typer.Option("-o", "--out", help="Write the result here instead of stdout.")] = None,
@@ -37,4 +45,6 @@ def register(app: typer.Typer) -> None:
         with progress_callback("effect analysis", quiet) as progress:
             result = run_guarded(lambda: effects_with_figure(doc, picture, store=open_store(store) if store else None,
                                                              progress=progress))
-        write_json(result, out)
+        if picture is not None:
+            wrote(picture, "the sensitivity heat map")
+        write_json(result, out, "the effect analysis")

@@ -13,12 +13,11 @@ from typing import Annotated
 
 import typer
 
-from rcsa.cli._common import run_guarded, write_json
+from rcsa.cli._common import command_group, run_guarded, write_json
 
 __all__ = ["keys_app", "register"]
 
-keys_app = typer.Typer(help="Create, list and revoke API keys of the REST service.", no_args_is_help=True,
-                       add_completion=False, pretty_exceptions_enable=False)
+keys_app = command_group("Create, list and revoke API keys of the REST service.")
 
 StoreOpt = Annotated[Path | None, typer.Option("--store", help="Store directory (default: $RCSA_STORE, else "
                                                                 "~/.local/share/rcsa/store).")]
@@ -43,7 +42,7 @@ def create(
                "and send it as the X-API-Key header", err=True)
 
 
-@keys_app.command("list")
+@keys_app.command("list", short_help="List keys as JSON (never their secrets).")
 def list_(
     include_revoked: Annotated[bool, typer.Option("--all", help="Also list revoked keys.")] = False,
     store: StoreOpt = None,
@@ -55,9 +54,9 @@ def list_(
     write_json([r.to_dict(with_hash=False) for r in records], None)
 
 
-@keys_app.command("revoke")
+@keys_app.command("revoke", short_help="Revoke a key; it is refused from the next request on.")
 def revoke(
-    key: Annotated[str, typer.Argument(help="Key id (k-...) from `rcsa keys list`, or the key itself.")],
+    key: Annotated[str, typer.Argument(metavar="KEY", help="Key id (k-...) from `rcsa keys list`, or the key itself.")],
     store: StoreOpt = None,
 ) -> None:
     """Revoke a key; services on this store refuse it from the next request on."""
@@ -69,4 +68,4 @@ def revoke(
 
 def register(app: typer.Typer) -> None:
     """Add ``rcsa keys ...`` to ``app``."""
-    app.add_typer(keys_app, name="keys", help="Create, list and revoke API keys of the REST service.")
+    app.add_typer(keys_app, name="keys")

@@ -9,17 +9,19 @@ FreeCAD stores no stickout: ``--options '{"stickout_m": 0.04}'`` (or per toolbit
 of every tool of the library on one spindle, computed
 here (no service needed), with a progress bar on stderr. The result JSON (one entry per
 library item: ``ok``, ``skipped`` with a reason, or ``error``) goes to stdout or ``-o
-OUT.json``; the exit status is 1 when any tool errored.
+OUT.json`` (``-o OUT.h5`` or ``OUT.parquet``: the same as HDF5 or Parquet); the exit status is
+1 when any tool errored.
 
 ``rcsa library sync LIBRARY --spindle ID-or-SPINDLE.json [--library-id ID]``: keep the
 library in the store (:func:`rcsa.app.libraries.prepare_sync`, the same code as ``POST
 /v1/libraries/{id}:sync``): only tools whose result is not stored yet are computed; the
 added / changed / unchanged / removed summary goes to stderr, the sync report (JSON) to
-stdout; exit status 1 when any tool failed. ``--dask-scheduler tcp://HOST:8786`` (or
+stdout (``-o OUT.json``: there; ``-o OUT.h5|.parquet``: the synced results written there, the
+report to stdout); exit status 1 when any tool failed. ``--dask-scheduler tcp://HOST:8786`` (or
 ``RCSA_DASK_SCHEDULER``) computes on that Dask cluster instead of here; the results are
 written here, the same bytes either way. ``rcsa library show ID`` prints a stored
-library's summary and per-tool status; ``rcsa library export ID -o FILE.h5|.zip|.json``
-writes its results (HDF5, zip of UFF 58 files, or JSON).
+library's summary and per-tool status; ``rcsa library export ID -o FILE.h5|.parquet|.zip|.json``
+writes its results (HDF5, Parquet, zip of UFF 58 files, or JSON).
 
 ``rcsa library recommend LIBRARY --material M --max-rpm N (--spindle S | --measurement ID |
 --library-id ID) (-o OUT | --in-place)``: chatter-safe presets (:mod:`rcsa.app.presets`). Per
@@ -37,7 +39,15 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rcsa.cli._common import fail, read_json, run_guarded, write_json
+from rcsa.cli._common import (
+    command_group,
+    fail,
+    read_json,
+    run_guarded,
+    write_json,
+    write_results,
+    wrote,
+)
 from rcsa.errors import InputError
 
 if TYPE_CHECKING:
@@ -46,8 +56,9 @@ if TYPE_CHECKING:
 
 __all__ = ["library_app", "register"]
 
-library_app = typer.Typer(help="Tool-point FRFs of whole CAM tool libraries.", no_args_is_help=True,
-                          add_completion=False, pretty_exceptions_enable=False)
+library_app = command_group("Tool-point FRFs of whole CAM tool libraries (Autodesk Fusion, FreeCAD): predict them, "
+                            "keep them in the store, export them, write chatter-safe presets.",
+                            short_help="Tool-point FRFs and presets of whole CAM tool libraries.")
 
 
 def parse_frequency_option(text: str) -> dict[str, Any]:
@@ -67,6 +78,11 @@ def parse_frequency_option(text: str) -> dict[str, Any]:
         raise InputError("frequency", f"{text!r}: write START:STOP:STEP in Hz, e.g. 5:5000:1, or a JSON "
                                       'object {"values_hz": [...]}') from None
     return {"start_hz": start, "stop_hz": stop, "step_hz": step}
+
+
+def _wrote_to(out: Path | None, what: str) -> str:
+    """``"wrote <what> to <out>: "`` when a result went to a file, for a command's summary line."""
+    return "" if out is None else f"wrote {what} to {out}: "
 
 
 def _spindle_document(path: Path) -> dict[str, Any]:
@@ -96,16 +112,22 @@ def _uncertainty_json(option: str | None) -> dict[str, Any] | None:
     return doc
 
 
-def _settings(base: dict[str, Any], frequency: str | None, joints: Path | None, store: Any) -> dict[str, Any]:
+def _settings(base: dict[str, Any], frequency: str | None, joints: Path | None, store: Any,
+              holder_tool: str | None = None) -> dict[str, Any]:
     """Keyword arguments of :func:`rcsa.app.libraries.prepare_library` from the command's options.
 
     ``store`` is given when the spindle is a stored measurement named on the command line;
-    its lines are then the default grid.
+    its lines are then the default grid. ``holder_tool`` is a clamping model name or a JSON
+    ``joints.holder_tool`` object for every tool.
     """
     # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
+    from rcsa.app.inputs import decode_json
     from rcsa.app.libraries import spindle_settings
+    ht: Any = holder_tool
+    if holder_tool is not None and holder_tool.lstrip().startswith("{"):
+        ht = decode_json(holder_tool, path="holder_tool", what="--holder-tool")
     return spindle_settings(base, frequency=parse_frequency_option(frequency) if frequency is not None else None,
-                            joints=read_json(joints) if joints is not None else None, store=store)
+                            joints=read_json(joints) if joints is not None else None, holder_tool=ht, store=store)
 
 
 def _progress_bar(quiet: bool) -> Any:
@@ -128,6 +150,10 @@ FrequencyOption = Annotated[str | None, typer.Option(
          "measurement's lines, else 5:5000:1.")]
 JointsOption = Annotated[Path | None, typer.Option(
     help="Joints JSON {spindle_holder, holder_tool} for every tool (default: the assembly's, else rigid).")]
+HolderToolOption = Annotated[str | None, typer.Option(
+    "--holder-tool", help="Every tool's holder-tool clamping: bonded, point, or a JSON joints.holder_tool object, "
+                          "e.g. '{\"model\": \"contact\", \"interface_stiffness_n_m3\": 5e13}' (replaces the "
+                          "joints' own).")]
 ImportOptions = Annotated[str | None, typer.Option(
     help='Import options as JSON, e.g. \'{"holder_segments_per_cone": 6}\'.')]
 NaturalFrequenciesOption = Annotated[bool, typer.Option(help="Compute exact natural frequencies.")]
@@ -140,13 +166,13 @@ DaskOption = Annotated[str | None, typer.Option(
 DaskTimeoutOption = Annotated[float, typer.Option(
     "--dask-connect-timeout", envvar="RCSA_DASK_CONNECT_TIMEOUT_S", min=0.1,
     help="Seconds to try to reach the Dask scheduler before giving up.")]
-LibraryArgument = Annotated[Path, typer.Argument(help="Fusion tool library (.json, .tools) or FreeCAD toolbits "
+LibraryArgument = Annotated[Path, typer.Argument(metavar="LIBRARY", help="Fusion tool library (.json, .tools) or FreeCAD toolbits "
                                                       "(.fctb, .fctl, a folder or a zip of them).")]
 HolderOption = Annotated[Path | None, typer.Option(help="FreeCAD holder (.fcholder) for the toolbits, when the "
                                                        "library has none.")]
 
 
-@library_app.command("predict")
+@library_app.command("predict", short_help="Tool-point FRFs of every tool of a library, now.")
 def predict(
     library: LibraryArgument,
     spindle: Annotated[Path | None, typer.Option(help="Spindle JSON (segments + bearings), or an assembly "
@@ -156,10 +182,13 @@ def predict(
                                                          "(hybrid).")] = None,
     frequency: FrequencyOption = None,
     joints: JointsOption = None,
+    holder_tool: HolderToolOption = None,
     options: ImportOptions = None,
     natural_frequencies: NaturalFrequenciesOption = True,
     uncertainty: UncertaintyOption = None,
-    out: Annotated[Path | None, typer.Option("-o", "--out", help="Write the result here instead of stdout.")] = None,
+    out: Annotated[Path | None, typer.Option("-o", "--out", help=(
+        "Write the result here instead of stdout: OUT.json, OUT.h5 (HDF5) or OUT.parquet (needs "
+        "rcsa[parquet])."))] = None,
     store: Annotated[Path | None, typer.Option("--store", help="Measurement store (default: RCSA_STORE or "
                                                                "the per-user store).")] = None,
     quiet: QuietOption = False,
@@ -179,7 +208,7 @@ def predict(
 
     def build() -> tuple[Workbench, Any]:
         bench = Workbench(open_store(store) if (store is not None or measurement is not None) else None)
-        settings = _settings(base, frequency, joints, bench.store if measurement is not None else None)
+        settings = _settings(base, frequency, joints, bench.store if measurement is not None else None, holder_tool)
         work = prepare_library(bench, library, holder=holder, **settings,
                                natural_frequencies=natural_frequencies, options=_options_json(options),
                                uncertainty=_uncertainty_json(uncertainty))
@@ -187,6 +216,9 @@ def predict(
             work.check()  # before the progress bar starts
         return bench, work
 
+    if out is not None:
+        from rcsa.app.results import format_of_suffix, require_format
+        run_guarded(lambda: require_format(format_of_suffix(out)))  # before computing anything
     bench, work = run_guarded(build)
     backend = run_guarded(lambda: compute_backend(dask_scheduler, connect_timeout_s=dask_connect_timeout))
     with _progress_bar(quiet) as bar:
@@ -200,9 +232,10 @@ def predict(
                                                   backend=backend)).document
         finally:
             backend.close()
-    write_json(result, out)
+    write_results(result, out, "library", None)  # the summary line below says where
     s = result["summary"]
-    typer.echo(f"{s['ok']} ok, {s['skipped']} skipped, {s['error']} error", err=True)
+    typer.echo(f"{_wrote_to(out, 'the library results')}{s['ok']} ok, {s['skipped']} skipped, {s['error']} error",
+               err=True)
     if s["error"]:
         for r in result["results"]:
             if r["status"] == "error":
@@ -214,7 +247,7 @@ StoreOption = Annotated[Path | None, typer.Option("--store", help="Store directo
                                                                    "per-user store).")]
 
 
-@library_app.command("sync")
+@library_app.command("sync", short_help="Keep a library's FRFs in the store; compute only changes.")
 def sync(
     library: LibraryArgument,
     spindle: Annotated[str, typer.Option(help="A stored measurement id (m-..., hybrid), or a spindle JSON "
@@ -224,11 +257,13 @@ def sync(
                                                                         "file name without suffix).")] = None,
     frequency: FrequencyOption = None,
     joints: JointsOption = None,
+    holder_tool: HolderToolOption = None,
     options: ImportOptions = None,
     natural_frequencies: NaturalFrequenciesOption = True,
     uncertainty: UncertaintyOption = None,
-    out: Annotated[Path | None, typer.Option("-o", "--out", help="Write the sync report here instead of "
-                                                                 "stdout.")] = None,
+    out: Annotated[Path | None, typer.Option("-o", "--out", help=(
+        "OUT.json: write the sync report here instead of stdout. OUT.h5 or OUT.parquet: write the synced "
+        "library's results there (as rcsa library export does) and the report to stdout."))] = None,
     store: StoreOption = None,
     quiet: QuietOption = False,
     dask_scheduler: DaskOption = None,
@@ -248,7 +283,7 @@ def sync(
     def build() -> tuple[Workbench, Any]:
         st = open_store(store)
         bench = Workbench(st, st.path)
-        settings = _settings(base, frequency, joints, st if measurement is not None else None)
+        settings = _settings(base, frequency, joints, st if measurement is not None else None, holder_tool)
         work = prepare_sync(bench, library_id, library, holder=holder, **settings,
                             natural_frequencies=natural_frequencies, options=_options_json(options),
                             uncertainty=_uncertainty_json(uncertainty))
@@ -256,6 +291,10 @@ def sync(
             work.check()  # before the progress bar starts
         return bench, work
 
+    binary = out is not None and out.suffix.lower() != ".json"
+    if binary:
+        from rcsa.app.results import format_of_suffix, require_format
+        run_guarded(lambda: require_format(format_of_suffix(out, allowed=("hdf5", "parquet"))))
     bench, work = run_guarded(build)
     ident = work.request["library_id"]
     backend = run_guarded(lambda: compute_backend(dask_scheduler if work.size else None,
@@ -271,9 +310,17 @@ def sync(
                                                   plan=work.plan, backend=backend)).document
         finally:
             backend.close()
-    write_json(report, out)
+    if binary:
+        from rcsa.app.libraries import write_export
+        from rcsa.app.stores import library_store
+        try:
+            run_guarded(lambda: write_export(library_store(store), ident, out))
+        except OSError as exc:
+            raise fail(f"cannot write {out}: {exc.strerror or exc}") from None
+    write_json(report, None if binary else out, None)  # the summary line below says where
     c, s = report["counts"], report["summary"]
-    typer.echo(f"{ident} revision {report['revision']}: {c['added']} added, {c['changed']} changed, "
+    written = _wrote_to(out, "the library results" if binary else "the sync report")
+    typer.echo(f"{written}{ident} revision {report['revision']}: {c['added']} added, {c['changed']} changed, "
                f"{c['unchanged']} unchanged, {c['removed']} removed ({report['computed']} computed, "
                f"{report['from_cache']} from cache; {s['ok']} ok, {s['skipped']} skipped, {s['error']} error)",
                err=True)
@@ -284,23 +331,23 @@ def sync(
         raise typer.Exit(1)
 
 
-@library_app.command("show")
+@library_app.command("show", short_help="A stored library's summary and every tool's status.")
 def show(
-    library_id: Annotated[str, typer.Argument(help="Id of a stored library.")],
+    library_id: Annotated[str, typer.Argument(metavar="LIBRARY_ID", help="Id of a stored library.")],
     store: StoreOption = None,
     out: Annotated[Path | None, typer.Option("-o", "--out", help="Write here instead of stdout.")] = None,
 ) -> None:
     """Print a stored library's summary and every tool's status (JSON)."""
     # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
     from rcsa.app.stores import library_store
-    write_json(run_guarded(lambda: library_store(store).get(library_id)), out)
+    write_json(run_guarded(lambda: library_store(store).get(library_id)), out, "the library summary")
 
 
-@library_app.command("export")
+@library_app.command("export", short_help="Write a stored library's results: HDF5, Parquet, UFF zip, JSON.")
 def export(
-    library_id: Annotated[str, typer.Argument(help="Id of a stored library.")],
-    out: Annotated[Path, typer.Option("-o", "--out", help="FILE.h5 (HDF5), FILE.zip (one UFF 58 file per tool) "
-                                                          "or FILE.json.")],
+    library_id: Annotated[str, typer.Argument(metavar="LIBRARY_ID", help="Id of a stored library.")],
+    out: Annotated[Path, typer.Option("-o", "--out", help="FILE.h5 (HDF5), FILE.parquet (needs rcsa[parquet]), "
+                                                          "FILE.zip (one UFF 58 file per tool) or FILE.json.")],
     store: StoreOption = None,
 ) -> None:
     """Write a stored library's results to a file; the format follows its suffix."""
@@ -308,18 +355,18 @@ def export(
     from rcsa.app.libraries import EXPORT_FORMATS, write_export
     from rcsa.app.stores import library_store
     if out.suffix.lower() not in EXPORT_FORMATS:
-        raise fail(f"{out}: the file name must end in .h5, .hdf5, .zip or .json")
+        raise fail(f"{out}: the file name must end in {', '.join(EXPORT_FORMATS)}")
     try:
         export = run_guarded(lambda: write_export(library_store(store), library_id, out))
     except OSError as exc:
         raise fail(f"cannot write {out}: {exc.strerror or exc}") from None
     ok = export.ok
-    typer.echo(f"{out}: {ok} tool{'s' if ok != 1 else ''} of {library_id} revision {export.revision}", err=True)
+    wrote(out, f"{ok} tool{'s' if ok != 1 else ''} of {library_id} revision {export.revision}")
 
 
-@library_app.command("recommend")
+@library_app.command("recommend", short_help="Write chatter-safe presets into a Fusion library.")
 def recommend(
-    library: Annotated[Path, typer.Argument(help="Autodesk Fusion tool library (.json or .tools).")],
+    library: Annotated[Path, typer.Argument(metavar="LIBRARY", help="Autodesk Fusion tool library (.json or .tools).")],
     material: Annotated[str, typer.Option(help="Workpiece material: a table entry (aluminium-7075, aluminium-6082, "
                                                "carbon-steel, ...; see the README) or your own name with "
                                                "--tangential-coefficient-n-m2 and --radial-ratio.")],
@@ -355,6 +402,7 @@ def recommend(
                                                           "depth limit at this confidence (default 0.95).")] = None,
     frequency: FrequencyOption = None,
     joints: JointsOption = None,
+    holder_tool: HolderToolOption = None,
     options: ImportOptions = None,
     store: StoreOption = None,
     quiet: QuietOption = False,
@@ -394,7 +442,7 @@ def recommend(
     def predicted() -> PresetFile:
         base = _spindle_document(spindle) if spindle is not None else {"spindle": {"measurement_id": measurement}}
         bench = Workbench(open_store(store) if (store is not None or measurement is not None) else None)
-        fields = _settings(base, frequency, joints, bench.store if measurement is not None else None)
+        fields = _settings(base, frequency, joints, bench.store if measurement is not None else None, holder_tool)
         with _progress_bar(quiet) as bar:
             task = bar.add_task("tools", total=1)
 
@@ -409,7 +457,7 @@ def recommend(
         write_preset_file(result, target)  # type: ignore[arg-type]
     except OSError as exc:
         raise fail(f"cannot write {target}: {exc.strerror or exc}") from None
-    write_json(result.report, report)
+    write_json(result.report, report, "the recommendation report")
     for t in result.report["tools"]:
         if t["status"] == "written":
             sd = t["stepdown"]
@@ -427,4 +475,4 @@ def recommend(
 
 def register(app: typer.Typer) -> None:
     """Add ``rcsa library ...`` to ``app``."""
-    app.add_typer(library_app, name="library", help="Tool-point FRFs of whole CAM tool libraries.")
+    app.add_typer(library_app, name="library")

@@ -7,15 +7,15 @@ from typing import Annotated
 
 import typer
 
-from rcsa.cli._common import read_json, run_guarded, write_json
+from rcsa.cli._common import read_json, run_guarded, write_json, wrote
 
 
 def register(app: typer.Typer) -> None:
     """Add the ``lobes`` command to ``app``."""
 
-    @app.command()
+    @app.command(short_help="Stability lobes: zero-order or semi-discretization.")
     def lobes(
-        request: Annotated[Path, typer.Argument(help="Stability-lobes request JSON (contract format); '-' for stdin.")],
+        request: Annotated[Path, typer.Argument(metavar="REQUEST.json", help="Stability-lobes request JSON (contract format); '-' for stdin.")],
         out: Annotated[Path | None, typer.Option("-o", "--out", help="Write the result here instead of stdout.")] = None,
         plot: Annotated[Path | None, typer.Option("--plot", help="Also draw the lobe diagram (.png or .svg).")] = None,
         store: Annotated[Path | None, typer.Option("--store", help="Measurement store for hybrid assemblies.")] = None,
@@ -33,4 +33,5 @@ def register(app: typer.Typer) -> None:
         if plot is not None:
             run_guarded(lambda: save_figure(robust_lobes_figure(answer.nominal, answer.extras()),
                                             check_picture_path(plot, "--plot")))
-        write_json(answer.to_dict(), out)
+            wrote(plot, "the lobe diagram")
+        write_json(answer.to_dict(), out, "the stability lobes")

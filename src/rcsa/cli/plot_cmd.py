@@ -12,16 +12,16 @@ from typing import Annotated
 
 import typer
 
-from rcsa.cli._common import read_json, run_guarded
+from rcsa.cli._common import read_json, run_guarded, wrote
 from rcsa.errors import InputError
 
 
 def register(app: typer.Typer) -> None:
     """Add the ``plot`` command to ``app``."""
 
-    @app.command()
+    @app.command(short_help="Draw an FRF or a stability lobe diagram (PNG, SVG).")
     def plot(
-        source: Annotated[Path, typer.Argument(help="Prediction result, measurement, assembly, lobes result or lobes "
+        source: Annotated[Path, typer.Argument(metavar="RESULT.json", help="Prediction result, measurement, assembly, lobes result or lobes "
                                                               "request (JSON).")],
         out: Annotated[Path, typer.Option("-o", "--out", help="Picture to write: .png or .svg.")],
         layout: Annotated[str, typer.Option(help="FRF layout: full, real_imag or bode.")] = "full",
@@ -40,3 +40,4 @@ def register(app: typer.Typer) -> None:
             save_figure(document_figure(doc, layout=layout, store=open_store(store) if store else None), out)
 
         run_guarded(draw)
+        wrote(out, "the picture")

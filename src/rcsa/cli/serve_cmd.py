@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
 import tempfile
 from typing import Annotated
 
@@ -12,7 +14,7 @@ import typer
 def register(app: typer.Typer) -> None:
     """Add the ``serve`` command to ``app``."""
 
-    @app.command()
+    @app.command(short_help="Run the REST service and its web view.")
     def serve(
         host: Annotated[str, typer.Option(help="Interface to bind.")] = "127.0.0.1",
         port: Annotated[int, typer.Option(help="TCP port.")] = 8000,
@@ -21,9 +23,18 @@ def register(app: typer.Typer) -> None:
             help="Run batch, library and sync jobs on this Dask cluster (tcp://HOST:8786; needs "
                  "pip install 'rcsa[dask]'). Default: RCSA_DASK_SCHEDULER, else in the service.")] = None,
     ) -> None:
-        """Run the REST service (uvicorn) with the store from RCSA_STORE or the default location."""
+        """Run the REST service (uvicorn) with the store from RCSA_STORE or the default location.
+
+        The settings, the store and the Dask scheduler are checked once first (the service's
+        own start-up, python -m service.preflight): a service that cannot start exits 1 with
+        the reason instead of leaving its workers to fail (uvicorn then exits 0).
+        """
         if dask_scheduler:
             os.environ["RCSA_DASK_SCHEDULER"] = dask_scheduler  # read by every worker process's settings
+        # its request must not count in the workers' shared metrics
+        env = {k: v for k, v in os.environ.items() if k != "PROMETHEUS_MULTIPROC_DIR"}
+        if subprocess.run([sys.executable, "-m", "service.preflight"], env=env, check=False).returncode:
+            raise typer.Exit(1)
         # uvicorn: only for this command (``rcsa --help`` and the others do without it)
         import uvicorn
 

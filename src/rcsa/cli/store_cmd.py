@@ -15,19 +15,15 @@ from typing import Annotated, Any, TypeVar
 
 import typer
 
-from rcsa.cli._common import fail, write_json
+from rcsa.cli._common import command_group, fail, write_json
 from rcsa.errors import InputError, RcsaError
 
 __all__ = ["store_app"]
 
 T = TypeVar("T")
 
-store_app = typer.Typer(
-    help="Import, list, show, delete measured spindle FRFs; check and rebuild the store.",
-    no_args_is_help=True,
-    add_completion=False,
-    pretty_exceptions_enable=False,
-)
+store_app = command_group("Import, list, show, delete measured spindle FRFs; check and rebuild the store.",
+                          short_help="Measured spindle FRFs: import, list, show, delete, check.")
 
 StoreOpt = Annotated[
     Path | None,
@@ -72,10 +68,10 @@ def _artifact_text(text: str | None) -> str | None:
         raise InputError("artifact", f"give a JSON object or @FILE.json ({e})") from None
 
 
-@store_app.command("import")
+@store_app.command("import", short_help="Import a measurement file; print its metadata and id.")
 def import_(
     file: Annotated[
-        Path, typer.Argument(help="File to import (tap: several taps may be given with --tap).")
+        Path, typer.Argument(metavar="FILE", help="File to import (tap: several taps may be given with --tap).")
     ],
     fmt: Annotated[
         str | None,
@@ -158,6 +154,9 @@ def import_(
         list[Path] | None,
         typer.Option("--tap", help="tap: further tap files averaged with FILE (H1)."),
     ] = None,
+    id_only: Annotated[
+        bool, typer.Option("--id-only", help="Print only the new id, for scripts: ID=$(rcsa store import ... --id-only).")
+    ] = False,
     store: StoreOpt = None,
 ) -> None:
     """Import a measurement file and print the new measurement's metadata JSON (with its id)."""
@@ -191,7 +190,11 @@ def import_(
         )
         return M.store_measurement(open_store(store), m)
 
-    write_json(_guard(run), None)
+    info = _guard(run)
+    if id_only:
+        typer.echo(info["id"])
+    else:
+        write_json(info, None)
 
 
 @store_app.command("list")
@@ -244,7 +247,7 @@ def list_(
     Console(width=200).print(table)
 
 
-@store_app.command("show")
+@store_app.command("show", short_help="A measurement's metadata and the peak of each FRF.")
 def show(
     measurement_id: Annotated[
         str, typer.Argument(metavar="ID", help="Measurement id, e.g. m-0123456789ab.")
@@ -277,7 +280,7 @@ def delete(
     write_json(_guard(lambda: M.delete_measurement(open_store(store), measurement_id)), None)
 
 
-@store_app.command("check")
+@store_app.command("check", short_help="Verify every measurement file and the catalogue.")
 def check(store: StoreOpt = None) -> None:
     """Verify every measurement file (schema, checksums, readability, id) and the catalogue;
     print a JSON report; exit 1 when it lists problems. Changes nothing."""
@@ -290,7 +293,7 @@ def check(store: StoreOpt = None) -> None:
         raise typer.Exit(1)
 
 
-@store_app.command("rebuild")
+@store_app.command("rebuild", short_help="Make the catalogue again from the measurement files.")
 def rebuild(store: StoreOpt = None) -> None:
     """Make the catalogue (index.sqlite) again from the measurement files; print a JSON
     report; exit 1 when some files cannot be read (listed as damaged, left out)."""

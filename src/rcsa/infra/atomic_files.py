@@ -3,7 +3,7 @@
 Every file rcsa keeps (measurements, cached results, keys, markers, exports) is written
 under a temporary name in the same directory, flushed and fsynced, then ``os.replace``d
 into place and the directory fsynced, so a crash leaves either the old file or the new one,
-never a torn one (``ecosystem.md`` §3).
+never a torn one (``docs/architecture.md`` "Durable storage").
 """
 
 from __future__ import annotations

@@ -216,8 +216,8 @@ class ResultEvicted(RcsaError):
 class StreamedResult:
     """A result too large to build in memory, returned by a :data:`Handler` instead of a document.
 
-    ``write(fh)`` computes and writes the result's bytes (JSON) to the binary file ``fh`` piece
-    by piece, and returns the job's summary. The runner calls it with the job's temporary
+    ``write(fh)`` computes and writes the result's bytes (JSON, or a binary form) to the
+    binary file ``fh`` (readable and seekable) piece by piece, and returns the job's summary. The runner calls it with the job's temporary
     result file, then fsyncs and renames it as for any other result.
     """
 
@@ -746,7 +746,7 @@ class JobRunner:
             if handler is None:
                 raise InputError("kind", f"this service cannot run jobs of kind {job.kind!r}")
             document, summary = handler(self.jobs.request(job.id), progress)
-            with open(tmp, "wb") as fh:
+            with open(tmp, "w+b") as fh:  # readable too: an HDF5 writer reads back what it wrote
                 if isinstance(document, StreamedResult):
                     written = document.write(fh)  # computed as it is written, heartbeats going on
                     summary = written if written is not None else summary

@@ -4,7 +4,7 @@ A Fusion library is ``{"data": [...], "version": n}`` (``.json``), or the same J
 ``tools.json`` in a zip (``.tools``). Each ``data`` item is a cutting tool, possibly with its
 holder embedded under ``"holder"``, or a standalone holder (``"type": "holder"``).
 :func:`library_combinations` turns every item into one :class:`Combination` whose ``holder``
-and ``tool`` are in the contract's assembly format (SI metres, ``contract.md``). This module
+and ``tool`` are in the contract's assembly format (SI metres, ``docs/contract.md``). This module
 reads the library and maps items; the geometry of one item is
 :mod:`rcsa.libraries.fusion_geometry`.
 
@@ -45,6 +45,8 @@ Tool
     :func:`~rcsa.libraries.tool_materials.tool_material` ("carbide", "hss", "ti coated",
     "ceramics", vendor spellings such as "HSS-Co"), else ``tool_material_default`` with a
     warning. An inserted length OAL − LB below twice SFDM is a warning (shallow clamping).
+    LB = OAL is a face-mounted tool (a shell or face mill on an arbor): nothing is inserted,
+    the holder is solid, and the tool sits on the holder's face (a warning says so).
 Necks
     The overhang profile from the flute end to LB is built from ``shoulder-length`` /
     ``shoulder-diameter`` (the body between the flute end and the shoulder; at DC when no
@@ -431,6 +433,12 @@ def _map_item(item: dict[str, Any], opts: _Options, warnings: list[str],
     holder_si = geometry.holder_geometry(holder_obj, warnings)
     stickout = geometry.stickout(geo, holder_si.gauge_length_m if own_holder else None, warnings)
     geometry.check_tool_lengths(geo, stickout)
+    on_face = geometry.face_mounted(geo, stickout)
+    if on_face:
+        stickout = geo["OAL"]
+        warnings.append("face-mounted (LB = OAL): the tool sits on the holder's face, no shank in a bore; the "
+                        "holder is modelled solid and the holder-tool joint is the face contact "
+                        "(joints.holder_tool: the point joint, or a face contact for model bonded/contact)")
     tool = {
         "material": _tool_material(item.get("BMC"), opts.tool_material_default, warnings),
         "diameter_m": geo["DC"], "shank_diameter_m": geo["SFDM"],
@@ -439,12 +447,13 @@ def _map_item(item: dict[str, Any], opts: _Options, warnings: list[str],
     }
     tool.update(geometry.neck_fields(geo, stickout, geometry.shaft_pieces(item, geo["unit"]), opts.shaft_origin,
                                      warnings))
-    holder = {"segments": geometry.holder_segments(holder_si, geo["SFDM"], opts.per_cone, opts.holder_material)}
+    holder = {"segments": geometry.holder_segments(holder_si, 0.0 if on_face else geo["SFDM"], opts.per_cone,
+                                                   opts.holder_material)}
     inserted = geo["OAL"] - stickout
     if inserted > holder_si.length_m + geometry.LENGTH_TOL_M:
         warnings.append(f"inserted length {geometry.mm(inserted)} exceeds the holder length "
                         f"{geometry.mm(holder_si.length_m)} below the gauge line; the excess is ignored")
-    if (note := shallow_insertion_note(inserted, geo["SFDM"])) is not None:
+    if not on_face and (note := shallow_insertion_note(inserted, geo["SFDM"])) is not None:
         warnings.append(note)
     return holder, tool
 

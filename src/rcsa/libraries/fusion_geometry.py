@@ -24,6 +24,7 @@ __all__ = [
     "Segment",
     "ShaftOrigin",
     "check_tool_lengths",
+    "face_mounted",
     "holder_geometry",
     "holder_segments",
     "mm",
@@ -110,10 +111,16 @@ def stickout(geo: Mapping[str, Any], gauge_length_m: float | None, warnings: lis
     return float(lb)
 
 
+def face_mounted(geo: Mapping[str, Any], stickout_m: float) -> bool:
+    """True for a tool whose whole length is below the holder (LB = OAL): a shell or face mill on an
+    arbor, clamped on the arbor's face rather than in a bore."""
+    return abs(stickout_m - geo["OAL"]) <= _STICKOUT_TOL_M
+
+
 def check_tool_lengths(geo: Mapping[str, Any], stickout_m: float) -> None:
-    """Stickout below OAL and flutes within the stickout, or the field at fault named."""
-    if stickout_m >= geo["OAL"]:
-        raise InputError("geometry.LB", f"stickout {mm(stickout_m)} must be less than the overall "
+    """Stickout at most OAL (equal: face-mounted) and flutes within the stickout, or the field at fault named."""
+    if stickout_m > geo["OAL"] and not face_mounted(geo, stickout_m):
+        raise InputError("geometry.LB", f"stickout {mm(stickout_m)} must not exceed the overall "
                                         f"length OAL {mm(geo['OAL'])}")
     if geo["LCF"] > stickout_m:
         raise InputError("geometry.LCF", f"flute length {mm(geo['LCF'])} exceeds the stickout "

@@ -1,7 +1,7 @@
 """Content-addressed cache of computed tool-point results (derived data, safe to delete).
 
-A result is filed under the SHA-256 of everything that determines it (``ecosystem.md``
-§3.4), never under a tool or library id:
+A result is filed under the SHA-256 of everything that determines it (``docs/architecture.md``
+"Durable storage"), never under a tool or library id:
 
 * the canonical JSON (:func:`canonical_json`: sorted keys, integers written as floats,
   ``-0.0`` as ``0.0``) of the combination (``holder``, ``tool``, ``joints``; its ``id`` left
@@ -15,9 +15,11 @@ A result is filed under the SHA-256 of everything that determines it (``ecosyste
   is never served for another option and results without one keep their keys;
 * the frequency grid as computed (SHA-256 of the float64 lines), so ``{start, stop, step}``
   and the same lines given as ``values_hz`` share results;
-* the model: ``rcsa.__version__`` and :func:`model_fingerprint`, the SHA-256 of the source of
-  every module that determines a prediction (:data:`MODEL_SOURCES`), so any change to the
-  physics gives new keys by itself — no version number to remember to bump.
+* the model: ``rcsa.__version__`` and :func:`model_fingerprint`, the SHA-256 of the *meaning*
+  of every module that determines a prediction (:data:`MODEL_SOURCES`): its syntax tree
+  without docstrings, comments or layout. Any change to what the physics computes gives new
+  keys by itself — no version number to remember to bump — while a docstring, a comment or a
+  reformatted line keeps every stored result.
 
 Layout (under the cache directory, normally ``<store>/libraries/results``)::
 
@@ -25,7 +27,6 @@ Layout (under the cache directory, normally ``<store>/libraries/results``)::
                             (UTF-8 JSON of every other field), the float64 ``frequency_hz`` and
                             the complex128 tool-point receptances ``h, l, n, p`` as raw
                             little-endian bytes (ok results)
-    <key[:2]>/<key>.npz     results written by earlier versions (one file each; still read)
 
 A chunk of results is written in one transaction (:meth:`ResultCache.put_many`): one durable
 write per chunk, and a writer killed at any moment leaves either the whole chunk or none of
@@ -36,6 +37,7 @@ modified afterwards.
 
 from __future__ import annotations
 
+import ast
 import contextlib
 import functools
 import hashlib
@@ -72,6 +74,7 @@ __all__ = [
     "result_key",
     "result_keys",
     "shared_part",
+    "source_meaning",
 ]
 
 #: What determines a computed result, relative to the ``rcsa`` package directory: all of the
@@ -200,13 +203,66 @@ def _source_files(node: Traversable, rel: str) -> Iterator[tuple[str, Traversabl
             yield from _source_files(child, f"{rel}/{child.name}")
 
 
+_DOCUMENTED = (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)
+
+
+def _is_docstring(statement: ast.stmt) -> bool:
+    return isinstance(statement, ast.Expr) and isinstance(statement.value, ast.Constant) \
+        and isinstance(statement.value.value, str)
+
+
+def _canonical(node: Any) -> str:
+    """A syntax tree written out field by field, docstrings left out, the same on every Python.
+
+    Positions are not written (they are attributes, not fields), nor are empty fields (a field
+    a newer Python adds, such as ``type_params``, is empty in code that does not use it), nor
+    the first statement of a module, class or function body when it is a string (its
+    docstring).
+    """
+    if isinstance(node, ast.AST):
+        fields = []
+        for name in sorted(node._fields):
+            value = getattr(node, name, None)
+            if name == "body" and isinstance(node, _DOCUMENTED) and value and _is_docstring(value[0]):
+                value = value[1:]
+            if value is None or value == [] or (name == "kind" and isinstance(node, ast.Constant)):
+                continue
+            fields.append(f"{name}={_canonical(value)}")
+        return f"{type(node).__name__}({','.join(fields)})"
+    if isinstance(node, list):
+        return "[" + ",".join([_canonical(v) for v in node]) + "]"
+    return f"{type(node).__name__}:{node!r}"
+
+
+def source_meaning(source: str | bytes) -> bytes:
+    """What a module's source means to the interpreter: its syntax tree, docstrings left out.
+
+    Comments, blank lines, layout and docstrings do not change it; any change to a name, a
+    number, an operator or a statement does.
+
+    Parameters
+    ----------
+    source : str or bytes
+        Python source.
+
+    Examples
+    --------
+    >>> documented = "def f(x):\\n    'Twice x.'\\n    return 2 * x  # doubled\\n"
+    >>> source_meaning(documented) == source_meaning("def f(x): return 2*x")
+    True
+    >>> source_meaning("def f(x): return 2*x") == source_meaning("def f(x): return 3*x")
+    False
+    """
+    return _canonical(ast.parse(source)).encode()
+
+
 def _fingerprint(package: Traversable) -> str:
-    digest = hashlib.sha256(b"rcsa.model-fingerprint/1\0")
+    digest = hashlib.sha256(b"rcsa.model-fingerprint/2\0")
     files = [f for source in MODEL_SOURCES for f in _source_files(package.joinpath(*source.split("/")), source)]
     if not files:
         raise FileNotFoundError(f"no model source under {package}")
     for rel, file in sorted(files, key=lambda f: f[0]):
-        data = file.read_bytes()
+        data = source_meaning(file.read_bytes())
         digest.update(rel.encode() + b"\0" + len(data).to_bytes(8, "little"))
         digest.update(data)
     return digest.hexdigest()
@@ -218,12 +274,13 @@ def _installed_fingerprint() -> str:
 
 
 def model_fingerprint(root: str | os.PathLike[str] | None = None) -> str:
-    """SHA-256 (hex) of the source of every module that determines a prediction.
+    """SHA-256 (hex) of what every module that determines a prediction means.
 
     The files of :data:`MODEL_SOURCES`, sorted by their path relative to the package, each
-    hashed with its path and length. Any edit to one of them (a physics change, a fixed bug)
-    changes the fingerprint, and with it every :func:`result_key`, so stale results are
-    never served.
+    hashed with its path as :func:`source_meaning` (its syntax tree without docstrings). Any
+    change to the code (a physics change, a fixed bug) changes the fingerprint, and with it
+    every :func:`result_key`, so stale results are never served; a change to a docstring or
+    a comment changes nothing, so stored results stay valid.
 
     Parameters
     ----------
@@ -302,9 +359,6 @@ class ResultCache:
     so a second writer of the same key (a resumed sync, a retried chunk, another process)
     changes nothing and nothing is ever stored twice.
 
-    Stores written by earlier versions kept one ``<key[:2]>/<key>.npz`` file per result; those
-    files are still read (:meth:`get`, :meth:`missing`), never written.
-
     Parameters
     ----------
     directory : str or os.PathLike
@@ -322,8 +376,6 @@ class ResultCache:
         self.database = self.directory / "results.sqlite"
         with closing(self._connect()) as con:
             con.executescript(_SCHEMA)
-        # files of earlier versions: looked up only when the directory has any
-        self._legacy = any(p.is_dir() and len(p.name) == 2 for p in self.directory.iterdir())
 
     def __repr__(self) -> str:
         return f"ResultCache({str(self.directory)!r})"
@@ -336,11 +388,6 @@ class ResultCache:
         except sqlite3.Error as exc:
             raise StoreError(f"cannot open the result cache {self.database}: {exc}") from None
         return con
-
-    def path(self, key: str) -> Path:
-        """The file a result of ``key`` had in earlier versions (whether or not it exists)."""
-        _check_key(key)
-        return self.directory / key[:2] / f"{key}.npz"
 
     def __contains__(self, key: object) -> bool:
         return isinstance(key, str) and not self.missing([key])
@@ -356,10 +403,7 @@ class ResultCache:
                 part = wanted[start:start + _KEYS_PER_QUERY]
                 found.update(r[0] for r in con.execute(
                     f"SELECT key FROM results WHERE key IN ({','.join('?' * len(part))})", part))
-        absent = {k for k in wanted if k not in found}
-        if self._legacy:
-            absent = {k for k in absent if not self.path(k).is_file()}
-        return absent
+        return {k for k in wanted if k not in found}
 
     def get(self, key: str) -> dict[str, Any]:
         """The stored result document (numpy arrays for the long arrays).
@@ -375,26 +419,11 @@ class ResultCache:
         with closing(self._connect()) as con:
             row = con.execute(f"SELECT {_ROW} FROM results WHERE key = ?", (key,)).fetchone()
         if row is None:
-            return self._get_legacy(key)
+            raise KeyError(key)
         try:
             return _decode(row)
         except (ValueError, orjson.JSONDecodeError) as exc:
             raise StoreError(f"unreadable cached result {key}: {exc}") from None
-
-    def _get_legacy(self, key: str) -> dict[str, Any]:
-        try:
-            with np.load(self.path(key), allow_pickle=False) as npz:
-                meta = orjson.loads(npz["meta"].tobytes())
-                doc = {"status": meta.pop("status", "ok")}
-                if "frequency_hz" in npz.files:
-                    doc["frequency_hz"] = npz["frequency_hz"]
-                    doc["tool_point"] = {k: complex_to_wire(npz[k], arrays="numpy") for k in _ARRAYS if k in npz.files}
-                doc.update(meta)
-        except FileNotFoundError:
-            raise KeyError(key) from None
-        except (OSError, ValueError, KeyError, orjson.JSONDecodeError) as exc:
-            raise StoreError(f"unreadable cached result {key}: {exc}") from None
-        return doc
 
     def status(self, key: str) -> str:
         """``status`` of a stored result (``ok`` or ``error``) without loading its arrays."""
@@ -418,8 +447,7 @@ class ResultCache:
                     out[key] = {"status": status, "error": orjson.loads(meta).get("error")}
         for key in wanted:
             if key not in out:
-                doc = self._get_legacy(key)
-                out[key] = {"status": doc.get("status", "ok"), "error": doc.get("error")}
+                raise KeyError(key)
         return out
 
     def put_many(self, items: Iterable[tuple[str, Mapping[str, Any]]]) -> int:

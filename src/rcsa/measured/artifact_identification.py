@@ -2,7 +2,7 @@
 
 A cylindrical blank (or a standard test holder) of known geometry is clamped in the spindle
 and tapped at two points; from the direct and cross FRFs the full 2×2 receptance ``S`` at
-the blank's base (including the clamping joint) is recovered exactly (``domain.md`` §4.4):
+the blank's base (including the clamping joint) is recovered exactly (``docs/physics.md`` §4.4):
 
     R_ae − G_ae = H_ab H_be x11 + (H_ab N_be + L_ab H_be) x12 + L_ab N_be x22,
     X = (R_bb + S)⁻¹,   S = X⁻¹ − R_bb,
@@ -209,7 +209,7 @@ def finite_difference_slope_weights(points_m: tuple[float, ...], order: int = 1)
     """Weights ``c`` with ``w'(tip) ≈ Σ c_k w_k`` from points at distances ``points_m`` from the tip.
 
     The axis points toward the tip, so a point at distance p sits at x = x₁ − (p − p₁).
-    ``order`` 1 uses two points (best at a free end, ``domain.md`` §4.6), 2 uses three
+    ``order`` 1 uses two points (best at a free end, ``docs/physics.md`` §4.6), 2 uses three
     (Lagrange weights for unequal spacing, e.g. the 0/55/90 mm points of a tap test).
     """
     x = -(np.asarray(points_m[:order + 1], dtype=float) - points_m[0])
@@ -253,4 +253,4 @@ def identify_finite_difference(geometry: ArtifactGeometry, points_m: tuple[float
     s = rb1 @ inv2(r11 - g11) @ r1b - r[:, :2, :2]
     return s, {"method": "finite_difference_fallback", "order": order,
                "warning": "rotations by finite differences and P = N²/H: biased (≈12 % of peak in "
-                          "domain.md §4.6 even without noise); use the exact three-FRF method when h22 exists"}
+                          "docs/physics.md §4.6 even without noise); use the exact three-FRF method when h22 exists"}

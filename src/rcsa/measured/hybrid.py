@@ -1,6 +1,6 @@
 """Measured spindles: from a stored measurement to the spindle-side receptance of an assembly.
 
-A stored measurement (``contract.md`` "Measured spindles") is one direction of a spindle,
+A stored measurement (``docs/contract.md`` "Measured spindles") is one direction of a spindle,
 at the plane ``spindle_nose`` (holder and tool are coupled to it) or ``holder_tip`` (it
 contains its holder and clamping; only the tool is coupled). By kind:
 

@@ -1,6 +1,6 @@
 """From a validated :class:`~rcsa.model.contract.AssemblySpec` to the beam chain that is solved.
 
-Modelling rules (``contract.md`` "Assembly", ``domain.md`` §1.3, §5):
+Modelling rules (``docs/contract.md`` "Assembly", ``docs/physics.md`` §1.3, §5):
 
 * Spindle segments are listed nose → rear; the chain runs rear → nose (global axis).
   Bearings are springs/dampers to ground at their position; a segment is split where a
@@ -20,6 +20,11 @@ Modelling rules (``contract.md`` "Assembly", ``domain.md`` §1.3, §5):
   and the composite section assume a clamped length of a few diameters; a shallow one is
   softer than the model, and how much depends on the clamp.
 * Joints are :class:`~rcsa.physics.chain.Spring` items at the gauge line and the holder face.
+* A holder–tool clamping (``joints.holder_tool.model`` ``bonded`` or ``contact``) replaces the
+  composite section and the point joint: over the inserted length the holder annulus and the
+  shank are two beams joined by a distributed interface, one
+  :class:`~rcsa.physics.insertion.Insertion` item from where the insertion starts to the
+  shank's node in the holder face (:mod:`rcsa.model.clamping`).
 """
 
 from __future__ import annotations
@@ -30,7 +35,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from rcsa.errors import InputError
-from rcsa.model.contract import AssemblySpec, HolderSpec, JointSpec, SpindleSpec, ToolSpec
+from rcsa.model.clamping import clamped_holder_chain, clamping_notes, face_contact
+from rcsa.model.contract import (
+    AssemblySpec,
+    ClampingSpec,
+    HolderSpec,
+    JointSpec,
+    SpindleSpec,
+    ToolSpec,
+)
 from rcsa.physics.chain import Beam, Chain, Ground, Spring
 from rcsa.physics.materials import Material
 from rcsa.physics.sections import (
@@ -90,8 +103,16 @@ def assembly_notes(spec: AssemblySpec) -> tuple[str, ...]:
     -------
     tuple of str
     """
-    note = shallow_insertion_note(spec.tool.inserted_length_m, spec.tool.shank_diameter_m)
-    return () if note is None else (note,)
+    face_mounted = spec.tool.inserted_length_m <= _TOL_M
+    note = None if face_mounted else shallow_insertion_note(spec.tool.inserted_length_m, spec.tool.shank_diameter_m)
+    notes: tuple[str, ...] = () if note is None else (note,)
+    if face_mounted and not isinstance(spec.holder_tool, ClampingSpec):
+        notes += ("face-mounted tool (nothing inserted): it sits on the holder's face, joined by "
+                  + ("the point joint given" if spec.holder_tool is not None else "a rigid point joint")
+                  + " (model contact gives the face contact's stiffness from its area)",)
+    if isinstance(spec.holder_tool, ClampingSpec) and spec.holder is not None:
+        notes += clamping_notes(spec.holder, spec.tool, spec.holder_tool)
+    return notes
 
 
 @dataclass(frozen=True, slots=True)
@@ -104,9 +125,13 @@ class AssemblyModel:
         Rear → nose, bearings included; empty for a measured spindle.
     spindle_holder : Spring or None
     holder : Chain
-        Gauge line → holder tip (composite over the insertion); empty when a measured
-        spindle already contains the holder (plane ``holder_tip``).
+        Gauge line → holder tip (composite over the insertion); with a clamping model, gauge
+        line → the shank's node in the holder face (the insertion's
+        :class:`~rcsa.physics.insertion.Insertion` last). Empty when a measured spindle already
+        contains the holder (plane ``holder_tip``).
     holder_tool : Spring or None
+        The point joint at the holder face (``None``: rigid, or a clamping along the insertion,
+        which is then the last item of ``holder``).
     tool : Chain
         Holder face → tool tip.
     """
@@ -138,14 +163,14 @@ def _opt(spring: Spring | None) -> Chain:
     return () if spring is None else (spring,)
 
 
-def joint_spring(joint: JointSpec | None) -> Spring | None:
-    """The chain item of an elastic joint (``None`` = rigid).
+def joint_spring(joint: JointSpec | ClampingSpec | None) -> Spring | None:
+    """The chain item of an elastic point joint (``None`` = rigid; a clamping has none).
 
     Parameters
     ----------
-    joint : JointSpec or None
+    joint : JointSpec, ClampingSpec or None
     """
-    if joint is None:
+    if joint is None or isinstance(joint, ClampingSpec):
         return None
     return Spring(joint.stiffness_n_m, joint.damping_ns_m, joint.rotational_stiffness_nm_rad,
                   joint.rotational_damping_nms_rad)
@@ -195,8 +220,13 @@ def spindle_chain(spindle: SpindleSpec, materials: Mapping[str, Material],
 
 
 def holder_chain(holder: HolderSpec, tool: ToolSpec, materials: Mapping[str, Material],
-                 shear: ShearModel | float = "hutchinson", theory: BeamTheory = "timoshenko") -> Chain:
+                 shear: ShearModel | float = "hutchinson", theory: BeamTheory = "timoshenko",
+                 clamping: ClampingSpec | None = None) -> Chain:
     """Holder from the gauge line to its tool end, composite with the tool core over the insertion.
+
+    With a ``clamping``, the insertion is instead one :class:`~rcsa.physics.insertion.Insertion`
+    item (holder annulus and shank joined by the interface) and the chain ends at the shank's
+    node in the holder face.
 
     Parameters
     ----------
@@ -209,9 +239,13 @@ def holder_chain(holder: HolderSpec, tool: ToolSpec, materials: Mapping[str, Mat
     shear : {"hutchinson", "cowper"} or float
         Shear coefficient model, or the coefficient itself.
     theory : {"timoshenko", "euler_bernoulli"}
+    clamping : ClampingSpec, optional
+        The holder–tool clamping along the insertion (``None``: composite + point joint).
     """
     length = holder.length_m
     insertion_start = length - min(tool.inserted_length_m, length)
+    if clamping is not None and tool.inserted_length_m > _TOL_M:
+        return clamped_holder_chain(holder, tool, clamping, materials, shear, theory)
     core = (tube(tool.shank_diameter_m, 0.0, materials[tool.material], shear, theory)
             if tool.inserted_length_m > _TOL_M else None)
     items: list[Beam | Spring | Ground] = []
@@ -237,7 +271,7 @@ def holder_chain(holder: HolderSpec, tool: ToolSpec, materials: Mapping[str, Mat
 
 def fluted_section(tool: ToolSpec, material: Material, shear: ShearModel | float,
                    theory: BeamTheory) -> Section:
-    """Equivalent section of the fluted part: stiffness from d_I, mass from d_A (``domain.md`` §5.1)."""
+    """Equivalent section of the fluted part: stiffness from d_I, mass from d_A (``docs/physics.md`` §5.1)."""
     d_i = tool.fluted_diameter_ratio * tool.diameter_m
     d_a = (tool.fluted_mass_diameter_ratio or tool.fluted_diameter_ratio) * tool.diameter_m
     stiff = tube(d_i, 0.0, material, shear, theory)
@@ -321,14 +355,24 @@ def build_model(spec: AssemblySpec, base_plane: str | None = None, spindle: Chai
     if base_plane != "holder_tip":
         if spec.holder is None:
             raise InputError("holder", "is required unless the measured spindle's plane is holder_tip")
-        holder = holder_chain(spec.holder, spec.tool, mats, shear, theory)
+        clamping = spec.holder_tool if isinstance(spec.holder_tool, ClampingSpec) else None
+        holder = holder_chain(spec.holder, spec.tool, mats, shear, theory, clamping)
     elif spec.holder is not None:
         raise InputError("holder", "must be left out: the measured spindle (plane holder_tip) already "
                          "contains its holder")
+    elif isinstance(spec.holder_tool, ClampingSpec):
+        raise InputError("joints.holder_tool.model",
+                         f"{spec.holder_tool.model!r} models the clamping from the holder's geometry, which a "
+                         "holder_tip measurement does not give (it contains holder and clamping): use the point "
+                         "joint, or measure the spindle at its nose")
+    holder_tool = joint_spring(spec.holder_tool)
+    if isinstance(spec.holder_tool, ClampingSpec) and spec.tool.inserted_length_m <= _TOL_M:
+        assert spec.holder is not None  # a clamping on a holder_tip measurement is refused above
+        holder_tool = face_contact(spec.holder, spec.tool, spec.holder_tool)
     return AssemblyModel(
         spindle=spindle,
         spindle_holder=joint_spring(spec.spindle_holder) if base_plane != "holder_tip" else None,
         holder=holder,
-        holder_tool=joint_spring(spec.holder_tool),
+        holder_tool=holder_tool,
         tool=tool_chain(spec.tool, mats, shear, theory),
     )

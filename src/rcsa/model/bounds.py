@@ -19,6 +19,7 @@ __all__ = [
     "MAX_BATCH_COMBINATIONS",
     "MAX_BEARINGS",
     "MAX_COHERENCE",
+    "MAX_CONTACT_PRESSURE_PA",
     "MAX_CONFIDENCE",
     "MAX_CUTTING_COEFFICIENT_N_M2",
     "MAX_DAMPING",
@@ -28,6 +29,9 @@ __all__ = [
     "MAX_FREQUENCY_LINES",
     "MAX_FRF_VALUE",
     "MAX_HOLDER_SEGMENTS_PER_CONE",
+    "MAX_INTERFACE_STIFFNESS_N_M3",
+    "MAX_INTERFACE_STIFFNESS_SCALE",
+    "MAX_INTERFACE_TANGENTIAL_RATIO",
     "MAX_JSON_DEPTH",
     "MAX_JSON_NUMBER",
     "MAX_LENGTH_M",
@@ -45,6 +49,7 @@ __all__ = [
     "MAX_TAP_SAMPLES",
     "MAX_STRING_CHARS",
     "MAX_STIFFNESS",
+    "MAX_SURFACE_ROUGHNESS_M",
     "MAX_TEETH",
     "MAX_TOLERANCE",
     "MAX_TOLERANCE_STICKOUT_M",
@@ -52,10 +57,14 @@ __all__ = [
     "MAX_UNCERTAINTY_DRAW_LINES",
     "MAX_UNCERTAINTY_SEED",
     "MIN_CONFIDENCE",
+    "MIN_CONTACT_PRESSURE_PA",
     "MIN_CUTTING_COEFFICIENT_N_M2",
     "MIN_DENSITY_KG_M3",
     "MIN_FLUTED_DIAMETER_RATIO",
     "MIN_FREQUENCY_HZ",
+    "MIN_INTERFACE_STIFFNESS_N_M3",
+    "MIN_INTERFACE_STIFFNESS_SCALE",
+    "MIN_INTERFACE_TANGENTIAL_RATIO",
     "MIN_JOINT_STIFFNESS",
     "MIN_LENGTH_M",
     "MIN_MODULUS_PA",
@@ -65,6 +74,7 @@ __all__ = [
     "MIN_SHEAR_COEFFICIENT",
     "MIN_SPEED_COUNT",
     "MIN_SPEED_RPM",
+    "MIN_SURFACE_ROUGHNESS_M",
     "MIN_UNCERTAINTY_DRAWS",
 ]
 
@@ -127,6 +137,19 @@ MAX_STIFFNESS = 1.0e15
 MIN_JOINT_STIFFNESS = 1.0e-3
 #: Largest viscous damping, N·s/m or N·m·s/rad.
 MAX_DAMPING = 1.0e12
+#: Interface stiffness per unit area of a holder–tool contact (``joints.holder_tool``,
+#: model ``contact``), N/m³: from a soft polymer layer (1e9) to far stiffer than any
+#: machined steel contact (1e17; measured shrink-fit and collet interfaces lie near 1e13–1e15).
+MIN_INTERFACE_STIFFNESS_N_M3, MAX_INTERFACE_STIFFNESS_N_M3 = 1.0e9, 1.0e17
+#: A factor on a clamping's whole interface stiffness (dimensionless; what an identification finds).
+MIN_INTERFACE_STIFFNESS_SCALE, MAX_INTERFACE_STIFFNESS_SCALE = 1.0e-4, 1.0e2
+#: Tangential over normal interface stiffness (dimensionless; 2(1−ν)/(2−ν) ≈ 0.8 for elastic
+#: asperity contact of steels).
+MIN_INTERFACE_TANGENTIAL_RATIO, MAX_INTERFACE_TANGENTIAL_RATIO = 1.0e-3, 10.0
+#: Nominal contact pressure of a clamping, Pa (a contact model's input).
+MIN_CONTACT_PRESSURE_PA, MAX_CONTACT_PRESSURE_PA = 1.0e3, 2.0e9
+#: RMS roughness scale of the contacting surfaces, m (a contact model's input).
+MIN_SURFACE_ROUGHNESS_M, MAX_SURFACE_ROUGHNESS_M = 1.0e-9, 1.0e-4
 #: Pieces of a tool's stepped neck (``tool.neck_segments``).
 MAX_NECK_SEGMENTS = 200
 #: Smallest equivalent fluted diameter over the cutting diameter (the largest is 1).

@@ -1,6 +1,6 @@
 """The contract's assembly document, parsed into immutable, validated specifications.
 
-Every rule of ``contract.md`` "Assembly" is checked here, once, at the edge; a violation
+Every rule of ``docs/contract.md`` "Assembly" is checked here, once, at the edge; a violation
 raises :class:`~rcsa.errors.InputError` naming the field (dotted path) and the rule. The
 numerical code downstream never sees an unchecked value.
 """
@@ -17,11 +17,15 @@ import numpy as np
 from rcsa.errors import InputError
 from rcsa.model.bounds import (
     MAX_BEARINGS,
+    MAX_CONTACT_PRESSURE_PA,
     MAX_DAMPING,
     MAX_DENSITY_KG_M3,
     MAX_DIAMETER_M,
     MAX_FREQUENCY_HZ,
     MAX_FREQUENCY_LINES,
+    MAX_INTERFACE_STIFFNESS_N_M3,
+    MAX_INTERFACE_STIFFNESS_SCALE,
+    MAX_INTERFACE_TANGENTIAL_RATIO,
     MAX_LENGTH_M,
     MAX_LOSS_FACTOR,
     MAX_MODULUS_PA,
@@ -30,17 +34,24 @@ from rcsa.model.bounds import (
     MAX_SEGMENTS,
     MAX_SHEAR_COEFFICIENT,
     MAX_STIFFNESS,
+    MAX_SURFACE_ROUGHNESS_M,
+    MIN_CONTACT_PRESSURE_PA,
     MIN_DENSITY_KG_M3,
     MIN_FLUTED_DIAMETER_RATIO,
     MIN_FREQUENCY_HZ,
+    MIN_INTERFACE_STIFFNESS_N_M3,
+    MIN_INTERFACE_STIFFNESS_SCALE,
+    MIN_INTERFACE_TANGENTIAL_RATIO,
     MIN_JOINT_STIFFNESS,
     MIN_LENGTH_M,
     MIN_MODULUS_PA,
     MIN_POISSON_RATIO,
     MIN_SHEAR_COEFFICIENT,
+    MIN_SURFACE_ROUGHNESS_M,
 )
 from rcsa.model.fields import Fields
 from rcsa.physics.arrays import FloatArray
+from rcsa.physics.insertion import contact_stiffness_n_m3
 from rcsa.physics.materials import BUILTIN_MATERIALS, Material
 from rcsa.physics.receptance import check_frequency_hz
 from rcsa.physics.sections import BeamTheory, ShearModel
@@ -48,12 +59,14 @@ from rcsa.physics.sections import BeamTheory, ShearModel
 __all__ = [
     "AssemblySpec",
     "BearingSpec",
+    "ClampingSpec",
     "HolderSpec",
     "JointSpec",
     "MeasuredSpindleSpec",
     "SegmentSpec",
     "SpindleSpec",
     "ToolSpec",
+    "CLAMPING_MODELS",
     "CombinationSpec",
     "CommonSpec",
     "assemble",
@@ -61,6 +74,7 @@ __all__ = [
     "parse_combination",
     "parse_common",
     "parse_frequency",
+    "parse_holder_tool",
     "parse_holder",
     "parse_joint",
     "parse_materials",
@@ -181,14 +195,14 @@ class HolderSpec:
 
 @dataclass(frozen=True, slots=True)
 class ToolSpec:
-    """Parametric tool (ISO 13399 / Fusion meaning; ``contract.md`` "Assembly").
+    """Parametric tool (ISO 13399 / Fusion meaning; ``docs/contract.md`` "Assembly").
 
     ``shoulder_length_m``/``shoulder_diameter_m`` (extension) describe a reduced neck from
     the flute end up to ``shoulder_length_m`` from the tip; ``neck_segments`` (extension,
     instead of them) a stepped neck as ``(length_m, diameter_m)`` pieces from the flute end
     toward the holder (a conical neck, stepped). ``fluted_mass_diameter_ratio``
     (extension) uses a separate equivalent diameter for the flutes' mass (default: the
-    stiffness one, ``domain.md`` §5.1).
+    stiffness one, ``docs/physics.md`` §5.1).
 
     Parameters
     ----------
@@ -254,9 +268,58 @@ class JointSpec:
     rotational_damping_nms_rad: float = 0.0
 
 
+#: The holder–tool clamping models (``joints.holder_tool.model``; contract v1.2).
+CLAMPING_MODELS = ("point", "bonded", "contact")
+
+
+@dataclass(frozen=True, slots=True)
+class ClampingSpec:
+    """A holder–tool clamping along the inserted length (``joints.holder_tool.model`` bonded/contact).
+
+    The shank and the holder nose are two beams sharing load through a distributed interface
+    over the insertion (:mod:`rcsa.model.clamping` derives its stiffness from geometry and
+    materials); ``contact`` adds a finite interface stiffness per unit area in series.
+
+    Parameters
+    ----------
+    model : {"bonded", "contact"}
+        ``bonded``: an ideal clamping (the shank bonded to the bore); ``contact``: the same with a
+        finite interface stiffness.
+    interface_stiffness_n_m3 : float or None
+        Normal interface stiffness per unit area, N/m³ (``contact``; ``None`` for bonded).
+    interface_tangential_ratio : float
+        Tangential over normal interface stiffness (dimensionless).
+    interface_loss_factor : float
+        Hysteretic loss factor of the interface stiffness (dimensionless).
+    front_gap_length_m : float
+        Length from the holder face into the bore over which the shank does not touch, m
+        (a bell-mouthed bore, or contact lost at the front); 0 by default.
+    contact_length_m : float or None
+        Length of the contact behind the front gap, m (a collet gripping the front of the
+        shank only); ``None``: the rest of the insertion.
+    contact_pressure_pa, surface_roughness_m : float or None
+        The contact model's inputs when ``interface_stiffness_n_m3`` was derived from them
+        (kept for the result's notes), Pa and m.
+    interface_stiffness_scale : float
+        A factor on the whole interface stiffness per unit length (dimensionless; default 1):
+        what an identification finds and analyses vary (``holder_tool.interface_stiffness_scale``:
+        identification, effect analysis, tolerance draws, diagnosis candidates).
+    """
+
+    model: str
+    interface_stiffness_n_m3: float | None = None
+    interface_tangential_ratio: float = 1.0
+    interface_loss_factor: float = 0.0
+    front_gap_length_m: float = 0.0
+    contact_pressure_pa: float | None = None
+    surface_roughness_m: float | None = None
+    interface_stiffness_scale: float = 1.0
+    contact_length_m: float | None = None
+
+
 @dataclass(frozen=True, slots=True)
 class AssemblySpec:
-    """A validated assembly document (``contract.md`` "Assembly").
+    """A validated assembly document (``docs/contract.md`` "Assembly").
 
     Parameters
     ----------
@@ -266,8 +329,10 @@ class AssemblySpec:
     holder : HolderSpec or None
         ``None`` only on a measured spindle whose plane is the holder tip.
     tool : ToolSpec
-    spindle_holder, holder_tool : JointSpec or None
-        The elastic joints; ``None`` is rigid.
+    spindle_holder : JointSpec or None
+        The spindle–holder joint; ``None`` is rigid.
+    holder_tool : JointSpec, ClampingSpec or None
+        The holder–tool joint: a point joint (``None`` is rigid) or a clamping along the insertion.
     beam_theory : {"timoshenko", "euler_bernoulli"}
     shear_coefficient : {"hutchinson", "cowper"} or float
     materials : mapping of str to Material
@@ -279,7 +344,7 @@ class AssemblySpec:
     holder: HolderSpec | None
     tool: ToolSpec
     spindle_holder: JointSpec | None = None
-    holder_tool: JointSpec | None = None
+    holder_tool: JointSpec | ClampingSpec | None = None
     beam_theory: BeamTheory = "timoshenko"
     shear_coefficient: ShearModel | float = "hutchinson"
     materials: Mapping[str, Material] = field(default_factory=lambda: MappingProxyType(dict(BUILTIN_MATERIALS)))
@@ -566,6 +631,83 @@ def parse_joint(value: object, path: str) -> JointSpec | None:
                      o.number("rotational_damping_nms_rad", ge=0.0, le=MAX_DAMPING, default=0.0))
 
 
+_POINT_FIELDS = ("stiffness_n_m", "damping_ns_m", "rotational_stiffness_nm_rad", "rotational_damping_nms_rad")
+_CLAMPING_FIELDS = ("interface_stiffness_n_m3", "interface_tangential_ratio", "interface_loss_factor",
+                    "front_gap_length_m", "contact_length_m", "contact_pressure_pa", "surface_roughness_m",
+                    "interface_stiffness_scale")
+
+
+def parse_holder_tool(value: object, path: str = "joints.holder_tool") -> JointSpec | ClampingSpec | None:
+    """The holder–tool joint: a point joint (``model`` absent or ``"point"``) or a clamping.
+
+    ``bonded`` takes no stiffness: the clamping follows from geometry and materials
+    (optionally ``front_gap_length_m`` and ``contact_length_m``: where along the bore the shank
+    touches; and ``interface_stiffness_scale``, a factor on it, as an identification finds). ``contact`` takes ``interface_stiffness_n_m3``, or
+    ``contact_pressure_pa`` and ``surface_roughness_m`` from which it is derived
+    (:func:`rcsa.physics.insertion.contact_stiffness_n_m3`), and optionally
+    ``interface_tangential_ratio``, ``interface_loss_factor`` and ``front_gap_length_m``.
+
+    Parameters
+    ----------
+    value : dict or None
+        The ``joints.holder_tool`` object, or ``None`` when left out (rigid point joint).
+    path : str
+        Where the value sits in the document, for error messages.
+
+    Returns
+    -------
+    JointSpec, ClampingSpec or None
+
+    Raises
+    ------
+    InputError
+        An unknown model, a field the model does not take, or a value out of bounds.
+    """
+    if value is None:
+        return None
+    o = Fields(value, path)
+    model = o.choice("model", "point", CLAMPING_MODELS)
+    if model == "point":
+        o.only("model", *_POINT_FIELDS)
+        return parse_joint({k: v for k, v in o.value.items() if k != "model"}, path)
+    stray = [k for k in _POINT_FIELDS if k in o.value]
+    if stray:
+        raise InputError(o.at(stray[0]), f"belongs to the point joint (model \"point\"); model {model!r} derives "
+                                         "the clamping's stiffness from the geometry"
+                                         + (" and interface_stiffness_n_m3" if model == "contact" else
+                                            " (use model \"contact\" with interface_stiffness_n_m3 for a softer one)"))
+    gap = o.number("front_gap_length_m", ge=0.0, le=MAX_LENGTH_M, default=0.0)
+    contact = o.optional_number("contact_length_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
+    scale = o.number("interface_stiffness_scale", gt=0.0, ge=MIN_INTERFACE_STIFFNESS_SCALE,
+                     le=MAX_INTERFACE_STIFFNESS_SCALE, default=1.0)
+    if model == "bonded":
+        o.only("model", "front_gap_length_m", "contact_length_m", "interface_stiffness_scale")
+        return ClampingSpec("bonded", front_gap_length_m=gap, contact_length_m=contact, interface_stiffness_scale=scale)
+    o.only("model", *_CLAMPING_FIELDS)
+    stiffness = o.optional_number("interface_stiffness_n_m3", gt=0.0, ge=MIN_INTERFACE_STIFFNESS_N_M3,
+                                  le=MAX_INTERFACE_STIFFNESS_N_M3)
+    pressure = o.optional_number("contact_pressure_pa", gt=0.0, ge=MIN_CONTACT_PRESSURE_PA, le=MAX_CONTACT_PRESSURE_PA)
+    roughness = o.optional_number("surface_roughness_m", gt=0.0, ge=MIN_SURFACE_ROUGHNESS_M,
+                                  le=MAX_SURFACE_ROUGHNESS_M)
+    if stiffness is None:
+        if pressure is None or roughness is None:
+            raise InputError(o.at("interface_stiffness_n_m3"), "is required for model \"contact\" (N/m³), unless "
+                                                               "contact_pressure_pa and surface_roughness_m are given")
+        stiffness = contact_stiffness_n_m3(pressure, roughness)
+        if not MIN_INTERFACE_STIFFNESS_N_M3 <= stiffness <= MAX_INTERFACE_STIFFNESS_N_M3:
+            raise InputError(o.at("contact_pressure_pa"),
+                             f"with surface_roughness_m gives an interface stiffness of {stiffness:.3g} N/m³, outside "
+                             f"[{MIN_INTERFACE_STIFFNESS_N_M3:g}, {MAX_INTERFACE_STIFFNESS_N_M3:g}]")
+    elif pressure is not None or roughness is not None:
+        raise InputError(o.at("interface_stiffness_n_m3"),
+                         "give either interface_stiffness_n_m3 or contact_pressure_pa with surface_roughness_m")
+    return ClampingSpec(
+        "contact", stiffness, o.number("interface_tangential_ratio", gt=0.0, ge=MIN_INTERFACE_TANGENTIAL_RATIO,
+                           le=MAX_INTERFACE_TANGENTIAL_RATIO, default=1.0),
+        o.number("interface_loss_factor", ge=0.0, lt=MAX_LOSS_FACTOR, default=0.0), gap, pressure, roughness,
+        interface_stiffness_scale=scale, contact_length_m=contact)
+
+
 @dataclass(frozen=True, slots=True)
 class CombinationSpec:
     """One tool–holder combination of a batch: holder, tool and joints.
@@ -574,14 +716,16 @@ class CombinationSpec:
     ----------
     holder : HolderSpec or None
     tool : ToolSpec
-    spindle_holder, holder_tool : JointSpec or None
-        The elastic joints; ``None`` is rigid.
+    spindle_holder : JointSpec or None
+        The spindle–holder joint; ``None`` is rigid.
+    holder_tool : JointSpec, ClampingSpec or None
+        The holder–tool joint (:func:`parse_holder_tool`).
     """
 
     holder: HolderSpec | None
     tool: ToolSpec
     spindle_holder: JointSpec | None
-    holder_tool: JointSpec | None
+    holder_tool: JointSpec | ClampingSpec | None
 
 
 def parse_combination(value: object, materials: Mapping[str, Material], path: str = "",
@@ -609,7 +753,7 @@ def parse_combination(value: object, materials: Mapping[str, Material], path: st
     joints.only("spindle_holder", "holder_tool")
     return CombinationSpec(holder, tool,
                            parse_joint(joints.value.get("spindle_holder"), joints.at("spindle_holder")),
-                           parse_joint(joints.value.get("holder_tool"), joints.at("holder_tool")))
+                           parse_holder_tool(joints.value.get("holder_tool"), joints.at("holder_tool")))
 
 
 @dataclass(frozen=True, slots=True)
@@ -697,7 +841,7 @@ def parse_assembly(document: object, max_lines: int = MAX_FREQUENCY_LINES) -> As
     Parameters
     ----------
     document : dict
-        The assembly as in ``contract.md`` "Assembly" (SI units).
+        The assembly as in ``docs/contract.md`` "Assembly" (SI units).
     max_lines : int
         Largest accepted number of frequency lines.
 

@@ -414,20 +414,3 @@ class Fields:
         if not isinstance(raw, list):
             raise InputError(self.at(key), "must be a list")
         return raw
-
-    def object(self, key: str, allowed: Collection[str] | None = None, *, required: bool = False) -> Fields:
-        """An object member as :class:`Fields` (an empty one when absent and not required).
-
-        Parameters
-        ----------
-        key : str
-            The member's name.
-        allowed : collection of str, optional
-            The keys the object may have.
-        required : bool
-            Refuse an absent member.
-        """
-        raw = self.value.get(key)
-        if raw is None and not required:
-            raw = {}
-        return Fields(raw, self.at(key), allowed)

@@ -3,7 +3,9 @@ joint identification and diagnoses vary.
 
 Names are stable strings: ``bearings[i].stiffness_n_m``, ``spindle_holder.damping_ns_m``,
 ``holder_tool.rotational_stiffness_nm_rad``, ``tool.stickout_m``,
-``tool.fluted_diameter_ratio``. :func:`get_parameter` reads one from an
+``tool.fluted_diameter_ratio``; for a holder–tool clamping along the insertion (model
+``bonded``/``contact``) ``holder_tool.interface_stiffness_scale`` (a factor on its whole interface
+stiffness) and, for ``contact``, ``holder_tool.interface_stiffness_n_m3``. :func:`get_parameter` reads one from an
 :class:`~rcsa.model.contract.AssemblySpec`; :func:`set_parameter` returns a new spec with it changed.
 """
 
@@ -13,13 +15,14 @@ from dataclasses import replace
 from typing import Any
 
 from rcsa.errors import InputError
-from rcsa.model.contract import AssemblySpec, SpindleSpec
+from rcsa.model.contract import AssemblySpec, ClampingSpec, SpindleSpec
 
 __all__ = ["get_parameter", "is_damping", "parameter_names", "set_parameter"]
 
 _JOINT_FIELDS = ("stiffness_n_m", "damping_ns_m", "rotational_stiffness_nm_rad", "rotational_damping_nms_rad")
 _BEARING_FIELDS = ("stiffness_n_m", "damping_ns_m")
 _TOOL_FIELDS = ("stickout_m", "fluted_diameter_ratio")
+_CLAMPING_FIELDS = ("interface_stiffness_scale", "interface_stiffness_n_m3")
 
 
 def parameter_names(spec: AssemblySpec) -> tuple[str, ...]:
@@ -45,7 +48,8 @@ def parameter_names(spec: AssemblySpec) -> tuple[str, ...]:
         for i, _ in enumerate(spec.spindle.bearings):
             names.extend(f"bearings[{i}].{k}" for k in _BEARING_FIELDS)
     for joint in ("spindle_holder", "holder_tool"):
-        names.extend(f"{joint}.{k}" for k in _JOINT_FIELDS)
+        fields = _CLAMPING_FIELDS if isinstance(getattr(spec, joint), ClampingSpec) else _JOINT_FIELDS
+        names.extend(f"{joint}.{k}" for k in fields)
     names.extend(f"tool.{k}" for k in _TOOL_FIELDS)
     return tuple(n for n in names if (v := get_parameter(spec, n)) is not None and v > 0)
 
@@ -80,9 +84,11 @@ def get_parameter(spec: AssemblySpec, name: str) -> float | None:
                 or index is None or index >= len(spec.spindle.bearings):
             raise InputError("parameters", f"unknown parameter {name!r}")
         return float(getattr(spec.spindle.bearings[index], field))
-    if group in ("spindle_holder", "holder_tool") and field in _JOINT_FIELDS:
+    if group in ("spindle_holder", "holder_tool") and field in (*_JOINT_FIELDS, *_CLAMPING_FIELDS):
         joint = getattr(spec, group)
-        value = None if joint is None else getattr(joint, field)
+        if joint is None or (field in _CLAMPING_FIELDS) != isinstance(joint, ClampingSpec):
+            return None  # rigid, or a field of the other kind of joint
+        value = getattr(joint, field)
         return None if value is None else float(value)
     if group == "tool" and field in _TOOL_FIELDS:
         return float(getattr(spec.tool, field))
@@ -94,7 +100,7 @@ def set_parameter(spec: AssemblySpec, name: str, value: float) -> AssemblySpec:
 
     The value is set as given, so a derivative may be taken at a bound (e.g. a fluted
     diameter ratio of exactly 1). A stickout change keeps the overall length: the inserted
-    length changes with it (``contract.md`` "Assembly").
+    length changes with it (``docs/contract.md`` "Assembly").
 
     Parameters
     ----------
@@ -112,10 +118,16 @@ def set_parameter(spec: AssemblySpec, name: str, value: float) -> AssemblySpec:
         bearings = list(spindle.bearings)
         bearings[index] = replace(bearings[index], **{field: float(value)})
         return replace(spec, spindle=replace(spindle, bearings=tuple(bearings)))
-    if group in ("spindle_holder", "holder_tool") and field in _JOINT_FIELDS:
+    if group in ("spindle_holder", "holder_tool") and field in (*_JOINT_FIELDS, *_CLAMPING_FIELDS):
         joint = getattr(spec, group)
         if joint is None:
             raise InputError("parameters", f"{name!r}: the joint {group} is rigid in this assembly")
+        if (field in _CLAMPING_FIELDS) != isinstance(joint, ClampingSpec):
+            kind = f"a clamping along the insertion (model {joint.model!r})" if isinstance(joint, ClampingSpec) \
+                else "a point joint"
+            raise InputError("parameters", f"{name!r}: {group} is {kind} in this assembly")
+        if getattr(joint, field) is None:
+            raise InputError("parameters", f"{name!r}: {group} has no {field} (model {joint.model!r})")
         return replace(spec, **{group: replace(joint, **{field: float(value)})})
     if group == "tool" and field in _TOOL_FIELDS:
         change: dict[str, Any] = {field: float(value)}  # a float field of ToolSpec (_TOOL_FIELDS)

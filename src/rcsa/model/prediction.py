@@ -2,7 +2,7 @@
 
 :func:`predict_model` solves an :class:`~rcsa.model.assembly.AssemblyModel` and returns a
 :class:`Prediction`, which is both a typed object (numpy arrays) and a read-only mapping in
-exactly the contract's JSON shape (``contract.md`` "Prediction result").
+exactly the contract's JSON shape (``docs/contract.md`` "Prediction result").
 """
 
 from __future__ import annotations
@@ -22,9 +22,7 @@ from rcsa.physics.algebra2x2 import inv2
 from rcsa.physics.arrays import ComplexArray, FloatArray
 from rcsa.physics.chain import Beam, Chain
 from rcsa.physics.elimination import (
-    march,
     march_tools,
-    static_condense,
     static_condense_rows,
     static_tip_receptance,
     static_tip_receptance_rows,
@@ -32,8 +30,9 @@ from rcsa.physics.elimination import (
 from rcsa.physics.natural_frequencies import natural_frequencies_batch
 from rcsa.physics.receptance import Receptance
 from rcsa.physics.stacking import chain_signature, stack_chains
+from rcsa.physics.subassembly_cache import SubassemblyCache
 
-__all__ = ["COUNT_LINES", "TOOLS_PER_PASS", "Prediction", "SubassemblyCache", "count_lines_hz", "predict_model",
+__all__ = ["COUNT_LINES", "TOOLS_PER_PASS", "Prediction", "count_lines_hz", "predict_model",
            "predict_tools", "tool_point_receptance"]
 
 #: Most lines of the requested grid counted (Wittrick–Williams) before the natural frequencies
@@ -153,55 +152,6 @@ class Prediction(Mapping[str, Any]):
         return len(self._dict())
 
 
-class SubassemblyCache:
-    """Condensed substructures on one frequency grid, reused across tools.
-
-    Keys are the (hashable, immutable) chains themselves, so two tools with the same
-    holder, shank and insertion share the spindle + holder condensation exactly.
-
-    Parameters
-    ----------
-    omega_rad_s : numpy.ndarray, shape (nfreq,)
-        Angular frequencies of the grid, rad/s.
-    base_receptance : numpy.ndarray, shape (nfreq, 2, 2), optional
-        A measured spindle-side receptance the cached chains start from (hybrid).
-    """
-
-    def __init__(self, omega_rad_s: FloatArray, base_receptance: ComplexArray | None = None) -> None:
-        self.omega_rad_s = np.asarray(omega_rad_s, dtype=float)
-        self.base_receptance = base_receptance
-        self._store: dict[Chain, ComplexArray] = {}
-        self._static: dict[Chain, FloatArray] = {}
-
-    def static(self, chain: Chain) -> FloatArray:
-        """Static undamped stiffness at the end of ``chain`` (cached), shape (2, 2).
-
-        Parameters
-        ----------
-        chain : Chain
-            A sub-chain from the spindle's rear (e.g. spindle + holder), shared across tools.
-        """
-        hit = self._static.get(chain)
-        if hit is None:
-            hit = self._static[chain] = static_condense(chain)
-        return hit
-
-    def condensed(self, chain: Chain) -> ComplexArray:
-        """Dynamic stiffness at the end of ``chain`` (plus the base), shape (nfreq, 2, 2).
-
-        Parameters
-        ----------
-        chain : Chain
-            A sub-chain from the spindle's rear or from the measured base (cached by identity
-            of its items).
-        """
-        hit = self._store.get(chain)
-        if hit is None:
-            hit = march(chain, self.omega_rad_s, start_compliance=self.base_receptance)[0]
-            self._store[chain] = hit
-        return hit
-
-
 def tool_point_receptance(model: AssemblyModel, cache: SubassemblyCache) -> ComplexArray:
     """Tool-point ``[[h, l], [n, p]]`` of a model on the cache's grid, shape (nfreq, 2, 2).
 
@@ -212,14 +162,13 @@ def tool_point_receptance(model: AssemblyModel, cache: SubassemblyCache) -> Comp
     ----------
     model : AssemblyModel
     cache : SubassemblyCache
-        Grid, base receptance and the cached condensations.
+        Grid, base receptance and the cached condensations
+        (:mod:`rcsa.physics.subassembly_cache`).
     """
     prefix, rest = model.to_holder_tip(), model.tool_side()
     if any(isinstance(item, Beam) for item in prefix):
-        k_tip = march(rest, cache.omega_rad_s, cache.condensed(prefix))[0]
-    else:
-        k_tip = march(prefix + rest, cache.omega_rad_s, start_compliance=cache.base_receptance)[0]
-    return inv2(k_tip)
+        return cache.tip_receptance(cache.condensed((prefix,)), rest)
+    return cache.tip_receptance(cache.condensed(()), prefix + rest)
 
 
 def predict_model(model: AssemblyModel, frequency_hz: FloatArray, *,
@@ -321,7 +270,7 @@ def predict_tools(models: Sequence[AssemblyModel], frequency_hz: FloatArray, cac
     static_all: list[FloatArray | None] = [None] * len(models)
     finished = 0
     for (prefix, _), members in groups.items():
-        k0 = cache.condensed(prefix)
+        k0 = cache.stiffness(prefix)
         s0 = cache.static(prefix)
         for c0 in range(0, len(members), TOOLS_PER_PASS):
             chunk = members[c0:c0 + TOOLS_PER_PASS]

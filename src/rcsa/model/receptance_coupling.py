@@ -1,7 +1,7 @@
 """The paper's receptance-coupling path (Budak, Ertürk & Özgüven 2006), step by step.
 
 An independent route to the tool-point receptance, written the way the RCSA literature
-states it (``domain.md`` §3.1–3.4), used to cross-check the dynamic-stiffness solver
+states it (``docs/physics.md`` §3.1–3.4), used to cross-check the dynamic-stiffness solver
 (:mod:`rcsa.physics.elimination`, the production path) and for measured substructures:
 
 1. free-free segment receptances (:func:`rcsa.physics.segments.free_free_receptance`) coupled rigidly
@@ -11,7 +11,7 @@ states it (``domain.md`` §3.1–3.4), used to cross-check the dynamic-stiffness
 4. tool: rigid chain → ``G_tt = T_tt − T_tb (T_bb + K_ht⁻¹ + SH22)⁻¹ T_bt`` (paper eq. 7).
 
 Free-free receptances grow like 1/ω² at low frequency, so this path loses digits below
-~5 Hz where the dynamic-stiffness path does not (``domain.md`` §2.7).
+~5 Hz where the dynamic-stiffness path does not (``docs/physics.md`` §2.7).
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ __all__ = ["component_receptance", "free_free_nodes", "spindle_nose_receptance",
 def component_receptance(chain: Chain, omega_rad_s: FloatArray) -> ComplexArray:
     """Free-free two-end receptance of a rigid chain of beams, shape (nfreq, 4, 4).
 
-    The paper's path (``domain.md`` §3): each beam's exact free-free receptance, coupled end
+    The paper's path (``docs/physics.md`` §3): each beam's exact free-free receptance, coupled end
     to end rigidly.
 
     Parameters
@@ -63,7 +63,7 @@ def free_free_nodes(beams: list[Beam], omega_rad_s: FloatArray) -> ComplexArray:
     """Free-free receptance of a rigid chain of beams with every node retained.
 
     Block-diagonal ``Y`` of the segments, a signed Boolean ``B`` joining end 2 of each beam to
-    end 1 of the next, ``G = Y − Y Bᵀ (B Y Bᵀ)⁻¹ B Y`` (``domain.md`` §3.1–3.2), then one
+    end 1 of the next, ``G = Y − Y Bᵀ (B Y Bᵀ)⁻¹ B Y`` (``docs/physics.md`` §3.1–3.2), then one
     representative of each node kept.
 
     Parameters

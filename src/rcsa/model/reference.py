@@ -1,6 +1,6 @@
 """The reference assemblies shared by the README, doctests, tests, benchmarks and the demo store.
 
-RA-1 (``domain.md`` §1.4): a BT40-class spindle on four bearings, a shrink-fit holder with
+RA-1 (``docs/physics.md`` §1.4): a BT40-class spindle on four bearings, a shrink-fit holder with
 the tool shank inside, a Ø12.7 mm carbide end mill at 74 mm stickout, the seed paper's
 Table 2 joint values. Its undamped natural frequencies are 599.85, 921.69, 1115.51,
 1383.61, 1444.68, 3115.94, 4025.97, 5102.79, 6080.83 and 7717.51 Hz.

@@ -32,11 +32,12 @@ from rcsa.model.draws import (
     peak_statistics,
     tool_point_h_draws,
 )
-from rcsa.model.prediction import Prediction, SubassemblyCache, predict_model, tool_point_receptance
+from rcsa.model.prediction import Prediction, predict_model, tool_point_receptance
 from rcsa.model.tolerances import MEASURED_SPINDLE_TOLERANCES, draw_nuisance
 from rcsa.model.uncertainty import PERCENTILES, UncertaintyBand, UncertaintyOptions
 from rcsa.model.wire import complex_to_wire
 from rcsa.physics.arrays import ComplexArray, FloatArray
+from rcsa.physics.subassembly_cache import SubassemblyCache
 
 __all__ = ["BaseResolver", "BaseUncertainty", "MeasuredBase", "SpindleSide", "ToolPointDraws", "measured_base_draws",
            "spread_of_bounds"]

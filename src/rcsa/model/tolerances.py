@@ -1,7 +1,7 @@
 """Nuisance tolerances: what the base model is known to be uncertain about, and draws of it.
 
-One definition shared by the diagnosis (its discrepancy covariance, ``diagnosis.md`` §4.3)
-and by predictions with uncertainty bands (``contract.md`` "Additions in v1.1"): the
+One definition shared by the diagnosis (its discrepancy covariance, ``docs/diagnosis.md`` §4.3)
+and by predictions with uncertainty bands (``docs/contract.md`` "Additions in v1.1"): the
 tolerance names, their defaults (one standard deviation), the order in which a random
 generator draws them, and how a draw changes an assembly.
 
@@ -44,12 +44,19 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Literal, TypeVar
+from typing import TYPE_CHECKING, Literal, TypeVar, overload
 
 import numpy as np
 
 from rcsa.model.bounds import MAX_TOLERANCE, MAX_TOLERANCE_STICKOUT_M
-from rcsa.model.contract import AssemblySpec, BearingSpec, JointSpec, SpindleSpec, ToolSpec
+from rcsa.model.contract import (
+    AssemblySpec,
+    BearingSpec,
+    ClampingSpec,
+    JointSpec,
+    SpindleSpec,
+    ToolSpec,
+)
 from rcsa.model.fields import Fields
 from rcsa.physics.arrays import FloatArray
 from rcsa.physics.materials import Material
@@ -68,6 +75,7 @@ __all__ = [
     "draw_nuisance",
     "parse_tolerances",
     "perturbed_spec",
+    "scaled_joint",
 ]
 
 #: Tolerances of the base model, one standard deviation (see the module docstring).
@@ -214,9 +222,38 @@ def apply_nuisance(base: _K, fields: Mapping[str, float]) -> _K:
                             for k, v in fields.items()})
 
 
-def _joint(joint: JointSpec | None, kt: float, kr: float, c: float) -> JointSpec | None:
+@overload
+def scaled_joint(joint: JointSpec | None, kt: float, kr: float, c: float) -> JointSpec | None: ...
+
+
+@overload
+def scaled_joint(joint: JointSpec | ClampingSpec | None, kt: float, kr: float, c: float
+                 ) -> JointSpec | ClampingSpec | None: ...
+
+
+def scaled_joint(joint: JointSpec | ClampingSpec | None, kt: float, kr: float, c: float
+                 ) -> JointSpec | ClampingSpec | None:
+    """A joint with its stiffnesses and dampers scaled (a rigid one stays rigid).
+
+    A point joint: ``k_t`` by ``kt``, ``k_r`` by ``kr``, both dampers by ``c``. A clamping
+    along the insertion: its whole interface stiffness by ``kt`` (``interface_stiffness_scale``) and its
+    interface loss factor by ``c``.
+
+    Parameters
+    ----------
+    joint : JointSpec, ClampingSpec or None
+    kt, kr, c : float
+        Scales (dimensionless).
+
+    Returns
+    -------
+    JointSpec, ClampingSpec or None
+    """
     if joint is None:
         return None
+    if isinstance(joint, ClampingSpec):
+        return replace(joint, interface_stiffness_scale=joint.interface_stiffness_scale * kt,
+                       interface_loss_factor=joint.interface_loss_factor * c)
     return JointSpec(joint.stiffness_n_m * kt, joint.damping_ns_m * c,
                      None if joint.rotational_stiffness_nm_rad is None else joint.rotational_stiffness_nm_rad * kr,
                      joint.rotational_damping_nms_rad * c)
@@ -268,9 +305,9 @@ def perturbed_spec(spec: AssemblySpec, fields: Mapping[str, float]) -> AssemblyS
     stickout = min(max(t.stickout_m + fields["stickout_offset_m"], _shortest_stickout_m(t)), t.overall_length_m)
     return replace(spec, materials=MappingProxyType(materials), spindle=spindle,
                    tool=replace(t, stickout_m=stickout),
-                   spindle_holder=_joint(spec.spindle_holder, fields["sh_translational_scale"],
+                   spindle_holder=scaled_joint(spec.spindle_holder, fields["sh_translational_scale"],
                                          fields["sh_rotational_scale"], fields["sh_damping_scale"]),
-                   holder_tool=_joint(spec.holder_tool, fields["ht_translational_scale"],
+                   holder_tool=scaled_joint(spec.holder_tool, fields["ht_translational_scale"],
                                       fields["ht_rotational_scale"], fields["ht_damping_scale"]))
 
 

@@ -1,7 +1,7 @@
 """Uncertainty on predictions: the request option, a measured spindle's own draws, the result.
 
 A prediction request may carry ``"uncertainty": {"draws": 200, "seed": 1, "tolerances":
-{...}}`` (``contract.md`` "Additions in v1.1"). The assembly is then drawn ``draws`` times
+{...}}`` (``docs/contract.md`` "Additions in v1.1"). The assembly is then drawn ``draws`` times
 under the nuisance tolerances of :mod:`rcsa.model.tolerances` (the diagnosis's names and
 defaults) and — on a measured spindle — under the measurement's own uncertainty
 (:class:`rcsa.model.spindle_side.BaseUncertainty`, :func:`rcsa.model.spindle_side.measured_base_draws`); every draw is solved exactly
@@ -139,7 +139,7 @@ def parse_prediction_request(document: object, max_lines: int = MAX_FREQUENCY_LI
     Parameters
     ----------
     document : dict
-        The assembly (``contract.md`` "Assembly") and, optionally, ``"uncertainty"``.
+        The assembly (``docs/contract.md`` "Assembly") and, optionally, ``"uncertainty"``.
     max_lines : int
         Largest accepted number of frequency lines.
 

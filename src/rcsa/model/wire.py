@@ -1,7 +1,7 @@
 """The wire form of numbers: one place that reads and writes the contract's arrays.
 
 JSON has no complex type, so the contract carries a complex array as
-``{"real": [...], "imag": [...]}`` (``contract.md`` "Units"). Every parser of a request or
+``{"real": [...], "imag": [...]}`` (``docs/contract.md`` "Units"). Every parser of a request or
 file in that form, and every writer of a result, goes through these functions, so the rules
 (numbers only, finite, one value per frequency line) and their error messages are the same
 everywhere. The units and the sign convention every receptance on the wire (and in every
@@ -31,12 +31,12 @@ __all__ = ["CONVENTION", "RECEPTANCE_UNITS", "WIRE_KEYS", "complex_from_wire", "
 #: The two keys of a complex array on the wire.
 WIRE_KEYS = frozenset({"real", "imag"})
 
-#: Units of the receptances h, l, n, p (``contract.md`` "Units").
+#: Units of the receptances h, l, n, p (``docs/contract.md`` "Units").
 RECEPTANCE_UNITS = {"h": "m/N", "l": "m/(N*m)", "n": "rad/N", "p": "rad/(N*m)"}
 
-#: The axis and sign conventions of every receptance (``domain.md`` §2.1, ``contract.md``).
+#: The axis and sign conventions of every receptance (``docs/physics.md`` §2.1, ``docs/contract.md``).
 CONVENTION = (
-    "domain.md 2.1: axis x from spindle rear to tool tip; w lateral displacement (m), "
+    "rcsa docs/physics.md 2.1: axis x from spindle rear to tool tip; w lateral displacement (m), "
     "psi rotation counter-clockwise positive = dw/dx (rad); F force (N), M moment (N*m); "
     "h=w/F, l=w/M, n=psi/F, p=psi/M; time dependence exp(+i*omega*t), "
     "so a damped driving-point receptance has Im h <= 0"

@@ -10,7 +10,7 @@ import numpy as np
 
 from rcsa.physics.arrays import ComplexArray, FloatArray, IntArray
 
-__all__ = ["Pivots", "det2", "inv2", "negative_count_sym", "negative_count_sym2"]
+__all__ = ["Pivots", "det2", "inv2", "negative_count_sym"]
 
 
 def det2(a: ComplexArray) -> ComplexArray:
@@ -58,17 +58,6 @@ def negative_count_sym(a11: ComplexArray | FloatArray, a12: ComplexArray | Float
     d = a11 * a22 - a12 * a12
     tr = a11 + a22
     return np.where(d < 0, 1, np.where(tr < 0, np.where(d > 0, 2, 1), 0))
-
-
-def negative_count_sym2(a: ComplexArray | FloatArray) -> IntArray:
-    """Number of negative eigenvalues of each real symmetric 2×2 matrix, shape (...), int.
-
-    Parameters
-    ----------
-    a : numpy.ndarray, shape (..., 2, 2)
-        Real symmetric matrices (a complex array's real part is used).
-    """
-    return negative_count_sym(a[..., 0, 0], a[..., 0, 1], a[..., 1, 1])
 
 
 class Pivots:

@@ -1,6 +1,6 @@
 """Array type aliases of the physics core (for annotations; numpy only).
 
-Arrays are frequency-first (``style.md`` §9.1): ``(nfreq,)`` per line, ``(nfreq, 2, 2)`` for
+Arrays are frequency-first (``docs/physics.md`` §2.1): ``(nfreq,)`` per line, ``(nfreq, 2, 2)`` for
 a point receptance or stiffness. Parameters of chain items and sections are one number, or
 — in a chain stacked over many tools (:mod:`rcsa.physics.stacking`) — one per row.
 """

@@ -1,7 +1,7 @@
 """A spindle–holder–tool assembly as a chain of beams, joints and grounded attachments.
 
 The assembly is one line of nodes along the global axis (spindle rear → tool tip,
-``domain.md`` §2.1). Between consecutive nodes sits a :class:`Beam` (uniform Timoshenko
+``docs/physics.md`` §2.1). Between consecutive nodes sits a :class:`Beam` (uniform Timoshenko
 segment) or a :class:`Spring` (an elastic joint of zero length); a :class:`Ground` adds a
 spring/damper to rigid ground and/or a lumped mass at the current node (bearings,
 sensors). A chain is a plain tuple of these immutable items, so sub-chains can be shared

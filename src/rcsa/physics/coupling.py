@@ -1,6 +1,6 @@
 """Receptance coupling as small pure functions over a leading frequency axis.
 
-One general formula covers every case (``domain.md`` §3.1, Lagrange-multiplier
+One general formula covers every case (``docs/physics.md`` §3.1, Lagrange-multiplier
 frequency-based substructuring; de Klerk, Rixen & Voormeeren 2008)::
 
     G = Y − Y Bᵀ (B Y Bᵀ + K⁻¹)⁻¹ B Y        (K⁻¹ = 0 for a rigid joint)
@@ -56,7 +56,7 @@ def couple(a: ComplexArray, b: ComplexArray, joint_compliance: ComplexArray | No
     """Couple end 2 of ``a`` to end 1 of ``b``; keep ``a``'s end 1 and ``b``'s end 2.
 
     ``Z = A22 + B11 + K⁻¹``; ``G11 = A11 − A12 Z⁻¹ A21``, ``G12 = A12 Z⁻¹ B12``,
-    ``G21 = B21 Z⁻¹ A21``, ``G22 = B22 − B21 Z⁻¹ B12`` (``domain.md`` §3.1).
+    ``G21 = B21 Z⁻¹ A21``, ``G22 = B22 − B21 Z⁻¹ B12`` (``docs/physics.md`` §3.1).
 
     Parameters
     ----------
@@ -87,7 +87,7 @@ def couple_to_base(a: ComplexArray, base: ComplexArray,
                    joint_compliance: ComplexArray | None = None) -> ComplexArray:
     """Receptance at end 2 of ``a`` once its end 1 sits on a grounded ``base``.
 
-    ``G22 = A22 − A21 (A11 + K⁻¹ + S)⁻¹ A12`` — the Budak/Ertürk form (``domain.md`` §3.3).
+    ``G22 = A22 − A21 (A11 + K⁻¹ + S)⁻¹ A12`` — the Budak/Ertürk form (``docs/physics.md`` §3.3).
 
     Parameters
     ----------
@@ -143,7 +143,7 @@ def decouple_base(a: ComplexArray, coupled_tip: ComplexArray,
     """Inverse RCSA: the base receptance ``S`` from a measured/computed tip receptance ``G22``.
 
     Inverts :func:`couple_to_base`: ``S = A12 (A22 − G22)⁻¹ A21 − A11 − K⁻¹``
-    (``domain.md`` §4.3; rearranged from ``G22 = A22 − A21 (A11 + K⁻¹ + S)⁻¹ A12``).
+    (``docs/physics.md`` §4.3; rearranged from ``G22 = A22 − A21 (A11 + K⁻¹ + S)⁻¹ A12``).
 
     Parameters
     ----------

@@ -9,7 +9,7 @@ the right" ``K`` and costs a few 2×2 operations per item and frequency::
     ground (Δ):                              K ← K + Δ
 
 Each step is the item's own (:meth:`rcsa.physics.chain.ChainItem.eliminate`); this module
-only runs them. At the tool tip the point receptance is ``K⁻¹``. This is the ``domain.md`` §3.5 global
+only runs them. At the tool tip the point receptance is ``K⁻¹``. This is the ``docs/physics.md`` §3.5 global
 dynamic-stiffness assembly (mathematically identical to receptance coupling, accurate down
 to very low frequency), done without forming the global matrix.
 

@@ -1,8 +1,8 @@
 """Linear-elastic isotropic materials with hysteretic damping.
 
-Built-ins follow ``contract.md``: ``steel`` (E 210 GPa, ν 0.30, ρ 7850 kg/m³, η 0.002) and
+Built-ins follow ``docs/contract.md``: ``steel`` (E 210 GPa, ν 0.30, ρ 7850 kg/m³, η 0.002) and
 ``carbide`` (E 600 GPa, ν 0.22, ρ 14500 kg/m³, η 0.002). A hysteretic loss factor η damps
-both moduli as E(1 + iη), G(1 + iη) (``domain.md`` §2.6).
+both moduli as E(1 + iη), G(1 + iη) (``docs/physics.md`` §2.6).
 
 The other built-ins are the tool materials CAM libraries name (Fusion ``BMC`` "hss",
 "ceramics"; FreeCAD ``Material`` "HSS", "HighCarbonToolSteel", "Sialon", ...; the readers

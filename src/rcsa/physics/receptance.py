@@ -1,6 +1,6 @@
 """Frequency-first receptance types.
 
-Conventions (``domain.md`` §2.1, fixed for the whole package)
+Conventions (``docs/physics.md`` §2.1, fixed for the whole package)
 -------------------------------------------------------------
 * One global axis x from the spindle rear to the tool tip.
 * Per node two DOFs: lateral displacement ``w`` (m, +y) and section rotation ``psi``

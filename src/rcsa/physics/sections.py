@@ -3,9 +3,9 @@
 A :class:`Section` is ``(EI, κGA, ρA, ρI)``, complex when the material is damped
 (E(1+iη), G(1+iη)). Geometry → section is a separate step: hollow circles
 (:func:`tube`), and parallel stacking of a holder annulus and a tool core
-(:func:`composite`, ``domain.md`` §2.6: EI, κGA, ρA and ρI simply add).
+(:func:`composite`, ``docs/physics.md`` §2.6: EI, κGA, ρA and ρI simply add).
 
-Shear coefficients for a (hollow) circle with m = d_i/d_o (``domain.md`` §2.6):
+Shear coefficients for a (hollow) circle with m = d_i/d_o (``docs/physics.md`` §2.6):
 
 * Hutchinson (2001): κ = 6(1+ν)²(1+m²)² / [(7+12ν+4ν²)(1+m²)² + 4(5+6ν+2ν²)m²]
 * Cowper (1966):     κ = 6(1+ν)(1+m²)² / [(7+6ν)(1+m²)² + (20+12ν)m²]
@@ -153,7 +153,7 @@ def shear_coefficient(poisson_ratio: float, inner_to_outer: float = 0.0,
 
     Examples
     --------
-    >>> round(shear_coefficient(0.3), 6)  # 6(1.3)²/10.96 (domain.md prints 0.925185, a rounding slip)
+    >>> round(shear_coefficient(0.3), 6)  # 6(1.3)²/10.96 (docs/physics.md prints 0.925185, a rounding slip)
     0.925182
     >>> round(shear_coefficient(0.3, model="cowper"), 4)
     0.8864
@@ -201,7 +201,7 @@ def tube(outer_diameter_m: float, inner_diameter_m: float, material: Material,
 def composite(*parts: Section) -> Section:
     """Parallel stacking of sections that bend together (holder annulus + tool core).
 
-    EI, κGA, ρA and ρI add (``domain.md`` §2.6). Any Euler–Bernoulli part makes the
+    EI, κGA, ρA and ρI add (``docs/physics.md`` §2.6). Any Euler–Bernoulli part makes the
     composite rigid in shear.
 
     Parameters

@@ -2,7 +2,7 @@
 
 The field transfer matrix of a uniform Timoshenko segment is written with the entire
 functions ``C(s, x) = cos(√s x)`` and ``S(s, x) = sin(√s x)/√s`` of the squared wavenumbers
-``s₁, s₂`` (``domain.md`` §2.2–2.3). They are even in √s, so no branch switch is needed at
+``s₁, s₂`` (``docs/physics.md`` §2.2–2.3). They are even in √s, so no branch switch is needed at
 the shear cut-off ω_c = √(κGA/ρI), and complex moduli (hysteretic damping) need no special
 case. Euler–Bernoulli is the same code with zero shear flexibility and zero rotary inertia.
 
@@ -51,7 +51,7 @@ RealTerms: TypeAlias = tuple[FloatArray, FloatArray, FloatArray, FloatArray, Flo
 def wavenumbers(omega_rad_s: FloatArray, section: Section) -> tuple[ComplexArray, ComplexArray]:
     """Squared wavenumbers ``s₁, s₂`` (1/m²) of the Timoshenko dispersion relation.
 
-    ``EI s² − (ρIω² + EI ρAω²/κGA) s − ρAω² (1 − ρIω²/κGA) = 0`` (``domain.md`` §2.2),
+    ``EI s² − (ρIω² + EI ρAω²/κGA) s − ρAω² (1 − ρIω²/κGA) = 0`` (``docs/physics.md`` §2.2),
     solved without cancellation (the larger root first, the other from the product).
 
     Parameters
@@ -109,7 +109,7 @@ def _c_and_s(k: ComplexArray, length_m: RealParam) -> tuple[ComplexArray, Comple
 def transfer_matrix(omega_rad_s: FloatArray, section: Section, length_m: float) -> ComplexArray:
     """Field transfer matrix ``T(L)`` with ``y(L) = T y(0)``, ``y = [w, ψ, V, M]``.
 
-    Closed form of ``B(L) B(0)⁻¹`` (``domain.md`` §2.3) with ``q_j = s_j − ρAω²/κGA``.
+    Closed form of ``B(L) B(0)⁻¹`` (``docs/physics.md`` §2.3) with ``q_j = s_j − ρAω²/κGA``.
 
     Parameters
     ----------
@@ -741,7 +741,7 @@ def stiffness_terms(omega_rad_s: FloatArray, section: Section, length_m: RealPar
              [ F,  G, -B,  C]]
 
     computed from the transfer-matrix entries of :func:`transfer_matrix` (their common
-    factor 1/(s₁ − s₂) cancels): ``D11 = T_ds⁻¹ T_dd`` and ``D12 = −T_ds⁻¹`` (``domain.md``
+    factor 1/(s₁ − s₂) cancels): ``D11 = T_ds⁻¹ T_dd`` and ``D12 = −T_ds⁻¹`` (``docs/physics.md``
     §2.4), in the versine form of :func:`six_terms` (no division by ρAω² or EI, full
     precision at low frequency). Accurate for pieces whose decay exponent ``|Im √s| L`` is at
     most ``MAX_DECAY_PER_PIECE``; longer segments: :func:`segment_terms`.
@@ -907,7 +907,7 @@ def dynamic_stiffness(omega_rad_s: FloatArray, section: Section, length_m: RealP
 def free_free_receptance(omega_rad_s: FloatArray, section: Section, length_m: float) -> ComplexArray:
     """Exact free-free receptance ``R``: ``[d₀; d_L] = R [f₀; f_L]``.
 
-    ``R = [[T_sd⁻¹T_ss, T_sd⁻¹], [·, T_dd T_sd⁻¹]]`` (``domain.md`` §2.4), lower-left block by
+    ``R = [[T_sd⁻¹T_ss, T_sd⁻¹], [·, T_dd T_sd⁻¹]]`` (``docs/physics.md`` §2.4), lower-left block by
     reciprocity. At frequencies where the segment is too long for one piece (strongly
     evanescent waves, where that form cancels catastrophically) ``R = D⁻¹`` is used instead;
     there the free-free rigid-body singularity of ``D`` is far away.
@@ -965,7 +965,7 @@ def static_stiffness(section: Section, length_m: RealParam) -> ComplexArray:
     """Exact static Timoshenko stiffness matrix (the ω → 0 limit of :func:`dynamic_stiffness`).
 
     ``EI/((1+Φ)L³) [[12, 6L, −12, 6L], [6L, (4+Φ)L², −6L, (2−Φ)L²], …]``, Φ = 12EI/(κGA L²)
-    (``domain.md`` §2.4), with the section's complex moduli (entries :func:`static_terms`).
+    (``docs/physics.md`` §2.4), with the section's complex moduli (entries :func:`static_terms`).
 
     Parameters
     ----------

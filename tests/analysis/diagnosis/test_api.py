@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import copy
 import json
+import re
 
 import numpy as np
 import pytest
@@ -82,6 +83,31 @@ def test_figure_draws_without_pyplot(mass_analysis, mass_response):
     assert save_figure(fig, "png")[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+def test_figure_is_readable(mass_analysis, mass_response):
+    # the measured curve lies under the model's, wider, so it shows where they agree; the
+    # frequency axes carry plain, distinct, non-overlapping labels; the gap map has its key
+    from rcsa.analysis.diagnosis.report import GAP_MAP_KEY
+
+    fig = diagnosis_figure(mass_analysis, mass_response)
+    renderer = fig.canvas.get_renderer()
+    frf_axes = [ax for ax in fig.axes if ax.get_xscale() == "log"]
+    assert len(frf_axes) == len(mass_analysis.request.measurements)
+    for ax in frf_axes:
+        lines = {line.get_label(): line for line in ax.get_lines()}
+        measured, model = lines["measured"], lines["base model"]
+        assert measured.get_zorder() < model.get_zorder() and measured.get_linewidth() > 2 * model.get_linewidth()
+        labels = [t for t in ax.get_xticklabels() if t.get_text()]
+        assert len(labels) >= 2 and all(re.fullmatch(r"\d+", t.get_text()) for t in labels), \
+            [t.get_text() for t in labels]
+        boxes = [t.get_window_extent(renderer) for t in labels]
+        assert not any(a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[i + 1:])
+        assert not [t for t in ax.get_xticklabels(minor=True) if t.get_text()]
+    assert any(t.get_text() == GAP_MAP_KEY for ax in fig.axes for t in ax.texts)
+    gap_maps = [ax for ax in fig.axes if ax.get_images()]
+    assert gap_maps and all(t.get_text().startswith(("static", "peak", "anti", "band"))
+                            for ax in gap_maps for t in ax.get_xticklabels())
+
+
 # ------------------------------------------------------------------------- validation errors
 def _edit(req, path, value):
     doc = copy.deepcopy(req)
@@ -129,6 +155,7 @@ def test_too_few_lines_is_refused(small_request):
 
 
 # ------------------------------------------------------------------------- CLI
+@pytest.mark.slow
 def test_cli_diagnose_writes_json_and_png(tmp_path, mass_request):
     import typer
 
@@ -153,6 +180,7 @@ def test_cli_diagnose_writes_json_and_png(tmp_path, mass_request):
     assert result.exit_code == 1 and "measurements" in result.output
 
 
+@pytest.mark.slow
 def test_one_measurement_and_different_grids_work():
     from rcsa.analysis.diagnosis.perturbed_model import Knobs
     from tests.analysis.diagnosis.conftest import model_request

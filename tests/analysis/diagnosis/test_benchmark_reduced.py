@@ -1,12 +1,15 @@
 """A reduced, seeded withheld-effect benchmark (the full one is ``benchmarks/bench_diagnosis.py``).
 
 Five classes × three trials from the independent FE truth (``tests/analysis/diagnosis/truth.py``),
-4 Hz lines to keep it under ~2 minutes. Thresholds sit well below the issue's targets
-(top-1 ≥ 0.9 at SNR ≥ 10, false claims ≤ 5 %) so the test guards against regressions, not
-against the luck of a few draws: at most one false claim in three no-effect trials, and at
-least 7 of the 12 effect trials identified correctly. The hybrid part runs one trial per
-class and kind of measured spindle (``tests/analysis/diagnosis/truth_hybrid.py``): at most
-one false claim in three, at least 6 of 9 effects identified, bearings never blamed.
+4 Hz lines to keep it under ~2 minutes. The trials are seeded, so the outcome is fixed for a
+given numpy; the thresholds sit within 2× of what the README states for the full benchmark
+(top-1 0.91 of all effect trials, i.e. 9 % missed; no false claim in 25; median held-out gap
+ratio 0.53): no false claim in the three no-effect trials, at least 10 of the 12 effect
+trials identified correctly (≥ 0.82; this seed gives 10: two are ``ambiguous`` at SNR ≈ 5),
+median gap ratio of the correct ones below 0.65 (this seed: 0.55). The hybrid part runs one
+trial per class and kind of measured spindle (``tests/analysis/diagnosis/truth_hybrid.py``;
+README: top-1 0.91 at SNR ≥ 10, 2 false claims in 75): no false claim in three, at least 8
+of the 9 effects identified (this seed: 9, all at SNR ≥ 10), bearings never blamed.
 """
 
 from __future__ import annotations
@@ -17,6 +20,10 @@ import pytest
 from rcsa.analysis.diagnosis import analyse
 from rcsa.analysis.diagnosis.report import build_response
 from tests.analysis.diagnosis import truth
+
+#: pytest-timeout's 600 s is the hang guard; this module's shared fixture alone takes about a
+#: minute at load 4 on 2 cores and took over 10 min at load 12-14 (a full run: timed out at 600 s)
+pytestmark = pytest.mark.timeout(1800)
 
 CLASSES = ("none", "sensor_mass", "bearings", "fluted_section", "joint_damping")
 TRIALS_PER_CLASS = 3
@@ -39,21 +46,21 @@ def outcomes():
 def test_no_effect_trials_rarely_claim_an_effect(outcomes):
     null = [o for o in outcomes if o[0] == "none"]
     false_claims = sum(status != "none" for _, status, _, _ in null)
-    assert false_claims <= 1, [(s, e) for _, s, e, _ in null]
+    assert false_claims == 0, [(s, e) for _, s, e, _ in null]
 
 
 @pytest.mark.slow
 def test_hidden_effects_are_mostly_identified(outcomes):
     effect_trials = [o for o in outcomes if o[0] != "none"]
     hits = sum(status == "identified" and named == effect for effect, status, named, _ in effect_trials)
-    assert hits >= 7, [(e, s, n) for e, s, n, _ in effect_trials]
+    assert hits >= 10, [(e, s, n) for e, s, n, _ in effect_trials]
 
 
 @pytest.mark.slow
 def test_identified_effects_shrink_the_held_out_gap(outcomes):
     ratios = [r["effects"][0]["held_out_gap_ratio"] for effect, status, named, r in outcomes
               if status == "identified" and named == effect]
-    assert ratios and float(np.median(ratios)) < 0.8
+    assert ratios and float(np.median(ratios)) < 0.65
     assert all(r["not_observable_at_standstill"] for *_, r in outcomes)
 
 
@@ -80,14 +87,14 @@ def hybrid_outcomes():
 @pytest.mark.slow
 def test_hybrid_no_effect_trials_rarely_claim_an_effect(hybrid_outcomes):
     null = [o for o in hybrid_outcomes if o[1] == "none"]
-    assert sum(status != "none" for _, _, status, _, _ in null) <= 1, [(k, s, e) for k, _, s, e, _ in null]
+    assert sum(status != "none" for _, _, status, _, _ in null) == 0, [(k, s, e) for k, _, s, e, _ in null]
 
 
 @pytest.mark.slow
 def test_hybrid_hidden_effects_are_mostly_identified(hybrid_outcomes):
     effect_trials = [o for o in hybrid_outcomes if o[1] != "none"]
     hits = sum(status == "identified" and named == effect for _, effect, status, named, _ in effect_trials)
-    assert hits >= 6, [(k, e, s, n) for k, e, s, n, _ in effect_trials]
+    assert hits >= 8, [(k, e, s, n) for k, e, s, n, _ in effect_trials]
 
 
 @pytest.mark.slow

@@ -1,4 +1,4 @@
-"""Unit tests of the diagnosis building blocks (``diagnosis.md`` §7 "Tests")."""
+"""Unit tests of the diagnosis building blocks (``docs/diagnosis.md`` §7 "Tests")."""
 
 from __future__ import annotations
 

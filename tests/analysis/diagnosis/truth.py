@@ -1,6 +1,6 @@
 """Truth generator of the withheld-effect benchmark: RA-1 "measurements" from the independent FE oracle.
 
-Every trial is a richer model than the diagnoser's base (``diagnosis.md`` §5.1): the
+Every trial is a richer model than the diagnoser's base (``docs/diagnosis.md`` §5.1): the
 Timoshenko finite-element assembly of :mod:`tests.oracles.fe_assembly` (it shares no code
 with ``rcsa``), with
 

@@ -80,12 +80,12 @@ def test_unknown_parameter_is_an_input_error(name):
 
 def test_modes_in_band_and_their_features(report):
     np.testing.assert_allclose(report.frequency_hz, [599.85, 921.69, 1115.51, 1383.61, 1444.68], atol=0.01)
-    # domain.md §1.5: tip residues 2.02, 0.032, 1.28, 13.6, 0.063; damped peaks 599 / 1103 / 1386 Hz
+    # docs/physics.md §1.5: tip residues 2.02, 0.032, 1.28, 13.6, 0.063; damped peaks 599 / 1103 / 1386 Hz
     np.testing.assert_allclose(report.modes.tip_residue_1_kg, [2.02, 0.032, 1.28, 13.6, 0.063], rtol=0.02)
     peaks = report.modes.peak_frequency_hz
     np.testing.assert_allclose(peaks[[0, 2, 3]], [599.0, 1103.0, 1386.0], atol=1.0)
     assert np.isnan(peaks[[1, 4]]).all()  # hidden at the tool point: no peak, no damping fit
-    # domain.md §1.5 peak heights on the 1 Hz grid; the refined maximum is at least as high
+    # docs/physics.md §1.5 peak heights on the 1 Hz grid; the refined maximum is at least as high
     np.testing.assert_allclose(report.modes.peak_magnitude_m_n[[0, 2, 3]], [4.273e-6, 8.27e-7, 5.837e-6],
                                rtol=2e-3)
     zeta = report.modes.damping_ratio[[0, 2, 3]]

@@ -23,7 +23,7 @@ META = MeasurementMeta(
 
 pytestmark = pytest.mark.skipif(
     not (POINT_1.is_file() and RAW_TAP.is_file()),
-    reason=f"third-party tap-test data not present at {DATA} (kept outside the repository)",
+    reason=f"third-party tap-test data not present at {DATA} (kept outside the repository; set RCSA_SHARED_DATA)",
 )
 
 
@@ -41,7 +41,7 @@ def test_point_1_imports_as_a_direct_frf_and_stores_bit_exact(tmp_path):
     band = m.frequency_hz >= 200
     i = int(np.argmax(np.abs(m.frfs["h"][band])))
     assert m.frequency_hz[band][i] == 1056.0
-    # SOURCE.md: |H11| peak 6.78e-7 m/N at 1056 Hz (3 significant digits)
+    # the data's own SOURCE.md (beside it, outside the repository): |H11| peak 6.78e-7 m/N at 1056 Hz (3 significant digits)
     assert abs(np.abs(m.frfs["h"][band][i]) / 6.78e-7 - 1) < 5e-3
     store = MeasurementStore(tmp_path / "store")
     got = store.get(store.put(m))
@@ -69,7 +69,7 @@ def test_raw_tap_reproduces_point_1():
     }
     # Measured here: +0.11 % at 500 Hz, -0.21 % at 1056 Hz (the dominant tool mode).
     assert abs(ratio[500]) <= 0.01 and abs(ratio[1056]) <= 0.01, ratio
-    # Measured here: +2.19 % at 1935 Hz and +1.06 % at 2607 Hz. SOURCE.md claims 0.3 % at all
+    # Measured here: +2.19 % at 1935 Hz and +1.06 % at 2607 Hz. The data's SOURCE.md claims 0.3 % at all
     # four; no processing of this single tap reproduces that (plain H1, exponential windows of
     # 0.02-0.5 s, a sensor mass of ±4 g all leave >= 1 % at 1935 Hz). The ratio is smooth
     # across each mode, so Point_1 is most likely an average of several taps of which this

@@ -68,7 +68,7 @@ def _read_logs(logs: list[Path]) -> tuple[dict[str, int], set[str], set[str]]:
     return put, deleted, deleting - deleted
 
 
-def _wait_ready(log: Path, proc: subprocess.Popen, timeout_s: float = 60.0) -> None:
+def _wait_ready(log: Path, proc: subprocess.Popen, timeout_s: float = 300.0) -> None:
     end = time.monotonic() + timeout_s
     while time.monotonic() < end:
         if log.exists() and log.read_text().startswith("ready"):

@@ -9,14 +9,14 @@ For every candidate M_k with parameters φ (uniform prior on the box [lo, hi], v
 ``f(φ)`` are the model features with the effect added, ``μ`` and ``Σ`` the discrepancy
 (:mod:`.discrepancy`). The likelihood is Gaussian or, by default, Student-t (ν = 5) on the
 symmetrically whitened residuals ``z = Σ^{-1/2} r`` — robust to a single feature that jumps
-when a mode crosses a window edge (``diagnosis.md`` §6.5).
+when a mode crosses a window edge (``docs/diagnosis.md`` §6.5).
 
 The integral is a trapezoid sum on a grid (25 points in 1-D, 11 × 11 in 2-D). When the
 posterior is narrower than the grid step it is redone on a fine grid over MAP ± 6 sd in 1-D
 and by the Laplace approximation (with the prior box's truncation) in 2-D; the MAP is refined
 by a bounded Nelder–Mead search and the sd comes from a finite-difference Hessian.
 
-Decision (Kass & Raftery 1995 scale, ``diagnosis.md`` §4.5): ``none`` unless the best
+Decision (Kass & Raftery 1995 scale, ``docs/diagnosis.md`` §4.5): ``none`` unless the best
 ln BF > τ (3, "strong"); ``ambiguous`` when other candidates lie within ``amb`` (2.3, a
 Bayes factor of 10) of the best; otherwise ``identified``.
 """

@@ -3,7 +3,7 @@
 Each candidate has one or two physically bounded parameters with a uniform prior, a null
 value at which the model *is* the base model, and a pure ``apply(knobs, values) -> knobs``.
 Parameters are shared by all measurements (a joint stiffness does not change with the
-stickout). Bounds follow ``diagnosis.md`` §2:
+stickout). Bounds follow ``docs/diagnosis.md`` §2:
 
 ================================  =========================================  ==============
 effect                            parameters (prior range)                   null
@@ -28,7 +28,7 @@ spindle_rotational_receptance     residual compliance added to the spindle's   0
 Speed-dependent effects are listed in :data:`NOT_OBSERVABLE_AT_STANDSTILL`; they are never
 candidates for a standstill tap test.
 
-On a **measured spindle** (hybrid, ``domain.md`` §4) the catalogue changes where the
+On a **measured spindle** (hybrid, ``docs/physics.md`` §4) the catalogue changes where the
 physics does (:func:`not_applicable` gives each excluded effect its reason):
 
 * ``bearings`` is not applicable: the bearings are inside the measured receptance;
@@ -52,7 +52,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from rcsa.analysis.diagnosis.perturbed_model import Knobs, Solver, config_parts, null_shear_scale
-from rcsa.model.contract import AssemblySpec, ToolSpec
+from rcsa.model.contract import AssemblySpec, ClampingSpec, JointSpec, ToolSpec
 from rcsa.model.spindle_side import MeasuredBase
 from rcsa.physics.algebra2x2 import inv2
 
@@ -175,7 +175,7 @@ def not_applicable(spec: AssemblySpec, tools: Sequence[ToolSpec], measured: Meas
         out["spindle_holder_joint"] = ("the spindle was measured at the holder tip: the spindle-holder joint is inside "
                                        "the measurement", True)
     ht, sh = spec.holder_tool, spec.spindle_holder
-    if ht is None or ht.rotational_stiffness_nm_rad is None:
+    if ht is None or (isinstance(ht, JointSpec) and ht.rotational_stiffness_nm_rad is None):
         out["holder_tool_joint"] = ("the base model's holder-tool joint (or its rotational stiffness) is rigid; give "
                                     "finite stiffnesses to test it" + (" (at a holder_tip plane the clamping of the "
                                                                        "measured artifact is inside the measurement)"
@@ -225,7 +225,14 @@ def catalogue(spec: AssemblySpec, tools: Sequence[ToolSpec], solver: Solver,
              if not cannot]
     ht, sh = spec.holder_tool, spec.spindle_holder
 
-    if "holder_tool_joint" not in excluded and ht is not None and ht.rotational_stiffness_nm_rad is not None:
+    if "holder_tool_joint" not in excluded and isinstance(ht, ClampingSpec):
+        scale0 = ht.interface_stiffness_scale
+        out.append(Candidate(  # interface softening over the whole insertion (a soft or worn clamp)
+            "holder_tool_joint", (Parameter("log10_interface_stiffness_scale", -3.0, 0.5, 0.0, "1"),),
+            lambda k, v: _mul(k, ht_translational_scale=10 ** v[0]),
+            lambda v: {"holder_tool.interface_stiffness_scale": scale0 * 10 ** v[0]}))
+    elif "holder_tool_joint" not in excluded and isinstance(ht, JointSpec) \
+            and ht.rotational_stiffness_nm_rad is not None:
         kr0 = ht.rotational_stiffness_nm_rad
 
         def ht_meaning(v: np.ndarray) -> dict[str, float]:
@@ -285,7 +292,8 @@ def catalogue(spec: AssemblySpec, tools: Sequence[ToolSpec], solver: Solver,
         out.append(Candidate(
             "insertion_depth", (Parameter("clamping_point_inside_holder_m", 0.0, 0.3 * inserted, 0.0, "m"),),
             lambda k, v: replace(k, insertion_offset_m=float(v[0])),
-            lambda v: {"clamping_point_inside_holder_m": float(v[0])}))
+            (lambda v: {"front_gap_length_m": float(v[0])}) if isinstance(ht, ClampingSpec)
+            else (lambda v: {"clamping_point_inside_holder_m": float(v[0])})))
 
     m_max = DEFAULT_SENSOR_MASS_MAX_KG if sensor_mass_max_kg is None else sensor_mass_max_kg
     out.append(Candidate(

@@ -25,7 +25,7 @@ def diagnose(request: Mapping[str, Any], resolve_base: BaseResolver | None = Non
     ----------
     request : dict
         ``{"assembly", "measurements": [{"tool", "frequency_hz", "h", "coherence", ...}],
-        "tolerances"?, "options"?}`` (``contract.md`` "Diagnosis"; optional fields in
+        "tolerances"?, "options"?}`` (``docs/contract.md`` "Diagnosis"; optional fields in
         :mod:`rcsa.analysis.diagnosis.request`).
     resolve_base : callable, optional
         Looks a measured spindle (``assembly.spindle = {"measurement_id": ...}``) up

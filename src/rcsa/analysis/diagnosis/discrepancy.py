@@ -2,7 +2,7 @@
 
 The known imperfections of the base model — material grade, bearing and joint stiffness,
 damping, re-clamping and the stickout setting — and the measurement noise are pushed through
-the model and the feature extractor (``diagnosis.md`` §4.3)::
+the model and the feature extractor (``docs/diagnosis.md`` §4.3)::
 
     for i in 1..n_mc:
         knobs_i = draw(tolerances)               # shared by all measurements + per measurement
@@ -15,7 +15,7 @@ never blamed on an effect. Noise is complex Gaussian with the Bendat & Piersol r
 |H| (and of its phase, rad) ``σ = √(1−γ²) / (|γ| √(2 n_avg))`` from the measured coherence γ².
 
 Default tolerances (one standard deviation; overridable per request, ``tolerances``) follow
-``diagnosis.md`` §2 and §5.1: those of the model (the table of :mod:`rcsa.model.tolerances`,
+``docs/diagnosis.md`` §2 and §5.1: those of the model (the table of :mod:`rcsa.model.tolerances`,
 where they and their draws are defined once — predictions with uncertainty bands use the
 same), and those of a measured spindle:
 

@@ -1,6 +1,6 @@
 """Mode-localised features of a tool-point FRF — the coordinates in which the gap is judged.
 
-For each measurement, the windows are fixed once from the **base** model (``diagnosis.md``
+For each measurement, the windows are fixed once from the **base** model (``docs/diagnosis.md``
 §4.2): the dominant peaks of the base ``|h|`` in the valid band, window edges at the
 geometric midpoints between consecutive peaks, and a quasi-static band below the first one.
 The same extractor with the same windows is then applied to measured and to modelled FRFs,

@@ -10,8 +10,9 @@ measurement's tool, knobs) into the three sub-chains that are solved one after t
     measured, holder_tip:   (measured receptance)           | corrections at the holder tip      | HT joint, tool, tip mass
 
 and :class:`Solver` condenses them item by item (each chain item's own elimination step; a
-measured receptance is absorbed, never inverted), caching the condensed state after the
-spindle and after the middle sub-chain and each beam's stiffness terms. The builder hands
+measured receptance is absorbed, never inverted), keeping the condensed state after the
+spindle and after the middle sub-chain and each beam's stiffness terms in the one
+subassembly cache (:class:`rcsa.physics.subassembly_cache.SubassemblyCache`). The builder hands
 out the very same sub-chain objects for equal inputs, so a change of a tool-side knob costs
 three beams per measurement, not the twenty of the whole chain.
 
@@ -21,7 +22,7 @@ different, physical realisations, see ``tests/analysis/diagnosis/truth.py``):
 * ``shear_scale`` multiplies the shear flexibility 1/(κGA) and the rotary inertia ρI of every
   Timoshenko section (0 = Euler–Bernoulli, 1 = Timoshenko with the assembly's κ).
 * ``fluted_stiffness_ratio`` / ``fluted_mass_ratio`` are the fluted section's equivalent
-  diameters over DC for EI (and ρI) and for ρA (``domain.md`` §5.1).
+  diameters over DC for EI (and ρI) and for ρA (``docs/physics.md`` §5.1).
 * ``tip_mass_kg`` is a point mass (no rotary inertia) on the tool, ``tip_mass_distance_m``
   behind the tip (the last beam is split there).
 * ``insertion_offset_m`` moves the clamping point that far into the holder: the holder's last
@@ -40,11 +41,15 @@ different, physical realisations, see ``tests/analysis/diagnosis/truth.py``):
   length L/s instead of L and shape PH/N² = 4c/3 instead of 4/3.
 * At ``holder_tip`` the holder is inside the measurement: ``insertion_offset_m`` only
   lengthens the tool's free length (the holder's annulus over δ is part of the measurement).
+* With a holder–tool clamping along the insertion (model ``bonded``/``contact``) the holder-tool
+  knobs act on the clamping, which belongs to the holder chain: ``ht_translational_scale``
+  scales its whole interface stiffness (softening over the insertion), ``ht_damping_scale``
+  its interface loss factor, and ``insertion_offset_m`` is contact lost over that length
+  at the front of the bore (its ``front_gap_length_m``): holder and tool keep their geometry.
 """
 
 from __future__ import annotations
 
-from collections import OrderedDict
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from functools import lru_cache
@@ -56,17 +61,18 @@ from rcsa.model.assembly import holder_chain, joint_spring, spindle_chain, tool_
 from rcsa.model.contract import (
     AssemblySpec,
     BearingSpec,
+    ClampingSpec,
     HolderSpec,
-    JointSpec,
     SegmentSpec,
     SpindleSpec,
     ToolSpec,
 )
+from rcsa.model.tolerances import scaled_joint
 from rcsa.physics.arrays import ComplexArray, FloatArray, IntArray
-from rcsa.physics.chain import Beam, Chain, ChainItem, Grid, Ground, Sym
+from rcsa.physics.chain import Beam, Chain, ChainItem, Ground
 from rcsa.physics.materials import Material
 from rcsa.physics.sections import Section
-from rcsa.physics.segments import SixTerms, Waves, segment_terms
+from rcsa.physics.subassembly_cache import Condensed, SubassemblyCache
 
 __all__ = ["AddedCompliance", "BaseReceptance", "Knobs", "Parts", "PartsBuilder", "RotationRescale", "Solver",
            "config_parts", "null_shear_scale"]
@@ -105,28 +111,6 @@ class Knobs:
     base_rotation_shape: float = 1.0
 
 
-class _BeamTermsGrid(Grid):
-    """A grid that keeps the six stiffness terms of the most recently used beams, and the
-    wavenumbers of the most recently used sections (beams of one section share them: the
-    shank of every stickout, the pieces of a split segment)."""
-
-    def __init__(self, omega_rad_s: FloatArray, max_beams: int) -> None:
-        super().__init__(omega_rad_s)
-        self._terms = lru_cache(maxsize=max_beams)(self._segment_terms)
-        self._section_waves = lru_cache(maxsize=max_beams // 4)(lambda section: Waves(self.omega_rad_s, section))
-
-    def waves(self, section: Section) -> Waves:
-        """Wavenumbers of ``section`` (bounded cache: the Monte Carlo makes new sections all the time)."""
-        return self._section_waves(section)  # type: ignore[no-any-return]
-
-    def _segment_terms(self, beam: Beam) -> SixTerms:
-        return segment_terms(self.omega_rad_s, beam.section, beam.length_m, self.waves(beam.section))
-
-    def beam_terms(self, beam: Beam) -> SixTerms:
-        """Six-term dynamic stiffness of ``beam``, cached by beam (section and length)."""
-        return self._terms(beam)
-
-
 def null_shear_scale(spec: AssemblySpec) -> float:
     """The ``shear_scale`` that reproduces the base: 0 for Euler–Bernoulli, 1 for Timoshenko."""
     return 0.0 if spec.beam_theory == "euler_bernoulli" else 1.0
@@ -141,14 +125,6 @@ def _materials(spec: AssemblySpec, k: Knobs) -> Mapping[str, Material]:
         out[name] = Material(m.youngs_modulus_pa * e, m.poisson_ratio, m.density_kg_m3 * rho,
                              m.loss_factor * k.loss_factor_scale)
     return out
-
-
-def _joint(joint: JointSpec | None, kt: float, kr: float, c: float) -> JointSpec | None:
-    if joint is None:
-        return None
-    return JointSpec(joint.stiffness_n_m * kt, joint.damping_ns_m * c,
-                     None if joint.rotational_stiffness_nm_rad is None else joint.rotational_stiffness_nm_rad * kr,
-                     joint.rotational_damping_nms_rad * c)
 
 
 def _spindle(spindle: SpindleSpec, k: Knobs) -> SpindleSpec:
@@ -204,8 +180,9 @@ def _spindle_chain(spindle: SpindleSpec, mats: tuple, shear: object, theory: str
 
 
 @lru_cache(maxsize=256)
-def _holder_chain(holder: HolderSpec, tool: ToolSpec, mats: tuple, shear: object, theory: str) -> Chain:
-    return holder_chain(holder, tool, dict(mats), shear, theory)  # type: ignore[arg-type]
+def _holder_chain(holder: HolderSpec, tool: ToolSpec, mats: tuple, shear: object, theory: str,
+                  clamping: ClampingSpec | None = None) -> Chain:
+    return holder_chain(holder, tool, dict(mats), shear, theory, clamping)  # type: ignore[arg-type]
 
 
 @lru_cache(maxsize=256)
@@ -326,7 +303,14 @@ class PartsBuilder:
             sp = spec.spindle
             spindle = _cached(self._spindles, (mkey, s, k.bearing_stiffness_scale, k.bearing_damping_scale),
                               lambda: shear_scaled(_spindle_chain(_spindle(sp, k), mats, shear, theory)))
-        stickout = tool.stickout_m + k.stickout_offset_m + k.insertion_offset_m
+        # a clamping along the insertion belongs to the holder chain, with the holder-tool knobs
+        clamping = scaled_joint(spec.holder_tool, k.ht_translational_scale, k.ht_rotational_scale,
+                                k.ht_damping_scale) if isinstance(spec.holder_tool, ClampingSpec) else None
+        front_gap = clamping is not None and self.plane != "holder_tip"
+        if front_gap and k.insertion_offset_m > 0.0:
+            assert isinstance(clamping, ClampingSpec)
+            clamping = replace(clamping, front_gap_length_m=clamping.front_gap_length_m + k.insertion_offset_m)
+        stickout = tool.stickout_m + k.stickout_offset_m + (0.0 if front_gap else k.insertion_offset_m)
         r_i = tool.fluted_diameter_ratio if k.fluted_stiffness_ratio is None else k.fluted_stiffness_ratio
         r_a = tool.fluted_mass_diameter_ratio if k.fluted_mass_ratio is None else k.fluted_mass_ratio
         made: list[ToolSpec] = []
@@ -346,30 +330,31 @@ class PartsBuilder:
             if self.plane == "holder_tip":
                 return tuple(items)
             assert spec.holder is not None
-            holder, ring = _trim_holder(spec.holder, k.insertion_offset_m, dict(mats))
-            sh = joint_spring(_joint(spec.spindle_holder, k.sh_translational_scale, k.sh_rotational_scale,
-                                     k.sh_damping_scale))
+            holder, ring = _trim_holder(spec.holder, 0.0 if front_gap else k.insertion_offset_m, dict(mats))
+            sh = joint_spring(scaled_joint(spec.spindle_holder, k.sh_translational_scale, k.sh_rotational_scale,
+                                           k.sh_damping_scale))
             if sh is not None:
                 items.append(sh)
-            items.extend(shear_scaled(_holder_chain(holder, tool_of(), mats, shear, theory)))
+            items.extend(shear_scaled(_holder_chain(holder, tool_of(), mats, shear, theory, clamping)))
             if ring is not None:
                 items.append(ring)
             return tuple(items)
 
         mid_key = (mkey, s, k.base_rotation_scale, k.base_rotation_shape, k.nose_cross_compliance_rad_n,
-                   k.nose_rotational_residual_rad_nm)
+                   k.nose_rotational_residual_rad_nm, clamping)
         if self.plane != "holder_tip":
             assert spec.holder is not None
             # the holder chain sees the tool only through the inserted length inside the (trimmed) holder
-            filled = round(min(tool.overall_length_m - stickout, spec.holder.length_m - k.insertion_offset_m), 12)
+            filled = round(min(tool.overall_length_m - stickout,
+                               spec.holder.length_m - (0.0 if front_gap else k.insertion_offset_m)), 12)
             mid_key += (k.sh_translational_scale, k.sh_rotational_scale, k.sh_damping_scale, k.insertion_offset_m,
                         filled, tool.shank_diameter_m, tool.material)
         mid = _cached(self._middles, mid_key, middle)
 
         def tail() -> Chain:
             items: list[ChainItem] = []
-            ht = joint_spring(_joint(spec.holder_tool, k.ht_translational_scale, k.ht_rotational_scale,
-                                     k.ht_damping_scale))
+            ht = joint_spring(scaled_joint(spec.holder_tool, k.ht_translational_scale, k.ht_rotational_scale,
+                                           k.ht_damping_scale))
             if ht is not None:
                 items.append(ht)
             items.extend(shear_scaled(_tool_chain(tool_of(), mats, shear, theory)))
@@ -405,27 +390,6 @@ def config_parts(spec: AssemblySpec, tool: ToolSpec, k: Knobs, plane: str | None
     return PartsBuilder(spec, plane, base).parts(tool, k)
 
 
-#: Condensed state after a prefix of a chain: the stiffness seen from the right (a Sym), or —
-#: while no beam has turned a measured base into a stiffness yet — its receptance (nfreq, 2, 2).
-_State = tuple[Sym | None, ComplexArray | None]
-
-
-def _advance(state: _State, chain: Chain, grid: Grid) -> _State:
-    """Carry the condensed state across ``chain`` (each item's own elimination step)."""
-    k, s = state
-    for item in chain:
-        if s is not None:
-            out, is_stiffness = item.absorb_compliance(s, grid)
-            if is_stiffness:
-                k, s = (out[:, 0, 0], 0.5 * (out[:, 0, 1] + out[:, 1, 0]), out[:, 1, 1]), None
-            else:
-                s = out
-        else:
-            assert k is not None
-            k, _ = item.eliminate(k, grid)
-    return k, s
-
-
 class Solver:
     """Tool-point ``h`` of many configurations on one frequency grid, with caches.
 
@@ -433,10 +397,11 @@ class Solver:
     plane) to the tool tip, each item doing its own elimination step
     (:meth:`rcsa.physics.chain.ChainItem.eliminate`, and
     :meth:`~rcsa.physics.chain.ChainItem.absorb_compliance` on a measured base, which is never
-    inverted), with two caches: the condensed state after the spindle and after the middle
-    sub-chain (keyed by the identity of the base and of the sub-chain objects, which
-    :class:`PartsBuilder` shares), and the six stiffness terms of each beam (keyed by section
-    and length), so a changed joint or tool re-uses every beam.
+    inverted), on one :class:`~rcsa.physics.subassembly_cache.SubassemblyCache`: the condensed
+    state after the spindle and after the middle sub-chain (found by the identity of the base
+    and of the sub-chain objects, which :class:`PartsBuilder` shares), and the six stiffness
+    terms of each beam (keyed by section and length), so a changed joint or tool re-uses every
+    beam. What the cache hands out is read-only; nothing is copied to stay safe.
 
     Parameters
     ----------
@@ -449,53 +414,26 @@ class Solver:
     def __init__(self, frequency_hz: FloatArray, cache_size: int = 128) -> None:
         self.frequency_hz = np.asarray(frequency_hz, dtype=float)
         self.omega_rad_s = 2.0 * np.pi * self.frequency_hz
-        self._grid = _BeamTermsGrid(self.omega_rad_s, 4 * cache_size)
-        self._cache_size = cache_size
-        self._states: OrderedDict[tuple[int, ...], tuple[tuple[object, ...], _State]] = OrderedDict()
-        zero = np.zeros(self.omega_rad_s.size, dtype=complex)
-        zero.flags.writeable = False
-        self._free: _State = ((zero, zero, zero), None)
+        self._cache = SubassemblyCache(self.omega_rad_s, max_states=cache_size, max_beams=4 * cache_size)
         self.evaluations = 0
 
-    def _state(self, base: BaseReceptance | None, chains: tuple[Chain, ...]) -> _State:
-        """Condensed state after ``chains`` on ``base`` (cached by identity)."""
-        if not chains:
-            return self._free if base is None else (None, base.compliance)
-        objs = (base, *chains)
-        key = tuple(id(o) for o in objs)
-        hit = self._states.get(key)
-        if hit is not None and all(a is b for a, b in zip(hit[0], objs, strict=True)):
-            self._states.move_to_end(key)
-            return hit[1]
-        k, s = _advance(self._state(base, chains[:-1]), chains[-1], self._grid)
-        # an elimination step writes into the grid's work arrays, which the next step reuses:
-        # the cached state is a copy of them
-        k = None if k is None else (k[0].copy(), k[1].copy(), k[2].copy())
-        for arr in (*(k or ()), *(() if s is None else (s,))):
-            arr.flags.writeable = False  # shared by every later configuration with this prefix
-        self._states[key] = (objs, (k, s))
-        while len(self._states) > self._cache_size:
-            self._states.popitem(last=False)
-        return k, s
+    def _state(self, parts: Parts) -> Condensed:
+        """Condensed state after the spindle and the middle sub-chain (cached by identity)."""
+        base = None if parts.base is None else parts.base.compliance
+        return self._cache.condensed((parts.spindle, parts.middle), base)
 
     def tip_h(self, parts: Parts, lines: IntArray | slice = slice(None)) -> ComplexArray:
         """Driving-point tool-tip receptance ``h`` (m/N), shape (nlines,)."""
-        k, s = _advance(self._state(parts.base, (parts.spindle, parts.middle)), parts.tool, self._grid)
+        h = self._cache.tip_h(self._state(parts), parts.tool)
         self.evaluations += 1
-        if k is None:
-            assert s is not None
-            return s[:, 0, 0][lines]
-        k11, k12, k22 = k
-        return (k22 / (k11 * k22 - k12 * k12))[lines]
+        return h[lines]
 
     def tip_h_many(self, parts: Sequence[Parts], lines: IntArray | slice = slice(None)) -> ComplexArray:
         """:meth:`tip_h` of many configurations, shape (n, nlines)."""
         return np.stack([self.tip_h(p, lines) for p in parts])
 
     def nose_stiffness(self, parts: Parts) -> ComplexArray:
-        """Condensed dynamic stiffness of an analytical spindle at its nose, shape (nfreq, 2, 2)."""
-        k, _ = self._state(parts.base, (parts.spindle,))
+        """Condensed dynamic stiffness of an analytical spindle at its nose, shape (nfreq, 2, 2), read-only."""
+        k = self._cache.condensed((parts.spindle,)).stiffness
         assert k is not None
-        out = np.empty((self.omega_rad_s.size, 2, 2), dtype=complex)
-        out[:, 0, 0], out[:, 0, 1], out[:, 1, 0], out[:, 1, 1] = k[0], k[1], k[1], k[2]
-        return out
+        return k

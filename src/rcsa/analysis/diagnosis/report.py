@@ -1,4 +1,4 @@
-"""The diagnosis response (``contract.md`` "Diagnosis") and its figure.
+"""The diagnosis response (``docs/contract.md`` "Diagnosis") and its figure.
 
 Response fields: ``gap`` (``modes`` and ``bands``: each feature and band judged as a z-score
 against what tolerances and noise already explain, plus χ², p-value and a sentence),
@@ -18,6 +18,7 @@ canvas (no pyplot): measured, base and corrected |h| per measurement, and the ga
 
 from __future__ import annotations
 
+import re
 import time
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
@@ -36,7 +37,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = ["build_response", "diagnosis_figure", "gap_map"]
 
-Z_FLAG = 3.0  # |z| above this is flagged in the gap map (diagnosis.md §4.4)
+Z_FLAG = 3.0  # |z| above this is flagged in the gap map (docs/diagnosis.md §4.4)
 P_GAP = 0.05
 
 
@@ -269,6 +270,30 @@ def _z_matrix(a: Analysis, model_features: np.ndarray) -> tuple[np.ndarray, list
     return out, names
 
 
+#: What the columns of the gap map are (drawn under it).
+GAP_MAP_KEY = ("Gap-map columns, window k counted from low to high frequency: peak k f / |h| = frequency / height "
+               "of its resonance; anti k f = the antiresonance after it; band k = the window's level; static = "
+               "quasi-static compliance; white = that measurement has no such feature. z = departure from the base "
+               "model in standard deviations of what tolerances and noise already explain.")
+
+
+def gap_map_label(feature: str) -> str:
+    """The gap map's column label of a feature name (``peak0.frequency`` → ``peak 1 f``).
+
+    Examples
+    --------
+    >>> [gap_map_label(s) for s in ("static", "peak0.frequency", "peak0.amplitude", "antiresonance1.frequency",
+    ...                             "band2.level")]
+    ['static', 'peak 1 f', 'peak 1 |h|', 'anti 2 f', 'band 3']
+    """
+    m = re.fullmatch(r"(peak|antiresonance|band)(\d+)\.(frequency|amplitude|level)", feature)
+    if m is None:
+        return feature
+    kind = {"peak": "peak", "antiresonance": "anti", "band": "band"}[m.group(1)]
+    what = {"frequency": " f", "amplitude": " |h|", "level": ""}[m.group(3)]
+    return f"{kind} {int(m.group(2)) + 1}{what}"
+
+
 def diagnosis_figure(a: Analysis, response: dict[str, Any] | None = None) -> Figure:
     """Measured, base and corrected FRFs per measurement, and the gap map before/after.
 
@@ -281,15 +306,15 @@ def diagnosis_figure(a: Analysis, response: dict[str, Any] | None = None) -> Fig
     # matplotlib (~0.3 s to import): only when a figure is drawn, not for every diagnosis
     from matplotlib.colors import TwoSlopeNorm
 
-    from rcsa.analysis.figures import freeze_layout, new_figure
+    from rcsa.analysis.figures import freeze_layout, log_frequency_ticks, new_figure
 
     response = build_response(a) if response is None else response
     p = a.problem
     n = len(p.configs)
     cols = 2 if n > 1 else 1
     rows = (n + cols - 1) // cols
-    fig = new_figure(5.2 * cols, 2.3 * rows + 2.6)
-    grid = fig.add_gridspec(rows + 1, cols, height_ratios=[1.0] * rows + [1.2])
+    fig = new_figure(5.2 * cols, 2.3 * rows + 3.1)
+    grid = fig.add_gridspec(rows + 2, cols, height_ratios=[1.0] * rows + [1.2, 0.32])
     effects = response["effects"]
     corrected = None
     if effects:
@@ -299,17 +324,21 @@ def diagnosis_figure(a: Analysis, response: dict[str, Any] | None = None) -> Fig
     base_full = a.full_h([], [])
     for i, m in enumerate(a.request.measurements):
         ax = fig.add_subplot(grid[i // cols, i % cols])
-        ax.loglog(m.frequency_hz, np.abs(m.h) * 1e6, color="0.55", lw=0.8, label="measured")
-        ax.loglog(m.frequency_hz, np.abs(base_full[i]) * 1e6, "--", color="tab:blue", lw=1.0, label="base model")
+        # the measurement as a wide light band under the thin model lines: visible where they match
+        ax.loglog(m.frequency_hz, np.abs(m.h) * 1e6, color="0.2", alpha=0.3, lw=3.2, label="measured",
+                  solid_capstyle="butt", zorder=1)
+        ax.loglog(m.frequency_hz, np.abs(base_full[i]) * 1e6, "--", color="tab:blue", lw=1.0, label="base model",
+                  zorder=2)
         if corrected is not None:
-            ax.loglog(m.frequency_hz, np.abs(corrected[i]) * 1e6, color="tab:red", lw=1.0,
-                      label=f"+ {effects[0]['effect']}")
+            ax.loglog(m.frequency_hz, np.abs(corrected[i]) * 1e6, color="tab:red", lw=0.9,
+                      label=f"+ {effects[0]['effect']}", zorder=3)
+        log_frequency_ticks(ax, float(m.frequency_hz[0]), float(m.frequency_hz[-1]))
         ax.set_title(f"measurement {m.label} (stickout {m.tool.stickout_m * 1e3:.1f} mm)", fontsize=9)
         ax.set_ylabel("|h| [µm/N]", fontsize=8)
         ax.tick_params(labelsize=7)
         if i == 0:
             ax.legend(fontsize=7, loc="lower left")
-        if i // cols == rows - 1:
+        if i // cols == rows - 1 or (i + cols >= n):
             ax.set_xlabel("frequency [Hz]", fontsize=8)
     zb, names = _z_matrix(a, p.base_features)
     panels = [("gap map: base model", zb)]
@@ -322,16 +351,17 @@ def diagnosis_figure(a: Analysis, response: dict[str, Any] | None = None) -> Fig
     for k, (title, zz) in enumerate(panels):
         ax = fig.add_subplot(sub[0, k])
         im = ax.imshow(np.clip(zz, -lim, lim), cmap="RdBu_r", norm=TwoSlopeNorm(0.0, -lim, lim), aspect="auto")
-        ax.set_xticks(range(len(names)), [s.replace(".frequency", " f").replace(".amplitude", " A")
-                                          .replace("antiresonance", "ar").replace("peak", "pk").replace(".level", " L").replace("band", "bd") for s in names],
-                      rotation=60, fontsize=6)
+        ax.set_xticks(range(len(names)), [gap_map_label(s) for s in names], rotation=60, fontsize=6)
         ax.set_yticks(range(n), [a.request.measurements[c.index].label for c in p.configs], fontsize=7)
         ax.set_title(f"{title} (z, |z| > {Z_FLAG:g} flagged)", fontsize=8)
         for (r_, c_), v in np.ndenumerate(zz):
             if np.isfinite(v) and abs(v) > Z_FLAG:
                 ax.text(c_, r_, f"{v:.0f}", ha="center", va="center", fontsize=6)
         if k == len(panels) - 1:
-            fig.colorbar(im, ax=ax, shrink=0.8)
+            fig.colorbar(im, ax=ax, shrink=0.8, label="z")
+    key = fig.add_subplot(grid[rows + 1, :])
+    key.axis("off")
+    key.text(0.0, 0.5, GAP_MAP_KEY, fontsize=7, va="center", ha="left", transform=key.transAxes, wrap=True)
     v = response["verdict"]
     fig.suptitle(f"verdict: {v['effect']} ({v['status']})", fontsize=10)
     return freeze_layout(fig)

@@ -1,4 +1,4 @@
-"""The diagnosis request (``contract.md`` "Diagnosis"), validated once at the edge.
+"""The diagnosis request (``docs/contract.md`` "Diagnosis"), validated once at the edge.
 
 Request::
 
@@ -71,7 +71,7 @@ class Measurement:
 
 @dataclass(frozen=True)
 class Options:
-    """Decision and effort settings (``diagnosis.md`` §7 defaults)."""
+    """Decision and effort settings (``docs/diagnosis.md`` §7 defaults)."""
 
     effects: tuple[str, ...] = CANDIDATE_NAMES
     effects_requested: bool = False

@@ -1,6 +1,6 @@
 """The diagnosis, step by step; :class:`Analysis` keeps the full state (benchmark, figure).
 
-The pipeline (``diagnosis.md`` §4):
+The pipeline (``docs/diagnosis.md`` §4):
 
 1. parse and validate the request (:mod:`.request`);
 2. fix the analysis lines, the base model and its feature windows (:mod:`.problem`);
@@ -35,7 +35,7 @@ from rcsa.model.spindle_side import BaseResolver
 __all__ = ["Analysis", "analyse", "validate"]
 
 # Signatures more collinear than this cannot be told apart: a second effect along the first
-# one's direction is refused (``diagnosis.md`` §4.7).
+# one's direction is refused (``docs/diagnosis.md`` §4.7).
 MAX_SIGNATURE_COSINE = 0.9
 # Held-out validation and parameter meanings are computed for the verdict's effects and for
 # this many best-ranked others (the rest is ranked by evidence only, to bound the runtime).
@@ -278,7 +278,7 @@ class Analysis:
     def _greedy_second(self) -> tuple[Fit, HeldOut | None, float] | None:
         """Best second effect with the first fixed at its MAP; accepted only if it passes every test.
 
-        Tests (``diagnosis.md`` §4.7): the first leaves a significant remainder; the second's
+        Tests (``docs/diagnosis.md`` §4.7): the first leaves a significant remainder; the second's
         conditional ln BF > τ; its signature is not collinear with the first's; it moves the
         features by at least :data:`MIN_SECOND_SHIFT_RATIO` of the first's shift (else it is
         within the first effect's form error); held-out χ² improves (checked last: costliest).
@@ -315,7 +315,7 @@ class Analysis:
 
         Listed when the verdict's effect leaves a significant remainder (the truth is then
         neither form exactly, so an evidence difference between two collinear forms says which
-        approximates better, not which mechanism acts; ``diagnosis.md`` §5.4).
+        approximates better, not which mechanism acts; ``docs/diagnosis.md`` §5.4).
         """
         d = self.decision
         if d.status == "none":

@@ -1,4 +1,4 @@
-"""How far the gap shrinks on measurements the fit did not see (``diagnosis.md`` §4.6).
+"""How far the gap shrinks on measurements the fit did not see (``docs/diagnosis.md`` §4.6).
 
 Folds: the request's ``options.held_out`` (one fold); otherwise, with four or more
 measurements, every second one in order of stickout is held out; with two or three,

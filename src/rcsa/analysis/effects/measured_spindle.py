@@ -1,6 +1,6 @@
 """Effect analysis on a measured spindle: how joints and tool move the modes of a hybrid model.
 
-On a measured spindle (``contract.md`` "Additions in v1.1") there are no exact natural
+On a measured spindle (``docs/contract.md`` "Additions in v1.1") there are no exact natural
 frequencies: the modes are those of the modal fit of the predicted tool-point ``h``
 (:func:`rcsa.model.modal_fit.modal_fit`, as the hybrid prediction reports them). Each
 parameter is perturbed by ``p·e^{±δ}`` and every nominal mode is fitted again on **its own

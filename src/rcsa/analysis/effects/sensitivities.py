@@ -25,7 +25,7 @@ mode by far less than the gap to its neighbours (RA-1's closest pair, 1384/1445 
 frequencies. Halving the step changes the sensitivities by less than 0.2 % (tested).
 
 This is the quantitative form of the "effect analysis" of Ertürk, Özgüven & Budak,
-IJMTM 47 (2007) 23–32 (``diagnosis.md`` §3.3): bearings act on the lowest spindle modes,
+IJMTM 47 (2007) 23–32 (``docs/diagnosis.md`` §3.3): bearings act on the lowest spindle modes,
 the interfaces on the higher holder/tool modes; stiffness moves frequencies, damping moves
 peaks.
 

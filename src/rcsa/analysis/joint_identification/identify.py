@@ -42,7 +42,7 @@ Speed: the model of each measurement is a
 terms kept once per grid, so a new joint value costs a few 2×2 operations per line — and
 every Jacobian is one stacked evaluation of all its finite-difference points.
 
-**Measured spindles** (``"spindle": {"measurement_id": ...}``, ``domain.md`` §4): the same
+**Measured spindles** (``"spindle": {"measurement_id": ...}``, ``docs/physics.md`` §4): the same
 procedure on the hybrid model. At ``spindle_nose`` both joints are identifiable; at
 ``holder_tip`` the spindle–holder joint is inside the measurement and is reported under
 ``not_applicable``. The measured base's own uncertainty enters twice. Its noise (an
@@ -109,7 +109,7 @@ from rcsa.analysis.joint_identification.request import (
     parse_identification_request,
 )
 from rcsa.analysis.progress import Progress, report
-from rcsa.model.contract import AssemblySpec
+from rcsa.model.contract import AssemblySpec, ClampingSpec, JointSpec
 from rcsa.model.spindle_side import BaseResolver
 
 __all__ = ["Identification", "identify", "identify_joints"]
@@ -173,6 +173,7 @@ class Identification:
     not_applicable: dict[str, str] = field(default_factory=dict)
     spindle_measurement: dict[str, Any] | None = None
     notes: list[str] = field(default_factory=list)
+    clamping_model: str | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """The contract's identification response (plus diagnostic fields)."""
@@ -182,8 +183,12 @@ class Identification:
             if not keys:
                 continue
             entry: dict[str, Any] = {k.split(".", 1)[1]: self.values[k] for k in keys}
+            clamping = "interface_stiffness_scale" in entry
+            if clamping:  # the identified clamping as a holder_tool joint of the contract
+                entry = {"model": self.clamping_model, **entry}
             entry["uncertainty"] = {f: self.uncertainty.get(f"{joint}.{f}")
-                                    for f in ("stiffness_n_m", "damping_ns_m")}
+                                    for f in (("interface_stiffness_scale",) if clamping else
+                                              ("stiffness_n_m", "damping_ns_m"))}
             if any(k in self.not_applicable for k in keys):
                 entry["status"] = "not_applicable"
                 entry["reason"] = next(self.not_applicable[k] for k in keys if k in self.not_applicable)
@@ -364,7 +369,10 @@ def _all_joint_values(spec: AssemblySpec) -> dict[str, float]:
     out = {}
     for joint in ("spindle_holder", "holder_tool"):
         spec_joint = getattr(spec, joint)
-        if spec_joint is None:
+        if isinstance(spec_joint, ClampingSpec):  # a clamping along the insertion: its interface stiffness
+            out[f"{joint}.interface_stiffness_scale"] = float(spec_joint.interface_stiffness_scale)
+            continue
+        if not isinstance(spec_joint, JointSpec):  # rigid
             continue
         for f in ("stiffness_n_m", "damping_ns_m", "rotational_stiffness_nm_rad", "rotational_damping_nms_rad"):
             v = getattr(spec_joint, f)
@@ -445,7 +453,9 @@ def identify_joints(req: IdentificationRequest, progress: Progress | None = None
     result = Identification("not_identifiable", dict(start), dict(start), band_hz=band,
                             not_applicable=dict(req.not_applicable),
                             spindle_measurement=None if req.spindle is None else dict(req.spindle.report),
-                            notes=_hybrid_notes(req))
+                            notes=_hybrid_notes(req),
+                            clamping_model=req.base.holder_tool.model if isinstance(req.base.holder_tool, ClampingSpec)
+                            else None)
     flags: list[dict[str, str]] = []
     noise = [relative_noise(m.h) for m in req.measurements]
     try:
@@ -550,7 +560,7 @@ def identify(request: Mapping[str, Any], resolve_base: BaseResolver | None = Non
     request : dict
         ``{"assembly": {...}, "measurements": [{"tool": {...}, "frequency_hz": [...],
         "h": {"real": [...], "imag": [...]}, "coherence": [...]}], "bounds": {...},
-        "max_residual_to_noise": 4.0}`` (``contract.md`` "Joint identification";
+        "max_residual_to_noise": 4.0}`` (``docs/contract.md`` "Joint identification";
         ``bounds`` and ``max_residual_to_noise`` optional). The assembly's spindle may be
         ``{"measurement_id": ...}`` when ``resolve_base`` is given.
     resolve_base : BaseResolver, optional

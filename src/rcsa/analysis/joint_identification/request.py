@@ -1,4 +1,4 @@
-"""Validation of a joint-identification request (``contract.md`` "Joint identification").
+"""Validation of a joint-identification request (``docs/contract.md`` "Joint identification").
 
 The request is a base assembly (its joints are the starting guess) and one or more measured
 tool-point FRFs, each of the base assembly with some ``tool`` fields overridden::
@@ -10,7 +10,7 @@ tool-point FRFs, each of the base assembly with some ``tool`` fields overridden:
      "max_residual_to_noise": 4.0}                              # optional
 
 The assembly's spindle may be a stored measurement (``"spindle": {"measurement_id": ...}``,
-``contract.md`` "Additions in v1.1"); the caller then passes a
+``docs/contract.md`` "Additions in v1.1"); the caller then passes a
 :data:`~rcsa.model.spindle_side.BaseResolver` (the application layer knows the store), and
 the spindle is resolved once on all the measurements' lines. On a ``holder_tip``
 measurement the spindle–holder joint is inside the measurement: it is not applicable
@@ -35,21 +35,25 @@ from rcsa.errors import InputError
 from rcsa.model import fields
 from rcsa.model.assembly import build_model
 from rcsa.model.bounds import MAX_STIFFNESS
-from rcsa.model.contract import AssemblySpec, MeasuredSpindleSpec, parse_assembly
+from rcsa.model.contract import AssemblySpec, ClampingSpec, MeasuredSpindleSpec, parse_assembly
 from rcsa.model.parameters import get_parameter
 from rcsa.model.spindle_side import BaseResolver
 
 __all__ = [
+    "CLAMPING_REASON",
     "HOLDER_TIP_REASON",
+    "POINT_REASON",
     "IDENTIFIABLE",
     "IdentificationRequest",
     "MeasurementData",
     "parse_identification_request",
 ]
 
-#: The parameters a joint identification estimates (translational stiffness and damping).
+#: The parameters a joint identification estimates: point joints' translational stiffness and
+#: damping; a holder–tool clamping along the insertion (model bonded/contact) its interface stiffness
+#: (a factor on it: below 1 a clamping softer than the model's).
 IDENTIFIABLE = ("spindle_holder.stiffness_n_m", "spindle_holder.damping_ns_m",
-                "holder_tool.stiffness_n_m", "holder_tool.damping_ns_m")
+                "holder_tool.stiffness_n_m", "holder_tool.damping_ns_m", "holder_tool.interface_stiffness_scale")
 
 _REQUEST_FIELDS = ("assembly", "measurements", "bounds", "max_residual_to_noise")
 MAX_MEASUREMENTS = MAX_TAP_TESTS
@@ -60,6 +64,11 @@ DEFAULT_MAX_RESIDUAL_TO_NOISE = 4.0
 #: Why the spindle–holder joint cannot be identified on a holder-tip measurement.
 HOLDER_TIP_REASON = ("not applicable: the measured spindle's plane is holder_tip, so the spindle–holder joint "
                      "is inside the measurement (measure at the spindle nose to identify it)")
+#: Why a point joint's parameters are not identified on a clamping along the insertion, and back.
+CLAMPING_REASON = ("not applicable: the holder–tool joint is a clamping along the insertion (model {model!r}); its "
+                   "interface stiffness is identified (holder_tool.interface_stiffness_scale)")
+POINT_REASON = ("not applicable: the holder–tool joint is a point joint; a clamping along the insertion (model bonded "
+                "or contact) has an interface stiffness instead")
 
 
 @dataclass(frozen=True)
@@ -128,7 +137,8 @@ def _bounds(raw: object, base: AssemblySpec, names: tuple[str, ...], holder_tip:
         if holder_tip and key.startswith("spindle_holder."):
             raise InputError(f"bounds.{key}", HOLDER_TIP_REASON)
         if key not in names:
-            raise InputError(f"bounds.{key}", "this joint is rigid in the assembly: nothing to identify")
+            raise InputError(f"bounds.{key}", "this joint is rigid in the assembly, or of the other kind (a point joint "
+                                              "or a clamping along the insertion): nothing to identify")
     for name in names:
         start = float(get_parameter(base, name) or 0.0)
         lo, hi = start / DEFAULT_BOUND_FACTOR, start * DEFAULT_BOUND_FACTOR
@@ -219,7 +229,11 @@ def parse_identification_request(request: object, resolve_base: BaseResolver | N
     holder_tip = spindle is not None and spindle.plane == "holder_tip"
     not_applicable = {n: HOLDER_TIP_REASON for n in IDENTIFIABLE
                       if holder_tip and n.startswith("spindle_holder.") and base.spindle_holder is not None}
-    names = tuple(n for n in IDENTIFIABLE if getattr(base, n.split(".")[0]) is not None and n not in not_applicable)
+    clamped = isinstance(base.holder_tool, ClampingSpec)
+    kind_of = {n: n.endswith("_scale") for n in IDENTIFIABLE if n.startswith("holder_tool.")}
+    other = {n for n, is_clamping in kind_of.items() if is_clamping != clamped}
+    names = tuple(n for n in IDENTIFIABLE if getattr(base, n.split(".")[0]) is not None and n not in not_applicable
+                  and n not in other)
     if not names:
         raise InputError("assembly.joints", "no elastic joint to identify: give starting values for the "
                          "holder–tool joint" + (" (the spindle–holder joint is inside the holder_tip measurement)"

@@ -1,4 +1,4 @@
-"""The contract's JSON form of a measurement (contract.md "Measured spindles"), both ways.
+"""The contract's JSON form of a measurement (docs/contract.md "Measured spindles"), both ways.
 
 Upload form::
 

@@ -1,6 +1,6 @@
 """CutPro-style ``.frf`` text: one direction per file, ``freq  real  imag`` per line.
 
-Assumed units (``ecosystem.md`` §2.2, from the public MATLAB writer ``Matlab2CutPro.m``):
+Assumed units (from the public MATLAB writer ``Matlab2CutPro.m`` of github.com/leekunhwee/Dynamics):
 frequency in Hz, real and imaginary parts of the receptance in **m/N**. That writer puts
 the labels ``Freq Hz Real m/N Imag Real`` after the first triple on the first line, so only
 the first three numbers of each line are read. A file in other units must be declared

@@ -9,8 +9,10 @@ Library users call :func:`read_any` on a path; the application layer calls
 :func:`read_upload` on an upload's bytes (``rcsa store import``, ``POST /v1/measurements``).
 
 >>> from rcsa.measured.importers import read_any
->>> m = read_any("tests/data/measurements/tip.csv", spindle_id="mc1", direction="x",
+>>> m = read_any("examples/measurement.csv", spindle_id="mc1", direction="x",
 ...              plane="spindle_nose")                                   # doctest: +SKIP
+>>> m.frfs["h"].shape                                                    # doctest: +SKIP
+(196,)
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Accelerometer mass correction of a driving-point FRF (``domain.md`` §4.1).
+"""Accelerometer mass correction of a driving-point FRF (``docs/physics.md`` §4.1).
 
 An accelerometer of mass m on the structure is a grounded mass modification: the measured
 driving-point receptance is ``H_m = H / (1 − ω² m H)``. Undoing it gives

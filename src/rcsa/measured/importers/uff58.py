@@ -1,6 +1,6 @@
 """Universal File Format dataset 58 (ASCII and binary "58b") through pyuff.
 
-What is read (``ecosystem.md`` §2.1, the UFF 58 spec printed by
+What is read (the UFF 58 record layout, as printed by
 ``pyuff.datasets.dataset_58.get_structure_58()``):
 
 * **Per-dataset selection.** Only datasets 58 and 164 are parsed; geometry, groups and

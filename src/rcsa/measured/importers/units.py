@@ -154,7 +154,7 @@ def phase_factor_to_rad(text: object, field: str = "phase_unit") -> float:
 
 
 def to_receptance(frequency_hz: np.ndarray, values: np.ndarray, quantity: str) -> np.ndarray:
-    """Convert an FRF in SI to receptance (m/N), ``domain.md`` §2.1.
+    """Convert an FRF in SI to receptance (m/N), ``docs/physics.md`` §2.1.
 
     Parameters
     ----------

@@ -2,7 +2,7 @@
 
 A :class:`Measurement` is one direction of one spindle (or spindle + holder), expressed as
 complex receptances in the contract's units (m/N, 1/N, rad/N, rad/(N·m)) and conventions
-(``domain.md`` §2.1) on a strictly increasing frequency axis in Hz. It is immutable: a
+(``docs/physics.md`` §2.1) on a strictly increasing frequency axis in Hz. It is immutable: a
 frozen dataclass whose arrays are read-only copies and whose mappings are read-only views.
 """
 
@@ -111,7 +111,7 @@ class MeasurementMeta:
     direction : {"x", "y"}
         Machine direction of this measurement.
     plane : {"spindle_nose", "holder_tip"}
-        Coupling plane the receptances belong to (contract.md "Measured spindles").
+        Coupling plane the receptances belong to (docs/contract.md "Measured spindles").
     kind : {"point_receptance", "artifact_frfs", "direct_frf"}
         Which receptances are present: ``h, l, n, p``; ``h11, h21, h22`` (+ optional
         ``hij``); or ``h`` alone.

@@ -54,10 +54,10 @@ KINDS = ("point_receptance", "artifact_frfs", "direct_frf")
 #: counted from the artifact tip toward the spindle (``points_m`` gives their positions).
 ARTIFACT_FRF_NAME = re.compile(r"^h[1-9][1-9]$")
 
-#: Units of each stored receptance (contract.md "Units"): those of the wire form.
+#: Units of each stored receptance (docs/contract.md "Units"): those of the wire form.
 FRF_UNITS = RECEPTANCE_UNITS
 
-# CONVENTION (the conventions every stored receptance is expressed in, domain.md §2.1) is the
+# CONVENTION (the conventions every stored receptance is expressed in, docs/physics.md §2.1) is the
 # wire form's, rcsa.model.wire.CONVENTION; it is written into every measurement file.
 
 

@@ -1,6 +1,6 @@
 """``MeasurementStore``: a directory of immutable per-measurement HDF5 files.
 
-Safety model (``ecosystem.md`` §3):
+Safety model (``docs/architecture.md`` "Durable storage"):
 
 * **One file per measurement, never modified.** ``put`` writes ``tmp/<id>.h5.tmp``, closes
   and fsyncs it, ``os.replace``-s it to ``measurements/<id>.h5`` and fsyncs the directory.
