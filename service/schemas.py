@@ -101,6 +101,7 @@ from rcsa.app.bounds import (
     SDM_MIN_MODES_PER_DIRECTION,
     SDM_MIN_STEPS_PER_PERIOD,
     TOOL_OVERRIDES,
+    UNCERTAINTY_SOLVERS,
 )
 from rcsa.app.predictions import example_assembly
 
@@ -363,6 +364,11 @@ class Uncertainty(_Request):
     tolerances: dict[str, Annotated[float, Field(ge=0, le=MAX_TOLERANCE)]] | None = Field(
         None, description="Tolerance by name (as the diagnosis's tolerances; a measured spindle adds its "
                           "measurement uncertainty); left out: the defaults.")
+    solver: Literal[UNCERTAINTY_SOLVERS] = Field(  # type: ignore[valid-type]
+        "reduced", description="How the draws are solved: 'reduced' (default) — each draw exactly on a few "
+                               "percent of the lines and fitted rationally, its error checked on held-out lines "
+                               "(a draw that fails the check is solved on every line); 'exact' — every draw on "
+                               "every line.")
 
 
 class Assembly(_Request):

@@ -1,4 +1,8 @@
-"""The one peak picker: its rule, the callers' rules, and its lazy import of scipy.signal."""
+"""The one peak picker: its rule, the callers' rules, and that it does without scipy.signal.
+
+Oracle: ``scipy.signal.find_peaks(y, prominence=...)`` (imported here only), whose peaks and
+prominences :func:`rcsa.model.peaks.peak_lines` reproduces without importing it.
+"""
 
 from __future__ import annotations
 
@@ -9,6 +13,7 @@ import numpy as np
 import pytest
 
 from rcsa.model.peaks import find_frf_peaks, peak_lines
+from tests.helpers import REPO
 
 
 def test_peak_lines_uses_topographic_prominence():
@@ -31,3 +36,25 @@ def test_frf_peaks_are_relative_to_the_largest_peak():
 def test_import_rcsa_does_not_import_scipy_signal():
     code = "import sys, rcsa, rcsa.analysis.diagnosis; sys.exit('scipy.signal' in sys.modules)"
     assert subprocess.run([sys.executable, "-c", code], check=False).returncode == 0
+
+
+def test_a_prediction_and_a_diagnosis_import_no_scipy_signal_stats_or_optimize():
+    code = ("import sys, json, rcsa; rcsa.predict(json.load(open('examples/ra1.json'))); "
+            "rcsa.diagnose(json.load(open('examples/diagnosis.json'))); "
+            "sys.exit(any(m in sys.modules for m in ('scipy.signal', 'scipy.stats', 'scipy.optimize')))")
+    assert subprocess.run([sys.executable, "-c", code], check=False, cwd=REPO).returncode == 0
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_peaks_and_prominences_equal_scipy_find_peaks(seed):
+    find_peaks = pytest.importorskip("scipy.signal").find_peaks
+    rng = np.random.default_rng(seed)
+    y = np.cumsum(rng.standard_normal(400))
+    y[50:60] = y[50]                                     # a plateau
+    y[200:203] = y[199] + 1.0                            # a flat-topped peak (midpoint rule)
+    y = np.round(y, 1)                                   # equal neighbours elsewhere too
+    for prominence in (0.0, 0.5, 2.0):
+        lines, prominences = peak_lines(y, prominence)
+        expected, props = find_peaks(y, prominence=prominence)
+        np.testing.assert_array_equal(lines, expected)
+        np.testing.assert_allclose(prominences, props["prominences"], rtol=0, atol=0)

@@ -1,8 +1,9 @@
-"""Uncertainty bands on predictions: the vectorised draws against a plain loop of predictions.
+"""Uncertainty bands on predictions: the exact vectorised draws against a plain loop of predictions.
 
-The band of ``"uncertainty": {...}`` is computed with every draw stacked into one chain
-(:mod:`rcsa.model.draws`); the oracle here draws the same knobs from the same seed and
-predicts each drawn assembly on its own with ``rcsa.predict``.
+The band of ``"uncertainty": {..., "solver": "exact"}`` is computed with every draw stacked into
+one chain (:mod:`rcsa.model.draws`); the oracle here draws the same knobs from the same seed
+and predicts each drawn assembly on its own with ``rcsa.predict``. The default solver, the
+reduced model, is checked against the exact one in ``tests/model/test_reduced_draws.py``.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ DRAWS, SEED = 16, 7
 
 @pytest.fixture(scope="module")
 def banded():
-    doc = {**ra1(GRID), "uncertainty": {"draws": DRAWS, "seed": SEED}}
+    doc = {**ra1(GRID), "uncertainty": {"draws": DRAWS, "seed": SEED, "solver": "exact"}}
     return doc, rcsa.predict(doc)
 
 
@@ -60,8 +61,9 @@ def test_the_percentiles_are_ordered_and_the_result_says_what_was_drawn(banded):
     p05, p50, p95 = (np.array(u["h_magnitude_m_n"][k]) for k in ("p05", "p50", "p95"))
     assert p05.size == len(result["frequency_hz"])
     assert np.all(p05 <= p50) and np.all(p50 <= p95) and np.any(p05 < p95)
-    assert (u["draws"], u["seed"]) == (DRAWS, SEED)
+    assert (u["draws"], u["seed"], u["solver"]) == (DRAWS, SEED, "exact")
     assert u["tolerances"] == dict(DEFAULT_TOLERANCES)
+    assert "reduced_model" not in u
     assert "by order" in u["natural_frequencies_matching"]
 
 
@@ -88,6 +90,7 @@ def test_without_the_option_the_result_is_unchanged():
     ({"draws": 2.5}, "uncertainty.draws", "integer"),
     ({"seed": -1}, "uncertainty.seed", "between 0 and"),
     ({"samples": 3}, "uncertainty.samples", "unknown"),
+    ({"solver": "fast"}, "uncertainty.solver", "one of"),
     ({"tolerances": {"youngs": 0.1}}, "uncertainty.tolerances.youngs", "unknown"),
     ({"tolerances": {"stickout_m": 0.5}}, "uncertainty.tolerances.stickout_m", "<= 0.05"),
     ({"tolerances": {"loss_factor_log": -0.1}}, "uncertainty.tolerances.loss_factor_log", ">= 0"),

@@ -274,8 +274,7 @@ def _connect(model: BeamModel, node_a: int, x_m: float, joint: Mapping[str, Any]
 
 
 def _distributed(model: BeamModel, nodes_a: list[int], nodes_b: list[int],
-                 spec: Mapping[str, Any], damped: bool, where: str,
-                 pieces_a: Sequence[_Piece] = (), pieces_b: Sequence[_Piece] = ()) -> None:
+                 spec: Mapping[str, Any], damped: bool, where: str) -> None:
     _check_keys(spec, _DISTRIBUTED_KEYS | {"shank_segments", "contact_length_m"}, where)
     scale, eta = (1.0, float(spec.get("loss_factor", 0.0))) if damped else (0.0, 0.0)
     model.add_distributed_springs(
@@ -283,14 +282,7 @@ def _distributed(model: BeamModel, nodes_a: list[int], nodes_b: list[int],
         translational_n_m2=float(_get(spec, "translational_stiffness_n_m2", where)) * (1 + 1j * eta),
         translational_ns_m2=scale * float(spec.get("translational_damping_ns_m2", 0.0)),
         rotational_nm_rad_m=float(spec.get("rotational_stiffness_nm_rad_m", 0.0)) * (1 + 1j * eta),
-        rotational_nms_rad_m=scale * float(spec.get("rotational_damping_nms_rad_m", 0.0)),
-        sections=(lambda x: (_piece_at(pieces_a, x).section, _piece_at(pieces_b, x).section))
-        if pieces_a and pieces_b else None)
-
-
-def _piece_at(pieces: Sequence[_Piece], x_m: float) -> _Piece:
-    """The piece containing ``x_m``."""
-    return next(p for p in pieces if p.x_start_m - _X_TOL_M <= x_m <= p.x_end_m + _X_TOL_M)
+        rotational_nms_rad_m=scale * float(spec.get("rotational_damping_nms_rad_m", 0.0)))
 
 
 @dataclass
@@ -474,7 +466,7 @@ def build_assembly_model(assembly: Mapping[str, Any], *, damped: bool = True,
         tool_nodes, tool_xs = _mesh(model, tool_pieces, breakpoints, h)
         _distributed(model, _nodes_between(holder_nodes, holder_xs, insert_start, holder_length),
                      _nodes_between(tool_nodes, tool_xs, insert_start, holder_length), ht_spec, damped,
-                     "effects.holder_tool_distributed", holder_pieces, tool_pieces)
+                     "effects.holder_tool_distributed")
     result = AssemblyModel(model, tool_nodes[-1], tip_x, holder_length,
                            {"spindle": (spindle_nodes, spindle_xs), "holder": (holder_nodes, holder_xs),
                             "tool": (tool_nodes, tool_xs)})

@@ -28,7 +28,7 @@ Hutchinson J.R., J. Appl. Mech. 68 (2001) 87-92; Cowper G.R., J. Appl. Mech. 33 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
 
@@ -466,16 +466,14 @@ class BeamModel:
     def add_distributed_springs(self, nodes_a: Sequence[int], nodes_b: Sequence[int], *,
                                 translational_n_m2: complex = 0.0, translational_ns_m2: float = 0.0,
                                 rotational_nm_rad_m: complex = 0.0,
-                                rotational_nms_rad_m: float = 0.0,
-                                sections: tuple[Section, Section] | Callable[[float], tuple[Section, Section]]
-                                | None = None,
-                                theory: BeamTheory = "timoshenko") -> None:
+                                rotational_nms_rad_m: float = 0.0) -> None:
         """Distributed spring layer between two parallel, identically meshed beams.
 
-        The layer's energy is ``½∫ k (w_a − w_b)² + k_r (psi_a − psi_b)² dx``, each beam's
-        ``w`` and ``psi`` interpolated with its own element's functions (:func:`shape_functions`
-        with its shear parameter, given ``sections``; the cubic Hermite functions without, which
-        act on the slope ``w'`` rather than the section rotation of a shear-flexible beam).
+        The layer's energy is ``½∫ k (w_a − w_b)² + k_r (psi_a − psi_b)² dx``, both beams' fields
+        interpolated alike (so that the layer can vanish: a stiff layer ties the beams without
+        locking): ``w`` by the cubic Hermite functions of the nodal ``w`` and ``psi``, the section
+        rotation ``psi`` linearly between its nodal values (not as the slope ``w'``, which a
+        shear-flexible beam's rotation is not).
 
         Parameters
         ----------
@@ -485,11 +483,6 @@ class BeamModel:
             Stiffness and viscous damping per unit length of the lateral contact.
         rotational_nm_rad_m, rotational_nms_rad_m : complex, float
             Stiffness and damping per unit length acting on the relative section rotation.
-        sections : (Section, Section) or callable, optional
-            The two beams' sections over the contact (their interpolations), or a function of
-            an element's mid-point x (m) giving them.
-        theory : {"timoshenko", "euler_bernoulli"}
-            Beam theory of both beams.
         """
         if len(nodes_a) != len(nodes_b) or len(nodes_a) < 2:
             raise ValueError("distributed springs need two node chains of equal length >= 2")
@@ -497,23 +490,19 @@ class BeamModel:
         xb = np.array([self.node_x_m[n] for n in nodes_b])
         if not np.allclose(xa, xb, rtol=0.0, atol=1e-12):
             raise ValueError("distributed springs need the two beams meshed at the same x positions")
+        linear = np.zeros((_GAUSS_XI.size, 4))
+        linear[:, 1], linear[:, 3] = 1.0 - _GAUSS_XI, _GAUSS_XI  # psi between its nodal values
         for i in range(len(nodes_a) - 1):
             ell = xa[i + 1] - xa[i]
-            pair = sections(0.5 * (xa[i] + xa[i + 1])) if callable(sections) else sections
-            phis = (0.0, 0.0) if pair is None else tuple(
-                float(np.real(shear_parameter(ell, Section(s.bending_stiffness_nm2.real, s.shear_stiffness_n.real,
-                                                           0.0, 0.0), theory))) for s in pair)
-            n_w_a, n_psi_a = shape_functions(_GAUSS_XI, ell, phis[0])
-            n_w_b, n_psi_b = shape_functions(_GAUSS_XI, ell, phis[1])
-            # relative motion w_a − w_b and psi_a − psi_b over the 8 DOFs (beam a's 4, then b's 4)
-            rel_w = np.concatenate([n_w_a, -n_w_b], axis=1)
-            rel_psi = np.concatenate([n_psi_a, -n_psi_b], axis=1)
+            n_w, _ = shape_functions(_GAUSS_XI, ell, 0.0)
             q = _GAUSS_W * ell
-            ww = np.einsum("q,qi,qj->ij", q, rel_w, rel_w)
-            pp = np.einsum("q,qi,qj->ij", q, rel_psi, rel_psi)
+            ww = np.einsum("q,qi,qj->ij", q, n_w, n_w)
+            pp = np.einsum("q,qi,qj->ij", q, linear, linear)
+            stiff = translational_n_m2 * ww + rotational_nm_rad_m * pp
+            damp = (translational_ns_m2 * ww + rotational_nms_rad_m * pp).real
             dofs = self.dofs_of(nodes_a[i:i + 2]) + self.dofs_of(nodes_b[i:i + 2])
-            self.add_stiffness(dofs, translational_n_m2 * ww + rotational_nm_rad_m * pp)
-            self.add_damping(dofs, (translational_ns_m2 * ww + rotational_nms_rad_m * pp).real)
+            self.add_stiffness(dofs, np.block([[stiff, -stiff], [-stiff, stiff]]))
+            self.add_damping(dofs, np.block([[damp, -damp], [-damp, damp]]))
 
     def fix(self, node: int, *, w: bool = True, psi: bool = True) -> None:
         """Clamp (remove) the node's ``w`` and/or ``psi`` DOF."""

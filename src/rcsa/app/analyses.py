@@ -246,7 +246,7 @@ def diagnose(request: Mapping[str, Any], *, store: MeasurementSource | None = No
     dict
         The contract's diagnosis response (see :func:`rcsa.analysis.diagnosis.diagnose.diagnose`).
     """
-    # scipy.stats and scipy.optimize (~0.9 s to import): only when a diagnosis is asked for
+    # the diagnosis's modules only when a diagnosis is asked for (they no longer load SciPy)
     from rcsa.analysis.diagnosis.diagnose import diagnose as run
 
     return run(request, resolver(store), progress)

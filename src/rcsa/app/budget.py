@@ -320,7 +320,9 @@ def _with_draws(seconds: float, memory: float, terms: dict[str, float], draws: f
                 ) -> tuple[float, float, dict[str, float]]:
     """A prediction's cost with ``draws`` drawn assemblies: each costs one march of the chain over
     the grid (the stacked march is vectorised as the plain one is, not cheaper per line), plus
-    the draws' tool-point ``h`` kept (16 bytes per draw and line) and their modes."""
+    the draws' tool-point ``h`` kept (16 bytes per draw and line) and their modes. Priced for
+    ``"solver": "exact"``: an upper bound for the reduced model of the draws (the default,
+    :mod:`rcsa.model.reduced_draws`), which solves each draw on a few percent of the lines."""
     if not draws:
         return seconds, memory, terms
     per_draw = K_LINE_S * terms["elements"] * terms["lines"]

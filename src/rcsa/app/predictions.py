@@ -237,7 +237,8 @@ def predict_draws(assembly: Mapping[str, Any], uncertainty: object, *, store: Me
         raise InputError(path, "is required")
     side = SpindleSide(CommonSpec(spec.frequency_hz, spec.beam_theory, spec.shear_coefficient, spec.materials,
                                   spec.spindle), resolver(store))
-    return side.predict(spec), side.tool_point_draws(spec, options), options
+    prediction = side.predict(spec)
+    return prediction, side.tool_point_draws(spec, options, prediction), options
 
 
 def predict_batch(request: Mapping[str, Any], *, store: MeasurementStore | None = None,

@@ -16,8 +16,10 @@
 With an ``uncertainty`` option (robust presets) every tool with an FRF also gets the ``h`` of
 its drawn assemblies (:meth:`rcsa.model.spindle_side.SpindleSide.tool_point_draws`), from the
 same settings — the stored sync's, or the ones given — so the pocket can be chosen on the
-robust limit. Drawing costs a full solve per draw: at most :data:`MAX_DRAWN_LINES` tools ×
-draws × lines per request.
+robust limit. The draws come from the reduced model of the draws (each draw solved exactly
+on a few percent of the lines, :mod:`rcsa.model.reduced_draws`; about 10 predictions per 200
+draws), or — with ``"solver": "exact"`` — from a full solve per draw, which the limit is
+priced for: at most :data:`MAX_DRAWN_LINES` tools × draws × lines per request.
 """
 
 from __future__ import annotations
@@ -44,8 +46,9 @@ from rcsa.model.wire import complex_from_wire
 __all__ = ["MAX_DRAWN_LINES", "FrfSource", "SYNC_SETTINGS", "draw_frfs", "frfs_from_results", "predicted_frfs",
            "stored_frfs"]
 
-#: Largest tools × draws × frequency lines of one robust recommendation (about 20 s of solves,
-#: on the development VM: 0.94 s per 200 draws × 2 000 lines of RA-1).
+#: Largest tools × draws × frequency lines of one robust recommendation (about 20 s of exact
+#: solves on the development VM: 0.94 s per 200 draws × 2 000 lines of RA-1; the reduced
+#: model of the draws, the default, takes about an eighth of that).
 MAX_DRAWN_LINES = 8_000_000
 
 #: The settings of a stored sync that determine its results (passed to ``sync_request``).

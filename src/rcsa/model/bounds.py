@@ -76,6 +76,7 @@ __all__ = [
     "MIN_SPEED_RPM",
     "MIN_SURFACE_ROUGHNESS_M",
     "MIN_UNCERTAINTY_DRAWS",
+    "UNCERTAINTY_SOLVERS",
 ]
 
 # ---------------------------------------------------------------------------- JSON documents
@@ -202,6 +203,9 @@ MIN_UNCERTAINTY_DRAWS, MAX_UNCERTAINTY_DRAWS = 2, 1000
 MAX_UNCERTAINTY_DRAW_LINES = 2_000_000
 #: Largest seed of the draws' random generator (an unsigned 32-bit integer).
 MAX_UNCERTAINTY_SEED = 2**32 - 1
+#: How a band's draws are solved (the option's ``solver``): by the reduced model (each draw
+#: exactly at a few lines, fitted rationally; the default) or every draw exactly on every line.
+UNCERTAINTY_SOLVERS = ("reduced", "exact")
 #: One standard deviation of a tolerance: relative (``_rel``) and log-scale (``_log``) ones,
 #: dimensionless, and the stickout's, m (the diagnosis accepts the same).
 MAX_TOLERANCE = 2.0

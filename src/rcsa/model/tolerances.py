@@ -76,6 +76,7 @@ __all__ = [
     "parse_tolerances",
     "perturbed_spec",
     "scaled_joint",
+    "shortest_stickout_m",
 ]
 
 #: Tolerances of the base model, one standard deviation (see the module docstring).
@@ -259,8 +260,13 @@ def scaled_joint(joint: JointSpec | ClampingSpec | None, kt: float, kr: float, c
                      joint.rotational_damping_nms_rad * c)
 
 
-def _shortest_stickout_m(tool: ToolSpec) -> float:
-    """The stickout below which the tool's shank would vanish: flutes and neck."""
+def shortest_stickout_m(tool: ToolSpec) -> float:
+    """The stickout below which the tool's shank would vanish: flutes and neck, m.
+
+    Parameters
+    ----------
+    tool : ToolSpec
+    """
     if tool.shoulder_length_m is not None and not tool.neck_segments:
         return tool.shoulder_length_m
     return tool.flute_length_m + sum(length for length, _ in tool.neck_segments)
@@ -302,7 +308,7 @@ def perturbed_spec(spec: AssemblySpec, fields: Mapping[str, float]) -> AssemblyS
             BearingSpec(b.position_m, b.stiffness_n_m * k, b.damping_ns_m * c, b.rotational_stiffness_nm_rad * k,
                         b.rotational_damping_nms_rad * c) for b in spindle.bearings))
     t = spec.tool
-    stickout = min(max(t.stickout_m + fields["stickout_offset_m"], _shortest_stickout_m(t)), t.overall_length_m)
+    stickout = min(max(t.stickout_m + fields["stickout_offset_m"], shortest_stickout_m(t)), t.overall_length_m)
     return replace(spec, materials=MappingProxyType(materials), spindle=spindle,
                    tool=replace(t, stickout_m=stickout),
                    spindle_holder=scaled_joint(spec.spindle_holder, fields["sh_translational_scale"],

@@ -1,16 +1,21 @@
 """Uncertainty on predictions: the request option, a measured spindle's own draws, the result.
 
 A prediction request may carry ``"uncertainty": {"draws": 200, "seed": 1, "tolerances":
-{...}}`` (``docs/contract.md`` "Additions in v1.1"). The assembly is then drawn ``draws`` times
-under the nuisance tolerances of :mod:`rcsa.model.tolerances` (the diagnosis's names and
-defaults) and — on a measured spindle — under the measurement's own uncertainty
-(:class:`rcsa.model.spindle_side.BaseUncertainty`, :func:`rcsa.model.spindle_side.measured_base_draws`); every draw is solved exactly
-(:mod:`rcsa.model.draws`, all draws at once) and the result gains::
+{...}, "solver": "reduced"}`` (``docs/contract.md`` "Additions in v1.1"; ``solver`` is ours). The
+assembly is then drawn ``draws`` times under the nuisance tolerances of
+:mod:`rcsa.model.tolerances` (the diagnosis's names and defaults) and — on a measured spindle
+— under the measurement's own uncertainty (:class:`rcsa.model.spindle_side.BaseUncertainty`,
+:func:`rcsa.model.spindle_side.measured_base_draws`). With ``"solver": "reduced"`` (the
+default) the draws are solved by a reduced model whose error is checked draw by draw
+(:mod:`rcsa.model.reduced_draws`); with ``"exact"``
+every draw is solved exactly on every line (:mod:`rcsa.model.draws`, all draws at once). The
+result gains::
 
-    "uncertainty": {"draws": 200, "seed": 1, "tolerances": {...},
+    "uncertainty": {"draws": 200, "seed": 1, "tolerances": {...}, "solver": "reduced",
                     "h_magnitude_m_n": {"p05": [...], "p50": [...], "p95": [...]},
                     "natural_frequencies_hz": {"mean": [...], "sd": [...], "in_band_fraction": [...]},
-                    "modes_entering_band": [...], "natural_frequencies_matching": "...", "notes": [...]}
+                    "modes_entering_band": [...], "natural_frequencies_matching": "...",
+                    "reduced_model": {...}, "notes": [...]}
 
 The percentiles are numpy's (linear interpolation between order statistics) over the draws
 at every line; ``sd`` is the sample standard deviation (``ddof = 1``). The draws' random
@@ -34,6 +39,7 @@ from rcsa.model.bounds import (
     MAX_UNCERTAINTY_DRAWS,
     MAX_UNCERTAINTY_SEED,
     MIN_UNCERTAINTY_DRAWS,
+    UNCERTAINTY_SOLVERS,
 )
 from rcsa.model.contract import AssemblySpec, MeasuredSpindleSpec, parse_assembly
 from rcsa.model.fields import Fields, json_object
@@ -52,7 +58,7 @@ __all__ = [
 ]
 
 #: Fields of the ``uncertainty`` option.
-UNCERTAINTY_FIELDS = ("draws", "seed", "tolerances")
+UNCERTAINTY_FIELDS = ("draws", "seed", "tolerances", "solver")
 #: Draws and seed when the request leaves them out (a fixed seed: a request without one is
 #: still reproducible, and its results can be cached by content).
 DEFAULT_DRAWS = 200
@@ -74,15 +80,18 @@ class UncertaintyOptions:
     tolerances : mapping of str to float
         Every tolerance (defaults filled in), one standard deviation
         (:mod:`rcsa.model.tolerances`).
+    solver : {"reduced", "exact"}
+        How the draws are solved (module docstring).
     """
 
     draws: int
     seed: int
     tolerances: Mapping[str, float]
+    solver: str = "reduced"
 
     def to_dict(self) -> dict[str, Any]:
         """The option as a request carries it (every default filled in)."""
-        return {"draws": self.draws, "seed": self.seed, "tolerances": dict(self.tolerances)}
+        return {"draws": self.draws, "seed": self.seed, "tolerances": dict(self.tolerances), "solver": self.solver}
 
 
 def parse_uncertainty(value: object, path: str = "uncertainty", *, measured_spindle: bool = False,
@@ -92,7 +101,7 @@ def parse_uncertainty(value: object, path: str = "uncertainty", *, measured_spin
     Parameters
     ----------
     value : dict or None
-        ``{"draws", "seed", "tolerances"}``, each optional.
+        ``{"draws", "seed", "tolerances", "solver"}``, each optional.
     path : str
         Where the option sits in the request, for error messages.
     measured_spindle : bool
@@ -129,7 +138,8 @@ def parse_uncertainty(value: object, path: str = "uncertainty", *, measured_spin
                                         f"use at most {MAX_UNCERTAINTY_DRAW_LINES // lines} draws or fewer lines")
     seed = o.integer("seed", default=DEFAULT_SEED, ge=0, le=MAX_UNCERTAINTY_SEED)
     tolerances = parse_tolerances(o.value.get("tolerances"), o.at("tolerances"), measured_spindle=measured_spindle)
-    return UncertaintyOptions(draws, seed, tolerances)
+    solver = o.string("solver", UNCERTAINTY_SOLVERS[0], choices=UNCERTAINTY_SOLVERS)
+    return UncertaintyOptions(draws, seed, tolerances, solver)
 
 
 def parse_prediction_request(document: object, max_lines: int = MAX_FREQUENCY_LINES
@@ -183,6 +193,8 @@ class UncertaintyBand:
     measured_spindle : dict or None
         What the measured spindle's draws assumed (:func:`rcsa.model.spindle_side.measured_base_draws`).
     notes : tuple of str
+    reduced_model : dict or None
+        What the reduced model did and how well it held (``"solver": "reduced"``), JSON-ready.
     """
 
     options: UncertaintyOptions
@@ -194,6 +206,7 @@ class UncertaintyBand:
     modes_entering_band: tuple[dict[str, float], ...] = ()
     measured_spindle: Mapping[str, Any] | None = None
     notes: tuple[str, ...] = field(default=())
+    reduced_model: Mapping[str, Any] | None = None
 
     def to_dict(self, arrays: Literal["list", "numpy"] = "list") -> dict[str, Any]:
         """The result's ``uncertainty`` object.
@@ -219,4 +232,6 @@ class UncertaintyBand:
         }
         if self.measured_spindle is not None:
             doc["measured_spindle"] = dict(self.measured_spindle)
+        if self.reduced_model is not None:
+            doc["reduced_model"] = dict(self.reduced_model)
         return doc

@@ -124,7 +124,7 @@ def contact_per_length(normal_n_m3: ComplexParam, tangential_n_m3: ComplexParam,
     --------
     >>> kw, kt = contact_per_length(1e14, 1e14, 0.010)
     >>> round(kw / 1e12, 4), round(kt / 1e6, 4)
-    (3.1416, 3.927)
+    (3.1416, 39.2699)
     """
     r = shank_diameter_m / 2.0
     return math.pi * r * (normal_n_m3 + tangential_n_m3), math.pi * r**3 * tangential_n_m3

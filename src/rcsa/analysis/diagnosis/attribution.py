@@ -23,16 +23,15 @@ Bayes factor of 10) of the best; otherwise ``identified``.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import minimize
-from scipy.special import gammaln
-from scipy.stats import norm
 
 from rcsa.analysis.diagnosis.candidates import Candidate
 from rcsa.analysis.diagnosis.discrepancy import Discrepancy
+from rcsa.analysis.diagnosis.simplex import nelder_mead
 
 __all__ = ["Decision", "Fit", "Likelihood", "decide", "evidence", "fit_candidate"]
 
@@ -64,7 +63,7 @@ class Likelihood:
         if kind == "gaussian":
             self.const = log_det_w - 0.5 * n * np.log(2 * np.pi)
         else:
-            self.const = log_det_w + n * (gammaln((NU + 1) / 2) - gammaln(NU / 2) - 0.5 * np.log(NU * np.pi))
+            self.const = log_det_w + n * (math.lgamma((NU + 1) / 2) - math.lgamma(NU / 2) - 0.5 * np.log(NU * np.pi))
 
     def whitened(self, model_features: np.ndarray) -> np.ndarray:
         """``z = Σ^{-1/2} (f_meas − μ − f_model)`` on the rows, shape (..., nrows)."""
@@ -197,11 +196,10 @@ def evidence(loglik: Callable[[np.ndarray], np.ndarray], lo: np.ndarray, hi: np.
     ll = loglik(pts)
     best = pts[np.argmax(ll)]
     step = (hi - lo) / (GRID_2D - 1)
-    res = minimize(lambda p: -float(loglik(np.clip(p, lo, hi)[None, :])[0]), best, method="Nelder-Mead",
-                   bounds=list(zip(lo, hi, strict=True)),
-                   options={"xatol": 1e-4 * float(np.min(hi - lo)), "fatol": 1e-3, "maxfev": 40,
-                            "initial_simplex": _simplex(best, step / 2, lo, hi)})
-    x_map, ll_map = (np.clip(res.x, lo, hi), -float(res.fun)) if -res.fun > ll.max() else (best, float(ll.max()))
+    res_x, res_fun = nelder_mead(lambda p: -float(loglik(np.clip(p, lo, hi)[None, :])[0]), best, lo, hi,
+                                 xatol=1e-4 * float(np.min(hi - lo)), fatol=1e-3, maxfev=40,
+                                 initial_simplex=_simplex(best, step / 2, lo, hi))
+    x_map, ll_map = (np.clip(res_x, lo, hi), -res_fun) if -res_fun > ll.max() else (best, float(ll.max()))
     h = step / 4
     cov = None
     for _ in range(3):  # shrink the stencil until it is below half a posterior sd
@@ -225,10 +223,16 @@ def evidence(loglik: Callable[[np.ndarray], np.ndarray], lo: np.ndarray, hi: np.
         sd = np.sqrt(np.maximum((w @ (pts - mean) ** 2) / w.sum(), 0.0))
         return _trapz_log(ll.reshape([GRID_2D] * d), axes) - np.log(volume), x_map, sd, ll_map, "grid"
     sd = np.sqrt(np.diag(cov))
-    mass = np.prod(norm.cdf((hi - x_map) / sd) - norm.cdf((lo - x_map) / sd))
+    mass = float(np.prod([_normal_cdf(b) - _normal_cdf(a) for a, b in zip((lo - x_map) / sd, (hi - x_map) / sd,
+                                                                           strict=True)]))
     log_z = ll_map + 0.5 * d * np.log(2 * np.pi) + 0.5 * np.linalg.slogdet(cov)[1] + np.log(max(mass, 1e-300)) \
         - np.log(volume)
     return float(log_z), x_map, sd, ll_map, "laplace"
+
+
+def _normal_cdf(z: float) -> float:
+    """Φ(z), the standard normal CDF."""
+    return 0.5 * math.erfc(-float(z) / math.sqrt(2.0))
 
 
 def _simplex(x: np.ndarray, step: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:

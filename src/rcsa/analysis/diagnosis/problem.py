@@ -23,7 +23,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from cachetools import LRUCache, cached
-from scipy.ndimage import median_filter
 
 from rcsa.analysis.diagnosis.discrepancy import (
     Discrepancy,
@@ -45,10 +44,19 @@ VALID_COHERENCE = 0.8
 _DRAW_CACHE: LRUCache[str, list[np.ndarray]] = LRUCache(maxsize=4)
 
 
+def _median_filter(x: np.ndarray, size: int) -> np.ndarray:
+    """Running median over ``size`` samples, the ends extended by their nearest value
+    (``scipy.ndimage.median_filter(x, size, mode="nearest")`` for 1-D ``x``, without importing it)."""
+    half = size // 2
+    padded = np.concatenate([np.full(half, x[0]), x, np.full(size - 1 - half, x[-1])])
+    out: np.ndarray = np.median(np.lib.stride_tricks.sliding_window_view(padded, size), axis=-1)
+    return out
+
+
 def _valid_band(coherence: np.ndarray | None, n: int) -> tuple[int, int]:
     if coherence is None:
         return 0, n
-    ok = median_filter(coherence, size=9, mode="nearest") >= VALID_COHERENCE
+    ok = _median_filter(np.asarray(coherence, dtype=float), 9) >= VALID_COHERENCE
     idx = np.flatnonzero(ok)
     if idx.size == 0:
         return 0, 0

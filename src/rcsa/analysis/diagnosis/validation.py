@@ -19,10 +19,10 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import minimize
 
 from rcsa.analysis.diagnosis.attribution import Likelihood
 from rcsa.analysis.diagnosis.discrepancy import Discrepancy
+from rcsa.analysis.diagnosis.simplex import nelder_mead
 
 __all__ = ["HeldOut", "folds", "held_out"]
 
@@ -115,11 +115,9 @@ def held_out(fold_list: Sequence[tuple[list[int], list[int]]], rows_of: Callable
         like = Likelihood(measured, disc, rows_of(train), kind)
         x0 = np.clip(x_all, lo, hi)
         if x0.size:
-            res = minimize(lambda p, like=like, k=k: -float(like(features_at(k, np.clip(p, lo, hi)))), x0,
-                           method="Nelder-Mead",
-                           bounds=list(zip(lo, hi, strict=True)),
-                           options={"xatol": 1e-4 * float(np.min(hi - lo)), "fatol": 1e-3, "maxfev": 30 * x0.size})
-            x = np.clip(res.x, lo, hi)
+            res_x, _ = nelder_mead(lambda p, like=like, k=k: -float(like(features_at(k, np.clip(p, lo, hi)))), x0,
+                                   lo, hi, xatol=1e-4 * float(np.min(hi - lo)), fatol=1e-3, maxfev=30 * x0.size)
+            x = np.clip(res_x, lo, hi)
         else:
             x = x0
         maps.append(x)

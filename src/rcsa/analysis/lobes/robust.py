@@ -3,9 +3,11 @@
 A stability-lobes request with an ``assembly`` may add ``"uncertainty": {"draws", "seed",
 "tolerances"}`` (as a prediction request, :mod:`rcsa.model.uncertainty`) and ``"robust":
 {"confidence": 0.95}``. The assembly is then drawn under its tolerances (and a measured
-spindle under its own uncertainty), every draw's lobes are computed (all draws at once,
-:func:`rcsa.analysis.lobes.zoa.depth_limit_envelopes`), and beside the nominal envelope the
-response gives::
+spindle under its own uncertainty), the draws' FRFs come from the reduced model of the draws
+(:meth:`rcsa.model.spindle_side.SpindleSide.tool_point_draws`, :mod:`rcsa.model.reduced_draws`;
+``"solver": "exact"`` solves every draw on every line), every draw's lobes are computed (all
+draws at once, :func:`rcsa.analysis.lobes.zoa.depth_limit_envelopes`), and beside the nominal
+envelope the response gives::
 
     "depth_limit_robust_m": [...],          # per speed of spindle_speed_rpm
     "robust": {"confidence": 0.95, "draws": 200, "seed": 0, "percentile": 5.0,
