@@ -11,7 +11,12 @@ fitted to the predicted FRF), 4 teeth, half-immersion down-milling, 500 speeds
   ``--baseline-every``-th speed and scaled to 500 (its depths are checked against the SDM's);
 * ZOA (Altintas–Budak) on the predicted FRF for the same speeds;
 * the SDM with the default 3 modes per direction, at low immersion (a/D = 0.05, 2 teeth),
-  and end to end through the application layer (prediction + exact modes + SDM).
+  and end to end through the application layer (prediction + exact modes + SDM);
+* the issue-22.4 yardstick: the SDM time over ``rcsa.predict`` of RA-1 at 10 000 lines in the
+  same process (target ≤ 25×; in wall and in CPU time — on a loaded machine the CPU ratio is the
+  steadier figure), and the limits against those the replaced per-speed search gave
+  on the same three 500-speed cuts (``tests/data/lobes/sdm_reference.json``; target: within
+  0.5 %).
 
 BLAS runs single-threaded here (``OPENBLAS_NUM_THREADS=1`` unless set): on this shared 2-core
 VM, threaded OpenBLAS makes the baseline's small 88 × 88 products ~100× slower, which would
@@ -27,6 +32,7 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # before numpy is imported
 
 import argparse  # noqa: E402
+import json  # noqa: E402
 import statistics  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
@@ -54,12 +60,16 @@ SPEEDS = np.linspace(2000.0, 30000.0, 500)
 STEPS = 40
 
 
-def _timed(fn, repeat: int):
-    times, out = [], None
+def _timed(fn, repeat: int, cpu: list | None = None):
+    """Median wall time and the result; the median CPU time of the process is appended to ``cpu``."""
+    times, cpus, out = [], [], None
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         out = fn()
         times.append(time.perf_counter() - t0)
+        cpus.append(time.process_time() - c0)
+    if cpu is not None:
+        cpu.append(statistics.median(cpus))
     return statistics.median(times), out
 
 
@@ -126,7 +136,8 @@ def main() -> None:
         return semi_discretization_lobes(model, **{**CUT, **cut}, spindle_speed_rpm=SPEEDS,
                                          steps_per_period=STEPS)
 
-    t_sdm, result = _timed(lambda: sdm(typical), args.repeat)
+    cpu_sdm: list[float] = []
+    t_sdm, result = _timed(lambda: sdm(typical), args.repeat, cpu_sdm)
     print(f"  SDM, 4 modes (2 in x, 2 in y), vectorised   {t_sdm:8.2f} s")
     sub = np.arange(0, SPEEDS.size, args.baseline_every)
     start = result.depth_search_max_m / 64.0 / 4.0  # the SDM's own scan start, b_ref/4
@@ -147,6 +158,33 @@ def main() -> None:
                "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 500}}
     t_app, _ = _timed(lambda: rcsa.stability_lobes(request), args.repeat)
     print(f"  end to end (predict + exact modes + SDM, 3 per direction) {t_app:6.2f} s")
+    big = ra1({"start_hz": 1.0, "stop_hz": 10000.0, "step_hz": 1.0})
+    cpu_pred: list[float] = []
+    t_pred, _ = _timed(lambda: rcsa.predict(big), 5 * args.repeat, cpu_pred)
+    print(f"  rcsa.predict of RA-1, 10 000 lines             {t_pred * 1e3:8.1f} ms   SDM (4 modes) / prediction "
+          f"{t_sdm / t_pred:5.1f}x  (target <= 25x)")
+    print(f"  the same in CPU time: SDM {cpu_sdm[0]:.2f} s, prediction {cpu_pred[0] * 1e3:.1f} ms, "
+          f"ratio {cpu_sdm[0] / cpu_pred[0]:5.1f}x  (load average {os.getloadavg()[0]:.1f})")
+    _against_reference()
+
+
+def _against_reference() -> None:
+    """The three 500-speed cuts of tests/data/lobes/sdm_reference.json, solved again."""
+    reference = json.loads((Path(__file__).resolve().parents[1] / "tests" / "data" / "lobes" /
+                            "sdm_reference.json").read_text())
+    for case in (c for c in reference["cases"] if c["benchmark_only"]):
+        grid = case["spindle_speed_rpm"]
+        model = ModalModel.of(**case["modal_model"])
+        t0 = time.perf_counter()
+        r = semi_discretization_lobes(model, **{k: case[k] for k in ("teeth", "tangential_coefficient_n_m2",
+                                                                       "radial_ratio", "radial_immersion", "milling")},
+                                      spindle_speed_rpm=np.linspace(grid["start"], grid["stop"], grid["count"]))
+        elapsed = time.perf_counter() - t0
+        old = np.array([np.nan if x is None else x for x in case["depth_limit_m"]])
+        dev = np.nanmax(np.abs(r.depth_limit_m / old - 1))
+        same_kind = np.mean(r.instability == np.array(case["instability"]))
+        print(f"  vs the replaced solver, {case['name']:24s} {elapsed:6.2f} s   max |limit/old - 1| {dev:.1e}   "
+              f"same kind at {same_kind:.0%} of speeds")
 
 
 if __name__ == "__main__":

@@ -25,6 +25,7 @@ from rcsa._version import __version__
 from rcsa.app.jobs import Workbench, analysis_job_handlers, job_handlers, job_store
 from rcsa.app.keys import key_ring
 from rcsa.app.measurements import seed_demo
+from rcsa.app.presets import recommend_job_handlers
 from rcsa.app.stores import CachedMeasurements, open_store
 from rcsa.errors import RcsaError
 from rcsa.infra.compute_backends import compute_backend
@@ -107,7 +108,7 @@ def _startup(settings: Settings, metrics: Metrics) -> AppState:
     def finished(job: Job, seconds: float) -> None:
         metrics.jobs.labels(job.kind, job.status).inc()
 
-    table = {**job_handlers(bench, present), **analysis_job_handlers(bench)}
+    table = {**job_handlers(bench, present), **analysis_job_handlers(bench), **recommend_job_handlers(bench)}
     for _ in range(settings.job_workers):
         runner = JobRunner(jobs, table, poll_s=settings.job_poll_s, heartbeat_s=settings.job_heartbeat_s,
                            on_finish=finished, retention_s=settings.job_retention_s,

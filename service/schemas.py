@@ -801,12 +801,15 @@ class LobesRequest(_Request):
                                                                                 "(dimensionless).")
     milling: Literal["up", "down"]
     spindle_speed_rpm: SpeedRange
-    uncertainty: Uncertainty | None = Field(None, description="Robust lobes: draw the assembly (method zoa) "
-                                            "and give depth_limit_robust_m beside the nominal limit.")
+    uncertainty: Uncertainty | None = Field(None, description="Robust lobes: draw the assembly and give "
+                                            "depth_limit_robust_m beside the nominal limit (zoa: every draw's "
+                                            "lobes; semi_discretization: a reduced model of the draws).")
     robust: Robust | None = Field(None, description="Confidence of the robust limit (needs uncertainty).")
-    method: Literal["zoa", "semi_discretization"] = Field(
+    method: Literal["zoa", "semi_discretization", "auto"] = Field(
         "zoa", description="zoa: zero-order (Altintas–Budak); semi_discretization: first-order SDM "
-                           "(time-periodic force, flip lobes; slower).")
+                           "(time-periodic force, flip lobes; slower); auto: semi_discretization where fewer than "
+                           "one tooth is in the cut on average, else zoa (the response says which: method, "
+                           "method_reason).")
     steps_per_period: int | None = Field(None, ge=SDM_MIN_STEPS_PER_PERIOD, le=SDM_MAX_STEPS_PER_PERIOD,
                                          description=f"SDM only: steps per tooth period (default {SDM_DEFAULT_STEPS_PER_PERIOD}).")
     modes_per_direction: int | None = Field(None, ge=SDM_MIN_MODES_PER_DIRECTION, le=SDM_MAX_MODES_PER_DIRECTION,
@@ -827,6 +830,10 @@ class LobesResult(_Response):
     depth_limit_m: list[float | None] = Field(description="Axial depth limit (lower envelope), m.")
     chatter_frequency_hz: list[float | None] = Field(description="Chatter frequency at the limit, Hz.")
     lobes: list[Lobe]
+    notes: list[str] | None = Field(None, description="Caveats: speeds whose semi-discretization limit is "
+                                                      "under-resolved, an FRF grid too coarse for zero-order lobes.")
+    flute_length_m: float | None = Field(None, description="The assembly tool's flute length, m: no stepdown "
+                                                           "exceeds it.")
 
 
 # --------------------------------------------------------------------------- analyses (diagnoses, identifications, effects)

@@ -38,8 +38,6 @@ policy):
 
 from __future__ import annotations
 
-import base64
-import hashlib
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Header, Path, Query, Request
@@ -53,14 +51,21 @@ from rcsa.app.libraries import (
     prepare_library,
     prepare_sync,
 )
-from rcsa.app.presets import OPTION_FIELDS, recommend_stored
+from rcsa.app.presets import (
+    OPTION_FIELDS,
+    RECOMMEND_JOB,
+    recommend_job_request,
+    recommend_stored,
+    report_document,
+)
 from rcsa.errors import InputError
+from rcsa.infra.job_queue import QuotaExceeded
 
 from ..bodies import check_form_fields, form_json, form_text, form_uploads, read_body, validate_json
 from ..deps import StateDep
 from ..errors import ProblemError
 from ..idempotency import IDEMPOTENCY_PROBLEMS, IdempotencyKeyHeader, IdempotentRoute
-from ..jobs import answer, caller
+from ..jobs import accepted, answer, caller, pool, wants_async
 from ..responses import body_limit, json_response, negotiate, problems, result_form
 from ..schemas import (
     Deleted,
@@ -293,7 +298,8 @@ _RECOMMEND_FIELDS = {
     "speed_tolerance": "Relative half-width of the speed window that must stay stable (default 0.03).",
     "max_surface_speed_m_min": "Surface-speed limit, m/min (default: the table's, for carbide tools).",
     "feed_per_tooth_m": "Feed per tooth for the preset's feeds, m (default: f_z of the tool's own first preset).",
-    "method": "Stability-lobe method: zoa.",
+    "method": "Stability-lobe method: auto (default: semi_discretization where fewer than one tooth is in the cut on "
+              "average, else zoa), zoa or semi_discretization.",
     "uncertainty": "Robust presets: the uncertainty option as JSON ({\"draws\": 200, \"seed\": 1, \"tolerances\": "
                    "{...}}); every tool's assembly is drawn with the stored sync's settings and the pocket chosen on "
                    "the robust depth limit.",
@@ -347,11 +353,12 @@ async def _recommend_inputs(request: Request, limit_bytes: int) -> tuple[bytes, 
                         **problems(400, 401, 403, 404, 406, 413, 415, 422), **IDEMPOTENCY_PROBLEMS},
              summary="Write chatter-safe presets into a Fusion library from a stored library's results (write key)")
 async def recommend_presets(
-    library_id: LibraryId, request: Request, state: StateDep, _: WriteAccess,
+    library_id: LibraryId, request: Request, state: StateDep, who: WriteAccess,
     accept: Annotated[str | None, Header(description="application/json (default: the report with the file in "
                                                      "it) or application/octet-stream (the file).")] = None,
     format: Annotated[Literal["report", "file"] | None, Query(
         description="Instead of Accept: report (JSON) or file (the updated library).")] = None,
+    prefer: PreferHeader = None,
     idempotency_key: IdempotencyKeyHeader = None,
 ) -> Response:
     """Per milling tool, the best stable pocket (speed, stepdown at the safety factor) as a Fusion preset.
@@ -360,17 +367,34 @@ async def recommend_presets(
     since (or that the sync does not know) is skipped with the reason. The preset is named
     ``rcsa chatter-safe: <material>`` and its guid is fixed by the tool and the material, so that
     sending the returned file again replaces it; nothing else in the file changes.
+
+    A library of more tools than ``RCSA_ASYNC_BATCH_THRESHOLD``, or ``Prefer: respond-async``,
+    becomes a job (``202``, ``Location: /v1/jobs/{id}``): its progress counts the tools whose
+    pockets are found (in chunks, on the Dask cluster when one is configured), and its result is
+    the JSON report with the file.
     """
     media = {"report": JSON, "file": OCTET}[format] if format else negotiate(accept, (JSON, OCTET),
                                                                                 "a recommendation's report and file")
     data, name, content_type, options = await _recommend_inputs(request, state.settings.max_upload_bytes)
+    owner = caller(who, request)
+    job_request = await run_in_threadpool(lambda: recommend_job_request(library_id, data, options, file_name=name,
+                                                                        content_type=content_type))
+    asked = wants_async(prefer)
+    if asked or job_request["items"] > state.settings.async_batch_threshold:
+        try:
+            job = state.jobs.submit(RECOMMEND_JOB, job_request, reuse_unfinished=idempotency_key is not None,
+                                    owner=owner, max_unfinished=state.settings.job_max_unfinished_per_caller,
+                                    pool=pool(owner))
+        except QuotaExceeded as exc:
+            raise ProblemError(429, f"{exc}; poll the jobs you have (GET /v1/jobs/{{id}}) and submit again when one "
+                                    "has finished", slug="too-many-jobs", title="Too many unfinished jobs",
+                               headers={"Retry-After": str(max(state.settings.retry_after_s, 5))}) from None
+        return accepted(state, job, preference_applied=asked)
     result = await run_in_threadpool(lambda: recommend_stored(state.bench, library_id, data, options,
                                                               file_name=name, content_type=content_type))
     written = result.report["summary"]["written"]
     if media == OCTET:
         return Response(result.data, media_type=OCTET, headers={
             "Content-Disposition": f'attachment; filename="{result.file_name}"', "X-RCSA-Presets-Written": str(written)})
-    return json_response({"library_id": library_id, **result.report, "file": {
-        "file_name": result.file_name, "media_type": result.media_type, "size_bytes": len(result.data),
-        "sha256": hashlib.sha256(result.data).hexdigest(),
-        "content_base64": base64.b64encode(result.data).decode("ascii")}})
+    return json_response(report_document(library_id, result))
+

@@ -28,7 +28,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from starlette.responses import Response
 
 from rcsa.app import budget, exports, figures
-from rcsa.app.analyses import stability_lobes, stability_lobes_results
+from rcsa.app.analyses import stability_lobes, stability_lobes_answer
 from rcsa.app.bounds import MAX_LENGTH_M, MAX_SPEED_RPM, MIN_SPEED_RPM
 from rcsa.app.predictions import example_assembly, predict
 
@@ -138,12 +138,11 @@ def plot_lobes(body: LobesPlotRequest, state: StateDep, _: ReadAccess, format: F
                               exclude={"show_lobes", "operating_point", "depth_max_mm", "title"})
     budget.check("lobes", request, mode="sync")
     with state.metrics.timed("lobes"):
-        result, robust = stability_lobes_results(request, store=state.reader,
-                                                 max_lines=state.settings.max_frequency_lines)
+        answer = stability_lobes_answer(request, store=state.reader, max_lines=state.settings.max_frequency_lines)
     point = body.operating_point
     fmt = _image_format(format, accept)
     with state.metrics.timed("plot"), _RENDER_LOCK:
-        image = figures.lobes_picture(result, fmt=fmt, robust=None if robust is None else robust.to_dict(),
+        image = figures.lobes_picture(answer.nominal, fmt=fmt, robust=answer.extras(),
                                       show_lobes=body.show_lobes, depth_max_mm=body.depth_max_mm,
                                       title=body.title, operating_point=None if point is None else
                                       (point.spindle_speed_rpm, point.depth_m))

@@ -362,8 +362,8 @@
 
   function lobesRequest() {
     const r = state.prediction;
-    // robust lobes need the assembly (its draws), and are zero-order only
-    const robust = state.uncertainty && $("lobes-method").value === "zoa";
+    // robust lobes need the assembly (its draws)
+    const robust = Boolean(state.uncertainty);
     const source = robust ? { assembly: state.assembly, uncertainty: state.uncertainty }
       : { frf_x: { frequency_hz: r.frequency_hz, h: r.tool_point.h } };
     return {
@@ -411,6 +411,7 @@
       state.lobesRequest = request;
       drawLobes(result, point);
       summarizeLobes(result, point);
+      showLobesNotes(result);
       for (const id of ["download-lobes-csv", "download-lobes-png", "download-lobes-svg"]) $(id).disabled = false;
       setStatus("lobes-status", result.lobes.length + " lobes in " + ((performance.now() - t0) / 1000).toFixed(2) +
         " s" + (result.frf_y_source === "same_as_x" ? " (Φyy = Φxx assumed)." : "."));
@@ -448,22 +449,63 @@
     return null;
   }
 
+  /** The tool's flute length (m) when the lobes are of a known assembly: no stepdown exceeds it. */
+  function fluteLength(result) {
+    if (result.flute_length_m) return result.flute_length_m;
+    const tool = state.assembly && state.assembly.tool;
+    return tool && tool.flute_length_m ? tool.flute_length_m : null;
+  }
+
+  /** The limit the summary judges by: the robust one when there is one, else the nominal; a
+   *  semi-discretization speed without a limit is stable to the search depth; all capped at the
+   *  flute length. */
+  function usableLimit(result) {
+    const flute = fluteLength(result);
+    const nominal = result.depth_limit_m;
+    const robust = result.depth_limit_robust_m;
+    const deep = result.depth_search_max_m || null;
+    return nominal.map((v, i) => {
+      let d = robust ? robust[i] : v;
+      if (d === null && v === null && deep !== null) d = deep;  // no limit found below the search depth
+      if (d === null) return null;
+      return flute !== null ? Math.min(d, flute) : d;
+    });
+  }
+
   function summarizeLobes(result, point) {
+    const flute = fluteLength(result);
+    const capped = (d) => (flute !== null && d >= flute * (1 - 1e-9) ? " (the flute length: stable deeper)" : "");
     $("lobes-min-depth").textContent = result.min_depth_limit_m === null ? "—"
       : fmt(result.min_depth_limit_m * MM_PER_M, 3) + " mm (chatter at " +
         fmt(result.min_depth_chatter_frequency_hz, 5) + " Hz): stable at any speed below it";
-    const best = pockets(result.spindle_speed_rpm, result.depth_limit_m).slice(0, 3)
-      .map((p) => fmt(p.d * MM_PER_M, 3) + " mm at " + Math.round(p.n) + " rpm");
-    $("lobes-pockets").textContent = best.length ? best.join("; ") : "none in this speed range";
+    const limit = usableLimit(result);
+    const best = pockets(result.spindle_speed_rpm, limit).slice(0, 3)
+      .map((p) => fmt(p.d * MM_PER_M, 3) + " mm at " + Math.round(p.n) + " rpm" + capped(p.d));
+    $("lobes-pockets").textContent = (best.length ? best.join("; ") : "none in this speed range") +
+      (result.depth_limit_robust_m ? " — on the robust limit (p" + result.robust.percentile + " of draws)" : "");
     if (!point) {
       $("lobes-op").textContent = "not given";
       return;
     }
-    const limit = envelopeAt(result, point.spindle_speed_rpm);
+    const at = envelopeAt({ spindle_speed_rpm: result.spindle_speed_rpm, depth_limit_m: limit }, point.spindle_speed_rpm);
     const where = fmt(point.depth_m * MM_PER_M, 3) + " mm at " + Math.round(point.spindle_speed_rpm) + " rpm";
-    $("lobes-op").textContent = limit === null ? where + ": outside the computed lobes"
-      : where + (point.depth_m < limit ? ": stable" : ": chatter expected") + " (limit " +
-        fmt(limit * MM_PER_M, 3) + " mm)";
+    const over = flute !== null && point.depth_m > flute ? "; deeper than the flute length " + fmt(flute * MM_PER_M, 3) + " mm" : "";
+    $("lobes-op").textContent = at === null ? where + ": outside the computed lobes" + over
+      : where + (point.depth_m < at ? ": stable" : ": chatter expected") + " (limit " + fmt(at * MM_PER_M, 3) + " mm" +
+        (result.depth_limit_robust_m ? ", robust" : "") + ")" + over;
+  }
+
+  /** The lobes' notes (under-resolved speeds, a grid too coarse for them), and which method auto chose. */
+  function showLobesNotes(result) {
+    const list = $("lobes-notes");
+    list.replaceChildren();
+    const notes = (result.notes || []).slice();
+    if (result.method_reason) notes.unshift("method " + result.method + " — " + result.method_reason);
+    for (const n of notes) {
+      const li = document.createElement("li");
+      li.textContent = n;
+      list.appendChild(li);
+    }
   }
 
   // ------------------------------------------------------------------ downloads
@@ -718,11 +760,17 @@
     const n = result.spindle_speed_rpm;
     const env = result.depth_limit_m.map((v) => (v === null ? null : v * MM_PER_M));
     const minMm = result.min_depth_limit_m === null ? null : result.min_depth_limit_m * MM_PER_M;
+    const flute = fluteLength(result);
+    const fluteMm = flute === null ? null : flute * MM_PER_M;
     let [, top] = extent([env]);
-    if (!Number.isFinite(top)) top = minMm || 1;
+    if (!Number.isFinite(top)) top = minMm || fluteMm || 1;
     if (minMm) top = Math.min(top, 8 * minMm);
+    if (fluteMm !== null && top > fluteMm) top = fluteMm;  // deeper limits than the flute cannot be used
     if (point) top = Math.max(top, point.depth_m * MM_PER_M);
     top *= 1.1;
+    // a semi-discretization speed without a limit is stable up to the search depth: shade it
+    const deepMm = result.depth_search_max_m ? result.depth_search_max_m * MM_PER_M : null;
+    const shade = env.map((v) => (v === null && deepMm !== null ? Math.min(deepMm, top) : v));
     const left = 90;
     const width = 960 - left - 24;
     const ax = axes(svg, { x: left, y: 16, w: width, h: 340 }, { min: n[0], max: n[n.length - 1], label: "Spindle speed (rpm)" },
@@ -738,8 +786,13 @@
       }
       run = [];
     };
-    env.forEach((v, i) => (v === null ? flush() : run.push([n[i], v])));
+    shade.forEach((v, i) => (v === null ? flush() : run.push([n[i], Math.min(v, top)])));
     flush();
+    if (fluteMm !== null && fluteMm <= top) {
+      const fl = svgEl("line", { id: "flute-length", class: "flute", x1: left, x2: left + width, y1: ax.sy(fluteMm),
+        y2: ax.sy(fluteMm) }, ax.plot);
+      svgEl("title", {}, fl).textContent = "flute length " + fmt(fluteMm, 3) + " mm: no deeper stepdown";
+    }
     result.lobes.forEach((lobe) => {
       line(ax, lobe.spindle_speed_rpm, lobe.depth_limit_m.map((v) => (v === null ? null : v * MM_PER_M)),
         "series-lobe", "lobe-" + lobe.index + "-path");

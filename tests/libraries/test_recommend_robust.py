@@ -23,7 +23,7 @@ SAMPLE = (REPO / "tests" / "data" / "tool-libraries" / "fusion-synthetic" / "syn
 GRID = {"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 5.0}  # 1 000 lines
 RA1 = ra1(GRID)
 SETTINGS = {"spindle": RA1["spindle"], "frequency": GRID, "joints": RA1["joints"]}
-OPTIONS = {"material": "aluminium-7075", "max_rpm": 24000}
+OPTIONS = {"material": "aluminium-7075", "max_rpm": 24000, "method": "zoa"}  # robust SDM: test_recommend_methods.py
 DRAWS = {"draws": 24, "seed": 3}
 
 

@@ -17,7 +17,7 @@ GRID = {"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 5.0}
 RA1 = ra1(GRID)
 SYNC_FORM = {"spindle": json.dumps(RA1["spindle"]), "frequency": json.dumps(GRID), "joints": json.dumps(RA1["joints"]),
              "natural_frequencies": "false"}
-OPTIONS = {"material": "aluminium-7075", "max_rpm": "24000", "safety_factor": "1.25"}
+OPTIONS = {"material": "aluminium-7075", "max_rpm": "24000", "safety_factor": "1.25", "method": "zoa"}
 NAME = "rcsa chatter-safe: aluminium 7075"
 
 
@@ -80,11 +80,12 @@ def test_write_key_and_problems(client):
 def test_robust_presets_from_the_uncertainty_form_field(client):
     _sync(client)
     r = client.post("/v1/libraries/shop:recommend", headers=WRITE, files={"library": ("shop.json", SAMPLE)},
-                    data={**OPTIONS, "uncertainty": json.dumps({"draws": 12, "seed": 2}), "confidence": "0.9"})
+                    data={**OPTIONS, "uncertainty": json.dumps({"draws": 12, "seed": 2}), "confidence": "0.9",
+                          "method": "zoa"})
     assert r.status_code == 200, r.text
     tools = [t for t in r.json()["tools"] if t["status"] == "written"]
     assert tools and all(t["confidence"] == 0.9 and t["robust_depth_limit_m"] <= t["depth_limit_m"] for t in tools)
-    assert r.json()["options"]["uncertainty"] == {"draws": 12, "seed": 2}
+    assert r.json()["options"]["uncertainty"] == {"draws": 12, "seed": 2} and r.json()["options"]["method"] == "zoa"
     for bad, field in (({"uncertainty": "{not json"}, "uncertainty"), ({"confidence": "0.9"}, "confidence")):
         assert_problem(client.post("/v1/libraries/shop:recommend", headers=WRITE,
                                    files={"library": ("shop.json", SAMPLE)}, data={**OPTIONS, **bad}), 422, field)

@@ -184,6 +184,12 @@ def test_predict_ra1_draw_frf_and_lobes_and_download(server, browser, downloads)
     browser.find_element(By.ID, "lobes").click()
     _wait_state(browser, "lobes")
     assert 60 < _points(browser, "lobes-envelope-path") <= 120  # 120 speeds
+    # auto at a thin radial cut: the semi-discretization, and the page says why
+    Select(browser.find_element(By.ID, "lobes-method")).select_by_value("auto")
+    browser.find_element(By.ID, "lobes").click()
+    _wait_state(browser, "lobes")
+    notes = [li.text for li in browser.find_elements(By.CSS_SELECTOR, "#lobes-notes li")]
+    assert notes and notes[0].startswith("method semi_discretization") and "teeth in the cut" in notes[0], notes
 
     browser.find_element(By.ID, "download-lobes-png").click()
     png = _wait_download(downloads, ".png")

@@ -283,6 +283,8 @@ def lobes_figure(
     title: str | None = None,
     robust_depth_limit_m: object | None = None,
     robust_label: str = "robust limit",
+    flute_length_m: float | None = None,
+    notes: Sequence[str] = (),
 ) -> Figure:
     """Stability lobe diagram: axial depth limit (mm) against spindle speed (rpm).
 
@@ -303,6 +305,12 @@ def lobes_figure(
         A robust depth limit per speed (:mod:`rcsa.analysis.lobes.robust`), m; drawn dashed
         (``gid`` ``"robust"``) with ``robust_label``.
     robust_label : str
+    flute_length_m : float, optional
+        The tool's flute length, m: drawn as a line (``gid`` ``"flute-length"``); no stepdown
+        exceeds it, so the depth axis stops just above it when the limits go higher.
+    notes : sequence of str
+        Caveats of the diagram (under-resolved speeds, an FRF grid too coarse for the
+        lobes), written under the axes.
 
     Returns
     -------
@@ -325,11 +333,15 @@ def lobes_figure(
                     gid=f"lobe-{lobe.index}",
                 )
     covered = np.isfinite(env_mm)
+    # a semi-discretization speed without a limit is stable up to its search depth (not unsettled)
+    stable_to = getattr(result, "depth_search_max_m", None)
+    shade_mm = np.where(covered, env_mm, stable_to * MM_PER_M if stable_to is not None else 0.0)
+    shaded = covered | (stable_to is not None)
     ax.fill_between(
         speed,
         0.0,
-        np.where(covered, env_mm, 0.0),
-        where=covered,
+        np.where(shaded, shade_mm, 0.0),
+        where=shaded,
         color="tab:green",
         alpha=0.15,
         lw=0,
@@ -362,7 +374,13 @@ def lobes_figure(
     top = depth_max_mm
     if top is None:
         finite_max = float(np.nanmax(env_mm)) if covered.any() else min_mm
-        top = 1.1 * min(finite_max, 8.0 * min_mm)
+        top = 1.1 * min(finite_max, 8.0 * min_mm) if np.isfinite(min_mm) else 1.1 * finite_max
+    if flute_length_m is not None and np.isfinite(flute_length_m):
+        flute_mm = flute_length_m * MM_PER_M
+        ax.axhline(flute_mm, color="0.3", lw=1.0, ls=":", gid="flute-length",
+                   label=f"flute length {flute_mm:.3g} mm (no deeper stepdown)")
+        if depth_max_mm is None and covered.any() and float(np.nanmax(env_mm)) > flute_mm:
+            top = 1.15 * flute_mm  # deeper limits than the flute cannot be used
     ax.set_xlim(speed[0], speed[-1])
     ax.set_ylim(0.0, top)
     ax.set_xlabel("Spindle speed (rpm)")
@@ -373,6 +391,13 @@ def lobes_figure(
     if title or note:
         ax.set_title(" — ".join(t for t in (checked_text(title, "title") if title else None, note) if t),
                      fontsize="medium")
+    if notes:
+        import textwrap  # noqa: PLC0415 (only for diagrams with notes)
+
+        text = "\n".join(textwrap.fill("• " + checked_text(n, "notes"), 150) for n in notes)
+        share = min(0.05 + 0.025 * text.count("\n"), 0.3)  # of the height, under the axes
+        fig.text(0.01, 0.005, text, fontsize=6.5, va="bottom", ha="left", gid="notes", color="tab:red")
+        fig.get_layout_engine().set(rect=(0.0, share, 1.0, 1.0 - share))
     return freeze_layout(fig)
 
 

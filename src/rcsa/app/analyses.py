@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from rcsa.analysis.effects.sensitivities import effects as _effects
-from rcsa.analysis.lobes.modal_model import modal_model_from_assembly
+from rcsa.analysis.lobes.modal_model import ModalModel, modal_model_from_assembly
 from rcsa.analysis.lobes.request import LobesRequest, parse_lobes_request
 from rcsa.analysis.lobes.robust import (
     RobustLobes,
@@ -14,7 +17,9 @@ from rcsa.analysis.lobes.robust import (
     robust_lobes,
     split_robust_request,
 )
-from rcsa.analysis.lobes.zoa import LobeResult
+from rcsa.analysis.lobes.robust_sdm import robust_sdm_limits
+from rcsa.analysis.lobes.semi_discretization import SemiDiscretizationResult
+from rcsa.analysis.lobes.zoa import LobeResult, frf_grid_notes
 from rcsa.analysis.progress import Progress
 from rcsa.app.predictions import predict, predict_draws
 from rcsa.app.stores import resolver
@@ -25,8 +30,8 @@ from rcsa.model.bounds import MAX_FREQUENCY_LINES
 from rcsa.model.contract import SpindleSpec, parse_assembly
 from rcsa.model.uncertainty import parse_prediction_request
 
-__all__ = ["ANALYSIS_KINDS", "diagnose", "effects", "identify", "run_analysis", "stability_lobes",
-           "stability_lobes_result", "stability_lobes_results", "validate"]
+__all__ = ["ANALYSIS_KINDS", "LobesAnswer", "diagnose", "effects", "identify", "run_analysis", "stability_lobes",
+           "stability_lobes_answer", "stability_lobes_result", "stability_lobes_results", "validate"]
 
 #: Single computations that may also run as jobs (``Prefer: respond-async``), by the name of
 #: their cost model in :mod:`rcsa.app.budget`.
@@ -34,50 +39,130 @@ ANALYSIS_KINDS = ("prediction", "lobes", "effects", "identification", "diagnosis
 
 
 def _parse_lobes(request: Mapping[str, Any]) -> tuple[LobesRequest, RobustRequest | None]:
-    """A stability-lobes request and its robust part; robust lobes are zero-order only."""
+    """A stability-lobes request and its robust part."""
     body, robust = split_robust_request(request)
     parsed = parse_lobes_request(body)
-    if robust is not None and parsed.method.name != "zoa":
-        raise InputError("uncertainty", f"robust lobes are computed with method 'zoa' only, not "
-                                        f"{parsed.method.name!r} (one semi-discretization per draw is too slow)")
     if parsed.assembly is not None and "uncertainty" in parsed.assembly:
         raise InputError("assembly.uncertainty", "give uncertainty at the top of a stability-lobes request "
                                                  "(it asks for robust lobes there)")
     return parsed, robust
 
 
-def stability_lobes_results(request: Mapping[str, Any], *, store: MeasurementStore | None = None,
-                            max_lines: int = MAX_FREQUENCY_LINES) -> tuple[LobeResult, RobustLobes | None]:
-    """Stability lobes (``docs/contract.md`` "Stability lobes") and, when asked for, robust ones.
+@dataclass(frozen=True)
+class LobesAnswer:
+    """Stability lobes with what the response says beside them.
+
+    Attributes
+    ----------
+    nominal : rcsa.analysis.lobes.zoa.LobeResult
+    robust : rcsa.analysis.lobes.robust.RobustLobes or None
+    notes : tuple of str
+        Caveats found here (a zero-order diagram on an FRF grid too coarse for it); a
+        semi-discretization's own notes (under-resolved speeds) come with ``nominal``.
+    flute_length_m : float or None
+        The assembly tool's flute length: no stepdown can exceed it (pictures and the web
+        page cap the depth axis and the pockets there).
+    method_reason : str
+        Why ``"method": "auto"`` chose the method (empty otherwise).
+    """
+
+    nominal: LobeResult
+    robust: RobustLobes | None = None
+    notes: tuple[str, ...] = ()
+    flute_length_m: float | None = None
+    method_reason: str = ""
+
+    def extras(self) -> dict[str, Any]:
+        """The response's fields beside the nominal diagram: ``notes`` (all of them),
+        ``flute_length_m`` (with an assembly), the robust fields, and with ``"method": "auto"``
+        the method used and why (``method``, ``method_reason``)."""
+        own = self.nominal.to_dict().get("notes", [])
+        out: dict[str, Any] = {"notes": [*own, *self.notes]}
+        if self.method_reason:
+            out["method"] = "semi_discretization" if isinstance(self.nominal, SemiDiscretizationResult) else "zoa"
+            out["method_reason"] = self.method_reason
+        if self.flute_length_m is not None:
+            out["flute_length_m"] = self.flute_length_m
+        if self.robust is not None:
+            out.update(self.robust.to_dict())
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """The contract's stability-lobes response with the extras."""
+        return {**self.nominal.to_dict(), **self.extras()}
+
+
+def _modes(parsed: LobesRequest, spec: Any, frequency_hz: np.ndarray, h: np.ndarray) -> ModalModel | None:
+    """The SDM's modes of an assembly: its exact modes when analytical (None: fitted to ``h`` by solve)."""
+    if parsed.method.name != "semi_discretization" or not isinstance(spec.spindle, SpindleSpec):
+        return None
+    return modal_model_from_assembly(spec, modes_per_direction=parsed.method.modes_per_direction,
+                                     frequency_hz=frequency_hz, h=h)
+
+
+def stability_lobes_answer(request: Mapping[str, Any], *, store: MeasurementStore | None = None,
+                           max_lines: int = MAX_FREQUENCY_LINES) -> LobesAnswer:
+    """Stability lobes (``docs/contract.md`` "Stability lobes"), robust ones when asked for, and notes.
 
     With an ``assembly``, its tool-point ``h`` is predicted first and used in x and y (the
     result says so: ``same_frf_in_y``). With ``"method": "semi_discretization"`` an
     analytical assembly gives its exact modes (:func:`~rcsa.analysis.lobes.modal_model.
     modal_model_from_assembly`); a measured spindle's predicted ``h`` is fitted instead.
-    With ``uncertainty`` (and optionally ``robust``: ``{"confidence"}``; method ``zoa``) the
-    assembly is also drawn and every draw's lobes computed (:mod:`rcsa.analysis.lobes.robust`).
+    With ``uncertainty`` (and optionally ``robust``: ``{"confidence"}``) the assembly is also
+    drawn: zero-order, every draw's lobes are computed (:mod:`rcsa.analysis.lobes.robust`);
+    semi-discretization, the reduced model of the draws gives every draw's limit
+    (:mod:`rcsa.analysis.lobes.robust_sdm`). A zero-order diagram on an FRF grid too coarse for
+    it gets a note (:func:`~rcsa.analysis.lobes.zoa.frf_grid_notes`).
+
+    Returns
+    -------
+    LobesAnswer
+    """
+    parsed, robust = _parse_lobes(request)
+    zoa = parsed.method.name == "zoa"
+    if parsed.assembly is None:
+        assert parsed.frequency_hz is not None and parsed.frf_xx is not None
+        notes = frf_grid_notes(parsed.frequency_hz, parsed.frf_xx) if zoa else []
+        return LobesAnswer(parsed.solve(), None, tuple(notes), None, parsed.method.reason)
+    spec = parse_assembly(parsed.assembly, max_lines)
+    flute = float(spec.tool.flute_length_m)
+    if robust is not None:
+        prediction, draws, options = predict_draws(parsed.assembly, robust.uncertainty, store=store,
+                                                   max_lines=max_lines)
+        f, h = prediction.frequency_hz, prediction.tool_point.h
+        modes = _modes(parsed, spec, f, h)
+        nominal = parsed.solve(f, h, modal_model=modes)
+        notes = tuple(frf_grid_notes(f, h)) if zoa else ()
+        if zoa:
+            return LobesAnswer(nominal, robust_lobes(parsed, nominal, f, draws.h, options, robust.confidence), notes,
+                               flute, parsed.method.reason)
+        assert isinstance(nominal, SemiDiscretizationResult)
+        per_draw: list[np.ndarray] = []
+        limit = robust_sdm_limits(nominal.modal_model, f, h, draws.h, nominal, robust.confidence,
+                                  teeth=parsed.teeth, tangential_coefficient_n_m2=parsed.tangential_coefficient_n_m2,
+                                  radial_ratio=parsed.radial_ratio, radial_immersion=parsed.radial_immersion,
+                                  milling=parsed.milling, draws_out=per_draw)
+        limit.flags.writeable = False
+        return LobesAnswer(nominal, RobustLobes(limit, per_draw[0], robust.confidence, options,
+                                                method="semi_discretization"), notes, flute, parsed.method.reason)
+    prediction = predict(spec, store=store, max_lines=max_lines)
+    f, h = prediction.frequency_hz, prediction.tool_point.h
+    notes = tuple(frf_grid_notes(f, h)) if zoa else ()
+    return LobesAnswer(parsed.solve(f, h, modal_model=_modes(parsed, spec, f, h)), None, notes, flute,
+                       parsed.method.reason)
+
+
+def stability_lobes_results(request: Mapping[str, Any], *, store: MeasurementStore | None = None,
+                            max_lines: int = MAX_FREQUENCY_LINES) -> tuple[LobeResult, RobustLobes | None]:
+    """The nominal and robust stability lobes of a request (:func:`stability_lobes_answer` without its notes).
 
     Returns
     -------
     nominal : rcsa.analysis.lobes.zoa.LobeResult
     robust : rcsa.analysis.lobes.robust.RobustLobes or None
     """
-    parsed, robust = _parse_lobes(request)
-    if parsed.assembly is None:
-        return parsed.solve(), None
-    if robust is not None:
-        prediction, draws, options = predict_draws(parsed.assembly, robust.uncertainty, store=store,
-                                                   max_lines=max_lines)
-        nominal = parsed.solve(prediction.frequency_hz, prediction.tool_point.h)
-        return nominal, robust_lobes(parsed, nominal, prediction.frequency_hz, draws.h, options, robust.confidence)
-    spec = parse_assembly(parsed.assembly, max_lines)
-    prediction = predict(spec, store=store, max_lines=max_lines)
-    frequency_hz, h = prediction.frequency_hz, prediction.tool_point.h
-    modes = None
-    if parsed.method.name == "semi_discretization" and isinstance(spec.spindle, SpindleSpec):
-        modes = modal_model_from_assembly(spec, modes_per_direction=parsed.method.modes_per_direction,
-                                          frequency_hz=frequency_hz, h=h)
-    return parsed.solve(frequency_hz, h, modal_model=modes), None
+    answer = stability_lobes_answer(request, store=store, max_lines=max_lines)
+    return answer.nominal, answer.robust
 
 
 def stability_lobes_result(request: Mapping[str, Any], *, store: MeasurementStore | None = None,
@@ -108,12 +193,12 @@ def stability_lobes(request: Mapping[str, Any], *, store: MeasurementStore | Non
     -------
     dict
         ``spindle_speed_rpm``, ``depth_limit_m``, ``chatter_frequency_hz``, ``lobes`` and
-        the extras of :class:`rcsa.analysis.lobes.zoa.LobeResult` (``frf_y_source``, minimum depth, …);
-        with ``uncertainty``, also ``depth_limit_robust_m`` and ``robust``
+        the extras of :class:`rcsa.analysis.lobes.zoa.LobeResult` (``frf_y_source``, minimum depth, …),
+        ``notes`` and, with an assembly, ``flute_length_m`` (:class:`LobesAnswer`); with
+        ``uncertainty``, also ``depth_limit_robust_m`` and ``robust``
         (:class:`rcsa.analysis.lobes.robust.RobustLobes`).
     """
-    nominal, robust = stability_lobes_results(request, store=store, max_lines=max_lines)
-    return nominal.to_dict() if robust is None else {**nominal.to_dict(), **robust.to_dict()}
+    return stability_lobes_answer(request, store=store, max_lines=max_lines).to_dict()
 
 
 def effects(request: Mapping[str, Any], *, store: MeasurementSource | None = None,

@@ -446,7 +446,8 @@ class SdmCostModel:
     ``n = 4 m`` (``m`` modes per direction, x and y, position and velocity) on every step,
     couples the ``k_cut`` steps in cut to their delayed samples, and takes the eigenvalues of
     the period map of dimension ``D = n + 2 k_cut``. Hence, for ``S`` speeds (and ``draws``
-    drawn assemblies, each a lobes run)::
+    more diagrams: robust lobes add :data:`rcsa.analysis.lobes.robust_sdm.REDUCED_COST_DIAGRAMS`,
+    whatever the number of drawn assemblies)::
 
         seconds = (1 + draws) · (per_step_s · k
                                  + S · (per_state_s · k·n + k_cut · (per_cut_s + per_cut_state_s · n)
@@ -506,7 +507,11 @@ def sdm_terms(request: Mapping[str, Any]) -> tuple[float, float, float]:
     from rcsa.analysis.lobes.options import parse_method
     from rcsa.analysis.lobes.zoa import engagement_angles_rad
 
-    method = parse_method(request)
+    try:
+        method = parse_method(request, teeth=int(request.get("teeth", 1)),
+                              radial_immersion=float(request.get("radial_immersion", 1.0)))
+    except (InputError, TypeError, ValueError):  # the request's parser says why
+        method = parse_method({})
     try:
         phi_st, phi_ex = engagement_angles_rad(float(request.get("radial_immersion", 1.0)),
                                                str(request.get("milling", "down")))  # type: ignore[arg-type]
@@ -535,13 +540,24 @@ def _lobes(request: Mapping[str, Any]) -> Cost:
     count = float(count) if isinstance(count, int | float) and not isinstance(count, bool) else 0.0
     method = request.get("method")
     name = method if isinstance(method, str) else (method.get("name", "zoa") if isinstance(method, Mapping) else "zoa")
+    if name == "auto":  # the method the request's parser will pick
+        from rcsa.analysis.lobes.options import auto_method
+
+        try:
+            name = auto_method(int(request.get("teeth", 1)), float(request.get("radial_immersion", 1.0)))[0]
+        except (TypeError, ValueError, ArithmeticError):
+            name = "semi_discretization"  # the dearer one
     per = LOBE_METHOD_S.get(str(name), LOBE_METHOD_S["zoa"])
     seconds += per * count * max(lines, 1.0) * (1.0 + _draws(request))
     memory += 64.0 * count * (1.0 + _draws(request))
     shrink: tuple[str, ...] = ("fewer speeds (spindle_speed_rpm.count)", "fewer frequency lines")
     if name == "semi_discretization":
+        from rcsa.analysis.lobes.robust_sdm import REDUCED_COST_DIAGRAMS
+
         steps, modes, fraction = sdm_terms(request)
-        seconds += SDM_COST.seconds(count, steps, modes, fraction, _draws(request))
+        # robust: the reduced model of the draws solves a few diagrams more, whatever the draws
+        extra = REDUCED_COST_DIAGRAMS if _draws(request) > 0 else 0.0
+        seconds += SDM_COST.seconds(count, steps, modes, fraction, extra)
         memory += SDM_COST.memory_bytes(count, steps, modes, fraction)
         terms = {**terms, "steps_per_period": steps, "modes_per_direction": modes,
                  "period_map_dimension": SDM_COST.sizes(steps, modes, fraction)[2]}

@@ -20,7 +20,7 @@ from rcsa.analysis.effects.sensitivities import effects_report
 from rcsa.analysis.figures import effects_figure
 from rcsa.analysis.lobes.zoa import LobeResult
 from rcsa.analysis.progress import Progress
-from rcsa.app.analyses import stability_lobes_results
+from rcsa.app.analyses import stability_lobes_answer
 from rcsa.app.predictions import predict
 from rcsa.app.stores import resolver
 from rcsa.errors import InputError
@@ -138,12 +138,20 @@ def band_of(result: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray] | None:
 
 
 def robust_lobes_figure(result: LobeResult, robust: Mapping[str, Any] | None, **options: Any) -> Figure:
-    """:func:`lobes_figure` with the robust limit of a response (``depth_limit_robust_m`` and
-    ``robust``, :meth:`rcsa.analysis.lobes.robust.RobustLobes.to_dict`) drawn dashed when given."""
-    if robust is None or robust.get("depth_limit_robust_m") is None:
+    """:func:`lobes_figure` with what a response says beside the diagram: the robust limit
+    (``depth_limit_robust_m`` and ``robust``, :meth:`rcsa.analysis.lobes.robust.RobustLobes.to_dict`)
+    drawn dashed, the tool's ``flute_length_m`` (a line; the depth axis stops just above it)
+    and the ``notes`` (under-resolved speeds, a grid too coarse for the lobes) written under it."""
+    extra = dict(robust or {})
+    notes = extra.get("notes")
+    flute = extra.get("flute_length_m")
+    options = {**options, "notes": [str(n) for n in notes] if isinstance(notes, list) else (),
+               "flute_length_m": float(flute) if isinstance(flute, int | float) and not isinstance(flute, bool)
+               else None}
+    if extra.get("depth_limit_robust_m") is None:
         return lobes_figure(result, **options)
-    depth = number_list(robust["depth_limit_robust_m"], "depth_limit_robust_m", finite=False)
-    about = robust.get("robust")
+    depth = number_list(extra["depth_limit_robust_m"], "depth_limit_robust_m", finite=False)
+    about = extra.get("robust")
     pct = about.get("percentile") if isinstance(about, Mapping) else None
     label = f"robust limit (p{pct:g} of draws)" if isinstance(pct, int | float) else "robust limit"
     return lobes_figure(result, robust_depth_limit_m=depth, robust_label=label, **options)
@@ -218,8 +226,8 @@ def document_figure(doc: object, *, layout: str = "full", store: MeasurementSour
     if isinstance(doc.get("spindle_speed_rpm"), list) and "depth_limit_m" in doc:
         return robust_lobes_figure(LobeResult.from_dict(doc), doc)  # a stability-lobes result
     if "tangential_coefficient_n_m2" in doc:
-        nominal, robust = stability_lobes_results(doc, store=store)
-        return robust_lobes_figure(nominal, None if robust is None else robust.to_dict())
+        answer = stability_lobes_answer(doc, store=store)
+        return robust_lobes_figure(answer.nominal, answer.extras())
     if "tool" in doc and "spindle" in doc:
         result = predict(doc, store=store)
         return frf_figure(result.frequency_hz, result.tool_point.h, labels=["tool point h"], layout=layout,

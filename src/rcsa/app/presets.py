@@ -10,6 +10,7 @@ refused: their toolbits have no presets of this form.
 
 from __future__ import annotations
 
+import base64
 import hashlib
 import os
 from collections.abc import Callable, Mapping
@@ -20,6 +21,8 @@ from typing import Any
 from rcsa.app.jobs import Workbench
 from rcsa.errors import InputError
 from rcsa.infra.atomic_files import atomic_write_bytes
+from rcsa.infra.compute_backends import Backend
+from rcsa.infra.job_queue import Handler
 from rcsa.libraries.formats import read_library
 from rcsa.libraries.fusion import FusionLibrary
 from rcsa.libraries.fusion_presets import FusionFile, read_fusion_file
@@ -28,11 +31,17 @@ from rcsa.libraries.recommend import (
     PRESET_PREFIX,
     RecommendOptions,
     parse_recommend_options,
+    pockets_on,
     recommend_presets,
 )
 from rcsa.libraries.recommend_sources import FrfSource, predicted_frfs, stored_frfs
 
-__all__ = ["OPTION_FIELDS", "PRESET_PREFIX", "PresetFile", "check_recommendation", "recommend_predicted", "recommend_stored", "write_preset_file"]
+__all__ = ["OPTION_FIELDS", "PRESET_PREFIX", "RECOMMEND_JOB", "PresetFile", "check_recommendation",
+           "recommend_job_handlers", "recommend_job_request", "recommend_predicted", "recommend_stored",
+           "report_document", "write_preset_file"]
+
+#: Kind of the job that writes presets into a large library (``Prefer: respond-async``).
+RECOMMEND_JOB = "library-recommend"
 
 _FREECAD_REFUSAL = ("chatter-safe presets are written into Autodesk Fusion libraries (.json or .tools) only: "
                     "FreeCAD toolbits (.fctb) and libraries have no start-values presets to write them into")
@@ -83,8 +92,9 @@ def check_recommendation(data: bytes, options: Mapping[str, Any], *, file_name: 
     _read(data, file_name, None)
 
 
-def _answer(file: FusionFile, file_name: str | None, source: FrfSource, options: RecommendOptions) -> PresetFile:
-    result = recommend_presets(file, source.entries, source.frfs, options)
+def _answer(file: FusionFile, file_name: str | None, source: FrfSource, options: RecommendOptions, *,
+            progress: Callable[[int, int], None] | None = None, backend: Backend | None = None) -> PresetFile:
+    result = recommend_presets(file, source.entries, source.frfs, options, progress, pockets_on(backend))
     name = PurePath(file_name).name if file_name else ("library.tools" if file.kind == "tools" else "library.json")
     report = {"library": {"file_name": name, "format": "fusion-" + file.kind,
                           "sha256_before": hashlib.sha256(file.raw).hexdigest(),
@@ -94,7 +104,8 @@ def _answer(file: FusionFile, file_name: str | None, source: FrfSource, options:
 
 
 def recommend_stored(bench: Workbench, library_id: str, data: bytes, options: Mapping[str, Any], *,
-                     file_name: str | None = None, content_type: str | None = None) -> PresetFile:
+                     file_name: str | None = None, content_type: str | None = None,
+                     progress: Callable[[int, int], None] | None = None, backend: Backend | None = None) -> PresetFile:
     """Presets from a stored library's results (``POST /v1/libraries/{id}:recommend``).
 
     Parameters
@@ -109,6 +120,10 @@ def recommend_stored(bench: Workbench, library_id: str, data: bytes, options: Ma
         :data:`rcsa.libraries.recommend.OPTION_FIELDS` (material, machine speed range, ...).
     file_name, content_type : str, optional
         What the upload says it is.
+    progress : callable, optional
+        ``progress(done, total)`` over the tools whose pockets are computed.
+    backend : Backend, optional
+        Where the pockets' chunks run (default: this process; a job passes the workbench's).
 
     Raises
     ------
@@ -121,7 +136,7 @@ def recommend_stored(bench: Workbench, library_id: str, data: bytes, options: Ma
     file, library = _read(data, file_name, content_type)
     source = stored_frfs(bench.libraries, library_id, library, store=bench.store, max_lines=bench.max_lines,
                          uncertainty=opts.uncertainty)
-    return _answer(file, file_name, source, opts)
+    return _answer(file, file_name, source, opts, progress=progress, backend=backend)
 
 
 def recommend_predicted(bench: Workbench, data: bytes, options: Mapping[str, Any], *, spindle: Mapping[str, Any],
@@ -143,7 +158,8 @@ def recommend_predicted(bench: Workbench, data: bytes, options: Mapping[str, Any
     file_name, content_type : str, optional
         What the file says it is.
     progress : callable, optional
-        ``progress(done, total)`` over the tools predicted.
+        ``progress(done, total)`` over the tools predicted, then over the tools whose pockets are
+        computed (on the workbench's backend).
     import_options : mapping, optional
         The library import's options (holder material, cones, ...: ``options`` of
         :func:`rcsa.libraries.library_prediction.library_request`).
@@ -157,7 +173,7 @@ def recommend_predicted(bench: Workbench, data: bytes, options: Mapping[str, Any
                             max_lines=bench.max_lines, max_combinations=bench.max_combinations, progress=progress,
                             uncertainty=opts.uncertainty,
                             options=import_options, **{k: v for k, v in fields.items() if v is not None})
-    return _answer(file, file_name, source, opts)
+    return _answer(file, file_name, source, opts, progress=progress, backend=bench.backend)
 
 
 def write_preset_file(preset_file: PresetFile, path: str | os.PathLike[str]) -> None:
@@ -169,3 +185,42 @@ def write_preset_file(preset_file: PresetFile, path: str | os.PathLike[str]) -> 
         The file cannot be written.
     """
     atomic_write_bytes(Path(path), preset_file.data)
+
+
+def report_document(library_id: str, result: PresetFile) -> dict[str, Any]:
+    """The JSON answer of ``POST /v1/libraries/{id}:recommend`` (and of its job): the report and
+    the file (base64)."""
+    return {"library_id": library_id, **result.report, "file": {
+        "file_name": result.file_name, "media_type": result.media_type, "size_bytes": len(result.data),
+        "sha256": hashlib.sha256(result.data).hexdigest(),
+        "content_base64": base64.b64encode(result.data).decode("ascii")}}
+
+
+def recommend_job_request(library_id: str, data: bytes, options: Mapping[str, Any], *, file_name: str | None = None,
+                          content_type: str | None = None) -> dict[str, Any]:
+    """The JSON-ready request of a :data:`RECOMMEND_JOB` (the file travels as base64), checked first;
+    ``items`` counts the library's items (whether it is large enough to be a job).
+
+    Raises
+    ------
+    InputError
+        Bad options or not a Fusion library (:func:`check_recommendation`).
+    """
+    parse_recommend_options(options)
+    _, library = _read(data, file_name, content_type)
+    return {"library_id": library_id, "options": dict(options), "file_name": file_name, "content_type": content_type,
+            "library_base64": base64.b64encode(data).decode("ascii"), "items": len(library.items)}
+
+
+def recommend_job_handlers(bench: Workbench) -> dict[str, Handler]:
+    """The job runner's handler of :data:`RECOMMEND_JOB`: :func:`recommend_stored` on the
+    workbench's backend (this process, or a Dask cluster), progress over the tools; its result
+    is :func:`report_document`."""
+    def run(request: dict[str, Any], progress: Callable[[int, int], None]) -> tuple[Any, dict[str, Any]]:
+        result = recommend_stored(bench, str(request["library_id"]), base64.b64decode(request["library_base64"]),
+                                  request["options"], file_name=request.get("file_name"),
+                                  content_type=request.get("content_type"), progress=progress,
+                                  backend=bench.backend)
+        return report_document(str(request["library_id"]), result), dict(result.report["summary"])
+
+    return {RECOMMEND_JOB: run}

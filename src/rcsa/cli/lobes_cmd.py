@@ -23,15 +23,15 @@ def register(app: typer.Typer) -> None:
         """Stability lobes from inline FRFs or an assembly: zero-order (Altintas–Budak, the default) or
         "method": "semi_discretization" in the request (Insperger–Stépán, for low radial immersion).
         With "uncertainty" (and "robust": {"confidence"}) beside an assembly: depth_limit_robust_m too
-        (zero-order only)."""
+        (semi-discretization: from a reduced model of the draws)."""
         # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
-        from rcsa.app.analyses import stability_lobes_results
+        from rcsa.app.analyses import stability_lobes_answer
         from rcsa.app.figures import check_picture_path, robust_lobes_figure, save_figure
         from rcsa.app.stores import open_store
         doc = read_json(request)
-        result, robust = run_guarded(lambda: stability_lobes_results(doc, store=open_store(store) if store else None))
-        extra = None if robust is None else robust.to_dict()
+        answer = run_guarded(lambda: stability_lobes_answer(doc, store=open_store(store) if store else None))
         if plot is not None:
-            run_guarded(lambda: save_figure(robust_lobes_figure(result, extra), check_picture_path(plot, "--plot")))
+            run_guarded(lambda: save_figure(robust_lobes_figure(answer.nominal, answer.extras()),
+                                            check_picture_path(plot, "--plot")))
             wrote(plot, "the lobe diagram")
-        write_json(result.to_dict() if extra is None else {**result.to_dict(), **extra}, out, "the stability lobes")
+        write_json(answer.to_dict(), out, "the stability lobes")

@@ -10,11 +10,13 @@ predicted on the fly), :func:`recommend_presets`
    surface-speed limit ``v_c,max / (π DC)`` (the table's, for carbide tools, or the
    caller's ``max_surface_speed_m_min``) and the speed ``n`` of the tool's own presets for
    this material (a vendor's preset named e.g. "Aluminum": the tool's own limit);
-3. computes the stability lobes (:func:`rcsa.analysis.lobes.zoa.stability_lobes`, the same
-   FRF in x and y) on a speed grid that resolves the speed tolerance, and picks the best
-   pocket (:func:`rcsa.analysis.lobes.pockets.best_pocket`: the speed maximising
-   ``n · a_p`` whose ± tolerance window stays stable at the stepdown times the safety factor;
-   the stepdown at most the flute length ``LCF``);
+3. computes the stability lobes (the same FRF in x and y) by the method asked for — zero-order,
+   semi-discretization, or ``"auto"``: semi-discretization wherever fewer than one tooth is in
+   the cut on average — and picks the best pocket
+   (:func:`rcsa.analysis.lobes.tool_pockets.tool_pockets`, the rule of
+   :mod:`rcsa.analysis.lobes.pockets`: the speed maximising ``n · a_p`` whose ± tolerance
+   window stays stable at the stepdown times the safety factor; the stepdown at most the flute
+   length ``LCF``, and a window stable deeper than that gets the flute length, said so);
 4. writes it as a Fusion preset (:mod:`rcsa.libraries.fusion_presets`) named
    ``"rcsa chatter-safe: <material>"`` with a guid fixed by the tool id and the material, so
    that running again replaces rcsa's preset and touches no other.
@@ -38,7 +40,7 @@ from __future__ import annotations
 import math
 import re
 import uuid
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -50,11 +52,15 @@ from rcsa.analysis.lobes.pockets import (
     DEFAULT_SPEED_TOLERANCE,
     Pocket,
     PocketRule,
-    best_pocket,
-    pocket_speed_grid,
-    window_minimum,
 )
-from rcsa.analysis.lobes.robust import DEFAULT_CONFIDENCE, robust_depth_limit
+from rcsa.analysis.lobes.robust import DEFAULT_CONFIDENCE
+from rcsa.analysis.lobes.tool_pockets import (
+    PRESET_METHODS,
+    CutSettings,
+    ToolCut,
+    ToolPocket,
+    tool_pockets,
+)
 from rcsa.analysis.lobes.workpiece_materials import (
     COEFFICIENT_MODEL,
     SPEED_SOURCE,
@@ -62,8 +68,9 @@ from rcsa.analysis.lobes.workpiece_materials import (
     material_key,
     workpiece_material,
 )
-from rcsa.analysis.lobes.zoa import Milling, check_cut, depth_limit_envelopes, stability_lobes
+from rcsa.analysis.lobes.zoa import Milling, check_cut
 from rcsa.errors import InputError
+from rcsa.infra.compute_backends import Backend, LocalBackend
 from rcsa.libraries.fusion_geometry import tool_geometry
 from rcsa.libraries.fusion_presets import FusionFile, is_replaced, write_presets
 from rcsa.libraries.tool_materials import tool_material
@@ -72,6 +79,7 @@ from rcsa.model.bounds import MAX_CONFIDENCE, MAX_SPEED_RPM, MIN_CONFIDENCE
 
 __all__ = [
     "DEFAULT_MIN_RPM",
+    "POCKET_CHUNK_TOOLS",
     "LOBE_METHODS",
     "MILLING_TOOL_TYPES",
     "OPTION_FIELDS",
@@ -81,17 +89,23 @@ __all__ = [
     "Recommendation",
     "RecommendOptions",
     "parse_recommend_options",
+    "pocket_chunk",
+    "pockets_on",
     "preset_guid",
     "preset_name",
     "recommend_presets",
 ]
 
+#: Tools per chunk of pocket work (a chunk's semi-discretization runs as one batch; chunks run
+#: on the workbench's backend: this process, or a Dask cluster).
+POCKET_CHUNK_TOOLS = 25
 #: Name of every preset rcsa writes: ``"rcsa chatter-safe: <material>"``.
 PRESET_PREFIX = "rcsa chatter-safe: "
 #: Default lowest spindle speed, rpm.
 DEFAULT_MIN_RPM = 1000.0
-#: Lobe methods available here.
-LOBE_METHODS = ("zoa",)
+#: Lobe methods of a recommendation (contract v1.2): zero-order, semi-discretization, or the
+#: one :func:`rcsa.analysis.lobes.options.auto_method` picks per tool (the default).
+LOBE_METHODS = PRESET_METHODS
 #: Fusion tool types that mill sideways (stability lobes of peripheral milling apply).
 MILLING_TOOL_TYPES = frozenset({
     "flat end mill", "ball end mill", "bull nose end mill", "chamfer mill", "face mill", "slot mill",
@@ -147,8 +161,9 @@ class RecommendOptions:
         The caller's surface-speed limit (else the table's, carbide tools only).
     feed_per_tooth_m : float or None
         Feed per tooth for the preset's feeds, m.
-    method : str
-        Lobe method (:data:`LOBE_METHODS`).
+    method : {"zoa", "semi_discretization", "auto"}
+        Lobe method (:data:`LOBE_METHODS`); ``"auto"`` picks per tool
+        (:func:`rcsa.analysis.lobes.tool_pockets.auto_method`).
     uncertainty : mapping or None
         The ``uncertainty`` option (draws, seed, tolerances; :mod:`rcsa.model.uncertainty`):
         each tool's assembly is drawn and the pocket chosen on the robust limit.
@@ -169,7 +184,7 @@ class RecommendOptions:
     speed_tolerance: float = DEFAULT_SPEED_TOLERANCE
     max_surface_speed_m_min: float | None = None
     feed_per_tooth_m: float | None = None
-    method: str = "zoa"
+    method: str = "auto"
     uncertainty: Mapping[str, Any] | None = None
     confidence: float | None = None
 
@@ -210,7 +225,8 @@ def parse_recommend_options(body: Mapping[str, Any]) -> RecommendOptions:
         ``tangential_coefficient_n_m2`` with ``radial_ratio`` (both, or neither: then the
         table's), ``radial_immersion`` (0.5), ``milling`` (``"down"``), ``min_rpm`` (1000),
         ``safety_factor`` (1.25), ``speed_tolerance`` (0.03), ``max_surface_speed_m_min``,
-        ``feed_per_tooth_m``, ``method`` (``"zoa"``), ``uncertainty`` (robust presets:
+        ``feed_per_tooth_m``, ``method`` (``"auto"``, or ``"zoa"``, ``"semi_discretization"``),
+        ``uncertainty`` (robust presets:
         every tool's assembly drawn, :mod:`rcsa.analysis.lobes.robust`) and ``confidence``
         (0.95; only with ``uncertainty``).
 
@@ -266,9 +282,9 @@ def parse_recommend_options(body: Mapping[str, Any]) -> RecommendOptions:
     vc = None if vc is None else fields.number(vc, "max_surface_speed_m_min", gt=0.0, le=1e5)
     fz = body.get("feed_per_tooth_m")
     fz = None if fz is None else fields.number(fz, "feed_per_tooth_m", gt=0.0, le=0.1)
-    method = body.get("method", "zoa")
+    method = body.get("method", "auto")
     if method not in LOBE_METHODS:
-        raise InputError("method", f"must be one of {', '.join(LOBE_METHODS)} in this version, got {method!r}")
+        raise InputError("method", f"must be one of {', '.join(LOBE_METHODS)}, got {method!r}")
     uncertainty, confidence = body.get("uncertainty"), body.get("confidence")
     if uncertainty is None and confidence is not None:
         raise InputError("confidence", "needs uncertainty: the robust limit is taken over drawn assemblies")
@@ -322,9 +338,52 @@ class _Skip(Exception):
     """Internal: the tool gets no preset (status ``skipped``)."""
 
 
+def pocket_chunk(chunk: list[ToolCut], settings: CutSettings) -> list[ToolPocket]:
+    """The pockets of one chunk of tools (:func:`~rcsa.analysis.lobes.tool_pockets.tool_pockets`): a
+    module-level function, so that a cluster's workers can run it by name."""
+    return tool_pockets(chunk, settings)
+
+
+PocketFinder = Callable[[list[ToolCut], CutSettings, Callable[[int, int], None] | None], list[ToolPocket]]
+
+
+def pockets_on(backend: Backend | None = None, tools_per_chunk: int = POCKET_CHUNK_TOOLS) -> PocketFinder:
+    """Find pockets in chunks of tools on a compute backend (default: this process), with progress.
+
+    Tools are ordered by tooth count (a chunk of one count is one semi-discretization batch)
+    and cut into chunks of ``tools_per_chunk``; each chunk is :func:`pocket_chunk`, sent to
+    ``backend`` (:mod:`rcsa.infra.compute`). ``progress(done, total)`` is called as chunks finish.
+    The result is the same whichever backend computes it.
+    """
+    def run(cuts: list[ToolCut], settings: CutSettings,
+            progress: Callable[[int, int], None] | None = None) -> list[ToolPocket]:
+        order = sorted(range(len(cuts)), key=lambda i: cuts[i].teeth)
+        chunks = [order[a : a + tools_per_chunk] for a in range(0, len(order), tools_per_chunk)]
+        out: list[ToolPocket | None] = [None] * len(cuts)
+        done = 0
+        if progress is not None:
+            progress(0, len(cuts))
+        for i, found in (backend or LocalBackend()).map(pocket_chunk, [[cuts[j] for j in c] for c in chunks],
+                                                        shared=settings, ordered=False):
+            for j, pocket in zip(chunks[i], found, strict=True):
+                out[j] = pocket
+            done += len(chunks[i])
+            if progress is not None:
+                progress(done, len(cuts))
+        return [p for p in out if p is not None]
+
+    return run
+
+
 def recommend_presets(file: FusionFile, entries: list[Mapping[str, Any]], frfs: Mapping[str, Frf | str],
-                      options: RecommendOptions) -> Recommendation:
+                      options: RecommendOptions, progress: Callable[[int, int], None] | None = None,
+                      pockets: PocketFinder | None = None) -> Recommendation:
     """Write a chatter-safe preset into every tool that has a stable pocket (module docstring).
+
+    The tools are prepared one by one (import status, tool type, teeth, speed range, FRF),
+    then all their pockets are found together (:func:`rcsa.analysis.lobes.tool_pockets.
+    tool_pockets`: the semi-discretization of all tools of a tooth count is one batch), then
+    the presets are written.
 
     Parameters
     ----------
@@ -337,6 +396,10 @@ def recommend_presets(file: FusionFile, entries: list[Mapping[str, Any]], frfs: 
         Tool id → its tool-point FRF, or why there is none (a :class:`FrfFailure` when
         computing it failed: the tool is then ``failed``; else ``skipped``).
     options : RecommendOptions
+    progress : callable, optional
+        ``progress(done, total)`` over the tools whose pockets are computed.
+    pockets : callable, optional
+        How the pockets are found (:func:`pockets_on` a backend; default: in this process).
 
     Returns
     -------
@@ -344,20 +407,40 @@ def recommend_presets(file: FusionFile, entries: list[Mapping[str, Any]], frfs: 
     """
     doc = file.document
     edits: dict[int, dict[str, Any]] = {}
-    tools = []
+    tools: list[dict[str, Any]] = []
+    prepared: list[tuple[int, _Prepared]] = []
     for entry in entries:
         head = {k: entry.get(k) for k in ("id", "index", "description", "number", "tool_type")}
         try:
-            outcome = _one_tool(doc["data"][int(entry["index"])], entry, frfs.get(str(entry["id"])), options)
+            ready = _prepare(doc["data"][int(entry["index"])], entry, frfs.get(str(entry["id"])), options)
         except _Skip as skip:
             tools.append({**head, "status": "skipped", "reason": str(skip)})
             continue
         except InputError as err:
             tools.append({**head, "status": "failed", "reason": str(err)})
             continue
-        preset, report = outcome
-        edits[int(entry["index"])] = preset
-        tools.append({**head, "status": "written", **report})
+        prepared.append((len(tools), ready))
+        tools.append(head)
+    settings = CutSettings(options.tangential_coefficient_n_m2, options.radial_ratio, options.radial_immersion,
+                           options.milling, PocketRule(options.safety_factor, options.speed_tolerance),
+                           method=options.method, confidence=options.confidence)  # type: ignore[arg-type]
+    found_all = (pockets or pockets_on())([r.cut for _, r in prepared], settings, progress)
+    for (slot, ready), found in zip(prepared, found_all, strict=True):
+        head = tools[slot]
+        if found.pocket is None:
+            tools[slot] = {**head, "status": "skipped", "reason": found.refusal or "no stable pocket",
+                           "lobe_method": found.method, "method_reason": found.method_reason}
+            continue
+        try:
+            preset, report = _written(ready, found, options)
+        except _Skip as skip:
+            tools[slot] = {**head, "status": "skipped", "reason": str(skip)}
+            continue
+        except InputError as err:
+            tools[slot] = {**head, "status": "failed", "reason": str(err)}
+            continue
+        edits[int(ready.entry["index"])] = preset
+        tools[slot] = {**head, "status": "written", **report}
     data = write_presets(file, edits)
     summary = {s: sum(t["status"] == s for t in tools) for s in ("written", "skipped", "failed")}
     rule = PocketRule(options.safety_factor, options.speed_tolerance)
@@ -366,15 +449,29 @@ def recommend_presets(file: FusionFile, entries: list[Mapping[str, Any]], frfs: 
         "rule": {**rule.to_dict(), "max_depth_m": "the tool's flute length LCF",
                  "objective": "maximise n * stepdown (material removal rate at a fixed a_e and f_z)",
                  "window": "the depth limit is the smallest within n * (1 +/- speed_tolerance)",
-                 "stepdown": "window depth limit / safety_factor, at most LCF"},
+                 "stepdown": "window depth limit / safety_factor, at most LCF",
+                 "method": "auto: semi_discretization where fewer than one tooth is in the cut on average "
+                           "(N acos(1 - 2 a_e/D) / 2 pi < 1), else zoa"},
         "preset_name": preset_name(options), "summary": summary, "tools": tools})
 
 
 # --------------------------------------------------------------------------- one tool
 
 
-def _one_tool(item: Any, entry: Mapping[str, Any], frf: Frf | str | None,
-              options: RecommendOptions) -> tuple[dict[str, Any], dict[str, Any]]:
+@dataclass(frozen=True)
+class _Prepared:
+    """A tool ready for its pocket: the library item, its entry, geometry, speed range and FRF."""
+
+    item: Any
+    entry: Mapping[str, Any]
+    geo: Mapping[str, Any]
+    teeth: int
+    limits: list[str]
+    warnings: list[str]
+    cut: ToolCut
+
+
+def _prepare(item: Any, entry: Mapping[str, Any], frf: Frf | str | None, options: RecommendOptions) -> _Prepared:
     status = entry.get("status")
     if status == "skipped":
         raise _Skip(str(entry.get("reason") or "skipped by the import"))
@@ -397,52 +494,38 @@ def _one_tool(item: Any, entry: Mapping[str, Any], frf: Frf | str | None,
         raise InputError("tool_point", str(frf))
     if isinstance(frf, str):
         raise _Skip(frf)
-    grid = pocket_speed_grid(lo, hi, options.speed_tolerance)
-    try:
-        lobes = stability_lobes(frf.frequency_hz, frf.h, None, teeth=teeth,
-                                tangential_coefficient_n_m2=options.tangential_coefficient_n_m2,
-                                radial_ratio=options.radial_ratio, radial_immersion=options.radial_immersion,
-                                milling=options.milling, spindle_speed_rpm=grid)
-    except InputError as err:
-        raise InputError(f"stability lobes: {err.field}", err.rule) from None
-    limit = lobes.depth_limit_m
-    if options.confidence is not None:  # robust: the pocket is chosen on the robust limit
-        if frf.h_draws is None:
-            raise InputError("uncertainty", "no drawn FRFs for this tool: robust presets need them")
-        envelopes = depth_limit_envelopes(frf.frequency_hz, frf.h_draws, teeth=teeth,
-                                          tangential_coefficient_n_m2=options.tangential_coefficient_n_m2,
-                                          radial_ratio=options.radial_ratio, radial_immersion=options.radial_immersion,
-                                          milling=options.milling, spindle_speed_rpm=grid)
-        limit = robust_depth_limit(envelopes, lobes.depth_limit_m, options.confidence)
-    rule = PocketRule(options.safety_factor, options.speed_tolerance, max_depth_m=flute_m)
-    pocket = best_pocket(grid, limit, min_rpm=lo, max_rpm=hi, rule=rule,
-                         chatter_frequency_hz=lobes.chatter_frequency_hz, governing_lobe=lobes.governing_lobe)
-    if pocket is None:
-        raise _Skip(f"no stable pocket between {lo:.0f} and {hi:.0f} rpm keeps a ±{options.speed_tolerance:.0%} "
-                    "speed window stable" + (" at the robust limit" if options.confidence is not None else ""))
-    nominal_m, robust = pocket.depth_limit_m, None
-    if options.confidence is not None:  # the window minimum of the nominal limit, beside the robust one
-        at = int(np.argmin(np.abs(grid - pocket.spindle_speed_rpm)))
-        nominal_m = float(window_minimum(grid, lobes.depth_limit_m, options.speed_tolerance)[at])
-        robust = pocket.depth_limit_m
-    preset, unit_report, feed_note = _preset(item, entry, geo, pocket, teeth, options)
+    if options.confidence is not None and frf.h_draws is None:
+        raise InputError("uncertainty", "no drawn FRFs for this tool: robust presets need them")
+    return _Prepared(item, entry, geo, teeth, limits, warnings,
+                     ToolCut(str(entry["id"]), frf.frequency_hz, frf.h, teeth, flute_m, lo, hi, frf.h_draws))
+
+
+def _written(ready: _Prepared, found: ToolPocket, options: RecommendOptions) -> tuple[dict[str, Any], dict[str, Any]]:
+    pocket = found.pocket
+    assert pocket is not None
+    item, entry, teeth = ready.item, ready.entry, ready.teeth
+    warnings = list(ready.warnings)
+    preset, unit_report, feed_note = _preset(item, entry, ready.geo, pocket, teeth, options, found)
     if feed_note:
         warnings.append(feed_note)
     report = {
         "spindle_speed_rpm": preset["n"], "stepdown_m": pocket.stepdown_m, "stepdown": unit_report,
-        "depth_limit_m": nominal_m, "safety_factor": options.safety_factor,
-        "robust_depth_limit_m": robust, "confidence": options.confidence,
-        "limited_by": pocket.limited_by,
+        "depth_limit_m": _num(found.depth_limit_m), "safety_factor": options.safety_factor,
+        "robust_depth_limit_m": None if found.robust_depth_limit_m is None else _num(found.robust_depth_limit_m),
+        "confidence": options.confidence,
+        "limited_by": pocket.limited_by, "stable_to_flute_length": found.stable_to_flute_length,
+        "flute_length_m": ready.cut.flute_length_m,
         "pocket": {"low_rpm": pocket.pocket_low_rpm, "high_rpm": pocket.pocket_high_rpm,
                    "width_rpm": pocket.pocket_width_rpm},
         "speed_tolerance": options.speed_tolerance,
-        "speed_range": {"min_rpm": lo, "max_rpm": hi, "limited_by": limits},
-        "lobe_method": options.method, "chatter_frequency_hz": _num(pocket.chatter_frequency_hz),
-        "governing_lobe": pocket.governing_lobe, "absolute_depth_limit_m": lobes.min_depth_limit_m,
+        "speed_range": {"min_rpm": ready.cut.min_rpm, "max_rpm": ready.cut.max_rpm, "limited_by": ready.limits},
+        "lobe_method": found.method, "method_reason": found.method_reason,
+        "chatter_frequency_hz": _num(pocket.chatter_frequency_hz),
+        "governing_lobe": pocket.governing_lobe, "absolute_depth_limit_m": _num(found.absolute_depth_limit_m),
         "teeth": teeth, "frf_y_source": "same_as_x",
         "preset": {"name": preset["name"], "guid": preset["guid"],
                    "replaced": _had_preset(item, preset["guid"], preset["name"])},
-        "warnings": warnings,
+        "notes": list(found.notes), "warnings": warnings,
     }
     return preset, report
 
@@ -520,7 +603,7 @@ def _round_down(x: float, step: float) -> float:
 
 
 def _preset(item: Any, entry: Mapping[str, Any], geo: Mapping[str, Any], pocket: Pocket, teeth: int,
-            options: RecommendOptions) -> tuple[dict[str, Any], dict[str, Any], str | None]:
+            options: RecommendOptions, found: ToolPocket) -> tuple[dict[str, Any], dict[str, Any], str | None]:
     unit = tuple(geo["unit"])
     inch = unit == _INCH
     per_unit_m = unit[0] / unit[1]
@@ -536,8 +619,12 @@ def _preset(item: Any, entry: Mapping[str, Any], geo: Mapping[str, Any], pocket:
     stepover = _round_down(options.radial_immersion * dc, 0.0001 if inch else 0.001)
     guid = preset_guid(str(entry["id"]), options)
     name = preset_name(options)
-    description = (f"rcsa {__version__}: {options.method} stability lobes; stepdown = depth limit within "
-                   f"+/-{options.speed_tolerance:.0%} of n / {options.safety_factor:g}; {options.display_name}, "
+    description = (f"rcsa {__version__}: {found.method} stability lobes"
+                   + (" (auto)" if options.method == "auto" else "") + "; "
+                   + ("stepdown = the flute length (the window is stable deeper than "
+                      f"{options.safety_factor:g} x the flute length); " if pocket.limited_by == "flute_length" else
+                      f"stepdown = depth limit within +/-{options.speed_tolerance:.0%} of n / {options.safety_factor:g}; ")
+                   + f"{options.display_name}, "
                    f"Kt {options.tangential_coefficient_n_m2 / 1e6:g} N/mm2, Kr {options.radial_ratio:.4g}, "
                    f"ae/D {options.radial_immersion:g}, {options.milling} milling"
                    + ("" if options.confidence is None else

@@ -41,7 +41,9 @@ References
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
@@ -59,6 +61,7 @@ __all__ = [
     "monodromy_matrix",
     "period_maps",
     "state_space",
+    "state_spaces",
     "step_exponentials",
     "trajectory",
 ]
@@ -69,6 +72,7 @@ _TAYLOR_DEGREE = 12
 # Reduced sizes up to this use a dense eigensolver; larger ones a Krylov (Arnoldi) basis.
 DENSE_MAX_SIZE = 48
 KRYLOV_DIM = 20
+KRYLOV_EXTRA = 12
 # A Ritz value is accepted when its residual is below this (relative to max(|μ|, 1)).
 RITZ_TOL = 1e-9
 _KRYLOV_SEED = 20040117
@@ -173,13 +177,17 @@ def cutting_plan(teeth: int, steps: int, phi_start_rad: float, phi_exit_rad: flo
 class StateSpace:
     """The modal model in scaled coordinates ``u = [ω q; q̇]``.
 
+    One system (arrays as below), or one per member of a batch (a leading axis of size
+    ``nb`` on every array: :func:`state_spaces`, then :meth:`take`), so that the period maps
+    of many tools are built and solved together.
+
     Attributes
     ----------
-    a0 : numpy.ndarray, shape (n, n)
+    a0 : numpy.ndarray, shape (n, n) or (nb, n, n)
         Free dynamics (block ``[[0, Ω], [−Ω, −2ZΩ]]``), 1/s.
-    c_out : numpy.ndarray, shape (2, n)
+    c_out : numpy.ndarray, shape (2, n) or (nb, 2, n)
         ``r = c_out u`` (m per scaled unit).
-    c_in : numpy.ndarray, shape (nmodes, 2)
+    c_in : numpy.ndarray, shape (nmodes, 2) or (nb, nmodes, 2)
         Modal force per N in x and y (``φ_r``, 1/√kg).
     """
 
@@ -190,7 +198,24 @@ class StateSpace:
     @property
     def n(self) -> int:
         """State size ``2·nmodes``."""
-        return int(self.a0.shape[0])
+        return int(self.a0.shape[-1])
+
+    @property
+    def batched(self) -> bool:
+        """One system per batch member (a leading axis)."""
+        return self.a0.ndim == 3
+
+    def take(self, idx: np.ndarray) -> StateSpace:
+        """The systems of the batch members ``idx`` (a single system is shared: itself)."""
+        if not self.batched:
+            return self
+        return StateSpace(self.a0[idx], self.c_out[idx], self.c_in[idx])
+
+    def per_step(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``a0``, ``c_out``, ``c_in`` shaped to broadcast against (nb, steps, ·, ·) arrays."""
+        if not self.batched:
+            return self.a0, self.c_out, self.c_in
+        return self.a0[:, None], self.c_out[:, None], self.c_in[:, None]
 
 
 def state_space(model: ModalModel) -> StateSpace:
@@ -208,6 +233,47 @@ def state_space(model: ModalModel) -> StateSpace:
     modes = np.arange(d)
     c_out[model.direction, modes] = phi / w
     c_in[modes, model.direction] = phi
+    return StateSpace(a0, c_out, c_in)
+
+
+#: Damping ratio of the inert modes that pad a smaller modal model in a stack of systems.
+PAD_DAMPING_RATIO = 0.5
+
+
+def state_spaces(models: Sequence[ModalModel]) -> StateSpace:
+    """The systems of several modal models stacked on a leading axis (one per model).
+
+    A model with fewer modes than the largest is padded with inert modes: no residue (no
+    force in, no displacement out), the model's lowest natural frequency and damping ratio
+    :data:`PAD_DAMPING_RATIO`, so their multipliers ``e^{−ζωT}`` stay far inside the unit
+    circle and the exponentials' norms do not grow.
+
+    Examples
+    --------
+    >>> a = ModalModel.of([500.0], [0.02], [1.0], [0])
+    >>> b = ModalModel.of([600.0, 900.0], [0.03, 0.02], [2.0, 1.0], [0, 1])
+    >>> s = state_spaces([a, b])
+    >>> s.a0.shape, s.c_out.shape, s.c_in.shape
+    ((2, 4, 4), (2, 2, 4), (2, 2, 2))
+    >>> bool(np.all(s.c_in[0, 1] == 0) and np.all(s.c_out[0][:, [1, 3]] == 0))
+    True
+    """
+    d = max(m.n_modes for m in models)
+    a0 = np.zeros((len(models), 2 * d, 2 * d))
+    c_out = np.zeros((len(models), 2, 2 * d))
+    c_in = np.zeros((len(models), d, 2))
+    for i, m in enumerate(models):  # a loop over models (tools), each a few small arrays
+        pad = d - m.n_modes
+        w = np.concatenate([_TWO_PI * m.frequency_hz, np.full(pad, _TWO_PI * float(m.frequency_hz.min()))])
+        z = np.concatenate([m.damping_ratio, np.full(pad, PAD_DAMPING_RATIO)])
+        one = state_space(m)
+        modes = np.arange(d)
+        a0[i, modes, d + modes] = w
+        a0[i, d + modes, modes] = -w
+        a0[i, d + modes, d + modes] = -2.0 * z * w
+        real = np.arange(m.n_modes)
+        c_out[i][:, real] = one.c_out[:, real]
+        c_in[i][real] = one.c_in
     return StateSpace(a0, c_out, c_in)
 
 
@@ -313,7 +379,7 @@ class PeriodMaps:
 def free_maps(system: StateSpace, plan: CuttingPlan, step_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Depth-free exponentials: each free stretch, shape (nb, nfree, n, n), and one step."""
     lengths = np.concatenate([plan.free_length, [1]]).astype(float)
-    z = system.a0 * (np.asarray(step_s, dtype=float)[:, None, None, None] * lengths[None, :, None, None])
+    z = system.per_step()[0] * (np.asarray(step_s, dtype=float)[:, None, None, None] * lengths[None, :, None, None])
     e = step_exponentials(z, np.zeros(z.shape[:-1] + (1,)))[0]
     return e[:, :-1], e[:, -1]
 
@@ -337,11 +403,12 @@ def period_maps(system: StateSpace, plan: CuttingPlan, tangential_coefficient_n_
         :func:`free_maps` of the same step lengths.
     """
     n, d = system.n, system.n // 2
+    a0, c_out, c_in = system.per_step()
     h = np.asarray(step_s, dtype=float)[:, None, None, None]
     kf = (tangential_coefficient_n_m2 * np.asarray(depth_m, dtype=float))[:, None, None, None] * plan.force[None]
-    coupling = system.c_in @ kf  # (nb, ncut, d, 2): modal force per delayed displacement
-    a = np.broadcast_to(system.a0, coupling.shape[:2] + (n, n)).copy()
-    a[..., d:, :] -= coupling @ system.c_out
+    coupling = c_in @ kf  # (nb, ncut, d, 2): modal force per delayed displacement
+    a = np.broadcast_to(a0, coupling.shape[:2] + (n, n)).copy()
+    a[..., d:, :] -= coupling @ c_out
     beta = np.zeros(coupling.shape[:2] + (n, 2))
     beta[..., d:, :] = h * coupling  # h B_i
     p, g1, g2 = step_exponentials(a * h, beta)
@@ -370,14 +437,44 @@ def apply_period(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps, z: np.
         states[:, start] = x
         x = maps.p[:, cut] @ x + inputs[:, cut] if cut >= 0 else maps.free[:, -1 - cut] @ x
     kept = np.flatnonzero(plan.slot >= 0)  # slots are numbered in step order
-    out = c @ states[:, kept]  # (nb, ns, 2, p)
+    out = system.per_step()[1] @ states[:, kept]  # (nb, ns, 2, p)
     return np.concatenate([x, out.reshape(nb, -1, cols)], axis=1)
 
 
 def monodromy_matrix(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps) -> np.ndarray:
-    """The reduced monodromy matrix, shape (nb, N, N), ``N = n + 2·n_samples``."""
-    size = system.n + 2 * plan.n_samples
-    return apply_period(system, plan, maps, np.broadcast_to(np.eye(size), (maps.batch, size, size)))
+    """The reduced monodromy matrix, shape (nb, N, N), ``N = n + 2·n_samples``.
+
+    :func:`apply_period` of the identity, written for it: the state block ``X`` (n × N) is
+    carried through the steps of one period (``X ← P_i X``, one product per step), each
+    delayed-sample input adds its ``G_i`` block to the two columns of that sample (the
+    sample ``r_0 = C u_0`` that closes the period adds ``G_i C`` to the ``u_0`` columns), and
+    every kept sample ``r_s = C X_s`` is written as it passes.
+    """
+    n, k = system.n, plan.steps
+    size = n + 2 * plan.n_samples
+    nb = maps.batch
+    c = system.c_out
+    x = np.zeros((nb, n, size))
+    x[:, :, :n] = np.eye(n)
+    phi = np.empty((nb, size, size))
+    slot = plan.slot
+    for cut, start, _ in plan.segments:  # the steps of one period
+        if slot[start] >= 0:
+            phi[:, n + 2 * slot[start] : n + 2 * slot[start] + 2] = c @ x
+        if cut < 0:
+            x = maps.free[:, -1 - cut] @ x
+            continue
+        g = maps.g[:, cut]
+        x = maps.p[:, cut] @ x
+        lo = n + 2 * slot[start]
+        x[:, :, lo : lo + 2] += g[:, :, :2]
+        if start + 1 < k:
+            nxt = n + 2 * slot[start + 1]
+            x[:, :, nxt : nxt + 2] += g[:, :, 2:]
+        else:
+            x[:, :, :n] += g[:, :, 2:] @ c
+    phi[:, :n] = x
+    return phi
 
 
 def trajectory(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps, z: np.ndarray) -> np.ndarray:
@@ -410,15 +507,27 @@ def trajectory(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps, z: np.nd
 
 
 def critical_multipliers(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps, *,
-                         vectors: bool = False) -> tuple[np.ndarray, np.ndarray | None]:
+                         vectors: bool | Literal["unstable"] = False) -> tuple[np.ndarray, np.ndarray | None]:
     """The multiplier of largest modulus of each map in the batch (and its eigenvector).
 
-    Reduced sizes ``N <= DENSE_MAX_SIZE`` are solved densely. Larger ones use
-    ``max(KRYLOV_DIM, n + 12)`` steps of Arnoldi on the implicit map (Gram–Schmidt twice,
-    fixed seeded start). A batch member is accepted when its leading Ritz value has a
-    residual below ``RITZ_TOL`` and no other Ritz value ``θ`` with residual ``ρ`` could hide
-    a larger eigenvalue (``|θ| + ρ`` not above the leading modulus); otherwise it falls back
-    to the dense solver, so the answer is always a converged eigenvalue.
+    The monodromy matrices are formed once (:func:`monodromy_matrix`: one pass over the
+    steps of a period for all columns). Reduced sizes ``N <= DENSE_MAX_SIZE`` are solved
+    densely. Larger ones use ``max(KRYLOV_DIM, n + 12)`` steps of Arnoldi on those matrices
+    (Gram–Schmidt twice, fixed seeded start). A batch member is accepted when its leading
+    Ritz value has a residual below ``RITZ_TOL`` and no other Ritz value ``θ`` with residual
+    ``ρ`` could hide a larger eigenvalue (``|θ| + ρ`` not above the leading modulus);
+    otherwise it falls back to the dense solver, so the answer is always a converged
+    eigenvalue.
+
+    Parameters
+    ----------
+    system : StateSpace
+    plan : CuttingPlan
+    maps : PeriodMaps
+    vectors : bool or "unstable"
+        Also the eigenvectors: of every member, or only of those with ``|μ| >= 1`` (the
+        others' rows are NaN; a dense member then costs one more eigen-decomposition only
+        when unstable).
 
     Returns
     -------
@@ -428,43 +537,55 @@ def critical_multipliers(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps
     size = system.n + 2 * plan.n_samples
     nb = maps.batch
     mu = np.empty(nb, dtype=complex)
-    vec = np.empty((nb, size), dtype=complex) if vectors else None
+    vec = np.full((nb, size), np.nan + 0j) if vectors else None
+    phi = monodromy_matrix(system, plan, maps)
     dense = np.ones(nb, dtype=bool)
     if size > DENSE_MAX_SIZE:
-        k_mu, k_vec, ok = _arnoldi(system, plan, maps, size, vectors)
+        k_mu, k_vec, ok = _arnoldi(phi, system.n, vectors is not False)
         mu[ok] = k_mu[ok]
         if vec is not None and k_vec is not None:
             vec[ok] = k_vec[ok]
         dense = ~ok
     if np.any(dense):
-        sub = _take(maps, np.flatnonzero(dense))
-        phi = monodromy_matrix(system, plan, sub)
-        if vectors:
-            ev, ew = np.linalg.eig(phi)
-        else:
-            ev, ew = np.linalg.eigvals(phi), None
-        i = np.argmax(np.abs(ev), axis=1)
-        rows = np.arange(ev.shape[0])
-        mu[dense] = ev[rows, i]
-        if vec is not None and ew is not None:
-            vec[dense] = ew[rows, :, i]
+        rows = np.flatnonzero(dense)
+        ev = np.linalg.eigvals(phi[rows])
+        mu[rows] = ev[np.arange(rows.size), np.argmax(np.abs(ev), axis=1)]
+        if vec is not None:
+            need = rows if vectors is True else rows[np.abs(mu[rows]) >= 1.0]
+            if need.size:
+                vec[need] = _inverse_iteration(phi[need], mu[need])
     return mu, vec
+
+
+def _inverse_iteration(phi: np.ndarray, mu: np.ndarray) -> np.ndarray:
+    """Eigenvectors of ``phi`` (nb, N, N) for its known eigenvalues ``mu`` (nb,): two steps of
+    inverse iteration, shifted by a relative 1e-10 so that the solve is never exactly singular
+    (an eigen-decomposition with vectors costs several times more)."""
+    size = phi.shape[-1]
+    shift = mu * (1.0 + 1e-10) + 1e-14
+    a = phi.astype(complex) - shift[:, None, None] * np.eye(size)
+    v = np.broadcast_to(np.random.default_rng(_KRYLOV_SEED).standard_normal(size) + 0j, (mu.size, size))
+    for _ in range(2):
+        v = np.linalg.solve(a, v[:, :, None])[:, :, 0]
+        v = v / np.linalg.norm(v, axis=1, keepdims=True)
+    return v
 
 
 def _take(maps: PeriodMaps, idx: np.ndarray) -> PeriodMaps:
     return PeriodMaps(maps.p[idx], maps.g[idx], maps.free[idx], maps.step[idx])
 
 
-def _arnoldi(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps, size: int,
-             vectors: bool) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
-    """Batched Arnoldi: leading Ritz value (and vector) and whether it converged."""
-    nb, p = maps.batch, min(max(KRYLOV_DIM, system.n + 12), size)
+def _arnoldi(phi: np.ndarray, n: int, vectors: bool) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
+    """Batched Arnoldi on monodromy matrices (nb, N, N) of state size ``n``: leading Ritz value
+    (and vector) and whether it converged."""
+    nb, size = phi.shape[0], phi.shape[-1]
+    p = min(max(KRYLOV_DIM, n + KRYLOV_EXTRA), size)
     basis = np.zeros((nb, size, p + 1))
     hess = np.zeros((nb, p + 1, p))
     start = np.random.default_rng(_KRYLOV_SEED).standard_normal(size)
     basis[:, :, 0] = start / np.linalg.norm(start)
     for j in range(p):
-        w = apply_period(system, plan, maps, basis[:, :, j : j + 1])[:, :, 0]
+        w = (phi @ basis[:, :, j : j + 1])[:, :, 0]
         v = basis[:, :, : j + 1]
         vt = v.transpose(0, 2, 1)
         coef = (vt @ w[:, :, None])[:, :, 0]

@@ -175,7 +175,7 @@ def parse_lobes_request(body: object) -> LobesRequest:
         ``frf_x``; null = same as x), ``teeth``, ``tangential_coefficient_n_m2``,
         ``radial_ratio``, ``radial_immersion``, ``milling`` (``"up"``/``"down"``) and
         ``spindle_speed_rpm`` (``{"start", "stop", "count"}``); optional ``method``
-        (``"zoa"`` or ``"semi_discretization"``, with ``steps_per_period`` and
+        (``"zoa"``, ``"semi_discretization"`` or ``"auto"``, with ``steps_per_period`` and
         ``modes_per_direction``: :func:`~rcsa.analysis.lobes.options.parse_method`).
 
     Returns
@@ -236,7 +236,7 @@ def parse_lobes_request(body: object) -> LobesRequest:
             "spindle_speed_rpm.stop", f"must be greater than start ({start}), got {stop}"
         )
     count = speed.integer("count", ge=MIN_SPEED_COUNT, le=MAX_SPEED_COUNT)
-    method = parse_method(body)
+    method = parse_method(body, teeth=cut.teeth, radial_immersion=cut.radial_immersion)
     if method.name == "semi_discretization" and count > MAX_SDM_SPEED_COUNT:
         raise InputError("spindle_speed_rpm.count",
                          f"at most {MAX_SDM_SPEED_COUNT} speeds with method 'semi_discretization', got {count}")

@@ -118,12 +118,16 @@ class RobustLobes:
     confidence : float
     options : UncertaintyOptions
         Draws, seed and tolerances.
+    method : {"zoa", "semi_discretization"}
+        How the draws' limits were found (semi-discretization: the reduced model of
+        :mod:`rcsa.analysis.lobes.robust_sdm`).
     """
 
     depth_limit_m: np.ndarray
     draws_depth_limit_m: np.ndarray
     confidence: float
     options: UncertaintyOptions
+    method: str = "zoa"
 
     @property
     def percentile(self) -> float:
@@ -133,11 +137,14 @@ class RobustLobes:
     def to_dict(self) -> dict[str, Any]:
         """The response's extra fields: ``depth_limit_robust_m`` and ``robust``."""
         return {"depth_limit_robust_m": [float(x) if np.isfinite(x) else None for x in self.depth_limit_m.tolist()],
-                "robust": {"confidence": self.confidence, "percentile": self.percentile, "method": "zoa",
+                "robust": {"confidence": self.confidence, "percentile": self.percentile, "method": self.method,
                            **self.options.to_dict(),
                            "rule": f"the {self.percentile:g}th percentile over the draws of the depth limit at each "
                                    f"speed, never above the nominal limit; null where the nominal or a draw is "
-                                   f"unsettled"}}
+                                   f"unsettled" + ("" if self.method == "zoa" else
+                                                   "; each draw's limit from the reduced model of the draws (the "
+                                                   "nominal diagram moved by each mode's frequency, damping and "
+                                                   "stiffness changes, rcsa.analysis.lobes.robust_sdm)")}}
 
 
 def robust_lobes(request: LobesRequest, nominal: LobeResult, frequency_hz: np.ndarray, h_draws: np.ndarray,

@@ -1,0 +1,244 @@
+"""Chatter-safe presets of a single-flute library, judged by dense semi-discretization (issue 20).
+
+The library: ``tests/data/tool-libraries/fusion-single-flute`` (25 single-flute carbide flat
+end mills; see its SOURCE.md) on RA-1's spindle and joints, aluminium 7075, down milling,
+24 000 rpm machine, the default rule (±3 % window, safety factor 1.25, flute length cap).
+For a_e/D = 0.05 and 0.5 the library is recommended twice — ``method zoa`` (what the product
+did before issue 20) and ``method auto`` (the default now) — and every tool is judged:
+
+* **unstable preset**: the preset's depth exceeds the semi-discretization limit somewhere in
+  its ±3 % window, solved densely (121 speeds, twice the steps per period the recommendation
+  uses to resolve the chatter — 20 per cycle —, the tool's modes fitted to its FRF as the
+  recommendation does);
+* **false refusal**: a tool refused with "cannot chatter", or refused while the dense
+  semi-discretization finds a stable pocket under the same rule;
+* **productivity**: ``n · stepdown`` over the best the dense semi-discretization allows under
+  the same rule (window, safety factor, speed range, flute length), on the fine pocket grid
+  (relative spacing τ/10) over the whole speed range;
+* **time-domain**: a sample of stability-limited presets simulated by the independent oracle
+  (``tests/oracles/milling_time_domain``, 30 time steps per cycle of 1.2 × the highest mode):
+  the preset must not chatter, 1.25 × its window's limit (at the window's weakest speed, same
+  fine solution) must.
+
+It also times the recommendation (prediction + pockets; 400 semi-discretization speeds per
+tool), and with ``--job-tools N`` runs a library of N tools (the 25, repeated with stickouts
+0.5 mm longer each round) as a job on a local backend or ``--dask`` a LocalCluster, printing
+its progress.
+
+Run: ``.venv/bin/python benchmarks/bench_presets.py [--immersions 0.05 0.5] [--sample 4]
+[--job-tools 1000 [--dask]]``; writes ``benchmarks/results/presets.json``.
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # before numpy is imported
+
+import argparse  # noqa: E402
+import json  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+from dataclasses import replace  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from tests.oracles.milling_time_domain import Cut, Mode, resolving_steps, simulate  # noqa: E402
+
+from rcsa.analysis.lobes.modal_model import ModalModel, fit_modal_model  # noqa: E402
+from rcsa.analysis.lobes.pockets import PocketRule, best_pocket, pocket_speed_grid  # noqa: E402
+from rcsa.analysis.lobes.semi_discretization import resolving_steps as sdm_steps  # noqa: E402
+from rcsa.analysis.lobes.semi_discretization import semi_discretization_lobes_many  # noqa: E402
+from rcsa.app.jobs import Workbench  # noqa: E402
+from rcsa.app.presets import recommend_predicted  # noqa: E402
+from rcsa.libraries.formats import read_library  # noqa: E402
+from rcsa.libraries.recommend_sources import predicted_frfs  # noqa: E402
+from rcsa.reference import ra1  # noqa: E402
+
+LIBRARY = ROOT / "tests" / "data" / "tool-libraries" / "fusion-single-flute" / "single_flute_library.json"
+GRID = {"start_hz": 5.0, "stop_hz": 6000.0, "step_hz": 2.0}
+RA1 = ra1(GRID)
+SETTINGS = {"spindle": RA1["spindle"], "frequency": GRID, "joints": RA1["joints"]}
+OPTIONS = {"material": "aluminium-7075", "max_rpm": 24000, "milling": "down"}
+KT, KR = 1319.41e6, 788.83 / 1319.41
+OUT = ROOT / "benchmarks" / "results" / "presets.json"
+
+
+def _recommend(data: bytes, immersion: float, method: str) -> tuple[dict, float, float]:
+    t0, c0 = time.perf_counter(), time.process_time()
+    result = recommend_predicted(Workbench(None), data, {**OPTIONS, "radial_immersion": immersion, "method": method},
+                                 file_name="single_flute.json", **SETTINGS)
+    return result.report, time.perf_counter() - t0, time.process_time() - c0
+
+
+def _limits(model, teeth, immersion, speeds, floor_m, finer=1):
+    r = semi_discretization_lobes_many([model], teeth=teeth, tangential_coefficient_n_m2=KT, radial_ratio=KR,
+                                       radial_immersion=immersion, milling="down", spindle_speed_rpm=[speeds],
+                                       steps_per_period=[finer * sdm_steps(model, teeth, speeds)],
+                                       min_depth_search_max_m=[floor_m])[0]
+    return r, np.where(np.isfinite(r.depth_limit_m), r.depth_limit_m,
+                       np.inf if r.depth_search_max_m >= floor_m else r.depth_search_max_m)
+
+
+def _judge(report: dict, frfs: dict, immersion: float, rule: PocketRule) -> list[dict]:
+    rows = []
+    for tool in report["tools"]:
+        frf = frfs.get(tool["id"])
+        if tool.get("tool_type") != "flat end mill" or frf is None or isinstance(frf, str):
+            continue
+        model = fit_modal_model(frf.frequency_hz, frf.h)
+        teeth = 1
+        flute = tool.get("flute_length_m")
+        lo, hi = (tool["speed_range"]["min_rpm"], tool["speed_range"]["max_rpm"]) if "speed_range" in tool else \
+            (1000.0, 24000.0)
+        row = {"id": tool["id"], "status": tool["status"], "method": tool.get("lobe_method"),
+               "reason": tool.get("reason")}
+        # the best the dense SDM allows under the same rule
+        fine = pocket_speed_grid(lo, hi, rule.speed_tolerance)
+        if flute is None:
+            item = next(t for t in json.loads(LIBRARY.read_text())["data"] if t["guid"] == tool["id"])
+            flute = item["geometry"]["LCF"] * (0.0254 if item["unit"] == "inches" else 1e-3)
+        need = rule.safety_factor * flute * 1.02
+        _, fine_limit = _limits(model, teeth, immersion, fine, need)
+        best = best_pocket(fine, fine_limit, min_rpm=lo, max_rpm=hi, rule=replace(rule, max_depth_m=flute))
+        row["sdm_best_index_rpm_m"] = None if best is None else best.removal_index_rpm_m
+        if tool["status"] == "written":
+            n, step = float(tool["spindle_speed_rpm"]), float(tool["stepdown_m"])
+            window = np.geomspace(n * (1 - rule.speed_tolerance), n * (1 + rule.speed_tolerance), 121)
+            _, dense = _limits(model, teeth, immersion, window, need, finer=2)
+            row.update(spindle_speed_rpm=n, stepdown_m=step, window_min_m=float(np.min(dense)),
+                       unstable=bool(np.min(dense) < step), productivity=None if best is None else
+                       n * step / best.removal_index_rpm_m, limited_by=tool.get("limited_by"),
+                       depth_limit_m=tool.get("depth_limit_m"))
+        else:
+            row["false_refusal"] = ("cannot chatter" in (tool.get("reason") or "")) or best is not None
+        row["modes"] = [[float(f), float(z), float(1.0 / r), int(d)] for f, z, r, d in
+                        zip(model.frequency_hz, model.damping_ratio, model.residue_1_kg, model.direction, strict=True)]
+        rows.append(row)
+    return rows
+
+
+def _time_domain(rows: list[dict], immersion: float, sample: int) -> list[dict]:
+    picked = [r for r in rows if r["status"] == "written" and r.get("limited_by") == "stability"][:sample]
+    out = []
+    for r in picked:
+        modes = [Mode(f, z, m, d) for f, z, m, d in r["modes"]]
+        n, step = r["spindle_speed_rpm"], r["stepdown_m"]
+        window = np.geomspace(n * 0.97, n * 1.03, 61)
+        f, z, mass, d = (np.array([x[i] for x in r["modes"]]) for i in range(4))
+        _, dense = _limits(ModalModel.of(f, z, 1.0 / mass, d.astype(int)), 1, immersion, window, 1.0, finer=2)
+        weakest = float(window[int(np.argmin(dense))])
+        up = 1.25 * float(np.min(dense))
+        cuts = [Cut(n, step, 1, KT, KR, immersion, "down", 5e-5), Cut(weakest, up, 1, KT, KR, immersion, "down", 5e-5)]
+        sim = simulate(modes, cuts, steps_per_period=resolving_steps(modes, cuts))
+        out.append({"id": r["id"], "spindle_speed_rpm": n, "stepdown_m": step, "preset_stable": bool(sim.stable[0]),
+                    "next_step_up_m": up, "at_rpm": weakest, "next_step_up_chatters": bool(sim.chatter[1]),
+                    "ratios": [float(x) for x in sim.ratio]})
+    return out
+
+
+def _summary(rows: list[dict]) -> dict:
+    written = [r for r in rows if r["status"] == "written"]
+    refused = [r for r in rows if r["status"] != "written"]
+    prod = [r["productivity"] for r in written if r.get("productivity") is not None]
+    return {"tools": len(rows), "written": len(written), "refused": len(refused),
+            "unstable_by_sdm": sum(r["unstable"] for r in written),
+            "worst_depth_over_window_limit": max((r["stepdown_m"] / r["window_min_m"] for r in written), default=None),
+            "false_refusals": sum(r["false_refusal"] for r in refused),
+            "productivity_median": float(np.median(prod)) if prod else None,
+            "productivity_min": float(np.min(prod)) if prod else None,
+            "by_method": {m: sum(r["method"] == m for r in written) for m in ("zoa", "semi_discretization")}}
+
+
+def _job(n_tools: int, dask: bool) -> dict:
+    """A library of ``n_tools`` recommended as a job (local backend or a Dask LocalCluster)."""
+    from rcsa.app.presets import recommend_job_handlers, recommend_job_request
+    from rcsa.infra.compute_backends import LocalBackend, compute_backend
+    from rcsa.libraries.sync import sync_library
+
+    base = json.loads(LIBRARY.read_text())
+    items = []
+    for i in range(n_tools):
+        t = json.loads(json.dumps(base["data"][i % len(base["data"])]))
+        k = i // len(base["data"])
+        t["guid"] = f"00000000-0000-4000-9000-{i:012x}"
+        step = 0.5 / (25.4 if t["unit"] == "inches" else 1.0)
+        t["geometry"]["LB"] = round(t["geometry"]["LB"] + k * step, 6)
+        t["geometry"]["assemblyGaugeLength"] = round(t["geometry"]["assemblyGaugeLength"] + k * step, 6)
+        t["geometry"]["OAL"] = round(t["geometry"]["OAL"] + k * step, 6)
+        items.append(t)
+    data = json.dumps({"data": items, "version": 1}).encode()
+    import tempfile
+
+    cluster = None
+    with tempfile.TemporaryDirectory() as tmp:
+        backend = LocalBackend()
+        if dask:
+            import distributed
+
+            cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                               dashboard_address=None)
+            backend = compute_backend(cluster.scheduler_address)
+        bench = Workbench(None, Path(tmp) / "store", backend=backend)
+        t0 = time.perf_counter()
+        sync_library(bench.libraries, "big", data, **SETTINGS, natural_frequencies=False)
+        t_sync = time.perf_counter() - t0
+        handler = recommend_job_handlers(bench)["library-recommend"]
+        request = recommend_job_request("big", data, {**OPTIONS, "radial_immersion": 0.05}, file_name="big.json")
+        ticks = []
+        t0 = time.perf_counter()
+
+        def progress(done: int, total: int) -> None:
+            ticks.append((round(time.perf_counter() - t0, 2), done, total))
+            print(f"    job progress {done}/{total} at {ticks[-1][0]:.1f} s", flush=True)
+
+        doc, summary = handler(request, progress)
+        t_job = time.perf_counter() - t0
+        if cluster is not None:
+            backend.close()
+            cluster.close()
+    return {"tools": n_tools, "backend": "dask LocalCluster (2 workers)" if dask else "local", "sync_s": t_sync,
+            "recommend_job_s": t_job, "summary": summary, "progress_ticks": len(ticks)}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--immersions", type=float, nargs="+", default=[0.05, 0.5])
+    parser.add_argument("--sample", type=int, default=4, help="presets per immersion simulated in the time domain")
+    parser.add_argument("--job-tools", type=int, default=0)
+    parser.add_argument("--dask", action="store_true")
+    args = parser.parse_args()
+    data = LIBRARY.read_bytes()
+    rule = PocketRule()
+    frfs = predicted_frfs(read_library(data, file_name="single_flute.json"), **SETTINGS).frfs
+    results: dict = {"library": str(LIBRARY.relative_to(ROOT)), "machine_load": os.getloadavg(), "immersions": {}}
+    for ae in args.immersions:
+        entry = {}
+        for method in ("zoa", "auto"):
+            report, wall, cpu = _recommend(data, ae, method)
+            rows = _judge(report, frfs, ae, rule)
+            entry[method] = {"wall_s": wall, "cpu_s": cpu, "summary": _summary(rows), "tools": rows}
+            s = entry[method]["summary"]
+            print(f"a_e/D {ae}: method {method:5s} {wall:6.1f} s ({cpu:.1f} s CPU, load {os.getloadavg()[0]:.1f}): "
+                  f"written {s['written']}, unstable by SDM {s['unstable_by_sdm']}, refused {s['refused']} "
+                  f"({s['false_refusals']} falsely), productivity median {s['productivity_median']} "
+                  f"min {s['productivity_min']}, methods {s['by_method']}", flush=True)
+        entry["time_domain"] = _time_domain(entry["auto"]["tools"], ae, args.sample)
+        for t in entry["time_domain"]:
+            print(f"    time domain {t['id'][-4:]}: preset {t['stepdown_m'] * 1e3:.3f} mm at {t['spindle_speed_rpm']:.0f} "
+                  f"rpm stable={t['preset_stable']}; {t['next_step_up_m'] * 1e3:.3f} mm at {t['at_rpm']:.0f} rpm "
+                  f"chatters={t['next_step_up_chatters']}", flush=True)
+        results["immersions"][str(ae)] = entry
+    if args.job_tools:
+        results["job"] = _job(args.job_tools, args.dask)
+        print("job:", results["job"])
+    OUT.write_text(json.dumps(results, indent=1, default=float) + "\n")
+    print(f"wrote {OUT}")
+
+
+if __name__ == "__main__":
+    main()

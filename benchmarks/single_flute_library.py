@@ -1,0 +1,62 @@
+"""Write ``tests/data/tool-libraries/fusion-single-flute/single_flute_library.json``.
+
+25 single-flute ("O-flute") solid carbide flat end mills for aluminium in the Autodesk Fusion
+library format, each in the synthetic BT40-ER32 holder of ``fusion-synthetic`` (written for
+this project). The dimensions are our own choice and span what single-flute aluminium cutters
+are sold as — 2 to 12 mm and 1/8 to 1/2 inch, flute lengths 1.5 to 3 diameters, stickouts from
+just past the flutes to 4.5 diameters, shank equal to the cutter (a 3 mm shank under 2 mm) —
+but they are not any vendor's catalogue (see SOURCE.md: no licensed vendor library or
+catalogue page with single-flute dimensions was available to us).
+
+Run: ``.venv/bin/python benchmarks/single_flute_library.py`` (deterministic; rewrites the file).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+OUT = Path(__file__).resolve().parents[1] / "tests" / "data" / "tool-libraries" / "fusion-single-flute" / \
+    "single_flute_library.json"
+HOLDER_SOURCE = OUT.parents[1] / "fusion-synthetic" / "synthetic_library.json"
+
+# (unit, DC, LCF, LB (stickout), OAL, SFDM) — mm tools in mm, inch tools in inches
+TOOLS = [
+    ("mm", 2.0, 6.0, 12.0, 50.0, 3.0), ("mm", 3.0, 8.0, 12.0, 50.0, 3.0), ("mm", 3.0, 12.0, 18.0, 60.0, 3.0),
+    ("mm", 4.0, 10.0, 16.0, 55.0, 4.0), ("mm", 4.0, 16.0, 22.0, 65.0, 4.0), ("mm", 5.0, 12.0, 18.0, 60.0, 5.0),
+    ("mm", 6.0, 12.0, 20.0, 60.0, 6.0), ("mm", 6.0, 18.0, 25.0, 65.0, 6.0), ("mm", 6.0, 22.0, 30.0, 75.0, 6.0),
+    ("mm", 8.0, 16.0, 25.0, 65.0, 8.0), ("mm", 8.0, 22.0, 32.0, 75.0, 8.0), ("mm", 8.0, 25.0, 36.0, 80.0, 8.0),
+    ("mm", 10.0, 20.0, 30.0, 75.0, 10.0), ("mm", 10.0, 30.0, 42.0, 90.0, 10.0), ("mm", 12.0, 24.0, 36.0, 83.0, 12.0),
+    ("mm", 12.0, 35.0, 50.0, 100.0, 12.0),
+    ("in", 0.125, 0.375, 0.5, 1.5, 0.125), ("in", 0.125, 0.5, 0.75, 2.0, 0.125),
+    ("in", 0.1875, 0.5, 0.75, 2.0, 0.1875), ("in", 0.25, 0.5, 0.875, 2.5, 0.25), ("in", 0.25, 0.75, 1.0, 2.5, 0.25),
+    ("in", 0.25, 1.0, 1.25, 3.0, 0.25), ("in", 0.375, 0.875, 1.25, 2.5, 0.375), ("in", 0.375, 1.125, 1.5, 3.0, 0.375),
+    ("in", 0.5, 1.25, 1.75, 3.5, 0.5),
+]
+
+
+def _tool(i: int, unit: str, dc: float, lcf: float, lb: float, oal: float, sfdm: float, holder: dict) -> dict:
+    inch = unit == "in"
+    size = f'{dc:g}"' if inch else f"{dc:g}mm"
+    geometry = {"CSP": False, "HAND": True, "DC": dc, "NOF": 1, "OAL": oal, "LCF": lcf, "LB": lb, "SFDM": sfdm,
+                "RE": 0, "shoulder-length": lb if sfdm > dc else lcf, "shoulder-diameter": dc,
+                "assemblyGaugeLength": round(holder["gaugeLength"] / (25.4 if inch else 1.0) + lb, 6)}
+    return {"BMC": "carbide", "GRADE": "Mill Generic",
+            "description": f"SYNTH {size} single flute (O-flute) aluminium end mill, {lb:g}{'in' if inch else 'mm'} "
+                           "stickout",
+            "guid": f"00000000-0000-4000-8000-{0x500 + i:012x}", "type": "flat end mill",
+            "unit": "inches" if inch else "millimeters", "vendor": "Synthetic", "product-id": f"SYNTH-SF-{i + 1:02d}",
+            "product-link": "", "geometry": geometry, "holder": holder,
+            "post-process": {"break-control": False, "comment": "", "diameter-offset": i + 1, "length-offset": i + 1,
+                             "live": True, "manual-tool-change": False, "number": i + 1, "turret": 0}}
+
+
+def main() -> None:
+    holder = json.loads(HOLDER_SOURCE.read_text())["data"][0]["holder"]
+    tools = [_tool(i, *t, holder=holder) for i, t in enumerate(TOOLS)]
+    OUT.write_text(json.dumps({"data": tools, "version": 1}, indent=2) + "\n")
+    print(f"{OUT}: {len(tools)} tools")
+
+
+if __name__ == "__main__":
+    main()
