@@ -454,7 +454,9 @@ def _guided(evaluate: _Evaluator, pairs: np.ndarray, guess: np.ndarray, delta: n
         br.lo[p[stable]], br.g_lo[p[stable]] = hi[stable], g_hi[stable]
         both = ((g_lo >= 0.0) & (g_hi >= 0.0)) | stable
         root = _straddle_root(lo, g_lo, hi, g_hi)
-        moves = both & np.isfinite(root) & (np.abs(np.log(root / x[active])) <= _GUIDE_MAX_DELTA)
+        with np.errstate(divide="ignore", invalid="ignore"):  # a straddle root at or below 0 moves nowhere
+            step = np.abs(np.log(root / x[active]))
+        moves = both & np.isfinite(root) & (root > 0.0) & (step <= _GUIDE_MAX_DELTA)
         scratch.append(p[~ok & ~moves & ~stable])
         if rounds_left == 0:
             climb.append(p[stable])
