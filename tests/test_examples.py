@@ -11,6 +11,8 @@
   - ``curl ...`` is sent to the REST service on the same store (``-H``, ``--data @FILE``,
     ``-F name=value``, ``-F name=@FILE``, ``-o FILE``); it must answer 2xx;
   - ``.venv/bin/python examples/make_examples.py DIR`` through the script's ``write``;
+  - ``.venv/bin/python examples/dask_local_cluster.py ...`` in a process of its own (it starts
+    a Dask ``LocalCluster``);
   - ``.venv/bin/rcsa serve ...`` is started for real, on a free port, in
     ``test_every_serve_command_starts_a_service`` (it answers ``/readyz``, then is stopped).
 
@@ -136,6 +138,9 @@ class Shell:
             self.curl(words[1:])
         elif words[:2] == [".venv/bin/python", "examples/make_examples.py"]:
             _load_script().write(Path(words[2]))
+        elif words[:2] == [".venv/bin/python", "examples/dask_local_cluster.py"]:
+            # a real process: it starts a LocalCluster of worker processes
+            subprocess.run([sys.executable, *words[1:]], check=True, timeout=600)
         elif words[:2] == [".venv/bin/rcsa", "serve"]:
             self.serve.append(words)
         else:
@@ -245,6 +250,10 @@ def test_every_readme_command_runs_as_written(scratch, shell):
     assert "depth_limit_robust_m" in robust
     sdm = json.loads((scratch / "lobes-sdm-result.json").read_text())
     assert {lobe["kind"] for lobe in sdm["lobes"]} >= {"hopf"}
+    sdm_report = json.loads((scratch / "presets-sdm-report.json").read_text())
+    assert {t["lobe_method"] for t in sdm_report["tools"] if t["status"] == "written"} == {"semi_discretization"}
+    dask_sync = json.loads((scratch / "library-dask.json").read_text())
+    assert dask_sync["summary"]["ok"] == 2, dask_sync["summary"]
     presets = json.loads((scratch / "shop.json").read_text())
     assert "rcsa" in json.dumps(presets)  # presets written in place
     # make_examples.py wrote the committed files again

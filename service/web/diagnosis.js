@@ -140,7 +140,9 @@
     const box = $("diag-verdict");
     box.hidden = false;
     box.dataset.status = v.status;
-    const what = v.status === "none" ? "No unmodelled effect needed"
+    // status "none" with a significant gap: no candidate explains it, the gap is left unexplained
+    const what = v.status === "none"
+      ? (result.gap && result.gap.significant ? "Gap left unexplained by every candidate" : "No unmodelled effect needed")
       : v.status === "ambiguous" ? "Ambiguous: " + [v.effect].concat(v.ambiguous_with).join(", ")
         : "Verdict: " + v.effect;
     $("diag-verdict-title").textContent = what + " (" + v.status + ")";
