@@ -39,7 +39,8 @@ from rcsa.app import budget  # noqa: E402
 SDM_GRID = [(s, k, m, ae) for s, k, m, ae in (
     (20, 10, 1, 0.5), (20, 40, 1, 0.5), (20, 80, 1, 0.5), (20, 40, 3, 0.5), (20, 80, 3, 0.5), (20, 40, 6, 0.5),
     (20, 120, 2, 0.5), (80, 40, 3, 0.5), (200, 40, 3, 0.5), (200, 20, 1, 0.5), (400, 40, 3, 0.5),
-    (20, 40, 3, 0.05), (20, 160, 3, 0.05), (80, 200, 2, 0.05), (20, 40, 8, 1.0))]
+    (20, 40, 3, 0.05), (20, 160, 3, 0.05), (80, 200, 2, 0.05), (20, 40, 8, 1.0),
+    (1000, 40, 3, 0.5), (300, 200, 3, 0.5), (1000, 200, 3, 0.5))]
 
 
 def _sdm_request(speeds: int, steps: int, modes: int, immersion: float) -> dict:
@@ -91,14 +92,17 @@ def _fit_sdm(rows: list[dict]) -> budget.SdmCostModel:
         feats.append([steps, s * steps * n, s * k_cut, s * k_cut * n, s * d**3])
         cpu.append(max(r["cpu_seconds"] - zoa, 1e-3))
         c = min(s, chunk)
-        mem_feats.append([c * steps * n, c * k_cut * n, c * d * d, c])
-        mem.append(max(r["peak_rss_bytes"] - r["base_rss_bytes"], 1.0))
+        mem_feats.append([c * steps * n, c * k_cut * n, c * d * d, s * steps * n])
+        mem.append(r["peak_rss_bytes"] - r["base_rss_bytes"])
     a, t = np.array(feats), np.array(cpu)
     x, _ = nnls(a / t[:, None], np.ones_like(t))  # relative errors
     x = x / np.min(a @ x / t)  # no calibration point above its estimate
+    # memory: the points above 16 MiB beyond the base (smaller peaks are within the RSS's noise and
+    # would set the scale of every term); none of those above its estimate
     am, m = np.array(mem_feats), np.array(mem)
-    y, _ = nnls(am / m[:, None], np.ones_like(m))
-    y = y / np.min(am @ y / m)
+    big = m >= 16 * 2**20
+    y, _ = nnls(am[big] / m[big, None], np.ones(int(big.sum())))
+    y = y / np.min(am[big] @ y / m[big])
     return budget.SdmCostModel(per_step_s=float(x[0]), per_state_s=float(x[1]), per_cut_s=float(x[2]),
                                per_cut_state_s=float(x[3]), per_eig_s=float(x[4]), mem_state_bytes=float(y[0]),
                                mem_cut_bytes=float(y[1]), mem_map_bytes=float(y[2]), mem_speed_bytes=float(y[3]),

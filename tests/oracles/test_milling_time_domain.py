@@ -67,3 +67,31 @@ def test_a_semi_discretization_preset_is_stable_and_the_next_step_up_chatters(to
     out = simulate(modes, cuts, steps_per_period=resolving_steps(modes, cuts))
     assert out.stable[0], ("the preset chatters", n, pocket.stepdown_m, out.ratio)
     assert out.chatter[1], ("1.25 x the window limit does not chatter", weakest, pocket.depth_limit_m, out.ratio)
+
+
+@pytest.mark.slow
+def test_a_pocket_governed_by_a_weak_high_mode_is_confirmed():
+    """One flute at half immersion whose 6.2 kHz tool mode (0.6 × the largest peak) governs the
+    pockets of its 635 Hz mode (``tests/analysis/lobes/test_sdm_weak_high_mode.py``): the preset
+    found on the FRF of those three modes must not chatter in the time domain, and 1.25 × its
+    window's limit must. Steps resolving only the largest peak wrote 9.7 mm here, which chatters."""
+    from tests.analysis.lobes.test_sdm_weak_high_mode import MODES
+
+    f = np.arange(5.0, 8000.0, 2.0)  # the 6.2 kHz peak inside the grid
+    w = 2 * np.pi * f
+    h = sum(1.0 / (m * ((2 * np.pi * fn) ** 2 - w**2 + 2j * z * (2 * np.pi * fn) * w)) for fn, z, m in MODES)
+    cut = ToolCut("single-flute-0506", f, h, 1, 0.0254, 18000.0, 20500.0)
+    settings = CutSettings(AL7075["kt"], AL7075["kr"], 0.5, "down", PocketRule(), method="semi_discretization")
+    found = tool_pockets([cut], settings)[0]
+    pocket, lobes = found.pocket, found.lobes
+    assert pocket is not None and pocket.limited_by == "stability" and lobes is not None
+    assert pocket.stepdown_m < 0.0045  # the converged window limit is ~4.1 mm (/ 1.25)
+    n, tol = pocket.spindle_speed_rpm, settings.rule.speed_tolerance
+    window = (lobes.spindle_speed_rpm >= n * (1 - tol)) & (lobes.spindle_speed_rpm <= n * (1 + tol))
+    weakest = lobes.spindle_speed_rpm[window][np.nanargmin(lobes.depth_limit_m[window])]
+    modes = [Mode(fn, z, m, d) for d in (0, 1) for fn, z, m in MODES]
+    cuts = [Cut(n, pocket.stepdown_m, 1, AL7075["kt"], AL7075["kr"], 0.5, "down", 5e-5),
+            Cut(float(weakest), 1.25 * pocket.depth_limit_m, 1, AL7075["kt"], AL7075["kr"], 0.5, "down", 5e-5)]
+    out = simulate(modes, cuts, steps_per_period=resolving_steps(modes, cuts))
+    assert out.stable[0], ("the preset chatters", n, pocket.stepdown_m, out.ratio)
+    assert out.chatter[1], ("1.25 x the window limit does not chatter", weakest, pocket.depth_limit_m, out.ratio)

@@ -106,8 +106,11 @@ def test_semi_discretization_is_priced_by_speeds_steps_and_modes_not_as_zero_ord
     per_speed = model.seconds(2000, 40, 3, 1.0) - model.seconds(1000, 40, 3, 1.0)
     assert model.seconds(1000, 40, 3, 1.0) == pytest.approx(model.per_step_s * 40 + 1000 * per_speed / 1000, rel=1e-12)
     assert model.seconds(1000, 80, 3, 1.0) > model.seconds(1000, 40, 3, 1.0) > model.seconds(1000, 40, 1, 1.0)
-    # memory: one chunk of speeds at a time
-    assert model.memory_bytes(10 * model.chunk, 40, 3, 1.0) == model.memory_bytes(model.chunk, 40, 3, 1.0)
+    # memory: one chunk of speeds in flight, plus what every speed keeps for the whole search
+    chunked = model.memory_bytes(model.chunk, 40, 3, 1.0) - model.chunk * model.mem_speed_bytes * 40 * 12
+    assert model.memory_bytes(10 * model.chunk, 40, 3, 1.0) == pytest.approx(
+        chunked + 10 * model.chunk * model.mem_speed_bytes * 40 * 12, rel=1e-12)
+    assert model.memory_bytes(2 * model.chunk, 40, 3, 1.0) > model.memory_bytes(model.chunk, 40, 3, 1.0)
     more = {**sdm, "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 5000}, "steps_per_period": 200}
     with pytest.raises(budget.BudgetExceeded, match="steps_per_period"):
         budget.check("lobes", more)

@@ -452,8 +452,10 @@ class SdmCostModel:
         seconds = (1 + draws) · (per_step_s · k
                                  + S · (per_state_s · k·n + k_cut · (per_cut_s + per_cut_state_s · n)
                                         + per_eig_s · D³))
-        memory  = min(S, chunk) · (mem_state_bytes · k·n + mem_cut_bytes · k_cut·n + mem_map_bytes · D²
-                                   + mem_speed_bytes)
+        memory  = min(S, chunk) · (mem_state_bytes · k·n + mem_cut_bytes · k_cut·n + mem_map_bytes · D²)
+                  + S · mem_speed_bytes · k·n
+
+    (the chunk in flight, and what every speed keeps for the whole search).
 
     The constants are fitted by ``.venv/bin/python benchmarks/bench_budget.py --fit-sdm``
     (non-negative least squares on the relative error of measured CPU seconds and peak RSS
@@ -490,16 +492,18 @@ class SdmCostModel:
     def memory_bytes(self, speeds: float, steps: float, modes: float, cut_fraction: float) -> float:
         """Estimated peak memory of the search, bytes (beyond the process's base)."""
         n, k_cut, d = self.sizes(steps, modes, cut_fraction)
-        return min(speeds, self.chunk) * (self.mem_state_bytes * steps * n + self.mem_cut_bytes * k_cut * n
-                                          + self.mem_map_bytes * d * d + self.mem_speed_bytes)
+        return (min(speeds, self.chunk) * (self.mem_state_bytes * steps * n + self.mem_cut_bytes * k_cut * n
+                                           + self.mem_map_bytes * d * d)
+                + speeds * self.mem_speed_bytes * steps * n)
 
 
-#: The semi-discretization's constants, fitted by ``benchmarks/bench_budget.py --fit-sdm`` on 15
-#: grid points (20–400 speeds, k = 10–200, 1–8 modes per direction, a/D = 0.05–1; load 9.6 on
-#: the 2-core VM): estimates 1.0–2.1× the measured CPU seconds, 1.0–1.7× the peak memory.
-SDM_COST = SdmCostModel(per_step_s=0.0001, per_state_s=1.2e-06, per_cut_s=5.6e-05, per_cut_state_s=1.4e-05,
-                        per_eig_s=2.9e-10, mem_state_bytes=820.0, mem_cut_bytes=1300.0, mem_map_bytes=0.0,
-                        mem_speed_bytes=0.0)
+#: The semi-discretization's constants, fitted by ``benchmarks/bench_budget.py --fit-sdm`` on 18
+#: grid points (20–1 000 speeds, k = 10–200, 1–8 modes per direction, a/D = 0.05–1; refitted after
+#: the SDM was batched over speeds and tools, load 0.9–1.2 on the 2-core VM): estimates 1.0–2.2×
+#: the measured CPU seconds, 1.00–1.27× the measured peak RSS (none below it).
+SDM_COST = SdmCostModel(per_step_s=0.0012, per_state_s=0.0, per_cut_s=2.8e-05, per_cut_state_s=5.5e-06,
+                        per_eig_s=9.5e-11, mem_state_bytes=0.0, mem_cut_bytes=5.7e+02, mem_map_bytes=1.0,
+                        mem_speed_bytes=1.5e+02)
 
 
 def sdm_terms(request: Mapping[str, Any]) -> tuple[float, float, float]:

@@ -169,6 +169,11 @@ class SemiDiscretizationResult(LobeResult):
         Ceiling of the depth search, m.
     modal_model : ModalModel
         The modes the map was built from (with their source and fit report).
+    top_mode_steps_per_cycle : numpy.ndarray, shape (nspeed,)
+        ``k / (1.2 f_top T)``: how finely the steps sample a vibration just above the model's
+        highest mode ``f_top``. Below ``MIN_STEPS_PER_CHATTER_CYCLE`` an instability of that
+        mode can be missed altogether (too coarse a discretisation damps it), so such speeds
+        are noted even where the limit found looks resolved.
     """
 
     instability: np.ndarray
@@ -178,10 +183,11 @@ class SemiDiscretizationResult(LobeResult):
     steps_per_chatter_cycle: np.ndarray
     depth_search_max_m: float
     modal_model: ModalModel
+    top_mode_steps_per_cycle: np.ndarray
 
     def __post_init__(self) -> None:
         LobeResult.__post_init__(self)
-        for name in ("instability", "critical_multiplier", "steps_per_chatter_cycle"):
+        for name in ("instability", "critical_multiplier", "steps_per_chatter_cycle", "top_mode_steps_per_cycle"):
             getattr(self, name).flags.writeable = False
 
     @property
@@ -215,12 +221,21 @@ class SemiDiscretizationResult(LobeResult):
 
     def notes(self) -> list[str]:
         """Plain-language caveats of this result."""
+        out = []
         bad = self.spindle_speed_rpm[self.under_resolved]
-        if not bad.size:
-            return []
-        return [f"{bad.size} speed(s) between {bad.min():.0f} and {bad.max():.0f} rpm have fewer than "
-                f"{MIN_STEPS_PER_CHATTER_CYCLE:g} steps per chatter cycle: their limits are under-resolved "
-                f"(raise steps_per_period, or use method zoa there)"]
+        if bad.size:
+            out.append(f"{bad.size} speed(s) between {bad.min():.0f} and {bad.max():.0f} rpm have fewer than "
+                       f"{MIN_STEPS_PER_CHATTER_CYCLE:g} steps per chatter cycle: their limits are under-resolved "
+                       f"(raise steps_per_period, or use method zoa there)")
+        coarse = self.spindle_speed_rpm[(self.top_mode_steps_per_cycle < MIN_STEPS_PER_CHATTER_CYCLE)
+                                        & ~self.under_resolved]
+        if coarse.size:
+            f_top = float(np.max(self.modal_model.frequency_hz))
+            out.append(f"{coarse.size} speed(s) between {coarse.min():.0f} and {coarse.max():.0f} rpm sample "
+                       f"a vibration of the highest mode ({f_top:.0f} Hz) with fewer than "
+                       f"{MIN_STEPS_PER_CHATTER_CYCLE:g} steps per cycle: an instability of that mode can be "
+                       f"missed there (raise steps_per_period, or leave the mode out)")
+        return out
 
 
 # --------------------------------------------------------------------------- search
@@ -710,8 +725,15 @@ def resolving_steps(model: ModalModel, teeth: int, spindle_speed_rpm: np.ndarray
     """Steps per tooth period that resolve the chatter at each speed: a band per speed.
 
     Chatter lies a little above a natural frequency: without ``chatter_frequency_hz`` the
-    mode with the largest peak (×1.2) sets the vibration cycles per tooth period ``c``; with it
-    (e.g. from an under-resolved first solve), that frequency does. The steps are
+    highest natural frequency of the model (×1.2) sets the vibration cycles per tooth period
+    ``c``. Not the mode with the largest peak: a weaker, higher mode can govern a pocket of the
+    strongest one (a single flute at half immersion chatters at a 6.2 kHz tool mode of 0.6 × the
+    largest peak, 4.1 mm deep, where steps resolving only the 635 Hz mode saw 12 mm — too few
+    steps per cycle hide a mode's instability instead of flagging it), and every mode of a
+    :class:`ModalModel` fitted to an FRF has a peak of at least
+    ``rcsa.analysis.lobes.modal_model.MIN_PEAK_FRACTION`` of the largest. With
+    ``chatter_frequency_hz`` (e.g. from an under-resolved first solve) the larger of that
+    frequency and the highest mode does. The steps are
     ``steps_per_cycle · c`` rounded up to a multiple of 20, between
     ``DEFAULT_STEPS_PER_PERIOD`` and ``max_steps`` (speeds needing more keep ``max_steps`` and
     are flagged by ``steps_per_chatter_cycle``). First-order SDM errs by about 2 % at 12 steps
@@ -721,17 +743,14 @@ def resolving_steps(model: ModalModel, teeth: int, spindle_speed_rpm: np.ndarray
     --------
     >>> m = ModalModel.of([1400.0, 4000.0], [0.02, 0.03], [1.0, 0.5], [0, 0])
     >>> resolving_steps(m, 1, np.array([3000.0, 12000.0, 24000.0])).tolist()
-    [320, 100, 60]
-    >>> resolving_steps(m, 1, np.array([24000.0]), chatter_frequency_hz=np.array([4100.0])).tolist()
-    [120]
+    [320, 240, 120]
+    >>> resolving_steps(m, 1, np.array([24000.0]), chatter_frequency_hz=np.array([5100.0])).tolist()
+    [140]
     """
     speed = np.asarray(spindle_speed_rpm, dtype=float)
-    if chatter_frequency_hz is None:
-        w = np.asarray(model.frequency_hz, dtype=float)
-        peak = np.asarray(model.residue_1_kg) / (2 * np.asarray(model.damping_ratio) * (2 * np.pi * w) ** 2)
-        f_top = np.full(speed.shape, 1.2 * float(w[np.argmax(peak)]))
-    else:
-        f_top = np.where(np.isfinite(chatter_frequency_hz), chatter_frequency_hz, 0.0)
+    f_top = np.full(speed.shape, 1.2 * float(np.max(np.asarray(model.frequency_hz, dtype=float))))
+    if chatter_frequency_hz is not None:
+        f_top = np.maximum(f_top, np.where(np.isfinite(chatter_frequency_hz), chatter_frequency_hz, 0.0))
     cycles = f_top * 60.0 / (teeth * speed)
     k = np.ceil(steps_per_cycle * cycles / 20.0) * 20
     return np.clip(k, DEFAULT_STEPS_PER_PERIOD, max_steps).astype(np.int64)
@@ -861,8 +880,7 @@ def semi_discretization_lobes_many(
             for name, values in part.items():
                 fields[i][name][p] = values
         done += sum(p.size for p in picks)
-    return [_result(models[i], speeds[i], fields[i], int(steps[i].max()) if steps[i].size else DEFAULT_STEPS_PER_PERIOD,
-                    float(ceiling[i])) for i in range(len(models))]
+    return [_result(models[i], speeds[i], fields[i], steps[i], teeth, float(ceiling[i])) for i in range(len(models))]
 
 
 # Per-speed arrays of a result: name, fill value, dtype.
@@ -902,9 +920,10 @@ def _solve_band(models: Sequence[ModalModel], speeds: Sequence[np.ndarray], step
              "cycles": cycles[a:b]} for a, b in zip(offsets[:-1], offsets[1:], strict=True)]
 
 
-def _result(model: ModalModel, speed: np.ndarray, f: dict[str, np.ndarray], steps: int,
+def _result(model: ModalModel, speed: np.ndarray, f: dict[str, np.ndarray], steps: np.ndarray, teeth: int,
             ceiling: float) -> SemiDiscretizationResult:
     depth, mu, freq, kind, lobe, cycles = (f[k] for k in ("depth", "mu", "freq", "kind", "lobe", "cycles"))
+    top_cycles = 1.2 * float(np.max(model.frequency_hz)) * 60.0 / (teeth * speed)  # per tooth period
     lobes, kinds, lowest = _segments(speed, depth, kind, lobe)
     found = np.isfinite(depth)
     best = int(np.nanargmin(depth)) if found.any() else -1
@@ -921,8 +940,9 @@ def _result(model: ModalModel, speed: np.ndarray, f: dict[str, np.ndarray], step
         instability=kind,
         critical_multiplier=mu,
         lobe_kinds=tuple(kinds),
-        steps_per_period=steps,
+        steps_per_period=int(steps.max()) if steps.size else DEFAULT_STEPS_PER_PERIOD,
         steps_per_chatter_cycle=cycles,
         depth_search_max_m=ceiling,
         modal_model=model,
+        top_mode_steps_per_cycle=steps / top_cycles,
     )

@@ -516,15 +516,18 @@ def _solve_windows(models: Sequence[ModalModel], todo: dict[int, list[float]], n
     solved = semi_discretization_lobes_many([models[j] for j in order], **kw, steps_per_period=steps,
                                             spindle_speed_rpm=speeds, min_depth_search_max_m=[needed[j] for j in order],
                                             depth_rtol=_VERIFY_RTOL, scan_start_m=starts)
-    # speeds whose chatter (another mode than the largest peak) the steps did not resolve: again, with its frequency
-    redo = [(i, r.steps_per_chatter_cycle < MIN_STEPS_PER_CHATTER_CYCLE) for i, r in enumerate(solved)]
+    # speeds whose chatter (above the highest mode) the steps did not resolve: again, with steps for its
+    # frequency — only where that gives more steps (a speed already at MAX_RESOLVING_STEPS keeps its limit,
+    # flagged by steps_per_chatter_cycle: solving it again with the same steps would give the same answer)
+    finer = [resolving_steps(models[j], kw["teeth"], speeds[i], chatter_frequency_hz=r.chatter_frequency_hz)
+             for i, (j, r) in enumerate(zip(order, solved, strict=True))]
+    redo = [(i, (r.steps_per_chatter_cycle < MIN_STEPS_PER_CHATTER_CYCLE) & (finer[i] > steps[i]))
+            for i, r in enumerate(solved)]
     redo = [(i, bad) for i, bad in redo if np.any(bad)]
     if redo:
         again = semi_discretization_lobes_many(
             [models[order[i]] for i, _ in redo], **kw,
-            steps_per_period=[resolving_steps(models[order[i]], kw["teeth"], speeds[i][bad],
-                                              chatter_frequency_hz=solved[i].chatter_frequency_hz[bad])
-                              for i, bad in redo],
+            steps_per_period=[finer[i][bad] for i, bad in redo],
             spindle_speed_rpm=[speeds[i][bad] for i, bad in redo],
             min_depth_search_max_m=[needed[order[i]] for i, _ in redo], depth_rtol=_VERIFY_RTOL,
             scan_start_m=[starts[i][bad] for i, bad in redo])
@@ -587,6 +590,7 @@ def _merged(first: SemiDiscretizationResult, keep: np.ndarray, second: SemiDiscr
                    instability=cat(first.instability, second.instability),
                    critical_multiplier=cat(first.critical_multiplier, second.critical_multiplier),
                    steps_per_chatter_cycle=cat(first.steps_per_chatter_cycle, second.steps_per_chatter_cycle),
+                   top_mode_steps_per_cycle=cat(first.top_mode_steps_per_cycle, second.top_mode_steps_per_cycle),
                    steps_per_period=max(first.steps_per_period, second.steps_per_period), lobes=(), lobe_kinds=())
 
 
