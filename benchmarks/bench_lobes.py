@@ -159,10 +159,17 @@ def main() -> None:
     t_app, _ = _timed(lambda: rcsa.stability_lobes(request), args.repeat)
     print(f"  end to end (predict + exact modes + SDM, 3 per direction) {t_app:6.2f} s")
     big = ra1({"start_hz": 1.0, "stop_hz": 10000.0, "step_hz": 1.0})
+    from rcsa.app import predictions
+
+    warm: list[float] = []
+    t_warm, _ = _timed(lambda: rcsa.predict(big), 5 * args.repeat, warm)
+    kept, predictions.SIDES.size = predictions.SIDES.size, 0  # cold, as bench_engine.py and the issue time it
     cpu_pred: list[float] = []
     t_pred, _ = _timed(lambda: rcsa.predict(big), 5 * args.repeat, cpu_pred)
-    print(f"  rcsa.predict of RA-1, 10 000 lines             {t_pred * 1e3:8.1f} ms   SDM (4 modes) / prediction "
+    predictions.SIDES.size = kept
+    print(f"  rcsa.predict of RA-1, 10 000 lines, cold       {t_pred * 1e3:8.1f} ms   SDM (4 modes) / prediction "
           f"{t_sdm / t_pred:5.1f}x  (target <= 25x)")
+    print(f"    (warm, the spindle side kept from the call before: {t_warm * 1e3:.1f} ms, ratio {t_sdm / t_warm:.1f}x)")
     print(f"  the same in CPU time: SDM {cpu_sdm[0]:.2f} s, prediction {cpu_pred[0] * 1e3:.1f} ms, "
           f"ratio {cpu_sdm[0] / cpu_pred[0]:5.1f}x  (load average {os.getloadavg()[0]:.1f})")
     _against_reference()

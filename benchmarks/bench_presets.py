@@ -26,7 +26,8 @@ tool), and with ``--job-tools N`` runs a library of N tools (the 25, repeated wi
 its progress.
 
 Run: ``.venv/bin/python benchmarks/bench_presets.py [--immersions 0.05 0.5] [--sample 4]
-[--job-tools 1000 [--dask]]``; writes ``benchmarks/results/presets.json``.
+[--job-tools 1000 [--dask]]``; writes ``benchmarks/results/presets.json`` (``--immersions``
+given no value: only the job, into ``benchmarks/results/presets_job.json``).
 """
 
 from __future__ import annotations
@@ -178,8 +179,12 @@ def _job(n_tools: int, dask: bool) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         backend = LocalBackend()
         if dask:
+            import dask
             import distributed
 
+            from rcsa.infra.compute_backends import DASK_WORKER_ENVIRON
+
+            dask.config.set({"distributed.nanny.pre-spawn-environ": DASK_WORKER_ENVIRON})
             cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
                                                dashboard_address=None)
             backend = compute_backend(cluster.scheduler_address)
@@ -207,7 +212,8 @@ def _job(n_tools: int, dask: bool) -> dict:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--immersions", type=float, nargs="+", default=[0.05, 0.5])
+    parser.add_argument("--immersions", type=float, nargs="*", default=[0.05, 0.5],
+                        help="radial immersions a_e/D to judge (none: only the --job-tools run)")
     parser.add_argument("--sample", type=int, default=4, help="presets per immersion simulated in the time domain")
     parser.add_argument("--job-tools", type=int, default=0)
     parser.add_argument("--dask", action="store_true")
@@ -236,8 +242,9 @@ def main() -> None:
     if args.job_tools:
         results["job"] = _job(args.job_tools, args.dask)
         print("job:", results["job"])
-    OUT.write_text(json.dumps(results, indent=1, default=float) + "\n")
-    print(f"wrote {OUT}")
+    out = OUT if args.immersions else OUT.with_name("presets_job.json")
+    out.write_text(json.dumps(results, indent=1, default=float) + "\n")
+    print(f"wrote {out}")
 
 
 if __name__ == "__main__":

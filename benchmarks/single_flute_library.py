@@ -5,7 +5,7 @@ library format, each in the synthetic BT40-ER32 holder of ``fusion-synthetic`` (
 this project). The dimensions are our own choice and span what single-flute aluminium cutters
 are sold as — 2 to 12 mm and 1/8 to 1/2 inch, flute lengths 1.5 to 3 diameters, stickouts from
 just past the flutes to 4.5 diameters, shank equal to the cutter (a 3 mm shank under 2 mm) —
-but they are not any vendor's catalogue (see SOURCE.md: no licensed vendor library or
+but they are not any vendor's catalogue (see tests/data/tool-libraries/SOURCE.md: no licensed vendor library or
 catalogue page with single-flute dimensions was available to us).
 
 Run: ``.venv/bin/python benchmarks/single_flute_library.py`` (deterministic; rewrites the file).

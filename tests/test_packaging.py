@@ -117,3 +117,17 @@ def test_compose_keeps_the_store_on_an_external_volume(compose):
     assert volume["name"] == "${RCSA_STORE_VOLUME:-rcsa-store}"
     others = [name for name, s in compose["services"].items() if name != "service" and s.get("volumes")]
     assert not others  # the scheduler and the workers share nothing but the network
+
+
+def test_compose_workers_keep_freed_memory_as_the_backend_says(compose):
+    """The workers' nanny environment is :data:`rcsa.infra.compute_backends.DASK_WORKER_ENVIRON`
+    (Dask reads the JSON of ``DASK_DISTRIBUTED__NANNY__PRE_SPAWN_ENVIRON`` as the config value)."""
+    import ast
+
+    from rcsa.infra.compute_backends import DASK_WORKER_ENVIRON
+
+    workers = [s for name, s in compose["services"].items() if name.startswith("worker")]
+    assert workers
+    for worker in workers:
+        value = worker["environment"]["DASK_DISTRIBUTED__NANNY__PRE_SPAWN_ENVIRON"]
+        assert ast.literal_eval(value) == DASK_WORKER_ENVIRON

@@ -415,8 +415,10 @@ def _levels(n: int) -> list[tuple[int, np.ndarray]]:
 
 
 def _straddle_root(lo: np.ndarray, g_lo: np.ndarray, hi: np.ndarray, g_hi: np.ndarray) -> np.ndarray:
-    """Where the line through ``(ln lo, g_lo)`` and ``(ln hi, g_hi)`` crosses 0 (NaN: not rising)."""
-    with np.errstate(divide="ignore", invalid="ignore"):
+    """Where the line through ``(ln lo, g_lo)`` and ``(ln hi, g_hi)`` crosses 0 (NaN: not rising;
+    inf where it rises too slowly to cross in floating point — the callers move no further than
+    ``_GUIDE_MAX_DELTA``)."""
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         slope = (g_hi - g_lo) / (np.log(hi) - np.log(lo))
         return np.where(slope > 0.0, np.exp(np.log(lo) - g_lo / slope), np.nan)
 
