@@ -49,10 +49,9 @@ from __future__ import annotations
 
 import math
 import threading
-from collections import OrderedDict
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any, Self
+from typing import Any, Generic, Self, TypeVar
 
 import numpy as np
 
@@ -61,6 +60,7 @@ from rcsa.physics.arrays import ComplexArray, ComplexParam, FloatArray, IntArray
 from rcsa.physics.chain import Beam, Grid, Sym
 from rcsa.physics.sections import Section
 from rcsa.physics.segments import MAX_DECAY_PER_PIECE
+from rcsa.physics.subassembly_cache import LruStore
 
 __all__ = ["INTERPOLATION_RTOL", "Insertion", "InsertionPiece", "contact_per_length", "contact_stiffness_n_m3",
            "expm_stack", "piece_stiffness", "unit_stiffness"]
@@ -447,10 +447,42 @@ class _PieceFit:
         return unit_stiffness(omega_rad_s, self.unit)
 
 
-#: Fits kept (per piece, each valid up to its band's top); least recently used evicted first.
-_FITS: OrderedDict[InsertionPiece, list[_PieceFit]] = OrderedDict()
+_FitKey = TypeVar("_FitKey")
+_FitValue = TypeVar("_FitValue")
+
+
+class _BandFits(Generic[_FitKey, _FitValue]):
+    """Fits per key, each valid up to its band's top; keys least recently used dropped first
+    (:class:`LruStore`), thread-safe."""
+
+    def __init__(self, size: int) -> None:
+        self._store: LruStore[_FitKey, list[tuple[float, _FitValue]]] = LruStore(size)
+        self._lock = threading.Lock()
+
+    def get(self, key: _FitKey, omega_max_rad_s: float, make: Callable[[float], _FitValue]) -> _FitValue:
+        """The fit of ``key`` with the narrowest band covering ``omega_max_rad_s``, else ``make(top)``
+        on the band :func:`_fit_band_rad_s` gives (kept)."""
+        with self._lock:
+            fits = self._store.peek(key)
+            usable = [f for f in fits or [] if f[0] >= omega_max_rad_s]
+            if usable:
+                return min(usable, key=lambda f: f[0])[1]
+        top = _fit_band_rad_s(omega_max_rad_s)
+        fit = make(top)
+        with self._lock:
+            fits = self._store.peek(key)
+            self._store.put(key, [*(fits or []), (top, fit)])
+        return fit
+
+
+#: Fits kept per piece and per whole insertion (each valid up to its band's top).
 _FITS_MAX = 256
-_FITS_LOCK = threading.Lock()
+_PIECE_FITS: _BandFits[InsertionPiece, _PieceFit] = _BandFits(_FITS_MAX)
+
+
+def _make_piece_fit(piece: InsertionPiece, top: float) -> _PieceFit:
+    unit, count = _units(piece, top)
+    return _PieceFit(top, unit, count, _interpolant(lambda w: unit_stiffness(w, unit), top))
 
 
 def piece_fit(piece: InsertionPiece, omega_max_rad_s: float) -> _PieceFit:
@@ -466,28 +498,19 @@ def piece_fit(piece: InsertionPiece, omega_max_rad_s: float) -> _PieceFit:
     omega_max_rad_s : float
         Highest angular frequency it will be evaluated at, rad/s.
     """
-    with _FITS_LOCK:
-        fits = _FITS.get(piece)
-        if fits is not None:
-            _FITS.move_to_end(piece)
-            usable = [f for f in fits if f.omega_fit_rad_s >= omega_max_rad_s]
-            if usable:
-                return min(usable, key=lambda f: f.omega_fit_rad_s)
-    top = _fit_band_rad_s(omega_max_rad_s)
-    unit, count = _units(piece, top)
-    fit = _PieceFit(top, unit, count, _interpolant(lambda w: unit_stiffness(w, unit), top))
-    with _FITS_LOCK:
-        _FITS.setdefault(piece, []).append(fit)
-        _FITS.move_to_end(piece)
-        while len(_FITS) > _FITS_MAX:
-            _FITS.popitem(last=False)
-    return fit
+    return _PIECE_FITS.get(piece, omega_max_rad_s, lambda top: _make_piece_fit(piece, top))
 
 
 #: An insertion is interpolated whole when its own clamped modes lie above this many band tops.
 _INTERNAL_MARGIN = 1.25
-#: Two-port fits of whole insertions: insertion → [(band top, interpolant or None)].
-_WHOLE: OrderedDict[Any, list[tuple[float, _Interpolant | None]]] = OrderedDict()
+#: Two-port fits of whole insertions (None: not interpolable whole on that band).
+_WHOLE_FITS: _BandFits[Any, _Interpolant | None] = _BandFits(_FITS_MAX)
+
+
+def _make_insertion_fit(insertion: Insertion, top: float) -> _Interpolant | None:
+    count = Pivots(1)
+    insertion.undamped().condensed(np.array([_INTERNAL_MARGIN * top]), count, exact=True)
+    return None if count.negatives[0] else _interpolant(lambda w: insertion.condensed(w, exact=True), top)
 
 
 def insertion_fit(insertion: Insertion, omega_max_rad_s: float) -> _Interpolant | None:
@@ -506,23 +529,7 @@ def insertion_fit(insertion: Insertion, omega_max_rad_s: float) -> _Interpolant 
     omega_max_rad_s : float
         Highest angular frequency it will be evaluated at, rad/s.
     """
-    with _FITS_LOCK:
-        fits = _WHOLE.get(insertion)
-        if fits is not None:
-            _WHOLE.move_to_end(insertion)
-            usable = [f for f in fits if f[0] >= omega_max_rad_s]
-            if usable:
-                return min(usable, key=lambda f: f[0])[1]
-    top = _fit_band_rad_s(omega_max_rad_s)
-    count = Pivots(1)
-    insertion.undamped().condensed(np.array([_INTERNAL_MARGIN * top]), count, exact=True)
-    fit = None if count.negatives[0] else _interpolant(lambda w: insertion.condensed(w, exact=True), top)
-    with _FITS_LOCK:
-        _WHOLE.setdefault(insertion, []).append((top, fit))
-        _WHOLE.move_to_end(insertion)
-        while len(_WHOLE) > _FITS_MAX:
-            _WHOLE.popitem(last=False)
-    return fit
+    return _WHOLE_FITS.get(insertion, omega_max_rad_s, lambda top: _make_insertion_fit(insertion, top))
 
 
 def _scalar(piece: InsertionPiece) -> bool:
