@@ -68,19 +68,12 @@ if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
 
-def first_call_child(case: str, request_path: str) -> dict:
-    """A fresh process that has imported only ``rcsa`` and numpy: the first ``rcsa.diagnose`` in
-    it (the diagnosis's modules load inside the call), a repeat (Σ cached), a repeat with Σ
-    dropped, and RA-1's plain prediction at 10 000 lines, cold (the ratios' yardstick, as
-    ``bench_engine.py`` times it). Runs before this module imports anything else."""
+def _first_calls(case: str, run, modules_before_first_call: bool) -> dict:
+    """``run()`` (a diagnosis: ``(cpu_s, wall_s, response)``) first in this process, again (Σ
+    cached), again with Σ dropped, and RA-1's plain prediction at 10 000 lines, cold (the
+    ratios' yardstick, as ``bench_engine.py`` times it). The diagnosis's modules are imported
+    here only after the first call."""
     import rcsa
-
-    request = json.loads(Path(request_path).read_text())
-
-    def run() -> tuple[float, float, dict]:
-        c0, t0 = time.process_time(), time.perf_counter()
-        r = rcsa.diagnose(request)
-        return time.process_time() - c0, time.perf_counter() - t0, r
 
     first = run()
     warm = run()
@@ -91,7 +84,7 @@ def first_call_child(case: str, request_path: str) -> dict:
     problem._DRAW_CACHE.clear()
     cold_again = run()
     assembly = ra1({"start_hz": 1.0, "stop_hz": 10000.0, "step_hz": 1.0})
-    predictions.SIDES.size = 0
+    predictions.SIDES.size = 0  # cold, as bench_engine.py times it: no spindle side kept across calls
     yardstick = []
     for _ in range(9):
         c0, t0 = time.process_time(), time.perf_counter()
@@ -103,10 +96,26 @@ def first_call_child(case: str, request_path: str) -> dict:
             "warm_wall_s": warm[1], "cold_in_warm_process_cpu_s": cold_again[0],
             "cold_in_warm_process_wall_s": cold_again[1], "prediction_cpu_s": pc, "prediction_wall_s": pw,
             "first_over_prediction_cpu": first[0] / pc, "first_over_prediction_wall": first[1] / pw,
-            "verdict": first[2]["verdict"]["effect"], "phases_of_first_s": first[2]["analysis"].get("timings_s"),
+            "verdict": first[2]["verdict"]["effect"], "phases_of_first_s": first[2].get("analysis", {}).get("timings_s"),
             "load_average": os.getloadavg(), "rcsa": str(Path(rcsa.__file__).parent),
             "scipy_loaded": any(m == "scipy" or m.startswith("scipy.") for m in sys.modules),
-            "diagnosis_modules_before_first_call": False}
+            "diagnosis_modules_before_first_call": modules_before_first_call}
+
+
+def first_call_child(case: str, request_path: str) -> dict:
+    """A fresh process that has imported only ``rcsa`` and numpy: the first ``rcsa.diagnose`` in
+    it (the diagnosis's modules load inside the call), then as :func:`_first_calls`. Runs before
+    this module imports anything else."""
+    import rcsa
+
+    request = json.loads(Path(request_path).read_text())
+
+    def run() -> tuple[float, float, dict]:
+        c0, t0 = time.process_time(), time.perf_counter()
+        r = rcsa.diagnose(request)
+        return time.process_time() - c0, time.perf_counter() - t0, r
+
+    return _first_calls(case, run, False)
 
 
 if __name__ == "__main__" and len(sys.argv) == 4 and sys.argv[1] == "--first-call":
@@ -269,17 +278,12 @@ def _fresh_request(case: str) -> tuple[dict, object]:
 
 
 def fresh_child(case: str) -> dict:
-    """One fresh process: the first diagnosis in it, a repeat (Σ cached), a repeat with Σ dropped,
-    and RA-1's plain prediction at 10 000 lines in the same process, cold (the yardstick of the
-    ratios, as ``bench_engine.py`` times it).
+    """One fresh process: the first diagnosis in it, then as :func:`_first_calls`.
 
     The request is built before the clock starts (the benchmark's truth); the first call
     includes whatever the diagnosis imports on first use.
     """
     import rcsa
-    from rcsa.analysis.diagnosis import problem
-    from rcsa.app import predictions
-    from rcsa.reference import ra1
 
     request, resolve = _fresh_request(case)
 
@@ -288,28 +292,7 @@ def fresh_child(case: str) -> dict:
         r = build_response(analyse(request, resolve)) if resolve is not None else rcsa.diagnose(request)
         return time.process_time() - c0, time.perf_counter() - t0, r
 
-    first = run()
-    warm = run()
-    problem._DRAW_CACHE.clear()
-    cold_again = run()
-    assembly = ra1({"start_hz": 1.0, "stop_hz": 10000.0, "step_hz": 1.0})  # bench_engine.py's yardstick
-    predictions.SIDES.size = 0  # cold, as bench_engine.py times it: no spindle side kept across calls
-    yardstick = []
-    for _ in range(9):
-        c0, t0 = time.process_time(), time.perf_counter()
-        rcsa.predict(assembly)
-        yardstick.append((time.process_time() - c0, time.perf_counter() - t0))
-    pc = float(np.median([x[0] for x in yardstick]))
-    pw = float(np.median([x[1] for x in yardstick]))
-    verdict = first[2]["verdict"]
-    return {"case": case, "first_cpu_s": first[0], "first_wall_s": first[1], "warm_cpu_s": warm[0],
-            "warm_wall_s": warm[1], "cold_in_warm_process_cpu_s": cold_again[0],
-            "cold_in_warm_process_wall_s": cold_again[1], "prediction_cpu_s": pc, "prediction_wall_s": pw,
-            "first_over_prediction_cpu": first[0] / pc, "first_over_prediction_wall": first[1] / pw,
-            "verdict": verdict["effect"], "phases_of_first_s": first[2].get("analysis", {}).get("timings_s"),
-            "load_average": os.getloadavg(), "rcsa": str(Path(rcsa.__file__).parent),
-            "scipy_loaded": any(m == "scipy" or m.startswith("scipy.") for m in sys.modules),
-            "diagnosis_modules_before_first_call": True}
+    return _first_calls(case, run, True)
 
 
 def timing_fresh(repeats: int = 3, cases: tuple[str, ...] = FRESH_CASES) -> dict:
