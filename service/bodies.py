@@ -16,9 +16,9 @@ from pydantic import BaseModel, ValidationError
 from starlette.datastructures import FormData, UploadFile
 
 from rcsa.app.inputs import decode_json
-from rcsa.errors import InputError
+from rcsa.errors import InputError, MalformedInput
 
-from .errors import ProblemError
+from .errors import ProblemError, malformed_body
 from .routing import ServiceRequest, is_json_media
 
 __all__ = ["check_form_fields", "form_json", "form_text", "form_uploads", "json_document", "read_body", "read_upload",
@@ -48,8 +48,11 @@ async def json_document(request: Request) -> Any:
     """The request's JSON body under the JSON policy (:func:`rcsa.app.inputs.decode_json`),
     decoded once per request."""
     if isinstance(request, ServiceRequest):
-        return await request.json()  # decoded (and cached) under the policy
-    return decode_json(await request.body())
+        return await request.document()  # counted, decoded (and cached) under the policy
+    try:
+        return decode_json(await request.body())
+    except MalformedInput as exc:
+        raise malformed_body(exc) from None
 
 
 def validate_json(model: type[M], data: bytes | Any) -> M:

@@ -11,6 +11,8 @@ from pathlib import Path
 from pydantic import Field, SecretStr
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
+from rcsa.app.bounds import MAX_BATCH_COMBINATIONS
+
 __all__ = ["Settings"]
 
 MIB = 1024 * 1024
@@ -30,7 +32,9 @@ class Settings(BaseSettings):
     max_body_bytes: int = Field(64 * MIB, ge=1024, description="Largest request body, bytes (413 above).")
     max_upload_bytes: int = Field(64 * MIB, ge=1024, description="Largest uploaded file, bytes (413 above).")
     max_frequency_lines: int = Field(20_000, ge=1, description="Most frequency lines per request.")
-    max_batch_combinations: int = Field(10_000, ge=1, description="Most combinations per batch request.")
+    max_batch_combinations: int = Field(MAX_BATCH_COMBINATIONS, ge=1, le=MAX_BATCH_COMBINATIONS,
+                                        description="Most combinations per batch request (at most "
+                                                    f"{MAX_BATCH_COMBINATIONS}, the schema's bound).")
     async_batch_threshold: int = Field(50, ge=0, description="Batches and libraries with more "
                                        "combinations than this run as jobs (202 Accepted).")
     sync_time_limit_s: float = Field(120.0, ge=0, description="An answer given at once (a POST that computes "

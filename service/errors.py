@@ -5,9 +5,12 @@ A problem has ``type`` (a URN naming the kind of problem), ``title``, ``status``
 ``request_id`` (the ``X-Request-ID`` of the request, to find its log lines) and, for invalid
 input, ``errors``: ``[{"field": "holder.segments[2].length_m", "detail": "..."}]`` with the
 offending field as a dotted path into the request (form fields and query parameters by
-name).
+name). Past :data:`MAX_PROBLEM_ERRORS` offending fields the list stops, and ``detail`` and
+``errors_total`` say how many there were.
 
-Mapping: pydantic's ``RequestValidationError`` and :class:`rcsa.errors.InputError` → 422;
+Mapping: a JSON request body that is not JSON at all (:class:`rcsa.errors.MalformedInput`:
+syntax, NaN/Infinity tokens, not UTF-8; :func:`malformed_body`) → 400; pydantic's ``RequestValidationError`` and
+:class:`rcsa.errors.InputError` (a well-formed document that breaks a rule) → 422;
 :class:`rcsa.errors.NotFoundError` → 404; :class:`rcsa.errors.DamagedError` (one stored
 object cannot be read) and :class:`rcsa.errors.ConflictError` → 409;
 :class:`rcsa.errors.StoreError` (the store as a whole) → 503; HTTP
@@ -33,6 +36,7 @@ from rcsa.errors import (
     ConflictError,
     DamagedError,
     InputError,
+    MalformedInput,
     NotFoundError,
     StoreError,
     TimeLimitExceeded,
@@ -41,12 +45,14 @@ from rcsa.errors import (
 from .field_errors import pydantic_errors
 
 __all__ = [
+    "MAX_PROBLEM_ERRORS",
     "PROBLEM_MEDIA_TYPE",
     "BodyTooLarge",
     "ProblemError",
     "allowed_methods",
     "install_error_handlers",
     "iter_routes",
+    "malformed_body",
     "problem_body",
     "problem_response",
     "pydantic_errors",
@@ -55,6 +61,8 @@ __all__ = [
 log = logging.getLogger("service.errors")
 
 PROBLEM_MEDIA_TYPE = "application/problem+json"
+#: Most offending fields a problem lists (the rest are counted in ``errors_total``).
+MAX_PROBLEM_ERRORS = 100
 TYPE_PREFIX = "urn:rcsa:problem:"
 
 _BY_STATUS = {
@@ -136,7 +144,9 @@ def problem_body(status: int, detail: str, *, slug: str | None = None, title: st
     if request_id is not None:
         body["request_id"] = request_id
     if errors:
-        body["errors"] = [dict(e) for e in errors]
+        body["errors"] = [dict(e) for e in errors[:MAX_PROBLEM_ERRORS]]
+        if len(errors) > MAX_PROBLEM_ERRORS:
+            body["errors_total"] = len(errors)
     if extra:
         body.update({k: v for k, v in extra.items() if k not in body})
     return body
@@ -163,7 +173,10 @@ def _validation_errors(exc: RequestValidationError) -> list[dict[str, str]]:
 def _detail_of(errors: Sequence[Mapping[str, str]]) -> str:
     first = errors[0]
     text = f"{first['field']}: {first['detail']}" if first["field"] else first["detail"]
-    if len(errors) > 1:
+    if len(errors) > MAX_PROBLEM_ERRORS:
+        text += (f" (and {len(errors) - 1} more problems; errors lists the first {MAX_PROBLEM_ERRORS}, errors_total "
+                 "counts them all)")
+    elif len(errors) > 1:
         text += f" (and {len(errors) - 1} more problem{'s' if len(errors) > 2 else ''}, listed in errors)"
     return text
 
@@ -176,6 +189,13 @@ async def _on_validation(request: Request, exc: RequestValidationError) -> Respo
 async def _on_input(request: Request, exc: InputError) -> Response:
     errors = [{"field": exc.field, "detail": exc.rule}]
     return problem_response(request, 422, _detail_of(errors), errors=errors)
+
+
+def malformed_body(exc: MalformedInput) -> ProblemError:
+    """The ``400`` problem of a request body that is not JSON at all (a JSON form field or an
+    uploaded file that is not JSON is a ``422``: the request itself was well-formed)."""
+    return ProblemError(400, exc.rule, slug="malformed-body", title="Malformed body",
+                        errors=[{"field": exc.field, "detail": exc.rule}])
 
 
 _NOT_FOUND_HINTS = {

@@ -11,9 +11,15 @@ puts the checks that must come first in front, in this order:
 2. **Authentication and scope** — the route's access (``require_read`` or ``require_write``
    among its dependencies) is checked from the ``X-API-Key`` header before a byte of the body
    is read: a refused write never reads, parses or stores anything.
-3. **The JSON policy** — a JSON body is decoded once by :func:`rcsa.app.inputs.decode_json`
-   (RFC 8259 strict: no NaN/Infinity; nesting ≤ ``MAX_JSON_DEPTH``; every number's magnitude
-   ≤ ``MAX_JSON_NUMBER``); a violation is a ``422`` naming the field. FastAPI's body
+3. **The JSON policy** — a JSON body's objects, arrays and elements are counted while it
+   arrives (:class:`rcsa.model.input_policy.JsonCounter`: at most ``MAX_JSON_CONTAINERS`` and
+   ``MAX_JSON_ITEMS``), so a body of millions of tiny items is refused before the rest of it is
+   read and before anything is parsed; then it is decoded once by
+   :func:`rcsa.app.inputs.decode_json` (RFC 8259 strict: no NaN/Infinity; nesting ≤
+   ``MAX_JSON_DEPTH``; every number's magnitude ≤ ``MAX_JSON_NUMBER``). Text that is not JSON
+   is a ``400``; a well-formed document that breaks a rule a ``422`` naming the field. A body
+   larger than :data:`OFF_LOOP_BYTES` is decoded, and validated against the route's body model,
+   in a worker thread, never on the event loop that serves every other caller. FastAPI's body
    parsing, :func:`service.bodies.read_body` and the idempotency fingerprint then take that
    document (:class:`ServiceRequest`), never the raw bytes again.
 
@@ -36,25 +42,34 @@ from typing import Any
 from fastapi import Request
 from fastapi.concurrency import run_in_threadpool
 from fastapi.dependencies.models import Dependant
+from fastapi.exceptions import RequestValidationError
 from fastapi.routing import APIRoute
 from starlette.responses import Response
 
 from rcsa.app.budget import time_limited
 from rcsa.app.inputs import decode_json
-from rcsa.errors import TimeLimitExceeded
+from rcsa.errors import MalformedInput, TimeLimitExceeded
 from rcsa.infra.api_keys import Principal
+from rcsa.model.input_policy import JsonCounter
 
-from .errors import BodyTooLarge
+from .errors import BodyTooLarge, malformed_body
 from .middleware import BODY_LIMIT_KEY
 from .security import principal, require_read, require_write
 from .state import ensure_state
 
-__all__ = ["BODY_LIMIT_KEY", "MAX_BODY_EXTENSION", "ServiceRequest", "ServiceRoute", "is_json_media"]
+__all__ = ["BODY_LIMIT_KEY", "MAX_BODY_EXTENSION", "OFF_LOOP_BYTES", "ServiceRequest", "ServiceRoute",
+           "is_json_media"]
 
 #: ``openapi_extra`` key (an OpenAPI extension) holding a route's largest body, bytes.
 MAX_BODY_EXTENSION = "x-max-body-bytes"
 #: Scope key of the caller's principal once the route class has authenticated it.
 PRINCIPAL_KEY = "rcsa.principal"
+#: JSON bodies larger than this are decoded and validated in a worker thread, bytes (a
+#: prediction's body is ~1 KiB; 8 MiB of batch takes ~0.1 s to decode and more to validate).
+OFF_LOOP_BYTES = 64 * 1024
+#: Bodies whose Content-Length says at most this many bytes are not counted while they arrive
+#: (too short to exceed the JSON policy's bounds; :func:`rcsa.model.input_policy.check_json_size`).
+_COUNT_ABOVE_BYTES = 200_000
 
 Handler = Callable[[Request], Awaitable[Response]]
 
@@ -65,13 +80,49 @@ def is_json_media(media: str) -> bool:
 
 
 class ServiceRequest(Request):
-    """A request whose JSON body is decoded once, under the JSON policy."""
+    """A request whose JSON body is counted as it arrives and decoded once, under the JSON policy."""
+
+    def _media(self) -> str:
+        return self.headers.get("content-type", "").split(";")[0].strip().lower()
+
+    async def body(self) -> bytes:
+        """The body; a JSON body's objects, arrays and elements counted piece by piece as they
+        arrive (:class:`rcsa.model.input_policy.JsonCounter`: refused past the bounds before the
+        rest is read)."""
+        if not hasattr(self, "_body"):
+            length = self.headers.get("content-length", "")
+            counter = JsonCounter() if is_json_media(self._media()) and not (
+                length.isdigit() and int(length) <= _COUNT_ABOVE_BYTES) else None
+            chunks: list[bytes] = []
+            async for chunk in self.stream():
+                if counter is not None and chunk:
+                    counter.feed(chunk)
+                chunks.append(chunk)
+            self._body = b"".join(chunks)
+            self._rcsa_counted = True
+        return self._body
+
+    async def document(self) -> Any:
+        """The body decoded by :func:`rcsa.app.inputs.decode_json` (cached; in a worker thread
+        when larger than :data:`OFF_LOOP_BYTES`)."""
+        if not hasattr(self, "_rcsa_json"):
+            body = await self.body()
+            counted = getattr(self, "_rcsa_counted", False)
+            try:
+                if len(body) > OFF_LOOP_BYTES:
+                    self._rcsa_json = await run_in_threadpool(decode_json, body, counted=counted)
+                else:
+                    self._rcsa_json = decode_json(body, counted=counted)
+            except MalformedInput as exc:
+                raise malformed_body(exc) from None
+        return self._rcsa_json
 
     async def json(self) -> Any:
-        """The body decoded by :func:`rcsa.app.inputs.decode_json` (cached)."""
-        if not hasattr(self, "_rcsa_json"):
-            self._rcsa_json = decode_json(await self.body())
-        return self._rcsa_json
+        """What FastAPI validates the body as: the route's body model when :class:`ServiceRoute`
+        validated it already (in a worker thread: pydantic accepts the instance as it is), else
+        :meth:`document`."""
+        validated = getattr(self, "_rcsa_validated", None)
+        return validated if validated is not None else await self.document()
 
 
 def _access(dependant: Dependant) -> str | None:
@@ -119,15 +170,23 @@ class ServiceRoute(APIRoute):
                 raise BodyTooLarge(limit, where=where if limit == route_limit else None)
             if access is not None:
                 request.scope[PRINCIPAL_KEY] = await run_in_threadpool(_authorize, state, request, access)
-            if request.method in ("POST", "PUT", "PATCH"):
-                media = request.headers.get("content-type", "").split(";")[0].strip().lower()
-                if is_json_media(media):
-                    await request.json()
+            if request.method in ("POST", "PUT", "PATCH") and is_json_media(request._media()):
+                doc = await request.document()
+                if self.body_field is not None and len(await request.body()) > OFF_LOOP_BYTES:
+                    request._rcsa_validated = await run_in_threadpool(self._validated_body, doc)
             if timed and state.settings.sync_time_limit_s:
                 return await within(state.settings.sync_time_limit_s, inner(request))
             return await inner(request)
 
         return handler
+
+    def _validated_body(self, doc: Any) -> Any:
+        """The body validated against the route's body model, as FastAPI would (its errors too)."""
+        assert self.body_field is not None
+        value, errors = self.body_field.validate(doc, {}, loc=("body",))
+        if errors:
+            raise RequestValidationError(errors, body=None)
+        return value
 
 
 #: How long after its time limit an answer given at once is cut off, if the computation has

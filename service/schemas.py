@@ -42,6 +42,7 @@ from rcsa.app.bounds import (
     EFFECTS_MAX_RELATIVE_STEP,
     IDENTIFIABLE_PARAMETERS,
     IDENTIFICATION_MIN_LINES,
+    MAX_BATCH_COMBINATIONS,
     MAX_BEARINGS,
     MAX_COHERENCE,
     MAX_CONFIDENCE,
@@ -443,8 +444,10 @@ class BatchRequest(_Request):
                                       "combination (analytical spindles; costs time on big batches).")
     uncertainty: Uncertainty | None = Field(None, description="Every combination's uncertainty band (same seed).")
     combinations: list[Annotated[Combination, WrapValidator(_keep_invalid)]] = Field(
-        min_length=1, description="Combinations (at most RCSA_MAX_BATCH_COMBINATIONS). Each is checked on "
-                                  "its own: one that is invalid gets status error in its result.")
+        min_length=1, max_length=MAX_BATCH_COMBINATIONS,
+        description=f"Combinations (at most RCSA_MAX_BATCH_COMBINATIONS, itself at most {MAX_BATCH_COMBINATIONS}; "
+                    "a longer list is refused before any item is looked at). Each is checked on its own: one that "
+                    "is invalid gets status error in its result.")
 
     def to_request(self) -> tuple[dict[str, Any], dict[int, dict[str, str]]]:
         """The batch document (combinations as sent) and the refused ones: index → {field, detail}."""

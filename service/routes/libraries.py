@@ -121,8 +121,9 @@ async def _library_inputs(request: Request, state: AppState) -> tuple[dict[str, 
     ``library``, ``file_name``, ``content_type``, ``holder``, ``holder_name``), and the other fields."""
     kind, body = await read_body(request)
     try:
-        if kind == "json":
-            doc = validate_json(LibraryPredictionRequest, body).model_dump(exclude_unset=True)
+        if kind == "json":  # validated in a worker thread: a library may be large
+            doc = (await run_in_threadpool(validate_json, LibraryPredictionRequest, body)).model_dump(
+                exclude_unset=True)
             return {"library": doc.pop("library")}, doc
         return await _from_form(body, state.settings.max_upload_bytes)
     finally:

@@ -145,7 +145,7 @@ async def measurement_form(form: Any, allowed: Mapping[str, str], limit_bytes: i
 async def _import(request: Request, kind: str, body: Any, fmt: str, state: AppState) -> dict[str, Any]:
     try:
         if kind == "json":
-            upload = validate_json(MeasurementUpload, body)
+            upload = await run_in_threadpool(validate_json, MeasurementUpload, body)  # may be large: off the loop
             measurement = await run_in_threadpool(M.measurement_from_document, upload.to_document())
         else:
             upload = await measurement_form(body, UPLOAD_FIELDS, state.settings.max_upload_bytes)

@@ -12,6 +12,7 @@ __all__ = [
     "DamagedError",
     "FrequencyMismatch",
     "InputError",
+    "MalformedInput",
     "NotFoundError",
     "RcsaError",
     "StoreError",
@@ -39,6 +40,18 @@ class InputError(RcsaError, ValueError):
         self.field = field
         self.rule = rule
         super().__init__(f"{field}: {rule}" if field else rule)
+
+
+class MalformedInput(InputError):
+    """Input that is not well-formed at all: not JSON (RFC 8259: syntax, ``NaN``/``Infinity``
+    tokens), not UTF-8 text. The REST service answers ``400``; an :class:`InputError` about a
+    well-formed document (a value out of range, a missing field) is a ``422``.
+
+    Parameters
+    ----------
+    field, rule : str
+        As for :class:`InputError`.
+    """
 
 
 class FrequencyMismatch(InputError):

@@ -82,14 +82,18 @@ def test_unknown_measurement_is_422_naming_the_spindle(client, assembly):
 
 
 def test_bad_json_wrong_content_type_and_empty_body(client):
+    # text that is not JSON is a 400 (malformed); a well-formed document that breaks a rule a 422
     r = client.post("/v1/tool-point-frf", content=b'{"frequency": ', headers={"content-type": "application/json"})
-    assert "not valid JSON" in assert_problem(r, 422, "")["detail"]
+    body = assert_problem(r, 400, "")
+    assert "not valid JSON" in body["detail"] and body["type"].endswith(":malformed-body")
     r = client.post("/v1/tool-point-frf", content=b"frequency=5", headers={"content-type": "text/plain"})
     assert "application/json" in assert_problem(r, 415)["detail"]
     assert_problem(client.post("/v1/tool-point-frf", content=b"[1, 2]", headers={"content-type": "application/json"}),
                    422)
     assert_problem(client.post("/v1/tool-point-frf"), 422)
     assert_problem(client.post("/v1/tool-point-frf", content=b"NaN", headers={"content-type": "application/json"}),
+                   400)
+    assert_problem(client.post("/v1/tool-point-frf", content=b'{"a": 1e400}', headers={"content-type": "application/json"}),
                    422)
 
 

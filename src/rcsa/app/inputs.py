@@ -20,14 +20,14 @@ from typing import Any
 
 import orjson
 
-from rcsa.errors import InputError
-from rcsa.model.input_policy import check_json, load_json
+from rcsa.errors import MalformedInput
+from rcsa.model.input_policy import check_json, check_json_size, load_json
 
 __all__ = ["decode_json"]
 
 
 def decode_json(data: bytes | bytearray | memoryview | str, *, path: str = "",
-                what: str = "the body") -> Any:
+                what: str = "the body", counted: bool = False) -> Any:
     """Parse JSON text under :mod:`rcsa.model.input_policy`.
 
     Parameters
@@ -38,6 +38,9 @@ def decode_json(data: bytes | bytearray | memoryview | str, *, path: str = "",
         Where the document sits in the request (e.g. a form field's name), for messages.
     what : str
         What the text is, for the syntax message (``the body``, ``form field options``).
+    counted : bool
+        The text's objects, arrays and elements were counted already, as it arrived
+        (:class:`rcsa.model.input_policy.JsonCounter`); else they are counted first.
 
     Returns
     -------
@@ -47,11 +50,14 @@ def decode_json(data: bytes | bytearray | memoryview | str, *, path: str = "",
     Raises
     ------
     InputError
-        See :mod:`rcsa.model.input_policy`.
+        See :mod:`rcsa.model.input_policy` (:class:`~rcsa.errors.MalformedInput` when the
+        text is not JSON at all).
     """
+    if not counted:
+        check_json_size(data, path=path, what=what)
     try:
         doc = orjson.loads(data)
     except orjson.JSONDecodeError as exc:
         load_json(data, path=path, what=what)  # raises with the policy's message
-        raise InputError(path, f"{what} is not valid JSON: {exc}") from None  # orjson alone refuses it
+        raise MalformedInput(path, f"{what} is not valid JSON: {exc}") from None  # orjson alone refuses it
     return check_json(doc, path=path)

@@ -32,7 +32,9 @@ __all__ = [
     "MAX_INTERFACE_STIFFNESS_N_M3",
     "MAX_INTERFACE_STIFFNESS_SCALE",
     "MAX_INTERFACE_TANGENTIAL_RATIO",
+    "MAX_JSON_CONTAINERS",
     "MAX_JSON_DEPTH",
+    "MAX_JSON_ITEMS",
     "MAX_JSON_NUMBER",
     "MAX_LENGTH_M",
     "MAX_LOSS_FACTOR",
@@ -93,6 +95,17 @@ MAX_JSON_NUMBER = 1.0e30
 #: descriptions and expressions are far shorter; the stored metadata of a measurement is an
 #: HDF5 attribute, which holds at most 64 KiB.
 MAX_STRING_CHARS = 16_384
+#: Most objects and arrays in one JSON document, counted on its raw text before it is parsed
+#: (:class:`rcsa.model.input_policy.JsonCounter`). A 10 000-combination batch of RA-1-like
+#: tools holds 100 000 of them and a Fusion library ~11 per tool; a parsed object costs ~200
+#: bytes, so the bound keeps what a document can make a process allocate near 50 MB (a 4 MiB
+#: body of 520 000 tiny objects is refused while it arrives, before any is made).
+MAX_JSON_CONTAINERS = 250_000
+#: Most elements of objects and arrays in one JSON document (counted on the raw text as the
+#: commas between them plus one per object or array): a measured point receptance of
+#: :data:`MAX_FREQUENCY_LINES` lines holds 1.8 million numbers (lines and four complex
+#: receptances), a 10 000-combination batch 370 000; a parsed number costs ~32 bytes.
+MAX_JSON_ITEMS = 4_000_000
 
 # ---------------------------------------------------------------------------- sizes
 

@@ -7,7 +7,12 @@ computes with it, so that both doors (CLI and REST) and a library caller refuse 
 the same way, with an :class:`~rcsa.errors.InputError` naming where (the numbers are
 :mod:`rcsa.model.bounds`'s, the one source):
 
-* not JSON (syntax, not UTF-8): ``... is not valid JSON: ...`` at the character, line and column;
+* not JSON (syntax, not UTF-8): ``... is not valid JSON: ...`` at the character, line and column
+  (:class:`~rcsa.errors.MalformedInput`: the REST service answers 400, the rest is 422);
+* more objects and arrays than :data:`~rcsa.model.bounds.MAX_JSON_CONTAINERS`, or more of
+  their elements than :data:`~rcsa.model.bounds.MAX_JSON_ITEMS`: counted on the raw text
+  before it is parsed (:class:`JsonCounter`, which the service also feeds while a body
+  arrives), so a document of millions of tiny items is refused before one is made;
 * ``NaN``, ``Infinity``, ``-Infinity`` (JSON tokens, or ``nan``/``inf`` in a text table): not
   finite numbers, refused;
 * a number whose magnitude exceeds :data:`~rcsa.model.bounds.MAX_JSON_NUMBER` (``1e308``,
@@ -41,10 +46,134 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from rcsa.errors import InputError
-from rcsa.model.bounds import MAX_JSON_DEPTH, MAX_JSON_NUMBER, MAX_STRING_CHARS
+from rcsa.errors import InputError, MalformedInput
+from rcsa.model.bounds import (
+    MAX_JSON_CONTAINERS,
+    MAX_JSON_DEPTH,
+    MAX_JSON_ITEMS,
+    MAX_JSON_NUMBER,
+    MAX_STRING_CHARS,
+)
 
-__all__ = ["check_count", "check_json", "check_number", "check_numbers", "load_json"]
+__all__ = ["JsonCounter", "check_count", "check_json", "check_json_size", "check_number", "check_numbers",
+           "load_json"]
+
+#: Bytes a :class:`JsonCounter` looks at in one numpy pass (bounds its scratch memory).
+_SCAN_BYTES = 1 << 20
+_QUOTE, _BACKSLASH, _COMMA, _BRACE, _BRACKET = 34, 92, 44, 123, 91
+
+
+class JsonCounter:
+    """Count the objects, arrays and their elements of JSON text as it arrives, without parsing it.
+
+    Feed the text piece by piece (:meth:`feed`, any split); it refuses as soon as the document
+    holds more than ``max_containers`` objects and arrays or more than ``max_items`` of their
+    elements. The count is made on the raw bytes by numpy, a pass per MiB: the structural
+    bytes ``{`` ``[`` ``,`` are counted where they lie outside strings (a ``"`` ends a string
+    unless an odd run of backslashes precedes it). Elements are counted as the commas between
+    them plus one per object or array (an empty one counts one too). On text that is not JSON
+    the counts mean nothing, but the parser refuses that text anyway.
+
+    Parameters
+    ----------
+    path : str
+        Where the document sits (a form field's name), for messages.
+    what : str
+        What the text is, for messages (``the body``, ``the tool library``).
+    max_containers, max_items : int
+        The bounds (default :data:`~rcsa.model.bounds.MAX_JSON_CONTAINERS` and
+        :data:`~rcsa.model.bounds.MAX_JSON_ITEMS`).
+
+    Examples
+    --------
+    >>> counter = JsonCounter(max_containers=3)
+    >>> counter.feed(b'{"a": [1, 2], "b": "{[,"')
+    >>> counter.containers, counter.items
+    (2, 4)
+    >>> counter.feed(b', "c": [[]]}')
+    Traceback (most recent call last):
+    ...
+    rcsa.errors.InputError: the body holds more than 3 objects and arrays (at most 3 in one JSON document): send less, e.g. split a batch into several requests
+    """
+
+    def __init__(self, *, path: str = "", what: str = "the body", max_containers: int = MAX_JSON_CONTAINERS,
+                 max_items: int = MAX_JSON_ITEMS) -> None:
+        self.path = path
+        self.what = what
+        self.max_containers = int(max_containers)
+        self.max_items = int(max_items)
+        self.containers = 0
+        self.items = 0
+        self.bytes = 0
+        self._in_string = False
+        self._backslashes = 0  # backslashes ending the text fed so far
+
+    def feed(self, data: bytes | bytearray | memoryview) -> None:
+        """Count one more piece of the text.
+
+        Raises
+        ------
+        InputError
+            The text so far exceeds a bound.
+        """
+        view = memoryview(data).cast("B")
+        for start in range(0, len(view), _SCAN_BYTES):
+            self._scan(np.frombuffer(view[start:start + _SCAN_BYTES], dtype=np.uint8))
+            if self.containers > self.max_containers:
+                raise InputError(self.path, f"{self.what} holds more than {self.max_containers} objects and arrays "
+                                            f"(at most {self.max_containers} in one JSON document): send less, e.g. "
+                                            "split a batch into several requests")
+            if self.items > self.max_items:
+                raise InputError(self.path, f"{self.what} holds more than {self.max_items} elements of objects and "
+                                            f"arrays (at most {self.max_items} in one JSON document): send less, "
+                                            "e.g. split a batch into several requests")
+
+    def _scan(self, a: npt.NDArray[np.uint8]) -> None:
+        self.bytes += a.size
+        quotes = np.flatnonzero(a == _QUOTE)
+        backslash = a == _BACKSLASH
+        carried = self._backslashes
+        not_backslash = np.flatnonzero(~backslash)
+        if not_backslash.size == 0:  # nothing but backslashes
+            self._backslashes = carried + a.size
+        else:
+            self._backslashes = a.size - 1 - int(not_backslash[-1])
+        if quotes.size and (carried or backslash.any()):
+            # a quote is escaped when an odd run of backslashes precedes it
+            k = np.searchsorted(not_backslash, quotes)  # quotes are not backslashes: exact positions
+            before = np.where(k > 0, not_backslash[np.maximum(k - 1, 0)], -1)
+            run = quotes - before - 1 + np.where(before < 0, carried, 0)
+            quotes = quotes[run % 2 == 0]
+        start_inside = self._in_string
+        self._in_string = bool((quotes.size + start_inside) % 2)
+        for mask_value, is_container in ((_BRACE, True), (_BRACKET, True), (_COMMA, False)):
+            found = np.flatnonzero(a == mask_value)
+            if found.size == 0:
+                continue
+            if quotes.size:
+                outside = (np.searchsorted(quotes, found) + start_inside) % 2 == 0
+                n = int(np.count_nonzero(outside))
+            else:
+                n = 0 if start_inside else int(found.size)
+            self.items += n
+            if is_container:
+                self.containers += n
+
+
+def check_json_size(data: bytes | bytearray | memoryview | str, *, path: str = "", what: str = "the body") -> None:
+    """Refuse JSON text with too many objects, arrays or elements before it is parsed (:class:`JsonCounter`).
+
+    Text shorter than the bounds cannot exceed them and is not scanned.
+
+    Raises
+    ------
+    InputError
+        Naming ``path``, the count and the bound.
+    """
+    if len(data) <= min(MAX_JSON_CONTAINERS, MAX_JSON_ITEMS):
+        return
+    raw = data.encode("utf-8") if isinstance(data, str) else data
+    JsonCounter(path=path, what=what).feed(raw)
 
 
 def load_json(data: bytes | bytearray | memoryview | str, *, path: str = "", what: str = "the body") -> Any:
@@ -73,19 +202,20 @@ def load_json(data: bytes | bytearray | memoryview | str, *, path: str = "", wha
         try:
             text = bytes(data).decode("utf-8-sig")
         except UnicodeDecodeError as exc:
-            raise InputError(path, f"{what} is not valid JSON: not UTF-8 text (byte {exc.start})") from None
+            raise MalformedInput(path, f"{what} is not valid JSON: not UTF-8 text (byte {exc.start})") from None
     else:
         text = data
+    check_json_size(text, path=path, what=what)
     try:
         doc = json.loads(text, parse_constant=_no_constant)
     except _Constant as exc:
-        raise InputError(path, f"{what} is not valid JSON: {exc.args[0]} is not a number "
-                               "(NaN and Infinity are not JSON: send finite numbers)") from None
+        raise MalformedInput(path, f"{what} is not valid JSON: {exc.args[0]} is not a number "
+                                   "(NaN and Infinity are not JSON: send finite numbers)") from None
     except RecursionError:
         raise InputError(path, f"nested deeper than {MAX_JSON_DEPTH} levels of objects and lists") from None
     except json.JSONDecodeError as exc:
-        raise InputError(path, f"{what} is not valid JSON: {exc.msg} at character {exc.pos} (line {exc.lineno}, "
-                               f"column {exc.colno})") from None
+        raise MalformedInput(path, f"{what} is not valid JSON: {exc.msg} at character {exc.pos} (line {exc.lineno}, "
+                                   f"column {exc.colno})") from None
     except ValueError as exc:  # an integer of more digits than Python converts (sys.int_info)
         raise InputError(path, f"{what} holds a number out of range (its magnitude must be <= "
                                f"{MAX_JSON_NUMBER:g}): {exc}") from None
