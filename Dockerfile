@@ -9,9 +9,11 @@
 # image declares no VOLUME, so nothing is created behind your back. The service runs as the
 # unprivileged user rcsa (uid 10001) with RCSA_WORKERS uvicorn workers (default 2) sharing the
 # store safely; it writes nothing outside /data and /tmp, so the root file system may be
-# read-only. A start that cannot work (bad RCSA_* setting, store not writable, Dask scheduler
-# unreachable) exits 1 with the reason. docker-compose.yml runs it with a Dask scheduler and
-# two workers (RCSA_EXTRAS=dask).
+# read-only. Slow clients are bounded (RCSA_HEADER_TIMEOUT_S, RCSA_BODY_TIMEOUT_S with
+# RCSA_BODY_MIN_RATE_BYTES_S, RCSA_TIMEOUT_KEEP_ALIVE_S) and so are connections
+# (RCSA_LIMIT_CONCURRENCY per worker: 503 beyond). A start that cannot work (bad RCSA_*
+# setting, store not writable, Dask scheduler unreachable) exits 1 with the reason.
+# docker-compose.yml runs it with a Dask scheduler and two workers (RCSA_EXTRAS=dask).
 #
 # Base image: BASE_IMAGE defaults to the upstream python:3.11.11-slim-bookworm pinned by its
 # digest. Where no registry can be reached, docker/build-base.sh makes a local stand-in from
@@ -39,6 +41,12 @@ ENV PIP_NO_CACHE_DIR=1 \
     PATH=/opt/venv/bin:$PATH \
     RCSA_STORE=/data/store \
     RCSA_WORKERS=2 \
+    RCSA_LIMIT_CONCURRENCY=100 \
+    RCSA_TIMEOUT_KEEP_ALIVE_S=5 \
+    RCSA_MAX_HEAD_BYTES=16384 \
+    RCSA_HEADER_TIMEOUT_S=10 \
+    RCSA_BODY_TIMEOUT_S=10 \
+    RCSA_BODY_MIN_RATE_BYTES_S=4096 \
     MPLCONFIGDIR=/tmp/matplotlib
 
 RUN useradd --uid 10001 --user-group --no-create-home --home-dir /tmp --shell /usr/sbin/nologin rcsa \

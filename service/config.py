@@ -71,3 +71,12 @@ class Settings(BaseSettings):
     gzip_level: int = Field(1, ge=1, le=9, description="gzip level (1 is fastest; numeric JSON gains "
                             "little from higher levels).")
     access_log: bool = Field(True, description="One log line per request, with its request id.")
+    header_timeout_s: float = Field(10.0, gt=0, description="A connection must send the whole head of a request "
+                                    "(request line and headers) within this many seconds of its first byte (or of "
+                                    "being opened), or it is closed, s (slow-header clients; rcsa serve and the "
+                                    "image use the service's HTTP protocol, service.http).")
+    body_timeout_s: float = Field(10.0, gt=0, description="Longest pause while a request body arrives, and the "
+                                  "grace before body_min_rate_bytes_s counts; a body that stalls or trickles is "
+                                  "answered 408 and the connection closed, s.")
+    body_min_rate_bytes_s: float = Field(4096.0, gt=0, description="Average rate a request body must keep "
+                                         "arriving at after the first body_timeout_s, bytes/s.")

@@ -18,18 +18,32 @@ installed, else h11) that sets ``TCP_NODELAY`` on every TCP connection it is giv
 
 ``rcsa serve`` and the Docker image do this. ``benchmarks/bench_service.py`` measures the
 keep-alive latency of ``/healthz``.
+
+The same class bounds the time the **head of a request** may take (uvicorn has no such
+timeout: its keep-alive timer stops at the first byte of the next request, so a client that
+sends its headers a byte at a time held a connection for as long as it liked): from the
+moment a connection opens, or the first byte of a request after the previous answer, the
+request line and headers must be complete within ``RCSA_HEADER_TIMEOUT_S`` (10 s), or the
+connection is closed. The body's own timeout is the service's
+(:class:`service.middleware.RequestContextMiddleware`).
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import functools
+import logging
 import socket
 from typing import Any
 
 from uvicorn.protocols.http.auto import AutoHTTPProtocol
 
-__all__ = ["HTTP_PROTOCOL", "NoDelayHTTPProtocol", "set_nodelay"]
+from .config import Settings
+
+__all__ = ["HTTP_PROTOCOL", "NoDelayHTTPProtocol", "header_timeout_s", "set_nodelay"]
+
+log = logging.getLogger("service")
 
 #: The ``--http`` value (import string) that selects :class:`NoDelayHTTPProtocol`.
 HTTP_PROTOCOL = "service.http:NoDelayHTTPProtocol"
@@ -46,10 +60,54 @@ def set_nodelay(transport: asyncio.BaseTransport) -> bool:
     return False
 
 
+@functools.cache
+def header_timeout_s() -> float:
+    """``RCSA_HEADER_TIMEOUT_S`` of this process's settings, s (read once)."""
+    return Settings().header_timeout_s
+
+
 class NoDelayHTTPProtocol(AutoHTTPProtocol):  # type: ignore[misc,valid-type]
-    """uvicorn's automatic HTTP protocol, with ``TCP_NODELAY`` on each connection."""
+    """uvicorn's automatic HTTP protocol, with ``TCP_NODELAY`` on each connection and a
+    timeout on the head of every request (module docstring)."""
+
+    _head_timer: asyncio.TimerHandle | None = None
 
     def connection_made(self, transport: Any) -> None:
-        """Set ``TCP_NODELAY``, then let uvicorn take the connection."""
+        """Set ``TCP_NODELAY``, let uvicorn take the connection, and start waiting for a head."""
         set_nodelay(transport)
         super().connection_made(transport)
+        self._arm_head_timer()
+
+    def data_received(self, data: bytes) -> None:
+        """Start the head's clock at the first byte of a request; stop it once its head is complete."""
+        if self._between_requests():
+            self._arm_head_timer()
+        super().data_received(data)
+        if not self._between_requests():
+            self._disarm_head_timer()
+
+    def connection_lost(self, exc: Exception | None) -> None:
+        """Forget the head's clock, then let uvicorn close."""
+        self._disarm_head_timer()
+        super().connection_lost(exc)
+
+    def _between_requests(self) -> bool:
+        cycle = getattr(self, "cycle", None)
+        return cycle is None or bool(cycle.response_complete)
+
+    def _arm_head_timer(self) -> None:
+        if self._head_timer is None:
+            self._head_timer = asyncio.get_running_loop().call_later(header_timeout_s(), self._head_too_slow)
+
+    def _disarm_head_timer(self) -> None:
+        if self._head_timer is not None:
+            self._head_timer.cancel()
+            self._head_timer = None
+
+    def _head_too_slow(self) -> None:
+        self._head_timer = None
+        if self._between_requests() and not self.transport.is_closing():
+            client = getattr(self, "client", None)
+            log.info("closed a connection from %s: no complete request head within %g s (RCSA_HEADER_TIMEOUT_S)",
+                     client[0] if client else "-", header_timeout_s())
+            self.transport.close()

@@ -160,7 +160,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         app.include_router(router)
     app.add_middleware(GZipMiddleware, minimum_size=settings.gzip_min_bytes, compresslevel=settings.gzip_level)
     app.add_middleware(RequestContextMiddleware, metrics=metrics, max_body_bytes=settings.max_body_bytes,
-                       access=settings.access_log)
+                       access=settings.access_log, body_timeout_s=settings.body_timeout_s,
+                       body_min_rate_bytes_s=settings.body_min_rate_bytes_s)
 
     def openapi() -> dict[str, Any]:
         if app.openapi_schema is None:

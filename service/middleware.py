@@ -8,6 +8,17 @@ copy). For every HTTP request it
   line written while the request runs (``%(request_id)s``, via a context variable);
 * refuses bodies over the limit with ``413`` — at once when ``Content-Length`` says so, else
   while the body is read (chunked uploads are counted byte by byte);
+* bounds the time a body may take to arrive (uvicorn has no such timeout): while the app
+  waits for the next piece of the body, at most ``body_timeout_s`` may pass, and in all at
+  most ``body_timeout_s`` plus the bytes received over ``body_min_rate_bytes_s`` — a client
+  that trickles its body is answered ``408`` and disconnected, whatever the size it announced
+  (:class:`BodyTimeout`; the head of a request has its own timeout in :mod:`service.http`);
+* a client that disconnects before its request was answered is counted and logged as such
+  (status ``499``, as nginx says it, without a traceback), not as a ``500``;
+* puts the security headers (:data:`SECURITY_HEADERS`) on every answer, and a
+  Content-Security-Policy that allows nothing on every answer that is not a page;
+* closes the connection after answering a request whose body was not read to its end (a
+  refused upload is not read on);
 * counts the request and its latency by route template and status (``/metrics``);
 * turns an exception nobody handled (a bug) into a generic ``500`` problem after logging
   its traceback with the request id.
@@ -15,6 +26,7 @@ copy). For every HTTP request it
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import re
 import time
@@ -23,12 +35,34 @@ from contextvars import ContextVar
 
 import orjson
 from starlette.datastructures import Headers, MutableHeaders
+from starlette.requests import ClientDisconnect
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from .errors import PROBLEM_MEDIA_TYPE, BodyTooLarge, problem_body
 from .metrics import Metrics
 
-__all__ = ["BODY_LIMIT_KEY", "RequestContextMiddleware", "RequestIdFilter", "configure_logging", "request_id_var"]
+__all__ = ["BODY_LIMIT_KEY", "CLIENT_CLOSED_REQUEST", "SECURITY_HEADERS", "BodyTimeout", "RequestContextMiddleware",
+           "RequestIdFilter", "configure_logging", "request_id_var"]
+
+#: Status counted (``/metrics``, access log) for a request whose client went away before the
+#: answer (nginx's 499 "client closed request"; never sent: nobody is there to read it).
+CLIENT_CLOSED_REQUEST = 499
+#: Headers every answer carries (a route's own value wins).
+SECURITY_HEADERS = ((b"x-content-type-options", b"nosniff"), (b"x-frame-options", b"DENY"),
+                    (b"referrer-policy", b"no-referrer"), (b"cross-origin-opener-policy", b"same-origin"))
+#: Content-Security-Policy of every answer that is not an HTML page (JSON, files, pictures): nothing
+#: may run, load or frame it. Pages (the web view, the API reference) bring their own policy.
+_NO_CONTENT_POLICY = b"default-src 'none'; frame-ancestors 'none'; sandbox"
+
+
+class BodyTimeout(Exception):
+    """The request body did not arrive in time (see the module docstring)."""
+
+    def __init__(self, received: int, seconds: float) -> None:
+        super().__init__(f"the request body did not arrive in time: {received} bytes in {seconds:.1f} s of waiting; "
+                         "send it without pauses (the server waits at most RCSA_BODY_TIMEOUT_S between pieces and "
+                         "needs RCSA_BODY_MIN_RATE_BYTES_S on average)")
+        self.detail = str(self)
 
 log = logging.getLogger("service")
 access_log = logging.getLogger("service.access")
@@ -88,13 +122,33 @@ def configure_logging(access: bool) -> None:
         logging.getLogger("uvicorn.access").disabled = True
 
 
-async def _send_problem(scope: Scope, send: Send, status: int, detail: str, request_id: str) -> None:
-    body = orjson.dumps(problem_body(status, detail, instance=scope.get("path"), request_id=request_id))
+async def _send_problem(scope: Scope, send: Send, status: int, detail: str, request_id: str,
+                        *, slug: str | None = None) -> None:
+    body = orjson.dumps(problem_body(status, detail, slug=slug, instance=scope.get("path"), request_id=request_id))
     await send({"type": "http.response.start", "status": status,
                 "headers": [(b"content-type", PROBLEM_MEDIA_TYPE.encode()),
-                            (b"content-length", str(len(body)).encode()),
-                            (b"x-request-id", request_id.encode())]})
+                            (b"content-length", str(len(body)).encode())]})  # the caller's send adds the id
     await send({"type": "http.response.body", "body": body})
+
+
+def _has_body(headers: Headers) -> bool:
+    """Whether the request announces a body (a length above 0, or chunked)."""
+    length = headers.get("content-length", "")
+    return (length.isdigit() and int(length) > 0) or "transfer-encoding" in headers
+
+
+def _secure(message: Message, close: bool) -> None:
+    """Add the security headers (and ``Connection: close``) to a response start, in place."""
+    raw = list(message.get("headers", []))
+    names = {k.lower() for k, _ in raw}
+    raw += [(k, v) for k, v in SECURITY_HEADERS if k not in names]
+    if b"content-security-policy" not in names:
+        media = next((v for k, v in raw if k.lower() == b"content-type"), b"")
+        if not media.lower().startswith(b"text/html"):
+            raw.append((b"content-security-policy", _NO_CONTENT_POLICY))
+    if close and b"connection" not in names:
+        raw.append((b"connection", b"close"))
+    message["headers"] = raw
 
 
 class RequestContextMiddleware:
@@ -107,13 +161,20 @@ class RequestContextMiddleware:
     max_body_bytes : int
     access : bool
         Write one access-log line per request.
+    body_timeout_s : float
+        Longest wait for the next piece of a body, and the grace before the rate counts, s.
+    body_min_rate_bytes_s : float
+        Average rate a body must keep arriving at beyond the grace, bytes/s.
     """
 
-    def __init__(self, app: ASGIApp, *, metrics: Metrics, max_body_bytes: int, access: bool = True) -> None:
+    def __init__(self, app: ASGIApp, *, metrics: Metrics, max_body_bytes: int, access: bool = True,
+                 body_timeout_s: float = 10.0, body_min_rate_bytes_s: float = 4096.0) -> None:
         self.app = app
         self.metrics = metrics
         self.max_body_bytes = int(max_body_bytes)
         self.access = access
+        self.body_timeout_s = float(body_timeout_s)
+        self.body_min_rate_bytes_s = float(body_min_rate_bytes_s)
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
@@ -128,16 +189,34 @@ class RequestContextMiddleware:
         status, started = 500, False
         limit = self.max_body_bytes
         received = 0
+        waited = 0.0  # seconds spent waiting for pieces of the body
+        body_done = not _has_body(headers)
+        disconnected = False
 
         async def receive_limited() -> Message:
-            nonlocal received
-            message = await receive()
+            nonlocal received, waited, body_done, disconnected
+            if body_done:
+                message = await receive()
+            else:
+                allowance = self.body_timeout_s + received / self.body_min_rate_bytes_s - waited
+                pause = min(self.body_timeout_s, max(allowance, 0.0))
+                t = time.monotonic()
+                try:
+                    message = await asyncio.wait_for(receive(), timeout=pause)
+                except TimeoutError:
+                    raise BodyTimeout(received, waited + pause) from None
+                finally:
+                    waited += time.monotonic() - t
             if message["type"] == "http.request":
                 received += len(message.get("body", b""))
+                if not message.get("more_body", False):
+                    body_done = True
                 own = scope.get(BODY_LIMIT_KEY)  # set by the route before it reads the body
                 if received > limit or (own is not None and received > own):
                     raise BodyTooLarge(limit if own is None else min(limit, int(own)),
                                        where=None if own is None else f"{scope.get('method')} {scope.get('path')}")
+            elif message["type"] == "http.disconnect" and not started:
+                disconnected = True
             return message
 
         async def send_with_id(message: Message) -> None:
@@ -145,28 +224,43 @@ class RequestContextMiddleware:
             if message["type"] == "http.response.start":
                 started, status = True, int(message["status"])
                 MutableHeaders(scope=message).append("X-Request-ID", rid)
+                _secure(message, close=not body_done)
             await send(message)
+
+        async def refuse(code: int, detail: str, slug: str | None = None) -> None:
+            nonlocal status, started
+            status, started = code, True
+            await _send_problem(scope, send_with_id, code, detail, rid, slug=slug)
 
         try:
             length = headers.get("content-length", "")
             if length.isdigit() and int(length) > limit:
-                status, started = 413, True
-                await _send_problem(scope, send, 413, BodyTooLarge(limit).detail, rid)
+                await refuse(413, BodyTooLarge(limit).detail)
                 return
             await self.app(scope, receive_limited, send_with_id)
         except BodyTooLarge as exc:
             if started:
                 raise
-            status, started = 413, True
-            await _send_problem(scope, send, 413, exc.detail, rid)
-        except Exception:
+            await refuse(413, exc.detail)
+        except BodyTimeout as exc:
+            if started:
+                raise
+            log.info("%s %s: %s", scope.get("method"), scope.get("path"), exc)
+            await refuse(408, exc.detail, slug="request-timeout")
+        except Exception as exc:
+            if disconnected or isinstance(exc, ClientDisconnect):  # nobody is there to answer
+                status = CLIENT_CLOSED_REQUEST
+                log.info("client disconnected before the answer to %s %s (%d bytes of the body received)",
+                         scope.get("method"), scope.get("path"), received)
+                return
             log.exception("unhandled error in %s %s", scope.get("method"), scope.get("path"))
             if started:
                 raise
-            status, started = 500, True
-            await _send_problem(scope, send, 500, "internal error: this is a bug in the service, not in "
-                                "your request; report it with the request_id", rid)
+            await refuse(500, "internal error: this is a bug in the service, not in your request; report it with "
+                              "the request_id")
         finally:
+            if disconnected and not started:
+                status = CLIENT_CLOSED_REQUEST
             elapsed = time.perf_counter() - t0
             route = scope.get("route")
             template = getattr(route, "path", None) or "<unmatched>"
