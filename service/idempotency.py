@@ -109,7 +109,7 @@ _RELEASED = "released"
 LEASE_S = 300.0
 MAX_STORED_BYTES = 32 * 1024 * 1024
 _PURGE_EVERY_S = 3600.0
-_KEPT_HEADERS = ("content-type", "location", "retry-after", "preference-applied")
+_KEPT_HEADERS = ("content-type", "location", "retry-after", "preference-applied", "x-job-token")
 _JOB_LOCATION = re.compile(r"^/v1/jobs/(j-[0-9a-f]{32})$")
 _HOST = socket.gethostname()
 

@@ -37,7 +37,7 @@ from .errors import install_error_handlers
 from .jobs import present
 from .metrics import Metrics
 from .middleware import RequestContextMiddleware, configure_logging
-from .openapi_doc import mark_anonymous_operations
+from .openapi_doc import document_job_token, mark_anonymous_operations
 from .routes import ROUTERS
 from .state import AppState, ensure_state
 
@@ -173,6 +173,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             for name, schema in defs.get("$defs", {}).items():
                 components.setdefault(name, schema)
             mark_anonymous_operations(doc, app.routes, settings.anonymous_read)
+            document_job_token(doc)
             app.openapi_schema = doc
         return app.openapi_schema
 

@@ -5,6 +5,8 @@
   anonymous callers while ``RCSA_ANONYMOUS_READ`` is true (:mod:`service.security`): those
   operations are declared ``security: [{}, {"APIKey": []}]`` (no key, or a key), so that
   generated clients do not insist on one. Writes keep the key as required.
+* **The job token.** Every operation that may answer ``202`` (it queues a job) takes the
+  anonymous caller's ``X-Job-Token`` header (:mod:`service.jobs`), as the job routes do.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from fastapi.routing import APIRoute
 from .errors import iter_routes
 from .security import require_read, require_write
 
-__all__ = ["OPTIONAL_KEY", "mark_anonymous_operations", "route_access"]
+__all__ = ["OPTIONAL_KEY", "document_job_token", "mark_anonymous_operations", "route_access"]
 
 #: ``security`` of an operation that anonymous callers may use: no key, or a key.
 OPTIONAL_KEY: list[dict[str, list[str]]] = [{}, {"APIKey": []}]
@@ -49,3 +51,19 @@ def mark_anonymous_operations(doc: dict[str, Any], routes: Iterable[Any], anonym
             operation = paths.get(route.path_format, {}).get(method.lower())
             if operation is not None and "security" in operation:
                 operation["security"] = [dict(s) for s in OPTIONAL_KEY]
+
+
+def document_job_token(doc: dict[str, Any]) -> None:
+    """Add the ``X-Job-Token`` header parameter to every operation that may answer ``202`` (in place)."""
+    from .jobs import JOB_TOKEN_HEADER
+
+    parameter = {"name": JOB_TOKEN_HEADER, "in": "header", "required": False, "schema": {"type": "string"},
+                 "description": "Anonymous callers: a job token of an earlier 202, so that a job started now joins "
+                                "it (GET /v1/jobs lists them together); without one, a 202 hands out a new one."}
+    for operations in doc.get("paths", {}).values():
+        for operation in operations.values():
+            if not isinstance(operation, dict) or "202" not in operation.get("responses", {}):
+                continue
+            params = operation.setdefault("parameters", [])
+            if not any(p.get("name", "").lower() == JOB_TOKEN_HEADER.lower() for p in params):
+                params.append(parameter)

@@ -12,7 +12,7 @@ from rcsa.app.results import MEDIA_TYPES, Format, encode_result, json_bytes, mis
 
 from .errors import PROBLEM_MEDIA_TYPE, ProblemError
 
-__all__ = ["ASYNC_ACCEPTED", "RESULT_FORMS", "RESULT_MEDIA", "body_limit", "json_response", "negotiate", "problems",
+__all__ = ["ACCEPTED_HEADERS", "ASYNC_ACCEPTED", "RESULT_FORMS", "accepted_entry", "RESULT_MEDIA", "body_limit", "json_response", "negotiate", "problems",
            "result_form", "result_response"]
 
 #: Media types of the forms a batch or library result may take (``Accept``), JSON first.
@@ -20,11 +20,24 @@ RESULT_MEDIA: tuple[str, ...] = tuple(MEDIA_TYPES.values())
 #: The form of each result media type.
 RESULT_FORMS: dict[str, Format] = {media: fmt for fmt, media in MEDIA_TYPES.items()}
 
+#: OpenAPI ``headers`` of a ``202 Accepted`` (a job was queued).
+ACCEPTED_HEADERS: dict[str, Any] = {
+    "Location": {"description": "The job: /v1/jobs/{id}.", "schema": {"type": "string"}},
+    "Retry-After": {"description": "Seconds before polling it.", "schema": {"type": "integer"}},
+    "X-Job-Token": {"description": "Anonymous callers only: the job token; send it in X-Job-Token to read the job "
+                                   "(GET /v1/jobs/{id}, its result, GET /v1/jobs). Jobs of a key are the key's.",
+                    "schema": {"type": "string"}}}
+
+
+def accepted_entry(description: str) -> dict[int | str, dict[str, Any]]:
+    """OpenAPI ``responses`` entry of a ``202`` that queued a job (body: JobStatus)."""
+    return {202: {"description": description, "headers": ACCEPTED_HEADERS, "content": {"application/json": {
+        "schema": {"$ref": "#/components/schemas/JobStatus"}}}}}
+
+
 #: OpenAPI ``responses`` entry of a computation that may run as a job.
-ASYNC_ACCEPTED: dict[int | str, dict[str, Any]] = {
-    202: {"description": "Prefer: respond-async: queued as a job (Location: /v1/jobs/{id}); its result is this "
-                         "endpoint's 200 body.", "content": {"application/json": {"schema": {
-                             "$ref": "#/components/schemas/JobStatus"}}}}}
+ASYNC_ACCEPTED = accepted_entry("Prefer: respond-async: queued as a job (Location: /v1/jobs/{id}); its result is "
+                                "this endpoint's 200 body.")
 
 
 def body_limit(operation: str, extra: Mapping[str, Any] | None = None) -> dict[str, Any]:

@@ -121,6 +121,7 @@ __all__ = [
     "EffectsResult",
     "IdentificationRequest",
     "IdentificationResult",
+    "JobPage",
     "JobStatus",
     "LibraryPredictionRequest",
     "LibraryResult",
@@ -563,6 +564,15 @@ class JobStatus(_Response):
                                            "results within their disk budget (RCSA_JOB_RESULTS_MAX_BYTES).")
     status_url: str = Field(description="Poll here.")
     result_url: str | None = Field(description="The result, once succeeded (and while it is kept).")
+    job_token: str | None = Field(None, description="Anonymous submissions (202) only: the token to send in "
+                                  "X-Job-Token to read this job (and to list it); also in the X-Job-Token header.")
+
+
+class JobPage(_Response):
+    """One page of your jobs, newest first."""
+
+    items: list[JobStatus]
+    next_cursor: str | None = Field(description="Pass as ?cursor= for the next page; null on the last page.")
 
 
 # --------------------------------------------------------------------------- libraries

@@ -19,9 +19,9 @@ from ..bodies import require_json
 from ..deps import StateDep
 from ..errors import ProblemError
 from ..idempotency import IDEMPOTENCY_PROBLEMS, IdempotencyKeyHeader, IdempotentRoute
-from ..jobs import answer, caller, job_document
-from ..responses import body_limit, json_response, negotiate, problems, result_form
-from ..schemas import BatchRequest, BatchResult, JobStatus
+from ..jobs import JobTokenHeader, answer, caller, job_document, own_job
+from ..responses import accepted_entry, body_limit, json_response, negotiate, problems, result_form
+from ..schemas import BatchRequest, BatchResult, JobPage, JobStatus
 from ..security import ReadAccess
 
 router = APIRouter(prefix="/v1", tags=["batches and jobs"], route_class=IdempotentRoute)
@@ -43,7 +43,7 @@ BINARY_RESULT = {MEDIA_TYPES["hdf5"]: {"schema": {"type": "string", "format": "b
 @router.post("/tool-point-frf/batch", dependencies=[Depends(require_json)], response_model=BatchResult,
              openapi_extra=body_limit("batch"), responses={
     200: {"description": "The results (BatchResult), or the same as HDF5 or Parquet (Accept).", "content": BINARY_RESULT},
-    202: {"model": JobStatus, "description": "Queued as a job; poll Location."}, **problems(401, 406, 413, 415, 422),
+    **accepted_entry("Queued as a job; poll Location."), **problems(401, 406, 413, 415, 422),
     **problems(429), **IDEMPOTENCY_PROBLEMS}, summary="Tool-point FRFs of many combinations")
 def predict_batch(body: BatchRequest, request: Request, state: StateDep, who: ReadAccess, prefer: PreferHeader = None,
                   tool_point: ToolPointQuery = None, idempotency_key: IdempotencyKeyHeader = None,
@@ -61,10 +61,25 @@ def predict_batch(body: BatchRequest, request: Request, state: StateDep, who: Re
                   result_format=fmt)
 
 
+@router.get("/jobs", response_model=JobPage, responses=problems(401, 422), summary="List your jobs")
+def list_jobs(request: Request, state: StateDep, who: ReadAccess, _token: JobTokenHeader = None,
+              limit: Annotated[int, Query(ge=1, le=1000, description="Items per page.")] = 100,
+              cursor: Annotated[str | None, Query(max_length=1000, description="next_cursor of the previous page.")]
+              = None) -> Response:
+    """Your jobs, newest first, a page at a time (``limit`` + ``cursor``): those of your API key,
+    or — anonymous — those of your ``X-Job-Token`` (none without one). Nobody else's."""
+    mine = caller(who, request, new_token=False)
+    jobs, next_cursor = state.jobs.page(mine.access, limit=limit, cursor=cursor) if mine.token or who.scope \
+        else ([], None)
+    return json_response({"items": [job_document(j) for j in jobs], "next_cursor": next_cursor})
+
+
 @router.get("/jobs/{job_id}", response_model=JobStatus, responses=problems(401, 404), summary="Job status")
-def get_job(job_id: JobId, state: StateDep, _: ReadAccess) -> Response:
-    """Status and progress of a job; ``result_url`` once it has succeeded."""
-    job = state.jobs.get(job_id)
+def get_job(job_id: JobId, request: Request, state: StateDep, who: ReadAccess, _token: JobTokenHeader = None
+            ) -> Response:
+    """Status and progress of one of your jobs; ``result_url`` once it has succeeded (``404``
+    for a job that is not yours)."""
+    job = own_job(state, job_id, who, request)
     headers = {} if job.finished else {"Retry-After": str(state.settings.retry_after_s)}
     return json_response(job_document(job), headers=headers)
 
@@ -76,7 +91,7 @@ def get_job(job_id: JobId, state: StateDep, _: ReadAccess) -> Response:
                                                                 {"$ref": "#/components/schemas/LibraryResult"}]}},
                       **BINARY_RESULT}},
     **problems(401, 404, 406, 409, 410)}, summary="Result of a finished job")
-def get_job_result(job_id: JobId, state: StateDep, _: ReadAccess,
+def get_job_result(job_id: JobId, request: Request, state: StateDep, who: ReadAccess, _token: JobTokenHeader = None,
                    accept: Annotated[str | None, Header(description=(
                        "Any Accept that allows the form the job wrote (the Accept of the POST that started it: "
                        "JSON, HDF5 or Parquet); 406 otherwise."))] = None) -> Response:
@@ -87,7 +102,7 @@ def get_job_result(job_id: JobId, state: StateDep, _: ReadAccess,
     in the form the job was asked for when it was submitted (JSON unless its POST's ``Accept``
     named HDF5 or Parquet).
     """
-    job = state.jobs.get(job_id)
+    job = own_job(state, job_id, who, request)
     if job.status == "succeeded" and job.result_evicted_utc is not None:
         raise ProblemError(410, f"the result of job {job_id} was deleted on {job.result_evicted_utc} to keep the kept "
                                 "job results within their disk budget (oldest first); submit the job again",

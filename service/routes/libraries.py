@@ -59,17 +59,15 @@ from rcsa.app.presets import (
     report_document,
 )
 from rcsa.errors import InputError
-from rcsa.infra.job_queue import QuotaExceeded
 
 from ..bodies import check_form_fields, form_json, form_text, form_uploads, read_body, validate_json
 from ..deps import StateDep
 from ..errors import ProblemError
 from ..idempotency import IDEMPOTENCY_PROBLEMS, IdempotencyKeyHeader, IdempotentRoute
-from ..jobs import accepted, answer, caller, pool, wants_async
-from ..responses import body_limit, json_response, negotiate, problems, result_form
+from ..jobs import answer, caller, submit, wants_async
+from ..responses import accepted_entry, body_limit, json_response, negotiate, problems, result_form
 from ..schemas import (
     Deleted,
-    JobStatus,
     LibraryList,
     LibraryPredictionRequest,
     LibraryResult,
@@ -134,7 +132,7 @@ async def _library_inputs(request: Request, state: AppState) -> tuple[dict[str, 
 @router.post("/tool-libraries:predict", response_model=LibraryResult, openapi_extra=body_limit("library", _BODY), responses={
     200: {"description": "The results (LibraryResult), or the same as HDF5 or Parquet (Accept).",
           "content": BINARY_RESULT},
-    202: {"model": JobStatus, "description": "Queued as a job; poll Location."},
+    **accepted_entry("Queued as a job; poll Location."),
     **problems(400, 401, 406, 413, 415, 422, 429), **IDEMPOTENCY_PROBLEMS},
     summary="Tool-point FRFs of a Fusion tool library")
 async def predict_library(request: Request, state: StateDep, who: ReadAccess, prefer: PreferHeader = None,
@@ -207,8 +205,7 @@ HDF5, ZIP, JSON, PARQUET = "application/x-hdf5", "application/zip", "application
 
 
 @router.post("/libraries/{library_id}:sync", response_model=SyncReport, openapi_extra=body_limit("library", _BODY), responses={
-    202: {"model": JobStatus, "description": "Queued as a library-sync job; poll Location (its result is the "
-                                             "sync report)."},
+    **accepted_entry("Queued as a library-sync job; poll Location (its result is the sync report)."),
     **problems(400, 401, 403, 413, 415, 422, 429), **IDEMPOTENCY_PROBLEMS},
     summary="Sync a stored library with a new export (write key)")
 async def sync_library(library_id: LibraryId, request: Request, state: StateDep, who: WriteAccess,
@@ -382,15 +379,9 @@ async def recommend_presets(
                                                                         content_type=content_type))
     asked = wants_async(prefer)
     if asked or job_request["items"] > state.settings.async_batch_threshold:
-        try:
-            job = state.jobs.submit(RECOMMEND_JOB, job_request, reuse_unfinished=idempotency_key is not None,
-                                    owner=owner, max_unfinished=state.settings.job_max_unfinished_per_caller,
-                                    pool=pool(owner))
-        except QuotaExceeded as exc:
-            raise ProblemError(429, f"{exc}; poll the jobs you have (GET /v1/jobs/{{id}}) and submit again when one "
-                                    "has finished", slug="too-many-jobs", title="Too many unfinished jobs",
-                               headers={"Retry-After": str(max(state.settings.retry_after_s, 5))}) from None
-        return accepted(state, job, preference_applied=asked)
+        return await run_in_threadpool(lambda: submit(state, RECOMMEND_JOB, job_request, owner,
+                                                      reuse_unfinished=idempotency_key is not None,
+                                                      preference_applied=asked))
     result = await run_in_threadpool(lambda: recommend_stored(state.bench, library_id, data, options,
                                                               file_name=name, content_type=content_type))
     written = result.report["summary"]["written"]

@@ -22,10 +22,13 @@ WRITE_KEY = "test-write-key-0123456789abcdef"
 READ_KEY = "test-read-key-0123456789abcdef"
 WRITE = {"X-API-Key": WRITE_KEY}
 READ = {"X-API-Key": READ_KEY}
+#: The job token every anonymous request of the test client carries (``X-Job-Token``): the
+#: jobs it submits are its own; tests of privacy send other tokens or none.
+JOB_TOKEN = "test-job-token-0123456789abcdef0123456789"
 GRID = {"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 5.0}
 PROBLEM = "application/problem+json"
 
-__all__ = ["GRID", "PROBLEM", "READ", "READ_KEY", "WRITE", "WRITE_KEY", "TestClient", "assert_problem"]
+__all__ = ["GRID", "JOB_TOKEN", "PROBLEM", "READ", "READ_KEY", "WRITE", "WRITE_KEY", "TestClient", "assert_problem"]
 
 
 def settings_for(store, **overrides: Any) -> Settings:
@@ -49,7 +52,7 @@ def make_client(store_path) -> Callable[..., Any]:
     @contextmanager
     def make(**overrides: Any) -> Iterator[TestClient]:
         app = create_app(settings_for(overrides.pop("store", store_path), **overrides))
-        with TestClient(app) as client:
+        with TestClient(app, headers={"X-Job-Token": JOB_TOKEN}) as client:
             yield client
 
     return make
@@ -106,3 +109,11 @@ def wait_until_ready(base: str, proc: Any, log_path: Any) -> None:
             pytest.fail("uvicorn exited before it was ready:\n" + log_path.read_text())
         time.sleep(0.2)
     pytest.fail("uvicorn did not become ready:\n" + log_path.read_text())
+
+
+def job_access(token: str = JOB_TOKEN) -> str:
+    """The access identity of an anonymous caller holding ``token`` (for jobs submitted to the
+    job store directly, as the service would)."""
+    import hashlib
+
+    return "token:" + hashlib.sha256(token.encode()).hexdigest()

@@ -15,7 +15,7 @@ from rcsa.errors import NotFoundError
 from rcsa.infra.job_queue import JobRunner, JobStore
 from rcsa.libraries import library_prediction as library_api
 
-from .conftest import GRID, assert_problem
+from .conftest import GRID, assert_problem, job_access
 
 
 def _batch(assembly, n_good=2, bad=True):
@@ -155,7 +155,7 @@ def test_failed_job_reports_a_problem(make_client, store_path, assembly):
         pass
     jobs = JobStore(jobs_dir)
     bad = {"frequency": {"start_hz": 0.0}, "spindle": {}, "combinations": [{}]}
-    job = jobs.submit("batch", library_api.checked_batch(bad, {}))
+    job = jobs.submit("batch", library_api.checked_batch(bad, {}), access=job_access())
     with make_client() as client:
         status = _wait(client, f"/v1/jobs/{job.id}")
         assert status["status"] == "failed" and status["error"]["status"] == 422

@@ -19,7 +19,7 @@ from rcsa.infra.job_queue import JobRunner, JobStore, ResultEvicted
 from rcsa.libraries import chunks
 from rcsa.reference import ra1
 
-from .conftest import READ, assert_problem
+from .conftest import JOB_TOKEN, READ, assert_problem
 
 
 def _batch(n: int, grid: dict, bad: tuple[int, ...] = ()) -> dict:
@@ -245,7 +245,8 @@ async def _serve(app, path: str) -> dict:
 
     scope = {"type": "http", "asgi": {"version": "3.0", "spec_version": "2.3"}, "http_version": "1.1",
              "method": "GET", "scheme": "http", "path": path, "raw_path": path.encode(), "query_string": b"",
-             "root_path": "", "headers": [(b"host", b"testserver")], "client": ("127.0.0.1", 50000),
+             "root_path": "", "headers": [(b"host", b"testserver"), (b"x-job-token", JOB_TOKEN.encode())],
+             "client": ("127.0.0.1", 50000),
              "server": ("testserver", 80), "state": {}}
     await app(scope, receive, send)
     return sent

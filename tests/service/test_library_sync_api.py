@@ -31,9 +31,10 @@ def _json_body(library: dict) -> dict:
 
 
 def _wait(client, location: str, timeout_s: float = 300.0) -> dict:
+    """Poll a sync job (a write key's job: read with that key)."""
     t0 = time.monotonic()
     while time.monotonic() - t0 < timeout_s:
-        job = client.get(location).json()
+        job = client.get(location, headers=WRITE).json()
         if job["status"] in ("succeeded", "failed"):
             return job
         time.sleep(0.05)
@@ -172,7 +173,7 @@ def test_replay_while_the_sync_job_runs_is_a_409(make_client, monkeypatch):
             release.set()
         job = _wait(client, first.headers["location"])
         assert job["status"] == "succeeded" and job["summary"]["added"] == 2
-        report = client.get(job["result_url"]).json()
+        report = client.get(job["result_url"], headers=WRITE).json()
         assert report["added"] == [tool_id(0), tool_id(1)] and report["computed"] == 2
         replay = client.post("/v1/libraries/shop:sync", json=body, headers=key)
         assert replay.status_code == 202 and replay.content == first.content
@@ -209,7 +210,7 @@ def test_a_killed_sync_job_is_resumed_and_takes_finished_tools_from_the_cache(ma
         assert busy.status_code in (409, 202)
         job = _wait(client, first.headers["location"])
         assert job["status"] == "succeeded" and job["attempts"] == 2
-        report = client.get(job["result_url"]).json()
+        report = client.get(job["result_url"], headers=WRITE).json()
         assert report["computed"] == 3 and report["from_cache"] == 2 and counted["tools"] == 5
         assert report["added"] == [tool_id(i) for i in range(5)] and report["revision"] == 1
         tools = client.get("/v1/libraries/shop").json()["tools"]

@@ -13,7 +13,6 @@ import logging
 from typing import Any
 
 import orjson
-
 from service.main import create_app
 from service.middleware import CLIENT_CLOSED_REQUEST
 

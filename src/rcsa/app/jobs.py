@@ -324,7 +324,8 @@ def _write_binary(fh: BinaryIO, started: EntryResults, fmt: str, kind: str) -> d
 
 def answer_or_queue(bench: Workbench, jobs: JobStore, work: Work, *, respond_async: bool, async_threshold: int,
                     reuse_unfinished: bool = False, owner: str | None = None,
-                    max_unfinished: int | None = None, pool: str | None = None) -> Job | Outcome:
+                    max_unfinished: int | None = None, pool: str | None = None,
+                    access: str | None = None) -> Job | Outcome:
     """Queue ``work`` as a job (:meth:`Work.should_queue`), or run it now.
 
     Parameters
@@ -346,6 +347,8 @@ def answer_or_queue(bench: Workbench, jobs: JobStore, work: Work, *, respond_asy
     pool : str, optional
         Whose runners the job shares (jobs are claimed fairly across pools and the running
         cap counts per pool; default: the owner's own).
+    access : str, optional
+        Who may read the job (:meth:`rcsa.infra.job_queue.JobStore.get`).
 
     Returns
     -------
@@ -363,7 +366,7 @@ def answer_or_queue(bench: Workbench, jobs: JobStore, work: Work, *, respond_asy
         if work.check is not None:
             work.check()
         return jobs.submit(work.kind, work.request, reuse_unfinished=reuse_unfinished, owner=owner,
-                           max_unfinished=max_unfinished, pool=pool)
+                           max_unfinished=max_unfinished, pool=pool, access=access)
     return run_work(bench, work.kind, work.request, plan=work.plan, backend=LocalBackend())
 
 

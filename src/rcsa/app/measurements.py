@@ -9,9 +9,6 @@ add nothing but their own input and output handling.
 
 from __future__ import annotations
 
-import base64
-import binascii
-import json
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -22,6 +19,7 @@ import numpy as np
 from rcsa.app.inputs import decode_json
 from rcsa.errors import ConflictError, InputError, NotFoundError, StoreError
 from rcsa.infra.atomic_files import atomic_write_bytes
+from rcsa.infra.pages import paginate
 from rcsa.measured.importers import measurement_from_contract, measurement_to_contract
 from rcsa.measured.importers.registry import (
     FORMATS,
@@ -235,22 +233,6 @@ def measurement_hdf5(store: Any, measurement_id: str) -> bytes:
         raise StoreError(f"cannot read measurement {measurement_id}: {e.strerror or e}") from None
 
 
-def _encode_cursor(info: Any) -> str:
-    raw = json.dumps([info.created_utc or "", info.id or ""]).encode()
-    return base64.urlsafe_b64encode(raw).decode().rstrip("=")
-
-
-def _decode_cursor(cursor: str) -> tuple[str, str]:
-    try:
-        raw = base64.urlsafe_b64decode(cursor + "=" * (-len(cursor) % 4))
-        created, ident = json.loads(raw)
-        if not isinstance(created, str) or not isinstance(ident, str):
-            raise ValueError
-        return created, ident
-    except (ValueError, TypeError, binascii.Error, UnicodeDecodeError):
-        raise InputError("cursor", "is not a cursor this service handed out; start again without it") from None
-
-
 def list_measurements(store: Any, *, limit: int = 100, cursor: str | None = None,
                       **filters: str | None) -> dict[str, Any]:
     """One page of the stored measurements' metadata, oldest first.
@@ -274,13 +256,8 @@ def list_measurements(store: Any, *, limit: int = 100, cursor: str | None = None
     """
     fields.integer(limit, "limit", ge=1, le=_MAX_PAGE)
     infos = store.list(filters.pop("spindle_id", None), **filters)
-    if cursor:
-        after = _decode_cursor(cursor)
-        infos = [i for i in infos if (i.created_utc or "", i.id or "") > after]
-    page = infos[:limit]
-    more = len(infos) > limit
-    out: dict[str, Any] = {"items": [i.to_dict() for i in page], "next_cursor": _encode_cursor(page[-1]) if more
-                           else None}
+    page, next_cursor = paginate(infos, key=lambda i: (i.created_utc or "", i.id or ""), limit=limit, cursor=cursor)
+    out: dict[str, Any] = {"items": [i.to_dict() for i in page], "next_cursor": next_cursor}
     damaged = store.damaged() if hasattr(store, "damaged") else []
     if damaged:  # left out of the items: unreadable files, so that a listing never fails on one
         out["damaged"] = damaged

@@ -42,6 +42,13 @@ Limits:
   ``result_evicted_utc``) until the rest fit; the newest result is always kept.
   :meth:`JobStore.result_path` of an evicted result raises :class:`ResultEvicted`.
 
+Access: a job is submitted with an ``access`` identity (the service's: ``key:<key id>`` for a
+keyed caller, ``token:<SHA-256 of the caller's job token>`` for an anonymous one) and
+:meth:`JobStore.get` with ``access`` finds it only for that identity — for anyone else it does
+not exist (:class:`~rcsa.errors.NotFoundError`); :meth:`JobStore.page` lists one identity's jobs.
+The ``owner`` (quotas) and the ``access`` (who may read) are apart: every anonymous caller of
+one address shares a quota, whatever tokens it holds.
+
 Duplicates: every row carries ``request_sha256``, the SHA-256 of the request's canonical
 JSON (:func:`canonical_request`). ``submit(..., reuse_unfinished=True)`` returns the
 unfinished job of the same kind, request *and owner* instead of queuing a copy (a job is
@@ -74,6 +81,7 @@ import orjson
 
 from rcsa.errors import InputError, NotFoundError, RcsaError
 from rcsa.infra.clock import utc_iso, utc_now_iso
+from rcsa.infra.pages import decode_cursor, encode_cursor
 from rcsa.infra.sqlite import connect, transaction
 
 __all__ = [
@@ -115,19 +123,22 @@ CREATE TABLE IF NOT EXISTS jobs (
     owner            TEXT,
     result_bytes     INTEGER,
     result_evicted_utc TEXT,
-    pool             TEXT
+    pool             TEXT,
+    access           TEXT
 );
 CREATE INDEX IF NOT EXISTS jobs_status ON jobs (status, created_utc);
 CREATE INDEX IF NOT EXISTS jobs_request ON jobs (request_sha256, kind);
 """
 #: Columns added since the first version (``ALTER TABLE`` on tables created before them).
-_ADDED_COLUMNS = {"owner": "TEXT", "result_bytes": "INTEGER", "result_evicted_utc": "TEXT", "pool": "TEXT"}
+_ADDED_COLUMNS = {"owner": "TEXT", "result_bytes": "INTEGER", "result_evicted_utc": "TEXT", "pool": "TEXT",
+                  "access": "TEXT"}
 _INDEXES = """
 CREATE INDEX IF NOT EXISTS jobs_owner ON jobs (owner, status);
 CREATE INDEX IF NOT EXISTS jobs_kept ON jobs (status, finished_utc) WHERE result_file IS NOT NULL;
+CREATE INDEX IF NOT EXISTS jobs_access ON jobs (access, created_utc, id);
 """
 _COLUMNS = ("id, kind, status, progress, created_utc, started_utc, finished_utc, attempts, "
-            "error, summary, request_sha256, heartbeat_unix, result_bytes, result_evicted_utc")
+            "error, summary, request_sha256, heartbeat_unix, result_bytes, result_evicted_utc, access")
 _BUSY_TIMEOUT_S = 30.0
 _PURGE_EVERY_S = 3600.0
 #: Fair choice of a queued job: fewest running jobs of its pool (its owner's own unless it was
@@ -251,6 +262,8 @@ class Job:
         Size of the result file (succeeded jobs).
     result_evicted_utc : str or None
         When the result file was deleted to keep the results within their disk budget.
+    access : str or None
+        Who may read it (module docstring); never in :meth:`to_dict`.
     """
 
     id: str
@@ -267,14 +280,15 @@ class Job:
     heartbeat_unix: float | None
     result_bytes: int | None = None
     result_evicted_utc: str | None = None
+    access: str | None = None
 
     @classmethod
     def _from_row(cls, row: tuple) -> Job:
         (jid, kind, status, progress, created, started, finished, attempts, error, summary,
-         sha, heartbeat, result_bytes, evicted) = row
+         sha, heartbeat, result_bytes, evicted, access) = row
         return cls(jid, kind, status, float(progress), created, started, finished, int(attempts),
                    json.loads(error) if error else None, json.loads(summary) if summary else None,
-                   sha, heartbeat, None if result_bytes is None else int(result_bytes), evicted)
+                   sha, heartbeat, None if result_bytes is None else int(result_bytes), evicted, access)
 
     @property
     def has_result(self) -> bool:
@@ -336,7 +350,8 @@ class JobStore:
 
     # ------------------------------------------------------------------ submit / read
     def submit(self, kind: str, request: Mapping[str, Any], *, reuse_unfinished: bool = False,
-               owner: str | None = None, max_unfinished: int | None = None, pool: str | None = None) -> Job:
+               owner: str | None = None, max_unfinished: int | None = None, pool: str | None = None,
+               access: str | None = None) -> Job:
         """Queue a job; return its state.
 
         Parameters
@@ -355,6 +370,8 @@ class JobStore:
         pool : str, optional
             Whose runners it shares: claims are fair across pools and the running cap counts
             per pool (default: the owner's own).
+        access : str, optional
+            Who may read it (module docstring); a reused job is one of the same access too.
 
         Raises
         ------
@@ -366,8 +383,8 @@ class JobStore:
         with closing(self._connect()) as con, transaction(con):
             if reuse_unfinished:
                 row = con.execute("SELECT id FROM jobs WHERE request_sha256 = ? AND kind = ? AND owner IS ? AND "
-                                  "status IN ('queued', 'running') ORDER BY created_utc, id LIMIT 1",
-                                  (sha, kind, owner)).fetchone()
+                                  "access IS ? AND status IN ('queued', 'running') ORDER BY created_utc, id LIMIT 1",
+                                  (sha, kind, owner, access)).fetchone()
                 if row is not None:
                     return self.get(row[0])
             if max_unfinished is not None:
@@ -376,17 +393,25 @@ class JobStore:
                 if n >= max_unfinished:
                     raise QuotaExceeded(owner or "this caller", int(max_unfinished))
             con.execute(
-                "INSERT INTO jobs (id, kind, status, request, request_sha256, created_utc, owner, pool) "
-                "VALUES (?, ?, 'queued', ?, ?, ?, ?, ?)", (job_id, kind, data, sha, utc_now_iso(), owner, pool))
+                "INSERT INTO jobs (id, kind, status, request, request_sha256, created_utc, owner, pool, access) "
+                "VALUES (?, ?, 'queued', ?, ?, ?, ?, ?, ?)",
+                (job_id, kind, data, sha, utc_now_iso(), owner, pool, access))
         return self.get(job_id)
 
-    def get(self, job_id: str) -> Job:
+    def get(self, job_id: str, *, access: str | None = None) -> Job:
         """The job's state.
+
+        Parameters
+        ----------
+        job_id : str
+        access : str, optional
+            Find the job only if it was submitted for this access identity (module docstring);
+            None: whoever it belongs to (the runners, the operator).
 
         Raises
         ------
         NotFoundError
-            No such job (or not a job id).
+            No such job (or not a job id), or not one of ``access``.
         """
         if not is_job_id(job_id):
             raise NotFoundError("job", str(job_id))
@@ -394,19 +419,53 @@ class JobStore:
             row = con.execute(f"SELECT {_COLUMNS} FROM jobs WHERE id = ?", (job_id,)).fetchone()
         if row is None:
             raise NotFoundError("job", job_id)
-        return Job._from_row(row)
+        job = Job._from_row(row)
+        if access is not None and not (job.access is not None and secrets.compare_digest(job.access, access)):
+            raise NotFoundError("job", job_id)  # someone else's job does not exist for this caller
+        return job
 
-    def request(self, job_id: str) -> dict[str, Any]:
-        """The request document a job was submitted with."""
-        self.get(job_id)
+    def page(self, access: str, *, limit: int = 100, cursor: str | None = None) -> tuple[list[Job], str | None]:
+        """One page of the jobs of one access identity, newest first, and the next page's cursor.
+
+        Parameters
+        ----------
+        access : str
+        limit : int
+            Jobs per page (>= 1).
+        cursor : str, optional
+            The cursor of the previous page (:mod:`rcsa.infra.pages`).
+
+        Raises
+        ------
+        InputError
+            A cursor this store did not hand out.
+        """
+        if limit < 1:
+            raise InputError("limit", f"must be >= 1, got {limit}")
+        sql, args = f"SELECT {_COLUMNS} FROM jobs WHERE access = ?", [access]
+        if cursor:
+            created, ident = decode_cursor(cursor)
+            sql += " AND (created_utc < ? OR (created_utc = ? AND id < ?))"
+            args += [created, created, ident]
+        sql += " ORDER BY created_utc DESC, id DESC LIMIT ?"
+        args.append(int(limit) + 1)
+        with closing(self._connect()) as con:
+            jobs = [Job._from_row(r) for r in con.execute(sql, args)]
+        more = len(jobs) > limit
+        jobs = jobs[:limit]
+        return jobs, (encode_cursor((jobs[-1].created_utc, jobs[-1].id)) if more else None)
+
+    def request(self, job_id: str, *, access: str | None = None) -> dict[str, Any]:
+        """The request document a job was submitted with (``access`` as in :meth:`get`)."""
+        self.get(job_id, access=access)
         with closing(self._connect()) as con:
             row = con.execute("SELECT request FROM jobs WHERE id = ?", (job_id,)).fetchone()
         if row is None:
             raise NotFoundError("job", job_id)
         return orjson.loads(row[0])
 
-    def result_path(self, job_id: str) -> Path:
-        """The result file of a succeeded job.
+    def result_path(self, job_id: str, *, access: str | None = None) -> Path:
+        """The result file of a succeeded job (``access`` as in :meth:`get`).
 
         Raises
         ------
@@ -415,7 +474,7 @@ class JobStore:
         ResultEvicted
             It succeeded, but its result was evicted (disk budget).
         """
-        job = self.get(job_id)
+        job = self.get(job_id, access=access)
         if job.status == "succeeded" and job.result_evicted_utc is not None:
             raise ResultEvicted(job.id, job.result_evicted_utc)
         path = self.results / f"{job.id}.json"
