@@ -200,7 +200,10 @@ def malformed_body(exc: MalformedInput) -> ProblemError:
 
 _NOT_FOUND_HINTS = {
     "measurement": "list the stored measurements with GET /v1/measurements",
-    "job": "job ids come from a 202 answer's Location header; finished jobs are purged after a while",
+    "job": "job ids come from a 202 answer's Location header, and a job is read with the API key or job token "
+           "(X-Job-Token) that started it; finished jobs are purged after a while",
+    "library": "list the stored libraries with GET /v1/libraries",
+    "tool": "list the library's tools with GET /v1/libraries/{library_id}",
     "result of job": "the job has not succeeded; GET /v1/jobs/{id} shows its status",
 }
 

@@ -163,7 +163,8 @@ def answer(state: AppState, work: Work, *, prefer: str | None, idempotency_key: 
         return accepted(state, result, preference_applied=asked, token=owner.token if owner else None)
     if result.kind in ("batch", "library"):
         return result_response(result.document, result_format, result.kind, headers=headers)
-    return json_response(present(result), headers=headers)
+    created = result.kind == "library-sync" and result.document.get("revision") == 1  # its first sync made it
+    return json_response(present(result), status_code=201 if created else 200, headers=headers)
 
 
 def too_many_jobs(state: AppState, exc: QuotaExceeded) -> ProblemError:

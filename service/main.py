@@ -37,7 +37,12 @@ from .errors import install_error_handlers
 from .jobs import present
 from .metrics import Metrics
 from .middleware import RequestContextMiddleware, configure_logging
-from .openapi_doc import document_job_token, mark_anonymous_operations
+from .openapi_doc import (
+    document_job_token,
+    mark_anonymous_operations,
+    operation_id,
+    write_operations,
+)
 from .routes import ROUTERS
 from .state import AppState, ensure_state
 
@@ -54,9 +59,11 @@ measurements and stability lobes.
   Complex arrays are `{"real": [...], "imag": [...]}`.
 * Errors are `application/problem+json` (RFC 9457) with a `detail` to act on and `errors[]`
   naming each offending field.
-* Auth: header `X-API-Key`. Writes (measurement upload and delete) need a key with scope
-  `write` (created on the server with `rcsa keys create --scope write`); reads and
+* Auth: header `X-API-Key`. Every operation that changes the store needs a key with scope
+  `write` (created on the server with `rcsa keys create --scope write`): {writes}. Reads and
   computations are anonymous unless `RCSA_ANONYMOUS_READ=false`.
+* Jobs are private: readable only with the API key that started them, or — anonymous — with the
+  job token of their `202` (`X-Job-Token`); `404` for anyone else. `GET /v1/jobs` lists yours.
 * Large batches and libraries answer `202 Accepted` with `Location: /v1/jobs/{id}`; poll it,
   then GET its `result_url`. `Prefer: respond-async` always makes a job.
 * POSTs that store or start something (measurement uploads, batches, libraries) accept an
@@ -148,7 +155,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             await run_in_threadpool(state.bench.backend.close)
 
     app = FastAPI(title="rcsa — tool-point FRF service", version=__version__, description=DESCRIPTION,
-                  lifespan=lifespan, separate_input_output_schemas=False,
+                  lifespan=lifespan, separate_input_output_schemas=False, generate_unique_id_function=operation_id,
                   # /docs and /redoc with local assets (service.routes.docs): they work offline
                   docs_url=None, redoc_url=None)
     # the state is built by the lifespan, or on the first request when the app is served
@@ -165,8 +172,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     def openapi() -> dict[str, Any]:
         if app.openapi_schema is None:
-            doc = get_openapi(title=app.title, version=app.version, description=app.description, routes=app.routes,
-                              separate_input_output_schemas=False)
+            writes = ", ".join(f"`{w}`" for w in write_operations(app.routes))
+            doc = get_openapi(title=app.title, version=app.version, description=app.description.replace("{writes}", writes),
+                              routes=app.routes, separate_input_output_schemas=False)
             _, defs = models_json_schema([(m, "validation") for m in _EXTRA_MODELS],
                                          ref_template="#/components/schemas/{model}")
             components = doc.setdefault("components", {}).setdefault("schemas", {})

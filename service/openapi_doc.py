@@ -5,6 +5,11 @@
   anonymous callers while ``RCSA_ANONYMOUS_READ`` is true (:mod:`service.security`): those
   operations are declared ``security: [{}, {"APIKey": []}]`` (no key, or a key), so that
   generated clients do not insist on one. Writes keep the key as required.
+* **Operation ids** a client generator turns into good names: the route function's name in
+  lower camel case (``predict_tool_point`` → ``predictToolPoint``, ``list_measurements`` →
+  ``listMeasurements``; :func:`operation_id`).
+* **Which operations need a write key**: the description lists them, from the routes
+  themselves (:func:`write_operations`), so the text never goes stale.
 * **The job token.** Every operation that may answer ``202`` (it queues a job) takes the
   anonymous caller's ``X-Job-Token`` header (:mod:`service.jobs`), as the job routes do.
 """
@@ -19,7 +24,8 @@ from fastapi.routing import APIRoute
 from .errors import iter_routes
 from .security import require_read, require_write
 
-__all__ = ["OPTIONAL_KEY", "document_job_token", "mark_anonymous_operations", "route_access"]
+__all__ = ["OPTIONAL_KEY", "document_job_token", "mark_anonymous_operations", "operation_id", "route_access",
+           "write_operations"]
 
 #: ``security`` of an operation that anonymous callers may use: no key, or a key.
 OPTIONAL_KEY: list[dict[str, list[str]]] = [{}, {"APIKey": []}]
@@ -67,3 +73,24 @@ def document_job_token(doc: dict[str, Any]) -> None:
             params = operation.setdefault("parameters", [])
             if not any(p.get("name", "").lower() == JOB_TOKEN_HEADER.lower() for p in params):
                 params.append(parameter)
+
+
+def operation_id(route: APIRoute) -> str:
+    """The OpenAPI ``operationId`` of a route: its function's name in lower camel case.
+
+    >>> from fastapi.routing import APIRoute
+    >>> def list_measurements(): ...
+    >>> operation_id(APIRoute("/v1/measurements", list_measurements))
+    'listMeasurements'
+    """
+    first, *rest = route.name.split("_")
+    return first + "".join(part[:1].upper() + part[1:] for part in rest)
+
+
+def write_operations(routes: Iterable[Any]) -> list[str]:
+    """``"METHOD /path"`` of every operation that needs a write key, in route order."""
+    out = []
+    for route in iter_routes(routes):
+        if isinstance(route, APIRoute) and route.include_in_schema and route_access(route) == "write":
+            out += [f"{method} {route.path_format}" for method in sorted(route.methods)]
+    return out

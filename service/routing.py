@@ -12,7 +12,7 @@ puts the checks that must come first in front, in this order:
    among its dependencies) is checked from the ``X-API-Key`` header before a byte of the body
    is read: a refused write never reads, parses or stores anything.
 3. **The JSON policy** — a JSON body's objects, arrays and elements are counted while it
-   arrives (:class:`rcsa.model.input_policy.JsonCounter`: at most ``MAX_JSON_CONTAINERS`` and
+   arrives (:func:`rcsa.app.inputs.json_counter`: at most ``MAX_JSON_CONTAINERS`` and
    ``MAX_JSON_ITEMS``), so a body of millions of tiny items is refused before the rest of it is
    read and before anything is parsed; then it is decoded once by
    :func:`rcsa.app.inputs.decode_json` (RFC 8259 strict: no NaN/Infinity; nesting ≤
@@ -47,10 +47,9 @@ from fastapi.routing import APIRoute
 from starlette.responses import Response
 
 from rcsa.app.budget import time_limited
-from rcsa.app.inputs import decode_json
+from rcsa.app.inputs import decode_json, json_counter
 from rcsa.errors import MalformedInput, TimeLimitExceeded
 from rcsa.infra.api_keys import Principal
-from rcsa.model.input_policy import JsonCounter
 
 from .errors import BodyTooLarge, malformed_body
 from .middleware import BODY_LIMIT_KEY
@@ -68,7 +67,7 @@ PRINCIPAL_KEY = "rcsa.principal"
 #: prediction's body is ~1 KiB; 8 MiB of batch takes ~0.1 s to decode and more to validate).
 OFF_LOOP_BYTES = 64 * 1024
 #: Bodies whose Content-Length says at most this many bytes are not counted while they arrive
-#: (too short to exceed the JSON policy's bounds; :func:`rcsa.model.input_policy.check_json_size`).
+#: (too short to exceed the JSON policy's bounds, which :func:`rcsa.app.inputs.decode_json` checks).
 _COUNT_ABOVE_BYTES = 200_000
 
 Handler = Callable[[Request], Awaitable[Response]]
@@ -87,16 +86,16 @@ class ServiceRequest(Request):
 
     async def body(self) -> bytes:
         """The body; a JSON body's objects, arrays and elements counted piece by piece as they
-        arrive (:class:`rcsa.model.input_policy.JsonCounter`: refused past the bounds before the
+        arrive (:func:`rcsa.app.inputs.json_counter`: refused past the bounds before the
         rest is read)."""
         if not hasattr(self, "_body"):
             length = self.headers.get("content-length", "")
-            counter = JsonCounter() if is_json_media(self._media()) and not (
+            count = json_counter() if is_json_media(self._media()) and not (
                 length.isdigit() and int(length) <= _COUNT_ABOVE_BYTES) else None
             chunks: list[bytes] = []
             async for chunk in self.stream():
-                if counter is not None and chunk:
-                    counter.feed(chunk)
+                if count is not None and chunk:
+                    count(chunk)
                 chunks.append(chunk)
             self._body = b"".join(chunks)
             self._rcsa_counted = True

@@ -779,6 +779,37 @@ class FrfIn(_Request):
     h: ComplexArrayIn = Field(description="Tool-point receptance, m/N.")
 
 
+class StoredFrf(_Request):
+    """A stored measurement's driving-point receptance h, used as the tool-point FRF as it is."""
+
+    measurement_id: str = Field(min_length=1, max_length=200, description="Id of a stored measurement with an h "
+                                "(GET /v1/measurements), e.g. a tool-tip tap test.", examples=["m-0123456789ab"])
+
+
+def _frf_tag(value: Any) -> str | None:
+    if isinstance(value, dict):
+        return "frf-stored" if "measurement_id" in value else "frf-inline"
+    if isinstance(value, StoredFrf):
+        return "frf-stored"
+    return "frf-inline" if isinstance(value, FrfIn) else None
+
+
+FrfRef = Annotated[
+    Annotated[FrfIn, Tag("frf-inline")] | Annotated[StoredFrf, Tag("frf-stored")],
+    Discriminator(_frf_tag, custom_error_type="frf",
+                  custom_error_message="must be an object {frequency_hz, h} or {measurement_id}"),
+]
+
+
+class LibraryToolRef(_Request):
+    """A tool of a stored library's last sync (GET /v1/libraries/{library_id} lists them)."""
+
+    library_id: str = Field(min_length=1, max_length=128, description="The stored library.",
+                            examples=["fusion-library"])
+    tool_id: str = Field(min_length=1, max_length=300, description="The tool's id in it (Fusion guid).",
+                         examples=["00000000-0000-4000-8000-000000000101"])
+
+
 class SpeedRange(_Request):
     """Spindle-speed grid: count values from start to stop."""
 
@@ -802,10 +833,15 @@ class LobesRequest(_Request):
         "radial_immersion": 0.5, "milling": "down", "spindle_speed_rpm": {"start": 2000, "stop": 30000,
                                                                           "count": 2000}}]})
 
-    frf_x: FrfIn | None = Field(None, description="Tool-point FRF in x (or give assembly).")
-    frf_y: FrfIn | None = Field(None, description="FRF in y on the same grid; null: same as x.")
+    frf_x: FrfRef | None = Field(None, description="Tool-point FRF in x, inline or a stored measurement's h "
+                                 "({\"measurement_id\": ...}); or give assembly or library_tool.")
+    frf_y: FrfRef | None = Field(None, description="FRF in y on the same grid; null: same as x.")
     assembly: Assembly | None = Field(None, description="Predict the FRF of this assembly instead.")
-    teeth: int = Field(ge=1, le=MAX_TEETH, description="Number of teeth (flutes).")
+    library_tool: LibraryToolRef | None = Field(None, description="Instead of assembly: a tool of a stored "
+                                                "library, by reference (its assembly is rebuilt from the library's "
+                                                "last sync and predicted; teeth default to its flute count).")
+    teeth: int | None = Field(None, ge=1, le=MAX_TEETH, description="Number of teeth (flutes); required unless "
+                              "library_tool gives it.")
     tangential_coefficient_n_m2: float = Field(ge=MIN_CUTTING_COEFFICIENT_N_M2, le=MAX_CUTTING_COEFFICIENT_N_M2,
                                                description="Tangential cutting coefficient Kt, N/m².")
     radial_ratio: float = Field(ge=0, le=MAX_RADIAL_RATIO, description="Radial to tangential coefficient ratio Kr "
@@ -1395,7 +1431,8 @@ class RecommendReport(_Response):
     file: RecommendedFile
 
 
-class LibraryList(_Response):
-    """Every stored library (without the per-tool lists)."""
+class LibraryPage(_Response):
+    """One page of the stored libraries, by id (without the per-tool lists)."""
 
-    libraries: list[LibrarySummary]
+    items: list[LibrarySummary]
+    next_cursor: str | None = Field(description="Pass as ?cursor= for the next page; null on the last page.")

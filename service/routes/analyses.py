@@ -60,7 +60,7 @@ def _answer(name: str, operation: str, body: BaseModel, request: Request, state:
 @router.post("/diagnoses", dependencies=[Depends(require_json)], response_model=DiagnosisResult,
              responses=_ERRORS, openapi_extra=body_limit("diagnosis"),
              summary="Sim-to-real gap diagnosis (contract \"Diagnosis\")")
-def post_diagnose(body: DiagnosisRequest, request: Request, state: StateDep, who: ReadAccess,
+def diagnose(body: DiagnosisRequest, request: Request, state: StateDep, who: ReadAccess,
                   prefer: PreferHeader = None) -> Response:
     """Where a base model and tap tests of it part, which unmodelled effect explains it
     (``verdict``), and each measurement's FRF once that effect is added (``corrected_h``).
@@ -73,7 +73,7 @@ def post_diagnose(body: DiagnosisRequest, request: Request, state: StateDep, who
 @router.post("/identifications", dependencies=[Depends(require_json)], response_model=IdentificationResult,
              responses=_ERRORS, openapi_extra=body_limit("identification"),
              summary="Joint identification (contract \"Joint identification\")")
-def post_identify(body: IdentificationRequest, request: Request, state: StateDep, who: ReadAccess,
+def identify_joints(body: IdentificationRequest, request: Request, state: StateDep, who: ReadAccess,
                   prefer: PreferHeader = None) -> Response:
     """The joints' translational stiffness and damping from measured tool-point FRFs;
     ``status`` is ``identified`` or ``not_identifiable`` (with a ``detail``).
@@ -85,7 +85,7 @@ def post_identify(body: IdentificationRequest, request: Request, state: StateDep
 @router.post("/effects", dependencies=[Depends(require_json)], response_model=EffectsResult,
              responses=_ERRORS, openapi_extra=body_limit("effects"),
              summary="Sensitivities of each mode to the model's parameters")
-def post_effects(body: EffectsRequest, request: Request, state: StateDep, who: ReadAccess,
+def analyse_effects(body: EffectsRequest, request: Request, state: StateDep, who: ReadAccess,
                  prefer: PreferHeader = None) -> Response:
     """Normalised sensitivities d ln(feature) / d ln(parameter) of every mode in a band to
     bearing, joint and tool parameters (on a measured spindle: modal-fit modes, bearings not

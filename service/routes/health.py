@@ -20,14 +20,14 @@ router = APIRouter(tags=["operations"], route_class=ServiceRoute)
 
 
 @router.get("/healthz", response_model=Health, summary="Liveness")
-def healthz() -> Response:
+def get_health() -> Response:
     """The process answers (nothing else is checked)."""
     return json_response({"status": "ok"})
 
 
 @router.get("/readyz", response_model=Ready, summary="Readiness",
             responses={503: {"model": Ready, "description": "Not ready (see checks)."}})
-def readyz(state: StateDep) -> Response:
+def get_readiness(state: StateDep) -> Response:
     """Ready when the store accepts a write (a probe file written and deleted), the job table
     answers, this process's job runners are alive and the compute backend can compute (a
     configured Dask scheduler answers and has a worker); ``503`` otherwise, each check saying
@@ -67,7 +67,7 @@ def _probe_store(root: Path) -> str:
 @router.get("/metrics", summary="Prometheus metrics", response_class=Response,
             responses={200: {"content": {CONTENT_TYPE_LATEST: {"schema": {"type": "string"}}},
                              "description": "Prometheus text exposition."}})
-def metrics(state: StateDep) -> Response:
+def get_metrics(state: StateDep) -> Response:
     """Request counts and latencies by route and status, FRFs computed, compute seconds,
     imports and import failures by format, jobs finished (all processes in multi-process mode)."""
     return Response(state.metrics.exposition(), media_type=CONTENT_TYPE_LATEST)

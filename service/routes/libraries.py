@@ -48,6 +48,8 @@ from rcsa.app.inputs import decode_json
 from rcsa.app.libraries import (
     LIBRARY_ID_PATTERN,
     export_file,
+    library_tool_result,
+    list_stored_libraries,
     prepare_library,
     prepare_sync,
 )
@@ -57,20 +59,21 @@ from rcsa.app.presets import (
     recommend_job_request,
     recommend_stored,
     report_document,
+    synced_library_file,
 )
 from rcsa.errors import InputError
 
 from ..bodies import check_form_fields, form_json, form_text, form_uploads, read_body, validate_json
 from ..deps import StateDep
-from ..errors import ProblemError
 from ..idempotency import IDEMPOTENCY_PROBLEMS, IdempotencyKeyHeader, IdempotentRoute
 from ..jobs import answer, caller, submit, wants_async
 from ..responses import accepted_entry, body_limit, json_response, negotiate, problems, result_form
 from ..schemas import (
     Deleted,
-    LibraryList,
+    LibraryPage,
     LibraryPredictionRequest,
     LibraryResult,
+    LibraryResultItem,
     LibrarySummary,
     RecommendReport,
     SyncReport,
@@ -205,6 +208,9 @@ HDF5, ZIP, JSON, PARQUET = "application/x-hdf5", "application/zip", "application
 
 
 @router.post("/libraries/{library_id}:sync", response_model=SyncReport, openapi_extra=body_limit("library", _BODY), responses={
+    201: {"model": SyncReport, "description": "The library did not exist: created by this first sync (Location: "
+                                              "/v1/libraries/{library_id}).",
+          "headers": {"Location": {"description": "The library.", "schema": {"type": "string"}}}},
     **accepted_entry("Queued as a library-sync job; poll Location (its result is the sync report)."),
     **problems(400, 401, 403, 413, 415, 422, 429), **IDEMPOTENCY_PROBLEMS},
     summary="Sync a stored library with a new export (write key)")
@@ -214,7 +220,8 @@ async def sync_library(library_id: LibraryId, request: Request, state: StateDep,
 
     The body is that of ``POST /v1/tool-libraries:predict`` (multipart or JSON). Only tools
     whose result is not stored yet are computed; the report lists the tool ids ``added``,
-    ``changed``, ``unchanged`` and ``removed`` since the previous sync of this id. Send an
+    ``changed``, ``unchanged`` and ``removed`` since the previous sync of this id. The first sync
+    of an id creates the library: ``201`` with ``Location``; later ones ``200``. Send an
     ``Idempotency-Key`` from automated (retrying) callers.
     """
     source, doc = await _library_inputs(request, state)
@@ -224,10 +231,15 @@ async def sync_library(library_id: LibraryId, request: Request, state: StateDep,
                                                   owner=caller(who, request)))
 
 
-@router.get("/libraries", response_model=LibraryList, responses=problems(401), summary="List stored libraries")
-def list_libraries(state: StateDep, _: ReadAccess) -> Response:
-    """Every stored library: settings, grid, counts and last sync report (no per-tool list)."""
-    return json_response({"libraries": state.bench.libraries.list()})
+@router.get("/libraries", response_model=LibraryPage, responses=problems(401, 422), summary="List stored libraries")
+def list_libraries(
+    state: StateDep, _: ReadAccess,
+    limit: Annotated[int, Query(ge=1, le=1000, description="Items per page.")] = 100,
+    cursor: Annotated[str | None, Query(max_length=1000, description="next_cursor of the previous page.")] = None,
+) -> Response:
+    """The stored libraries by id, a page at a time (``limit`` + ``cursor``, as the measurements
+    and jobs): settings, grid, counts and last sync report (no per-tool list)."""
+    return json_response(list_stored_libraries(state.bench, limit=limit, cursor=cursor))
 
 
 @router.get("/libraries/{library_id}", response_model=LibrarySummary, responses=problems(401, 404),
@@ -235,6 +247,24 @@ def list_libraries(state: StateDep, _: ReadAccess) -> Response:
 def get_library(library_id: LibraryId, state: StateDep, _: ReadAccess) -> Response:
     """Summary of a stored library with every tool's status and result key (no arrays)."""
     return json_response(state.bench.libraries.get(library_id))
+
+
+ToolId = Annotated[str, Path(min_length=1, max_length=300, description=(
+    "A tool's id in the library (the Fusion guid; FreeCAD: <toolbit>@<holder>), as GET /v1/libraries/{library_id} "
+    "lists them."), examples=["00000000-0000-4000-8000-000000000101"])]
+
+
+@router.get("/libraries/{library_id}/tools/{tool_id}", response_model=LibraryResultItem,
+            responses=problems(401, 404, 422), summary="One tool's result from a stored library")
+def get_library_tool(
+    library_id: LibraryId, tool_id: ToolId, state: StateDep, _: ReadAccess,
+    tool_point: Annotated[str | None, Query(pattern=r"^[hlnp](,[hlnp]){0,3}$", description=(
+        "Receptances to return in tool_point, e.g. h; default h,l,n,p."))] = None,
+) -> Response:
+    """The stored result of one tool of the library's last sync — its tool-point FRF (``ok``), why it
+    was skipped, or its error — without fetching the whole library's results."""
+    return json_response(library_tool_result(state.bench, library_id, tool_id,
+                                             tool_point.split(",") if tool_point else None))
 
 
 @router.get("/libraries/{library_id}/results", response_model=LibraryResult, responses={
@@ -305,6 +335,13 @@ _RECOMMEND_FIELDS = {
 }
 assert set(_RECOMMEND_FIELDS) - {"library"} == set(OPTION_FIELDS)
 _RECOMMEND_BODY = {"requestBody": {"required": True, "content": {
+    "application/json": {"schema": {
+        "type": "object", "required": ["material", "max_rpm"], "additionalProperties": False,
+        "description": "Presets by reference: the options alone; the presets are written into the Fusion file the "
+                       "library's last sync kept in the store.",
+        "properties": {name: ({"type": "object"} if name == "uncertainty" else {"type": "string"}
+                              if name in _TEXT_OPTIONS else {"type": "number"}) | {"description": text}
+                       for name, text in _RECOMMEND_FIELDS.items() if name != "library"}}},
     "multipart/form-data": {"schema": {
         "type": "object", "required": ["library", "material", "max_rpm"],
         "properties": {name: ({"type": "string", "format": "binary", "description": text} if name == "library"
@@ -313,12 +350,20 @@ _RECOMMEND_BODY = {"requestBody": {"required": True, "content": {
         "additionalProperties": False}}}}}
 
 
-async def _recommend_inputs(request: Request, limit_bytes: int) -> tuple[bytes, str | None, str | None, dict[str, Any]]:
+async def _recommend_inputs(request: Request, state: AppState, library_id: str
+                            ) -> tuple[bytes, str | None, str | None, dict[str, Any]]:
+    """The library file and the options: from a form, or (JSON) the options alone and the file the
+    library's last sync kept (presets by reference)."""
     kind, form = await read_body(request)
-    if kind != "form":
-        raise ProblemError(415, "send multipart/form-data: the Fusion library as the file field 'library' and the "
-                                "options as text fields (the file's bytes are kept exactly, so it cannot travel "
-                                "inside JSON)")
+    if kind == "json":
+        if not isinstance(form, dict):
+            raise InputError("", "send the options as a JSON object (material, max_rpm, ...)")
+        unknown = sorted(set(form) - set(OPTION_FIELDS))
+        if unknown:
+            raise InputError(unknown[0], f"unknown option (allowed: {', '.join(OPTION_FIELDS)})")
+        data, name, content_type = await run_in_threadpool(synced_library_file, state.bench, library_id)
+        return data, name, content_type, dict(form)
+    limit_bytes = state.settings.max_upload_bytes
     try:
         check_form_fields(form, _RECOMMEND_FIELDS)
         source = await library_upload(form, limit_bytes, holder=False)
@@ -348,7 +393,9 @@ async def _recommend_inputs(request: Request, limit_bytes: int) -> tuple[bytes, 
                                              "file.content_base64. application/octet-stream: the updated library "
                                              "file (same format and name as uploaded).",
                               "content": {OCTET: {"schema": {"type": "string", "format": "binary"}}}},
-                        **problems(400, 401, 403, 404, 406, 413, 415, 422), **IDEMPOTENCY_PROBLEMS},
+                        **accepted_entry("Queued as a library-recommend job; poll Location (its result is the "
+                                         "report with the file)."),
+                        **problems(400, 401, 403, 404, 406, 413, 415, 422, 429), **IDEMPOTENCY_PROBLEMS},
              summary="Write chatter-safe presets into a Fusion library from a stored library's results (write key)")
 async def recommend_presets(
     library_id: LibraryId, request: Request, state: StateDep, who: WriteAccess,
@@ -360,6 +407,9 @@ async def recommend_presets(
     idempotency_key: IdempotencyKeyHeader = None,
 ) -> Response:
     """Per milling tool, the best stable pocket (speed, stepdown at the safety factor) as a Fusion preset.
+
+    The body is the Fusion library and the options as a form, or — by reference — the options alone
+    as JSON: the presets are then written into the Fusion file the library's last sync kept.
 
     The FRFs are the stored results of this library's last sync; a tool whose geometry changed
     since (or that the sync does not know) is skipped with the reason. The preset is named
@@ -373,7 +423,7 @@ async def recommend_presets(
     """
     media = {"report": JSON, "file": OCTET}[format] if format else negotiate(accept, (JSON, OCTET),
                                                                                 "a recommendation's report and file")
-    data, name, content_type, options = await _recommend_inputs(request, state.settings.max_upload_bytes)
+    data, name, content_type, options = await _recommend_inputs(request, state, library_id)
     owner = caller(who, request)
     job_request = await run_in_threadpool(lambda: recommend_job_request(library_id, data, options, file_name=name,
                                                                         content_type=content_type))

@@ -38,6 +38,7 @@ from ..responses import body_limit, problems
 from ..routing import ServiceRoute
 from ..schemas import FrfIn, LobesRequest, PredictionRequest
 from ..security import ReadAccess
+from .lobes import lobes_document
 
 router = APIRouter(prefix="/v1", tags=["plots and exports"], route_class=ServiceRoute)
 
@@ -134,8 +135,7 @@ def plot_lobes(body: LobesPlotRequest, state: StateDep, _: ReadAccess, format: F
     lobe, the stable region shaded, the absolute limit dashed and, when given, the operating
     point; with ``uncertainty``, the robust limit dashed. The body is a ``POST /v1/stability-lobes``
     request plus the drawing options."""
-    request = body.model_dump(exclude_unset=True,
-                              exclude={"show_lobes", "operating_point", "depth_max_mm", "title"})
+    request = lobes_document(body, state, exclude={"show_lobes", "operating_point", "depth_max_mm", "title"})
     budget.check("lobes", request, mode="sync")
     with state.metrics.timed("lobes"):
         answer = stability_lobes_answer(request, store=state.reader, max_lines=state.settings.max_frequency_lines)
@@ -180,7 +180,7 @@ def export_lobes_csv(body: LobesRequest, state: StateDep, _: ReadAccess) -> Resp
     """Compute the lobes (exactly as ``POST /v1/stability-lobes``) and answer the lower
     envelope as CSV: spindle speed in rpm, depth limit in m, chatter frequency in Hz and the
     index k of the governing lobe."""
-    request = body.model_dump(exclude_unset=True)
+    request = lobes_document(body, state)
     budget.check("lobes", request, mode="sync")
     with state.metrics.timed("lobes"):
         doc = stability_lobes(request, store=state.reader, max_lines=state.settings.max_frequency_lines)

@@ -23,7 +23,7 @@ router = APIRouter(prefix="/v1", tags=["predictions"], route_class=ServiceRoute)
 @router.post("/tool-point-frf", dependencies=[Depends(require_json)], response_model=PredictionResult,
              responses={**problems(401, 413, 415, 422), **ASYNC_ACCEPTED}, openapi_extra=body_limit("prediction"),
              summary="Tool-point FRF of one assembly")
-def predict_tool_point_frf(body: PredictionRequest, request: Request, state: StateDep, who: ReadAccess,
+def predict_tool_point(body: PredictionRequest, request: Request, state: StateDep, who: ReadAccess,
                            tool_point: ToolPointQuery = None, prefer: PreferHeader = None) -> Response:
     """Predict the tool-point receptance of a spindle–holder–tool assembly (contract "Assembly").
 

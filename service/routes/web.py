@@ -82,7 +82,7 @@ def _asset(name: str) -> Response:
 
 @router.get("/v1/examples/ra1", tags=["examples"], response_model=Assembly, responses=problems(401),
             summary="The reference assembly RA-1")
-def example_ra1(_: ReadAccess) -> Response:
+def get_example_ra1(_: ReadAccess) -> Response:
     """RA-1 (a BT40-class spindle on four bearings, a shrink-fit holder, a Ø12.7 mm carbide end
     mill at 74 mm stickout, the seed paper's joints) as an assembly document, SI units, grid
     5–10 000 Hz by 1 Hz. Its first natural frequency is 599.85 Hz."""
@@ -147,7 +147,7 @@ _ENTRIES_BODY = {"requestBody": {"required": True, "content": {
 @router.post("/v1/tool-libraries:entries", tags=["tool libraries"], response_model=LibraryEntries,
              openapi_extra=body_limit("library", _ENTRIES_BODY), responses=problems(400, 401, 413, 415, 422),
              summary="List a Fusion tool library's entries (no computation)")
-async def library_entries(request: Request, state: StateDep, _: ReadAccess) -> Response:
+async def read_library_entries(request: Request, state: StateDep, _: ReadAccess) -> Response:
     """Read a Fusion tool library and list every item: its id, description, status (ok,
     skipped with the reason, or error naming the field), T number, teeth (NOF), and for ok
     items the holder and tool in the assembly format (SI metres), ready for

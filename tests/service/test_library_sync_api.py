@@ -86,7 +86,7 @@ def test_sync_is_incremental_and_replays_byte_for_byte(client, counted):
     assert summary["revision"] == 3 and summary["summary"] == {"ok": 4, "skipped": 0, "error": 0}
     assert [t["id"] for t in summary["tools"]] == [tool_id(i) for i in (0, 1, 2, 6)]
     assert summary["last_sync"]["counts"] == {"added": 1, "changed": 1, "unchanged": 2, "removed": 1}
-    assert [x["id"] for x in client.get("/v1/libraries").json()["libraries"]] == ["shop"]
+    assert [x["id"] for x in client.get("/v1/libraries").json()["items"]] == ["shop"]
 
 
 def test_results_as_json_hdf5_and_uff_zip(client):

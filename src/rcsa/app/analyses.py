@@ -22,16 +22,18 @@ from rcsa.analysis.lobes.semi_discretization import SemiDiscretizationResult
 from rcsa.analysis.lobes.zoa import LobeResult, frf_grid_notes
 from rcsa.analysis.progress import Progress
 from rcsa.app.predictions import predict, predict_draws
-from rcsa.app.stores import resolver
+from rcsa.app.stores import open_store, resolver
 from rcsa.errors import InputError
+from rcsa.libraries.sync import LibraryStore
 from rcsa.measured.hybrid import MeasurementSource
 from rcsa.measured.store import MeasurementStore
 from rcsa.model.bounds import MAX_FREQUENCY_LINES
 from rcsa.model.contract import SpindleSpec, parse_assembly
 from rcsa.model.uncertainty import parse_prediction_request
 
-__all__ = ["ANALYSIS_KINDS", "LobesAnswer", "diagnose", "effects", "identify", "run_analysis", "stability_lobes",
-           "stability_lobes_answer", "stability_lobes_result", "stability_lobes_results", "validate"]
+__all__ = ["ANALYSIS_KINDS", "LobesAnswer", "diagnose", "effects", "identify", "resolve_lobes_references",
+           "run_analysis", "stability_lobes", "stability_lobes_answer", "stability_lobes_result",
+           "stability_lobes_results", "validate"]
 
 #: Single computations that may also run as jobs (``Prefer: respond-async``), by the name of
 #: their cost model in :mod:`rcsa.app.budget`.
@@ -174,6 +176,74 @@ def stability_lobes_result(request: Mapping[str, Any], *, store: MeasurementStor
     rcsa.analysis.lobes.zoa.LobeResult
     """
     return stability_lobes_results(request, store=store, max_lines=max_lines)[0]
+
+
+def resolve_lobes_references(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
+                             libraries: LibraryStore | None = None) -> dict[str, Any]:
+    """A stability-lobes request whose references to stored things are replaced by what they name.
+
+    Resolved before the request is parsed (:mod:`rcsa.analysis.lobes.request` never sees them),
+    so that everything after — budget, validation, a job — works on an ordinary request:
+
+    * ``"library_tool": {"library_id": ..., "tool_id": ...}`` — a tool of a stored library's last
+      sync: becomes the ``assembly`` (the sync's spindle, grid, materials with the tool's holder,
+      tool and joints; :meth:`rcsa.libraries.sync.LibraryStore.tool_assembly`), and ``teeth``
+      defaults to the tool's flute count;
+    * ``"frf_x": {"measurement_id": ...}`` (and ``frf_y``) — a stored measurement's driving-point
+      receptance ``h``, taken as the tool-point FRF as it is (e.g. a tap test kept in the store).
+
+    Parameters
+    ----------
+    request : mapping
+        The lobes request (contract "Stability lobes", with the references above).
+    store : MeasurementSource, optional
+        Where measurements are read.
+    libraries : LibraryStore, optional
+        Where stored libraries are read.
+
+    Returns
+    -------
+    dict
+        The request with the references replaced (the same object's keys otherwise).
+
+    Raises
+    ------
+    InputError
+        A reference beside what it replaces (``library_tool`` with ``assembly`` or an FRF), a
+        measurement without ``h``, a tool without an assembly.
+    NotFoundError
+        No such library, tool or measurement.
+    """
+    out = dict(request)
+    ref = out.pop("library_tool", None)
+    if ref is not None:
+        clash = [k for k in ("assembly", "frf_x", "frf_y") if out.get(k) is not None]
+        if clash:
+            raise InputError("library_tool", f"give either library_tool or {clash[0]}, not both")
+        if libraries is None:
+            raise InputError("library_tool", "stored libraries need a store")
+        assembly, tool = libraries.tool_assembly(str(ref["library_id"]), str(ref["tool_id"]))
+        out["assembly"] = assembly
+        if out.get("teeth") is None and tool.get("teeth"):
+            out["teeth"] = tool["teeth"]
+    for key in ("frf_x", "frf_y"):
+        frf = out.get(key)
+        if isinstance(frf, Mapping) and "measurement_id" in frf:
+            if set(frf) != {"measurement_id"}:
+                raise InputError(key, "a stored FRF is given by measurement_id alone")
+            out[key] = _stored_frf(store, str(frf["measurement_id"]), key)
+    return out
+
+
+def _stored_frf(store: MeasurementSource | None, measurement_id: str, field: str) -> dict[str, Any]:
+    """A stored measurement's ``h`` as an inline FRF ``{"frequency_hz", "h": {"real", "imag"}}``."""
+    measurement = (store if store is not None else open_store(None)).get(measurement_id)
+    h = measurement.frfs.get("h")
+    if h is None:
+        raise InputError(f"{field}.measurement_id", f"measurement {measurement_id} holds no driving-point receptance "
+                                                   f"h (it holds {', '.join(sorted(measurement.frfs))})")
+    return {"frequency_hz": np.asarray(measurement.frequency_hz, dtype=float).tolist(),
+            "h": {"real": np.real(h).tolist(), "imag": np.imag(h).tolist()}}
 
 
 def stability_lobes(request: Mapping[str, Any], *, store: MeasurementStore | None = None,

@@ -16,14 +16,23 @@ rcsa.errors.InputError: h.real[1]: number out of range: its magnitude must be <=
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import orjson
 
 from rcsa.errors import MalformedInput
-from rcsa.model.input_policy import check_json, check_json_size, load_json
+from rcsa.model.input_policy import JsonCounter, check_json, check_json_size, load_json
 
-__all__ = ["decode_json"]
+__all__ = ["decode_json", "json_counter"]
+
+
+def json_counter(*, path: str = "", what: str = "the body") -> Callable[[bytes], None]:
+    """A ``feed(piece)`` that counts JSON text piece by piece as it arrives and raises
+    :class:`~rcsa.errors.InputError` once it holds too many objects, arrays or elements
+    (:class:`rcsa.model.input_policy.JsonCounter`); what the service calls while a body arrives,
+    before :func:`decode_json` (``counted=True``) parses it."""
+    return JsonCounter(path=path, what=what).feed
 
 
 def decode_json(data: bytes | bytearray | memoryview | str, *, path: str = "",

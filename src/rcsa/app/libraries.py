@@ -19,8 +19,10 @@ from rcsa.app.jobs import Work, Workbench
 from rcsa.app.results import RESULT_FORMAT_FIELD, Format, encode_result, json_bytes, require_format
 from rcsa.errors import InputError
 from rcsa.infra.atomic_files import atomic_write_bytes
+from rcsa.infra.pages import paginate
 from rcsa.libraries.exports import library_uff_zip
 from rcsa.libraries.formats import LibrarySource, import_library, read_library
+from rcsa.libraries.fusion import FusionLibrary
 from rcsa.libraries.library_prediction import (
     LIBRARY_OPTIONS,
     check_common,
@@ -45,6 +47,8 @@ __all__ = [
     "ExportFile",
     "export_file",
     "library_entries",
+    "library_tool_result",
+    "list_stored_libraries",
     "prepare_batch",
     "prepare_library",
     "prepare_sync",
@@ -153,13 +157,28 @@ def prepare_sync(bench: Workbench, library_id: str | None, library: LibrarySourc
     """
     if library_id is None:
         library_id = library_id_from_name(str(library)) if isinstance(library, str | os.PathLike) else "library"
+    source = library
     library = read_library(library, file_name=file_name, content_type=content_type, holder=holder,
                            holder_name=holder_name)
     request = sync_request(library_id, library, **_library_fields(fields))
     _check_tools(len(request["batch"]["combinations"]), bench.max_combinations)
+    if isinstance(library, FusionLibrary):  # kept: presets can be written into it later by reference
+        request["settings"]["source_file"] = _keep_file(bench.libraries, source, file_name, content_type)
     plan = plan_sync(bench.libraries, request, store=bench.store, max_lines=bench.max_lines)
     return Work("library-sync", request, len(plan.pending), plan,
                 check=lambda: check_common(request["batch"], store=bench.store, max_lines=bench.max_lines))
+
+
+def _keep_file(libraries: LibraryStore, source: LibrarySource, file_name: str | None,
+               content_type: str | None) -> dict[str, Any]:
+    """Keep a synced Fusion library's file in the store; ``{"sha256", "file_name", "content_type"}``."""
+    if isinstance(source, str | os.PathLike):
+        data, file_name = Path(source).read_bytes(), file_name or Path(source).name
+    elif isinstance(source, bytes | bytearray | memoryview):
+        data = bytes(source)
+    else:  # a JSON document (the REST JSON form)
+        data, file_name, content_type = json_bytes(source), file_name or "library.json", "application/json"
+    return {"sha256": libraries.keep_file(data), "file_name": file_name, "content_type": content_type}
 
 
 def every_tool_joints(joints: Mapping[str, Any] | None, holder_tool: str | Mapping[str, Any] | None
@@ -304,6 +323,32 @@ class ExportFile:
     file_name: str
     ok: int
     revision: int
+
+
+def list_stored_libraries(bench: Workbench, *, limit: int = 100, cursor: str | None = None) -> dict[str, Any]:
+    """One page of the stored libraries' summaries, by id: ``{"items": [...], "next_cursor"}``
+    (:mod:`rcsa.infra.pages`, as the measurements and jobs are listed).
+
+    Raises
+    ------
+    InputError
+        A cursor this service did not hand out, or ``limit`` below 1.
+    """
+    items, next_cursor = paginate(bench.libraries.list(), key=lambda lib: (lib["id"],), limit=limit, cursor=cursor)
+    return {"items": items, "next_cursor": next_cursor}
+
+
+def library_tool_result(bench: Workbench, library_id: str, tool_id: str,
+                        tool_point: list[str] | None = None) -> dict[str, Any]:
+    """One tool's result from a stored library's last sync (an item of its results: ``ok`` with
+    its tool-point FRF, ``skipped`` with the reason or ``error``); long arrays as numpy arrays.
+
+    Raises
+    ------
+    NotFoundError
+        No such library or tool.
+    """
+    return bench.libraries.tool_result(library_id, tool_id, tool_point)
 
 
 def export_file(libraries: LibraryStore, library_id: str, fmt: ExportFormat) -> ExportFile:

@@ -38,7 +38,7 @@ from rcsa.libraries.recommend_sources import FrfSource, predicted_frfs, stored_f
 
 __all__ = ["OPTION_FIELDS", "PRESET_PREFIX", "RECOMMEND_JOB", "PresetFile", "check_recommendation",
            "recommend_job_handlers", "recommend_job_request", "recommend_predicted", "recommend_stored",
-           "report_document", "write_preset_file"]
+           "report_document", "synced_library_file", "write_preset_file"]
 
 #: Kind of the job that writes presets into a large library (``Prefer: respond-async``).
 RECOMMEND_JOB = "library-recommend"
@@ -137,6 +137,24 @@ def recommend_stored(bench: Workbench, library_id: str, data: bytes, options: Ma
     source = stored_frfs(bench.libraries, library_id, library, store=bench.store, max_lines=bench.max_lines,
                          uncertainty=opts.uncertainty)
     return _answer(file, file_name, source, opts, progress=progress, backend=backend)
+
+
+def synced_library_file(bench: Workbench, library_id: str) -> tuple[bytes, str | None, str | None]:
+    """The Fusion file a stored library's last sync was made from (kept in the store by the sync):
+    its bytes, file name and media type — presets by reference, without sending the file again.
+
+    Raises
+    ------
+    NotFoundError
+        No such library.
+    InputError
+        The sync kept no file (a FreeCAD library, or a sync made before files were kept).
+    """
+    kept = (bench.libraries.get(library_id).get("settings") or {}).get("source_file")
+    if not kept:
+        raise InputError("library", f"the stored library {library_id!r} keeps no Fusion file (a FreeCAD library, or "
+                                    "synced before files were kept): send the file, or sync it again")
+    return bench.libraries.file(kept["sha256"]), kept.get("file_name"), kept.get("content_type")
 
 
 def recommend_predicted(bench: Workbench, data: bytes, options: Mapping[str, Any], *, spindle: Mapping[str, Any],

@@ -32,8 +32,8 @@ def encode_cursor(key: Sequence[str]) -> str:
     return base64.urlsafe_b64encode(raw).decode().rstrip("=")
 
 
-def decode_cursor(cursor: str, parts: int = 2) -> tuple[str, ...]:
-    """The sort key a cursor stands for.
+def decode_cursor(cursor: str, parts: int | None = 2) -> tuple[str, ...]:
+    """The sort key a cursor stands for (of ``parts`` strings; None: any number).
 
     Raises
     ------
@@ -43,7 +43,8 @@ def decode_cursor(cursor: str, parts: int = 2) -> tuple[str, ...]:
     try:
         raw = base64.urlsafe_b64decode(cursor + "=" * (-len(cursor) % 4))
         key = json.loads(raw)
-        if not isinstance(key, list) or len(key) != parts or not all(isinstance(k, str) for k in key):
+        if not isinstance(key, list) or (parts is not None and len(key) != parts) or \
+                not all(isinstance(k, str) for k in key):
             raise ValueError
         return tuple(key)
     except (ValueError, TypeError, binascii.Error, UnicodeDecodeError):
@@ -64,7 +65,7 @@ def paginate(items: Sequence[T], *, key: Callable[[T], Sequence[str]], limit: in
         raise InputError("limit", f"must be >= 1, got {limit}")
     ordered = sorted(items, key=lambda x: tuple(key(x)), reverse=newest_first)
     if cursor:
-        after = decode_cursor(cursor, len(key(ordered[0])) if ordered else 2)
+        after = decode_cursor(cursor, len(key(ordered[0])) if ordered else None)
         ordered = [x for x in ordered if (tuple(key(x)) < after if newest_first else tuple(key(x)) > after)]
     page = ordered[:limit]
     return page, (encode_cursor(key(page[-1])) if len(ordered) > limit else None)

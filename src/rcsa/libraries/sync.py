@@ -28,7 +28,14 @@ Layout (under ``<store>/libraries/``)::
     results/              content-addressed results (:class:`rcsa.libraries.results_cache.ResultCache`),
                           shared by every library; durable before any commit references
                           them, never modified
+    files/<sha256>        the library files synced (:meth:`LibraryStore.keep_file`), by the SHA-256
+                          of their bytes; a sync's ``settings.source_file`` names its file, so
+                          presets can be written into it later without sending it again
     tmp/                  scratch files
+
+Each ``ok`` tool keeps its combination (holder, tool, joints) with its row, so that its
+assembly can be rebuilt from the library's settings (:meth:`LibraryStore.tool_assembly`): a
+stability-lobes request may name a stored tool instead of sending the assembly again.
 
 Safety: result files are durable before the transaction that references them commits, and
 commits are serialised by SQLite (``BEGIN IMMEDIATE``), so two service processes (or the CLI
@@ -54,6 +61,7 @@ import numpy as np
 
 from rcsa._version import __version__
 from rcsa.errors import InputError, NotFoundError, StoreError
+from rcsa.infra.atomic_files import atomic_write_bytes
 from rcsa.infra.clock import utc_now_iso
 from rcsa.infra.compute_backends import Backend, LocalBackend
 from rcsa.infra.sqlite import connect, transaction
@@ -374,6 +382,97 @@ class LibraryStore:
         library = _library_doc(row, summary)
         return {"library": library, "results": results, "summary": summary}
 
+    def tool_assembly(self, library_id: str, tool_id: str) -> tuple[dict[str, Any], dict[str, Any]]:
+        """The assembly of one ``ok`` tool of the library's last sync — the sync's spindle, grid,
+        materials and theory with the tool's holder, tool and joints — and its row (``id, index,
+        description, number, teeth, tool_type``).
+
+        Raises
+        ------
+        NotFoundError
+            No such library, or no such tool in it.
+        InputError
+            The tool was skipped or in error, or was synced before tools kept their combination
+            (sync the library again).
+        """
+        row, tools = self._snapshot(library_id)
+        tool = next((t for t in tools if t["id"] == str(tool_id)), None)
+        if tool is None:
+            raise NotFoundError("tool", f"{library_id}/{tool_id}")
+        if tool["status"] != "ok":
+            why = tool["reason"] or (tool["error"] or {}).get("detail", "")
+            raise InputError("library_tool.tool_id", f"tool {tool_id} of {library_id!r} has no assembly: it was "
+                                                     f"{tool['status']} ({why})")
+        with closing(self._connect()) as con:
+            entry = json.loads(con.execute("SELECT entry FROM tools WHERE library_id = ? AND tool_id = ?",
+                                           (library_id, str(tool_id))).fetchone()[0])
+        combination = entry.get("combination")
+        if combination is None:
+            raise InputError("library_tool.tool_id", f"the library {library_id!r} was synced before its tools kept "
+                                                     "their assembly: sync it again")
+        settings = json.loads(row[6])
+        assembly = {k: settings[k] for k in _COMMON if settings.get(k) is not None}
+        head = {k: tool[k] for k in ("id", "index", "description", "number", "teeth", "tool_type")}
+        return {**assembly, **combination}, head
+
+    def keep_file(self, data: bytes) -> str:
+        """Keep a library file's bytes (once per content, durably); its SHA-256."""
+        sha = hashlib.sha256(data).hexdigest()
+        path = self.directory / "files" / sha
+        if not path.is_file():
+            path.parent.mkdir(parents=True, exist_ok=True)
+            atomic_write_bytes(path, data)
+        return sha
+
+    def file(self, sha256: str) -> bytes:
+        """The bytes of a kept library file.
+
+        Raises
+        ------
+        NotFoundError
+            No file of that content is kept.
+        """
+        path = self.directory / "files" / str(sha256)
+        if not re.fullmatch(r"[0-9a-f]{64}", str(sha256)) or not path.is_file():
+            raise NotFoundError("library file", str(sha256))
+        return path.read_bytes()
+
+    def tool_result(self, library_id: str, tool_id: str, tool_point: list[str] | None = None) -> dict[str, Any]:
+        """One tool's result of the library's last sync: the item of :meth:`results` for that
+        tool (reads that tool's row and result only).
+
+        Raises
+        ------
+        NotFoundError
+            No such library, or no such tool in it (``what``: ``library`` or ``tool``).
+        """
+        if not is_library_id(library_id):
+            raise NotFoundError("library", str(library_id))
+        with closing(self._connect()) as con, transaction(con, immediate=False):
+            known = con.execute("SELECT 1 FROM libraries WHERE id = ?", (library_id,)).fetchone()
+            row = con.execute("SELECT tool_id, position, status, result_key, entry, revision FROM tools "
+                              "WHERE library_id = ? AND tool_id = ?", (library_id, str(tool_id))).fetchone()
+        if known is None:
+            raise NotFoundError("library", library_id)
+        if row is None:
+            raise NotFoundError("tool", f"{library_id}/{tool_id}")
+        tid, position, status, key, entry, _ = row
+        e = json.loads(entry)
+        head = {"id": tid, "index": position, **{k: e.get(k) for k in _HEAD[2:]}}
+        if status == "skipped":
+            return {**head, "status": "skipped", "reason": e.get("reason")}
+        if key is None:
+            return {**head, "status": "error", "error": e.get("error")}
+        try:
+            doc = self.cache.get(key)
+        except KeyError:
+            return {**head, "status": "error", "error": {
+                "field": "", "detail": "the stored result is missing (the result cache was cleared); sync the "
+                                       "library again to recompute it"}}
+        if tool_point is not None and doc.get("status") == "ok":
+            doc = select_tool_point(doc, tool_point)
+        return {**head, "status": doc.pop("status"), "result_sha256": key, **doc}
+
     # ------------------------------------------------------------------ writes
     def delete(self, library_id: str) -> dict[str, Any]:
         """Forget a library (its cached results stay: they are shared, and safe to delete).
@@ -492,6 +591,8 @@ def _tool_rows(request: Mapping[str, Any], keys: tuple[str, ...]) -> list[dict[s
         meta["warnings"] = list(entry.get("warnings") or [])
         if entry["status"] == "ok":
             key = keys[position]
+            combination = request["batch"]["combinations"][position]
+            meta["combination"] = {k: v for k, v in combination.items() if k != "id"}  # its assembly, later
             position += 1
             rows.append({"id": entry["id"], "index": entry.get("index", len(rows)), "status": "ok",
                          "fingerprint": key, "result_key": key, "entry": meta})
