@@ -180,7 +180,7 @@ def test_freecad_sync_keeps_ids_across_syncs(client):
     form = {**FORM, "options": json.dumps({"stickout_m": 0.040})}
     files = {"library": ("Tools.zip", _freecad_zip())}
     first = client.post("/v1/libraries/fc-shop:sync", files=files, data=form, headers=WRITE)
-    assert first.status_code == 200, first.text
+    assert first.status_code == 201, first.text
     assert first.json()["counts"] == {"added": 2, "changed": 0, "unchanged": 0, "removed": 0}
     again = client.post("/v1/libraries/fc-shop:sync", files={"library": ("Tools.zip", _freecad_zip())}, data=form,
                         headers=WRITE)

@@ -60,12 +60,12 @@ def test_sync_is_incremental_and_replays_byte_for_byte(client, counted):
     files = {"library": ("shop.json", json.dumps(lib).encode())}
     key = {**WRITE, "Idempotency-Key": "nightly-2026-01-01"}
     first = client.post("/v1/libraries/shop:sync", files=files, data=FORM, headers=key)
-    assert first.status_code == 200, first.text
+    assert first.status_code == 201 and first.headers["location"] == "/v1/libraries/shop", first.text
     report = first.json()
     assert report["added"] == [tool_id(i) for i in range(4)] and report["computed"] == 4 and report["revision"] == 1
     assert first.headers["location"] == "/v1/libraries/shop" and report["results_url"] == "/v1/libraries/shop/results"
     replay = client.post("/v1/libraries/shop:sync", files=files, data=FORM, headers=key)
-    assert replay.status_code == 200 and replay.content == first.content and counted["tools"] == 4
+    assert replay.status_code == 201 and replay.content == first.content and counted["tools"] == 4  # the same answer
     assert replay.headers["location"] == first.headers["location"]
     other = client.post("/v1/libraries/shop:sync", files=files, data={**FORM, "natural_frequencies": "false"},
                         headers=key)
@@ -91,7 +91,7 @@ def test_sync_is_incremental_and_replays_byte_for_byte(client, counted):
 
 def test_results_as_json_hdf5_and_uff_zip(client):
     r = client.post("/v1/libraries/shop:sync", json=_json_body(make_library(2)), headers=WRITE)
-    assert r.status_code == 200, r.text
+    assert r.status_code == 201, r.text
     full = client.get("/v1/libraries/shop/results")
     assert full.status_code == 200 and full.headers["content-type"] == "application/json"
     results = full.json()["results"]
@@ -125,7 +125,7 @@ def test_writes_need_a_write_key_and_reads_follow_the_read_policy(make_client):
     with make_client(anonymous_read=False) as client:
         assert_problem(client.post("/v1/libraries/shop:sync", json=body), 401)
         assert_problem(client.post("/v1/libraries/shop:sync", json=body, headers=READ), 403)
-        assert client.post("/v1/libraries/shop:sync", json=body, headers=WRITE).status_code == 200
+        assert client.post("/v1/libraries/shop:sync", json=body, headers=WRITE).status_code == 201
         assert_problem(client.get("/v1/libraries/shop"), 401)
         assert client.get("/v1/libraries/shop", headers=READ).status_code == 200
         assert_problem(client.delete("/v1/libraries/shop", headers=READ), 403)
@@ -140,7 +140,7 @@ def test_sync_on_a_stored_measurement(make_client):
                                                                 "step_hz": 10.0})}
         files = {"library": ("shop.json", json.dumps(make_library(2)).encode())}
         r = client.post("/v1/libraries/hybrid:sync", files=files, data=form, headers=WRITE)
-        assert r.status_code == 200, r.text
+        assert r.status_code == 201, r.text
         assert r.json()["summary"]["ok"] == 2
         assert client.get("/v1/libraries/hybrid").json()["measurement_sha256"]
         r = client.post("/v1/libraries/hybrid:sync", files=files, data={**form, "measurement_id": "m-000000000000"},

@@ -94,7 +94,7 @@ def test_a_library_prediction_in_a_binary_form(client, media):
 def test_stored_library_results_as_parquet(client):
     body = {"library": LIBRARY, "spindle": json.loads((REPO / "examples/ra1.json").read_text())["spindle"],
             "frequency": GRID}
-    assert client.post("/v1/libraries/shop:sync", json=body, headers=WRITE).status_code == 200
+    assert client.post("/v1/libraries/shop:sync", json=body, headers=WRITE).status_code == 201
     as_json = client.get("/v1/libraries/shop/results")
     for kwargs in ({"headers": {"Accept": PARQUET}}, {"params": {"format": "parquet"}}):
         r = client.get("/v1/libraries/shop/results", **kwargs)
