@@ -9,7 +9,7 @@ import pytest
 import rcsa
 from rcsa.measured.importers import read_csv
 from rcsa.measured.store import MeasurementMeta, MeasurementStore
-from rcsa.model.modal_fit import modal_fit, rational_fit, refit_mode
+from rcsa.model.modal_fit import kept_modal_fit, modal_fit, rational_fit, refit_mode
 from rcsa.reference import ra1
 from tests.helpers import SHARED_DATA
 
@@ -121,3 +121,15 @@ def test_real_tap_test_as_a_spindle_gives_sorted_distinct_frequencies(tmp_path, 
     assert len(result["peaks"]) == nat.size  # one peak per mode, not one per ripple
     fit = result["modal_fit"][0]
     assert {"frequency_hz", "damping_ratio", "sd_hz", "band_hz", "modes_in_band"} <= set(fit)
+
+
+def test_a_kept_fit_is_the_fit_of_the_same_bytes_and_only_of_them():
+    h = synthetic(0.01, 7)
+    first = kept_modal_fit(F, h)
+    assert kept_modal_fit(F.copy(), h.copy()) is first  # found by content, not by identity
+    fresh = modal_fit(F, h)
+    assert [m.to_dict() for m in first.modes] == [m.to_dict() for m in fresh.modes]
+    assert np.array_equal(first.peak_lines, fresh.peak_lines) and not first.peak_lines.flags.writeable
+    other = h.copy()
+    other[100] *= 1 + 1e-12  # one sample differs in its last bits: another fit
+    assert kept_modal_fit(F, other) is not first

@@ -14,7 +14,7 @@ from typing import Any, Literal
 import numpy as np
 
 from rcsa.model.assembly import AssemblyModel
-from rcsa.model.modal_fit import modal_fit
+from rcsa.model.modal_fit import kept_modal_fit
 from rcsa.model.peaks import find_frf_peaks
 from rcsa.model.uncertainty import UncertaintyBand
 from rcsa.model.wire import complex_to_wire
@@ -206,7 +206,7 @@ def predict_model(model: AssemblyModel, frequency_hz: FloatArray, *,
     g = tool_point_receptance(model, cache)
     if base_receptance is not None:
         h = g[:, 0, 0]
-        fit = modal_fit(f, h)
+        fit = kept_modal_fit(f, h)  # the same h asked again: the fit kept, not redone
         peaks = [{"frequency_hz": float(f[i]), "magnitude_m_n": float(abs(h[i]))} for i in fit.peak_lines]
         notes_out = (*notes, "hybrid assembly: natural_frequencies_hz are modal-fit estimates from the predicted "
                      "tool-point h (one pole per peak that stands out of the noise, fitted with residual "
