@@ -24,6 +24,15 @@ documents = st.recursive(scalars, lambda inner: st.one_of(
     st.lists(inner, max_size=6), st.dictionaries(tricky_text, inner, max_size=6)), max_leaves=60)
 
 
+def strings(doc: object) -> list[str]:
+    """Every string of a parsed document, keys too."""
+    if isinstance(doc, dict):
+        return [s for k, v in doc.items() for s in [k, *strings(v)]]
+    if isinstance(doc, list):
+        return [s for v in doc for s in strings(v)]
+    return [doc] if isinstance(doc, str) else []
+
+
 def reference_counts(doc: object) -> tuple[int, int]:
     """(objects and arrays, their members + one per empty one), by walking the parsed document."""
     if isinstance(doc, dict | list):
@@ -46,6 +55,8 @@ def test_counts_match_the_parsed_document_whatever_the_split(doc, cuts, indent):
         counter.feed(text[a:b])
     assert (counter.containers, counter.items) == reference_counts(doc)
     assert counter.bytes == len(text)
+    assert counter.longest_string_bytes == max(
+        [len(json.dumps(s, ensure_ascii=False).encode()) - 1 for s in strings(doc)], default=0)
 
 
 def test_a_piece_ending_inside_a_run_of_backslashes():
@@ -92,3 +103,12 @@ def test_well_formed_but_invalid_is_not_malformed(text):
     with pytest.raises(InputError) as caught:
         load_json(text)
     assert not isinstance(caught.value, MalformedInput)
+
+
+def test_a_huge_string_is_refused_long_before_its_end():
+    counter = JsonCounter()
+    counter.feed(b'{"notes": "')
+    with pytest.raises(InputError, match="more than 16384 characters"):
+        for _ in range(1000):  # 64 MiB, if it were all read
+            counter.feed(b"x" * 65536)
+    assert counter.bytes < 2**20

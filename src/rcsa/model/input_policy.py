@@ -9,10 +9,12 @@ the same way, with an :class:`~rcsa.errors.InputError` naming where (the numbers
 
 * not JSON (syntax, not UTF-8): ``... is not valid JSON: ...`` at the character, line and column
   (:class:`~rcsa.errors.MalformedInput`: the REST service answers 400, the rest is 422);
-* more objects and arrays than :data:`~rcsa.model.bounds.MAX_JSON_CONTAINERS`, or more of
-  their elements than :data:`~rcsa.model.bounds.MAX_JSON_ITEMS`: counted on the raw text
-  before it is parsed (:class:`JsonCounter`, which the service also feeds while a body
-  arrives), so a document of millions of tiny items is refused before one is made;
+* more objects and arrays than :data:`~rcsa.model.bounds.MAX_JSON_CONTAINERS`, more of
+  their elements than :data:`~rcsa.model.bounds.MAX_JSON_ITEMS`, or a string of more than
+  :data:`MAX_STRING_BYTES` bytes (certainly too long: a character takes at most 12): counted
+  on the raw text before it is parsed (:class:`JsonCounter`, which the service also feeds
+  while a body arrives), so a document of millions of tiny items, or one huge string, is
+  refused before anything is made of it;
 * ``NaN``, ``Infinity``, ``-Infinity`` (JSON tokens, or ``nan``/``inf`` in a text table): not
   finite numbers, refused;
 * a number whose magnitude exceeds :data:`~rcsa.model.bounds.MAX_JSON_NUMBER` (``1e308``,
@@ -55,9 +57,13 @@ from rcsa.model.bounds import (
     MAX_STRING_CHARS,
 )
 
-__all__ = ["JsonCounter", "check_count", "check_json", "check_json_size", "check_number", "check_numbers",
+__all__ = ["MAX_STRING_BYTES", "JsonCounter", "check_count", "check_json", "check_json_size", "check_number", "check_numbers",
            "load_json"]
 
+#: Raw bytes of a JSON string beyond which it certainly holds more than
+#: :data:`~rcsa.model.bounds.MAX_STRING_CHARS` characters (a character is at most 12 bytes of
+#: JSON text: a surrogate pair of ``\\uXXXX`` escapes).
+MAX_STRING_BYTES = 12 * MAX_STRING_CHARS
 #: Bytes a :class:`JsonCounter` looks at in one numpy pass (bounds its scratch memory).
 _SCAN_BYTES = 1 << 20
 _QUOTE, _BACKSLASH, _COMMA, _BRACE, _BRACKET = 34, 92, 44, 123, 91
@@ -106,6 +112,8 @@ class JsonCounter:
         self.items = 0
         self.bytes = 0
         self._in_string = False
+        self._string_start = 0  # offset of the opening quote of the string the text ends in
+        self.longest_string_bytes = 0  # from an opening quote to its closing one
         self._backslashes = 0  # backslashes ending the text fed so far
 
     def feed(self, data: bytes | bytearray | memoryview) -> None:
@@ -127,8 +135,12 @@ class JsonCounter:
                 raise InputError(self.path, f"{self.what} holds more than {self.max_items} elements of objects and "
                                             f"arrays (at most {self.max_items} in one JSON document): send less, "
                                             "e.g. split a batch into several requests")
+            if self.longest_string_bytes > MAX_STRING_BYTES:
+                raise InputError(self.path, f"{self.what} holds a text of more than {MAX_STRING_CHARS} characters "
+                                            f"(over {MAX_STRING_BYTES} bytes); at most {MAX_STRING_CHARS}")
 
     def _scan(self, a: npt.NDArray[np.uint8]) -> None:
+        offset = self.bytes
         self.bytes += a.size
         quotes = np.flatnonzero(a == _QUOTE)
         backslash = a == _BACKSLASH
@@ -146,6 +158,15 @@ class JsonCounter:
             quotes = quotes[run % 2 == 0]
         start_inside = self._in_string
         self._in_string = bool((quotes.size + start_inside) % 2)
+        # string lengths: quote pairs (a string open since an earlier piece closes at the first)
+        bounds = np.concatenate(([self._string_start - offset], quotes)) if start_inside else quotes
+        if self._in_string:
+            bounds = np.concatenate((bounds, [a.size]))
+        if bounds.size >= 2:
+            longest = int(np.max(bounds[1::2] - bounds[0::2]))
+            self.longest_string_bytes = max(self.longest_string_bytes, longest)
+        if self._in_string:
+            self._string_start = offset + int(bounds[-2])
         for mask_value, is_container in ((_BRACE, True), (_BRACKET, True), (_COMMA, False)):
             found = np.flatnonzero(a == mask_value)
             if found.size == 0:
