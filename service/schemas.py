@@ -29,6 +29,7 @@ from pydantic import (
     ValidatorFunctionWrapHandler,
     WrapValidator,
     create_model,
+    field_validator,
     model_validator,
 )
 from pydantic_core import PydanticCustomError
@@ -449,6 +450,16 @@ class BatchRequest(_Request):
         description=f"Combinations (at most RCSA_MAX_BATCH_COMBINATIONS, itself at most {MAX_BATCH_COMBINATIONS}; "
                     "a longer list is refused before any item is looked at). Each is checked on its own: one that "
                     "is invalid gets status error in its result.")
+
+    @field_validator("combinations", mode="before")
+    @classmethod
+    def _few_enough(cls, combos: Any) -> Any:
+        """Refuse too many combinations before any of them is validated (pydantic's own length
+        check comes after the items)."""
+        if isinstance(combos, list) and len(combos) > MAX_BATCH_COMBINATIONS:
+            raise PydanticCustomError("too_long", f"at most {MAX_BATCH_COMBINATIONS} per batch, got {len(combos)}; "
+                                                  "split the batch")
+        return combos
 
     def to_request(self) -> tuple[dict[str, Any], dict[int, dict[str, str]]]:
         """The batch document (combinations as sent) and the refused ones: index → {field, detail}."""

@@ -614,3 +614,27 @@ def test_a_gauge_line_a_sliver_inside_a_cone_gives_no_segment_below_the_shortest
     lengths = [s["length_m"] for s in combo.holder["segments"]]
     assert min(lengths) >= 1e-6
     assert math.fsum(lengths) == pytest.approx(0.0400006, rel=1e-12)
+
+
+def test_a_library_of_too_many_items_is_refused_before_any_is_read():
+    from rcsa.libraries.fusion import load_fusion_library
+    from rcsa.model.bounds import MAX_LIBRARY_ITEMS
+
+    with pytest.raises(InputError, match=f"at most {MAX_LIBRARY_ITEMS} items") as caught:
+        load_fusion_library({"data": [0] * (MAX_LIBRARY_ITEMS + 1)})
+    assert caught.value.field == "data"
+
+
+def test_a_zip_of_too_many_files_is_refused_before_it_is_opened():
+    import io
+    import zipfile
+
+    from rcsa.libraries.formats import read_library
+    from rcsa.model.bounds import MAX_LIBRARY_ITEMS
+
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w") as zf:
+        for i in range(MAX_LIBRARY_ITEMS + 1):
+            zf.writestr(f"t{i}.fctb", b"")
+    with pytest.raises(InputError, match=f"more than {MAX_LIBRARY_ITEMS} files"):
+        read_library(buffer.getvalue(), file_name="tools.zip")

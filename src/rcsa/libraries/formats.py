@@ -33,7 +33,7 @@ from rcsa.libraries.freecad_library import (
     load_freecad_library,
 )
 from rcsa.libraries.fusion import FusionLibrary, library_combinations, load_fusion_library
-from rcsa.model.input_policy import load_json
+from rcsa.model.input_policy import check_zip_members, load_json
 
 __all__ = ["FREECAD_OPTIONS", "FUSION_OPTIONS", "Library", "LibraryFormat", "LibrarySource", "detect_format",
            "import_library", "read_library"]
@@ -62,6 +62,7 @@ def _content_format(source: bytes | Mapping[str, Any]) -> LibraryFormat | None:
             return "freecad"
         return "fusion" if "data" in source else None
     if source.startswith(b"PK"):
+        check_zip_members(source, "library")
         try:
             with zipfile.ZipFile(io.BytesIO(source)) as zf:
                 names = [PurePosixPath(n).name.lower() for n in zf.namelist()]

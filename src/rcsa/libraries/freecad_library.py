@@ -42,6 +42,7 @@ from rcsa.libraries.freecad import MAX_FILE_BYTES, load_freecad_object, map_tool
 from rcsa.libraries.quantities import count_value
 from rcsa.model import fields
 from rcsa.model.bounds import MAX_BATCH_COMBINATIONS
+from rcsa.model.input_policy import check_zip_members
 
 __all__ = ["FREECAD_SUFFIXES", "FreeCADLibrary", "freecad_library_combinations", "load_freecad_library"]
 
@@ -183,6 +184,7 @@ def _ordered(bits: dict[str, Toolbit], fctl: object, field: str) -> list[Toolbit
 
 
 def _from_zip(raw: bytes) -> tuple[list[Toolbit], tuple[str, dict[str, Any]] | None]:
+    check_zip_members(raw, "library")
     try:
         with zipfile.ZipFile(io.BytesIO(raw)) as zf:
             members = [i for i in zf.infolist() if not i.is_dir()]

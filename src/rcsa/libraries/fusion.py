@@ -82,8 +82,13 @@ from rcsa.libraries.quantities import count_value, unit_to_metres
 from rcsa.libraries.tool_materials import tool_material
 from rcsa.model import fields
 from rcsa.model.assembly import shallow_insertion_note
-from rcsa.model.bounds import MAX_HOLDER_SEGMENTS_PER_CONE, MAX_TEETH, MIN_FLUTED_DIAMETER_RATIO
-from rcsa.model.input_policy import load_json
+from rcsa.model.bounds import (
+    MAX_HOLDER_SEGMENTS_PER_CONE,
+    MAX_LIBRARY_ITEMS,
+    MAX_TEETH,
+    MIN_FLUTED_DIAMETER_RATIO,
+)
+from rcsa.model.input_policy import check_count, check_zip_members, load_json
 
 __all__ = [
     "MAX_LIBRARY_BYTES",
@@ -213,6 +218,7 @@ def tools_json_member(zf: zipfile.ZipFile) -> zipfile.ZipInfo:
 
 
 def _tools_json_from_zip(raw: bytes) -> bytes:
+    check_zip_members(raw, "")
     try:
         with zipfile.ZipFile(io.BytesIO(raw)) as zf:
             with zf.open(tools_json_member(zf)) as fh:
@@ -233,6 +239,7 @@ def _library_from_document(doc: object, source: str) -> FusionLibrary:
                                  "{\"data\": [tools and holders], \"version\": n}")
     if not isinstance(doc["data"], list):
         raise InputError("data", f"must be a list of tools and holders, got {type(doc['data']).__name__}")
+    check_count(len(doc["data"]), "data", MAX_LIBRARY_ITEMS, "items (tools and holders)")
     return FusionLibrary(items=tuple(doc["data"]), version=doc.get("version"),
                          sha256=hashlib.sha256(_canonical(doc)).hexdigest(), source=source)
 

@@ -33,7 +33,7 @@ from typing import Any, Literal
 
 from rcsa.errors import InputError, RcsaError
 from rcsa.libraries.fusion import MAX_LIBRARY_BYTES, tools_json_member
-from rcsa.model.input_policy import load_json
+from rcsa.model.input_policy import check_zip_members, load_json
 
 __all__ = ["FusionFile", "is_replaced", "read_fusion_file", "with_presets", "write_presets"]
 
@@ -87,6 +87,7 @@ def read_fusion_file(raw: bytes) -> FusionFile:
     kind: Literal["json", "tools"] = "json"
     if raw.startswith(b"PK"):
         kind = "tools"
+        check_zip_members(raw, "library")
         try:
             with zipfile.ZipFile(io.BytesIO(raw)) as zf:
                 info = tools_json_member(zf)

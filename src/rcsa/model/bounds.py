@@ -35,6 +35,7 @@ __all__ = [
     "MAX_JSON_CONTAINERS",
     "MAX_JSON_DEPTH",
     "MAX_JSON_ITEMS",
+    "MAX_LIBRARY_ITEMS",
     "MAX_JSON_NUMBER",
     "MAX_LENGTH_M",
     "MAX_LOSS_FACTOR",
@@ -117,6 +118,10 @@ MAX_FREQUENCY_LINES = 200_000
 MAX_TAP_SAMPLES = 2_000_000
 #: Tool–holder combinations of one batch.
 MAX_BATCH_COMBINATIONS = 10_000
+#: Items (tools, holders, anything) of one CAM tool library: twice the combinations a request may
+#: predict, as a library holds holders and tools that are skipped besides (a workshop's library
+#: has hundreds). Checked before any item is looked at.
+MAX_LIBRARY_ITEMS = 2 * MAX_BATCH_COMBINATIONS
 #: Segments of one spindle or one holder. Real spindle models have 10–60 and a CAM
 #: holder cut into cylinders a few hundred; each segment costs a 4×4 solve per line.
 MAX_SEGMENTS = 1_000

@@ -21,7 +21,10 @@ the same way, with an :class:`~rcsa.errors.InputError` naming where (the numbers
   ``1e400``, an integer of 400 digits): the path of the number, or the file's line and column;
 * nesting deeper than :data:`~rcsa.model.bounds.MAX_JSON_DEPTH`: the path where it gets too deep;
 * a string longer than :data:`~rcsa.model.bounds.MAX_STRING_CHARS`: its path;
-* more rows than a file of its kind may have (:func:`check_count`): the file's field.
+* more rows than a file of its kind may have (:func:`check_count`): the file's field;
+* a zip archive of more than :data:`~rcsa.model.bounds.MAX_LIBRARY_ITEMS` files
+  (:func:`check_zip_members`, before the archive is opened: the members' directory alone of a
+  million tiny files would cost hundreds of MB to read).
 
 JSON text is parsed here by the standard library (strict: the tokens above are refused by
 the parser); the service decodes its bodies with a faster parser and calls :func:`check_json`
@@ -54,10 +57,11 @@ from rcsa.model.bounds import (
     MAX_JSON_DEPTH,
     MAX_JSON_ITEMS,
     MAX_JSON_NUMBER,
+    MAX_LIBRARY_ITEMS,
     MAX_STRING_CHARS,
 )
 
-__all__ = ["MAX_STRING_BYTES", "JsonCounter", "check_count", "check_json", "check_json_size", "check_number", "check_numbers",
+__all__ = ["MAX_STRING_BYTES", "JsonCounter", "check_count", "check_zip_members", "check_json", "check_json_size", "check_number", "check_numbers",
            "load_json"]
 
 #: Raw bytes of a JSON string beyond which it certainly holds more than
@@ -376,6 +380,39 @@ def check_count(count: int, field: str, limit: int, what: str = "rows") -> None:
     """
     if count > limit:
         raise InputError(field, f"at most {limit} {what}, got {count}")
+
+
+def check_zip_members(raw: bytes | bytearray | memoryview, field: str, limit: int = MAX_LIBRARY_ITEMS) -> None:
+    """Refuse a zip archive of more than ``limit`` files, before it is opened.
+
+    Counts the signature every entry of a zip's central directory starts with (``PK\\1\\2``;
+    :mod:`zipfile` refuses an entry without it) in the raw bytes, whatever count the archive
+    states: an upper bound of its members, made without building one object per member.
+
+    Parameters
+    ----------
+    raw : bytes
+        The archive.
+    field : str
+        The field it stands for, for the message.
+    limit : int
+        Most files allowed.
+
+    Raises
+    ------
+    InputError
+        Naming ``field`` and the bound.
+
+    Examples
+    --------
+    >>> check_zip_members(b"PK\\x01\\x02" * 3, "library", limit=2)
+    Traceback (most recent call last):
+    ...
+    rcsa.errors.InputError: library: the zip archive holds more than 2 files (3 entries)
+    """
+    n = bytes(raw).count(b"PK\x01\x02") if not isinstance(raw, bytes) else raw.count(b"PK\x01\x02")
+    if n > limit:
+        raise InputError(field, f"the zip archive holds more than {limit} files ({n} entries)")
 
 
 def _join(path: str, key: str | int) -> str:
