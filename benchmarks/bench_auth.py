@@ -153,7 +153,7 @@ def _matches(template: str, concrete: str) -> bool:
     c_method, c_path = concrete.split(" ", 1)
     t, c = t_path.split("/"), c_path.split("/")
     return t_method == c_method and len(t) == len(c) and all(
-        a == b or (a.startswith("{") and (a.split("}")[1] == "" or b.endswith(a.split("}")[1]))) for a, b in zip(t, c))
+        a == b or (a.startswith("{") and (a.split("}")[1] == "" or b.endswith(a.split("}")[1]))) for a, b in zip(t, c, strict=True))
 
 
 def jobs(client: httpx.Client, revoked: str) -> list[dict]:

@@ -45,7 +45,7 @@ def _document(i: int) -> dict:
     doc = json.loads(json.dumps(DOC))
     doc["spindle_id"] = f"crash-{i:04d}"
     scale = 1.0 + i * 1e-6  # numbers of its own: a mix-up would show
-    for name, value in doc.items():
+    for value in doc.values():
         if isinstance(value, dict) and "real" in value:
             value["real"] = [x * scale for x in value["real"]]
     return doc
@@ -109,12 +109,12 @@ def main() -> None:
                         i = todo.pop()
                     key = {"Idempotency-Key": f"crash-{args.seed}-{i}"}
                     if i < args.jobs:  # a batch job too, with its own key
-                        r = _retry(lambda: client.post("/v1/tool-point-frf/batch", json=BATCH,
-                                                       headers={**key, "Prefer": "respond-async"}))
+                        r = _retry(lambda key=key: client.post("/v1/tool-point-frf/batch", json=BATCH,
+                                                               headers={**key, "Prefer": "respond-async"}))
                         with lock:
                             job_ids.append(r.json()["id"])
-                    r = _retry(lambda: client.post("/v1/measurements", json=_document(i),
-                                                   headers={"Idempotency-Key": f"crash-{args.seed}-m{i}"}))
+                    r = _retry(lambda i=i: client.post("/v1/measurements", json=_document(i),
+                                                       headers={"Idempotency-Key": f"crash-{args.seed}-m{i}"}))
                     answers[i] = {"status": r.status_code, "id": r.json().get("id")}
 
         t0 = time.monotonic()
