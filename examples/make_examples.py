@@ -158,6 +158,19 @@ def lobes_semi_discretization() -> dict:
             "method": "semi_discretization", "steps_per_period": 24, "modes_per_direction": 2}
 
 
+def lobes_of_a_stored_tool() -> dict:
+    """The cut of :func:`lobes_with_assembly` on a tool of the stored library ``fusion-library`` (synced
+    from ``fusion-library.json``), by reference: its assembly is rebuilt from the sync, its teeth too."""
+    return {"library_tool": {"library_id": "fusion-library", "tool_id": "00000000-0000-4000-8000-000000000101"},
+            **{k: v for k, v in CUTTING.items() if k != "teeth"},
+            "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 1000}}
+
+
+def presets_by_reference() -> dict:
+    """The options of chatter-safe presets written into the Fusion file a sync of the library kept."""
+    return {"material": "aluminium-7075", "max_rpm": 24000}
+
+
 def write(folder: Path) -> list[Path]:
     """Write every generated example into ``folder``; returns the paths."""
     folder.mkdir(parents=True, exist_ok=True)
@@ -168,7 +181,8 @@ def write(folder: Path) -> list[Path]:
              "lobes-assembly.json": lobes_with_assembly(), "batch.json": batch(), "effects.json": effects(),
              "ra1-uncertainty.json": ra1_with_uncertainty(), "ra1-bonded.json": ra1_bonded(),
              "lobes-robust.json": lobes_robust(),
-             "lobes-sdm.json": lobes_semi_discretization()}
+             "lobes-sdm.json": lobes_semi_discretization(), "lobes-library-tool.json": lobes_of_a_stored_tool(),
+             "presets-options.json": presets_by_reference()}
     paths = []
     for name, doc in files.items():
         path = folder / name

@@ -22,7 +22,7 @@ from rcsa.analysis.lobes.semi_discretization import SemiDiscretizationResult
 from rcsa.analysis.lobes.zoa import LobeResult, frf_grid_notes
 from rcsa.analysis.progress import Progress
 from rcsa.app.predictions import predict, predict_draws
-from rcsa.app.stores import open_store, resolver
+from rcsa.app.stores import library_store, open_store, resolver
 from rcsa.errors import InputError
 from rcsa.libraries.sync import LibraryStore
 from rcsa.measured.hybrid import MeasurementSource
@@ -199,7 +199,7 @@ def resolve_lobes_references(request: Mapping[str, Any], *, store: MeasurementSo
     store : MeasurementSource, optional
         Where measurements are read.
     libraries : LibraryStore, optional
-        Where stored libraries are read.
+        Where stored libraries are read (default: those of ``store``, or of the default store).
 
     Returns
     -------
@@ -220,8 +220,10 @@ def resolve_lobes_references(request: Mapping[str, Any], *, store: MeasurementSo
         clash = [k for k in ("assembly", "frf_x", "frf_y") if out.get(k) is not None]
         if clash:
             raise InputError("library_tool", f"give either library_tool or {clash[0]}, not both")
+        if not isinstance(ref, Mapping) or set(ref) != {"library_id", "tool_id"}:
+            raise InputError("library_tool", 'must be {"library_id": ..., "tool_id": ...}')
         if libraries is None:
-            raise InputError("library_tool", "stored libraries need a store")
+            libraries = library_store(getattr(store, "path", None))
         assembly, tool = libraries.tool_assembly(str(ref["library_id"]), str(ref["tool_id"]))
         out["assembly"] = assembly
         if out.get("teeth") is None and tool.get("teeth"):

@@ -23,13 +23,16 @@ def register(app: typer.Typer) -> None:
         """Stability lobes from inline FRFs or an assembly: zero-order (Altintas–Budak, the default) or
         "method": "semi_discretization" in the request (Insperger–Stépán, for low radial immersion).
         With "uncertainty" (and "robust": {"confidence"}) beside an assembly: depth_limit_robust_m too
-        (semi-discretization: from a reduced model of the draws)."""
+        (semi-discretization: from a reduced model of the draws). A stored library's tool
+        ("library_tool": {"library_id", "tool_id"}) or a stored measurement's FRF ("frf_x":
+        {"measurement_id"}) may stand for the assembly or the FRF."""
         # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
-        from rcsa.app.analyses import stability_lobes_answer
+        from rcsa.app.analyses import resolve_lobes_references, stability_lobes_answer
         from rcsa.app.figures import check_picture_path, robust_lobes_figure, save_figure
         from rcsa.app.stores import open_store
-        doc = read_json(request)
-        answer = run_guarded(lambda: stability_lobes_answer(doc, store=open_store(store) if store else None))
+        opened = open_store(store) if store else None  # else RCSA_STORE's or the default one, when needed
+        doc = run_guarded(lambda: resolve_lobes_references(read_json(request), store=opened))
+        answer = run_guarded(lambda: stability_lobes_answer(doc, store=opened))
         if plot is not None:
             run_guarded(lambda: save_figure(robust_lobes_figure(answer.nominal, answer.extras()),
                                             check_picture_path(plot, "--plot")))
