@@ -14,9 +14,11 @@ a ``point_receptance`` measurement (5 000 lines, 1–5 000 Hz), then measures
   result), wall time from the POST to the last byte of the result (target <= 5 s), with the
   full tool_point (h, l, n, p) and with ``?tool_point=h``.
 
-The single predictions are measured twice: the same request over and over (the figure of
-earlier runs), and a different tool (stickout) in every request on the same spindle and holder
-(what a CAM system asking tool after tool sends). ``--stages`` first times, in this process and
+The single predictions are measured three ways: the same request over and over (the figure of
+earlier runs; the service answers it from its kept prediction), a different tool (stickout) in
+every request on the same spindle and holder, 50 tools in turn (what a CAM system asking tool
+after tool sends: each tool's modal fit is kept, its prediction not), and a tool never asked
+before in every request (nothing of the tool kept: the cold cost on a kept spindle side). ``--stages`` first times, in this process and
 without HTTP, each stage of one such request — JSON decoding and schema validation, the
 prediction (spindle side kept or cold; of it the modal fit), the result document and its JSON
 bytes, gzip — and the whole ASGI app (routing, middleware) called in-process: where the time
@@ -252,11 +254,11 @@ def largest(base: str, mid: str, n: int, grid: dict[str, float], proc: subproces
             "worker_peak_rss_mb": _worker_peaks(proc.pid)}
 
 
-def tool_bodies(mid: str, n: int = 50) -> list[bytes]:
-    """RA-1's holder and tool on the stored spindle, stickouts 50–80 mm: one body per tool."""
+def tool_bodies(mid: str, n: int = 50, offset_m: float = 0.0) -> list[bytes]:
+    """RA-1's holder and tool on the stored spindle, stickouts 50–80 mm (+ ``offset_m``): one body per tool."""
     doc = ra1(GRID_5000)
     return [json.dumps({**doc, "spindle": {"measurement_id": mid},
-                        "tool": {**doc["tool"], "stickout_m": round(0.050 + 0.030 * i / n, 6)}}).encode()
+                        "tool": {**doc["tool"], "stickout_m": round(0.050 + offset_m + 0.030 * i / n, 9)}}).encode()
             for i in range(n)]
 
 
@@ -386,6 +388,10 @@ def main() -> None:
         for n in args.threads:
             single[f"{n}_threads_tool_per_request"] = load(base, tools, threads=n, requests=args.requests,
                                                            headers={"Accept-Encoding": "identity"})
+        for n in args.threads:  # a tool never asked before in every request: nothing of it kept
+            fresh = tool_bodies(mid, args.requests, offset_m=0.001 * n)
+            single[f"{n}_threads_new_tool_per_request"] = load(base, fresh, threads=n, requests=args.requests,
+                                                               headers={"Accept-Encoding": "identity"})
         results["single_prediction_5000_lines"] = single
         results["server_side"] = _server_side(base)
         grid_1000 = {"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 5.0}

@@ -61,3 +61,25 @@ def test_a_measured_spindle_deleted_since_is_not_used(tmp_path, monkeypatch):
     store.delete(mid)
     with pytest.raises(InputError, match=f"spindle.measurement_id: no stored measurement '{mid}'"):
         predictions.predict(doc, store=store)
+
+
+def test_the_same_request_again_is_its_kept_prediction_and_only_while_its_side_is(tmp_path, monkeypatch):
+    sides = predictions.SpindleSides(4)
+    monkeypatch.setattr(predictions, "SIDES", sides)
+    store = MeasurementStore(tmp_path / "store")
+    mid = store.put(demo_measurement(GRID))
+    doc = {**ra1(GRID), "spindle": {"measurement_id": mid}}
+    first = predictions.predict(doc, store=store)
+    again = predictions.predict({**doc, "tool": dict(doc["tool"])}, store=store)  # equal, not the same object
+    assert again is first and json_bytes(first) == json_bytes(_fresh(doc, store))
+    assert not first.natural_frequencies_hz.flags.writeable and not first.tool_point.h.flags.writeable
+    other = predictions.predict({**doc, "tool": {**doc["tool"], "stickout_m": 0.06}}, store=store)
+    assert other is not first
+    for k in range(predictions.PREDICTIONS_PER_SIDE):  # more tools than a side keeps: the oldest dropped
+        predictions.predict({**doc, "tool": {**doc["tool"], "stickout_m": 0.05 + 0.001 * k}}, store=store)
+    assert predictions.predict(doc, store=store) is not first
+    # a side dropped (its measurement gone) takes its predictions along
+    assert sides._predictions.keys() == {id(side) for _, side in sides._items.values()}
+    store.delete(mid)
+    with pytest.raises(InputError):
+        predictions.predict(doc, store=store)

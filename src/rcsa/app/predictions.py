@@ -63,6 +63,9 @@ def example_assembly(name: str, frequency: Mapping[str, Any] | None = None) -> d
 SIDES_KEPT = 8
 #: Condensed chains (spindle + holder prefixes) one kept side may hold before it is dropped.
 PREFIXES_PER_SIDE = 64
+#: Finished predictions one kept side keeps (least recently used dropped): the same request on
+#: the same spindle answered again from memory (at 5 000 lines one is ~0.4 MB).
+PREDICTIONS_PER_SIDE = 8
 _SHARED_FIELDS = ("frequency", "beam_theory", "shear_coefficient", "materials", "spindle")
 
 
@@ -79,17 +82,60 @@ class SpindleSides:
     replaced or damaged since is read again, and fails as a fresh request would). Results are those of a fresh side, bit for bit: the same arrays are computed
     once instead of each time.
 
+    Each kept side also keeps its last :data:`PREDICTIONS_PER_SIDE` finished predictions by
+    the rest of their request (canonical JSON: holder, tool, joints, options): the same
+    prediction asked again is answered from memory (:meth:`predict`), and dropped with its side
+    when the measurement's file changes. A kept prediction is shared between its callers: its
+    arrays are read-only.
+
     Parameters
     ----------
     size : int
         Sides kept; 0 keeps none.
+    predictions_per_side : int
+        Finished predictions each side keeps; 0 keeps none (every request computed).
     """
 
-    def __init__(self, size: int = SIDES_KEPT) -> None:
+    def __init__(self, size: int = SIDES_KEPT, predictions_per_side: int = PREDICTIONS_PER_SIDE) -> None:
         self.size = int(size)
+        self.predictions_per_side = int(predictions_per_side)
         # the package's one eviction policy (least recently used first), as the sides' own caches
         self._items: LruStore[tuple[int, bytes], tuple[Any, SpindleSide]] = LruStore(self.size)
+        self._predictions: dict[int, LruStore[bytes, Prediction]] = {}  # by id of a kept side
         self._lock = threading.Lock()
+
+    def predict(self, document: Mapping[str, Any], common: CommonSpec, store: MeasurementStore | None,
+                spec: AssemblySpec, uncertainty: UncertaintyOptions | None) -> Prediction:
+        """The prediction of ``document`` on its kept side: kept from an earlier identical request,
+        or computed now (and kept).
+
+        Parameters
+        ----------
+        document : mapping
+            The request.
+        common, spec : CommonSpec, AssemblySpec
+            The same, parsed.
+        store : MeasurementStore, optional
+            Where a measured spindle is read.
+        uncertainty : UncertaintyOptions, optional
+            The request's uncertainty band.
+        """
+        side = self.side(document, common, store)
+        with self._lock:
+            kept = self._predictions.get(id(side))
+        if kept is None:  # a side not kept (or dropped since): compute
+            return side.predict(spec, uncertainty=uncertainty)
+        key = orjson.dumps({k: v for k, v in document.items() if k not in _SHARED_FIELDS},
+                           option=orjson.OPT_SORT_KEYS)
+        with self._lock:
+            hit = kept.peek(key)
+        if hit is not None:
+            return hit
+        result = side.predict(spec, uncertainty=uncertainty)
+        result.natural_frequencies_hz.setflags(write=False)
+        with self._lock:
+            kept.put(key, result)
+        return result
 
     def side(self, document: Mapping[str, Any], common: CommonSpec,
              store: MeasurementStore | None) -> SpindleSide:
@@ -117,9 +163,18 @@ class SpindleSides:
             hit = SpindleSide(common, resolver(store))
         with self._lock:
             if len(hit.cache) > PREFIXES_PER_SIDE or identity is None:
-                self._items.pop(key)
+                dropped = self._items.pop(key)
+                if dropped is not None:
+                    self._predictions.pop(id(dropped[1]), None)
                 return hit
+            previous = self._items.peek(key)
+            if previous is not None and previous[1] is not hit:  # replaced: its predictions go with it
+                self._predictions.pop(id(previous[1]), None)
             self._items.put(key, (identity, hit))
+            self._predictions.setdefault(id(hit), LruStore(self.predictions_per_side))
+            kept_ids = {id(side) for _, side in self._items.values()}
+            for gone in [i for i in self._predictions if i not in kept_ids]:  # evicted sides
+                del self._predictions[gone]
         return hit
 
 
@@ -163,7 +218,8 @@ def predict(assembly: Mapping[str, Any] | AssemblySpec, *, store: MeasurementSto
     -----
     The spindle side (its condensations and a measured base on the grid) is kept across
     calls with the same spindle, grid and materials (:class:`SpindleSides`): the next tool on
-    that spindle and holder skips the condensation.
+    that spindle and holder skips the condensation, and the same request again is answered
+    from the side's kept predictions (shared: do not modify the result).
 
     Examples
     --------
@@ -176,9 +232,9 @@ def predict(assembly: Mapping[str, Any] | AssemblySpec, *, store: MeasurementSto
         parse_prediction_request(assembly, max_lines)
     common = CommonSpec(spec.frequency_hz, spec.beam_theory, spec.shear_coefficient, spec.materials,
                         spec.spindle)
-    side = SpindleSide(common, resolver(store)) if isinstance(assembly, AssemblySpec) else \
-        SIDES.side(assembly, common, store)
-    return side.predict(spec, uncertainty=uncertainty)
+    if isinstance(assembly, AssemblySpec):
+        return SpindleSide(common, resolver(store)).predict(spec, uncertainty=uncertainty)
+    return SIDES.predict(assembly, common, store, spec, uncertainty)
 
 
 def prediction_document(prediction: Prediction, tool_point: Sequence[str] | None = None) -> dict[str, Any]:
