@@ -1,6 +1,7 @@
 """Hostile input against a real ``uvicorn --workers 2``: every operation, uploaded files included.
 
-Run: ``.venv/bin/python benchmarks/bench_hostile.py`` (``--per-operation 60 --seed 21``: about
+Run: ``.venv/bin/python benchmarks/bench_hostile.py`` against a real ``rcsa serve --workers 2``
+(``--per-operation 60 --seed 21``: about
 2 100 cases over 34 operations; ``--heavy`` adds the largest files: 250 000-row tables and a
 2 100 000-row tap test). The cases come from ``tests/service/hostile_cases.py``: mutations of a
 valid request of each operation — numbers beyond the input policy (1e308, 1e400, 400 digits,
@@ -29,9 +30,7 @@ import argparse
 import json
 import os
 import platform
-import signal
 import socket
-import subprocess
 import sys
 import tempfile
 import time
@@ -47,38 +46,9 @@ sys.path.insert(0, str(REPO / "benchmarks"))
 
 from tests.service.hostile_cases import Case, cases, judge, operations  # noqa: E402
 
+from _service import machine, memory_mb, start_service, stop_service, workers  # noqa: E402
+
 KEY = "bench-hostile-write-key-0123456789"
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def _start(tmp: Path) -> tuple[subprocess.Popen, str, Path]:
-    port = _free_port()
-    prom = tmp / "prom"
-    prom.mkdir()
-    env = {**os.environ, "RCSA_STORE": str(tmp / "store"), "RCSA_API_KEYS": f"{KEY}:write",
-           "RCSA_SEED_DEMO": "false", "PROMETHEUS_MULTIPROC_DIR": str(prom), "RCSA_ACCESS_LOG": "false"}
-    log = tmp / "uvicorn.log"
-    with log.open("w") as out:
-        proc = subprocess.Popen([sys.executable, "-m", "uvicorn", "service.main:create_app", "--factory",
-                                 "--workers", "2", "--host", "127.0.0.1", "--port", str(port)], cwd=REPO, env=env,
-                                stdout=out, stderr=subprocess.STDOUT)
-    base = f"http://127.0.0.1:{port}"
-    for _ in range(600):
-        try:
-            if httpx.get(base + "/readyz", timeout=5).status_code == 200:
-                time.sleep(1.0)  # the second worker
-                return proc, base, log
-        except httpx.TransportError:
-            pass
-        if proc.poll() is not None:
-            raise SystemExit("uvicorn exited:\n" + log.read_text())
-        time.sleep(0.2)
-    raise SystemExit("uvicorn did not become ready:\n" + log.read_text())
 
 
 def _send(client: httpx.Client, case: Case) -> dict[str, object]:
@@ -138,7 +108,6 @@ def bulk_bodies() -> list[tuple[str, str, bytes]]:
 def post_raw(base: str, path: str, body: bytes, timeout_s: float = 300.0) -> dict[str, object]:
     """POST ``body`` on a raw socket, reading the answer while it is sent: status, seconds to the
     answer's first byte, bytes sent by then, the problem's detail."""
-    import socket
     import threading as th
 
     host, port = base.removeprefix("http://").split(":")
@@ -193,7 +162,6 @@ def bulk(args: argparse.Namespace) -> None:
     """The bulk cases against ``rcsa serve --workers 2`` (module docstring); ``results/bulk.json``."""
     import threading as th
 
-    from _service import machine, memory_mb, start_service, stop_service, workers
     from rcsa.reference import ra1
 
     before = machine()
@@ -283,18 +251,14 @@ def main() -> None:
     print(f"{len(todo)} cases over {len(operations())} operations (seed {args.seed}); load average "
           f"{load[0]:.2f}, {load[1]:.2f}, {load[2]:.2f} on {os.cpu_count()} cores")
     with tempfile.TemporaryDirectory() as tmp:
-        proc, base, log = _start(Path(tmp))
+        proc, base, log = start_service(Path(tmp), env={"RCSA_API_KEYS": f"{KEY}:write"})
         t0 = time.perf_counter()
         try:
             with httpx.Client(base_url=base, timeout=args.timeout) as client, \
                     ThreadPoolExecutor(args.clients) as pool:
                 rows = list(pool.map(lambda c: _send(client, c), todo))
         finally:
-            proc.send_signal(signal.SIGINT)
-            try:
-                proc.wait(timeout=60)
-            except subprocess.TimeoutExpired:
-                proc.kill()
+            stop_service(proc)
         wall = time.perf_counter() - t0
         traceback_lines = log.read_text().count("Traceback")
     by_status = Counter(r["status"] for r in rows)
