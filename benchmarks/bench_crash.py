@@ -108,9 +108,10 @@ def main() -> None:
                             return
                         i = todo.pop()
                     key = {"Idempotency-Key": f"crash-{args.seed}-{i}"}
-                    if i < args.jobs:  # a batch job too, with its own key
-                        r = _retry(lambda key=key: client.post("/v1/tool-point-frf/batch", json=BATCH,
-                                                               headers={**key, "Prefer": "respond-async"}))
+                    if i < args.jobs:  # a batch job too, of its own (the same batch again would be the same job)
+                        own = {**BATCH, "combinations": [{**c, "id": f"J{i}-{c['id']}"} for c in BATCH["combinations"]]}
+                        r = _retry(lambda key=key, own=own: client.post("/v1/tool-point-frf/batch", json=own,
+                                                                        headers={**key, "Prefer": "respond-async"}))
                         with lock:
                             job_ids.append(r.json()["id"])
                     r = _retry(lambda i=i: client.post("/v1/measurements", json=_document(i),
