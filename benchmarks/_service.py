@@ -32,6 +32,12 @@ def machine() -> dict[str, object]:
             "load_average": list(os.getloadavg())}
 
 
+def rcsa(store: Path, *args: str) -> subprocess.CompletedProcess:
+    """Run the CLI ``rcsa ARGS`` on the store ``store`` (as an operator would), output captured."""
+    return subprocess.run([sys.executable, "-c", "from rcsa.cli import main; main()", *args], cwd=REPO,
+                          env={**os.environ, "RCSA_STORE": str(store)}, capture_output=True, text=True)
+
+
 def free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))

@@ -26,7 +26,6 @@ import argparse
 import hashlib
 import json
 import secrets
-import subprocess
 import sys
 import tempfile
 import time
@@ -35,7 +34,7 @@ from pathlib import Path
 
 import httpx
 
-from _service import REPO, machine, start_service, stop_service
+from _service import REPO, machine, rcsa, start_service, stop_service
 
 WRITE_KEY = "auth-bench-write-key-0123456789abcdef"
 READ_KEY = "auth-bench-read-key-0123456789abcdef"
@@ -48,9 +47,9 @@ RECOMMEND = {"material": "aluminium-7075", "max_rpm": "24000"}
 
 
 def _rcsa(store: Path, *args: str) -> str:
-    out = subprocess.run([sys.executable, "-c", "from rcsa.cli import main; main()", *args], cwd=REPO, check=True,
-                         capture_output=True, text=True, env={"RCSA_STORE": str(store), "PATH": "/usr/bin:/bin"})
-    return out.stdout.strip()
+    done = rcsa(store, *args)
+    done.check_returncode()
+    return done.stdout.strip()
 
 
 def credentials(valid: str, read: str, revoked: str) -> list[tuple[str, dict[str, str], dict[str, str]]]:

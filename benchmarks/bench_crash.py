@@ -18,7 +18,6 @@ import json
 import os
 import random
 import signal
-import subprocess
 import sys
 import tempfile
 import threading
@@ -27,7 +26,7 @@ from pathlib import Path
 
 import httpx
 
-from _service import REPO, machine, start_service, stop_service, workers
+from _service import REPO, machine, rcsa, start_service, stop_service, workers
 
 KEY = "crash-bench-write-key-0123456789abcdef"
 DOC = json.loads((REPO / "tests" / "data" / "measurements" / "point_receptance.json").read_text())
@@ -161,9 +160,7 @@ def main() -> None:
         finally:
             done.set()
             stop_service(proc)
-        check = subprocess.run([sys.executable, "-c", "from rcsa.cli import main; main()", "store", "check"],
-                               cwd=REPO, env={**os.environ, "RCSA_STORE": str(Path(tmp) / "store")},
-                               capture_output=True, text=True)
+        check = rcsa(Path(tmp) / "store", "store", "check")
     jobs_bad = {j: f for j, f in finished.items()
                 if f["status"] != "succeeded" or f["summary"] != {"ok": len(BATCH["combinations"]), "error": 0}}
     record = {"machine_before": before, "machine_after": machine(), "uploads": args.uploads, "jobs": len(job_ids),

@@ -57,6 +57,7 @@ from pathlib import Path
 import httpx
 import orjson
 
+from _service import memory_mb, workers
 from rcsa.app.measurements import demo_measurement
 from rcsa.measured.importers import measurement_to_contract
 from rcsa.reference import ra1
@@ -210,22 +211,6 @@ def _server_side(base: str) -> dict[str, float]:
             "mean_predict_ms": 1e3 * values["rcsa_compute_seconds_sum"] / values["rcsa_compute_seconds_count"]}
 
 
-def _worker_peaks(parent: int) -> dict[int, float]:
-    """Peak resident memory (VmHWM, MB) of the child processes of ``parent`` (Linux /proc)."""
-    peaks = {}
-    for entry in Path("/proc").iterdir():
-        if not entry.name.isdigit():
-            continue
-        try:
-            status = (entry / "status").read_text()
-        except OSError:
-            continue
-        fields = dict(line.split(":", 1) for line in status.splitlines() if ":" in line)
-        if fields.get("PPid", "").strip() == str(parent) and "VmHWM" in fields:
-            peaks[int(entry.name)] = int(fields["VmHWM"].split()[0]) / 1024
-    return peaks
-
-
 def largest(base: str, mid: str, n: int, grid: dict[str, float], proc: subprocess.Popen) -> dict[str, object]:
     """The largest batch the limits allow, as a job; its result streamed and counted, not parsed."""
     doc = ra1(grid)
@@ -251,7 +236,7 @@ def largest(base: str, mid: str, n: int, grid: dict[str, float], proc: subproces
     assert summary == {"ok": n, "error": 0}, summary
     return {"combinations": n, "lines": _lines(grid), "attempts": job["attempts"], "job_done_s": t_done - t0,
             "result_received_s": t_bytes - t0, "result_gb": received / 1e9, "result_bytes": job["result_bytes"],
-            "worker_peak_rss_mb": _worker_peaks(proc.pid)}
+            "worker_peak_rss_mb": {pid: memory_mb(pid)["peak_rss_mb"] for pid in workers(proc)}}
 
 
 def tool_bodies(mid: str, n: int = 50, offset_m: float = 0.0) -> list[bytes]:

@@ -179,18 +179,24 @@ class FrequencyValues(_Request):
     values_hz: list[FrequencyValue] = Field(min_length=1, description="Frequency lines, Hz: strictly increasing, > 0.")
 
 
-def _frequency_tag(value: Any) -> str | None:
-    if isinstance(value, dict):
-        return "frequency-values" if "values_hz" in value else "frequency-range"
-    if isinstance(value, FrequencyValues):
-        return "frequency-values"
-    return "frequency-range" if isinstance(value, FrequencyRange) else None
+def _keyed_union(absent: type[BaseModel], absent_tag: str, present: type[BaseModel], present_tag: str, key: str,
+                 kind: str, message: str) -> Any:
+    """One of two request models, told apart by whether ``key`` is given: the union (tags in
+    :data:`service.field_errors.UNION_TAGS`) and a one-line error when neither fits."""
+    def tag(value: Any) -> str | None:
+        if isinstance(value, dict):
+            return present_tag if key in value else absent_tag
+        if isinstance(value, present):
+            return present_tag
+        return absent_tag if isinstance(value, absent) else None
+
+    return Annotated[Annotated[absent, Tag(absent_tag)] | Annotated[present, Tag(present_tag)],  # type: ignore[valid-type]
+                     Discriminator(tag, custom_error_type=kind, custom_error_message=message)]
 
 
 Frequency = Annotated[
-    Annotated[FrequencyRange, Tag("frequency-range")] | Annotated[FrequencyValues, Tag("frequency-values")],
-    Discriminator(_frequency_tag, custom_error_type="frequency",
-                  custom_error_message="must be an object {start_hz, stop_hz, step_hz} or {values_hz}"),
+    _keyed_union(FrequencyRange, "frequency-range", FrequencyValues, "frequency-values", "values_hz", "frequency",
+                 "must be an object {start_hz, stop_hz, step_hz} or {values_hz}"),
     Field(description="Frequency grid (Hz): {start_hz, stop_hz, step_hz} (stop included) or {values_hz}. "
                       "The number of lines is limited (RCSA_MAX_FREQUENCY_LINES).",
           examples=[_EXAMPLE_GRID]),
@@ -247,18 +253,9 @@ class MeasuredSpindle(_Request):
                                                              "rotations of a direct_frf measurement, m.")
 
 
-def _spindle_tag(value: Any) -> str | None:
-    if isinstance(value, dict):
-        return "spindle-measured" if "measurement_id" in value else "spindle-analytical"
-    if isinstance(value, MeasuredSpindle):
-        return "spindle-measured"
-    return "spindle-analytical" if isinstance(value, AnalyticalSpindle) else None
-
-
 Spindle = Annotated[
-    Annotated[AnalyticalSpindle, Tag("spindle-analytical")] | Annotated[MeasuredSpindle, Tag("spindle-measured")],
-    Discriminator(_spindle_tag, custom_error_type="spindle",
-                  custom_error_message="must be an object {segments, bearings} or {measurement_id}"),
+    _keyed_union(AnalyticalSpindle, "spindle-analytical", MeasuredSpindle, "spindle-measured", "measurement_id",
+                 "spindle", "must be an object {segments, bearings} or {measurement_id}"),
     Field(description="The spindle: modelled (segments + bearings) or a stored measurement (hybrid)."),
 ]
 
@@ -797,19 +794,8 @@ class StoredFrf(_Request):
                                 "(GET /v1/measurements), e.g. a tool-tip tap test.", examples=["m-0123456789ab"])
 
 
-def _frf_tag(value: Any) -> str | None:
-    if isinstance(value, dict):
-        return "frf-stored" if "measurement_id" in value else "frf-inline"
-    if isinstance(value, StoredFrf):
-        return "frf-stored"
-    return "frf-inline" if isinstance(value, FrfIn) else None
-
-
-FrfRef = Annotated[
-    Annotated[FrfIn, Tag("frf-inline")] | Annotated[StoredFrf, Tag("frf-stored")],
-    Discriminator(_frf_tag, custom_error_type="frf",
-                  custom_error_message="must be an object {frequency_hz, h} or {measurement_id}"),
-]
+FrfRef = _keyed_union(FrfIn, "frf-inline", StoredFrf, "frf-stored", "measurement_id", "frf",
+                      "must be an object {frequency_hz, h} or {measurement_id}")
 
 
 class LibraryToolRef(_Request):

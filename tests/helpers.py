@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 import re
+import signal
 import subprocess
 import sys
 import time
@@ -41,6 +42,15 @@ def max_error_of_peak(actual: np.ndarray, expected: np.ndarray) -> float:
 
 #: how many times the log of a starting uvicorn is read, 0.1 s apart, for the port it bound
 BIND_ATTEMPTS = 1200
+
+
+def stop_uvicorn(proc: subprocess.Popen) -> None:
+    """SIGINT a server started by :func:`start_uvicorn`, and SIGKILL it if it is not gone in a minute."""
+    proc.send_signal(signal.SIGINT)
+    try:
+        proc.wait(timeout=60)
+    except subprocess.TimeoutExpired:
+        proc.kill()
 
 
 def start_uvicorn(args: list[str], env: dict[str, str], log_path: Path,

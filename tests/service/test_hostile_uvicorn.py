@@ -16,7 +16,6 @@ from __future__ import annotations
 import copy
 import json
 import os
-import signal
 import subprocess
 import time
 from collections.abc import Iterator
@@ -28,7 +27,7 @@ import pytest
 
 from rcsa.app.predictions import predict
 from rcsa.reference import ra1
-from tests.helpers import REPO, start_uvicorn
+from tests.helpers import REPO, start_uvicorn, stop_uvicorn
 from tests.service.conftest import wait_until_ready
 
 from .conftest import WRITE_KEY
@@ -67,11 +66,7 @@ def server(tmp_path_factory) -> Iterator[Server]:
         wait_until_ready(base, proc, log)
         yield Server(base, tmp / "store", crash_dir, proc, log)
     finally:
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(timeout=60)
-        except subprocess.TimeoutExpired:
-            proc.kill()
+        stop_uvicorn(proc)
 
 
 # ---------------------------------------------------------------------------- requests

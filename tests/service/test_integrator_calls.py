@@ -82,7 +82,8 @@ def test_lobes_of_a_stored_measurement_equal_lobes_of_its_frf_sent_inline(client
     assert_problem(client.post("/v1/stability-lobes", json={**CUT, "teeth": 4, "frf_x": {"measurement_id": mid,
                                                                                          "h": 1}}), 422)
     assert_problem(client.post("/v1/stability-lobes", json={**CUT, "teeth": 4,
-                                                            "frf_x": {"measurement_id": "m-000000000000"}}), 404)
+                                                            "frf_x": {"measurement_id": "m-000000000000"}}), 422,
+                   "frf_x.measurement_id")
 
 
 def test_lists_have_one_shape_and_pages(synced):

@@ -12,9 +12,7 @@ the one that ends them; the sockets' own timeouts only guard against a hang.
 from __future__ import annotations
 
 import os
-import signal
 import socket
-import subprocess
 import threading
 import time
 from pathlib import Path
@@ -22,7 +20,7 @@ from pathlib import Path
 import httpx
 import pytest
 
-from tests.helpers import start_uvicorn
+from tests.helpers import start_uvicorn, stop_uvicorn
 from tests.service.conftest import wait_until_ready
 
 HEAD = (b"POST /v1/tool-point-frf HTTP/1.1\r\nHost: test\r\nContent-Type: application/json\r\n"
@@ -94,10 +92,6 @@ def test_trickling_heads_and_bodies_are_ended_by_the_server(tmp_path: Path):
         assert 'route="/v1/tool-point-frf",status="499"' in metrics
         assert 'status="500"' not in metrics
     finally:
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(timeout=60)
-        except subprocess.TimeoutExpired:
-            proc.kill()
+        stop_uvicorn(proc)
     text = log.read_text()
     assert "Traceback" not in text and "no complete request head within 1 s" in text

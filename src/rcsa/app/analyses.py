@@ -23,7 +23,7 @@ from rcsa.analysis.lobes.zoa import LobeResult, frf_grid_notes
 from rcsa.analysis.progress import Progress
 from rcsa.app.predictions import predict, predict_draws
 from rcsa.app.stores import library_store, open_store, resolver
-from rcsa.errors import InputError
+from rcsa.errors import InputError, NotFoundError
 from rcsa.libraries.sync import LibraryStore
 from rcsa.measured.hybrid import MeasurementSource
 from rcsa.measured.store import MeasurementStore
@@ -210,9 +210,8 @@ def resolve_lobes_references(request: Mapping[str, Any], *, store: MeasurementSo
     ------
     InputError
         A reference beside what it replaces (``library_tool`` with ``assembly`` or an FRF), a
-        measurement without ``h``, a tool without an assembly.
-    NotFoundError
-        No such library, tool or measurement.
+        measurement without ``h``, a tool without an assembly; a library, tool or measurement
+        that does not exist (naming the reference, as an unknown spindle measurement is).
     """
     out = dict(request)
     ref = out.pop("library_tool", None)
@@ -224,7 +223,11 @@ def resolve_lobes_references(request: Mapping[str, Any], *, store: MeasurementSo
             raise InputError("library_tool", 'must be {"library_id": ..., "tool_id": ...}')
         if libraries is None:
             libraries = library_store(getattr(store, "path", None))
-        assembly, tool = libraries.tool_assembly(str(ref["library_id"]), str(ref["tool_id"]))
+        try:
+            assembly, tool = libraries.tool_assembly(str(ref["library_id"]), str(ref["tool_id"]))
+        except NotFoundError as exc:  # a reference to nothing is invalid input, as an unknown spindle is
+            field = "library_tool.library_id" if exc.what == "library" else "library_tool.tool_id"
+            raise InputError(field, f"{exc}: list them with GET /v1/libraries/{{library_id}}") from None
         out["assembly"] = assembly
         if out.get("teeth") is None and tool.get("teeth"):
             out["teeth"] = tool["teeth"]
@@ -239,7 +242,10 @@ def resolve_lobes_references(request: Mapping[str, Any], *, store: MeasurementSo
 
 def _stored_frf(store: MeasurementSource | None, measurement_id: str, field: str) -> dict[str, Any]:
     """A stored measurement's ``h`` as an inline FRF ``{"frequency_hz", "h": {"real", "imag"}}``."""
-    measurement = (store if store is not None else open_store(None)).get(measurement_id)
+    try:
+        measurement = (store if store is not None else open_store(None)).get(measurement_id)
+    except NotFoundError as exc:  # as an unknown spindle measurement is
+        raise InputError(f"{field}.measurement_id", f"{exc}: list them with GET /v1/measurements") from None
     h = measurement.frfs.get("h")
     if h is None:
         raise InputError(f"{field}.measurement_id", f"measurement {measurement_id} holds no driving-point receptance "

@@ -123,6 +123,11 @@ class JsonCounter:
     def feed(self, data: bytes | bytearray | memoryview) -> None:
         """Count one more piece of the text.
 
+        Parameters
+        ----------
+        data : bytes
+            The next piece (any split of the text).
+
         Raises
         ------
         InputError
@@ -189,6 +194,15 @@ def check_json_size(data: bytes | bytearray | memoryview | str, *, path: str = "
     """Refuse JSON text with too many objects, arrays or elements before it is parsed (:class:`JsonCounter`).
 
     Text shorter than the bounds cannot exceed them and is not scanned.
+
+    Parameters
+    ----------
+    data : bytes or str
+        The JSON text.
+    path : str
+        Where the document sits, for messages.
+    what : str
+        What the text is, for messages.
 
     Raises
     ------
