@@ -131,15 +131,16 @@ def _hostile_requests() -> list[tuple[str, str, str, bytes, dict[str, str], int 
         raw=b'{"notes":' + b"[" * 900 + b"]" * 900 + b"}")
     add("library 60 deep", "/v1/tool-libraries:predict", None,
         raw=b'{"library":' + b'{"a":' * 60 + b"1" + b"}" * 60 + b',"frequency":{"values_hz":[1]}}')
-    # non-finite tokens
+    # non-finite tokens: not JSON at all (400)
     for token in ("NaN", "Infinity", "-Infinity"):
-        add(f"prediction {token}", "/v1/tool-point-frf", None, raw=replace(asm, '"stickout_m": 0.074',
-                                                                           f'"stickout_m": {token}'))
-        add(f"upload {token}", "/v1/measurements", None, headers=WRITE,
+        add(f"prediction {token}", "/v1/tool-point-frf", None, expected=400,
+            raw=replace(asm, '"stickout_m": 0.074', f'"stickout_m": {token}'))
+        add(f"upload {token}", "/v1/measurements", None, headers=WRITE, expected=400,
             raw=replace(upload, '"real": [', f'"real": [{token}, '))
-        add(f"lobes {token}", "/v1/stability-lobes", None, raw=replace(lobes, '"radial_ratio": 0.3',
-                                                                       f'"radial_ratio": {token}'))
-    add("truncated JSON", "/v1/measurements", None, headers=WRITE, raw=json.dumps(upload).encode()[:-40])
+        add(f"lobes {token}", "/v1/stability-lobes", None, expected=400,
+            raw=replace(lobes, '"radial_ratio": 0.3', f'"radial_ratio": {token}'))
+    add("truncated JSON", "/v1/measurements", None, headers=WRITE, expected=400,
+        raw=json.dumps(upload).encode()[:-40])
     # oversized grids, segment counts, budgets
     add("prediction 5 Hz-10 MHz", "/v1/tool-point-frf", ra1({"start_hz": 5.0, "stop_hz": 1e7, "step_hz": 1e4}))
     add("effects 5 Hz-10 MHz", "/v1/effects", ra1({"start_hz": 5.0, "stop_hz": 1e7, "step_hz": 1e4}))
