@@ -70,7 +70,7 @@ def main() -> None:
     parser.add_argument("--uploads", type=int, default=210)
     parser.add_argument("--jobs", type=int, default=20)
     parser.add_argument("--clients", type=int, default=3)
-    parser.add_argument("--kill-every", type=float, default=1.5)
+    parser.add_argument("--kill-every", type=float, default=0.5)
     parser.add_argument("--seed", type=int, default=30)
     parser.add_argument("--out", type=Path, default=REPO / "benchmarks" / "results" / "crash.json")
     args = parser.parse_args()
@@ -164,7 +164,7 @@ def main() -> None:
     jobs_bad = {j: f for j, f in finished.items()
                 if f["status"] != "succeeded" or f["summary"] != {"ok": len(BATCH["combinations"]), "error": 0}}
     record = {"machine_before": before, "machine_after": machine(), "uploads": args.uploads, "jobs": len(job_ids),
-              "workers_killed": len(kills), "wall_seconds": round(wall, 1), "lost": lost, "duplicated": duplicated,
+              "workers_killed": len(kills), "kill_every_s": args.kill_every, "wall_seconds": round(wall, 1), "lost": lost, "duplicated": duplicated,
               "unreadable": unreadable, "jobs_not_complete": jobs_bad,
               "job_attempts": sorted(f["attempts"] for f in finished.values()), "store_check_exit": check.returncode,
               "store_check": check.stdout[-2000:]}
