@@ -54,6 +54,7 @@ Tables created by earlier versions get the new columns on first use; their
 
 from __future__ import annotations
 
+import builtins
 import contextlib
 import hashlib
 import json
@@ -423,7 +424,7 @@ class JobStore:
             raise NotFoundError("result of job", job_id)
         return path
 
-    def list(self, status: str | None = None, limit: int = 100) -> list[Job]:
+    def list(self, status: str | None = None, limit: int = 100) -> builtins.list[Job]:
         """Jobs, newest first, optionally of one status."""
         sql, args = f"SELECT {_COLUMNS} FROM jobs", []
         if status is not None:
@@ -559,7 +560,7 @@ class JobStore:
             raise
         self._unlink_evicted(evicted)
 
-    def evict(self, max_bytes: int) -> list[str]:
+    def evict(self, max_bytes: int) -> builtins.list[str]:
         """Delete the oldest kept results until the rest take at most ``max_bytes``; return their job ids.
 
         The newest result is always kept (even when it alone is larger). An evicted job keeps
@@ -570,7 +571,7 @@ class JobStore:
         self._unlink_evicted(evicted)
         return evicted
 
-    def _evict(self, con: sqlite3.Connection, max_bytes: int) -> list[str]:
+    def _evict(self, con: sqlite3.Connection, max_bytes: int) -> builtins.list[str]:
         """Mark the results to evict (inside the caller's transaction); :meth:`_unlink_evicted` after it."""
         rows = con.execute("SELECT id, result_bytes FROM jobs WHERE status = 'succeeded' AND result_file IS NOT "
                            "NULL ORDER BY finished_utc DESC, id DESC").fetchall()
@@ -589,7 +590,7 @@ class JobStore:
                             [(now, i) for i in evicted])
         return evicted
 
-    def _unlink_evicted(self, evicted: list[str]) -> None:
+    def _unlink_evicted(self, evicted: builtins.list[str]) -> None:
         for i in evicted:
             with contextlib.suppress(FileNotFoundError):
                 (self.results / f"{i}.json").unlink()

@@ -37,6 +37,7 @@ and the service) may sync at once; each diff is taken against the commit before 
 
 from __future__ import annotations
 
+import builtins
 import contextlib
 import hashlib
 import json
@@ -277,12 +278,12 @@ class LibraryStore:
         with closing(self._connect()) as con:
             return con.execute("SELECT 1 FROM libraries WHERE id = ?", (library_id,)).fetchone() is not None
 
-    def ids(self) -> list[str]:
+    def ids(self) -> builtins.list[str]:
         """Ids of the stored libraries, sorted."""
         with closing(self._connect()) as con:
             return [r[0] for r in con.execute("SELECT id FROM libraries ORDER BY id")]
 
-    def list(self) -> list[dict[str, Any]]:
+    def list(self) -> builtins.list[dict[str, Any]]:
         """Summaries of every stored library (without the per-tool list), sorted by id."""
         with closing(self._connect()) as con:
             rows = con.execute(f"SELECT {_LIB_COLUMNS} FROM libraries ORDER BY id").fetchall()
@@ -315,7 +316,7 @@ class LibraryStore:
         doc["tools"] = tools
         return doc
 
-    def _snapshot(self, library_id: str) -> tuple[tuple, list[dict[str, Any]]]:
+    def _snapshot(self, library_id: str) -> tuple[tuple, builtins.list[dict[str, Any]]]:
         if not is_library_id(library_id):
             raise NotFoundError("library", str(library_id))
         with closing(self._connect()) as con, transaction(con, immediate=False):
@@ -332,7 +333,7 @@ class LibraryStore:
                         "result_sha256": key, "revision": revision})
         return row, out
 
-    def results(self, library_id: str, tool_point: list[str] | None = None) -> dict[str, Any]:
+    def results(self, library_id: str, tool_point: builtins.list[str] | None = None) -> dict[str, Any]:
         """The library's results in the shape of a library prediction (``LibraryResult``).
 
         Parameters
