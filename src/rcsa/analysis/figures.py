@@ -28,6 +28,7 @@ import matplotlib
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.layout_engine import ConstrainedLayoutEngine
 
 from rcsa.analysis.effects.report import EffectReport
 from rcsa.analysis.lobes.zoa import LobeResult
@@ -397,7 +398,9 @@ def lobes_figure(
         text = "\n".join(textwrap.fill("• " + checked_text(n, "notes"), 150) for n in notes)
         share = min(0.05 + 0.025 * text.count("\n"), 0.3)  # of the height, under the axes
         fig.text(0.01, 0.005, text, fontsize=6.5, va="bottom", ha="left", gid="notes", color="tab:red")
-        fig.get_layout_engine().set(rect=(0.0, share, 1.0, 1.0 - share))
+        engine = fig.get_layout_engine()
+        assert isinstance(engine, ConstrainedLayoutEngine)  # every figure starts constrained (figure())
+        engine.set(rect=(0.0, share, 1.0, 1.0 - share))
     return freeze_layout(fig)
 
 

@@ -25,7 +25,6 @@ from rcsa.app.predictions import predict, predict_draws
 from rcsa.app.stores import resolver
 from rcsa.errors import InputError
 from rcsa.measured.hybrid import MeasurementSource
-from rcsa.measured.store import MeasurementStore
 from rcsa.model.bounds import MAX_FREQUENCY_LINES
 from rcsa.model.contract import SpindleSpec, parse_assembly
 from rcsa.model.uncertainty import parse_prediction_request
@@ -100,7 +99,7 @@ def _modes(parsed: LobesRequest, spec: Any, frequency_hz: np.ndarray, h: np.ndar
                                      frequency_hz=frequency_hz, h=h)
 
 
-def stability_lobes_answer(request: Mapping[str, Any], *, store: MeasurementStore | None = None,
+def stability_lobes_answer(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
                            max_lines: int = MAX_FREQUENCY_LINES) -> LobesAnswer:
     """Stability lobes (``docs/contract.md`` "Stability lobes"), robust ones when asked for, and notes.
 
@@ -122,8 +121,8 @@ def stability_lobes_answer(request: Mapping[str, Any], *, store: MeasurementStor
     zoa = parsed.method.name == "zoa"
     if parsed.assembly is None:
         assert parsed.frequency_hz is not None and parsed.frf_xx is not None
-        notes = frf_grid_notes(parsed.frequency_hz, parsed.frf_xx) if zoa else []
-        return LobesAnswer(parsed.solve(), None, tuple(notes), None, parsed.method.reason)
+        grid_notes = tuple(frf_grid_notes(parsed.frequency_hz, parsed.frf_xx)) if zoa else ()
+        return LobesAnswer(parsed.solve(), None, grid_notes, None, parsed.method.reason)
     spec = parse_assembly(parsed.assembly, max_lines)
     flute = float(spec.tool.flute_length_m)
     if robust is not None:
@@ -152,7 +151,7 @@ def stability_lobes_answer(request: Mapping[str, Any], *, store: MeasurementStor
                        parsed.method.reason)
 
 
-def stability_lobes_results(request: Mapping[str, Any], *, store: MeasurementStore | None = None,
+def stability_lobes_results(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
                             max_lines: int = MAX_FREQUENCY_LINES) -> tuple[LobeResult, RobustLobes | None]:
     """The nominal and robust stability lobes of a request (:func:`stability_lobes_answer` without its notes).
 
@@ -165,7 +164,7 @@ def stability_lobes_results(request: Mapping[str, Any], *, store: MeasurementSto
     return answer.nominal, answer.robust
 
 
-def stability_lobes_result(request: Mapping[str, Any], *, store: MeasurementStore | None = None,
+def stability_lobes_result(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
                            max_lines: int = MAX_FREQUENCY_LINES) -> LobeResult:
     """The nominal stability lobes of a request (:func:`stability_lobes_results`, robust ones left out).
 
@@ -176,7 +175,7 @@ def stability_lobes_result(request: Mapping[str, Any], *, store: MeasurementStor
     return stability_lobes_results(request, store=store, max_lines=max_lines)[0]
 
 
-def stability_lobes(request: Mapping[str, Any], *, store: MeasurementStore | None = None,
+def stability_lobes(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
                     max_lines: int = MAX_FREQUENCY_LINES) -> dict[str, Any]:
     """The contract's stability-lobes response (see :func:`stability_lobes_result`).
 
@@ -270,7 +269,7 @@ def validate(kind: str, request: Mapping[str, Any], *, store: MeasurementSource 
     # prediction and effects: the budget's estimate already parsed the assembly
 
 
-def run_analysis(kind: str, request: Mapping[str, Any], *, store: MeasurementStore | None = None,
+def run_analysis(kind: str, request: Mapping[str, Any], *, store: MeasurementSource | None = None,
                  max_lines: int = MAX_FREQUENCY_LINES) -> dict[str, Any]:
     """Run one of :data:`ANALYSIS_KINDS` and return its result document (a job's result).
 

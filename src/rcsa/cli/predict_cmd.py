@@ -42,5 +42,5 @@ def register(app: typer.Typer) -> None:
         if out is not None and out.suffix.lower() in (".h5", ".hdf5", ".parquet"):
             raise fail(f"{out}: HDF5 and Parquet results are for batches and libraries; write one assembly's "
                        "result as .json")
-        result = run_guarded(lambda: predict_assembly(doc, store=open_store(store) if store else None))
-        write_json(result, out, "the prediction")
+        prediction = run_guarded(lambda: predict_assembly(doc, store=open_store(store) if store else None))
+        write_json(prediction, out, "the prediction")

@@ -270,7 +270,7 @@ class Job:
     result_evicted_utc: str | None = None
 
     @classmethod
-    def _from_row(cls, row: tuple) -> Job:
+    def _from_row(cls, row: tuple[Any, ...]) -> Job:
         (jid, kind, status, progress, created, started, finished, attempts, error, summary,
          sha, heartbeat, result_bytes, evicted) = row
         return cls(jid, kind, status, float(progress), created, started, finished, int(attempts),
@@ -404,7 +404,8 @@ class JobStore:
             row = con.execute("SELECT request FROM jobs WHERE id = ?", (job_id,)).fetchone()
         if row is None:
             raise NotFoundError("job", job_id)
-        return orjson.loads(row[0])
+        doc: dict[str, Any] = orjson.loads(row[0])
+        return doc
 
     def result_path(self, job_id: str) -> Path:
         """The result file of a succeeded job.
@@ -426,7 +427,7 @@ class JobStore:
 
     def list(self, status: str | None = None, limit: int = 100) -> builtins.list[Job]:
         """Jobs, newest first, optionally of one status."""
-        sql, args = f"SELECT {_COLUMNS} FROM jobs", []
+        sql, args = f"SELECT {_COLUMNS} FROM jobs", builtins.list[str | int]()
         if status is not None:
             sql += " WHERE status = ?"
             args.append(status)

@@ -287,7 +287,7 @@ class LibraryStore:
         """Summaries of every stored library (without the per-tool list), sorted by id."""
         with closing(self._connect()) as con:
             rows = con.execute(f"SELECT {_LIB_COLUMNS} FROM libraries ORDER BY id").fetchall()
-            counts = {lib: {} for lib, *_ in rows}
+            counts: dict[str, dict[str, int]] = {lib: {} for lib, *_ in rows}
             for lib, status, n in con.execute("SELECT library_id, status, COUNT(*) FROM tools GROUP BY 1, 2"):
                 counts.setdefault(lib, {})[status] = n
         return [_library_doc(r, counts.get(r[0], {})) for r in rows]
@@ -316,7 +316,7 @@ class LibraryStore:
         doc["tools"] = tools
         return doc
 
-    def _snapshot(self, library_id: str) -> tuple[tuple, builtins.list[dict[str, Any]]]:
+    def _snapshot(self, library_id: str) -> tuple[tuple[Any, ...], builtins.list[dict[str, Any]]]:
         if not is_library_id(library_id):
             raise NotFoundError("library", str(library_id))
         with closing(self._connect()) as con, transaction(con, immediate=False):
@@ -474,7 +474,7 @@ _LIB_COLUMNS = ("id, revision, created_utc, synced_utc, source, library_sha256, 
                 "software_version, last_sync")
 
 
-def _library_doc(row: tuple, counts: Mapping[str, int]) -> dict[str, Any]:
+def _library_doc(row: tuple[Any, ...], counts: Mapping[str, int]) -> dict[str, Any]:
     (lib, revision, created, synced, source, sha, settings, msha, fsha, n, fmin, fmax, model, software,
      last) = row
     return {"id": lib, "revision": revision, "created_utc": created, "synced_utc": synced, "source": source,
@@ -487,7 +487,8 @@ def _library_doc(row: tuple, counts: Mapping[str, int]) -> dict[str, Any]:
 
 def _tool_rows(request: Mapping[str, Any], keys: tuple[str, ...]) -> list[dict[str, Any]]:
     """One row per library entry: id, index, status, fingerprint, result key, entry JSON."""
-    rows, position = [], 0
+    rows: list[dict[str, Any]] = []
+    position = 0
     for entry in request["entries"]:
         meta = {k: entry.get(k) for k in _HEAD[2:]}
         meta["warnings"] = list(entry.get("warnings") or [])

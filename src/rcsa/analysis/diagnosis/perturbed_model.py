@@ -210,7 +210,7 @@ def _with_mass(chain: list[ChainItem], mass_kg: float, distance_m: float) -> lis
             if left < item.length_m:
                 return [*out[:i], Beam(item.section, item.length_m - left), Ground(mass_kg=mass_kg),
                         Beam(item.section, left), *out[i + 1:]]
-            left -= item.length_m
+            left -= float(item.length_m)
     raise ValueError("tip mass lies beyond the tool")
 
 
@@ -292,7 +292,7 @@ class PartsBuilder:
                 k.loss_factor_scale)
         mats = self._mats.get(mkey, lambda: tuple(sorted(_materials(spec, k).items())))
         s = null_shear_scale(spec) if k.shear_scale is None else k.shear_scale
-        theory = "euler_bernoulli" if (spec.beam_theory == "euler_bernoulli" and s == 0.0) else "timoshenko"
+        theory: BeamTheory = "euler_bernoulli" if (spec.beam_theory == "euler_bernoulli" and s == 0.0) else "timoshenko"
         scale = 1.0 if theory == "euler_bernoulli" else s
         shear = spec.shear_coefficient
 
@@ -346,7 +346,7 @@ class PartsBuilder:
                 items.append(ring)
             return tuple(items)
 
-        mid_key = (mkey, s, k.base_rotation_scale, k.base_rotation_shape, k.nose_cross_compliance_rad_n,
+        mid_key: tuple[object, ...] = (mkey, s, k.base_rotation_scale, k.base_rotation_shape, k.nose_cross_compliance_rad_n,
                    k.nose_rotational_residual_rad_nm, clamping)
         if self.plane != "holder_tip":
             assert spec.holder is not None

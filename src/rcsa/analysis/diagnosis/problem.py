@@ -89,7 +89,8 @@ class Config:
 
     def db_error(self, h_model: np.ndarray) -> np.ndarray:
         """20 log10 |h_meas / h_model| on the good lines, dB."""
-        return 20.0 * np.log10(np.abs(self.h_meas[self.good] / h_model[self.good]))
+        db: np.ndarray = 20.0 * np.log10(np.abs(self.h_meas[self.good] / h_model[self.good]))
+        return db
 
 
 class Problem:
@@ -191,7 +192,7 @@ class Problem:
         spec = self.spec
         if base.plane == "holder_tip" and spec.holder is not None:
             raise InputError("assembly.holder", f"must be left out: the measured spindle "
-                                                f"{req.measured_spindle.measurement_id!r} (plane holder_tip) already "
+                                                f"{spindle.measurement_id!r} (plane holder_tip) already "
                                                 "contains its holder")
         if base.plane != "holder_tip" and spec.holder is None:
             raise InputError("assembly.holder", "is required: the measured spindle's plane is spindle_nose, so the "
