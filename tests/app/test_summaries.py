@@ -152,3 +152,10 @@ def test_unsettled_speeds_reads_the_sdm_flags():
     assert flags["under-resolved"].tolist() == [True, False, False, False]
     assert flags["unresolved"].tolist() == [False, True, False, False]
     assert unsettled_speeds({"spindle_speed_rpm": speed, "resolved": [True] * 4}) == {}
+
+
+def test_the_chord_limit_is_the_pocket_rules_speed_tolerance():
+    from rcsa.analysis.lobes.pockets import DEFAULT_SPEED_TOLERANCE
+    from rcsa.app.summaries import MAX_CHORD
+
+    assert MAX_CHORD == DEFAULT_SPEED_TOLERANCE

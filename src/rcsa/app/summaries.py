@@ -18,17 +18,12 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from rcsa.analysis.lobes.pockets import (
-    DEFAULT_SAFETY_FACTOR,
-    DEFAULT_SPEED_TOLERANCE,
-    PocketRule,
-    best_pocket,
-)
-from rcsa.analysis.lobes.semi_discretization import MIN_STEPS_PER_CHATTER_CYCLE
+if TYPE_CHECKING:
+    from rcsa.analysis.lobes.pockets import PocketRule
 
 __all__ = ["MAX_CHORD", "MAX_ROWS", "POCKETS", "Table", "batch_summary", "diagnosis_summary", "lobes_summary",
            "prediction_summary", "unsettled_speeds"]
@@ -38,9 +33,9 @@ MAX_ROWS = 12
 #: Pockets listed by :func:`lobes_summary`.
 POCKETS = 3
 #: A lobe drawn straight over more than this fraction of the speed is flagged as coarse: as long
-#: as the pocket rule's speed tolerance, so a lobe minimum hidden under the chord could sit in a
-#: recommended window.
-MAX_CHORD = DEFAULT_SPEED_TOLERANCE
+#: as the pocket rule's speed tolerance (``rcsa.analysis.lobes.pockets.DEFAULT_SPEED_TOLERANCE``,
+#: checked by the tests), so a lobe minimum hidden under the chord could sit in a recommended window.
+MAX_CHORD = 0.03
 _UM = 1e6
 _MM = 1e3
 
@@ -218,6 +213,8 @@ def _pockets(speed: np.ndarray, depth: np.ndarray, chatter: np.ndarray, rule: Po
              count: int) -> list[Any]:
     """The ``count`` best pockets: each the best of :func:`~rcsa.analysis.lobes.pockets.best_pocket`
     once the pockets found before are taken out of the diagram."""
+    from rcsa.analysis.lobes.pockets import best_pocket
+
     found = []
     depth = depth.copy()
     for _ in range(count):
@@ -248,6 +245,13 @@ def lobes_summary(result: Mapping[str, Any]) -> list[Table]:
     list of Table
         The limits, then the pockets.
     """
+    # the lobes' modules only when lobes are summarised (``rcsa predict`` does without them)
+    from rcsa.analysis.lobes.pockets import (
+        DEFAULT_SAFETY_FACTOR,
+        DEFAULT_SPEED_TOLERANCE,
+        PocketRule,
+    )
+
     speed = np.asarray(result.get("spindle_speed_rpm") or [], dtype=float)
     robust = result.get("depth_limit_robust_m")
     limit = robust if robust is not None else result.get("depth_limit_m")
@@ -314,6 +318,8 @@ def unsettled_speeds(result: Mapping[str, Any]) -> dict[str, np.ndarray]:
     dict of str to numpy.ndarray
         A boolean mask over ``spindle_speed_rpm`` for each reason that flags any speed.
     """
+    from rcsa.analysis.lobes.semi_discretization import MIN_STEPS_PER_CHATTER_CYCLE
+
     n = len(result.get("spindle_speed_rpm") or [])
     out: dict[str, np.ndarray] = {}
     steps = result.get("steps_per_chatter_cycle")
