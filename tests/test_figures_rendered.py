@@ -40,7 +40,7 @@ def test_the_readme_renders_its_figures_from_json():
 
 
 def test_a_changed_number_is_caught(tmp_path):
-    doc = tmp_path / "doc.md"
+    doc = tmp_path / "page"
     good = render_figures.render("rms <!-- figure: modal_fit.json:figures.rms_z_pooled|.2f -->?<!-- /figure -->")
     value = render_figures.value("modal_fit", "figures.rms_z_pooled")
     assert good == f"rms <!-- figure: modal_fit.json:figures.rms_z_pooled|.2f -->{value:.2f}<!-- /figure -->"

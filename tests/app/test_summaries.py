@@ -22,7 +22,7 @@ GRID = {"start_hz": 100.0, "stop_hz": 5000.0, "step_hz": 5.0}
 
 
 def _rows(table):
-    return dict((row[0], row[1:]) for row in table.rows)
+    return {row[0]: row[1:] for row in table.rows}
 
 
 def test_prediction_summary_is_the_result():
