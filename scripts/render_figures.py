@@ -355,8 +355,9 @@ def scatter2_false_claims() -> str:
     upper bound (seed 4 is the one the claims' weighing was tuned on: ``diagnosis_scatter2.json``)."""
     s = value("diagnosis_scatter2_eval", "summary")
     k, n = (int(x) for x in s["false_claims_all_count"].split("/"))
-    return (f"**false claims {k}/{n}** (≤ 5 %: {'met' if k / n <= 0.05 else 'missed'}; 95 % upper bound "
-            f"{clopper_pearson_upper(k, n) * 100:.1f} %)")
+    upper = clopper_pearson_upper(k, n)
+    verdict = "met" if upper <= 0.05 else "met by the rate seen, not shown at 95 %" if k / n <= 0.05 else "missed"
+    return f"**false claims {k}/{n}** (≤ 5 %: {verdict}; 95 % upper bound {upper * 100:.1f} %)"
 
 
 def machine() -> str:

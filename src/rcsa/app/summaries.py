@@ -42,18 +42,9 @@ _MM = 1e3
 
 @dataclass(frozen=True)
 class Table:
-    """One table: a title, column headers, rows of text and a caption (notes under it).
-
-    Attributes
-    ----------
-    title : str
-    columns : tuple of str
-        Headers; the first column is a label, the others are values (right-aligned when drawn).
-    rows : tuple of tuple of str
-        One entry per column.
-    caption : str
-        Notes under the table ("" for none).
-    """
+    """One table: its ``title``, the ``columns``' headers (the first a label, the others values,
+    drawn right-aligned), the ``rows`` of text (one entry per column) and a ``caption`` of notes
+    under it ("" for none)."""
 
     title: str
     columns: tuple[str, ...]
