@@ -61,6 +61,7 @@ Tables created by earlier versions get the new columns on first use; their
 
 from __future__ import annotations
 
+import builtins
 import contextlib
 import hashlib
 import json
@@ -283,7 +284,7 @@ class Job:
     access: str | None = None
 
     @classmethod
-    def _from_row(cls, row: tuple) -> Job:
+    def _from_row(cls, row: tuple[Any, ...]) -> Job:
         (jid, kind, status, progress, created, started, finished, attempts, error, summary,
          sha, heartbeat, result_bytes, evicted, access) = row
         return cls(jid, kind, status, float(progress), created, started, finished, int(attempts),
@@ -424,7 +425,7 @@ class JobStore:
             raise NotFoundError("job", job_id)  # someone else's job does not exist for this caller
         return job
 
-    def page(self, access: str, *, limit: int = 100, cursor: str | None = None) -> tuple[list[Job], str | None]:
+    def page(self, access: str, *, limit: int = 100, cursor: str | None = None) -> tuple[builtins.list[Job], str | None]:
         """One page of the jobs of one access identity, newest first, and the next page's cursor.
 
         Parameters
@@ -442,7 +443,7 @@ class JobStore:
         """
         if limit < 1:
             raise InputError("limit", f"must be >= 1, got {limit}")
-        sql, args = f"SELECT {_COLUMNS} FROM jobs WHERE access = ?", [access]
+        sql, args = f"SELECT {_COLUMNS} FROM jobs WHERE access = ?", builtins.list[str | int]([access])
         if cursor:
             created, ident = decode_cursor(cursor)
             sql += " AND (created_utc < ? OR (created_utc = ? AND id < ?))"
@@ -462,7 +463,8 @@ class JobStore:
             row = con.execute("SELECT request FROM jobs WHERE id = ?", (job_id,)).fetchone()
         if row is None:
             raise NotFoundError("job", job_id)
-        return orjson.loads(row[0])
+        doc: dict[str, Any] = orjson.loads(row[0])
+        return doc
 
     def result_path(self, job_id: str, *, access: str | None = None) -> Path:
         """The result file of a succeeded job (``access`` as in :meth:`get`).
@@ -482,9 +484,9 @@ class JobStore:
             raise NotFoundError("result of job", job_id)
         return path
 
-    def list(self, status: str | None = None, limit: int = 100) -> list[Job]:
+    def list(self, status: str | None = None, limit: int = 100) -> builtins.list[Job]:
         """Jobs, newest first, optionally of one status."""
-        sql, args = f"SELECT {_COLUMNS} FROM jobs", []
+        sql, args = f"SELECT {_COLUMNS} FROM jobs", builtins.list[str | int]()
         if status is not None:
             sql += " WHERE status = ?"
             args.append(status)
@@ -618,7 +620,7 @@ class JobStore:
             raise
         self._unlink_evicted(evicted)
 
-    def evict(self, max_bytes: int) -> list[str]:
+    def evict(self, max_bytes: int) -> builtins.list[str]:
         """Delete the oldest kept results until the rest take at most ``max_bytes``; return their job ids.
 
         The newest result is always kept (even when it alone is larger). An evicted job keeps
@@ -629,7 +631,7 @@ class JobStore:
         self._unlink_evicted(evicted)
         return evicted
 
-    def _evict(self, con: sqlite3.Connection, max_bytes: int) -> list[str]:
+    def _evict(self, con: sqlite3.Connection, max_bytes: int) -> builtins.list[str]:
         """Mark the results to evict (inside the caller's transaction); :meth:`_unlink_evicted` after it."""
         rows = con.execute("SELECT id, result_bytes FROM jobs WHERE status = 'succeeded' AND result_file IS NOT "
                            "NULL ORDER BY finished_utc DESC, id DESC").fetchall()
@@ -648,7 +650,7 @@ class JobStore:
                             [(now, i) for i in evicted])
         return evicted
 
-    def _unlink_evicted(self, evicted: list[str]) -> None:
+    def _unlink_evicted(self, evicted: builtins.list[str]) -> None:
         for i in evicted:
             with contextlib.suppress(FileNotFoundError):
                 (self.results / f"{i}.json").unlink()
