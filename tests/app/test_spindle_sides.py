@@ -44,7 +44,7 @@ def test_sides_are_bounded(monkeypatch):
     assert len(sides._items) == 2
     monkeypatch.setattr(predictions, "PREFIXES_PER_SIDE", 0)  # a side holding too many chains is dropped
     predictions.predict(ra1({**GRID, "step_hz": 50.0}))
-    assert len(sides._items) == 2 and all(len(s.cache) <= 3 for _, s in sides._items.values())
+    assert len(sides._items) == 2 and all(len(k.side.cache) <= 3 for k in sides._items.values())
 
 
 def test_a_measured_spindle_deleted_since_is_not_used(tmp_path, monkeypatch):
@@ -77,9 +77,14 @@ def test_the_same_request_again_is_its_kept_prediction_and_only_while_its_side_i
     assert other is not first
     for k in range(predictions.PREDICTIONS_PER_SIDE):  # more tools than a side keeps: the oldest dropped
         predictions.predict({**doc, "tool": {**doc["tool"], "stickout_m": 0.05 + 0.001 * k}}, store=store)
-    assert predictions.predict(doc, store=store) is not first
-    # a side dropped (its measurement gone) takes its predictions along
-    assert sides._predictions.keys() == {id(side) for _, side in sides._items.values()}
+    kept = predictions.predict(doc, store=store)
+    assert kept is not first and predictions.predict(doc, store=store) is kept
+    # a side dropped (more spindle sides asked for than are kept) takes its predictions along
+    for k in range(sides.size):
+        predictions.predict({**doc, "frequency": {**GRID, "stop_hz": GRID["stop_hz"] - 20.0 * (k + 1)}}, store=store)
+    again = predictions.predict(doc, store=store)
+    assert again is not kept and json_bytes(again) == json_bytes(kept)
+    # and a side whose measurement is gone is not used
     store.delete(mid)
     with pytest.raises(InputError):
         predictions.predict(doc, store=store)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any, Literal
 
 import orjson
@@ -99,12 +100,12 @@ class SpindleSides:
     def __init__(self, size: int = SIDES_KEPT, predictions_per_side: int = PREDICTIONS_PER_SIDE) -> None:
         self.size = int(size)
         self.predictions_per_side = int(predictions_per_side)
-        # the package's one eviction policy (least recently used first), as the sides' own caches
-        self._items: LruStore[tuple[int, bytes], tuple[Any, SpindleSide]] = LruStore(self.size)
-        self._predictions: dict[int, LruStore[bytes, Prediction]] = {}  # by id of a kept side
+        # the package's one eviction policy (least recently used first), as the sides' own caches;
+        # each kept side holds its finished predictions, so they go wherever it goes
+        self._items: LruStore[tuple[int, bytes], _Kept] = LruStore(self.size)
         self._lock = threading.Lock()
 
-    def predict(self, document: Mapping[str, Any], common: CommonSpec, store: MeasurementStore | None,
+    def predict(self, document: Mapping[str, Any], common: CommonSpec, store: MeasurementSource | None,
                 spec: AssemblySpec, uncertainty: UncertaintyOptions | None) -> Prediction:
         """The prediction of ``document`` on its kept side: kept from an earlier identical request,
         or computed now (and kept).
@@ -115,27 +116,22 @@ class SpindleSides:
             The request.
         common, spec : CommonSpec, AssemblySpec
             The same, parsed.
-        store : MeasurementStore, optional
+        store : MeasurementSource, optional
             Where a measured spindle is read.
         uncertainty : UncertaintyOptions, optional
             The request's uncertainty band.
         """
-        side = self.side(document, common, store)
-        with self._lock:
-            kept = self._predictions.get(id(side))
-        if kept is None:  # a side not kept (or dropped since): compute
-            return side.predict(spec, uncertainty=uncertainty)
+        kept = self._kept(document, common, store)
+        if kept.predictions is None:  # a side not kept: compute
+            return kept.side.predict(spec, uncertainty=uncertainty)
         key = orjson.dumps({k: v for k, v in document.items() if k not in _SHARED_FIELDS},
                            option=orjson.OPT_SORT_KEYS)
-        with self._lock:
-            hit = kept.peek(key)
+        hit = kept.predictions.peek(key)
         if hit is not None:
             return hit
-        result = side.predict(spec, uncertainty=uncertainty)
+        result = kept.side.predict(spec, uncertainty=uncertainty)
         result.natural_frequencies_hz.setflags(write=False)
-        with self._lock:
-            kept.put(key, result)
-        return result
+        return kept.predictions.put(key, result)
 
     def side(self, document: Mapping[str, Any], common: CommonSpec,
              store: MeasurementSource | None) -> SpindleSide:
@@ -147,35 +143,45 @@ class SpindleSides:
             The request (its shared fields make the key).
         common : CommonSpec
             The same, parsed.
-        store : MeasurementStore, optional
+        store : MeasurementSource, optional
             Where a measured spindle is read (None: the default store; such sides are not kept).
         """
+        return self._kept(document, common, store).side
+
+    def _kept(self, document: Mapping[str, Any], common: CommonSpec, store: MeasurementSource | None) -> _Kept:
+        """The kept side of a request with its kept predictions, or a new side (kept for the next
+        unless it cannot be: then without predictions)."""
         measured = isinstance(common.spindle, MeasuredSpindleSpec)
         if not self.size or (measured and store is None):
-            return SpindleSide(common, resolver(store))
+            return _Kept(None, SpindleSide(common, resolver(store)), None)
         key = (id(store), orjson.dumps({k: document.get(k) for k in _SHARED_FIELDS}, option=orjson.OPT_SORT_KEYS))
         # a measured spindle's file as it is now: a side computed from another state of it is not used
         identity = _identity(store, common.spindle.measurement_id) if measured else ()  # type: ignore[union-attr]
         with self._lock:
             kept = self._items.peek(key)
-        hit = kept[1] if kept is not None and identity is not None and kept[0] == identity else None
-        if hit is None:  # new, or deleted, replaced or damaged since: resolve again (as a fresh request would)
-            hit = SpindleSide(common, resolver(store))
+            if kept is not None and identity is not None and kept.identity == identity:
+                if len(kept.side.cache) <= PREFIXES_PER_SIDE:
+                    return kept
+                self._items.pop(key)  # grown past its bound: dropped with its predictions
+                return _Kept(None, kept.side, None)
+        # new, or deleted, replaced or damaged since: resolved again (as a fresh request would), the
+        # old side and its predictions dropped
+        fresh = SpindleSide(common, resolver(store))
         with self._lock:
-            if len(hit.cache) > PREFIXES_PER_SIDE or identity is None:
-                dropped = self._items.pop(key)
-                if dropped is not None:
-                    self._predictions.pop(id(dropped[1]), None)
-                return hit
-            previous = self._items.peek(key)
-            if previous is not None and previous[1] is not hit:  # replaced: its predictions go with it
-                self._predictions.pop(id(previous[1]), None)
-            self._items.put(key, (identity, hit))
-            self._predictions.setdefault(id(hit), LruStore(self.predictions_per_side))
-            kept_ids = {id(side) for _, side in self._items.values()}
-            for gone in [i for i in self._predictions if i not in kept_ids]:  # evicted sides
-                del self._predictions[gone]
-        return hit
+            if identity is None:
+                self._items.pop(key)
+                return _Kept(None, fresh, None)
+            return self._items.put(key, _Kept(identity, fresh, LruStore(self.predictions_per_side)))
+
+
+@dataclass(frozen=True)
+class _Kept:
+    """A kept spindle side: the identity of its measurement's file, the side, its finished
+    predictions by the rest of their request (None: a side not kept)."""
+
+    identity: Any
+    side: SpindleSide
+    predictions: LruStore[bytes, Prediction] | None
 
 
 def _identity(store: Any, measurement_id: str) -> Any:
