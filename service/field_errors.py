@@ -13,7 +13,7 @@ __all__ = ["UNION_TAGS", "field_path", "pydantic_errors"]
 
 #: Names the schemas give the members of their unions (pydantic puts them in error locations).
 UNION_TAGS = frozenset({"frequency-range", "frequency-values", "spindle-analytical", "spindle-measured",
-                        "frf-inline", "frf-stored"})
+                        "frf-inline", "frf-stored", "effects-assembly", "effects-request"})
 
 #: What pydantic puts in error locations for the members of a union (not field names).
 _PYDANTIC_TAGS = ("literal[", "function-", "json-or-python[", "lax-or-strict[", "constrained-", "list[", "dict[",

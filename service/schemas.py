@@ -107,7 +107,7 @@ from rcsa.app.bounds import (
 )
 from rcsa.app.predictions import example_assembly
 
-from .field_errors import pydantic_errors
+from .field_errors import UNION_TAGS, pydantic_errors
 
 __all__ = [
     "Assembly",
@@ -182,7 +182,11 @@ class FrequencyValues(_Request):
 def _keyed_union(absent: type[BaseModel], absent_tag: str, present: type[BaseModel], present_tag: str, key: str,
                  kind: str, message: str) -> Any:
     """One of two request models, told apart by whether ``key`` is given: the union (tags in
-    :data:`service.field_errors.UNION_TAGS`) and a one-line error when neither fits."""
+    :data:`service.field_errors.UNION_TAGS`, which keeps them out of the fields errors name) and a
+    one-line error when neither fits."""
+    if not {absent_tag, present_tag} <= UNION_TAGS:
+        raise ValueError(f"add {absent_tag!r} and {present_tag!r} to service.field_errors.UNION_TAGS")
+
     def tag(value: Any) -> str | None:
         if isinstance(value, dict):
             return present_tag if key in value else absent_tag
@@ -1063,19 +1067,9 @@ class EffectAnalysisRequest(_AnalysisRequest):
                                                                       "(default: the assembly's grid).")
 
 
-def _effects_tag(value: Any) -> str | None:
-    if isinstance(value, dict):
-        return "effects-request" if "assembly" in value else "effects-assembly"
-    if isinstance(value, EffectAnalysisRequest):
-        return "effects-request"
-    return "effects-assembly" if isinstance(value, Assembly) else None
-
-
 EffectsRequest = Annotated[
-    Annotated[EffectAnalysisRequest, Tag("effects-request")] | Annotated[Assembly, Tag("effects-assembly")],
-    Discriminator(_effects_tag, custom_error_type="effects_request",
-                  custom_error_message="must be an assembly, or an object {assembly, parameters, relative_step, "
-                                       "band_hz}"),
+    _keyed_union(Assembly, "effects-assembly", EffectAnalysisRequest, "effects-request", "assembly",
+                 "effects_request", "must be an assembly, or an object {assembly, parameters, relative_step, band_hz}"),
     Field(description="An assembly (all parameters, its grid's band, δ = 1e-3), or {assembly, parameters, "
                       "relative_step, band_hz}."),
 ]

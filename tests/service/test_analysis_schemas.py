@@ -206,10 +206,12 @@ def test_effect_request_bounds_agree_with_the_library():
      "measurements[0].tool.holder"),
     ("/v1/effects", lambda: {"assembly": ra1(GRID), "band": [1.0, 2.0]}, "band"),
     ("/v1/effects", lambda: {**ra1(GRID), "parameters": []}, "parameters"),
+    ("/v1/effects", lambda: {"assembly": ra1(GRID), "relative_step": 5}, "relative_step"),
+    ("/v1/effects", lambda: _set(ra1(GRID), ("tool", "stickout_m"), -1.0), "tool.stickout_m"),
 ])
-def test_unknown_fields_are_refused_with_their_name(client, path, doc, field):
-    body = assert_problem(client.post(path, json=doc()), 422)
-    assert any(e["field"].endswith(field) for e in body["errors"]), body
+def test_refused_fields_are_named_exactly(client, path, doc, field):
+    # the name exactly: not prefixed with the name of the union member the body was read as
+    assert_problem(client.post(path, json=doc()), 422, field)
 
 
 def test_a_fractional_count_the_library_accepts_is_accepted():
