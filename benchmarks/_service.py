@@ -1,5 +1,5 @@
 """What the service benchmarks share: a real ``rcsa serve --workers N`` on loopback, its worker
-processes and their memory, and the machine's record.
+processes and their memory (the records are written by ``record.write``).
 
 ``start_service`` runs the command a user runs (``rcsa serve``: preflight, then uvicorn with the
 service's HTTP protocol, its connection limits and timeouts) on a free port with a temporary
@@ -12,7 +12,6 @@ from ``/proc`` (Linux).
 from __future__ import annotations
 
 import os
-import platform
 import signal
 import socket
 import subprocess
@@ -24,12 +23,6 @@ from pathlib import Path
 import httpx
 
 REPO = Path(__file__).resolve().parents[1]
-
-
-def machine() -> dict[str, object]:
-    """The machine and its load now, for every record."""
-    return {"cpus": os.cpu_count(), "python": platform.python_version(), "platform": platform.platform(),
-            "load_average": list(os.getloadavg())}
 
 
 def rcsa(store: Path, *args: str) -> subprocess.CompletedProcess:

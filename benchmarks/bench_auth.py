@@ -34,7 +34,8 @@ from pathlib import Path
 
 import httpx
 
-from _service import REPO, machine, rcsa, start_service, stop_service
+from _service import REPO, rcsa, start_service, stop_service
+from record import load_average, write
 
 WRITE_KEY = "auth-bench-write-key-0123456789abcdef"
 READ_KEY = "auth-bench-read-key-0123456789abcdef"
@@ -96,7 +97,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--out", type=Path, default=REPO / "benchmarks" / "results" / "auth.json")
     args = parser.parse_args()
-    before = machine()
+    load_start = load_average()
     rows: list[dict] = []
     with tempfile.TemporaryDirectory() as tmp:
         store = Path(tmp) / "store"
@@ -132,17 +133,15 @@ def main() -> None:
     by_status = Counter(str(r["status"]) for r in rows)
     bypasses = [r for r in rows if r["bypass"]]
     server_errors = [r for r in rows if r["status"] >= 500]
-    record = {"machine_before": before, "machine_after": machine(), "cases": len(rows),
+    figures = {"cases": len(rows),
               "write_cases": sum(r["probe"] == "write" for r in rows),
               "job_cases": sum(r["probe"] == "job" for r in rows), "operations_probed": sorted(declared),
               "by_status": dict(sorted(by_status.items())), "bypasses": bypasses, "server_errors": server_errors,
               "store_unchanged": unchanged, "tracebacks": tracebacks, "rows": rows}
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(record, indent=1) + "\n")
-    print(f"{len(rows)} cases ({record['write_cases']} on {len(declared)} write operations, {record['job_cases']} job "
+    write("auth", figures, load_start=load_start, out=args.out)
+    print(f"{len(rows)} cases ({figures['write_cases']} on {len(declared)} write operations, {figures['job_cases']} job "
           f"reads): {dict(sorted(by_status.items()))}; bypasses {len(bypasses)}, 5xx {len(server_errors)}, store "
-          f"unchanged: {unchanged}, tracebacks {tracebacks}; load average {before['load_average'][0]:.1f}; "
-          f"written to {args.out}")
+          f"unchanged: {unchanged}, tracebacks {tracebacks}; load average {load_start[0]:.1f}")
     sys.exit(1 if bypasses or server_errors or not unchanged or tracebacks else 0)
 
 

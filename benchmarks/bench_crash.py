@@ -26,7 +26,8 @@ from pathlib import Path
 
 import httpx
 
-from _service import REPO, machine, rcsa, start_service, stop_service, workers
+from _service import REPO, rcsa, start_service, stop_service, workers
+from record import load_average, write
 
 KEY = "crash-bench-write-key-0123456789abcdef"
 DOC = json.loads((REPO / "tests" / "data" / "measurements" / "point_receptance.json").read_text())
@@ -74,7 +75,7 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=30)
     parser.add_argument("--out", type=Path, default=REPO / "benchmarks" / "results" / "crash.json")
     args = parser.parse_args()
-    before = machine()
+    load_start = load_average()
     rng = random.Random(args.seed)
     with tempfile.TemporaryDirectory() as tmp:
         proc, base, log = start_service(Path(tmp), env={"RCSA_API_KEYS": f"{KEY}:write", "RCSA_JOB_POLL_S": "0.2",
@@ -163,17 +164,16 @@ def main() -> None:
         check = rcsa(Path(tmp) / "store", "store", "check")
     jobs_bad = {j: f for j, f in finished.items()
                 if f["status"] != "succeeded" or f["summary"] != {"ok": len(BATCH["combinations"]), "error": 0}}
-    record = {"machine_before": before, "machine_after": machine(), "uploads": args.uploads, "jobs": len(job_ids),
+    figures = {"uploads": args.uploads, "jobs": len(job_ids),
               "workers_killed": len(kills), "kill_every_s": args.kill_every, "wall_seconds": round(wall, 1), "lost": lost, "duplicated": duplicated,
               "unreadable": unreadable, "jobs_not_complete": jobs_bad,
               "job_attempts": sorted(f["attempts"] for f in finished.values()), "store_check_exit": check.returncode,
               "store_check": check.stdout[-2000:]}
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(record, indent=1) + "\n")
+    write("crash", figures, load_start=load_start, out=args.out)
     print(f"{args.uploads} idempotent uploads and {len(job_ids)} batch jobs, {len(kills)} workers killed in "
           f"{wall:.0f} s: lost {len(lost)}, duplicated {len(duplicated)}, unreadable {len(unreadable)}, jobs not "
           f"complete {len(jobs_bad)}; rcsa store check exit {check.returncode}; load average "
-          f"{before['load_average'][0]:.1f}; written to {args.out}")
+          f"{load_start[0]:.1f}")
     sys.exit(1 if lost or duplicated or unreadable or jobs_bad or check.returncode else 0)
 
 

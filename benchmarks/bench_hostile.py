@@ -29,7 +29,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import socket
 import sys
 import tempfile
@@ -46,7 +45,8 @@ sys.path.insert(0, str(REPO / "benchmarks"))
 
 from tests.service.hostile_cases import Case, cases, judge, operations  # noqa: E402
 
-from _service import machine, memory_mb, start_service, stop_service, workers  # noqa: E402
+from _service import memory_mb, start_service, stop_service, workers  # noqa: E402
+from record import load_average, write  # noqa: E402
 
 KEY = "bench-hostile-write-key-0123456789"
 
@@ -164,7 +164,7 @@ def bulk(args: argparse.Namespace) -> None:
 
     from rcsa.reference import ra1
 
-    before = machine()
+    load_start = load_average()
     cases = bulk_bodies()
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -218,16 +218,15 @@ def bulk(args: argparse.Namespace) -> None:
             stop_service(proc)
         tracebacks = log.read_text().count("Traceback")
     wrong = [r for r in rows if not 400 <= int(r["status"]) < 500 or not r["workers_alive"]]
-    record = {"machine_before": before, "machine_after": machine(), "cases": rows,
+    figures = {"cases": rows,
               "other_caller": {**neighbour, "slowest_s": round(neighbour["slowest_s"], 3)},
               "workers_unchanged": all(r["workers_alive"] for r in rows),
               "tracebacks": tracebacks, "wrong": wrong}
-    out = args.out.with_name("bulk.json") if args.out.name == "hostile.json" else args.out
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(record, indent=1) + "\n")
+    write("bulk", figures, load_start=load_start,
+          out=args.out.with_name("bulk.json") if args.out.name == "hostile.json" else args.out)
     print(f"other caller: {neighbour['requests']} predictions, {neighbour['failures']} failed, slowest "
           f"{neighbour['slowest_s']:.2f} s; tracebacks {tracebacks}; wrong {len(wrong)}; load average "
-          f"{before['load_average'][0]:.1f}; written to {out}")
+          f"{load_start[0]:.1f}")
     if wrong or neighbour["failures"] or tracebacks:
         sys.exit(1)
 
@@ -247,9 +246,9 @@ def main() -> None:
         bulk(args)
         return
     todo = cases(args.seed, args.per_operation, heavy=args.heavy, write_headers={"X-API-Key": KEY})
-    load = os.getloadavg()
+    load_start = load_average()
     print(f"{len(todo)} cases over {len(operations())} operations (seed {args.seed}); load average "
-          f"{load[0]:.2f}, {load[1]:.2f}, {load[2]:.2f} on {os.cpu_count()} cores")
+          f"{', '.join(map(str, load_start))} on {os.cpu_count()} cores")
     with tempfile.TemporaryDirectory() as tmp:
         proc, base, log = start_service(Path(tmp), env={"RCSA_API_KEYS": f"{KEY}:write"})
         t0 = time.perf_counter()
@@ -275,15 +274,12 @@ def main() -> None:
     wrong = [r for r in rows if r["verdict"] != "ok"]
     for r in wrong:
         print(f"WRONG {r['verdict']}: {r['operation']} | {r['label']} -> {r['status']} {r['detail']}")
-    load_after = os.getloadavg()
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps({
-        "machine": {"cpus": os.cpu_count(), "python": platform.python_version(), "platform": platform.platform()},
-        "load_average_before": load, "load_average_after": load_after, "seed": args.seed,
-        "per_operation": args.per_operation, "heavy": args.heavy, "cases": len(rows), "operations": len(per_op),
-        "wall_seconds": round(wall, 1), "by_status": {str(k): v for k, v in sorted(by_status.items())},
-        "by_verdict": dict(by_verdict), "tracebacks": traceback_lines,
-        "per_operation_status": {op: dict(c) for op, c in sorted(per_op.items())}, "wrong": wrong}, indent=1) + "\n")
+    write("hostile", {
+        "seed": args.seed, "per_operation": args.per_operation, "heavy": args.heavy, "cases": len(rows),
+        "operations": len(per_op), "wall_seconds": round(wall, 1),
+        "by_status": {str(k): v for k, v in sorted(by_status.items())}, "by_verdict": dict(by_verdict),
+        "tracebacks": traceback_lines, "per_operation_status": {op: dict(c) for op, c in sorted(per_op.items())},
+        "wrong": wrong}, load_start=load_start, out=args.out)
     if args.bulk:
         bulk(args)
     sys.exit(1 if wrong or traceback_lines else 0)

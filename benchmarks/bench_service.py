@@ -1,7 +1,8 @@
 """Service load test (issue 4): a real ``uvicorn --workers 2`` on loopback.
 
-Run: ``.venv/bin/python benchmarks/bench_service.py``. It starts the service on a free port
-with a temporary store and a write key, uploads RA-1's analytical spindle-nose receptance as
+Run: ``.venv/bin/python benchmarks/bench_service.py``. It starts the service as a user does
+(``rcsa serve --workers 2``, ``benchmarks/_service.py``) on a free port with a temporary store
+and a write key, uploads RA-1's analytical spindle-nose receptance as
 a ``point_receptance`` measurement (5 000 lines, 1–5 000 Hz), then measures
 
 * single hybrid predictions of RA-1's holder and tool on that stored spindle at 5 000 lines:
@@ -42,13 +43,9 @@ import argparse
 import http.client
 import json
 import os
-import platform
 import shutil
-import signal
-import socket
 import statistics
 import subprocess
-import sys
 import tempfile
 import threading
 import time
@@ -57,41 +54,18 @@ from pathlib import Path
 import httpx
 import orjson
 
-from _service import memory_mb, workers
+from _service import memory_mb, start_service, stop_service, workers
 from rcsa.app.measurements import demo_measurement
 from rcsa.measured.importers import measurement_to_contract
 from rcsa.reference import ra1
+from record import load_average, write
 
-REPO = Path(__file__).resolve().parents[1]
 KEY = "bench-write-key-0123456789abcdef"
 GRID_5000 = {"start_hz": 1.0, "stop_hz": 5000.0, "step_hz": 1.0}
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def _start(store: Path, workers: int) -> tuple[subprocess.Popen, str]:
-    port = _free_port()
-    prom = Path(tempfile.mkdtemp(prefix="rcsa-prom-"))
-    env = {**os.environ, "RCSA_STORE": str(store), "RCSA_API_KEYS": f"{KEY}:write", "RCSA_SEED_DEMO": "false",
-           "RCSA_ACCESS_LOG": "false", "PROMETHEUS_MULTIPROC_DIR": str(prom), "RCSA_JOB_POLL_S": "0.05"}
-    proc = subprocess.Popen([sys.executable, "-m", "uvicorn", "service.main:create_app", "--factory", "--http", "service.http:NoDelayHTTPProtocol", "--workers",
-                             str(workers), "--host", "127.0.0.1", "--port", str(port), "--log-level", "warning"],
-                            cwd=REPO, env=env)
-    base = f"http://127.0.0.1:{port}"
-    deadline = time.monotonic() + 120
-    while time.monotonic() < deadline:
-        try:
-            if httpx.get(base + "/readyz", timeout=5).status_code == 200:
-                time.sleep(1.0)
-                return proc, base
-        except httpx.TransportError:
-            time.sleep(0.2)
-    proc.kill()
-    raise RuntimeError("the service did not start")
+#: The service's settings for the benchmark: a write key, jobs polled often.
+ENV = {"RCSA_API_KEYS": f"{KEY}:write", "RCSA_JOB_POLL_S": "0.05"}
 
 
 def _percentile(values: list[float], q: float) -> float:
@@ -340,14 +314,12 @@ def main() -> None:
     if args.largest:
         main_largest(args)
         return
-    args.out = args.out or REPO / "benchmarks" / "results" / "service.json"
     staged = stages() if args.stages else None
 
-    store = Path(tempfile.mkdtemp(prefix="rcsa-bench-")) / "store"
-    proc, base = _start(store, args.workers)
-    results: dict[str, object] = {"machine": {"cpus": os.cpu_count(), "python": platform.python_version(),
-                                              "platform": platform.platform()},
-                                  "uvicorn_workers": args.workers, "load_average_start": os.getloadavg()[0]}
+    load_start = load_average()
+    tmp = Path(tempfile.mkdtemp(prefix="rcsa-bench-"))
+    proc, base, _ = start_service(tmp, workers=args.workers, env=ENV)
+    results: dict[str, object] = {"uvicorn_workers": args.workers}
     if staged is not None:
         results["stages_ms"] = staged
     try:
@@ -386,8 +358,8 @@ def main() -> None:
             batch(base, mid, args.batch, grid_1000, tool_point="h", accept_encoding="gzip"),
         ]
     finally:
-        proc.send_signal(signal.SIGINT)
-        proc.wait(timeout=60)
+        stop_service(proc)
+        shutil.rmtree(tmp, ignore_errors=True)
 
     print(f"single hybrid prediction (RA-1 holder + tool on a stored spindle), 5 000 lines, {args.workers} workers:")
     for name, row in results["single_prediction_5000_lines"].items():
@@ -400,38 +372,30 @@ def main() -> None:
         print(f"batch of {b['combinations']} at {b['lines']} lines, tool_point={b['tool_point']}, "
               f"Accept-Encoding {b['accept_encoding']}: job done {b['job_done_s']:.2f} s, result received "
               f"{b['result_received_s']:.2f} s ({b['result_mb']:.0f} MB), parsed {b['result_parsed_s']:.2f} s")
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(results, indent=1) + "\n")
-    print(f"written to {args.out}")
+    write("service", results, load_start=load_start, out=args.out)
 
 
 def main_largest(args: argparse.Namespace) -> None:
-    out = args.out or REPO / "benchmarks" / "results" / "service-largest.json"
-    store = Path(tempfile.mkdtemp(prefix="rcsa-bench-")) / "store"
-    proc, base = _start(store, args.workers)
+    tmp = Path(tempfile.mkdtemp(prefix="rcsa-bench-"))
+    proc, base, _ = start_service(tmp, workers=args.workers, env=ENV)
     try:
         grid = {"start_hz": 0.25, "stop_hz": 5000.0, "step_hz": 0.25}  # 20 000 lines
         spindle = measurement_to_contract(demo_measurement(grid))
         spindle = {k: v for k, v in spindle.items() if k not in ("id", "source", "created_utc")}
         r = httpx.post(base + "/v1/measurements", json=spindle, headers={"X-API-Key": KEY}, timeout=120)
         assert r.status_code == 201, r.text
-        load = os.getloadavg()[0]
+        load_start = load_average()
         figures = largest(base, r.json()["id"], args.batch, grid, proc)
     finally:
-        proc.send_signal(signal.SIGINT)
-        proc.wait(timeout=120)
-        shutil.rmtree(store.parent, ignore_errors=True)  # 4 GB of result
-    figures = {"machine": {"cpus": os.cpu_count(), "python": platform.python_version(),
-                           "platform": platform.platform()}, "uvicorn_workers": args.workers,
-               "load_average_start": load, **figures}
+        stop_service(proc)
+        shutil.rmtree(tmp, ignore_errors=True)  # 4 GB of result
+    figures = {"uvicorn_workers": args.workers, **figures}
     peaks = ", ".join(f"{mb:.0f} MB" for mb in figures["worker_peak_rss_mb"].values())
     print(f"largest batch: {figures['combinations']} combinations x {figures['lines']} lines on {args.workers} uvicorn "
-          f"workers (load average {load:.1f} on {os.cpu_count()} cores): job done in {figures['job_done_s']:.0f} s "
+          f"workers (load average {load_start[0]:.1f} on {os.cpu_count()} cores): job done in {figures['job_done_s']:.0f} s "
           f"(attempt {figures['attempts']}), {figures['result_gb']:.2f} GB received by "
           f"{figures['result_received_s']:.0f} s; peak RSS of the workers {peaks}")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(figures, indent=1) + "\n")
-    print(f"written to {out}")
+    write("service-largest", figures, load_start=load_start, out=args.out)
 
 
 if __name__ == "__main__":

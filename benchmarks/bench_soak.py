@@ -35,10 +35,11 @@ from pathlib import Path
 
 import httpx
 
-from _service import REPO, machine, memory_mb, start_service, stop_service, workers
+from _service import REPO, memory_mb, start_service, stop_service, workers
 from rcsa.app.measurements import demo_measurement
 from rcsa.measured.importers import measurement_to_contract
 from rcsa.reference import ra1
+from record import load_average, write
 
 KEY = "soak-write-key-0123456789abcdef0123"
 GRID = {"start_hz": 1.0, "stop_hz": 5000.0, "step_hz": 1.0}
@@ -137,7 +138,7 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=30)
     parser.add_argument("--out", type=Path, default=REPO / "benchmarks" / "results" / "soak.json")
     args = parser.parse_args()
-    before = machine()
+    load_start = load_average()
     with tempfile.TemporaryDirectory() as tmp:
         proc, base, log = start_service(Path(tmp), env={"RCSA_API_KEYS": f"{KEY}:write", "RCSA_JOB_POLL_S": "0.2"})
         try:
@@ -192,19 +193,18 @@ def main() -> None:
                                 "end_mb": series[-1][1], "max_first_two_thirds_mb": early,
                                 "growth_last_third_mb": round(max(mb for t, mb in series if t >= third) - early, 1)}
     errors = {k: v for k, v in counts.items() if k.split(": ")[-1].startswith("5") or "transport" in k}
-    record = {"machine_before": before, "machine_after": machine(), "minutes": args.minutes, "clients": args.clients,
+    figures = {"minutes": args.minutes, "clients": args.clients,
               "seed": args.seed, "requests": sum(counts.values()), "by_kind_status": dict(sorted(counts.items())),
               "server_errors": errors, "same_workers_throughout": same_workers, "tracebacks": tracebacks,
               "first_traceback": first_traceback,
               "workers": per_worker, "samples": samples}
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(record, indent=1) + "\n")
+    write("soak", figures, load_start=load_start, out=args.out)
     for pid, w in per_worker.items():
         print(f"worker {pid}: {w['start_mb']:.0f} MB at the start, peak {w['peak_mb']:.0f} MB, end {w['end_mb']:.0f} MB; "
               f"last third above the first two thirds' highest: {w['growth_last_third_mb']:+.0f} MB")
-    print(f"{record['requests']} requests, server errors: {errors or 'none'}, tracebacks: {tracebacks}, "
-          f"workers replaced: {not same_workers}; load average {before['load_average'][0]:.1f} before, "
-          f"{record['machine_after']['load_average'][0]:.1f} after; written to {args.out}")
+    print(f"{figures['requests']} requests, server errors: {errors or 'none'}, tracebacks: {tracebacks}, "
+          f"workers replaced: {not same_workers}; load average {load_start[0]:.1f} before, "
+          f"{load_average()[0]:.1f} after")
 
 
 if __name__ == "__main__":
