@@ -143,6 +143,20 @@ def keepalive(base: str, *, requests: int = 300, connections: int = 1) -> dict[s
             "p99_ms": _percentile(latencies, 99), "max_ms": max(latencies)}
 
 
+def _finished_job(client: httpx.Client, accepted: httpx.Response, pause_s: float) -> dict:
+    """Poll the job a ``202`` accepted until it ends; its status document. An anonymous job is
+    private to the token its ``202`` handed out (``X-Job-Token``), so the client sends it from now on."""
+    assert accepted.status_code == 202, accepted.text
+    client.headers["X-Job-Token"] = accepted.headers["x-job-token"]
+    while True:
+        answer = client.get(accepted.headers["location"])
+        answer.raise_for_status()
+        if (job := answer.json())["status"] in ("succeeded", "failed"):
+            assert job["status"] == "succeeded", job
+            return job
+        time.sleep(pause_s)
+
+
 def batch(base: str, mid: str, n: int, grid: dict[str, float], *, tool_point: str | None,
           accept_encoding: str) -> dict[str, float]:
     doc = ra1(grid)
@@ -152,12 +166,7 @@ def batch(base: str, mid: str, n: int, grid: dict[str, float], *, tool_point: st
     params = {"tool_point": tool_point} if tool_point else {}
     with httpx.Client(base_url=base, timeout=300, headers={"Accept-Encoding": accept_encoding}) as client:
         t0 = time.perf_counter()
-        r = client.post("/v1/tool-point-frf/batch", json=request, params=params)
-        assert r.status_code == 202, r.text
-        location = r.headers["location"]
-        while (job := client.get(location).json())["status"] not in ("succeeded", "failed"):
-            time.sleep(0.05)
-        assert job["status"] == "succeeded", job
+        job = _finished_job(client, client.post("/v1/tool-point-frf/batch", json=request, params=params), 0.05)
         t_done = time.perf_counter()
         result = client.get(job["result_url"])
         raw = result.content
@@ -193,13 +202,9 @@ def largest(base: str, mid: str, n: int, grid: dict[str, float], proc: subproces
     request = {"frequency": grid, "spindle": {"measurement_id": mid}, "combinations": combos}
     with httpx.Client(base_url=base, timeout=600) as client:
         t0 = time.perf_counter()
-        r = client.post("/v1/tool-point-frf/batch", json=request, headers={"Accept-Encoding": "identity"})
-        assert r.status_code == 202, r.text
-        location = r.headers["location"]
-        while (job := client.get(location).json())["status"] not in ("succeeded", "failed"):
-            time.sleep(0.5)
+        job = _finished_job(client, client.post("/v1/tool-point-frf/batch", json=request,
+                                                headers={"Accept-Encoding": "identity"}), 0.5)
         t_done = time.perf_counter()
-        assert job["status"] == "succeeded", job
         received, tail = 0, b""
         with client.stream("GET", job["result_url"], headers={"Accept-Encoding": "identity"}) as result:
             for piece in result.iter_bytes():
