@@ -5,7 +5,8 @@ upload measurements (each its own spindle id and numbers, each with its own
 ``Idempotency-Key``) and submit batch jobs, retrying on a broken connection, a 5xx or a 409
 (the first attempt still running) until the upload answers 201 and the job has finished; a
 killer thread meanwhile SIGKILLs a random worker every ``--kill-every`` seconds (uvicorn's
-supervisor starts a new one). Then every upload is looked up: *lost* (no measurement of its
+supervisor starts a new one), among those up for ``--min-age`` seconds (a worker killed while
+it still starts would leave a service that answers nothing). Then every upload is looked up: *lost* (no measurement of its
 spindle id), *duplicated* (more than one), *unreadable* (its GET fails, or its numbers are
 not those sent, bit for bit), and every job must have succeeded with all its results;
 ``rcsa store check`` must pass. Results go to ``benchmarks/results/crash.json``.
@@ -72,6 +73,7 @@ def main() -> None:
     parser.add_argument("--jobs", type=int, default=20)
     parser.add_argument("--clients", type=int, default=3)
     parser.add_argument("--kill-every", type=float, default=0.5)
+    parser.add_argument("--min-age", type=float, default=3.0, help="Seconds a worker lives before it may be killed.")
     parser.add_argument("--seed", type=int, default=30)
     parser.add_argument("--out", type=Path, default=REPO / "benchmarks" / "results" / "crash.json")
     args = parser.parse_args()
@@ -89,9 +91,14 @@ def main() -> None:
         done = threading.Event()
         kills: list[dict] = []
 
+        first_seen: dict[int, float] = {}
+
         def killer() -> None:
+            # Only a worker up for --min-age s is killed: one killed while it still imports never
+            # serves, and with both workers so the service would answer nothing (no test at all).
             while not done.wait(args.kill_every * (0.5 + rng.random())):
-                alive = workers(proc)
+                now = time.monotonic()
+                alive = [pid for pid in workers(proc) if now - first_seen.setdefault(pid, now) >= args.min_age]
                 if alive:
                     pid = rng.choice(alive)
                     try:
@@ -165,7 +172,7 @@ def main() -> None:
     jobs_bad = {j: f for j, f in finished.items()
                 if f["status"] != "succeeded" or f["summary"] != {"ok": len(BATCH["combinations"]), "error": 0}}
     figures = {"uploads": args.uploads, "jobs": len(job_ids),
-              "workers_killed": len(kills), "kill_every_s": args.kill_every, "wall_seconds": round(wall, 1), "lost": lost, "duplicated": duplicated,
+              "workers_killed": len(kills), "kill_every_s": args.kill_every, "min_age_s": args.min_age, "wall_seconds": round(wall, 1), "lost": lost, "duplicated": duplicated,
               "unreadable": unreadable, "jobs_not_complete": jobs_bad,
               "job_attempts": sorted(f["attempts"] for f in finished.values()), "store_check_exit": check.returncode,
               "store_check": check.stdout[-2000:]}

@@ -453,7 +453,9 @@ def auth_probes() -> str:
 def crash_losses() -> str:
     """Idempotent uploads and jobs while workers are killed (``bench_crash.py``)."""
     f, load = _record("crash")
-    every = f"one every {f['kill_every_s']:g} s" if "kill_every_s" in f else f"in {f['wall_seconds']:.0f} s"
+    every = f"in {f['wall_seconds']:.0f} s"
+    if "min_age_s" in f:
+        every += f": every {f['kill_every_s']:g} s or so, one that had been up {f['min_age_s']:g} s"
     return (f"{count(f['uploads'])} idempotent uploads and {f['jobs']} batch jobs while {f['workers_killed']} "
             f"workers were killed ({every}): {len(f['lost'])} lost, {len(f['duplicated'])} duplicated, "
             f"{len(f['unreadable'])} unreadable, {len(f['jobs_not_complete'])} jobs not complete"
