@@ -72,9 +72,8 @@ def load(name: str, directory: Path = dataset.DATA_DIR) -> dict[str, Any]:
 def holder_tool(case: dict[str, Any]) -> dict[str, Any]:
     """The case's interface as a contract ``joints.holder_tool`` (bonded, or contact with its layer).
 
-    The contact region (front gap and length) and its arc (``contact_arc_deg``, a side-lock's
-    contact at the back of the bore) are carried; a side-lock screw's own patch on the flat is
-    not (the contract has no such field).
+    The contact region (front gap and length), its arc (``contact_arc_deg``, a side-lock's
+    contact at the back of the bore) and a side-lock screw (``screw_diameter_m``) are carried.
     """
     face = case["interface"]
     out: dict[str, Any] = {"model": "bonded"}
@@ -87,6 +86,9 @@ def holder_tool(case: dict[str, Any]) -> dict[str, Any]:
         out["contact_length_m"] = face["contact_stop_m"] - face["contact_start_m"]
     if face.get("arc_deg", 360.0) < 360.0:
         out["contact_arc_deg"] = face["arc_deg"]
+    flat = case["tool"].get("flat")
+    if flat is not None:
+        out["screw_diameter_m"] = flat["screw_diameter_m"]
     return out
 
 

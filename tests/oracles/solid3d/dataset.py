@@ -269,7 +269,10 @@ def beam_document(case: SolidCase, frequency_hz: np.ndarray = FREQUENCY_HZ) -> d
 
     The contract's beam model: composite insertion, rigid point joint at the holder face,
     fluted part at ``fluted_diameter_ratio · DC`` (a real flute section has no contract
-    equivalent beyond that ratio). RA-1's spindle and spindle–holder joint are kept.
+    equivalent beyond that ratio). A cone is stepped as a tool library's cone is
+    (:func:`rcsa.libraries.profiles.cone_cylinders`); a nut is the holder's outline over its
+    length, as a library draws the holder; a side-lock flat is left out (the contract's shank is
+    round). RA-1's spindle and spindle–holder joint are kept.
 
     Parameters
     ----------
@@ -293,11 +296,30 @@ def beam_document(case: SolidCase, frequency_hz: np.ndarray = FREQUENCY_HZ) -> d
         pieces = [(seg["length_m"], seg["outer_diameter_m"])] if end is None else \
             cone_cylinders(seg["length_m"], seg["outer_diameter_m"], end)
         segments.extend({**seg, "length_m": length, "outer_diameter_m": od} for length, od in pieces)
+    for ring in case.rings:                   # a nut is part of the holder's outline, as a library draws it
+        segments = _with_ring(segments, case.holder_length_m - ring.front_offset_m - ring.length_m,
+                              case.holder_length_m - ring.front_offset_m, ring.outer_diameter_m)
     doc["holder"] = {"segments": segments}
     doc["tool"] = {k: v for k, v in mine["tool"].items() if k not in ("flutes", "flat")}
     doc["materials"] = {**doc.get("materials", {}), **mine["materials"]}
     doc["joints"] = {"spindle_holder": doc["joints"]["spindle_holder"]}
     return doc
+
+
+def _with_ring(segments: list[dict[str, Any]], z0_m: float, z1_m: float, outer_diameter_m: float
+               ) -> list[dict[str, Any]]:
+    """Contract holder segments with the outline widened to ``outer_diameter_m`` over z0–z1."""
+    out, z = [], 0.0
+    for seg in segments:
+        a, b = z, z + seg["length_m"]
+        cuts = sorted({a, b, *(x for x in (z0_m, z1_m) if a + 1e-12 < x < b - 1e-12)})
+        for lo, hi in zip(cuts[:-1], cuts[1:], strict=True):
+            inside = z0_m - 1e-12 <= lo and hi <= z1_m + 1e-12
+            out.append({**seg, "length_m": round(hi - lo, 12),
+                        "outer_diameter_m": max(seg["outer_diameter_m"], outer_diameter_m) if inside
+                        else seg["outer_diameter_m"]})
+        z = b
+    return out
 
 
 def spindle_base_receptance(frequency_hz: np.ndarray = FREQUENCY_HZ) -> tuple[np.ndarray, np.ndarray]:
