@@ -7,7 +7,7 @@ Run (reads ``tests/data/solid3d``, which ``benchmarks/bench_solid3d.py --write-d
     .venv/bin/python benchmarks/calibrate_clamping.py --lofo     # leave one holder family out -> clamping_lofo.json
 
 ``--fit`` fits the coefficients of :data:`rcsa.model.clamping.FITTED` on the calibration cases
-(:data:`tests.oracles.solid3d.clamping_scores.CALIBRATION`, both bases) by least squares over
+(:data:`tests.oracles.solid3d.clamping_scores.CALIBRATION_CASES`, both bases) by least squares over
 every peak's frequency and height and the static compliance
 (:mod:`tests.oracles.solid3d.clamping_fit`), from the committed coefficients and from
 :data:`STARTS` other starts spread over the search box (seeded), and says how far apart the
@@ -44,7 +44,7 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from tests.oracles.solid3d import clamping_fit, clamping_scores, dataset  # noqa: E402
-from tests.oracles.solid3d.clamping_scores import CALIBRATION, INFORMATION, role  # noqa: E402
+from tests.oracles.solid3d.clamping_scores import CALIBRATION_CASES, INFORMATION, role  # noqa: E402
 
 import rcsa.model.clamping as clamping  # noqa: E402
 
@@ -85,8 +85,8 @@ def run_fit(directory: Path, starts: int, seed: int) -> dict[str, Any]:
     """The committed fit from several starts (module docstring)."""
     names = list(clamping.FITTED)
     committed = clamping.BULK_COEFFICIENTS
-    rows = clamping_fit.prepare(list(CALIBRATION), directory=directory)
-    print(f"fitting {names} on {len(rows)} rows ({len(CALIBRATION)} cases x 2 bases), {sum(r.peak_hz.size for r in rows)}"
+    rows = clamping_fit.prepare(list(CALIBRATION_CASES), directory=directory)
+    print(f"fitting {names} on {len(rows)} rows ({len(CALIBRATION_CASES)} cases x 2 bases), {sum(r.peak_hz.size for r in rows)}"
           " peaks")
     results = []
     for k, start in enumerate(_starts(names, committed, starts, seed)):
@@ -105,7 +105,7 @@ def run_fit(directory: Path, starts: int, seed: int) -> dict[str, Any]:
           + ", ".join(f"{n} {100 * v:.3f} %" for n, v in spread.items()))
     print("the fit from the committed coefficients vs the committed: "
           + ", ".join(f"{n} {100 * v:+.3f} %" for n, v in from_committed.items()))
-    return {**_machine(), "fitted": names, "committed": asdict(committed), "calibration": list(CALIBRATION),
+    return {**_machine(), "fitted": names, "committed": asdict(committed), "calibration": list(CALIBRATION_CASES),
             "sigma": clamping_fit.SIGMA, "bounds": clamping_fit.BOUNDS, "start_box": clamping_fit.START_BOX,
             "seed": seed, "starts": results, "best": best["coefficients"], "spread": spread,
             "from_committed": from_committed}
@@ -117,7 +117,7 @@ def run_lofo(directory: Path) -> dict[str, Any]:
     committed = clamping.BULK_COEFFICIENTS
     folds = []
     for family in dataset.FAMILIES:
-        train = [n for n in CALIBRATION if dataset.case_family(n) != family]
+        train = [n for n in CALIBRATION_CASES if dataset.case_family(n) != family]
         test = [n for n in dataset.reference_cases() if dataset.case_family(n) == family and n not in INFORMATION]
         t0 = time.perf_counter()
         res = clamping_fit.fit(clamping_fit.prepare(train, directory=directory), names, committed, directory)
@@ -193,7 +193,7 @@ def run_scores(directory: Path) -> dict[str, Any]:
     summary = _summary(rows)
     print(json.dumps(summary, indent=1))
     return {**_machine(), **_load(), "coefficients": asdict(clamping.BULK_COEFFICIENTS), "fitted": list(clamping.FITTED),
-            "calibration": list(CALIBRATION), "information": list(INFORMATION), "target": TARGET,
+            "calibration": list(CALIBRATION_CASES), "information": list(INFORMATION), "target": TARGET,
             "summary": summary, "rows": rows}
 
 

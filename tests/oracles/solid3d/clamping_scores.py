@@ -29,14 +29,14 @@ from rcsa.physics.elimination import tip_receptance
 from tests.oracles.solid3d import dataset
 from tests.oracles.solid3d.reduction import tip_receptance as solid_tip_receptance
 
-__all__ = ["CALIBRATION", "INFORMATION", "PEAK_PROMINENCE_DB", "extrapolation_notes", "holder_tool", "load",
+__all__ = ["CALIBRATION_CASES", "INFORMATION", "PEAK_PROMINENCE_DB", "extrapolation_notes", "holder_tool", "load",
            "model_chain", "model_peaks", "peak_scores", "rcsa_h", "refine_peaks", "role", "score_row", "scores",
            "truth_h", "truth_peaks"]
 
 #: The cases the clamping coefficients are fitted on (both bases). One per holder family other than
 #: the issue-24 holder's; the issue-24 holder's own case (``base_d10``, also the diagnosis's 40 mm
 #: bonded truth) is held out. Every other case is held out, except :data:`INFORMATION`.
-CALIBRATION = ("diameter_d6", "diameter_d16", "nose_od1.6d", "nose_od3.2d", "insertion_2d", "insertion_5d",
+CALIBRATION_CASES = ("diameter_d6", "diameter_d16", "nose_od1.6d", "nose_od3.2d", "insertion_2d", "insertion_5d",
                "stickout_3d", "stickout_6d", "shrink_slender_d6", "hydraulic_d20", "collet_d16", "sidelock_d16")
 #: Cases the clamping models do not describe (reported, not scored): real flute sections (the
 #: ``fluted_section`` effect), a rigid holder.
@@ -51,7 +51,7 @@ _CLAMP = (Ground(1e15, 0.0, 1e15, 0.0),)
 
 def role(name: str) -> str:
     """``"calibration"``, ``"information"`` or ``"held-out"``."""
-    return "calibration" if name in CALIBRATION else "information" if name in INFORMATION else "held-out"
+    return "calibration" if name in CALIBRATION_CASES else "information" if name in INFORMATION else "held-out"
 
 
 def extrapolation_notes(name: str, directory: Path = dataset.DATA_DIR) -> list[str]:
