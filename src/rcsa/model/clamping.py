@@ -58,7 +58,8 @@ class BulkCoefficients:
     0.3–1.6 d) with a singular value 40 times below the others' (``benchmarks/calibrate_clamping.py``).
 
     Holder sections: next to a step from a larger outer diameter D to a smaller d the larger
-    section does not bend as a whole at once: over ``ℓ = step_cone (D − d)/2`` from the step its
+    section does not bend as a whole at once: over ``ℓ = step_cone (D − d)/2`` from the step (at
+    most the section's length; cones from both its ends overlapping take the thinner) its
     stiffness grows as a cone from d to D (the 45° load-spreading cone at ``step_cone = 1``), its
     mass unchanged. A holder's sections are stubby (length about their diameter) and their ends
     are kept from warping by the steps and the face they sit on: their shear stiffness is
@@ -80,7 +81,7 @@ class BulkCoefficients:
 
 
 #: The fitted coefficients (``benchmarks/calibrate_clamping.py --fit``).
-BULK_COEFFICIENTS = BulkCoefficients(interface=7.63, step_cone=1.23, holder_shear=1.12)
+BULK_COEFFICIENTS = BulkCoefficients(interface=8.18, step_cone=1.24, holder_shear=1.18)
 #: The coefficients the calibration fits (every one of :data:`BULK_COEFFICIENTS`).
 FITTED = ("interface", "step_cone", "holder_shear")
 #: Pieces a step's stiffness cone is cut into (constant sections at their mid-diameters).
@@ -224,7 +225,7 @@ def _holder_pieces(holder: HolderSpec, step_cone: float) -> list[_HolderPiece]:
         for j, at in ((i - 1, x0), (i + 1, x1)):
             small = segs[j].outer_diameter_m if 0 <= j < len(segs) else big
             if step_cone > 0 and small < big:
-                cones.append((at, small, min(step_cone * (big - small) / 2.0, seg.length_m / 2.0)))
+                cones.append((at, small, min(step_cone * (big - small) / 2.0, seg.length_m)))
         cuts = {x0, x1}
         for at, _, ell in cones:
             cuts.update(at + np.sign(x0 + x1 - 2 * at) * ell * np.arange(1, CONE_PIECES + 1) / CONE_PIECES)

@@ -37,9 +37,9 @@ __all__ = ["BOUNDS", "SIGMA", "START_BOX", "FitResult", "Row", "fit", "prepare",
 #: (about the 3-D reference's own discretisation error, ×1, ×5, ×3).
 SIGMA = {"frequency": 0.005, "height": 0.05, "static": 0.02}
 #: Where each coefficient may go (the search's box), as (lowest, highest).
-BOUNDS = {"interface": (0.05, 500.0), "step_cone": (0.01, 10.0), "holder_shear": (0.2, 20.0)}
+BOUNDS = {"interface": (0.5, 200.0), "step_cone": (0.05, 4.0), "holder_shear": (0.3, 5.0)}
 #: Where the random starts are drawn (log-uniform): a factor of 4 either side of plausible values.
-START_BOX = {"interface": (2.0, 60.0), "step_cone": (0.3, 3.0), "holder_shear": (0.5, 3.0)}
+START_BOX = {"interface": (2.0, 32.0), "step_cone": (0.25, 3.0), "holder_shear": (0.5, 2.5)}
 _LOSS = 0.002
 
 
