@@ -18,15 +18,17 @@ from __future__ import annotations
 import pytest
 
 from rcsa.model.clamping import CALIBRATED_GEOMETRY_RANGES
-from tests.oracles.solid3d.clamping_scores import CALIBRATION_CASES, INFORMATION, role, score_row
-from tests.oracles.solid3d.dataset import (
-    BASES,
-    FAMILIES,
-    FREQUENCY_HZ,
-    beam_document,
-    case_family,
-    reference_cases,
+from tests.oracles.solid3d.clamping_scores import (
+    CALIBRATION_CASES,
+    GEOMETRY_KEYS,
+    INFORMATION,
+    extrapolation_notes,
+    geometry_ranges,
+    outside,
+    role,
+    score_row,
 )
+from tests.oracles.solid3d.dataset import BASES, FAMILIES, case_family, reference_cases
 
 HELD_OUT = tuple(n for n in reference_cases() if role(n) == "held-out")
 
@@ -56,14 +58,11 @@ def test_every_family_is_both_calibrated_and_held_out_and_no_truth_is_shared():
 
 
 def test_the_calibrated_range_is_the_span_of_the_calibration_cases():
-    """What the prediction notes as extrapolated (rcsa.model.clamping.CALIBRATED_GEOMETRY_RANGES) is where no calibration case is
-    (rcsa's view of each case: the holder as its outline, a cone stepped)."""
-    wall, shank, insertion = [], [], []
-    for name in CALIBRATION_CASES:
-        doc = beam_document(reference_cases()[name][0], FREQUENCY_HZ[:2])
-        d = doc["tool"]["shank_diameter_m"]
-        wall.append(doc["holder"]["segments"][-1]["outer_diameter_m"] / d)
-        shank.append(d)
-        insertion.append((doc["tool"]["overall_length_m"] - doc["tool"]["stickout_m"]) / d)
-    for key, values in (("wall_ratio", wall), ("shank_diameter_m", shank), ("insertion_diameters", insertion)):
-        assert CALIBRATED_GEOMETRY_RANGES[key] == pytest.approx((min(values), max(values)), rel=1e-6), key
+    """What the prediction notes as extrapolated (rcsa.model.clamping.CALIBRATED_GEOMETRY_RANGES) is where no
+    calibration case is (rcsa's view of each case: the holder as its outline, a cone stepped)."""
+    ranges = geometry_ranges(CALIBRATION_CASES)
+    for key in GEOMETRY_KEYS:
+        assert CALIBRATED_GEOMETRY_RANGES[key] == pytest.approx(ranges[key], rel=1e-6), key
+    # and a held-out case outside that span is named by rcsa's own notes, one inside is not
+    for name in HELD_OUT:
+        assert bool(outside(name, ranges)) == bool(extrapolation_notes(name)), name

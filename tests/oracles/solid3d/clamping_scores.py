@@ -16,6 +16,7 @@ What is compared, per case and base (the holder's base face clamped, or RA-1's s
 from __future__ import annotations
 
 import functools
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -29,7 +30,8 @@ from rcsa.physics.elimination import tip_receptance
 from tests.oracles.solid3d import dataset
 from tests.oracles.solid3d.reduction import tip_receptance as solid_tip_receptance
 
-__all__ = ["CALIBRATION_CASES", "INFORMATION", "PEAK_PROMINENCE_DB", "extrapolation_notes", "holder_tool", "load",
+__all__ = ["CALIBRATION_CASES", "GEOMETRY_KEYS", "INFORMATION", "PEAK_PROMINENCE_DB", "case_geometry",
+           "extrapolation_notes", "geometry_ranges", "holder_tool", "load", "outside",
            "model_chain", "model_peaks", "peak_scores", "rcsa_h", "refine_peaks", "role", "score_row", "scores",
            "truth_h", "truth_peaks"]
 
@@ -52,6 +54,33 @@ _CLAMP = (Ground(1e15, 0.0, 1e15, 0.0),)
 def role(name: str) -> str:
     """``"calibration"``, ``"information"`` or ``"held-out"``."""
     return "calibration" if name in CALIBRATION_CASES else "information" if name in INFORMATION else "held-out"
+
+
+#: The geometry a calibration covers, as rcsa sees a case (:func:`case_geometry`); the keys of
+#: :data:`rcsa.model.clamping.CALIBRATED_GEOMETRY_RANGES`.
+GEOMETRY_KEYS = ("wall_ratio", "shank_diameter_m", "insertion_diameters")
+
+
+def case_geometry(name: str) -> dict[str, float]:
+    """A case's geometry as rcsa's clamping notes read it (the holder as its outline, a cone stepped):
+    the nose's outer diameter over the shank's, the shank diameter (m), the inserted length in
+    shank diameters."""
+    doc = dataset.beam_document(dataset.reference_cases()[name][0], dataset.FREQUENCY_HZ[:2])
+    d = float(doc["tool"]["shank_diameter_m"])
+    return {"wall_ratio": doc["holder"]["segments"][-1]["outer_diameter_m"] / d, "shank_diameter_m": d,
+            "insertion_diameters": (doc["tool"]["overall_length_m"] - doc["tool"]["stickout_m"]) / d}
+
+
+def geometry_ranges(names: Sequence[str]) -> dict[str, tuple[float, float]]:
+    """The span (lowest, highest) of each of :data:`GEOMETRY_KEYS` over the cases ``names``."""
+    found = [case_geometry(n) for n in names]
+    return {k: (min(g[k] for g in found), max(g[k] for g in found)) for k in GEOMETRY_KEYS}
+
+
+def outside(name: str, ranges: Mapping[str, tuple[float, float]]) -> list[str]:
+    """The keys of :data:`GEOMETRY_KEYS` in which the case ``name`` lies outside ``ranges`` (extrapolated)."""
+    g = case_geometry(name)
+    return [k for k in GEOMETRY_KEYS if not ranges[k][0] * (1 - 1e-9) <= g[k] <= ranges[k][1] * (1 + 1e-9)]
 
 
 def extrapolation_notes(name: str, directory: Path = dataset.DATA_DIR) -> list[str]:
