@@ -7,14 +7,17 @@ Run (reads ``tests/data/solid3d``, which ``benchmarks/bench_solid3d.py --write-d
     .venv/bin/python benchmarks/calibrate_clamping.py --lofo     # leave one holder family out -> clamping_lofo.json
 
 ``--fit`` fits the coefficients of :data:`rcsa.model.clamping.FITTED` on the calibration cases
-(:data:`tests.oracles.solid3d.clamping_scores.CALIBRATION_CASES`, both bases) by least squares over
-every peak's frequency and height and the static compliance
+(:data:`tests.oracles.solid3d.clamping_scores.CALIBRATION_CASES`, both bases) by least squares
+over every peak's frequency and height and the static compliance
 (:mod:`tests.oracles.solid3d.clamping_fit`), from the committed coefficients and from
-:data:`STARTS` other starts spread over the search box (seeded), and says how far apart the
-answers land and how far from the committed ones.
+:data:`STARTS` other starts drawn log-uniformly over the start box (seed :data:`SEED`), and says
+how far apart the answers land and how far the fit from the committed coefficients moves them
+(the committed coefficients are this fit's answer, rounded: it must stay within 1 %).
 
-``--lofo``: for each holder family, the same fit (from the committed coefficients) on the
-calibration cases of the *other* families, scored on every case of the family left out.
+``--lofo``: for each holder family, the same fit on the calibration cases of the *other*
+families only, from the centre of the start box (nothing of the family left out enters it),
+scored on every case of the family left out (both bases, every peak of the band); each fold
+names the cases that lie outside the geometry its own training cases span.
 
 Scoring (no option): for every case of the data set and both bases (the holder's base face
 clamped; RA-1's spindle and spindle–holder joint), rcsa's tool-point h against the 3-D truth
@@ -23,15 +26,16 @@ the mean |dB|, the static compliance. Models: ``point`` (the contract's beam: co
 insertion, rigid point joint) and the case's clamping (``bonded``, or ``contact`` with the
 case's interface, front gap, contact length and arc). Summaries keep the clamped base apart
 (the spindle rows share RA-1's spindle with the truth, whose modes both sides match by
-construction) and name the held-out cases that extrapolate.
+construction, which halves their errors) and name the held-out cases that extrapolate.
+
+Every run writes its figures with the machine and its load (``benchmarks/record.py``);
+``scripts/render_figures.py`` renders the README's clamping tables from them.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
-import os
-import platform
+import math
 import sys
 import time
 from dataclasses import asdict, replace
@@ -47,38 +51,31 @@ from tests.oracles.solid3d import clamping_fit, clamping_scores, dataset  # noqa
 from tests.oracles.solid3d.clamping_scores import CALIBRATION_CASES, INFORMATION, role  # noqa: E402
 
 import rcsa.model.clamping as clamping  # noqa: E402
+from record import load_average, write  # noqa: E402
 
-#: Starts of ``--fit`` besides the committed coefficients (log-uniform in the box, seed :data:`SEED`).
+#: Starts of ``--fit`` besides the committed coefficients (log-uniform in the start box, seed :data:`SEED`).
 STARTS = 5
 SEED = 20240531
 #: Tolerances the issue sets (every peak in the band; any row).
 TARGET = {"frequency": 0.015, "height": 0.15}
 
 
-def _load() -> dict[str, float]:
-    return {"load_1min": os.getloadavg()[0], "load_5min": os.getloadavg()[1]}
-
-
-def _machine() -> dict[str, Any]:
-    return {"machine": f"{platform.machine()}, {os.cpu_count()} cores (shared VM)", "python": platform.python_version()}
-
-
-def _write(name: str, record: dict[str, Any]) -> None:
-    out = REPO / "benchmarks" / "results" / name
-    out.parent.mkdir(exist_ok=True)
-    out.write_text(json.dumps(record, indent=1, default=float) + "\n")
-    print(f"wrote {out.relative_to(REPO)}")
-
-
-def _starts(names: list[str], committed: clamping.BulkCoefficients, count: int, seed: int
-            ) -> list[clamping.BulkCoefficients]:
+def _random_starts(names: list[str], committed: clamping.BulkCoefficients, count: int, seed: int
+                   ) -> list[clamping.BulkCoefficients]:
     rng = np.random.default_rng(seed)
-    out = [committed]
-    for _ in range(count):
-        values = {n: float(np.exp(rng.uniform(np.log(clamping_fit.START_BOX[n][0]), np.log(clamping_fit.START_BOX[n][1]))))
-                  for n in names}
-        out.append(replace(committed, **values))
-    return out
+    box = clamping_fit.START_BOX
+    return [replace(committed, **{n: float(np.exp(rng.uniform(np.log(box[n][0]), np.log(box[n][1])))) for n in names})
+            for _ in range(count)]
+
+
+def _centre(names: list[str], committed: clamping.BulkCoefficients) -> clamping.BulkCoefficients:
+    """The geometric centre of the start box (a start that knows nothing of the data)."""
+    return replace(committed, **{n: math.sqrt(clamping_fit.START_BOX[n][0] * clamping_fit.START_BOX[n][1])
+                                 for n in names})
+
+
+def _coefficients_text(c: clamping.BulkCoefficients, names: list[str]) -> str:
+    return ", ".join(f"{n} {getattr(c, n):.4g}" for n in names)
 
 
 def run_fit(directory: Path, starts: int, seed: int) -> dict[str, Any]:
@@ -86,18 +83,18 @@ def run_fit(directory: Path, starts: int, seed: int) -> dict[str, Any]:
     names = list(clamping.FITTED)
     committed = clamping.BULK_COEFFICIENTS
     rows = clamping_fit.prepare(list(CALIBRATION_CASES), directory=directory)
-    print(f"fitting {names} on {len(rows)} rows ({len(CALIBRATION_CASES)} cases x 2 bases), {sum(r.peak_hz.size for r in rows)}"
-          " peaks")
+    peaks = sum(r.peak_hz.size for r in rows)
+    print(f"fitting {names} on {len(rows)} rows ({len(CALIBRATION_CASES)} cases x 2 bases), {peaks} peaks", flush=True)
     results = []
-    for k, start in enumerate(_starts(names, committed, starts, seed)):
+    for k, start in enumerate([committed, *_random_starts(names, committed, starts, seed)]):
+        load = load_average()
         t0 = time.perf_counter()
         res = clamping_fit.fit(rows, names, start, directory)
-        results.append({**res.to_dict(names), "seconds": time.perf_counter() - t0, **_load(),
-                        "start_kind": "committed" if k == 0 else f"random {k}"})
-        print(f"  start {k} ({results[-1]['start_kind']}): "
-              + ", ".join(f"{n} {getattr(start, n):.4g} -> {getattr(res.coefficients, n):.4g}" for n in names)
-              + f"; cost {res.cost:.4f}, rms {res.rms:.3f}, {res.evaluations} evaluations, "
-              f"{results[-1]['seconds']:.0f} s", flush=True)
+        results.append({"start_kind": "committed" if k == 0 else f"random {k}", **res.to_dict(names),
+                        "seconds": time.perf_counter() - t0, "load_average": load})
+        print(f"  start {k} ({results[-1]['start_kind']}): {_coefficients_text(start, names)} -> "
+              f"{_coefficients_text(res.coefficients, names)}; cost {res.cost:.4f}, rms {res.rms:.3f}, "
+              f"{res.evaluations} evaluations, {results[-1]['seconds']:.0f} s", flush=True)
     best = min(results, key=lambda r: r["cost"])
     spread = {n: max(abs(r["coefficients"][n] / best["coefficients"][n] - 1) for r in results) for n in names}
     from_committed = {n: results[0]["coefficients"][n] / getattr(committed, n) - 1 for n in names}
@@ -105,35 +102,12 @@ def run_fit(directory: Path, starts: int, seed: int) -> dict[str, Any]:
           + ", ".join(f"{n} {100 * v:.3f} %" for n, v in spread.items()))
     print("the fit from the committed coefficients vs the committed: "
           + ", ".join(f"{n} {100 * v:+.3f} %" for n, v in from_committed.items()))
-    return {**_machine(), "fitted": names, "committed": asdict(committed), "calibration": list(CALIBRATION_CASES),
-            "sigma": clamping_fit.SIGMA, "bounds": clamping_fit.BOUNDS, "start_box": clamping_fit.START_BOX,
-            "seed": seed, "starts": results, "best": best["coefficients"], "spread": spread,
-            "from_committed": from_committed}
-
-
-def run_lofo(directory: Path) -> dict[str, Any]:
-    """Leave one holder family out: fit on the others' calibration cases, score the family's cases."""
-    names = list(clamping.FITTED)
-    committed = clamping.BULK_COEFFICIENTS
-    folds = []
-    for family in dataset.FAMILIES:
-        train = [n for n in CALIBRATION_CASES if dataset.case_family(n) != family]
-        test = [n for n in dataset.reference_cases() if dataset.case_family(n) == family and n not in INFORMATION]
-        t0 = time.perf_counter()
-        res = clamping_fit.fit(clamping_fit.prepare(train, directory=directory), names, committed, directory)
-        clamping.BULK_COEFFICIENTS = res.coefficients
-        try:
-            rows = [_row(n, b, directory, models=("clamping",)) for n in test for b in dataset.BASES]
-        finally:
-            clamping.BULK_COEFFICIENTS = committed
-        folds.append({"family": family, "trained_on": train, "coefficients": {n: getattr(res.coefficients, n)
-                                                                              for n in names},
-                      "rms": res.rms, "rows": rows, "seconds": time.perf_counter() - t0, **_load()})
-        worst = _worst([r["clamping"] for r in rows])
-        print(f"  without {family:15s}: " + ", ".join(f"{n} {getattr(res.coefficients, n):.4g}" for n in names)
-              + f" | its {len(test)} cases: peaks within {100 * worst['frequency']:.2f} % / "
-              f"{100 * worst['height']:.1f} %, mean |dB| <= {worst['mean_abs_db']:.2f}", flush=True)
-    return {**_machine(), "fitted": names, "families": list(dataset.FAMILIES), "folds": folds}
+    return {"fitted": names, "committed": asdict(committed), "calibration_cases": list(CALIBRATION_CASES),
+            "rows": len(rows), "peaks": peaks, "sigma": clamping_fit.SIGMA, "bounds": clamping_fit.BOUNDS,
+            "start_box": clamping_fit.START_BOX, "seed": seed, "starts": results, "best": best["coefficients"],
+            "spread": spread, "max_spread": max(spread.values()), "from_committed": from_committed,
+            "max_from_committed": max(abs(v) for v in from_committed.values()),
+            "smallest_singular_value": min(min(r["singular_values"]) for r in results)}
 
 
 def _row(name: str, base: str, directory: Path, models: tuple[str, ...] = ("point", "clamping")) -> dict[str, Any]:
@@ -146,10 +120,54 @@ def _row(name: str, base: str, directory: Path, models: tuple[str, ...] = ("poin
     return row
 
 
-def _worst(scores: list[dict[str, Any]]) -> dict[str, float]:
-    return {"frequency": max((s["max_frequency_error"] for s in scores), default=0.0),
-            "height": max((s["max_height_error"] for s in scores), default=0.0),
-            "mean_abs_db": max((s["mean_abs_db"] for s in scores), default=0.0)}
+def _within(score: dict[str, Any]) -> bool:
+    return bool(score["max_frequency_error"] <= TARGET["frequency"] and score["max_height_error"] <= TARGET["height"])
+
+
+def _worst(scores: list[dict[str, Any]]) -> dict[str, Any]:
+    """The largest |errors| over the rows' peaks, signed, with where they are."""
+    peaks = [(s_i, p) for s_i, s in enumerate(scores) for p in s["peaks"]]
+    f = max(peaks, key=lambda x: abs(x[1]["frequency_error"]))
+    h = max(peaks, key=lambda x: abs(x[1]["height_error"]))
+    return {"peaks": len(peaks), "frequency_error": f[1]["frequency_error"], "frequency_at_hz": f[1]["frequency_hz"],
+            "height_error": h[1]["height_error"], "height_at_hz": h[1]["frequency_hz"],
+            "max_mean_abs_db": max(s["mean_abs_db"] for s in scores),
+            "rows_within_target": sum(_within(s) for s in scores), "rows": len(scores)}
+
+
+def run_lofo(directory: Path) -> dict[str, Any]:
+    """Leave one holder family out: fit on the others' calibration cases, score the family's cases."""
+    names = list(clamping.FITTED)
+    committed = clamping.BULK_COEFFICIENTS
+    start = _centre(names, committed)
+    folds = []
+    for family in dataset.FAMILIES:
+        train = [n for n in CALIBRATION_CASES if dataset.case_family(n) != family]
+        test = [n for n in dataset.reference_cases() if dataset.case_family(n) == family and n not in INFORMATION]
+        ranges = clamping_scores.geometry_ranges(train)
+        load = load_average()
+        t0 = time.perf_counter()
+        res = clamping_fit.fit(clamping_fit.prepare(train, directory=directory), names, start, directory)
+        clamping.BULK_COEFFICIENTS = res.coefficients
+        try:
+            rows = [_row(n, b, directory, models=("clamping",)) for n in test for b in dataset.BASES]
+        finally:
+            clamping.BULK_COEFFICIENTS = committed
+        for r in rows:
+            r["outside_training"] = clamping_scores.outside(r["case"], ranges)
+        by_base = {b: _worst([r["clamping"] for r in rows if r["base"] == b]) for b in dataset.BASES}
+        folds.append({"family": family, "trained_on": train, "training_ranges": ranges, "start": asdict(start),
+                      "coefficients": {n: getattr(res.coefficients, n) for n in names}, "rms": res.rms,
+                      "singular_values": res.singular_values.tolist(), "cases": test,
+                      "extrapolating": sorted({r["case"] for r in rows if r["outside_training"]}),
+                      "worst": by_base, "rows": rows, "seconds": time.perf_counter() - t0, "load_average": load})
+        print(f"  without {family:15s}: {_coefficients_text(res.coefficients, names)} | its {len(test)} cases: "
+              + "; ".join(f"{b} peaks within {100 * abs(w['frequency_error']):.2f} % / {100 * abs(w['height_error']):.1f} %"
+                          f" ({w['rows_within_target']}/{w['rows']} rows)" for b, w in by_base.items()), flush=True)
+    every = [r for fold in folds for r in fold["rows"]]
+    totals = {b: _worst([r["clamping"] for r in every if r["base"] == b]) for b in dataset.BASES}
+    return {"fitted": names, "families": list(dataset.FAMILIES), "start": asdict(start), "target": TARGET,
+            "totals": totals, "folds": folds}
 
 
 def _summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
@@ -165,15 +183,11 @@ def _summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
             c = [r["clamping"] for r in chosen]
             p = [r["point"] for r in chosen]
             out[f"{base}_{label}"] = {
-                "rows": len(c), "cases": [r["case"] for r in chosen],
+                "cases": [r["case"] for r in chosen], **_worst(c),
                 "median_mean_abs_db": float(np.median([s["mean_abs_db"] for s in c])),
-                "max_mean_abs_db": float(max(s["mean_abs_db"] for s in c)),
-                "max_peak_frequency_error": float(max(s["max_frequency_error"] for s in c)),
-                "max_peak_height_error": float(max(s["max_height_error"] for s in c)),
                 "point_median_mean_abs_db": float(np.median([s["mean_abs_db"] for s in p])),
-                "point_max_peak_frequency_error": float(max(s["max_frequency_error"] for s in p)),
-                "rows_within_target": sum(s["max_frequency_error"] <= TARGET["frequency"]
-                                          and s["max_height_error"] <= TARGET["height"] for s in c)}
+                "point_max_frequency_error": float(max(s["max_frequency_error"] for s in p)),
+                "point_max_height_error": float(max(s["max_height_error"] for s in p))}
     return out
 
 
@@ -191,30 +205,36 @@ def run_scores(directory: Path) -> dict[str, Any]:
                      f"{100 * c['max_frequency_error']:5.2f} % / {100 * c['max_height_error']:5.1f} %" if c else "")
                   + (" (extrapolated)" if row["extrapolated"] else ""), flush=True)
     summary = _summary(rows)
-    print(json.dumps(summary, indent=1))
-    return {**_machine(), **_load(), "coefficients": asdict(clamping.BULK_COEFFICIENTS), "fitted": list(clamping.FITTED),
-            "calibration": list(CALIBRATION_CASES), "information": list(INFORMATION), "target": TARGET,
-            "summary": summary, "rows": rows}
+    for key, s in summary.items():
+        print(f"{key:32s} {s['rows_within_target']}/{s['rows']} rows within target; peaks within "
+              f"{100 * abs(s['frequency_error']):.2f} % / {100 * abs(s['height_error']):.1f} %; "
+              f"median mean |dB| {s['median_mean_abs_db']:.2f} (point {s['point_median_mean_abs_db']:.2f})")
+    return {"coefficients": asdict(clamping.BULK_COEFFICIENTS), "fitted": list(clamping.FITTED),
+            "calibration_cases": list(CALIBRATION_CASES), "information": list(INFORMATION), "target": TARGET,
+            "calibrated_geometry_ranges": clamping.CALIBRATED_GEOMETRY_RANGES, "summary": summary, "rows": rows}
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     parser.add_argument("--fit", action="store_true", help="fit from several starts (results/clamping_fit.json)")
     parser.add_argument("--lofo", action="store_true", help="leave one family out (results/clamping_lofo.json)")
     parser.add_argument("--starts", type=int, default=STARTS, help="random starts besides the committed one")
     parser.add_argument("--seed", type=int, default=SEED)
     parser.add_argument("--data", type=Path, default=dataset.DATA_DIR, help="the 3-D data set's folder")
     args = parser.parse_args()
-    t0 = time.perf_counter()
     if args.fit:
-        record = run_fit(args.data, args.starts, args.seed)
-        _write("clamping_fit.json", {**record, "seconds": time.perf_counter() - t0})
+        load = load_average()
+        t0 = time.perf_counter()
+        write("clamping_fit", {**run_fit(args.data, args.starts, args.seed), "seconds": time.perf_counter() - t0},
+              load_start=load)
     if args.lofo:
-        record = run_lofo(args.data)
-        _write("clamping_lofo.json", {**record, "seconds": time.perf_counter() - t0})
+        load = load_average()
+        t0 = time.perf_counter()
+        write("clamping_lofo", {**run_lofo(args.data), "seconds": time.perf_counter() - t0}, load_start=load)
     if not (args.fit or args.lofo):
-        record = run_scores(args.data)
-        _write("clamping.json", {**record, "seconds": time.perf_counter() - t0})
+        load = load_average()
+        t0 = time.perf_counter()
+        write("clamping", {**run_scores(args.data), "seconds": time.perf_counter() - t0}, load_start=load)
 
 
 if __name__ == "__main__":
