@@ -186,9 +186,12 @@ def arc_per_length(normal_n_m3: complex, tangential_n_m3: complex, axial_n_m3: c
 
     Examples
     --------
-    >>> kw, kt = arc_per_length(1e14, 1e14, 1e14, 0.010)
-    >>> round(kw.real / 1e12, 4), round(kt.real / 1e6, 4)
-    (3.1416, 39.2699)
+    Over 120° the lateral stiffness is a third of the all-round one, and the rotational one,
+    the shank free to slide, falls far more:
+
+    >>> [tuple(round(k.real / u, 4) for k, u in zip(arc_per_length(1e14, 1e14, 1e14, 0.010, deg), (1e12, 1e6)))
+    ...  for deg in (360.0, 120.0)]
+    [(3.1416, 39.2699), (1.0472, 0.5977)]
     """
     r = shank_diameter_m / 2
     alpha = math.radians(arc_deg) / 2
