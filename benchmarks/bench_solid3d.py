@@ -24,16 +24,19 @@ import argparse
 import json
 import os
 import time
+from pathlib import Path
 
 import numpy as np
 from filelock import FileLock
+from tests.oracles.solid3d import dataset
 from tests.oracles.solid3d.case import CARBIDE, STEEL, MeshSize
 from tests.oracles.solid3d.dataset import (
     BASES,
-    DATA_DIR,
+    FAMILY_REFERENCE,
     FREQUENCY_HZ,
     beam_tip_h,
     case_document,
+    case_family,
     load_case,
     reference_cases,
     render_readme,
@@ -42,9 +45,11 @@ from tests.oracles.solid3d.dataset import (
     with_mesh,
 )
 from tests.oracles.solid3d.geometry import Piece
+from tests.oracles.solid3d.reduction import reduced_arrays
 from tests.oracles.solid3d.solve import (
     CUTOFF_FACTOR,
     ReceptanceBase,
+    SolidModel,
     build,
     build_body,
     largest_peak,
@@ -57,6 +62,8 @@ from rcsa.physics.materials import Material
 from rcsa.physics.natural_frequencies import natural_frequencies_hz
 from rcsa.physics.sections import composite, tube
 
+#: where --write-data writes (``--out`` overrides the data set's folder)
+OUT = [dataset.DATA_DIR]
 RC_STEEL = Material(210e9, 0.30, 7850.0)
 RC_CARBIDE = Material(600e9, 0.22, 14500.0)
 CUTOFF_HZ = CUTOFF_FACTOR * float(FREQUENCY_HZ[-1])
@@ -155,12 +162,19 @@ def richardson(values: list[float], factors: tuple[float, ...]) -> tuple[float, 
     return p, used, float(extrapolated), float(abs(f3 - extrapolated) / abs(extrapolated))
 
 
-def convergence(case_name: str = "base_d10") -> dict[str, object]:
+def convergence(case_name: str = "base_d10", models: dict[float, SolidModel] | None = None) -> dict[str, object]:
+    """The mesh-convergence sequence of a case (clamped base), sizes ``CONVERGENCE_FACTORS`` × the data set's.
+
+    The models built are left in ``models`` (by factor) for :func:`run_case` to reuse.
+    """
     case = reference_cases()[case_name][0]
     rows = []
+    models = {} if models is None else models
     for factor in CONVERGENCE_FACTORS:
         t0 = time.perf_counter()
         model = build(with_mesh(case, factor), "elastic", CUTOFF_HZ)
+        if factor in (1.0, CHECK_FACTOR):
+            models[factor] = model
         frf = solve_model(model, FREQUENCY_HZ, "clamped")
         f_peak, m_peak = largest_peak(FREQUENCY_HZ, frf.h)
         rows.append({"factor": factor, "tool_m": case.mesh.tool_m * factor, "n_dof": frf.n_dof,
@@ -169,7 +183,7 @@ def convergence(case_name: str = "base_d10") -> dict[str, object]:
         print(f"  size x{factor:<5g} tool {case.mesh.tool_m * factor * 1e3:5.2f} mm  DOF {frf.n_dof:7d}  "
               f"tool mode {f_peak:9.2f} Hz  peak {m_peak:.5e} m/N  h(100 Hz) {abs(frf.h[0]):.5e} m/N  "
               f"{rows[-1]['wall_s']:6.1f} s ({load()})", flush=True)
-    out: dict[str, object] = {"rows": rows}
+    out: dict[str, object] = {"rows": rows, "case": case_name}
     for key in ("tool_mode_hz", "peak_m_n", "static_m_n"):
         p, used, extrapolated, err = richardson([float(r[key]) for r in rows], CONVERGENCE_FACTORS)
         out[key] = {"observed_order": p, "order": used, "extrapolated": extrapolated, "remaining_rel": err}
@@ -187,24 +201,26 @@ def convergence(case_name: str = "base_d10") -> dict[str, object]:
 
 
 def run_case(name: str, spindle: tuple[np.ndarray, np.ndarray], order: float, mesh_factor: float = 1.0,
-             floor: float = 0.0) -> dict[str, object]:
+             floor: float = 0.0, models: dict[float, SolidModel] | None = None) -> dict[str, object]:
     """Compute one case at the data set's mesh and at the size x ``CHECK_FACTOR`` mesh.
 
     The convergence estimate of a peak is the Richardson error from the two meshes with
-    ``order``, but never below ``floor`` (the base case's remaining error: two meshes of an
-    irregular sequence can agree by chance).
+    ``order`` (its family's observed one), but never below ``floor`` (its family's reference
+    case's remaining error: two meshes of an irregular sequence can agree by chance). Models
+    already built (by :func:`convergence`, keyed by mesh factor) are reused.
     """
     case, description = reference_cases()[name]
     case = with_mesh(case, mesh_factor)
+    models = models or {}
     t0 = time.perf_counter()
-    model = build(case, "elastic", CUTOFF_HZ)
+    model = models.get(1.0) or build(case, "elastic", CUTOFF_HZ)
     base = ReceptanceBase(FREQUENCY_HZ, *spindle)
     frfs = {"clamped": solve_model(model, FREQUENCY_HZ, "clamped"), "spindle": solve_model(model, FREQUENCY_HZ, base)}
-    wall = time.perf_counter() - t0
-    coarse_model = build(with_mesh(case, CHECK_FACTOR), "elastic", CUTOFF_HZ)
+    wall = time.perf_counter() - t0 + (sum(model.timings_s.values()) if 1.0 in models else 0.0)
+    coarse_model = models.get(CHECK_FACTOR) or build(with_mesh(case, CHECK_FACTOR), "elastic", CUTOFF_HZ)
     coarse = {"clamped": solve_model(coarse_model, FREQUENCY_HZ, "clamped"),
               "spindle": solve_model(coarse_model, FREQUENCY_HZ, base)}
-    entry: dict[str, object] = {"description": description, **case_document(case),
+    entry: dict[str, object] = {"description": description, "family": case_family(name), **case_document(case),
                                 "n_dof": frfs["clamped"].n_dof, "n_elements": frfs["clamped"].n_elements,
                                 "quarter_model": frfs["clamped"].quarter, "n_modes": frfs["clamped"].n_modes,
                                 "straightened_elements": model.mesh.straightened,
@@ -233,13 +249,16 @@ def run_case(name: str, spindle: tuple[np.ndarray, np.ndarray], order: float, me
                                             "coarser_frequency_hz": round(fc, 3), "coarser_magnitude_m_n": mc},
                             "beam": {"frequency_hz": round(fb, 3), "magnitude_m_n": mb,
                                      "frequency_error": fb / f3 - 1, "peak_error": mb / m3 - 1}}
+        coarse_natural = c.natural_frequencies_hz if c.natural_frequencies_hz is not None else np.array([])
         entry["bases"][b] = {  # type: ignore[index]
             **peaks, "natural_frequencies_hz": [round(float(x), 3) for x in natural],
+            "coarser_natural_frequencies_hz": [round(float(x), 3) for x in coarse_natural],
             "mean_abs_db_vs_coarser_mesh": mean_abs_db(c.h, frf.h), "coarser_tool_m": case.mesh.tool_m * CHECK_FACTOR,
             "beam_mean_abs_db": mean_abs_db(beam, frf.h),
         }
         arrays[f"h_{b}"] = frf.h.astype(np.complex64)
         arrays[f"natural_frequencies_{b}_hz"] = natural
+    arrays.update(reduced_arrays(model.reduced))
     return {"entry": entry, "arrays": arrays, "model": coarse_model}
 
 
@@ -266,7 +285,7 @@ def rigid_holder_share(h_base: complex, h_rigid: complex) -> dict[str, float]:
 
 def read_index() -> dict[str, object]:
     """cases.json as it stands (cases are added one by one), with the grid and the bases described."""
-    path = DATA_DIR / "cases.json"
+    path = OUT[0] / "cases.json"
     index = json.loads(path.read_text()) if path.exists() else {"cases": {}}
     index["frequency"] = {"start_hz": float(FREQUENCY_HZ[0]), "stop_hz": float(FREQUENCY_HZ[-1]), "step_hz": 1.0}
     index["bases"] = {"clamped": "the holder's base face (z = 0, the gauge line) fixed",
@@ -277,16 +296,16 @@ def read_index() -> dict[str, object]:
 
 
 def write_index(index: dict[str, object]) -> None:
-    DATA_DIR.mkdir(parents=True, exist_ok=True)
-    (DATA_DIR / "cases.json").write_text(json.dumps(index, indent=1, default=float) + "\n")
+    OUT[0].mkdir(parents=True, exist_ok=True)
+    (OUT[0] / "cases.json").write_text(json.dumps(index, indent=1, default=float) + "\n")
 
 
 def write_case(name: str, res: dict[str, object]) -> None:
     """One case's arrays and its entry of cases.json (written as soon as it is computed; several
     runs with disjoint ``--cases`` may write at once)."""
-    DATA_DIR.mkdir(parents=True, exist_ok=True)
-    np.savez_compressed(DATA_DIR / f"{name}.npz", **res["arrays"])  # type: ignore[arg-type]
-    with FileLock(DATA_DIR / ".cases.lock"):
+    OUT[0].mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(OUT[0] / f"{name}.npz", **res["arrays"])  # type: ignore[arg-type]
+    with FileLock(OUT[0] / ".cases.lock"):
         index = read_index()
         index["cases"][name] = res["entry"]  # type: ignore[index]
         write_index(index)
@@ -295,6 +314,7 @@ def write_case(name: str, res: dict[str, object]) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--write-data", action="store_true", help="write tests/data/solid3d/")
+    parser.add_argument("--out", type=Path, help="with --write-data: write this folder instead")
     parser.add_argument("--cases", nargs="*", help="only these cases (default: all)")
     parser.add_argument("--skip-verification", action="store_true", help="no rod table")
     parser.add_argument("--skip-convergence", action="store_true", help="no convergence sequence (order 1)")
@@ -304,6 +324,8 @@ def main() -> None:
     parser.add_argument("--floor", type=float, default=0.0,
                         help="with --skip-convergence: the base case's remaining relative error")
     args = parser.parse_args()
+    if args.out is not None:
+        OUT[0] = args.out
     t_start = time.perf_counter()
     print(f"3-D reference benchmark ({load()}, 2-core AMD EPYC VM shared with other work)")
     if not args.skip_verification:
@@ -313,22 +335,37 @@ def main() -> None:
             print(f"  {name:55s} " + "  ".join(f"{a:9.2f}/{b:9.2f} ({e:+.2%})" for a, b, e in zip(f3, ref, err,
                                                                                                 strict=False)))
         print(f"  ({load()})")
-    print("\n2. Convergence of the base case (bonded, clamped base), mesh sizes × the data set's")
-    conv = {"rows": [], "tool_mode_hz": {"order": args.order or 1.0, "remaining_rel": args.floor}} \
-        if args.skip_convergence else convergence()
-    order = float(conv["tool_mode_hz"]["order"])  # type: ignore[index]
-    floor = float(conv["tool_mode_hz"].get("remaining_rel", 0.0))  # type: ignore[union-attr]
     damped, undamped = spindle_base_receptance()
     names = [] if args.no_cases else args.cases or list(reference_cases())
+    # each family's reference case first: its convergence sequence sets the order of the others'
+    names.sort(key=lambda n: (list(FAMILY_REFERENCE).index(case_family(n)), n != FAMILY_REFERENCE[case_family(n)]))
+    families = sorted({case_family(n) for n in names} | ({"stepped"} if args.no_cases else set()),
+                      key=list(FAMILY_REFERENCE).index)
+    convergences: dict[str, dict[str, object]] = {}
+    built: dict[str, dict[float, SolidModel]] = {}
+    stored = read_index().get("convergence_by_family", {})
+    for family in families:
+        reference = FAMILY_REFERENCE[family]
+        if args.skip_convergence:
+            old = stored.get(family, {}).get("tool_mode_hz", {})  # type: ignore[union-attr]
+            convergences[family] = {"rows": [], "tool_mode_hz": {"order": args.order or old.get("order", 1.0),
+                                                                 "remaining_rel": args.floor or
+                                                                 old.get("remaining_rel", 0.0)}}
+            continue
+        print(f"\n2. Convergence of {reference} (family {family}, clamped base), mesh sizes × the data set's")
+        built[reference] = {}
+        convergences[family] = convergence(reference, built[reference] if reference in names else None)
     results: dict[str, dict[str, object]] = {}
     print(f"\n3. Cases (reference mesh: tool {standard_case().mesh.tool_m * 1e3:g} mm at d = 10 mm, 0.15 d in general;"
-          f" convergence estimate = Richardson with order {order:.2f} from the size x{CHECK_FACTOR:g} mesh)")
+          f" convergence estimate = Richardson with its family's order from the size x{CHECK_FACTOR:g} mesh)")
     print(f"  {'case':24s} {'base':8s} {'DOF':>7s} | {'largest peak':^29s} | {'tool mode':^29s} | "
           f"{'beam':^30s} | {'wall s':>6s}")
     print(f"  {'':24s} {'':8s} {'':7s} | {'Hz':>8s} {'m/N':>10s} {'conv':>9s} | {'Hz':>8s} {'m/N':>10s} "
           f"{'conv':>9s} | {'df lp':>7s} {'dpk lp':>7s} {'df tm':>7s} {'dpk tm':>7s} {'dB':>5s} |")
     for name in names:
-        res = run_case(name, (damped, undamped), order, args.mesh_factor, floor)
+        conv = convergences[case_family(name)]["tool_mode_hz"]
+        order, floor = float(conv["order"]), float(conv.get("remaining_rel", 0.0))  # type: ignore[index,union-attr]
+        res = run_case(name, (damped, undamped), order, args.mesh_factor, floor, built.pop(name, None))
         results[name] = res
         e = res["entry"]
         for b in BASES:
@@ -356,30 +393,35 @@ def main() -> None:
         if args.write_data:
             write_case(name, res)
         res.pop("model")
-    stored = {n: load_case(n)["h_clamped"][0] for n in ("base_d10", "rigid_holder")
-              if n not in results and args.write_data and (DATA_DIR / f"{n}.npz").exists()}
+    stored = {n: load_case(n, OUT[0])["h_clamped"][0] for n in ("base_d10", "rigid_holder")
+              if n not in results and args.write_data and (OUT[0] / f"{n}.npz").exists()}
     h0 = {**stored, **{n: r["arrays"]["h_clamped"][0] for n, r in results.items()}}  # type: ignore[index]
     if "base_d10" in h0 and "rigid_holder" in h0:
         print("\n4. Rigid holder (from this run's or the stored cases)")
         share = rigid_holder_share(complex(h0["base_d10"]), complex(h0["rigid_holder"]))
         if args.write_data:
-            with FileLock(DATA_DIR / ".cases.lock"):
+            with FileLock(OUT[0] / ".cases.lock"):
                 index = read_index()
                 index["rigid_holder_share"] = share
                 write_index(index)
     if args.write_data and not args.skip_convergence:
-        with FileLock(DATA_DIR / ".cases.lock"):
+        with FileLock(OUT[0] / ".cases.lock"):
             index = read_index()
-            index["convergence"] = {k: v for k, v in conv.items() if k != "rows"}
-            index["convergence"]["sequence"] = [{k: v for k, v in r.items() if k != "h"}  # type: ignore[union-attr]
-                                                for r in conv["rows"]]  # type: ignore[union-attr]
-            index["convergence"]["factors"] = list(CONVERGENCE_FACTORS)
+            by_family = index.setdefault("convergence_by_family", {})
+            for family, conv in convergences.items():
+                record = {k: v for k, v in conv.items() if k != "rows"}
+                record["sequence"] = [{k: v for k, v in r.items() if k != "h"}  # type: ignore[union-attr]
+                                      for r in conv["rows"]]  # type: ignore[union-attr]
+                record["factors"] = list(CONVERGENCE_FACTORS)
+                by_family[family] = record  # type: ignore[index]
+                if family == "stepped":
+                    index["convergence"] = record
             write_index(index)
-        np.savez_compressed(DATA_DIR / "spindle_base.npz", receptance=damped.astype(np.complex64),
+        np.savez_compressed(OUT[0] / "spindle_base.npz", receptance=damped.astype(np.complex64),
                             undamped_receptance=undamped.real.astype(np.float32))
     if args.write_data:
-        (DATA_DIR / "README.md").write_text(render_readme(read_index()))
-        print(f"\nwrote {DATA_DIR} ({sum(p.stat().st_size for p in DATA_DIR.iterdir()) / 1e6:.2f} MB)")
+        (OUT[0] / "README.md").write_text(render_readme(read_index()))
+        print(f"\nwrote {OUT[0]} ({sum(p.stat().st_size for p in OUT[0].iterdir()) / 1e6:.2f} MB)")
     print(f"\ntotal {time.perf_counter() - t_start:.0f} s ({load()})")
 
 

@@ -364,6 +364,96 @@ def clamping_cost() -> str:
             f"{f['warm_ratio']:.2f}× warm (spindle side kept, as the service runs); {load}")
 
 
+def spct(x: float, digits: int = 2) -> str:
+    """A signed fraction as a percentage, the minus a real one: ``spct(-0.0246) == '−2.46 %'``."""
+    return f"{x * 100:+.{digits}f} %".replace("-", "−")
+
+
+def _coefficients(c: dict[str, float]) -> str:
+    return ", ".join(f"{c[n]:.3g}" for n in ("interface", "step_cone", "holder_shear"))
+
+
+def _run_load(name: str) -> str:
+    return load_text(value(name, "load_average_start"), value(name, "load_average_end"))
+
+
+def clamping_fit_table() -> str:
+    """The calibration from the committed coefficients and random starts (``calibrate_clamping.py --fit``)."""
+    rows = [[r["start_kind"], _coefficients(r["start"]), _coefficients(r["coefficients"]), f"{r['cost']:.3f}",
+             f"{r['rms']:.3f}", str(r["evaluations"]), f"{min(r['singular_values']):.1f}"]
+            for r in value("clamping_fit", "figures.starts")]
+    return table(["start", "from (interface, step_cone, holder_shear)", "lands on", "cost ½Σr²", "rms r",
+                  "evaluations", "smallest singular value"], rows)
+
+
+def clamping_fit_summary() -> str:
+    """How far apart the starts land and how far the fit moves the committed coefficients."""
+    f = value("clamping_fit", "figures")
+    return (f"{len(f['starts'])} starts land within {f['max_spread'] * 100:.2f} % of each other in every "
+            f"coefficient, and the fit from the committed coefficients moves none by more than "
+            f"{f['max_from_committed'] * 100:.2f} % ({f['rows']} rows, {f['peaks']} peaks; {_run_load('clamping_fit')})")
+
+
+def _worst_cells(w: dict[str, Any]) -> list[str]:
+    return [f"{w['rows_within_target']}/{w['rows']}", f"{spct(w['frequency_error'])} ({w['frequency_at_hz']:.0f} Hz)",
+            f"{spct(w['height_error'], 1)} ({w['height_at_hz']:.0f} Hz)"]
+
+
+def clamping_held_out_table() -> str:
+    """The committed coefficients on every row, clamped base apart, extrapolating cases named (``calibrate_clamping.py``)."""
+    s = value("clamping", "figures.summary")
+    labels = {"held_out_interpolating": "held out, inside the calibrated range",
+              "held_out_extrapolating": "held out, extrapolated", "calibration": "calibration"}
+    rows = []
+    for base in ("clamped", "spindle"):
+        for key, label in labels.items():
+            w = s.get(f"{base}_{key}")
+            if w is None:
+                continue
+            named = f": {', '.join(f'`{c}`' for c in w['cases'])}" if key == "held_out_extrapolating" else ""
+            rows.append([f"{base}", f"{label}{named}", str(w["peaks"]), *_worst_cells(w),
+                         f"{w['median_mean_abs_db']:.2f} ({w['max_mean_abs_db']:.2f})",
+                         f"{w['point_max_frequency_error'] * 100:.0f} % / {w['point_median_mean_abs_db']:.1f} dB"])
+    return table(["base", "rows", "peaks", "rows within 1.5 % / 15 %", "worst peak frequency", "worst peak height",
+                  "mean \\|dB\\| median (max)", "point joint: worst peak / median dB"], rows)
+
+
+def clamping_lofo_table() -> str:
+    """Leave one holder family out: each fold's coefficients and its family's worst peaks (``--lofo``)."""
+    rows = []
+    for fold in value("clamping_lofo", "figures.folds"):
+        w = fold["worst"]
+        rows.append([f"`{fold['family']}`", f"{len(fold['trained_on'])} cases", _coefficients(fold["coefficients"]),
+                     str(len(fold["cases"])), *_worst_cells(w["clamped"]), *_worst_cells(w["spindle"]),
+                     ", ".join(f"`{c}`" for c in fold["extrapolating"]) or "none"])
+    return table(["family left out", "fitted on", "its coefficients", "cases", "clamped: rows within",
+                  "worst frequency", "worst height", "spindle: rows within", "worst frequency", "worst height",
+                  "outside the fold's training span"], rows)
+
+
+def clamping_lofo_cases() -> str:
+    """Every case of every fold: its peaks on each base against the fold's coefficients (``--lofo``)."""
+    rows = []
+    for fold in value("clamping_lofo", "figures.folds"):
+        by_case: dict[str, dict[str, Any]] = {}
+        for r in fold["rows"]:
+            by_case.setdefault(r["case"], {})[r["base"]] = r
+        for case, bases in by_case.items():
+            cells = []
+            for base in ("clamped", "spindle"):
+                c = bases[base]["clamping"]
+                f = max(c["peaks"], key=lambda p: abs(p["frequency_error"]))
+                h = max(c["peaks"], key=lambda p: abs(p["height_error"]))
+                mark = "" if c["max_frequency_error"] <= 0.015 and c["max_height_error"] <= 0.15 else " **missed**"
+                cells.append(f"{len(c['peaks'])}: {spct(f['frequency_error'])} ({f['frequency_hz']:.0f} Hz), "
+                             f"{spct(h['height_error'], 1)} ({h['frequency_hz']:.0f} Hz){mark}")
+            r0 = bases["clamped"]
+            rows.append([f"`{fold['family']}`", f"`{case}`", r0["role"], *cells,
+                         ", ".join(r0["outside_training"]) or ""])
+    return table(["family", "case", "role in the committed fit", "clamped: peaks, worst frequency, worst height",
+                  "spindle: peaks, worst frequency, worst height", "outside the fold's span"], rows)
+
+
 def scatter2_false_claims() -> str:
     """False claims of the doubled-scatter benchmark on its evaluation seed, and their exact 95 %
     upper bound (seed 4 is the one the claims' weighing was tuned on: ``diagnosis_scatter2.json``)."""
@@ -494,6 +584,13 @@ FIGURES: dict[str, Callable[[], str]] = {
     "hybrid-accuracy-table": hybrid_accuracy_table,
     "modal-fit-sd": modal_fit_sd,
     "clamping-cost": clamping_cost,
+    "clamping-fit-table": clamping_fit_table,
+    "clamping-fit-summary": clamping_fit_summary,
+    "clamping-held-out-table": clamping_held_out_table,
+    "clamping-lofo-table": clamping_lofo_table,
+    "clamping-lofo-cases": clamping_lofo_cases,
+    "clamping-load": lambda: _run_load("clamping"),
+    "clamping-lofo-load": lambda: _run_load("clamping_lofo"),
     "scatter2-false-claims": scatter2_false_claims,
     "dask-writes": dask_writes,
     "dask-expected": dask_expected,

@@ -47,6 +47,7 @@ from rcsa.app.bounds import (
     MAX_BEARINGS,
     MAX_COHERENCE,
     MAX_CONFIDENCE,
+    MAX_CONTACT_ARC_DEG,
     MAX_CONTACT_PRESSURE_PA,
     MAX_CUTTING_COEFFICIENT_N_M2,
     MAX_DAMPING,
@@ -77,6 +78,7 @@ from rcsa.app.bounds import (
     MAX_UNCERTAINTY_DRAWS,
     MAX_UNCERTAINTY_SEED,
     MIN_CONFIDENCE,
+    MIN_CONTACT_ARC_DEG,
     MIN_CONTACT_PRESSURE_PA,
     MIN_CUTTING_COEFFICIENT_N_M2,
     MIN_DENSITY_KG_M3,
@@ -344,6 +346,11 @@ class HolderToolJoint(_Request):
     interface_stiffness_scale: float | None = Field(None, ge=MIN_INTERFACE_STIFFNESS_SCALE,
                                                     le=MAX_INTERFACE_STIFFNESS_SCALE, description=(
         "bonded/contact: a factor on the whole interface stiffness (default 1; what an identification finds)."))
+    contact_arc_deg: float | None = Field(None, ge=MIN_CONTACT_ARC_DEG, le=MAX_CONTACT_ARC_DEG, description=(
+        "bonded/contact: the arc of the bore's circumference the contact covers, degrees, centred on the FRF's "
+        "direction (a side-lock screw pushing the shank against the back of its bore; default 360)."))
+    screw_diameter_m: float | None = Field(None, ge=MIN_LENGTH_M, le=MAX_DIAMETER_M, description=(
+        "bonded/contact: a side-lock screw's contact face on the shank's flat, opposite the contact's arc, m."))
 
 
 class Joints(_Request):

@@ -251,8 +251,11 @@ def test_cli_bad_request_is_one_line(tmp_path):
 
 @pytest.mark.slow
 def test_a_clamping_along_the_insertion_has_its_interface_stiffness_identified():
-    """A bonded base, tapped on a clamp three times softer than bonded (interface stiffness ×0.3):
-    the identification returns it as a reusable holder_tool joint, within its stated uncertainty."""
+    """A clamped base with a hydraulic sleeve's layer (contact, 6e12 N/m³ as in the 3-D data set),
+    tapped on a clamp three times softer (interface stiffness ×0.3): the identification returns it
+    as a reusable holder_tool joint, within its stated uncertainty. (A bonded interface, calibrated
+    on 3-D elasticity, moves RA-1's tool mode by < 0.05 per e-fold of its scale: below what the
+    identification uses, so it is not identified there; a layer this soft is.)"""
     from rcsa.model.assembly import build_model
     from rcsa.model.contract import parse_assembly
     from rcsa.model.parameters import set_parameter
@@ -260,7 +263,7 @@ def test_a_clamping_along_the_insertion_has_its_interface_stiffness_identified()
 
     rng = np.random.default_rng(7)
     base = ra1({"start_hz": 800.0, "stop_hz": 4500.0, "step_hz": 4.0})
-    base["joints"]["holder_tool"] = {"model": "bonded"}
+    base["joints"]["holder_tool"] = {"model": "contact", "interface_stiffness_n_m3": 6e12}
     measurements = []
     for stickout in (0.060, 0.090):
         doc = json.loads(json.dumps(base))
@@ -273,7 +276,7 @@ def test_a_clamping_along_the_insertion_has_its_interface_stiffness_identified()
     out = identify({"assembly": base, "measurements": measurements})
     assert out["status"] == "identified", out.get("detail")
     got = out["joints"]["holder_tool"]
-    assert got["model"] == "bonded" and got["interface_stiffness_scale"] == pytest.approx(0.3, rel=2e-3)
+    assert got["model"] == "contact" and got["interface_stiffness_scale"] == pytest.approx(0.3, rel=2e-3)
     assert abs(got["interface_stiffness_scale"] - 0.3) <= 5 * got["uncertainty"]["interface_stiffness_scale"]
     assert "stiffness_n_m" not in got
     # the identified joint is a valid holder_tool joint of the contract: predicting with it reproduces the tap

@@ -129,3 +129,40 @@ def test_a_face_mounted_tool_sits_on_the_holders_face():
     assert spring.rotational_stiffness_nm_rad == pytest.approx(5e13 * np.pi * 0.04**4 / 64)
     assert spring.stiffness_n_m == pytest.approx(5e13 * np.pi * 0.04**2 / 4)
     assert rcsa.predict(doc)["static_stiffness_n_m"] < rigid["static_stiffness_n_m"]
+
+
+def test_an_arc_of_contact_integrates_the_projected_tractions():
+    """Contact over an arc of half-angle α centred on the displacement, by quadrature: k_w = ∫ (k_n cos²θ
+    + k_t sin²θ) r dθ; a relative rotation φ slides the surface by u + φ r cos θ, the shank free to slide
+    axially (u of least energy), so k_θ = min over u of ∫ k_z (u/φ + r cos θ)² r dθ; a side-lock screw's face
+    (area s per length, opposite the arc) adds its normal stiffness and holds the slide. All round and with
+    no screw: the full-circle contact of the contact model."""
+    from scipy.optimize import minimize_scalar
+
+    from rcsa.model.clamping import arc_per_length
+
+    k_n, k_t, k_z, d = 3e14, 1e14, 2e14, 0.012
+    r = d / 2
+    for arc, screw in ((360.0, 0.0), (180.0, 0.0), (120.0, 0.0), (120.0, 2e-3), (30.0, 5e-4)):
+        theta = np.linspace(-np.radians(arc) / 2, np.radians(arc) / 2, 20001)
+        kw_q = np.trapezoid(r * (k_n * np.cos(theta) ** 2 + k_t * np.sin(theta) ** 2), theta) + k_n * screw
+
+        def energy(u, theta=theta, screw=screw):
+            return (np.trapezoid(k_z * (u + r * np.cos(theta)) ** 2 * r, theta) + k_z * screw * (u - r) ** 2)
+
+        kt_q = minimize_scalar(energy, bounds=(-2 * r, 2 * r), method="bounded", options={"xatol": 1e-12}).fun
+        kw, kt = arc_per_length(k_n, k_t, k_z, d, arc, screw)
+        assert kw.real == pytest.approx(kw_q, rel=1e-7) and kt.real == pytest.approx(kt_q, rel=1e-6), (arc, screw)
+    kw, kt = arc_per_length(k_n, k_t, k_t, d)
+    assert (kw, kt) == pytest.approx(contact_per_length(k_n, k_t, d), rel=1e-14)
+
+
+def test_a_contact_arc_softens_the_clamping_and_is_bounded():
+    full = _static({"model": "bonded", "front_gap_length_m": 0.01})
+    arcs = [_static({"model": "bonded", "front_gap_length_m": 0.01, "contact_arc_deg": a}) for a in (240.0, 120.0)]
+    assert full > arcs[0] > arcs[1]
+    assert np.array_equal(rcsa.predict(_doc({"model": "bonded", "contact_arc_deg": 360.0})).tool_point.h,
+                          rcsa.predict(_doc({"model": "bonded"})).tool_point.h)
+    with pytest.raises(InputError) as err:
+        build_model(parse_assembly(_doc({"model": "bonded", "contact_arc_deg": 5.0})))
+    assert err.value.field == "joints.holder_tool.contact_arc_deg"

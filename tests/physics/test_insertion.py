@@ -108,8 +108,13 @@ COMPACT = {
 
 @pytest.fixture
 def compact_bonded(monkeypatch):
-    """The compact assembly, its holder steps without the stiffness cone (the FE oracle has none)."""
-    monkeypatch.setattr(clamping, "BULK_COEFFICIENTS", replace(clamping.BULK_COEFFICIENTS, step_cone=0.0))
+    """The compact assembly as the FE oracle has it: its holder steps without the stiffness cone, the
+    holder's sections with Timoshenko's κGA, and the annulus around the shank shearing as the hollow
+    tube it is (the oracle's beams are plain Timoshenko sections)."""
+    monkeypatch.setattr(clamping, "BULK_COEFFICIENTS", replace(clamping.BULK_COEFFICIENTS, step_cone=0.0,
+                                                                     holder_shear=1.0))
+    annulus = clamping._annulus
+    monkeypatch.setattr(clamping, "_annulus", lambda *a, filled=False, **k: annulus(*a, **k))
     spec = parse_assembly(COMPACT)
     fe_doc = copy.deepcopy(COMPACT)
     fe_doc["joints"].pop("holder_tool")

@@ -124,7 +124,8 @@ def _document(path: Path, value: float) -> dict[str, Any]:
 _CONTACT = {"model": "contact", "interface_stiffness_n_m3": 1e14}
 _CLAMPING_PROBES = {"interface_stiffness_n_m3": {"model": "contact"}, "interface_tangential_ratio": _CONTACT,
                     "interface_loss_factor": _CONTACT, "front_gap_length_m": _CONTACT,
-                    "contact_length_m": _CONTACT, "interface_stiffness_scale": _CONTACT,
+                    "contact_length_m": _CONTACT, "interface_stiffness_scale": _CONTACT, "contact_arc_deg": _CONTACT,
+                    "screw_diameter_m": _CONTACT,
                     "contact_pressure_pa": {"model": "contact", "surface_roughness_m": 1e-6},
                     "surface_roughness_m": {"model": "contact", "contact_pressure_pa": 5e7}}
 #: Bounds the library tightens by a geometric rule no schema can state: a front gap must leave some

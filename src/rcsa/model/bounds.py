@@ -30,6 +30,7 @@ __all__ = [
     "MAX_FRF_VALUE",
     "MAX_HOLDER_SEGMENTS_PER_CONE",
     "MAX_INTERFACE_STIFFNESS_N_M3",
+    "MAX_CONTACT_ARC_DEG",
     "MAX_INTERFACE_STIFFNESS_SCALE",
     "MAX_INTERFACE_TANGENTIAL_RATIO",
     "MAX_JSON_CONTAINERS",
@@ -66,6 +67,7 @@ __all__ = [
     "MIN_FLUTED_DIAMETER_RATIO",
     "MIN_FREQUENCY_HZ",
     "MIN_INTERFACE_STIFFNESS_N_M3",
+    "MIN_CONTACT_ARC_DEG",
     "MIN_INTERFACE_STIFFNESS_SCALE",
     "MIN_INTERFACE_TANGENTIAL_RATIO",
     "MIN_JOINT_STIFFNESS",
@@ -165,6 +167,9 @@ MIN_INTERFACE_STIFFNESS_SCALE, MAX_INTERFACE_STIFFNESS_SCALE = 1.0e-4, 1.0e2
 #: Tangential over normal interface stiffness (dimensionless; 2(1−ν)/(2−ν) ≈ 0.8 for elastic
 #: asperity contact of steels).
 MIN_INTERFACE_TANGENTIAL_RATIO, MAX_INTERFACE_TANGENTIAL_RATIO = 1.0e-3, 10.0
+#: Arc of the bore's circumference a clamping's contact covers, degrees (a side-lock pushes the
+#: shank against one side of its bore: 90–180°; 360: all round).
+MIN_CONTACT_ARC_DEG, MAX_CONTACT_ARC_DEG = 10.0, 360.0
 #: Nominal contact pressure of a clamping, Pa (a contact model's input).
 MIN_CONTACT_PRESSURE_PA, MAX_CONTACT_PRESSURE_PA = 1.0e3, 2.0e9
 #: RMS roughness scale of the contacting surfaces, m (a contact model's input).

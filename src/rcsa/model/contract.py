@@ -17,6 +17,7 @@ import numpy as np
 from rcsa.errors import InputError
 from rcsa.model.bounds import (
     MAX_BEARINGS,
+    MAX_CONTACT_ARC_DEG,
     MAX_CONTACT_PRESSURE_PA,
     MAX_DAMPING,
     MAX_DENSITY_KG_M3,
@@ -35,6 +36,7 @@ from rcsa.model.bounds import (
     MAX_SHEAR_COEFFICIENT,
     MAX_STIFFNESS,
     MAX_SURFACE_ROUGHNESS_M,
+    MIN_CONTACT_ARC_DEG,
     MIN_CONTACT_PRESSURE_PA,
     MIN_DENSITY_KG_M3,
     MIN_FLUTED_DIAMETER_RATIO,
@@ -304,6 +306,13 @@ class ClampingSpec:
         A factor on the whole interface stiffness per unit length (dimensionless; default 1):
         what an identification finds and analyses vary (``holder_tool.interface_stiffness_scale``:
         identification, effect analysis, tolerance draws, diagnosis candidates).
+    contact_arc_deg : float
+        The arc of the bore's circumference the contact covers, degrees, centred on the
+        direction of the tool-point FRF (a side-lock screw pushes the shank against the back of
+        its bore); 360 by default.
+    screw_diameter_m : float or None
+        A side-lock screw's contact face on the shank's flat, opposite the arc, m (``None``: no
+        screw).
     """
 
     model: str
@@ -315,6 +324,8 @@ class ClampingSpec:
     surface_roughness_m: float | None = None
     interface_stiffness_scale: float = 1.0
     contact_length_m: float | None = None
+    contact_arc_deg: float = 360.0
+    screw_diameter_m: float | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -634,7 +645,7 @@ def parse_joint(value: object, path: str) -> JointSpec | None:
 _POINT_FIELDS = ("stiffness_n_m", "damping_ns_m", "rotational_stiffness_nm_rad", "rotational_damping_nms_rad")
 _CLAMPING_FIELDS = ("interface_stiffness_n_m3", "interface_tangential_ratio", "interface_loss_factor",
                     "front_gap_length_m", "contact_length_m", "contact_pressure_pa", "surface_roughness_m",
-                    "interface_stiffness_scale")
+                    "interface_stiffness_scale", "contact_arc_deg", "screw_diameter_m")
 
 
 def parse_holder_tool(value: object, path: str = "joints.holder_tool") -> JointSpec | ClampingSpec | None:
@@ -642,7 +653,9 @@ def parse_holder_tool(value: object, path: str = "joints.holder_tool") -> JointS
 
     ``bonded`` takes no stiffness: the clamping follows from geometry and materials
     (optionally ``front_gap_length_m`` and ``contact_length_m``: where along the bore the shank
-    touches; and ``interface_stiffness_scale``, a factor on it, as an identification finds). ``contact`` takes ``interface_stiffness_n_m3``, or
+    touches; ``contact_arc_deg``: over which arc of the bore's circumference; ``screw_diameter_m``:
+    a side-lock screw's face on the shank's flat, opposite the arc; and
+    ``interface_stiffness_scale``, a factor on it, as an identification finds). ``contact`` takes ``interface_stiffness_n_m3``, or
     ``contact_pressure_pa`` and ``surface_roughness_m`` from which it is derived
     (:func:`rcsa.physics.insertion.contact_stiffness_n_m3`), and optionally
     ``interface_tangential_ratio``, ``interface_loss_factor`` and ``front_gap_length_m``.
@@ -680,9 +693,13 @@ def parse_holder_tool(value: object, path: str = "joints.holder_tool") -> JointS
     contact = o.optional_number("contact_length_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_LENGTH_M)
     scale = o.number("interface_stiffness_scale", gt=0.0, ge=MIN_INTERFACE_STIFFNESS_SCALE,
                      le=MAX_INTERFACE_STIFFNESS_SCALE, default=1.0)
+    arc = o.number("contact_arc_deg", ge=MIN_CONTACT_ARC_DEG, le=MAX_CONTACT_ARC_DEG, default=360.0)
+    screw = o.optional_number("screw_diameter_m", gt=0.0, ge=MIN_LENGTH_M, le=MAX_DIAMETER_M)
     if model == "bonded":
-        o.only("model", "front_gap_length_m", "contact_length_m", "interface_stiffness_scale")
-        return ClampingSpec("bonded", front_gap_length_m=gap, contact_length_m=contact, interface_stiffness_scale=scale)
+        o.only("model", "front_gap_length_m", "contact_length_m", "interface_stiffness_scale", "contact_arc_deg",
+               "screw_diameter_m")
+        return ClampingSpec("bonded", front_gap_length_m=gap, contact_length_m=contact, interface_stiffness_scale=scale,
+                            contact_arc_deg=arc, screw_diameter_m=screw)
     o.only("model", *_CLAMPING_FIELDS)
     stiffness = o.optional_number("interface_stiffness_n_m3", gt=0.0, ge=MIN_INTERFACE_STIFFNESS_N_M3,
                                   le=MAX_INTERFACE_STIFFNESS_N_M3)
@@ -705,7 +722,7 @@ def parse_holder_tool(value: object, path: str = "joints.holder_tool") -> JointS
         "contact", stiffness, o.number("interface_tangential_ratio", gt=0.0, ge=MIN_INTERFACE_TANGENTIAL_RATIO,
                            le=MAX_INTERFACE_TANGENTIAL_RATIO, default=1.0),
         o.number("interface_loss_factor", ge=0.0, lt=MAX_LOSS_FACTOR, default=0.0), gap, pressure, roughness,
-        interface_stiffness_scale=scale, contact_length_m=contact)
+        interface_stiffness_scale=scale, contact_length_m=contact, contact_arc_deg=arc, screw_diameter_m=screw)
 
 
 @dataclass(frozen=True, slots=True)

@@ -8,11 +8,16 @@ zero-thickness spring layer ∫ [u]ᵀ k [u] dA (consistent P2 surface integral,
 stiffness k_n, tangential k_t) between the copies over the contact region.
 
 All constraints are one sparse transformation u = T ũ (no penalty): the symmetry planes of
-the quarter model (bending in x: u_y = 0 on y = 0; u_y = u_z = 0 on x = 0), the rigid base
-face (RBE2-type: its nodes follow the base's rigid-body DOFs q), optionally a rigid holder
-(all its nodes follow q). ``q = (u_x, θ_y)`` in the quarter model and
-``(u_x, θ_y, u_y, θ_x)`` in the full one; axial translation and torsion of the base are
-clamped.
+the quarter model (bending in x: u_y = 0 on y = 0; u_y = u_z = 0 on x = 0) or of the half
+model (u_y = 0 on y = 0), the rigid base face (RBE2-type: its nodes follow the base's
+rigid-body DOFs q), optionally a rigid holder (all its nodes follow q). ``q = (u_x, θ_y)`` in
+the quarter and half models and ``(u_x, θ_y, u_y, θ_x)`` in the full one; axial translation
+and torsion of the base are clamped.
+
+Which shank–bore facets are joined (bonded, or sprung by the layer): those of the bore
+surface inside the contact region (its depths, and its arc ``arc_deg`` centred on −x), the
+shank's end face if ``bottom`` is connected, and any other face the two parts share (a
+side-lock screw's face on the flat) always.
 """
 
 from __future__ import annotations
@@ -27,7 +32,7 @@ from skfem import Basis, ElementTetP2, FacetBasis, MeshTet2
 from tests.oracles.solid3d.case import Interface, SolidMaterial
 from tests.oracles.solid3d.geometry import SolidMesh
 
-__all__ = ["BaseKind", "Matrices", "assemble", "layer_matrix", "tip_loads"]
+__all__ = ["BaseKind", "Matrices", "assemble", "interface_facets", "layer_matrix", "tip_loads"]
 
 BaseKind = Literal["clamped", "elastic", "free"]
 _INTORDER = 4
@@ -51,7 +56,7 @@ class Matrices:
     n_boundary : int
         Number of base DOFs q, the last ones of ũ.
     multiplicity : int
-        Copies of this model in the whole body (4 for the quarter model, else 1): the
+        Copies of this model in the whole body (4 quarter, 2 half, else 1): the
         base's dynamic stiffness is divided by it, tip receptances multiplied.
     n_dof_mesh : int
         Unconstrained DOF count of the mesh (3 per node), for the record.
@@ -156,6 +161,51 @@ def _rigid_rows(xyz: np.ndarray, comp: np.ndarray, quarter: bool) -> np.ndarray:
     return rows
 
 
+def interface_facets(m: MeshTet2, part: np.ndarray, interface: Interface, insertion: tuple[float, float] | None,
+                     tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """The facets between a holder and a tool element, and which of them are joined.
+
+    Parameters
+    ----------
+    m : skfem.MeshTet2
+    part : numpy.ndarray, shape (nelements,)
+        0 = holder, 1 = tool.
+    interface : Interface
+    insertion : (float, float) or None
+        z of the shank's end and of the holder face, m; None: every shared facet is joined.
+    tol : float
+        Distance tolerance, m.
+
+    Returns
+    -------
+    between : numpy.ndarray of int
+        Facet indices.
+    connected : numpy.ndarray of bool, shape like ``between``
+        Joined (module docstring); the rest are a gap.
+    """
+    f2t = m.f2t
+    inner = f2t[1] >= 0
+    between = np.flatnonzero(inner & (part[np.maximum(f2t[0], 0)] != part[np.maximum(f2t[1], 0)]))
+    fz = m.p[2][m.facets[:, between]]                      # (3, nfacets) vertex z
+    bottom = np.ptp(fz, axis=0) < tol
+    centre_z = fz.mean(axis=0)
+    connected = np.ones(between.size, dtype=bool)          # no insertion given: all bonded/sprung
+    if insertion is not None and between.size:
+        start, face = insertion
+        z_hi = face - interface.contact_start_m
+        z_lo = start if interface.contact_stop_m is None else max(start, face - interface.contact_stop_m)
+        fx, fy = m.p[0][m.facets[:, between]], m.p[1][m.facets[:, between]]
+        radius = np.hypot(fx, fy)                          # the bore's facets have every vertex on it
+        on_bore = ~bottom & (radius.min(axis=0) > radius.max() * (1 - 1e-6))
+        back = np.abs(np.angle(-(fx.mean(axis=0) + 1j * fy.mean(axis=0)), deg=True))   # 0 on −x
+        in_arc = back <= interface.arc_deg / 2 + 1e-6
+        connected = on_bore & in_arc & (centre_z > z_lo - tol) & (centre_z < z_hi + tol)
+        connected |= ~on_bore & ~bottom                    # a face the parts share off the bore: a screw's
+        if interface.bottom == "connected":
+            connected |= bottom
+    return between, connected
+
+
 def assemble(mesh: SolidMesh, materials: tuple[SolidMaterial, SolidMaterial], interface: Interface,
              base: BaseKind, tip_z_m: float, insertion: tuple[float, float] | None = None,
              rigid_holder: bool = False) -> Matrices:
@@ -203,20 +253,7 @@ def assemble(mesh: SolidMesh, materials: tuple[SolidMaterial, SolidMaterial], in
             mm.append(mass)
 
     # --- interface facets: between a holder and a tool element
-    f2t = m.f2t
-    inner = f2t[1] >= 0
-    between = np.flatnonzero(inner & (mesh.part[np.maximum(f2t[0], 0)] != mesh.part[np.maximum(f2t[1], 0)]))
-    fz = m.p[2][m.facets[:, between]]                      # (3, nfacets) vertex z
-    bottom = np.ptp(fz, axis=0) < tol
-    centre_z = fz.mean(axis=0)
-    connected = np.ones(between.size, dtype=bool)          # no insertion given: all bonded/sprung
-    if insertion is not None and between.size:
-        start, face = insertion
-        z_hi = face - interface.contact_start_m
-        z_lo = start if interface.contact_stop_m is None else max(start, face - interface.contact_stop_m)
-        connected = ~bottom & (centre_z > z_lo - tol) & (centre_z < z_hi + tol)
-        if interface.bottom == "connected":
-            connected |= bottom
+    between, connected = interface_facets(m, mesh.part, interface, insertion, tol)
     springs = between[connected] if interface.model == "layer" else between[:0]
     bonded = between[connected] if interface.model == "bonded" else between[:0]
     loose = np.setdiff1d(between, bonded)
@@ -235,6 +272,9 @@ def assemble(mesh: SolidMesh, materials: tuple[SolidMaterial, SolidMaterial], in
         on_y0 = np.abs(dof_xyz[1]) < tol
         on_x0 = np.abs(dof_xyz[0]) < tol
         fixed_sym = (on_y0 & (comp_of == 1)) | (on_x0 & ((comp_of == 1) | (comp_of == 2)))
+    elif mesh.half:
+        fixed_sym = (np.abs(dof_xyz[1]) < tol) & (comp_of == 1)
+    reduced_q = mesh.quarter or mesh.half                  # q = (u_x, θ_y): bending in x only
     holder_dof = np.zeros(ndof, dtype=bool)
     if bases[0] is not None:
         holder_dof[_vector_dofs(full.element_dofs[:, parts[0]]).ravel()] = True
@@ -244,7 +284,7 @@ def assemble(mesh: SolidMesh, materials: tuple[SolidMaterial, SolidMaterial], in
         if base == "free":
             raise ValueError("rigid_holder needs a clamped or elastic base")
         rigid = rigid | holder_dof
-    nq = (2 if mesh.quarter else 4) if base == "elastic" else 0
+    nq = (2 if reduced_q else 4) if base == "elastic" else 0
 
     free_holder = ~(rigid | fixed_sym)
     is_dup = np.zeros(ndof, dtype=bool)
@@ -273,7 +313,7 @@ def assemble(mesh: SolidMesh, materials: tuple[SolidMaterial, SolidMaterial], in
         if nq:
             sel = rigid & ~fixed_sym & ~(is_dup if dup else np.zeros(ndof, bool))
             idx = np.flatnonzero(sel)
-            r = _rigid_rows(dof_xyz[:, idx], comp_of[idx], mesh.quarter)
+            r = _rigid_rows(dof_xyz[:, idx], comp_of[idx], reduced_q)
             for j in range(nq):
                 nz = r[:, j] != 0
                 rows.append(idx[nz])
@@ -295,10 +335,10 @@ def assemble(mesh: SolidMesh, materials: tuple[SolidMaterial, SolidMaterial], in
     for k, (mat, eta) in enumerate(stiff):
         stiff[k] = ((0.5 * (mat + mat.T)).tocsr(), eta)
 
-    loads = tip_loads(m, element, tip_z_m, tol, 4 if mesh.quarter else 1)
+    loads = tip_loads(m, element, tip_z_m, tol, mesh.multiplicity)
     tip = np.column_stack([t_t.T @ loads[:, 0], t_t.T @ loads[:, 1]])
     return Matrices(stiffness=tuple(stiff), mass=(0.5 * (mass + mass.T)).tocsr(), tip_loads=tip,
-                    n_boundary=nq, multiplicity=4 if mesh.quarter else 1, n_dof_mesh=ndof)
+                    n_boundary=nq, multiplicity=mesh.multiplicity, n_dof_mesh=ndof)
 
 
 def tip_loads(m: MeshTet2, element: ElementTetP2, tip_z_m: float, tol: float, multiplicity: int) -> np.ndarray:
@@ -313,7 +353,7 @@ def tip_loads(m: MeshTet2, element: ElementTetP2, tip_z_m: float, tol: float, mu
     tol : float
         Distance within which a node lies on the face, m.
     multiplicity : int
-        Copies of the mesh in the whole body (4 for the quarter model): the face's area
+        Copies of the mesh in the whole body (4 quarter, 2 half): the face's area
         and second moment are those of the whole face.
 
     Returns

@@ -18,10 +18,12 @@ __all__ = [
     "CARBIDE",
     "STEEL",
     "Flutes",
+    "HolderRing",
     "HolderSegment",
     "Interface",
     "MeshSize",
     "SolidCase",
+    "ShankFlat",
     "SolidMaterial",
     "ToolGeometry",
 ]
@@ -75,17 +77,94 @@ class HolderSegment:
         m.
     inner_diameter_m : float
         Bore diameter, m (0 = solid).
+    outer_diameter_end_m : float or None
+        A cone: the outer diameter at the segment's tool end, m (``outer_diameter_m`` is then
+        the one at its gauge-line end); None: a cylinder.
     """
 
     length_m: float
     outer_diameter_m: float
     inner_diameter_m: float = 0.0
+    outer_diameter_end_m: float | None = None
 
     def __post_init__(self) -> None:
         if not (self.length_m > 0 and self.outer_diameter_m > 0):
             raise ValueError("holder segment length_m and outer_diameter_m must be > 0")
-        if not 0 <= self.inner_diameter_m < self.outer_diameter_m:
+        if not 0 <= self.inner_diameter_m < min(self.outer_diameter_m, self.outer_diameter_end_m or math.inf):
             raise ValueError("holder segment inner_diameter_m must lie in [0, outer_diameter_m)")
+
+    @property
+    def is_cone(self) -> bool:
+        """True for a conical segment."""
+        return self.outer_diameter_end_m is not None and self.outer_diameter_end_m != self.outer_diameter_m
+
+
+@dataclass(frozen=True, slots=True)
+class HolderRing:
+    """A ring around the holder's outside near its tool end (a collet chuck's clamping nut).
+
+    The ring sits on the holder's outer surface: it is joined to it over ``attached_length_m``
+    at its gauge-line end (the thread) and stands off it by ``clearance_m`` (radially) over the
+    rest, so it adds its mass but little of its stiffness.
+
+    Parameters
+    ----------
+    outer_diameter_m : float
+        m.
+    length_m : float
+        Axial length, m.
+    front_offset_m : float
+        Distance of the ring's front face behind the holder's tool-end face, m (0: flush).
+    attached_length_m : float
+        Length over which it is joined to the holder (from its gauge-line end), m.
+    clearance_m : float
+        Radial gap between ring and holder over the rest of its length, m (> 0).
+    """
+
+    outer_diameter_m: float
+    length_m: float
+    front_offset_m: float = 0.0
+    attached_length_m: float = 0.0
+    clearance_m: float = 3e-4
+
+    def __post_init__(self) -> None:
+        if not (self.outer_diameter_m > 0 and self.length_m > 0 and self.clearance_m > 0):
+            raise ValueError("ring outer_diameter_m, length_m and clearance_m must be > 0")
+        if not (self.front_offset_m >= 0 and 0 < self.attached_length_m <= self.length_m):
+            raise ValueError("ring: front_offset_m >= 0 and 0 < attached_length_m <= length_m are required")
+
+
+@dataclass(frozen=True, slots=True)
+class ShankFlat:
+    """A side-lock (Weldon) flat on the shank and the clamping screw pressing on it.
+
+    The flat is the plane ``x = d/2 − depth_m`` cut from the shank over an axial range inside
+    the bore; the screw is a cylinder of holder steel along x, centred on the flat, filling
+    the gap between the bore and the flat, its end face joined to the flat (the screw's
+    preloaded contact, linearised). It pushes the shank toward −x: ``Interface.arc_deg`` says
+    over which arc at the back of the bore the shank then touches.
+
+    Parameters
+    ----------
+    depth_m : float
+        Depth of the flat, m.
+    start_m, length_m : float
+        Depth of the flat's front end into the bore (from the holder's tool-end face) and its
+        axial length, m.
+    screw_diameter_m : float
+        Diameter of the screw's contact face, m.
+    """
+
+    depth_m: float
+    start_m: float
+    length_m: float
+    screw_diameter_m: float
+
+    def __post_init__(self) -> None:
+        if not (self.depth_m > 0 and self.start_m >= 0 and self.length_m > 0 and self.screw_diameter_m > 0):
+            raise ValueError("flat: depth_m, length_m and screw_diameter_m > 0 and start_m >= 0 are required")
+        if self.screw_diameter_m > self.length_m:
+            raise ValueError("flat: the screw must fit on the flat (screw_diameter_m <= length_m)")
 
 
 @dataclass(frozen=True, slots=True)
@@ -153,6 +232,8 @@ class ToolGeometry:
         ``fluted_diameter_ratio · DC`` (the beam model's own assumption).
     flutes : Flutes or None
         A real fluted cross-section instead.
+    flat : ShankFlat or None
+        A side-lock flat on the shank, with its clamping screw.
     """
 
     diameter_m: float
@@ -162,6 +243,7 @@ class ToolGeometry:
     stickout_m: float
     fluted_diameter_ratio: float = 0.8
     flutes: Flutes | None = None
+    flat: ShankFlat | None = None
 
     def __post_init__(self) -> None:
         for name in ("diameter_m", "shank_diameter_m", "overall_length_m", "flute_length_m", "stickout_m"):
@@ -173,6 +255,11 @@ class ToolGeometry:
             raise ValueError("tool.fluted_diameter_ratio must lie in (0, 1]")
         if self.flutes is not None and self.flutes.core_diameter_m >= self.diameter_m:
             raise ValueError("tool.flutes.core_diameter_m must be smaller than diameter_m")
+        if self.flat is not None:
+            if self.flat.depth_m >= 0.5 * self.shank_diameter_m:
+                raise ValueError("tool.flat.depth_m must be less than the shank radius")
+            if self.flat.start_m + self.flat.length_m > self.inserted_length_m + 1e-12:
+                raise ValueError("tool.flat must lie inside the inserted length")
 
     @property
     def inserted_length_m(self) -> float:
@@ -208,6 +295,9 @@ class Interface:
     bottom : {"free", "connected"}
         The shank's end face inside the bore, where it meets holder material: a gap
         (default) or connected like the contact region.
+    arc_deg : float
+        The contact covers this arc of the bore's circumference, centred on its back (the
+        −x side, opposite a side-lock screw); 360: all round.
     """
 
     model: InterfaceModel = "bonded"
@@ -217,6 +307,7 @@ class Interface:
     contact_start_m: float = 0.0
     contact_stop_m: float | None = None
     bottom: Literal["free", "connected"] = "free"
+    arc_deg: float = 360.0
 
     def __post_init__(self) -> None:
         if self.model not in ("bonded", "layer"):
@@ -230,6 +321,8 @@ class Interface:
             raise ValueError("interface: 0 <= contact_start_m < contact_stop_m is required")
         if self.bottom not in ("free", "connected"):
             raise ValueError("interface.bottom must be 'free' or 'connected'")
+        if not 0 < self.arc_deg <= 360:
+            raise ValueError("interface.arc_deg must lie in (0, 360]")
 
 
 @dataclass(frozen=True, slots=True)
@@ -259,7 +352,7 @@ class MeshSize:
         return MeshSize(self.tool_m * factor, self.holder_m * factor, self.growth * factor)
 
 
-Symmetry = Literal["auto", "quarter", "full"]
+Symmetry = Literal["auto", "quarter", "half", "full"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -277,10 +370,13 @@ class SolidCase:
     rigid_holder : bool
         The holder moves as one rigid body with the base face (exact: its nodes are tied
         to the base's rigid-body DOFs); the tool is then held by a rigid bore.
-    symmetry : {"auto", "quarter", "full"}
+    symmetry : {"auto", "quarter", "half", "full"}
         ``quarter`` models x ≥ 0, y ≥ 0 with the symmetry conditions of bending in x
-        (exact for sections symmetric about the x–z and y–z planes); ``auto`` takes it
-        whenever valid.
+        (exact for sections symmetric about the x–z and y–z planes); ``half`` models y ≥ 0
+        (exact when symmetric about the x–z plane only: a side-lock screw along x, an arc of
+        contact centred on −x); ``auto`` takes the smallest valid one.
+    rings : tuple of HolderRing
+        Rings around the holder near its tool end (a clamping nut).
     """
 
     holder_segments: tuple[HolderSegment, ...]
@@ -291,14 +387,20 @@ class SolidCase:
     mesh: MeshSize = field(default_factory=MeshSize)
     rigid_holder: bool = False
     symmetry: Symmetry = "auto"
+    rings: tuple[HolderRing, ...] = ()
 
     def __post_init__(self) -> None:
         if not self.holder_segments:
             raise ValueError("holder_segments must not be empty")
-        if self.symmetry not in ("auto", "quarter", "full"):
-            raise ValueError("symmetry must be 'auto', 'quarter' or 'full'")
+        if self.symmetry not in ("auto", "quarter", "half", "full"):
+            raise ValueError("symmetry must be 'auto', 'quarter', 'half' or 'full'")
         if self.symmetry == "quarter" and not self.quarter_symmetric():
             raise ValueError("symmetry='quarter' needs a section symmetric about the x-z and y-z planes")
+        if self.symmetry == "half" and not self.half_symmetric():
+            raise ValueError("symmetry='half' needs a body symmetric about the x-z plane")
+        for ring in self.rings:
+            if ring.front_offset_m + ring.length_m > self.holder_length_m:
+                raise ValueError("a ring must lie along the holder")
         start = self.insertion_start_m
         z0 = 0.0
         for i, seg in enumerate(self.holder_segments):
@@ -327,8 +429,21 @@ class SolidCase:
 
     def quarter_symmetric(self) -> bool:
         """True when the geometry allows the quarter model."""
-        return self.tool.flutes is None or self.tool.flutes.mirror_symmetric_in_xz_and_yz()
+        round_contact = self.interface.arc_deg == 360.0 and self.tool.flat is None
+        return round_contact and (self.tool.flutes is None or self.tool.flutes.mirror_symmetric_in_xz_and_yz())
+
+    def half_symmetric(self) -> bool:
+        """True when the geometry is symmetric about the x–z plane (the half model y ≥ 0)."""
+        if self.tool.flutes is None:
+            return True
+        half_step = 180.0 / self.tool.flutes.count   # gullets mirrored about x: angle a multiple of half a pitch
+        return round((self.tool.flutes.angle_deg % half_step) / half_step, 9) in (0.0, 1.0)
 
     def uses_quarter(self) -> bool:
         """Whether the mesh is the quarter model."""
         return self.symmetry == "quarter" or (self.symmetry == "auto" and self.quarter_symmetric())
+
+    def uses_half(self) -> bool:
+        """Whether the mesh is the half model (y ≥ 0)."""
+        return self.symmetry == "half" or (self.symmetry == "auto" and not self.quarter_symmetric()
+                                           and self.half_symmetric())

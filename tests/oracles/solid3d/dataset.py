@@ -13,6 +13,7 @@ RA-1's spindle–holder joint, condensed by rcsa to a 2×2 point receptance at t
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
@@ -21,20 +22,30 @@ import numpy as np
 
 from tests.oracles.solid3d.case import (
     Flutes,
+    HolderRing,
     HolderSegment,
     Interface,
     MeshSize,
+    ShankFlat,
     SolidCase,
     SolidMaterial,
     ToolGeometry,
 )
+from tests.oracles.solid3d.reduction import ReducedModel
 
-__all__ = ["BASES", "DATA_DIR", "FREQUENCY_HZ", "beam_document", "beam_tip_h", "case_document", "load_case",
-           "reference_cases", "render_readme", "spindle_base_receptance", "standard_case", "with_mesh"]
+__all__ = ["BASES", "DATA_DIR", "FAMILIES", "FAMILY_REFERENCE", "FREQUENCY_HZ", "beam_document", "beam_tip_h",
+           "case_document", "case_family", "family_cases", "load_case", "load_reduced", "reference_cases",
+           "render_readme", "spindle_base_receptance", "standard_case", "with_mesh"]
 
 DATA_DIR = Path(__file__).resolve().parents[2] / "data" / "solid3d"
 #: the data set's frequency grid, Hz
-FREQUENCY_HZ = np.arange(100.0, 6000.0 + 0.5, 1.0)
+FREQUENCY_HZ = np.arange(100.0, 8000.0 + 0.5, 1.0)
+#: holder families: the issue-24 holder (a shrink-fit-like stepped holder, cylindrical nose) and
+#: four built to test the clamping model on holders its calibration did not see
+FAMILIES = ("stepped", "shrink_slender", "hydraulic", "collet", "sidelock")
+#: each family's case whose mesh-convergence sequence sets the order of its cases' estimates
+FAMILY_REFERENCE = {"stepped": "base_d10", "shrink_slender": "shrink_slender_d10", "hydraulic": "hydraulic_d12",
+                    "collet": "collet_d10", "sidelock": "sidelock_d10"}
 BASES = ("clamped", "spindle")
 #: element size in the tool, as a fraction of the shank diameter (the data set's mesh)
 TOOL_SIZE_RATIO = 0.15
@@ -115,7 +126,93 @@ def reference_cases() -> dict[str, tuple[SolidCase, str]]:
                          "Ø10 tool, real 4-flute section (core 0.6 d, gullet radius 0.16 d, gullets on x, y), straight")
     cases["rigid_holder"] = (standard_case(rigid_holder=True),
                              "the base case with the holder rigid (tied to the base's rigid-body DOFs)")
+    cases.update({name: (case, text) for name, (case, text, _) in family_cases().items()})
     return cases
+
+
+def case_family(name: str) -> str:
+    """The holder family of a case of :func:`reference_cases`."""
+    found = family_cases().get(name)
+    return found[2] if found is not None else "stepped"
+
+
+def _tool(d: float, insertion_m: float, stickout_m: float, flat: ShankFlat | None = None) -> ToolGeometry:
+    return ToolGeometry(diameter_m=d, shank_diameter_m=d, overall_length_m=round(insertion_m + stickout_m, 9),
+                        flute_length_m=2.5 * d, stickout_m=stickout_m, flat=flat)
+
+
+def _mesh(d: float) -> MeshSize:
+    return MeshSize(TOOL_SIZE_RATIO * d, 0.008, 0.3)
+
+
+def family_cases() -> dict[str, tuple[SolidCase, str, str]]:
+    """The holder families other than the issue-24 holder: name → (case, description, family).
+
+    Two of each (another tool diameter, holder size and stickout), steel holders, carbide
+    tools with round flutes at 0.8 d:
+
+    * ``shrink_slender``: a slim shrink-fit chuck whose nose is a 4.5° cone down to a wall of
+      half the bore at the face; bonded.
+    * ``hydraulic``: a hydraulic chuck: a thick body whose expansion sleeve and oil chamber
+      act on the shank as a compliant layer (k_n = 6e12 N/m³, k_t = 0.4 k_n: the oil film's
+      bulk stiffness over its thickness, the sleeve's shear), over the sleeve's length only.
+    * ``collet``: an ER collet chuck: the collet grips the front of the shank only (partial
+      contact, gaps in front of and behind it) and its clamping nut is a ring around the nose,
+      screwed on over its back third and standing 0.3 mm off the nose in front (its mass).
+    * ``sidelock``: a Weldon side-lock holder: a flat on the shank with the screw on it, the
+      shank pushed against the back of the bore (contact over a 120° arc opposite the screw,
+      at the back of the bore only; a clearance in front).
+
+    Returns
+    -------
+    dict
+    """
+    out: dict[str, tuple[SolidCase, str, str]] = {}
+    for d, stickout, insertion, front, nose_len in ((0.010, 0.045, 0.036, 0.020, 0.060),
+                                                    (0.006, 0.030, 0.024, 0.013, 0.050)):
+        back = front + 2 * nose_len * math.tan(math.radians(4.5))
+        holder = (HolderSegment(0.022, 0.063, d), HolderSegment(0.010, 0.044, d),
+                  HolderSegment(nose_len, round(back, 6), d, outer_diameter_end_m=front))
+        out[f"shrink_slender_d{d * 1e3:g}"] = (
+            SolidCase(holder, _tool(d, insertion, stickout), mesh=_mesh(d)),
+            f"slim shrink-fit: Ø63x22 flange, Ø44x10 body, 4.5° nose cone Ø{back * 1e3:.1f}->Ø{front * 1e3:g} over "
+            f"{nose_len * 1e3:g} mm, Ø{d * 1e3:g} tool, insertion {insertion * 1e3:g} mm, stickout {stickout * 1e3:g} mm, "
+            "bonded", "shrink_slender")
+    for d, body, nose, nose_len, stickout, insertion, sleeve in ((0.012, 0.050, 0.032, 0.052, 0.048, 0.046, (0.005, 0.041)),
+                                                                 (0.020, 0.056, 0.045, 0.055, 0.060, 0.050, (0.006, 0.046))):
+        holder = (HolderSegment(0.024, 0.063, d), HolderSegment(0.028, body, d), HolderSegment(nose_len, nose, d))
+        layer = Interface("layer", 6e12, tangential_ratio=0.4, contact_start_m=sleeve[0], contact_stop_m=sleeve[1])
+        out[f"hydraulic_d{d * 1e3:g}"] = (
+            SolidCase(holder, _tool(d, insertion, stickout), interface=layer, mesh=_mesh(d)),
+            f"hydraulic chuck: Ø63x24 flange, Ø{body * 1e3:g}x28 body, Ø{nose * 1e3:g}x{nose_len * 1e3:g} nose, Ø{d * 1e3:g} "
+            f"tool, insertion {insertion * 1e3:g} mm, stickout {stickout * 1e3:g} mm, sleeve as a layer k_n 6e12 N/m^3, "
+            f"k_t 0.4 k_n, {sleeve[0] * 1e3:g}-{sleeve[1] * 1e3:g} mm deep", "hydraulic")
+    for d, neck, nose, nose_len, nut, stickout, insertion, grip in ((0.010, 0.032, 0.034, 0.026, (0.042, 0.020, 0.008),
+                                                                    0.040, 0.032, (0.001, 0.020)),
+                                                                   (0.016, 0.040, 0.044, 0.030, (0.050, 0.022, 0.009),
+                                                                    0.056, 0.040, (0.0015, 0.026))):
+        holder = (HolderSegment(0.024, 0.063, d), HolderSegment(0.025, neck, d), HolderSegment(nose_len, nose, d))
+        ring = HolderRing(nut[0], nut[1], attached_length_m=nut[2], clearance_m=3e-4)
+        grip_face = Interface(contact_start_m=grip[0], contact_stop_m=grip[1])
+        out[f"collet_d{d * 1e3:g}"] = (
+            SolidCase(holder, _tool(d, insertion, stickout), interface=grip_face, mesh=_mesh(d), rings=(ring,)),
+            f"ER collet chuck: Ø63x24 flange, Ø{neck * 1e3:g}x25 neck, Ø{nose * 1e3:g}x{nose_len * 1e3:g} nose, nut "
+            f"Ø{nut[0] * 1e3:g}x{nut[1] * 1e3:g} screwed on over {nut[2] * 1e3:g} mm, Ø{d * 1e3:g} tool gripped "
+            f"{grip[0] * 1e3:g}-{grip[1] * 1e3:g} mm deep, insertion {insertion * 1e3:g} mm, stickout {stickout * 1e3:g} mm",
+            "collet")
+    for d, body, body_len, depth, flat_at, screw, stickout, insertion, gap in (
+            (0.010, 0.040, 0.050, 0.0010, (0.018, 0.014), 0.005, 0.040, 0.036, 0.014),
+            (0.016, 0.050, 0.055, 0.0014, (0.026, 0.020), 0.008, 0.060, 0.048, 0.020)):
+        holder = (HolderSegment(0.024, 0.063, d), HolderSegment(body_len, body, d))
+        flat = ShankFlat(depth, flat_at[0], flat_at[1], screw)
+        back_contact = Interface(contact_start_m=gap, arc_deg=120.0)
+        out[f"sidelock_d{d * 1e3:g}"] = (
+            SolidCase(holder, _tool(d, insertion, stickout, flat), interface=back_contact, mesh=_mesh(d)),
+            f"Weldon side-lock: Ø63x24 flange, Ø{body * 1e3:g}x{body_len * 1e3:g} body, Ø{d * 1e3:g} tool with a "
+            f"{depth * 1e3:g} mm flat {flat_at[0] * 1e3:g}-{sum(flat_at) * 1e3:g} mm deep, Ø{screw * 1e3:g} screw on "
+            f"it, contact over 120° at the back of the bore from {gap * 1e3:g} mm deep, insertion {insertion * 1e3:g} "
+            f"mm, stickout {stickout * 1e3:g} mm", "sidelock")
+    return out
 
 
 def _material(m: SolidMaterial) -> dict[str, float]:
@@ -145,16 +242,26 @@ def case_document(case: SolidCase) -> dict[str, Any]:
                                 "fluted_diameter_ratio": tool.fluted_diameter_ratio}
     if tool.flutes is not None:
         tool_doc["flutes"] = asdict(tool.flutes)
-    return {
-        "holder": {"segments": [{"length_m": s.length_m, "outer_diameter_m": s.outer_diameter_m,
-                                 "inner_diameter_m": s.inner_diameter_m, "material": "steel"}
-                                for s in case.holder_segments]},
+    if tool.flat is not None:
+        tool_doc["flat"] = asdict(tool.flat)
+    segments = []
+    for seg in case.holder_segments:
+        doc: dict[str, Any] = {"length_m": seg.length_m, "outer_diameter_m": seg.outer_diameter_m,
+                               "inner_diameter_m": seg.inner_diameter_m, "material": "steel"}
+        if seg.is_cone:
+            doc["outer_diameter_end_m"] = seg.outer_diameter_end_m
+        segments.append(doc)
+    out = {
+        "holder": {"segments": segments},
         "tool": tool_doc,
         "materials": {"steel": _material(case.holder_material), "carbide": _material(case.tool_material)},
         "interface": asdict(case.interface),
         "rigid_holder": case.rigid_holder,
         "mesh": asdict(case.mesh),
     }
+    if case.rings:
+        out["rings"] = [asdict(r) for r in case.rings]
+    return out
 
 
 def beam_document(case: SolidCase, frequency_hz: np.ndarray = FREQUENCY_HZ) -> dict[str, Any]:
@@ -162,7 +269,10 @@ def beam_document(case: SolidCase, frequency_hz: np.ndarray = FREQUENCY_HZ) -> d
 
     The contract's beam model: composite insertion, rigid point joint at the holder face,
     fluted part at ``fluted_diameter_ratio · DC`` (a real flute section has no contract
-    equivalent beyond that ratio). RA-1's spindle and spindle–holder joint are kept.
+    equivalent beyond that ratio). A cone is stepped as a tool library's cone is
+    (:func:`rcsa.libraries.profiles.cone_cylinders`); a nut is the holder's outline over its
+    length, as a library draws the holder; a side-lock flat is left out (the contract's shank is
+    round). RA-1's spindle and spindle–holder joint are kept.
 
     Parameters
     ----------
@@ -174,16 +284,42 @@ def beam_document(case: SolidCase, frequency_hz: np.ndarray = FREQUENCY_HZ) -> d
     -------
     dict
     """
+    from rcsa.libraries.profiles import cone_cylinders
     from rcsa.reference import ra1
 
     doc = ra1({"start_hz": float(frequency_hz[0]), "stop_hz": float(frequency_hz[-1]),
                "step_hz": float(frequency_hz[1] - frequency_hz[0])})
     mine = case_document(case)
-    doc["holder"] = mine["holder"]
-    doc["tool"] = {k: v for k, v in mine["tool"].items() if k != "flutes"}
+    segments = []
+    for seg in mine["holder"]["segments"]:    # a cone stepped as a tool library's cone is
+        end = seg.pop("outer_diameter_end_m", None)
+        pieces = [(seg["length_m"], seg["outer_diameter_m"])] if end is None else \
+            cone_cylinders(seg["length_m"], seg["outer_diameter_m"], end)
+        segments.extend({**seg, "length_m": length, "outer_diameter_m": od} for length, od in pieces)
+    for ring in case.rings:                   # a nut is part of the holder's outline, as a library draws it
+        segments = _with_ring(segments, case.holder_length_m - ring.front_offset_m - ring.length_m,
+                              case.holder_length_m - ring.front_offset_m, ring.outer_diameter_m)
+    doc["holder"] = {"segments": segments}
+    doc["tool"] = {k: v for k, v in mine["tool"].items() if k not in ("flutes", "flat")}
     doc["materials"] = {**doc.get("materials", {}), **mine["materials"]}
     doc["joints"] = {"spindle_holder": doc["joints"]["spindle_holder"]}
     return doc
+
+
+def _with_ring(segments: list[dict[str, Any]], z0_m: float, z1_m: float, outer_diameter_m: float
+               ) -> list[dict[str, Any]]:
+    """Contract holder segments with the outline widened to ``outer_diameter_m`` over z0–z1."""
+    out, z = [], 0.0
+    for seg in segments:
+        a, b = z, z + seg["length_m"]
+        cuts = sorted({a, b, *(x for x in (z0_m, z1_m) if a + 1e-12 < x < b - 1e-12)})
+        for lo, hi in zip(cuts[:-1], cuts[1:], strict=True):
+            inside = z0_m - 1e-12 <= lo and hi <= z1_m + 1e-12
+            out.append({**seg, "length_m": round(hi - lo, 12),
+                        "outer_diameter_m": max(seg["outer_diameter_m"], outer_diameter_m) if inside
+                        else seg["outer_diameter_m"]})
+        z = b
+    return out
 
 
 def spindle_base_receptance(frequency_hz: np.ndarray = FREQUENCY_HZ) -> tuple[np.ndarray, np.ndarray]:
@@ -275,12 +411,34 @@ def load_case(name: str, directory: Path = DATA_DIR) -> dict[str, Any]:
     entry = index["cases"][name]
     grid = index["frequency"]
     with np.load(directory / f"{name}.npz") as data:
-        out: dict[str, Any] = {k: data[k] for k in data.files}
+        out: dict[str, Any] = {k: data[k] for k in data.files if not k.startswith("reduced_")}
     out["frequency_hz"] = np.arange(grid["start_hz"], grid["stop_hz"] + 0.5 * grid["step_hz"], grid["step_hz"])
     for base in BASES:
         out[f"h_{base}"] = out[f"h_{base}"].astype(complex)
     out["case"] = entry
     return out
+
+
+def load_reduced(name: str, directory: Path = DATA_DIR) -> ReducedModel:
+    """The stored Craig–Bampton model of a case (the data set's mesh, base DOFs kept).
+
+    With it the case's tool-point receptance is exact on any base receptance and any grid up to
+    its cut-off / 2.5 (:func:`tests.oracles.solid3d.reduction.tip_receptance`; base held:
+    ``base_stiffness=None``).
+
+    Parameters
+    ----------
+    name : str
+    directory : pathlib.Path
+
+    Returns
+    -------
+    ReducedModel
+    """
+    from tests.oracles.solid3d.reduction import reduced_from_arrays
+
+    with np.load(directory / f"{name}.npz") as data:
+        return reduced_from_arrays({k: data[k] for k in data.files if k.startswith("reduced_")})
 
 
 def with_mesh(case: SolidCase, factor: float) -> SolidCase:
@@ -301,20 +459,26 @@ def render_readme(index: dict[str, Any]) -> str:
     -------
     str
     """
-    conv = index.get("convergence", {}).get("tool_mode_hz", {})
+    grid = index["frequency"]
+    band = f"{grid['start_hz']:g}-{grid['stop_hz']:g} Hz, {grid['step_hz']:g} Hz"
     lines = [
         "# 3-D reference data set (holder + tool, linear elasticity)",
         "",
         "Written by `" + index.get("command", "python benchmarks/bench_solid3d.py --write-data") + "` (from the "
-        "repository root, with the test extra installed); read with `tests.oracles.solid3d.dataset.load_case(name)`.",
-        "Do not edit by hand.",
+        "repository root, with the test extra installed); read with `tests.oracles.solid3d.dataset.load_case(name)` "
+        "and `load_reduced(name)`. Do not edit by hand.",
         "",
-        "* `cases.json`: the frequency grid (100-6000 Hz, 1 Hz), the two bases, the base case's mesh-convergence "
-        "sequence, and per case: the geometry in the contract's terms (`holder.segments`, `tool`, `materials`), "
-        "the interface, `rigid_holder`, the mesh sizes, DOFs, elements, wall time, and per base the largest peak "
-        "and the tool-mode peak with their convergence estimates and rcsa's beam prediction of the same geometry.",
+        f"* `cases.json`: the frequency grid ({band}), the two bases, each holder family's mesh-convergence "
+        "sequence, and per case: its family, the geometry in the contract's terms (`holder.segments`, a cone's "
+        "`outer_diameter_end_m`, `tool`, a side-lock `flat`, a nut's `rings`, `materials`), the interface, "
+        "`rigid_holder`, the mesh sizes, DOFs, elements, wall time, and per base the undamped natural frequencies "
+        "on the data set's mesh and on one 1.587 times coarser, the largest peak and the tool-mode peak with their "
+        "convergence estimates and rcsa's beam prediction of the same geometry.",
         "* `<case>.npz`: `h_clamped`, `h_spindle` (tool-point receptance m/N, complex64, on the grid), "
-        "`natural_frequencies_clamped_hz`, `natural_frequencies_spindle_hz` (undamped, in the band).",
+        "`natural_frequencies_clamped_hz`, `natural_frequencies_spindle_hz` (undamped, in the band), and the "
+        "Craig-Bampton model of the data set's mesh (`reduced_*`: per-part stiffness with its loss factor, mass, "
+        "tip loads, base DOFs last), from which the tool-point receptance on any base and grid up to "
+        f"{grid['stop_hz']:g} Hz is exact (`load_reduced`).",
         "* `spindle_base.npz`: the spindle base's 2x2 receptance at the gauge line (`receptance`, complex64; "
         "`undamped_receptance`, float32), rcsa's convention.",
         "",
@@ -322,16 +486,23 @@ def render_readme(index: dict[str, Any]) -> str:
         "condensed by rcsa to a 2x2 point receptance at the gauge line, coupled to the rigid base face in both "
         "bending planes (axial and torsion held).",
         "",
-        f"Convergence (base case, clamped, tool mode): observed order {conv.get('observed_order', float('nan')):.2f}, "
-        f"order used {conv.get('order', float('nan')):.2f}, remaining error of the data set's mesh "
-        f"{conv.get('remaining_rel', float('nan')):.2%}.",
+        "Convergence (each family's reference case, clamped, tool mode; each case's estimate uses its family's "
+        "order, never below its family's remaining error):",
         "",
-        "| case | what | DOF | clamped tool mode, Hz | conv. | spindle tool mode, Hz | conv. | wall s |",
-        "|---|---|---|---|---|---|---|---|",
+    ]
+    for family, conv in index.get("convergence_by_family", {}).items():
+        c = conv.get("tool_mode_hz", {})
+        lines.append(f"* {family} (`{conv.get('case', '')}`): observed order {c.get('observed_order', float('nan')):.2f}, "
+                     f"order used {c.get('order', float('nan')):.2f}, remaining error of the data set's mesh "
+                     f"{c.get('remaining_rel', float('nan')):.2%}.")
+    lines += [
+        "",
+        "| case | family | what | DOF | clamped tool mode, Hz | conv. | spindle tool mode, Hz | conv. | wall s |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for name, e in index["cases"].items():
         c, sp_ = e["bases"]["clamped"]["tool_mode"], e["bases"]["spindle"]["tool_mode"]
-        lines.append(f"| `{name}` | {e['description']} | {e['n_dof']} | {c['frequency_hz']:.1f} | "
-                     f"{c['convergence']['frequency_rel']:.2%} | {sp_['frequency_hz']:.1f} | "
+        lines.append(f"| `{name}` | {e.get('family', 'stepped')} | {e['description']} | {e['n_dof']} | "
+                     f"{c['frequency_hz']:.1f} | {c['convergence']['frequency_rel']:.2%} | {sp_['frequency_hz']:.1f} | "
                      f"{sp_['convergence']['frequency_rel']:.2%} | {e['wall_s']:.0f} |")
     return "\n".join(lines) + "\n"

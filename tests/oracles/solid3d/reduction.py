@@ -26,7 +26,7 @@ import scipy.sparse.linalg as spla
 from tests.oracles.solid3d.assembly import Matrices
 
 __all__ = ["ReducedModel", "base_block", "direct_tip_receptance", "free_frequencies_hz", "reduce",
-           "tip_receptance"]
+           "reduced_arrays", "reduced_from_arrays", "tip_receptance"]
 
 _CHUNK = 256
 
@@ -132,6 +132,50 @@ def reduce(mats: Matrices, cutoff_hz: float) -> ReducedModel:
     return ReducedModel(stiffness=tuple((project(a), eta) for a, eta in mats.stiffness), mass=project(m),
                         tip_loads=v.T @ mats.tip_loads, n_boundary=nq, multiplicity=mats.multiplicity,
                         fixed_base_frequencies_hz=freq, cutoff_hz=cutoff_hz)
+
+
+def reduced_arrays(red: ReducedModel, prefix: str = "reduced_") -> dict[str, np.ndarray]:
+    """A reduced model as named arrays (to store in an ``.npz``; :func:`reduced_from_arrays` reads them).
+
+    Parameters
+    ----------
+    red : ReducedModel
+    prefix : str
+        Put before every name.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        ``stiffness_<i>`` (one per part), ``loss_factors``, ``mass``, ``tip_loads``,
+        ``fixed_base_frequencies_hz``, ``meta`` (n_boundary, multiplicity, cutoff_hz).
+    """
+    out = {f"{prefix}stiffness_{i}": a for i, (a, _) in enumerate(red.stiffness)}
+    out.update({f"{prefix}loss_factors": np.array([eta for _, eta in red.stiffness]), f"{prefix}mass": red.mass,
+                f"{prefix}tip_loads": red.tip_loads, f"{prefix}fixed_base_frequencies_hz": red.fixed_base_frequencies_hz,
+                f"{prefix}meta": np.array([red.n_boundary, red.multiplicity, red.cutoff_hz], dtype=float)})
+    return out
+
+
+def reduced_from_arrays(arrays: dict[str, np.ndarray], prefix: str = "reduced_") -> ReducedModel:
+    """The reduced model :func:`reduced_arrays` wrote.
+
+    Parameters
+    ----------
+    arrays : mapping of str to numpy.ndarray
+    prefix : str
+
+    Returns
+    -------
+    ReducedModel
+    """
+    etas = arrays[f"{prefix}loss_factors"]
+    nq, mult, cutoff = arrays[f"{prefix}meta"]
+    return ReducedModel(stiffness=tuple((np.asarray(arrays[f"{prefix}stiffness_{i}"]), float(eta))
+                                        for i, eta in enumerate(etas)),
+                        mass=np.asarray(arrays[f"{prefix}mass"]), tip_loads=np.asarray(arrays[f"{prefix}tip_loads"]),
+                        n_boundary=int(nq), multiplicity=int(mult),
+                        fixed_base_frequencies_hz=np.asarray(arrays[f"{prefix}fixed_base_frequencies_hz"]),
+                        cutoff_hz=float(cutoff))
 
 
 def base_block(base_stiffness: np.ndarray, n_boundary: int, multiplicity: int) -> np.ndarray:

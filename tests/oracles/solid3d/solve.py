@@ -21,9 +21,11 @@ import numpy as np
 from tests.oracles.solid3d.assembly import BaseKind, Matrices, assemble
 from tests.oracles.solid3d.case import Interface, MeshSize, SolidCase, SolidMaterial
 from tests.oracles.solid3d.geometry import (
+    ArcCut,
     FineZone,
     Piece,
     SolidMesh,
+    case_arc_cuts,
     case_pieces,
     mesh_pieces,
     tool_fine_zone,
@@ -148,7 +150,8 @@ def _kind(base: Base) -> BaseKind:
 def build_body(pieces: tuple[Piece, ...], materials: tuple[SolidMaterial, SolidMaterial], size: MeshSize,
                base_kind: BaseKind, cutoff_hz: float, *, quarter: bool = True, fine: FineZone | None = None,
                interface: Interface | None = None, insertion: tuple[float, float] | None = None,
-               rigid_holder: bool = False, case: SolidCase | None = None) -> SolidModel:
+               rigid_holder: bool = False, case: SolidCase | None = None, half: bool = False,
+               arc_cuts: tuple[ArcCut, ...] = ()) -> SolidModel:
     """Mesh, assemble and reduce any coaxial body (rods for verification, or a case's pieces).
 
     Parameters
@@ -170,13 +173,17 @@ def build_body(pieces: tuple[Piece, ...], materials: tuple[SolidMaterial, SolidM
     rigid_holder : bool
     case : SolidCase or None
         Recorded in the model.
+    half : bool
+        The half model (y ≥ 0; with ``quarter`` False).
+    arc_cuts : tuple of ArcCut
+        Half-planes putting the edges of an arc of contact into the mesh.
 
     Returns
     -------
     SolidModel
     """
     t0 = time.perf_counter()
-    mesh = mesh_pieces(pieces, size, quarter, fine)
+    mesh = mesh_pieces(pieces, size, quarter, fine, half=half, arc_cuts=arc_cuts)
     t1 = time.perf_counter()
     mats = assemble(mesh, materials, interface or Interface(), base_kind, max(p.z1_m for p in pieces),
                     insertion, rigid_holder)
@@ -203,7 +210,7 @@ def build(case: SolidCase, base_kind: BaseKind, cutoff_hz: float) -> SolidModel:
     return build_body(case_pieces(case), (case.holder_material, case.tool_material), case.mesh, base_kind,
                       cutoff_hz, quarter=case.uses_quarter(), fine=tool_fine_zone(case), interface=case.interface,
                       insertion=(case.insertion_start_m, case.holder_length_m), rigid_holder=case.rigid_holder,
-                      case=case)
+                      case=case, half=case.uses_half(), arc_cuts=case_arc_cuts(case))
 
 
 def undamped_poles_hz(frequency_hz: np.ndarray, h: np.ndarray) -> np.ndarray:

@@ -17,9 +17,12 @@ from tests.oracles.solid3d.dataset import (
     DATA_DIR,
     FREQUENCY_HZ,
     load_case,
+    load_reduced,
     reference_cases,
+    spindle_base_receptance,
     with_mesh,
 )
+from tests.oracles.solid3d.reduction import tip_receptance
 from tests.oracles.solid3d.solve import build, largest_peak, solve_model
 
 
@@ -32,14 +35,18 @@ def test_every_case_is_stored_with_its_description_and_figures(index):
     assert set(index["cases"]) == set(reference_cases())
     for name, entry in index["cases"].items():
         assert entry["holder"]["segments"] and entry["tool"]["stickout_m"] > 0, name
-        assert entry["n_dof"] > 1000 and entry["wall_s"] > 0, name
+        # a family's reference case reuses its convergence sequence's model: the stored data set says 0 s
+        # for it (bench_solid3d now adds the reused model's build time)
+        assert entry["n_dof"] > 1000 and entry["wall_s"] >= 0, name
         for base in BASES:
             figures = entry["bases"][base]
             assert figures["tool_mode"]["frequency_hz"] > 100.0, (name, base)
             assert 0 <= figures["tool_mode"]["convergence"]["frequency_rel"] < 0.02, (name, base)
     assert index["convergence"]["tool_mode_hz"]["remaining_rel"] < 0.01
+    for family, conv in index["convergence_by_family"].items():
+        assert conv["tool_mode_hz"]["remaining_rel"] < 0.01, family
     total = sum(p.stat().st_size for p in DATA_DIR.iterdir())
-    assert total < 3.5e6, total
+    assert total < 5e6, total
 
 
 @pytest.mark.parametrize("name", sorted(reference_cases()))
@@ -54,6 +61,19 @@ def test_stored_frfs_are_passive_and_peak_where_the_index_says(name, index):
         stored = index["cases"][name]["bases"][base]["largest_peak"]
         assert f == pytest.approx(stored["frequency_hz"], rel=1e-4)
         assert m == pytest.approx(stored["magnitude_m_n"], rel=1e-4)
+
+
+@pytest.mark.parametrize("name", ["base_d10", "sidelock_d16", "collet_d10"])
+def test_the_stored_craig_bampton_model_is_the_stored_frf(name):
+    """The reduced model (what a diagnosis or a fine peak search evaluates) gives the stored h on both bases."""
+    data = load_case(name)
+    red = load_reduced(name)
+    f = data["frequency_hz"][::50]
+    damped, _ = spindle_base_receptance(f)
+    for base, stiffness in (("clamped", None), ("spindle", np.linalg.inv(damped))):
+        h = tip_receptance(red, 2 * np.pi * f, stiffness)[:, 0, 0]
+        stored = data[f"h_{base}"][::50]
+        assert np.max(np.abs(h - stored)) <= 1e-6 * np.max(np.abs(stored)), base   # complex64 storage
 
 
 @pytest.mark.slow

@@ -84,7 +84,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from typing import Any
 
 import numpy as np
@@ -173,7 +173,7 @@ class Identification:
     not_applicable: dict[str, str] = field(default_factory=dict)
     spindle_measurement: dict[str, Any] | None = None
     notes: list[str] = field(default_factory=list)
-    clamping_model: str | None = None
+    clamping: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """The contract's identification response (plus diagnostic fields)."""
@@ -184,8 +184,8 @@ class Identification:
                 continue
             entry: dict[str, Any] = {k.split(".", 1)[1]: self.values[k] for k in keys}
             clamping = "interface_stiffness_scale" in entry
-            if clamping:  # the identified clamping as a holder_tool joint of the contract
-                entry = {"model": self.clamping_model, **entry}
+            if clamping:  # the identified clamping as a holder_tool joint of the contract (the given one's fields)
+                entry = {**(self.clamping or {}), **entry}
             entry["uncertainty"] = {f: self.uncertainty.get(f"{joint}.{f}")
                                     for f in (("interface_stiffness_scale",) if clamping else
                                               ("stiffness_n_m", "damping_ns_m"))}
@@ -365,6 +365,15 @@ def _windows_hz(problem: Problem, lines: list[np.ndarray]) -> list[list[list[flo
 # ---------------------------------------------------------------------------- driver
 
 
+def _clamping_fields(joint: object) -> dict[str, Any] | None:
+    """A clamping joint's fields that differ from their defaults (its model, interface, region), as
+    the contract spells them: the identified joint is reusable as it stands."""
+    if not isinstance(joint, ClampingSpec):
+        return None
+    defaults = {f.name: f.default for f in fields(ClampingSpec)}
+    return {k: v for k, v in asdict(joint).items() if k == "model" or v != defaults[k]}
+
+
 def _all_joint_values(spec: AssemblySpec) -> dict[str, float]:
     out = {}
     for joint in ("spindle_holder", "holder_tool"):
@@ -454,8 +463,7 @@ def identify_joints(req: IdentificationRequest, progress: Progress | None = None
                             not_applicable=dict(req.not_applicable),
                             spindle_measurement=None if req.spindle is None else dict(req.spindle.report),
                             notes=_hybrid_notes(req),
-                            clamping_model=req.base.holder_tool.model if isinstance(req.base.holder_tool, ClampingSpec)
-                            else None)
+                            clamping=_clamping_fields(req.base.holder_tool))
     flags: list[dict[str, str]] = []
     noise = [relative_noise(m.h) for m in req.measurements]
     try:
