@@ -130,7 +130,11 @@ class Analysis:
         for c in self.candidates:
             self.fits.append(fit_candidate(c, self.features_at, self.like, self.log_z0))
             report(progress, len(self.fits) + 1, steps)
-        self.decision: Decision = decide(self.fits, opts.claim_threshold, opts.ambiguity_window)
+        #: every candidate's fit at the stated Σ (``fits`` may be refitted at ŝ below)
+        self.stated_fits = list(self.fits)
+        self.form_fits = [f for f in self.fits if f.candidate.model_form]
+        effect_fits = [f for f in self.fits if not f.candidate.model_form]
+        self.decision: Decision = decide(effect_fits, opts.claim_threshold, opts.ambiguity_window)
         # The claim is judged at the scatter the data still show once the best effect is in:
         # tolerances understated by ŝ make every structured nuisance deviation look like an
         # effect, so the best one must still clear τ with Σ·ŝ² (the model features are cached).
@@ -138,18 +142,16 @@ class Analysis:
         # would only compress the differences between them.
         self.judge, self.scatter_scale = self.like, 1.0
         if self.decision.status != "none":
-            best = self.decision.ranking[0]
-            self.scatter_scale = self.remainder_scale(self.features_at(best.candidate, best.map))
-        if self.scatter_scale > 1.0:
-            self.judge = Likelihood(p.measured_features, self.disc, np.arange(n_feat), opts.likelihood,
-                                    scale=self.scatter_scale)
-            log_z0 = float(self.judge(p.base_features))
-            best = self.decision.ranking[0]
-            if fit_candidate(best.candidate, self.features_at, self.judge, log_z0).log_bayes_factor \
-                    <= opts.claim_threshold:
-                self.log_z0 = log_z0
-                self.fits = [fit_candidate(c, self.features_at, self.judge, self.log_z0) for c in self.candidates]
-                self.decision = decide(self.fits, float("inf"), opts.ambiguity_window)
+            holds, self.scatter_scale, self.judge = self.claim_holds(self.decision.ranking[0])
+            if not holds:
+                self.log_z0 = float(self.judge(p.base_features))
+                effect_fits = [fit_candidate(c, self.features_at, self.judge, self.log_z0) for c in self.candidates
+                               if not c.model_form]
+                self.fits = effect_fits + self.form_fits
+                self.decision = decide(effect_fits, float("inf"), opts.ambiguity_window)
+        #: whether an effect was claimed before model forms were weighed
+        self.effect_claimed = self.decision.status != "none"
+        self.form_proposed = self._propose_form()
         clock.mark("candidates")
         self.folds = folds([m.tool.stickout_m for m in self.request.measurements], opts.held_out)
         self.held: dict[str, HeldOut | None] = {}
@@ -166,6 +168,54 @@ class Analysis:
         report(progress, steps, steps)
         self.timings_s = clock.phases
         self.runtime_s = time.perf_counter() - t0
+
+    # ------------------------------------------------------------------ claims
+    def claim_holds(self, fit: Fit) -> tuple[bool, float, Likelihood]:
+        """Whether ``fit``'s claim holds at the scatter its remainder shows, that scale, and the likelihood.
+
+        ``ŝ`` (:meth:`remainder_scale`) of the data about the fit's MAP; above 1 the candidate
+        is refitted with Σ·ŝ² and must still clear the claim threshold.
+        """
+        opts, p = self.request.options, self.problem
+        scale = self.remainder_scale(self.features_at(fit.candidate, fit.map))
+        if scale <= 1.0:
+            return fit.log_bayes_factor > opts.claim_threshold, 1.0, self.like
+        judge = Likelihood(p.measured_features, self.disc, np.arange(p.base_features.size), opts.likelihood,
+                           scale=scale)
+        refit = fit_candidate(fit.group or fit.candidate, self.features_at, judge, float(judge(p.base_features)))
+        return refit.log_bayes_factor > opts.claim_threshold, scale, judge
+
+    def _propose_form(self) -> Fit | None:
+        """The model form that becomes the verdict, if any (``docs/diagnosis.md``, model form).
+
+        The best model-form candidate is proposed when its own claim holds (ln BF > τ, also at
+        its remainder's scatter) and either no effect is claimed (the gap would otherwise be
+        left unexplained) or its evidence exceeds the best effect's by more than the ambiguity
+        window (an effect that only stands in for the model's form: e.g. a fluted section
+        blamed for a clamping's compliance on a rigid point joint). Effects and model forms answer
+        different questions (a deviation inside the model, or the model itself), so they are
+        never ``ambiguous`` with each other; two model forms within the window are.
+        """
+        opts = self.request.options
+        forms = sorted(self.form_fits, key=lambda f: -f.log_bayes_factor)
+        if not forms or forms[0].log_bayes_factor <= opts.claim_threshold:
+            return None
+        best = forms[0]
+        effects = sorted((f for f in self.stated_fits if not f.candidate.model_form), key=lambda f: -f.log_bayes_factor)
+        if self.decision.status != "none":
+            top = effects[0]
+            if best.log_evidence - top.log_evidence <= opts.ambiguity_window:
+                return None
+        holds, scale, judge = self.claim_holds(best)
+        if not holds:
+            return None
+        rivals = [f.candidate.name for f in forms[1:] if f.log_bayes_factor > opts.claim_threshold
+                  and best.log_evidence - f.log_evidence < opts.ambiguity_window]
+        self.decision = Decision("ambiguous" if rivals else "identified", best.candidate.name, rivals,
+                                 [*forms, *effects])
+        self.scatter_scale, self.judge = scale, judge
+        self.log_z0 = float(self.like(self.problem.base_features))
+        return best
 
     # ------------------------------------------------------------------ model features
     def knobs_of(self, cands: Sequence[Candidate], values: Sequence[np.ndarray]) -> Knobs:
@@ -193,10 +243,10 @@ class Analysis:
         numpy.ndarray, shape (n, nfeat)
         """
         p = self.problem
-        prefix = tuple((c.name, tuple(np.round(np.asarray(v, float), 12))) for c, v in zip(cands[:-1], fixed,
-                                                                                          strict=True))
+        prefix = tuple((c.key, tuple(np.round(np.asarray(v, float), 12))) for c, v in zip(cands[:-1], fixed,
+                                                                                         strict=True))
         values = np.atleast_2d(np.asarray(values, dtype=float))
-        keys = [prefix + ((cands[-1].name, tuple(np.round(v, 12))),) for v in values]
+        keys = [prefix + ((cands[-1].key, tuple(np.round(v, 12))),) for v in values]
         todo: dict[tuple, np.ndarray] = {}
         for k, v in zip(keys, values, strict=True):
             if k not in self._cache:
@@ -302,11 +352,15 @@ class Analysis:
         """
         p_value, like, f1 = self._second(form_error)
         out = []
-        for f in self.decision.ranking[1:1 + RANKED_WITH_HELD_OUT]:
+        for f in self._second_ranking():
             fit, cos, ratio = self._second_fit(f.candidate, like, f1)
             ho, improves = self._second_held_out(fit)
             out.append(SecondCandidate(fit, cos, ho, improves, ratio))
         return p_value, out
+
+    def _second_ranking(self) -> list[Fit]:
+        """The effects a second one is looked for among: the next best ranked (model forms never)."""
+        return [f for f in self.decision.ranking[1:] if not f.candidate.model_form][:RANKED_WITH_HELD_OUT]
 
     def _greedy_second(self) -> tuple[Fit, HeldOut | None, float] | None:
         """Best second effect with the first fixed at its MAP; accepted only if it passes every test.
@@ -320,7 +374,7 @@ class Analysis:
         if p_value >= RESIDUAL_P:
             return None  # the first effect leaves nothing that tolerances and noise do not explain
         best: tuple[Fit, HeldOut | None, float] | None = None
-        for f in self.decision.ranking[1:1 + RANKED_WITH_HELD_OUT]:
+        for f in self._second_ranking():
             if f.candidate.name == "spindle_rotational_receptance" and self.spindle_share(f1) < MIN_SPINDLE_SHARE:
                 continue  # the measured spindle's own uncertainty explains nothing of the remainder
             fit, cos, ratio = self._second_fit(f.candidate, like, f1)
