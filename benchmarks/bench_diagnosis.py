@@ -138,8 +138,8 @@ def _equivalent(a: str, b: str) -> bool:
     return a == b or any(a in s and b in s for s in EQUIVALENT)
 
 
-def run_trial(index: int, effect: str, seed: int, tolerance_scale: float = 1.0) -> dict:
-    """One trial: truth, diagnosis, scores (runs in a worker process)."""
+def run_trial(index: int, effect: str, seed: int, tolerance_scale: float = 1.0, extra=None) -> dict:
+    """One trial: truth, diagnosis, scores (runs in a worker process); ``extra(analysis)`` adds to the record."""
     rng = np.random.default_rng([seed, index])
     t0 = time.perf_counter()
     trial = truth.make_trial(rng, effect, tolerance_scale=tolerance_scale)
@@ -151,12 +151,13 @@ def run_trial(index: int, effect: str, seed: int, tolerance_scale: float = 1.0) 
     snr = 0.0
     if effect != "none":
         snr = float(np.linalg.norm(a.like.w @ (_features(a, trial.clean) - _features(a, trial.clean_null))))
-    return _record(index, effect, trial.params, a, r, snr, t_diag, t_truth, c_diag)
+    out = _record(index, effect, trial.params, a, r, snr, t_diag, t_truth, c_diag)
+    return out if extra is None else {**out, **extra(a)}
 
 
 def run_hybrid_trial(index: int, effect: str, kind: str, seed: int,
-                     length_log_sd: float = truth_hybrid.LENGTH_LOG_SD) -> dict:
-    """One hybrid trial (measured spindle of ``kind``): truth, diagnosis, scores."""
+                     length_log_sd: float = truth_hybrid.LENGTH_LOG_SD, extra=None) -> dict:
+    """One hybrid trial (measured spindle of ``kind``): truth, diagnosis, scores (``extra`` as in :func:`run_trial`)."""
     rng = np.random.default_rng([seed, index])
     t0 = time.perf_counter()
     trial = truth_hybrid.make_hybrid_trial(rng, effect, kind, length_log_sd=length_log_sd)
@@ -181,7 +182,7 @@ def run_hybrid_trial(index: int, effect: str, kind: str, seed: int,
     out = _record(index, effect, trial.params, a, r, snr, t_diag, t_truth, c_diag)
     out["kind"] = kind
     out["not_applicable"] = [x["effect"] for x in r["not_applicable"]]
-    return out
+    return out if extra is None else {**out, **extra(a)}
 
 
 def _false_claim(r: dict) -> bool:
@@ -541,10 +542,18 @@ def main() -> None:
     ap.add_argument("--timing-child", choices=FRESH_CASES, help=argparse.SUPPRESS)
     ap.add_argument("--solid3d", action="store_true",
                     help="3-D reference truths, bonded and point base (writes diagnosis_solid3d.json)")
+    ap.add_argument("--solid3d-cases", nargs="*", metavar="CASE",
+                    help="cases of the 3-D data set tests/data/solid3d (default: every one outside the clamping "
+                         "calibration), one tap test each per base model (writes diagnosis_solid3d_cases.json)")
+    ap.add_argument("--base-models", nargs="*", default=["point", "point_ra1", "bonded"],
+                    choices=["point", "point_ra1", "bonded"], help="--solid3d-cases: the base models")
     ap.add_argument("--solid3d-write-data", action="store_true",
                     help="only build and store the 3-D truths' reduced models (tests/data/diagnosis_solid3d)")
     ap.add_argument("--out-of-catalogue", action="store_true",
                     help="holder crack, non-uniform layer, holder mass (writes diagnosis_out_of_catalogue.json)")
+    ap.add_argument("--claim-data", nargs="+", choices=["hybrid", "matched", "scatter2"], metavar="SET",
+                    help="only record what the claim rule needs (diagnosis_calibration.claim_data) on a tuning seed: "
+                         "hybrid (--trials-per-class per class and kind), matched and scatter2 (per class)")
     ap.add_argument("--form-error", action="store_true",
                     help="only measure the candidates' form error on correct fits (--trials-per-class per effect)")
     args = ap.parse_args()
@@ -553,8 +562,27 @@ def main() -> None:
 
         truth_solid3d.write_data()
         return
-    if args.solid3d or args.out_of_catalogue:
+    if args.solid3d or args.out_of_catalogue or args.solid3d_cases is not None:
         run_outside(args)
+        return
+    if args.claim_data:
+        from benchmarks.diagnosis_calibration import claim_trial
+
+        n = args.trials_per_class
+        plan = [(e, k, 1.0) for k in args.kinds for e in truth_hybrid.HYBRID_EFFECTS for _ in range(n)
+                if "hybrid" in args.claim_data]
+        plan += [(e, "matched", 1.0) for e in truth.EFFECTS for _ in range(n) if "matched" in args.claim_data]
+        plan += [(e, "matched", 2.0) for e in truth.EFFECTS for _ in range(n) if "scatter2" in args.claim_data]
+        out = args.out.with_suffix(".jsonl")
+        with ProcessPoolExecutor(max_workers=args.workers) as pool, out.open("a") as fh:
+            futures = [pool.submit(claim_trial, i, e, k, args.seed, ts) for i, (e, k, ts) in enumerate(plan)]
+            for n_done, fut in enumerate(futures):
+                rec = fut.result()
+                rec["seed"] = args.seed
+                fh.write(json.dumps(rec) + "\n")
+                fh.flush()
+                print(f"[{n_done + 1}/{len(plan)}] {rec['kind']:16s} {rec['effect']:29s} -> {rec['status']:10s} "
+                      f"{rec['verdict']:29s} SNR {rec['snr_true']:5.1f}", flush=True)
         return
     if args.form_error:
         from benchmarks.diagnosis_calibration import form_error
@@ -630,7 +658,12 @@ def run_outside(args: argparse.Namespace) -> None:
     from benchmarks import diagnosis_outside as outside
     from tests.analysis.diagnosis import truth_solid3d
 
-    if args.solid3d:
+    if args.solid3d_cases is not None:
+        cases = args.solid3d_cases or truth_solid3d.dataset_cases_outside_calibration()
+        plan = [(c, m) for m in args.base_models for c in cases for _ in range(args.trials_per_class)]
+        name, fn = "diagnosis_solid3d_cases.json", outside.run_dataset_trial
+        jobs = [(i, c, m, args.seed) for i, (c, m) in enumerate(plan)]
+    elif args.solid3d:
         variants = list(truth_solid3d.VARIANTS)
         plan = [(v, m) for m in ("bonded", "point") for v in variants for _ in range(args.trials_per_class)]
         name, fn = "diagnosis_solid3d.json", outside.run_solid_trial
@@ -653,10 +686,12 @@ def run_outside(args: argparse.Namespace) -> None:
             load.append(os.getloadavg()[0])
             with partial.open("a") as fh:
                 fh.write(json.dumps(rec) + "\n")
-            print(f"[{n + 1}/{len(jobs)}] {rec.get('variant', rec.get('effect')):18s} {rec.get('base_model', ''):6s} "
+            print(f"[{n + 1}/{len(jobs)}] {rec.get('variant', rec.get('case', rec.get('effect'))):18s} "
+                  f"{rec.get('base_model', ''):6s} "
                   f"-> {rec['status']:10s} {rec['verdict']:29s} dB {rec['base_db_error']:.2f} -> "
                   f"{rec['corrected_db_error']:.2f} {rec['runtime_s']:.1f} s", flush=True)
-    summary = outside.summarise_solid(records) if args.solid3d else outside.summarise_ooc(records)
+    summary = (outside.summarise_dataset(records) if args.solid3d_cases is not None else
+               outside.summarise_solid(records) if args.solid3d else outside.summarise_ooc(records))
     summary.update(command=" ".join(["benchmarks/bench_diagnosis.py", *sys.argv[1:]]),
                    wall_time_s=time.perf_counter() - t0, machine=machine(), workers=args.workers, seed=args.seed,
                    load_average={"min": min(load), "max": max(load), "median": float(np.median(load))})
