@@ -119,13 +119,16 @@ def form_error(args: argparse.Namespace) -> None:
 
 
 # ---------------------------------------------------------------------------------- the claim rule
-#: Scales of Σ at which the claims of the best effect and the best model form are re-weighed.
-CLAIM_SCALES = (1.0, 1.1, 1.2, 1.35, 1.5, 1.75, 2.0, 2.5, 3.0, 4.0)
+#: Scales of Σ at which the claims of the best effects and the best model form are re-weighed.
+CLAIM_SCALES = (1.0, 1.25, 1.5, 2.0, 2.5, 3.0, 4.0)
+#: Effects (best ranked) whose ln BF is recorded at every scale (ambiguity at a scale).
+CLAIM_EFFECTS = 3
 
 
 def claim_data(a) -> dict:  # type: ignore[no-untyped-def]
     """What an offline claim rule needs of one diagnosis: every candidate's stated fit, and for the
-    best effect and the best model form their remainder and their ln BF at :data:`CLAIM_SCALES`."""
+    best :data:`CLAIM_EFFECTS` effects and the best model form their remainder and their ln BF at
+    :data:`CLAIM_SCALES`."""
     from rcsa.analysis.diagnosis.attribution import Likelihood, fit_candidate
 
     p = a.problem
@@ -134,25 +137,24 @@ def claim_data(a) -> dict:  # type: ignore[no-untyped-def]
                            f.log_evidence] for f in fits]}
     w = a.like.w
     null = np.sum((a.disc.samples @ w.T) ** 2, axis=1)
-    for tag, group in (("best_effect", [f for f in fits if not f.candidate.model_form]),
-                       ("best_form", [f for f in fits if f.candidate.model_form])):
-        if not group:
-            continue
-        f = max(group, key=lambda x: x.log_bayes_factor)
-        feats = a.features_at(f.candidate, f.map)
-        r = p.measured_features - (feats + a.disc.mu)
-        lnbf = []
-        for s in CLAIM_SCALES:
-            judge = Likelihood(p.measured_features, a.disc, np.arange(p.base_features.size),
-                               a.request.options.likelihood, scale=s)
-            lnbf.append(fit_candidate(f.group or f.candidate, a.features_at, judge,
-                                      float(judge(p.base_features))).log_bayes_factor)
-        out[tag] = {"key": f.candidate.key, "name": f.candidate.name,
-                    "chi2_remainder": float(np.sum((w @ r) ** 2)), "null_median": float(np.median(null)),
-                    "null_n": int(null.size), "p_remainder": a.residual_p_value(feats),
-                    "chi2_shift": float(np.sum((w @ (feats - p.base_features)) ** 2)),
-                    "chi2_base": float(np.sum((w @ (p.measured_features - p.base_features - a.disc.mu)) ** 2)),
-                    "scale": a.remainder_scale(feats), "lnbf_at_scale": lnbf}
+    judges = [Likelihood(p.measured_features, a.disc, np.arange(p.base_features.size), a.request.options.likelihood,
+                         scale=s) for s in CLAIM_SCALES]
+    effects = sorted((f for f in fits if not f.candidate.model_form), key=lambda x: -x.log_bayes_factor)
+    forms = sorted((f for f in fits if f.candidate.model_form), key=lambda x: -x.log_bayes_factor)
+    for tag, group in (("effects", effects[:CLAIM_EFFECTS]), ("forms", forms[:1])):
+        out[tag] = []
+        for f in group:
+            feats = a.features_at(f.candidate, f.map)
+            r = p.measured_features - (feats + a.disc.mu)
+            lnbf = [fit_candidate(f.group or f.candidate, a.features_at, j, float(j(p.base_features))
+                                  ).log_bayes_factor for j in judges]
+            out[tag].append({"key": f.candidate.key, "name": f.candidate.name,
+                             "chi2_remainder": float(np.sum((w @ r) ** 2)), "null_median": float(np.median(null)),
+                             "p_remainder": a.residual_p_value(feats),
+                             "chi2_shift": float(np.sum((w @ (feats - p.base_features)) ** 2)),
+                             "scale": a.remainder_scale(feats), "lnbf_at_scale": lnbf})
+    out["chi2_base"] = float(np.sum((w @ (p.measured_features - p.base_features - a.disc.mu)) ** 2))
+    out["p_base"] = a.residual_p_value(p.base_features)
     return out
 
 

@@ -39,7 +39,6 @@ the diagnoser is still told ±0.3 mm) and separate holder/tool densities. Noise 
 from __future__ import annotations
 
 import copy
-import dataclasses
 import json
 import math
 import time
@@ -289,22 +288,19 @@ def dataset_cases_outside_calibration(directory: Path | None = None) -> list[str
 def dataset_base_document(case: dict[str, Any], model: str) -> dict[str, Any]:
     """The diagnoser's base model of a data-set case on RA-1's spindle (no frequency grid).
 
-    The case's holder, tool and materials in the contract's terms (fields the contract does
-    not have, e.g. a real flute cross-section, are left out: the diagnosis must find what they
-    do), RA-1's spindle and spindle–holder joint (the data set's ``spindle`` base), and the
+    The case's holder, tool and materials in the contract's terms as the data set states them
+    (only a real flute cross-section, which the contract has no field for, is left out: the
+    diagnosis must find what it does), RA-1's spindle and spindle–holder joint (the data set's
+    ``spindle`` base), and the
     holder–tool joint of ``model``: ``"point"`` (the contract's default: left out, rigid),
     ``"bonded"``, or ``"point_ra1"`` (RA-1's elastic point joint).
     """
-    from rcsa.model.contract import ToolSpec
     from rcsa.reference import ra1
 
     doc = ra1()
     del doc["frequency"]
-    segment_fields = ("length_m", "outer_diameter_m", "inner_diameter_m", "material")
-    doc["holder"] = {"segments": [{k: seg[k] for k in segment_fields if k in seg}
-                                  for seg in case["holder"]["segments"]]}
-    tool_fields = {f.name for f in dataclasses.fields(ToolSpec)}
-    doc["tool"] = {k: v for k, v in case["tool"].items() if k in tool_fields}
+    doc["holder"] = copy.deepcopy(case["holder"])
+    doc["tool"] = {k: v for k, v in case["tool"].items() if k != "flutes"}
     doc["materials"] = {**doc.get("materials", {}), **case["materials"]}
     ht = doc["joints"]["holder_tool"]
     doc["joints"] = {"spindle_holder": doc["joints"]["spindle_holder"]}
