@@ -57,6 +57,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -68,8 +69,10 @@ from rcsa.analysis.diagnosis.perturbed_model import (
     null_shear_scale,
 )
 from rcsa.model.contract import AssemblySpec, ClampingSpec, JointSpec, ToolSpec
-from rcsa.model.spindle_side import MeasuredBase
 from rcsa.physics.algebra2x2 import inv2
+
+if TYPE_CHECKING:  # types only: the measured spindle's module loads with a measured spindle
+    from rcsa.model.spindle_side import MeasuredBase
 
 __all__ = ["CANDIDATE_NAMES", "EFFECT_NAMES", "MODEL_FORM_NAMES", "NOT_OBSERVABLE_AT_STANDSTILL",
            "STANDSTILL_SENTENCE", "Candidate", "Parameter", "catalogue", "model_form_of", "not_applicable",

@@ -20,6 +20,7 @@ import json
 import threading
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from cachetools import LRUCache, cached
@@ -34,7 +35,9 @@ from rcsa.analysis.diagnosis.features import Windows, band_rms_db, design_window
 from rcsa.analysis.diagnosis.perturbed_model import BaseReceptance, Knobs, PartsBuilder, Solver
 from rcsa.analysis.diagnosis.request import DEFAULT_NOISE_REL, MIN_VALID_LINES, Request
 from rcsa.errors import InputError
-from rcsa.model.spindle_side import MeasuredBase
+
+if TYPE_CHECKING:  # types only: the measured spindle's module loads with a measured spindle
+    from rcsa.model.spindle_side import MeasuredBase
 
 __all__ = ["Problem", "VALID_COHERENCE"]
 

@@ -17,7 +17,7 @@ from __future__ import annotations
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -37,16 +37,19 @@ from rcsa.analysis.diagnosis.request import Request, parse_request
 from rcsa.analysis.diagnosis.validation import HeldOut, folds, held_out
 from rcsa.analysis.progress import Progress, report
 from rcsa.errors import InputError
-from rcsa.model.spindle_side import BaseResolver
+
+if TYPE_CHECKING:  # types only: the measured spindle's module loads with a measured spindle
+    from rcsa.model.spindle_side import BaseResolver
 
 __all__ = ["Analysis", "analyse", "validate"]
 
 # Signatures more collinear than this cannot be told apart: a second effect along the first
 # one's direction is refused (``docs/diagnosis.md`` §4.7).
 MAX_SIGNATURE_COSINE = 0.9
-# Held-out validation and parameter meanings are computed for the verdict's effects and for
-# this many best-ranked others (the rest is ranked by evidence only, to bound the runtime).
-RANKED_WITH_HELD_OUT = 3
+# Held-out validation is computed for the verdict's effects only (the reported ones); the rest is
+# ranked by evidence (a refit per fold of three more candidates was a fifth of a diagnosis).
+# A second effect is looked for among this many next-ranked effects.
+SECOND_CANDIDATES = 3
 # A second effect is only looked for when the first leaves a significant remainder.
 RESIDUAL_P = 0.05
 # A second effect must move the features by at least this fraction of the first's (whitened
@@ -155,7 +158,7 @@ class Analysis:
         clock.mark("candidates")
         self.folds = folds([m.tool.stickout_m for m in self.request.measurements], opts.held_out)
         self.held: dict[str, HeldOut | None] = {}
-        shown = self.reported_names() + [f.candidate.name for f in self.decision.ranking[:RANKED_WITH_HELD_OUT]]
+        shown = self.reported_names()
         for f in self.decision.ranking:
             if f.candidate.name in shown:
                 self.held[f.candidate.name] = self._held_out([f.candidate], [f.map])
@@ -348,7 +351,7 @@ class Analysis:
         p_value : float
             Remainder of the first effect against the Monte-Carlo null.
         candidates : list of SecondCandidate
-            The next :data:`RANKED_WITH_HELD_OUT` ranked effects.
+            The next :data:`SECOND_CANDIDATES` ranked effects.
         """
         p_value, like, f1 = self._second(form_error)
         out = []
@@ -360,7 +363,7 @@ class Analysis:
 
     def _second_ranking(self) -> list[Fit]:
         """The effects a second one is looked for among: the next best ranked (model forms never)."""
-        return [f for f in self.decision.ranking[1:] if not f.candidate.model_form][:RANKED_WITH_HELD_OUT]
+        return [f for f in self.decision.ranking[1:] if not f.candidate.model_form][:SECOND_CANDIDATES]
 
     def _greedy_second(self) -> tuple[Fit, HeldOut | None, float] | None:
         """Best second effect with the first fixed at its MAP; accepted only if it passes every test.
