@@ -51,6 +51,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 import time
@@ -132,10 +133,38 @@ from rcsa.measured.hybrid import base_resolver, measured_base  # noqa: E402
 EQUIVALENT = ({"holder_tool_joint", "insertion_depth"}, {"spindle_holder_joint", "spindle_rotational_receptance"})
 SNR_BINS = ((0.0, 5.0), (5.0, 10.0), (10.0, 20.0), (20.0, float("inf")))
 DEFAULT_OUT = REPO / "benchmarks" / "results" / "diagnosis.json"
+#: Seeds whose trials were looked at while the diagnosis was tuned (the figures published before
+#: issue 31 — matched 1, hybrid 2, 3-D 3, doubled scatter 4, out of the catalogue 5 — and the
+#: claim-rule and model-form calibration of issue 31: hybrid 2 and 6, doubled scatter 2 and 4,
+#: the 3-D data-set cases 31). Their figures say how the rules were chosen, not how they do.
+TUNING_SEEDS = (1, 2, 3, 4, 5, 6, 31)
+#: Seeds never used while tuning, one per benchmark: ``--evaluation`` picks the benchmark's own,
+#: and the published figures of issue 31 come from them.
+EVALUATION_SEEDS = {"matched": 3101, "hybrid": 3102, "solid3d": 3103, "scatter2": 3104, "out_of_catalogue": 3105,
+                    "solid3d_cases": 3106}
+
+
+def seed_role(seed: int) -> str:
+    """``tuning``, ``evaluation`` or ``other`` (written into every result file)."""
+    return "tuning" if seed in TUNING_SEEDS else "evaluation" if seed in EVALUATION_SEEDS.values() else "other"
+
+
+#: Model forms whose proposal names a class's hidden physics: the ``holder_tool_joint`` truth is
+#: the tool core held by springs per unit length along the whole insertion (``truth.py``), i.e.
+#: a clamping along the insertion — ``clamping_model`` proposing ``contact`` (or ``bonded``) is
+#: that physics, named as a model form. Scored as a right answer, and counted apart
+#: (``top1_strict`` does not).
+FORM_NAMES_CLASS = {"holder_tool_joint": ("clamping_model", ("contact", "bonded"))}
 
 
 def _equivalent(a: str, b: str) -> bool:
     return a == b or any(a in s and b in s for s in EQUIVALENT)
+
+
+def _names(effect: str, named: str, proposed_model: str | None) -> bool:
+    """Whether a verdict ``named`` (with the model it proposes) names the hidden ``effect``."""
+    form = FORM_NAMES_CLASS.get(effect)
+    return named == effect or (form is not None and named == form[0] and proposed_model in form[1])
 
 
 def run_trial(index: int, effect: str, seed: int, tolerance_scale: float = 1.0, extra=None) -> dict:
@@ -186,11 +215,13 @@ def run_hybrid_trial(index: int, effect: str, kind: str, seed: int,
 
 
 def _false_claim(r: dict) -> bool:
-    """A claim (identified or ambiguous) naming no effect equivalent to the hidden one."""
+    """A claim (identified or ambiguous) naming no effect equivalent to the hidden one (a model
+    form that names the hidden physics, :data:`FORM_NAMES_CLASS`, is no false claim)."""
     if r["status"] == "none":
         return False
     named = [r["verdict"], *r["ambiguous_with"]]
-    return r["effect"] == "none" or not any(_equivalent(x, r["effect"]) for x in named)
+    return r["effect"] == "none" or not (any(_equivalent(x, r["effect"]) for x in named)
+                                         or _names(r["effect"], r["verdict"], r.get("form_verdict")))
 
 
 def _features(a: Analysis, hs: list[np.ndarray]) -> np.ndarray:
@@ -203,14 +234,16 @@ def _record(index: int, effect: str, params: dict, a: Analysis, r: dict, snr: fl
     v = r["verdict"]
     first = r["effects"][0] if r["effects"] else None
     ranked = [e["effect"] for e in r["ranking"]]
-    correct = v["status"] == "identified" and v["effect"] == effect
+    proposed = first.get("proposed_model") if first else None
+    correct = v["status"] == "identified" and _names(effect, v["effect"], proposed)
     out = {
         "index": index, "effect": effect, "params": {k: float(x) for k, x in params.items()},
         "status": v["status"], "verdict": v["effect"], "ambiguous_with": v["ambiguous_with"],
         "log_bayes_factor": v["log_bayes_factor"], "snr_true": snr, "snr_fitted": v["snr"],
-        "top1": correct, "best_ranked": ranked[0] if ranked else "none",
+        "top1": correct, "top1_strict": v["status"] == "identified" and v["effect"] == effect,
+        "form_verdict": proposed, "best_ranked": ranked[0] if ranked else "none",
         "in_set": effect in [v["effect"], *v["ambiguous_with"]],
-        "equivalent": (v["status"] == "identified" and _equivalent(v["effect"], effect)) or (
+        "equivalent": (v["status"] == "identified" and (_equivalent(v["effect"], effect) or correct)) or (
             v["status"] == "ambiguous" and all(_equivalent(x, effect) for x in [v["effect"], *v["ambiguous_with"]])),
         "confirmed": v["confirmed_on_held_out"],
         "held_out_gap_ratio": first["held_out_gap_ratio"] if first else None,
@@ -327,6 +360,26 @@ def timing_fresh(repeats: int = 3, cases: tuple[str, ...] = FRESH_CASES) -> dict
     return out
 
 
+def upper_bound_95(k: int, n: int) -> float:
+    """One-sided 95 % Clopper–Pearson upper bound of a rate seen ``k`` times in ``n`` trials.
+
+    >>> round(upper_bound_95(0, 60), 4)   # 1 − 0.05^(1/60)
+    0.0487
+    """
+    if n == 0:
+        return 1.0
+    if k >= n:
+        return 1.0
+
+    def cdf(p: float) -> float:  # P(X ≤ k), X ~ Binomial(n, p)
+        return sum(math.comb(n, j) * p**j * (1 - p) ** (n - j) for j in range(k + 1))
+    lo, hi = k / n, 1.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if cdf(mid) > 0.05 else (lo, mid)
+    return hi
+
+
 def summarise(records: list[dict]) -> dict:
     """Scores of ``docs/diagnosis.md`` §5.2 from the trial records."""
     eff = [r for r in records if r["effect"] != "none"]
@@ -364,6 +417,9 @@ def summarise(records: list[dict]) -> dict:
     return {
         "trials": len(records), "effect_trials": len(eff), "null_trials": len(null),
         "top1_all": rate(eff, "top1"), "top1_snr_ge_10": rate(strong, "top1"), "n_snr_ge_10": len(strong),
+        "top1_strict_snr_ge_10": rate(strong, "top1_strict") if all("top1_strict" in r for r in strong) else None,
+        "model_form_verdicts": dict(Counter(f"{r['effect']}->{r['verdict']}:{r['form_verdict']}" for r in records
+                                            if r.get("form_verdict"))),
         "equivalence_all": rate(eff, "equivalent"), "equivalence_snr_ge_10": rate(strong, "equivalent"),
         "set_accuracy_all": rate(eff, "in_set"), "set_accuracy_snr_ge_10": rate(strong, "in_set"),
         "best_ranked_snr_ge_10": float(np.mean([r["best_ranked"] == r["effect"] for r in strong])) if strong else None,
@@ -371,6 +427,7 @@ def summarise(records: list[dict]) -> dict:
         # a verdict naming no effect of the hidden one's equivalence class (on no-effect data: any claim)
         "false_claims_all_trials": float(np.mean([_false_claim(r) for r in records])) if records else None,
         "false_claims_all_count": f"{sum(_false_claim(r) for r in records)}/{len(records)}",
+        "false_claims_all_upper_95": upper_bound_95(sum(_false_claim(r) for r in records), len(records)),
         "wrong_effect_claims": int(sum(_false_claim(r) for r in eff)),
         "false_claims_count": f"{sum(r['status'] != 'none' for r in null)}/{len(null)}",
         "miss_rate": float(np.mean([r["status"] == "none" for r in eff])) if eff else None,
@@ -398,11 +455,13 @@ def print_summary(s: dict) -> None:
         return "n/a" if x is None else f"{x:.3f}"
     print(f"trials {s['trials']} ({s['effect_trials']} with an effect, {s['null_trials']} without)")
     print(f"top-1 (identified and correct): all {pct(s['top1_all'])}, SNR>=10 {pct(s['top1_snr_ge_10'])} "
-          f"(n={s['n_snr_ge_10']})")
+          f"(n={s['n_snr_ge_10']}); strictly the effect's own name: {pct(s['top1_strict_snr_ge_10'])}; "
+          f"model forms as verdict: {s['model_form_verdicts']}")
     print(f"equivalence-class: all {pct(s['equivalence_all'])}, SNR>=10 {pct(s['equivalence_snr_ge_10'])}; "
           f"set accuracy SNR>=10 {pct(s['set_accuracy_snr_ge_10'])}; best-ranked SNR>=10 "
           f"{pct(s['best_ranked_snr_ge_10'])}")
-    print(f"false claims, all trials (no effect of the hidden class named): {s['false_claims_all_count']}")
+    print(f"false claims, all trials (no effect of the hidden class named): {s['false_claims_all_count']} "
+          f"(95 % upper bound {100 * s['false_claims_all_upper_95']:.1f} %)")
     print(f"false claims on no-effect data: {s['false_claims_count']} ({pct(s['false_claims_on_null'])}); "
           f"miss rate {pct(s['miss_rate'])}")
     for k, b in s["by_snr"].items():
@@ -556,7 +615,14 @@ def main() -> None:
                          "hybrid (--trials-per-class per class and kind), matched and scatter2 (per class)")
     ap.add_argument("--form-error", action="store_true",
                     help="only measure the candidates' form error on correct fits (--trials-per-class per effect)")
+    ap.add_argument("--evaluation", action="store_true",
+                    help="use the benchmark's evaluation seed (EVALUATION_SEEDS: never used while tuning)")
     args = ap.parse_args()
+    if args.evaluation:
+        kind = ("solid3d_cases" if args.solid3d_cases is not None else "solid3d" if args.solid3d else
+                "out_of_catalogue" if args.out_of_catalogue else "hybrid" if args.hybrid else
+                "scatter2" if args.tolerance_scale == 2.0 else "matched")
+        args.seed = EVALUATION_SEEDS[kind]
     if args.solid3d_write_data:
         from tests.analysis.diagnosis import truth_solid3d
 
@@ -644,6 +710,7 @@ def main() -> None:
     summary["command"] = " ".join(["benchmarks/bench_diagnosis.py", *sys.argv[1:]])
     summary["settings"] = {"stickouts_m": list(truth.STICKOUTS_M), "band_hz": [50.0, 8000.0], "line_step_hz": 2.0,
                            "noise": "1 % + floor -50 dB of peak, 5 averages", "seed": args.seed,
+                           "seed_role": seed_role(args.seed),
                            "tolerance_scale": args.tolerance_scale, "workers": args.workers,
                            "machine": machine(), "load_average": {"min": min(load), "max": max(load),
                                                                   "median": float(np.median(load))}}
@@ -694,6 +761,7 @@ def run_outside(args: argparse.Namespace) -> None:
                outside.summarise_solid(records) if args.solid3d else outside.summarise_ooc(records))
     summary.update(command=" ".join(["benchmarks/bench_diagnosis.py", *sys.argv[1:]]),
                    wall_time_s=time.perf_counter() - t0, machine=machine(), workers=args.workers, seed=args.seed,
+                   seed_role=seed_role(args.seed),
                    load_average={"min": min(load), "max": max(load), "median": float(np.median(load))})
     print(json.dumps(summary, indent=1))
     out.write_text(json.dumps({"summary": summary, "trials": records}, indent=1))
@@ -732,6 +800,7 @@ def hybrid_summary(records: list[dict], args: argparse.Namespace, planned: int) 
                            "line_step_hz": 2.0, "noise": "taps 1 % + floor -50 dB of peak, 5 averages; "
                            "stored spindle FRFs 0.3 %", "plane": "spindle_nose", "kinds": list(args.kinds),
                            "trials_per_class_and_kind": args.trials_per_class, "seed": args.seed,
+                           "seed_role": seed_role(args.seed),
                            "direct_frf_length_log_sd": args.length_log_sd,
                            "workers": args.workers, "machine": machine()}
     for k in kinds:

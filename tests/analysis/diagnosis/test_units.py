@@ -202,3 +202,21 @@ def test_added_compliance_is_a_chain_item_adding_to_the_receptance(spec):
     beam = next(i for i in chain if hasattr(i, "section"))
     on_base = inv2(march((added, beam), omega, start_compliance=r)[0])
     np.testing.assert_allclose(on_base, inv2(march((beam,), omega, inv2(r + c))[0]), rtol=1e-8)
+
+
+def test_the_parabola_stencils_give_the_normal_equations_vertex():
+    """The per-line stencil (the least squares solved once per line) and the normal equations
+    solved per call give the same vertex; clipped stencils fall back to the latter."""
+    from rcsa.analysis.diagnosis.features import _vertex, parabola_stencils
+
+    rng = np.random.default_rng(4)
+    x = np.log(np.sort(rng.uniform(100.0, 6000.0, 300)))
+    y = -0.5 * ((x[None, :] - x[[80, 150, 220]][:, None]) / 0.02) ** 2 + 0.01 * rng.standard_normal((3, 300))
+    i = np.array([80, 150, 221])
+    lo, hi = np.array([40, 100, 200]), np.array([120, 200, 260])
+    for sign, yy in ((1.0, y), (-1.0, -y)):
+        plain = _vertex(x, yy, i, lo, hi, sign)
+        fast = _vertex(x, yy, i, lo, hi, sign, stencils=parabola_stencils(x))
+        np.testing.assert_allclose(fast[0], plain[0], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(fast[1], plain[1], rtol=1e-12)
+    assert np.all(np.abs(plain[0] - x[i]) < 0.02)  # a real vertex, not the fallback to the line

@@ -33,6 +33,19 @@ spindle_rotational_receptance     residual compliance added to the spindle's   0
                                   a ∈ [−0.5, 1.5], b ∈ [−0.5, 4]
 ================================  =========================================  ==============
 
+**Model form** (an extension of the contract's effects; ``docs/diagnosis.md`` §4.9): two more
+candidates change the form of the base's holder–tool model instead of adding to it —
+
+================================  =========================================  ==============
+clamping_model                    every form the base lacks: ``point``        the base's
+                                  (rigid joint, no parameter), ``bonded``     form
+                                  (none), ``contact`` (log10 k_n ∈ [11, 15]
+                                  N/m³); evidence: the mean over the forms
+interface_scale                   a clamping's interface per length,          0, 0
+                                  log10 of translation and of rotation
+                                  factors ∈ [−2, 1] (clamping bases)
+================================  =========================================  ==============
+
 ``m_max`` is 1.5 × the largest declared ``sensor_mass_kg`` of the measurements, or 20 g.
 Speed-dependent effects are listed in :data:`NOT_OBSERVABLE_AT_STANDSTILL`; they are never
 candidates for a standstill tap test.
@@ -339,8 +352,8 @@ def _model_form_candidates(spec: AssemblySpec, excluded: dict[str, tuple[str, bo
                 (Parameter("log10_interface_stiffness_n_m3", *CONTACT_LOG10_N_M3, CONTACT_LOG10_N_M3[1], "1"),),
                 contact, lambda v: {"holder_tool.interface_stiffness_n_m3": float(10 ** v[0])}))
         if base != "point":
-            forms.append(_clamping_form("clamping_model", RIGID_POINT, (), lambda v: RIGID_POINT, lambda v: {}))
-            forms[-1] = replace(forms[-1], variant="point")
+            forms.append(replace(_clamping_form("clamping_model", RIGID_POINT, (), lambda v: RIGID_POINT,
+                                                lambda v: {}), variant="point"))
         out.append(Candidate("clamping_model", (), lambda k, v: k, lambda v: {}, model_form=True, forms=tuple(forms)))
     if "interface_scale" not in excluded and isinstance(ht, ClampingSpec):
         scale0 = ht.interface_stiffness_scale

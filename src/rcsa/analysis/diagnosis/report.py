@@ -215,8 +215,11 @@ def _form_sentence(a: Analysis, e: dict[str, Any]) -> str:
     if d.status == "ambiguous":
         return (f"The gap is a matter of model form: {', '.join([d.effect, *d.ambiguous_with])} explain it equally "
                 f"well (ln BF within {a.request.options.ambiguity_window:g}); the best is {what}{_held_sentence(e)}.")
-    why = ("no effect within the base model explains it" if not a.effect_claimed else
-           "the effects leave a significant remainder that it removes")
+    effects = [f for f in a.stated_fits if not f.candidate.model_form]
+    top = max(effects, key=lambda f: f.log_evidence) if effects else None
+    why = ("no effect within the base model explains it" if not a.effect_claimed or top is None else
+           f"its evidence beats the best effect within the base model, {top.candidate.name}, by "
+           f"{a.form_proposed.log_evidence - top.log_evidence:.1f} in ln" if a.form_proposed is not None else "")
     flag = ""
     if e["residual_p_value"] < 0.05:
         flag = (f" It does not explain everything: the remainder is still beyond tolerances and noise "

@@ -50,6 +50,9 @@ MAX_SIGNATURE_COSINE = 0.9
 # ranked by evidence (a refit per fold of three more candidates was a fifth of a diagnosis).
 # A second effect is looked for among this many next-ranked effects.
 SECOND_CANDIDATES = 3
+# A claim is weighed at the scatter its remainder shows only when that remainder is this
+# significant (Monte-Carlo p-value; :meth:`Analysis.claim_holds`).
+SCATTER_P = 0.01
 # A second effect is only looked for when the first leaves a significant remainder.
 RESIDUAL_P = 0.05
 # A second effect must move the features by at least this fraction of the first's (whitened
@@ -176,11 +179,18 @@ class Analysis:
     def claim_holds(self, fit: Fit) -> tuple[bool, float, Likelihood]:
         """Whether ``fit``'s claim holds at the scatter its remainder shows, that scale, and the likelihood.
 
-        ``ŝ`` (:meth:`remainder_scale`) of the data about the fit's MAP; above 1 the candidate
-        is refitted with Σ·ŝ² and must still clear the claim threshold.
+        ``ŝ`` (:meth:`remainder_scale`) of the data about the fit's MAP. When the remainder is
+        significantly beyond the stated tolerances and noise (its Monte-Carlo p-value at most
+        :data:`SCATTER_P`, or beyond every draw), the candidate is refitted with Σ·ŝ² and must
+        still clear the claim threshold; a remainder within the null's own spread (ŝ up to
+        ~1.3 by chance with a few dozen features) weighs nothing (issue 31: weighing it turned
+        right effects of SNR 5-10 into ``none``).
         """
         opts, p = self.request.options, self.problem
-        scale = self.remainder_scale(self.features_at(fit.candidate, fit.map))
+        feats = self.features_at(fit.candidate, fit.map)
+        scale = self.remainder_scale(feats)
+        if scale > 1.0 and self.residual_p_value(feats) > max(SCATTER_P, 1.0 / (self.disc.samples.shape[0] + 1)):
+            scale = 1.0
         if scale <= 1.0:
             return fit.log_bayes_factor > opts.claim_threshold, 1.0, self.like
         judge = Likelihood(p.measured_features, self.disc, np.arange(p.base_features.size), opts.likelihood,
@@ -315,9 +325,9 @@ class Analysis:
         first = self.decision.ranking[0]
         f1 = self.features_at(first.candidate, first.map)
         p = self.problem
-        like = self.judge if form_error == 0.0 else Likelihood(
+        like = self.like if form_error == 0.0 else Likelihood(
             p.measured_features, self.with_form_error(f1 - p.base_features, form_error),
-            np.arange(p.base_features.size), self.request.options.likelihood, scale=self.scatter_scale)
+            np.arange(p.base_features.size), self.request.options.likelihood)
         return self.residual_p_value(f1, like.w), like, f1
 
     def _second_fit(self, c2: Candidate, like: Likelihood, f1: np.ndarray) -> tuple[Fit, float, float]:
@@ -369,9 +379,12 @@ class Analysis:
         """Best second effect with the first fixed at its MAP; accepted only if it passes every test.
 
         Tests (``docs/diagnosis.md`` §4.7): the first leaves a significant remainder; the second's
-        conditional ln BF > τ; its signature is not collinear with the first's; it moves the
-        features by at least :data:`MIN_SECOND_SHIFT_RATIO` of the first's shift (else it is
-        within the first effect's form error); held-out χ² improves (checked last: costliest).
+        conditional ln BF > τ, also at the scatter the remainder of both shows when that is
+        significant (as the first's claim, :meth:`claim_holds`); its signature is not collinear
+        with the first's; it moves the features by at least :data:`MIN_SECOND_SHIFT_RATIO` of
+        the first's shift (else it is within the first effect's form error); held-out χ²
+        improves (checked last: costliest). All at the stated Σ: the first's remainder is what
+        a second effect is looked for in, so it does not widen Σ against it.
         """
         p_value, like, f1 = self._second()
         if p_value >= RESIDUAL_P:
@@ -385,10 +398,27 @@ class Analysis:
                     or ratio < MIN_SECOND_SHIFT_RATIO
                     or (best is not None and fit.log_bayes_factor <= best[0].log_bayes_factor)):
                 continue
+            if not self._second_claim_holds(fit):
+                continue
             ho, improves = self._second_held_out(fit)
             if improves:
                 best = (fit, ho, cos)
         return best
+
+    def _second_claim_holds(self, fit: Fit) -> bool:
+        """The second effect's conditional claim at the scatter the remainder of both shows (when significant)."""
+        opts, p = self.request.options, self.problem
+        first = self.decision.ranking[0]
+        f12 = self.features_of([first.candidate, fit.candidate], [first.map, fit.map])
+        scale = self.remainder_scale(f12)
+        if scale <= 1.0 or self.residual_p_value(f12) > max(SCATTER_P, 1.0 / (self.disc.samples.shape[0] + 1)):
+            return True
+        judge = Likelihood(p.measured_features, self.disc, np.arange(p.base_features.size), opts.likelihood,
+                           scale=scale)
+        f1 = self.features_at(first.candidate, first.map)
+        refit = fit_candidate(fit.candidate, lambda c, v: self.features_many([first.candidate, c], [first.map], v),
+                              judge, float(judge(f1)))
+        return refit.log_bayes_factor > opts.claim_threshold
 
     def remainder_scale(self, model_features: np.ndarray) -> float:
         """How much more the data scatter about ``model_features`` than tolerances and noise allow.
@@ -437,7 +467,7 @@ class Analysis:
 
         Listed when the verdict's effect leaves a significant remainder (the truth is then
         neither form exactly, so an evidence difference between two collinear forms says which
-        approximates better, not which mechanism acts; ``docs/diagnosis.md`` §5.4).
+        approximates better, not which mechanism acts; ``docs/diagnosis.md`` §5.5).
         """
         d = self.decision
         if d.status == "none":
