@@ -87,6 +87,11 @@ def _h_with(a: Analysis, knobs: Knobs) -> list[np.ndarray]:
     return out
 
 
+def _calibrated_h(r: dict) -> list[np.ndarray]:
+    """The response's calibrated FRF (the verdict's model, nuisance where the data put it)."""
+    return [np.array(h["real"]) + 1j * np.array(h["imag"]) for h in r["calibrated"]["h"]]
+
+
 def corrected_db_error(h_model: list[np.ndarray], h_truth: list[np.ndarray]) -> float:
     """Mean over measurements of the mean |20 log10 (h_model / h_truth)| over their lines, dB."""
     return float(np.mean([np.mean(np.abs(20 * np.log10(np.abs(m / t)))) for m, t in
@@ -134,6 +139,7 @@ def run_solid_trial(index: int, variant: str, model: str, seed: int, tolerance_s
            "snr_effect": float(np.linalg.norm(w @ (f_truth - _features(a, trial.clean_null)))),
            "base_db_error": corrected_db_error(a.full_h([], []), trial.clean),
            "corrected_db_error": corrected_db_error(_final_h(a, r), trial.clean),
+           "calibrated_db_error": corrected_db_error(_calibrated_h(r), trial.clean),
            "runtime_s": t_diag, "truth_s": t_truth, **_verdict(a, r)}
     # the same with the truth's own in-tolerance draw given to the model: what is left is the
     # model's form error and the effect's fit, not the scatter a diagnosis is told to expect
@@ -173,6 +179,7 @@ def run_dataset_trial(index: int, case: str, model: str, seed: int) -> dict:
     rec = {"index": index, "case": case, "base_model": model,
            "base_db_error": corrected_db_error(a.full_h([], []), trial.clean),
            "corrected_db_error": corrected_db_error(_final_h(a, r), trial.clean),
+           "calibrated_db_error": corrected_db_error(_calibrated_h(r), trial.clean),
            "runtime_s": t_diag, **_verdict(a, r),
            "model_form_proposed": r["model_form"]["proposed"],
            "model_forms": [(c["candidate"], c["proposed_model"], round(c["log_bayes_factor"], 2),
@@ -202,11 +209,14 @@ def summarise_dataset(records: list[dict]) -> dict:
                              for r in cs)),
                          "median_base_db_error": _median([r["base_db_error"] for r in cs]),
                          "median_corrected_db_error": _median([r["corrected_db_error"] for r in cs]),
-                         "max_corrected_db_error": float(max(r["corrected_db_error"] for r in cs))}
+                         "max_corrected_db_error": float(max(r["corrected_db_error"] for r in cs)),
+                         "median_calibrated_db_error": _median([r["calibrated_db_error"] for r in cs])}
         out[model] = {"n": len(rs), "median_base_db_error": _median([r["base_db_error"] for r in rs]),
                       "median_corrected_db_error": _median([r["corrected_db_error"] for r in rs]),
                       "max_corrected_db_error": float(max(r["corrected_db_error"] for r in rs)),
                       "share_corrected_within_1db": float(np.mean([r["corrected_db_error"] <= 1.0 for r in rs])),
+                      "median_calibrated_db_error": _median([r["calibrated_db_error"] for r in rs]),
+                      "max_calibrated_db_error": float(max(r["calibrated_db_error"] for r in rs)),
                       "left_unexplained": int(sum(r["left_unexplained"] for r in rs)),
                       "unexplained_although_switch_explains": int(sum(r["unexplained_although_switch_explains"]
                                                                       for r in rs)),
@@ -228,6 +238,7 @@ def run_ooc_trial(index: int, effect: str, seed: int) -> dict:
            "snr_true": float(np.linalg.norm(w @ (_features(a, trial.clean) - _features(a, trial.clean_null)))),
            "base_db_error": corrected_db_error(a.full_h([], []), trial.clean),
            "corrected_db_error": corrected_db_error(_final_h(a, r), trial.clean),
+           "calibrated_db_error": corrected_db_error(_calibrated_h(r), trial.clean),
            "largest_gap": gap["summary"], "largest_z": gap["max_abs_z"],
            "largest_z_at": {k: gap["worst"].get(k) for k in ("label", "kind", "mode", "feature")},
            "runtime_s": t_diag, **_verdict(a, r)}
@@ -261,6 +272,7 @@ def summarise_solid(records: list[dict]) -> dict:
                                                for r in cs)),
                       "median_base_db_error": _median([r["base_db_error"] for r in cs]),
                       "median_corrected_db_error": _median([r["corrected_db_error"] for r in cs]),
+                      "median_calibrated_db_error": _median([r["calibrated_db_error"] for r in cs]),
                       "median_base_db_error_at_true_nuisance": _median([r["base_db_error_at_true_nuisance"]
                                                                        for r in cs]),
                       "median_corrected_db_error_at_true_nuisance": _median(
@@ -271,6 +283,9 @@ def summarise_solid(records: list[dict]) -> dict:
                       "median_base_db_error": _median([r["base_db_error"] for r in rs]),
                       "median_corrected_db_error": _median([r["corrected_db_error"] for r in rs]),
                       "share_corrected_within_1db": float(np.mean([r["corrected_db_error"] <= 1.0 for r in rs])),
+                      "median_calibrated_db_error": _median([r["calibrated_db_error"] for r in rs]),
+                      "max_calibrated_db_error": float(max(r["calibrated_db_error"] for r in rs)),
+                      "share_calibrated_within_1db": float(np.mean([r["calibrated_db_error"] <= 1.0 for r in rs])),
                       "median_base_db_error_at_true_nuisance": _median([r["base_db_error_at_true_nuisance"]
                                                                        for r in rs]),
                       "median_corrected_db_error_at_true_nuisance": _median(
@@ -296,7 +311,8 @@ def summarise_ooc(records: list[dict]) -> dict:
                                                                   if r["held_out_gap_ratio"] is not None]),
                   "remainder_reported": int(sum((r["residual_p_value"] or 1.0) < 0.05 for r in claims)),
                   "median_base_db_error": _median([r["base_db_error"] for r in rs]),
-                  "median_corrected_db_error": _median([r["corrected_db_error"] for r in rs])}
+                  "median_corrected_db_error": _median([r["corrected_db_error"] for r in rs]),
+                  "median_calibrated_db_error": _median([r["calibrated_db_error"] for r in rs])}
     rs = records
     out["pooled"] = {"n": len(rs), "wrong_effect_large_shrink": int(sum(r["wrong_large_shrink"] for r in rs)),
                      "rate": float(np.mean([r["wrong_large_shrink"] for r in rs])) if rs else None}

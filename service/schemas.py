@@ -1140,6 +1140,9 @@ class DiagnosedEffect(_Response):
     evidence_method: str | None = None
     residual_p_value: float | None = None
     given: str | None = Field(None, description="A second effect: the first, held at its fit.")
+    proposed_model: str | None = Field(None, description="A model-form candidate (clamping_model, interface_scale): "
+                                                         "the holder-tool model form it proposes (point, bonded, "
+                                                         "contact).")
     corrected_h: list[ComplexArray] | None = Field(None, description="Per measurement, in request order: the "
                                                    "prediction with this effect added, m/N.")
 
@@ -1152,6 +1155,12 @@ class DiagnosisResult(_Response):
     effects: list[DiagnosedEffect] = Field(description="The verdict's effect(s), with corrected_h.")
     ranking: list[DiagnosedEffect] = Field(default_factory=list, description="Every candidate, best first "
                                                                              "(without FRFs).")
+    model_form: dict[str, Any] | None = Field(None, description="The model-form candidates beside the effects: each "
+                                                                "form's ln BF, its margin over the best effect, and "
+                                                                "the form proposed, if any.")
+    calibrated: dict[str, Any] | None = Field(None, description="The verdict's model with the base's own parameters "
+                                                                "moved within their tolerances to where the "
+                                                                "measurements put them: h per measurement, m/N.")
     not_observable_at_standstill: list[str] = Field(default_factory=list)
     not_observable_sentence: str | None = None
     not_applicable: list[NotApplicable] | None = Field(None, description="Effects that cannot exist on this "

@@ -39,7 +39,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from rcsa.analysis.diagnosis.state import Analysis
 
-__all__ = ["build_response", "diagnosis_figure", "gap_map", "model_form_block"]
+__all__ = ["build_response", "calibrated_block", "diagnosis_figure", "gap_map", "model_form_block"]
 
 Z_FLAG = 3.0  # |z| above this is flagged in the gap map (docs/diagnosis.md §4.4)
 P_GAP = 0.05
@@ -274,6 +274,39 @@ def model_form_block(a: Analysis) -> dict[str, Any]:
             "sentence": sentence}
 
 
+def calibrated_block(a: Analysis) -> dict[str, Any]:
+    """The verdict's model with the base's own parameters where the measurements put them (``calibrated``).
+
+    The verdict's effect(s) (or model form) at their fitted values — none when the verdict is
+    ``none`` — and every nuisance parameter at its most probable value within its stated
+    tolerance given the measurements (:meth:`rcsa.analysis.diagnosis.state.Analysis.calibrated_knobs`):
+    the best prediction of what was measured, where ``corrected_h`` adds the effect alone.
+
+    Parameters
+    ----------
+    a : Analysis
+
+    Returns
+    -------
+    dict
+        ``{"effects", "h": [per measurement], "gap_db", "parameters_moved_sd"}``.
+    """
+    d = a.decision
+    cands, values = [], []
+    if d.status != "none":
+        best = d.ranking[0]
+        cands, values = [best.candidate], [best.map]
+        if a.second is not None:
+            cands.append(a.second[0].candidate)
+            values.append(a.second[0].map)
+    knobs, moves = a.calibrated_knobs(cands, values)
+    p = a.problem
+    h_lines = [a.problem.solver.tip_h(p.builder.parts(p.tools[c.index], knobs[c.index]), c.grid_lines)
+               for c in p.configs]
+    return {"effects": [c.name for c in cands], "h": [complex_to_wire(h) for h in a.full_h(cands, values, knobs)],
+            "gap_db": _db_rms(a, h_lines), "parameters_moved_sd": moves}
+
+
 def build_response(a: Analysis) -> dict[str, Any]:
     """The JSON-ready response of a finished :class:`~rcsa.analysis.diagnosis.state.Analysis`."""
     response_started = time.perf_counter()
@@ -335,6 +368,7 @@ def build_response(a: Analysis) -> dict[str, Any]:
         "effects": effects,
         "ranking": ranking,
         "model_form": model_form_block(a),
+        "calibrated": calibrated_block(a),
         "not_applicable": [{"effect": e, "reason": reason} for e, (reason, _) in a.not_applicable.items()],
         "not_observable_at_standstill": list(NOT_OBSERVABLE_AT_STANDSTILL),
         "not_observable_sentence": STANDSTILL_SENTENCE,

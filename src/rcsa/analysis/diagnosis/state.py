@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -500,8 +500,59 @@ class Analysis:
         shift = self.features_of(cands, values) - self.problem.base_features
         return float(np.linalg.norm(self.like.w @ shift))
 
-    def full_h(self, cands: Sequence[Candidate], values: Sequence[np.ndarray]) -> list[np.ndarray]:
-        """Model ``h`` on every measurement's own (full) lines."""
+    def calibrated_knobs(self, cands: Sequence[Candidate], values: Sequence[np.ndarray]
+                         ) -> tuple[list[Knobs], dict[str, float]]:
+        """The candidates at their values and the nuisance at its most probable draw given the measurements.
+
+        The base model's own parameters may be anywhere within their stated tolerances; the
+        measurements say where. A linear (Kalman) update from the Monte-Carlo draws, which
+        pair each draw's nuisance parameters ``u`` with its noisy features ``f``:
+        ``u* = ū + C_uf Σ⁻¹ r``, ``r`` the remainder of the measured features about the model
+        with the candidates (``C_uf`` their sample cross-covariance, Σ the discrepancy). The
+        draws' spindle receptances (a measured spindle's noise) are not updated.
+
+        Parameters
+        ----------
+        cands : sequence of Candidate
+        values : sequence of numpy.ndarray
+
+        Returns
+        -------
+        knobs : list of Knobs
+            One per measurement.
+        moves : dict
+            Each updated parameter's move in prior standard deviations (``config:knob`` for
+            per-measurement knobs).
+        """
+        p = self.problem
+        u, names = p.draw_parameters(self.request.options.monte_carlo_draws)
+        s = self.disc.samples
+        n = min(u.shape[0], s.shape[0])
+        u, s = u[:n], s[:n]
+        du = u - u.mean(axis=0)
+        cross = du.T @ s / max(n - 1, 1)
+        r = p.measured_features - (self.features_of(cands, values) + self.disc.mu)
+        step = cross @ np.linalg.solve(self.disc.sigma, r)
+        latent = u.mean(axis=0) + step
+        sd = np.maximum(du.std(axis=0), 1e-300)
+        per: list[dict[str, float]] = [{} for _ in p.configs]
+        moves: dict[str, float] = {}
+        for (c, knob, kind), v, dv, sdv in zip(names, latent, step, sd, strict=True):
+            value = float(np.exp(v)) if kind == "log" else float(v)
+            for i in (range(len(p.configs)) if c is None else [c]):
+                per[i][knob] = value
+            moves[knob if c is None else f"{c}:{knob}"] = float(dv / sdv)
+        base = self.knobs_of(cands, values)
+        out = []
+        for fields in per:
+            # the drawn value replaces the base's own factor (1, or 0 m): the candidates' factors stay
+            out.append(replace(base, **{k: (getattr(base, k) + v if k == "stickout_offset_m"
+                                            else getattr(base, k) * v) for k, v in fields.items()}))
+        return out, moves
+
+    def full_h(self, cands: Sequence[Candidate], values: Sequence[np.ndarray],
+               knobs: Sequence[Knobs] | None = None) -> list[np.ndarray]:
+        """Model ``h`` on every measurement's own (full) lines (``knobs``: one per measurement instead)."""
         p = self.problem
         k = self.knobs_of(cands, values)
         out = []
@@ -512,7 +563,7 @@ class Analysis:
             if hit is None:
                 base = None if p.measured is None else BaseReceptance(p.full_bases[key].receptance)
                 hit = solvers[key] = (Solver(m.frequency_hz, cache_size=4), PartsBuilder(p.spec, p.plane, base))
-            out.append(hit[0].tip_h(hit[1].parts(m.tool, k)))
+            out.append(hit[0].tip_h(hit[1].parts(m.tool, k if knobs is None else knobs[len(out)])))
         return out
 
 
