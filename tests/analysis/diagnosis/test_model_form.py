@@ -175,6 +175,7 @@ def test_a_3d_holder_outside_the_calibration_is_given_its_model_form(case, model
     default point model (rigid joint): the diagnosis proposes the clamping's form, and the
     corrected FRF comes within 1 dB of the 3-D truth (the base is 2.4-4.3 dB off)."""
     from benchmarks.diagnosis_outside import corrected_db_error
+
     from tests.analysis.diagnosis import truth_solid3d
 
     assert case in truth_solid3d.dataset_cases_outside_calibration()
@@ -193,6 +194,7 @@ def test_the_calibrated_model_moves_the_nuisance_where_the_measurements_put_it()
     ``corrected_h`` is the base, 1.7 dB from the truth; the calibrated model, the base's own
     parameters moved to where the measurements put them, comes within 0.6 dB."""
     from benchmarks.diagnosis_outside import corrected_db_error
+
     from tests.analysis.diagnosis import truth_solid3d
 
     trial = truth_solid3d.make_solid_trial(np.random.default_rng([77, 0]), "bonded", options={

@@ -276,13 +276,13 @@ def dataset_cases_outside_calibration(directory: Path | None = None) -> list[str
     """The cases of the 3-D data set the clamping coefficients were not fitted on.
 
     Every case of ``tests/data/solid3d/cases.json`` but the calibration's
-    (:data:`tests.oracles.solid3d.clamping_scores.CALIBRATION`, read when called: the list
+    (:data:`tests.oracles.solid3d.clamping_scores.CALIBRATION_CASES`, read when called: the list
     follows the data set and its calibration) and :data:`NOT_A_HOLDER`.
     """
     from tests.oracles.solid3d import clamping_scores, dataset
 
     index = json.loads(((directory or dataset.DATA_DIR) / "cases.json").read_text())
-    return [n for n in index["cases"] if n not in clamping_scores.CALIBRATION and n not in NOT_A_HOLDER]
+    return [n for n in index["cases"] if n not in clamping_scores.CALIBRATION_CASES and n not in NOT_A_HOLDER]
 
 
 def dataset_base_document(case: dict[str, Any], model: str) -> dict[str, Any]:
