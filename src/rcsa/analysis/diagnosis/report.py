@@ -427,6 +427,13 @@ def gap_map_label(feature: str) -> str:
     return f"{kind} {int(m.group(2)) + 1}{what}"
 
 
+def _corrected_label(effect: dict[str, Any]) -> str:
+    """Legend of a corrected FRF: ``+ effect``, or ``→ contact (clamping_model)`` for a model form."""
+    if effect.get("proposed_model"):
+        return f"→ {effect['proposed_model']} ({effect['effect']})"
+    return f"+ {effect['effect']}"
+
+
 def diagnosis_figure(a: Analysis, response: dict[str, Any] | None = None) -> Figure:
     """Measured, base and corrected FRFs per measurement, and the gap map before/after.
 
@@ -464,7 +471,7 @@ def diagnosis_figure(a: Analysis, response: dict[str, Any] | None = None) -> Fig
                   zorder=2)
         if corrected is not None:
             ax.loglog(m.frequency_hz, np.abs(corrected[i]) * 1e6, color="tab:red", lw=0.9,
-                      label=f"+ {effects[0]['effect']}", zorder=3)
+                      label=_corrected_label(effects[0]), zorder=3)
         log_frequency_ticks(ax, float(m.frequency_hz[0]), float(m.frequency_hz[-1]))
         ax.set_title(f"measurement {m.label} (stickout {m.tool.stickout_m * 1e3:.1f} mm)", fontsize=9)
         ax.set_ylabel("|h| [µm/N]", fontsize=8)
