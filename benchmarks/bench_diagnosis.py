@@ -417,7 +417,9 @@ def summarise(records: list[dict]) -> dict:
         bins[f"{lo:g}-{hi:g}"] = {"n": len(rs), "top1": rate(rs, "top1"), "equivalence": rate(rs, "equivalent"),
                                   "miss": float(np.mean([r["status"] == "none" for r in rs])) if rs else None}
     classes = [c for c in truth.EFFECTS if any(r["effect"] == c for r in records)]
-    columns = [*truth.EFFECTS, "ambiguous"]
+    # model forms (clamping_model, interface_scale) are verdicts too: a column each
+    forms = sorted({r["verdict"] for r in records if r["verdict"] not in truth.EFFECTS} - {"ambiguous"})
+    columns = [*truth.EFFECTS, *forms, "ambiguous"]
     confusion = {h: dict.fromkeys(columns, 0) for h in classes}
     for r in records:
         col = "ambiguous" if r["status"] == "ambiguous" else r["verdict"]
