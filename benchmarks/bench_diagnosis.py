@@ -147,11 +147,13 @@ DEFAULT_OUT = REPO / "benchmarks" / "results" / "diagnosis.json"
 #: Seeds whose trials were looked at while the diagnosis was tuned (the figures published before
 #: issue 31 — matched 1, hybrid 2, 3-D 3, doubled scatter 4, out of the catalogue 5 — and the
 #: claim-rule and model-form calibration of issue 31: hybrid 2 and 6, doubled scatter 2 and 4,
-#: the 3-D data-set cases 31). Their figures say how the rules were chosen, not how they do.
-TUNING_SEEDS = (1, 2, 3, 4, 5, 6, 31)
+#: the 3-D data-set cases 31; hybrid 3102, first meant for evaluation: a run of it stopped after
+#: 174 trials was looked at trial by trial before the claim rule's scatter bound was set, so it
+#: is a tuning seed now). Their figures say how the rules were chosen, not how they do.
+TUNING_SEEDS = (1, 2, 3, 4, 5, 6, 31, 3102)
 #: Seeds never used while tuning, one per benchmark: ``--evaluation`` picks the benchmark's own,
 #: and the published figures of issue 31 come from them.
-EVALUATION_SEEDS = {"matched": 3101, "hybrid": 3102, "solid3d": 3103, "scatter2": 3104, "out_of_catalogue": 3105,
+EVALUATION_SEEDS = {"matched": 3101, "hybrid": 3112, "solid3d": 3103, "scatter2": 3104, "out_of_catalogue": 3105,
                     "solid3d_cases": 3106}
 
 

@@ -383,6 +383,7 @@ def build_response(a: Analysis) -> dict[str, Any]:
                      "tolerances": dict(a.request.tolerances),
                      "log_evidence_base": a.log_z0,
                      "scatter_scale": a.scatter_scale,
+                     "remainder_beyond_scatter": a.remainder_beyond_scatter,
                      "timings_s": {**a.timings_s, "response": time.perf_counter() - response_started}},
         "notes": notes,
         **spindle,

@@ -147,6 +147,8 @@ class Analysis:
         # The ranking and the ambiguity between candidates stay at the stated Σ: widening it
         # would only compress the differences between them.
         self.judge, self.scatter_scale = self.like, 1.0
+        #: whether a claim's remainder lay beyond every scatter scale the prior allows (not weighed)
+        self.remainder_beyond_scatter = False
         if self.decision.status != "none":
             holds, self.scatter_scale, self.judge = self.claim_holds(self.decision.ranking[0])
             if not holds:
@@ -184,12 +186,24 @@ class Analysis:
         :data:`SCATTER_P`, or beyond every draw), the candidate is refitted with Σ·ŝ² and must
         still clear the claim threshold; a remainder within the null's own spread (ŝ up to
         ~1.3 by chance with a few dozen features) weighs nothing (issue 31: weighing it turned
-        right effects of SNR 5-10 into ``none``).
+        right effects of SNR 5-10 into ``none``), and so does one beyond every scale the scatter
+        prior allows (ŝ > ``MAX_SCATTER_SCALE`` unclipped): no understatement of the tolerances the
+        diagnosis allows for makes it, so it is structure the candidate lacks — a right effect
+        of another form at high SNR (a distributed contact fitted by the lumped joint leaves
+        ŝ ≈ 10) — which is reported as the remainder, not taken as scatter
+        (:attr:`remainder_beyond_scatter`).
         """
         opts, p = self.request.options, self.problem
         feats = self.features_at(fit.candidate, fit.map)
-        scale = self.remainder_scale(feats)
+        raw = self.remainder_scale(feats, clip=False)
+        scale = min(raw, MAX_SCATTER_SCALE)
         if scale > 1.0 and self.residual_p_value(feats) > max(SCATTER_P, 1.0 / (self.disc.samples.shape[0] + 1)):
+            scale = 1.0
+        if raw > MAX_SCATTER_SCALE:
+            # beyond every scatter scale the prior allows: the remainder is structure the
+            # candidate lacks (its form error, or another effect), not understated tolerances,
+            # and says nothing about how wide Σ is; it is reported (residual_p_value), not weighed
+            self.remainder_beyond_scatter = True
             scale = 1.0
         if scale <= 1.0:
             return fit.log_bayes_factor > opts.claim_threshold, 1.0, self.like
@@ -421,18 +435,18 @@ class Analysis:
                               judge, float(judge(f1)))
         return refit.log_bayes_factor > opts.claim_threshold
 
-    def remainder_scale(self, model_features: np.ndarray) -> float:
+    def remainder_scale(self, model_features: np.ndarray, clip: bool = True) -> float:
         """How much more the data scatter about ``model_features`` than tolerances and noise allow.
 
         ``ŝ = √(χ² / median χ²_MC)``, the Mahalanobis χ² of the remainder over the median of
-        the Monte-Carlo null's (which carries the features' own non-Gaussian spread), kept in
-        ``[1, MAX_SCATTER_SCALE]``.
+        the Monte-Carlo null's (which carries the features' own non-Gaussian spread), at least 1
+        and, with ``clip``, at most ``MAX_SCATTER_SCALE``.
         """
         w = self.like.w
         r = self.problem.measured_features - (model_features + self.disc.mu)
         null = np.sum((self.disc.samples @ w.T) ** 2, axis=1)
         ratio = float(np.sum((w @ r) ** 2)) / max(float(np.median(null)), 1e-300)
-        return float(np.clip(np.sqrt(ratio), 1.0, MAX_SCATTER_SCALE))
+        return float(np.clip(np.sqrt(ratio), 1.0, MAX_SCATTER_SCALE if clip else np.inf))
 
     def spindle_share(self, model_features: np.ndarray) -> float:
         """Share of the expected scatter along the remainder that the measured spindle's own uncertainty makes.
