@@ -862,12 +862,14 @@ def run_hybrid(args: argparse.Namespace) -> None:
     out.parent.mkdir(parents=True, exist_ok=True)
     partial = out.with_suffix(".partial.jsonl")  # every record as it comes: a run cut short can still be scored
     partial.write_text("")
+    load = [os.getloadavg()[0]]
     with ProcessPoolExecutor(max_workers=args.workers) as pool:
         futures = [pool.submit(run_hybrid_trial, i, e, k, args.seed, args.length_log_sd)
                    for i, (e, k) in enumerate(plan)]
         for n, fut in enumerate(futures):
             rec = fut.result()
             records.append(rec)
+            load.append(os.getloadavg()[0])
             with partial.open("a") as fh:
                 fh.write(json.dumps(rec) + "\n")
             print(f"[{n + 1}/{len(plan)}] {rec['kind']:16s} {rec['effect']:29s} -> {rec['status']:10s} "
@@ -875,6 +877,7 @@ def run_hybrid(args: argparse.Namespace) -> None:
                   f"{rec['runtime_s']:.1f} s", flush=True)
     summary = hybrid_summary(records, args, planned=len(plan))
     summary["wall_time_s"] = time.perf_counter() - t0
+    summary["settings"]["load_average"] = {"min": min(load), "max": max(load), "median": float(np.median(load))}
     out.write_text(json.dumps({"summary": summary, "trials": records}, indent=1))
     partial.unlink()
     print(f"wrote {out}")
