@@ -39,7 +39,16 @@ Run::
         --out benchmarks/results/diagnosis_scatter2.json
     .venv/bin/python benchmarks/bench_diagnosis.py --out-of-catalogue --trials-per-class 15 --seed 5 --workers 2
 
-The last three are the classes outside the diagnosis's own model world (issue 24;
+Issue 31's published figures, on evaluation seeds (``EVALUATION_SEEDS``)::
+
+    .venv/bin/python benchmarks/bench_diagnosis.py --hybrid --trials-per-class 12 --evaluation --workers 2 \
+        --out benchmarks/results/diagnosis_hybrid_eval.json
+    .venv/bin/python benchmarks/bench_diagnosis.py --trials 100 --tolerance-scale 2 --evaluation --workers 2 \
+        --out benchmarks/results/diagnosis_scatter2_eval.json
+    .venv/bin/python benchmarks/bench_diagnosis.py --solid3d --trials-per-class 3 --evaluation --workers 2
+    .venv/bin/python benchmarks/bench_diagnosis.py --solid3d-cases --trials-per-class 2 --evaluation --workers 2
+
+The solid3d, scatter and out-of-catalogue runs are the classes outside the diagnosis's own model world (issue 24;
 ``benchmarks/diagnosis_outside.py`` says what each scores).
     .venv/bin/python benchmarks/bench_diagnosis.py --calibrate holder_tool
 
