@@ -39,7 +39,16 @@ Run::
         --out benchmarks/results/diagnosis_scatter2.json
     .venv/bin/python benchmarks/bench_diagnosis.py --out-of-catalogue --trials-per-class 15 --seed 5 --workers 2
 
-The last three are the classes outside the diagnosis's own model world (issue 24;
+Issue 31's published figures, on evaluation seeds (``EVALUATION_SEEDS``)::
+
+    .venv/bin/python benchmarks/bench_diagnosis.py --hybrid --trials-per-class 12 --evaluation --workers 2 \
+        --out benchmarks/results/diagnosis_hybrid_eval.json
+    .venv/bin/python benchmarks/bench_diagnosis.py --trials 100 --tolerance-scale 2 --evaluation --workers 2 \
+        --out benchmarks/results/diagnosis_scatter2_eval.json
+    .venv/bin/python benchmarks/bench_diagnosis.py --solid3d --trials-per-class 3 --evaluation --workers 2
+    .venv/bin/python benchmarks/bench_diagnosis.py --solid3d-cases --trials-per-class 2 --evaluation --workers 2
+
+The solid3d, scatter and out-of-catalogue runs are the classes outside the diagnosis's own model world (issue 24;
 ``benchmarks/diagnosis_outside.py`` says what each scores).
     .venv/bin/python benchmarks/bench_diagnosis.py --calibrate holder_tool
 
@@ -51,6 +60,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 import time
@@ -92,7 +102,18 @@ def _first_calls(case: str, run, modules_before_first_call: bool) -> dict:
         yardstick.append((time.process_time() - c0, time.perf_counter() - t0))
     pc = float(np.median([x[0] for x in yardstick]))
     pw = float(np.median([x[1] for x in yardstick]))
+    # warm: caches filled (the spindle side kept across calls, as a running service has it)
+    predictions.SIDES.size = predictions.SIDES_KEPT
+    rcsa.predict(assembly)
+    warm_pred = []
+    for _ in range(9):
+        c0 = time.process_time()
+        rcsa.predict(assembly)
+        warm_pred.append(time.process_time() - c0)
+    pwc = float(np.median(warm_pred))
     return {"case": case, "first_cpu_s": first[0], "first_wall_s": first[1], "warm_cpu_s": warm[0],
+            "warm_prediction_cpu_s": pwc, "first_over_warm_prediction_cpu": first[0] / pwc,
+            "bytecode_cached": bool(sys.pycache_prefix) or not sys.dont_write_bytecode,
             "warm_wall_s": warm[1], "cold_in_warm_process_cpu_s": cold_again[0],
             "cold_in_warm_process_wall_s": cold_again[1], "prediction_cpu_s": pc, "prediction_wall_s": pw,
             "first_over_prediction_cpu": first[0] / pc, "first_over_prediction_wall": first[1] / pw,
@@ -132,14 +153,44 @@ from rcsa.measured.hybrid import base_resolver, measured_base  # noqa: E402
 EQUIVALENT = ({"holder_tool_joint", "insertion_depth"}, {"spindle_holder_joint", "spindle_rotational_receptance"})
 SNR_BINS = ((0.0, 5.0), (5.0, 10.0), (10.0, 20.0), (20.0, float("inf")))
 DEFAULT_OUT = REPO / "benchmarks" / "results" / "diagnosis.json"
+#: Seeds whose trials were looked at while the diagnosis was tuned (the figures published before
+#: issue 31 — matched 1, hybrid 2, 3-D 3, doubled scatter 4, out of the catalogue 5 — and the
+#: claim-rule and model-form calibration of issue 31: hybrid 2 and 6, doubled scatter 2 and 4,
+#: the 3-D data-set cases 31; hybrid 3102, first meant for evaluation: a run of it stopped after
+#: 174 trials was looked at trial by trial before the claim rule's scatter bound was set, so it
+#: is a tuning seed now). Their figures say how the rules were chosen, not how they do.
+TUNING_SEEDS = (1, 2, 3, 4, 5, 6, 31, 3102)
+#: Seeds never used while tuning, one per benchmark: ``--evaluation`` picks the benchmark's own,
+#: and the published figures of issue 31 come from them.
+EVALUATION_SEEDS = {"matched": 3101, "hybrid": 3112, "solid3d": 3103, "scatter2": 3104, "out_of_catalogue": 3105,
+                    "solid3d_cases": 3106}
+
+
+def seed_role(seed: int) -> str:
+    """``tuning``, ``evaluation`` or ``other`` (written into every result file)."""
+    return "tuning" if seed in TUNING_SEEDS else "evaluation" if seed in EVALUATION_SEEDS.values() else "other"
+
+
+#: Model forms whose proposal names a class's hidden physics: the ``holder_tool_joint`` truth is
+#: the tool core held by springs per unit length along the whole insertion (``truth.py``), i.e.
+#: a clamping along the insertion — ``clamping_model`` proposing ``contact`` (or ``bonded``) is
+#: that physics, named as a model form. Scored as a right answer, and counted apart
+#: (``top1_strict`` does not).
+FORM_NAMES_CLASS = {"holder_tool_joint": ("clamping_model", ("contact", "bonded"))}
 
 
 def _equivalent(a: str, b: str) -> bool:
     return a == b or any(a in s and b in s for s in EQUIVALENT)
 
 
-def run_trial(index: int, effect: str, seed: int, tolerance_scale: float = 1.0) -> dict:
-    """One trial: truth, diagnosis, scores (runs in a worker process)."""
+def _names(effect: str, named: str, proposed_model: str | None) -> bool:
+    """Whether a verdict ``named`` (with the model it proposes) names the hidden ``effect``."""
+    form = FORM_NAMES_CLASS.get(effect)
+    return named == effect or (form is not None and named == form[0] and proposed_model in form[1])
+
+
+def run_trial(index: int, effect: str, seed: int, tolerance_scale: float = 1.0, extra=None) -> dict:
+    """One trial: truth, diagnosis, scores (runs in a worker process); ``extra(analysis)`` adds to the record."""
     rng = np.random.default_rng([seed, index])
     t0 = time.perf_counter()
     trial = truth.make_trial(rng, effect, tolerance_scale=tolerance_scale)
@@ -151,12 +202,13 @@ def run_trial(index: int, effect: str, seed: int, tolerance_scale: float = 1.0) 
     snr = 0.0
     if effect != "none":
         snr = float(np.linalg.norm(a.like.w @ (_features(a, trial.clean) - _features(a, trial.clean_null))))
-    return _record(index, effect, trial.params, a, r, snr, t_diag, t_truth, c_diag)
+    out = _record(index, effect, trial.params, a, r, snr, t_diag, t_truth, c_diag)
+    return out if extra is None else {**out, **extra(a)}
 
 
 def run_hybrid_trial(index: int, effect: str, kind: str, seed: int,
-                     length_log_sd: float = truth_hybrid.LENGTH_LOG_SD) -> dict:
-    """One hybrid trial (measured spindle of ``kind``): truth, diagnosis, scores."""
+                     length_log_sd: float = truth_hybrid.LENGTH_LOG_SD, extra=None) -> dict:
+    """One hybrid trial (measured spindle of ``kind``): truth, diagnosis, scores (``extra`` as in :func:`run_trial`)."""
     rng = np.random.default_rng([seed, index])
     t0 = time.perf_counter()
     trial = truth_hybrid.make_hybrid_trial(rng, effect, kind, length_log_sd=length_log_sd)
@@ -181,15 +233,17 @@ def run_hybrid_trial(index: int, effect: str, kind: str, seed: int,
     out = _record(index, effect, trial.params, a, r, snr, t_diag, t_truth, c_diag)
     out["kind"] = kind
     out["not_applicable"] = [x["effect"] for x in r["not_applicable"]]
-    return out
+    return out if extra is None else {**out, **extra(a)}
 
 
 def _false_claim(r: dict) -> bool:
-    """A claim (identified or ambiguous) naming no effect equivalent to the hidden one."""
+    """A claim (identified or ambiguous) naming no effect equivalent to the hidden one (a model
+    form that names the hidden physics, :data:`FORM_NAMES_CLASS`, is no false claim)."""
     if r["status"] == "none":
         return False
     named = [r["verdict"], *r["ambiguous_with"]]
-    return r["effect"] == "none" or not any(_equivalent(x, r["effect"]) for x in named)
+    return r["effect"] == "none" or not (any(_equivalent(x, r["effect"]) for x in named)
+                                         or _names(r["effect"], r["verdict"], r.get("form_verdict")))
 
 
 def _features(a: Analysis, hs: list[np.ndarray]) -> np.ndarray:
@@ -202,14 +256,16 @@ def _record(index: int, effect: str, params: dict, a: Analysis, r: dict, snr: fl
     v = r["verdict"]
     first = r["effects"][0] if r["effects"] else None
     ranked = [e["effect"] for e in r["ranking"]]
-    correct = v["status"] == "identified" and v["effect"] == effect
+    proposed = first.get("proposed_model") if first else None
+    correct = v["status"] == "identified" and _names(effect, v["effect"], proposed)
     out = {
         "index": index, "effect": effect, "params": {k: float(x) for k, x in params.items()},
         "status": v["status"], "verdict": v["effect"], "ambiguous_with": v["ambiguous_with"],
         "log_bayes_factor": v["log_bayes_factor"], "snr_true": snr, "snr_fitted": v["snr"],
-        "top1": correct, "best_ranked": ranked[0] if ranked else "none",
+        "top1": correct, "top1_strict": v["status"] == "identified" and v["effect"] == effect,
+        "form_verdict": proposed, "best_ranked": ranked[0] if ranked else "none",
         "in_set": effect in [v["effect"], *v["ambiguous_with"]],
-        "equivalent": (v["status"] == "identified" and _equivalent(v["effect"], effect)) or (
+        "equivalent": (v["status"] == "identified" and (_equivalent(v["effect"], effect) or correct)) or (
             v["status"] == "ambiguous" and all(_equivalent(x, effect) for x in [v["effect"], *v["ambiguous_with"]])),
         "confirmed": v["confirmed_on_held_out"],
         "held_out_gap_ratio": first["held_out_gap_ratio"] if first else None,
@@ -305,6 +361,15 @@ def timing_fresh(repeats: int = 3, cases: tuple[str, ...] = FRESH_CASES) -> dict
     import subprocess
     import tempfile
 
+    env = dict(os.environ)
+    if os.environ.get("RCSA_TIMING_BYTECODE") == "1":
+        # the modules' bytecode compiled once, as an installed wheel or the Docker image has it
+        # (an editable install under PYTHONDONTWRITEBYTECODE=1 compiles every module in every process)
+        prefix = tempfile.mkdtemp(prefix="rcsa-pyc-")
+        env["PYTHONPYCACHEPREFIX"] = prefix
+        subprocess.run([sys.executable, "-m", "compileall", "-q", str(REPO / "src"), str(REPO / "benchmarks"),
+                        str(REPO / "tests")], env=env, check=True, capture_output=True)
+        env["PYTHONDONTWRITEBYTECODE"] = "1"
     out = {}
     for case in cases:
         runs = []
@@ -315,15 +380,37 @@ def timing_fresh(repeats: int = 3, cases: tuple[str, ...] = FRESH_CASES) -> dict
                 path = Path(tempfile.mkdtemp()) / "request.json"
                 path.write_text(json.dumps(_fresh_request(case)[0], default=lambda x: np.asarray(x).tolist()))
                 argv = [sys.executable, __file__, "--first-call", case, str(path)]
-            done = subprocess.run(argv, capture_output=True, text=True, check=True, cwd=REPO)
+            done = subprocess.run(argv, capture_output=True, text=True, check=True, cwd=REPO, env=env)
             runs.append(json.loads(done.stdout.strip().splitlines()[-1]))
         best = min(runs, key=lambda x: x["first_cpu_s"])
         out[case] = {**best, "runs": runs}
         print(f"{case:22s} first in a process: CPU {best['first_cpu_s']:.2f} s (wall {best['first_wall_s']:.2f}) = "
-              f"{best['first_over_prediction_cpu']:.0f}x one RA-1 prediction at 10 000 lines ({best['prediction_cpu_s'] * 1e3:.1f} ms "
-              f"CPU); Σ cached {best['warm_cpu_s']:.2f} s; Σ dropped {best['cold_in_warm_process_cpu_s']:.2f} s | "
+              f"{best['first_over_warm_prediction_cpu']:.0f}x a warm RA-1 prediction at 10 000 lines "
+              f"({best['warm_prediction_cpu_s'] * 1e3:.1f} ms), {best['first_over_prediction_cpu']:.0f}x a cold one "
+              f"({best['prediction_cpu_s'] * 1e3:.1f} ms CPU); Σ cached {best['warm_cpu_s']:.2f} s; Σ dropped "
+              f"{best['cold_in_warm_process_cpu_s']:.2f} s; bytecode cached {best['bytecode_cached']} | "
               f"load {best['load_average'][0]:.1f} ({best['rcsa']})", flush=True)
     return out
+
+
+def upper_bound_95(k: int, n: int) -> float:
+    """One-sided 95 % Clopper–Pearson upper bound of a rate seen ``k`` times in ``n`` trials.
+
+    >>> round(upper_bound_95(0, 60), 4)   # 1 − 0.05^(1/60)
+    0.0487
+    """
+    if n == 0:
+        return 1.0
+    if k >= n:
+        return 1.0
+
+    def cdf(p: float) -> float:  # P(X ≤ k), X ~ Binomial(n, p)
+        return sum(math.comb(n, j) * p**j * (1 - p) ** (n - j) for j in range(k + 1))
+    lo, hi = k / n, 1.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if cdf(mid) > 0.05 else (lo, mid)
+    return hi
 
 
 def summarise(records: list[dict]) -> dict:
@@ -341,7 +428,9 @@ def summarise(records: list[dict]) -> dict:
         bins[f"{lo:g}-{hi:g}"] = {"n": len(rs), "top1": rate(rs, "top1"), "equivalence": rate(rs, "equivalent"),
                                   "miss": float(np.mean([r["status"] == "none" for r in rs])) if rs else None}
     classes = [c for c in truth.EFFECTS if any(r["effect"] == c for r in records)]
-    columns = [*truth.EFFECTS, "ambiguous"]
+    # model forms (clamping_model, interface_scale) are verdicts too: a column each
+    forms = sorted({r["verdict"] for r in records if r["verdict"] not in truth.EFFECTS} - {"ambiguous"})
+    columns = [*truth.EFFECTS, *forms, "ambiguous"]
     confusion = {h: dict.fromkeys(columns, 0) for h in classes}
     for r in records:
         col = "ambiguous" if r["status"] == "ambiguous" else r["verdict"]
@@ -363,6 +452,9 @@ def summarise(records: list[dict]) -> dict:
     return {
         "trials": len(records), "effect_trials": len(eff), "null_trials": len(null),
         "top1_all": rate(eff, "top1"), "top1_snr_ge_10": rate(strong, "top1"), "n_snr_ge_10": len(strong),
+        "top1_strict_snr_ge_10": rate(strong, "top1_strict") if all("top1_strict" in r for r in strong) else None,
+        "model_form_verdicts": dict(Counter(f"{r['effect']}->{r['verdict']}:{r['form_verdict']}" for r in records
+                                            if r.get("form_verdict"))),
         "equivalence_all": rate(eff, "equivalent"), "equivalence_snr_ge_10": rate(strong, "equivalent"),
         "set_accuracy_all": rate(eff, "in_set"), "set_accuracy_snr_ge_10": rate(strong, "in_set"),
         "best_ranked_snr_ge_10": float(np.mean([r["best_ranked"] == r["effect"] for r in strong])) if strong else None,
@@ -370,6 +462,7 @@ def summarise(records: list[dict]) -> dict:
         # a verdict naming no effect of the hidden one's equivalence class (on no-effect data: any claim)
         "false_claims_all_trials": float(np.mean([_false_claim(r) for r in records])) if records else None,
         "false_claims_all_count": f"{sum(_false_claim(r) for r in records)}/{len(records)}",
+        "false_claims_all_upper_95": upper_bound_95(sum(_false_claim(r) for r in records), len(records)),
         "wrong_effect_claims": int(sum(_false_claim(r) for r in eff)),
         "false_claims_count": f"{sum(r['status'] != 'none' for r in null)}/{len(null)}",
         "miss_rate": float(np.mean([r["status"] == "none" for r in eff])) if eff else None,
@@ -397,11 +490,13 @@ def print_summary(s: dict) -> None:
         return "n/a" if x is None else f"{x:.3f}"
     print(f"trials {s['trials']} ({s['effect_trials']} with an effect, {s['null_trials']} without)")
     print(f"top-1 (identified and correct): all {pct(s['top1_all'])}, SNR>=10 {pct(s['top1_snr_ge_10'])} "
-          f"(n={s['n_snr_ge_10']})")
+          f"(n={s['n_snr_ge_10']}); strictly the effect's own name: {pct(s['top1_strict_snr_ge_10'])}; "
+          f"model forms as verdict: {s['model_form_verdicts']}")
     print(f"equivalence-class: all {pct(s['equivalence_all'])}, SNR>=10 {pct(s['equivalence_snr_ge_10'])}; "
           f"set accuracy SNR>=10 {pct(s['set_accuracy_snr_ge_10'])}; best-ranked SNR>=10 "
           f"{pct(s['best_ranked_snr_ge_10'])}")
-    print(f"false claims, all trials (no effect of the hidden class named): {s['false_claims_all_count']}")
+    print(f"false claims, all trials (no effect of the hidden class named): {s['false_claims_all_count']} "
+          f"(95 % upper bound {100 * s['false_claims_all_upper_95']:.1f} %)")
     print(f"false claims on no-effect data: {s['false_claims_count']} ({pct(s['false_claims_on_null'])}); "
           f"miss rate {pct(s['miss_rate'])}")
     for k, b in s["by_snr"].items():
@@ -541,20 +636,54 @@ def main() -> None:
     ap.add_argument("--timing-child", choices=FRESH_CASES, help=argparse.SUPPRESS)
     ap.add_argument("--solid3d", action="store_true",
                     help="3-D reference truths, bonded and point base (writes diagnosis_solid3d.json)")
+    ap.add_argument("--solid3d-cases", nargs="*", metavar="CASE",
+                    help="cases of the 3-D data set tests/data/solid3d (default: every one outside the clamping "
+                         "calibration), one tap test each per base model (writes diagnosis_solid3d_cases.json)")
+    ap.add_argument("--base-models", nargs="*", default=["point", "point_ra1", "bonded"],
+                    choices=["point", "point_ra1", "bonded"], help="--solid3d-cases: the base models")
     ap.add_argument("--solid3d-write-data", action="store_true",
                     help="only build and store the 3-D truths' reduced models (tests/data/diagnosis_solid3d)")
     ap.add_argument("--out-of-catalogue", action="store_true",
                     help="holder crack, non-uniform layer, holder mass (writes diagnosis_out_of_catalogue.json)")
+    ap.add_argument("--claim-data", nargs="+", choices=["hybrid", "matched", "scatter2"], metavar="SET",
+                    help="only record what the claim rule needs (diagnosis_calibration.claim_data) on a tuning seed: "
+                         "hybrid (--trials-per-class per class and kind), matched and scatter2 (per class)")
     ap.add_argument("--form-error", action="store_true",
                     help="only measure the candidates' form error on correct fits (--trials-per-class per effect)")
+    ap.add_argument("--evaluation", action="store_true",
+                    help="use the benchmark's evaluation seed (EVALUATION_SEEDS: never used while tuning)")
     args = ap.parse_args()
+    if args.evaluation:
+        kind = ("solid3d_cases" if args.solid3d_cases is not None else "solid3d" if args.solid3d else
+                "out_of_catalogue" if args.out_of_catalogue else "hybrid" if args.hybrid else
+                "scatter2" if args.tolerance_scale == 2.0 else "matched")
+        args.seed = EVALUATION_SEEDS[kind]
     if args.solid3d_write_data:
         from tests.analysis.diagnosis import truth_solid3d
 
         truth_solid3d.write_data()
         return
-    if args.solid3d or args.out_of_catalogue:
+    if args.solid3d or args.out_of_catalogue or args.solid3d_cases is not None:
         run_outside(args)
+        return
+    if args.claim_data:
+        from benchmarks.diagnosis_calibration import claim_trial
+
+        n = args.trials_per_class
+        plan = [(e, k, 1.0) for k in args.kinds for e in truth_hybrid.HYBRID_EFFECTS for _ in range(n)
+                if "hybrid" in args.claim_data]
+        plan += [(e, "matched", 1.0) for e in truth.EFFECTS for _ in range(n) if "matched" in args.claim_data]
+        plan += [(e, "matched", 2.0) for e in truth.EFFECTS for _ in range(n) if "scatter2" in args.claim_data]
+        out = args.out.with_suffix(".jsonl")
+        with ProcessPoolExecutor(max_workers=args.workers) as pool, out.open("a") as fh:
+            futures = [pool.submit(claim_trial, i, e, k, args.seed, ts) for i, (e, k, ts) in enumerate(plan)]
+            for n_done, fut in enumerate(futures):
+                rec = fut.result()
+                rec["seed"] = args.seed
+                fh.write(json.dumps(rec) + "\n")
+                fh.flush()
+                print(f"[{n_done + 1}/{len(plan)}] {rec['kind']:16s} {rec['effect']:29s} -> {rec['status']:10s} "
+                      f"{rec['verdict']:29s} SNR {rec['snr_true']:5.1f}", flush=True)
         return
     if args.form_error:
         from benchmarks.diagnosis_calibration import form_error
@@ -616,6 +745,7 @@ def main() -> None:
     summary["command"] = " ".join(["benchmarks/bench_diagnosis.py", *sys.argv[1:]])
     summary["settings"] = {"stickouts_m": list(truth.STICKOUTS_M), "band_hz": [50.0, 8000.0], "line_step_hz": 2.0,
                            "noise": "1 % + floor -50 dB of peak, 5 averages", "seed": args.seed,
+                           "seed_role": seed_role(args.seed),
                            "tolerance_scale": args.tolerance_scale, "workers": args.workers,
                            "machine": machine(), "load_average": {"min": min(load), "max": max(load),
                                                                   "median": float(np.median(load))}}
@@ -630,7 +760,12 @@ def run_outside(args: argparse.Namespace) -> None:
     from benchmarks import diagnosis_outside as outside
     from tests.analysis.diagnosis import truth_solid3d
 
-    if args.solid3d:
+    if args.solid3d_cases is not None:
+        cases = args.solid3d_cases or truth_solid3d.dataset_cases_outside_calibration()
+        plan = [(c, m) for m in args.base_models for c in cases for _ in range(args.trials_per_class)]
+        name, fn = "diagnosis_solid3d_cases.json", outside.run_dataset_trial
+        jobs = [(i, c, m, args.seed) for i, (c, m) in enumerate(plan)]
+    elif args.solid3d:
         variants = list(truth_solid3d.VARIANTS)
         plan = [(v, m) for m in ("bonded", "point") for v in variants for _ in range(args.trials_per_class)]
         name, fn = "diagnosis_solid3d.json", outside.run_solid_trial
@@ -653,12 +788,16 @@ def run_outside(args: argparse.Namespace) -> None:
             load.append(os.getloadavg()[0])
             with partial.open("a") as fh:
                 fh.write(json.dumps(rec) + "\n")
-            print(f"[{n + 1}/{len(jobs)}] {rec.get('variant', rec.get('effect')):18s} {rec.get('base_model', ''):6s} "
+            print(f"[{n + 1}/{len(jobs)}] {rec.get('variant', rec.get('case', rec.get('effect'))):18s} "
+                  f"{rec.get('base_model', ''):6s} "
                   f"-> {rec['status']:10s} {rec['verdict']:29s} dB {rec['base_db_error']:.2f} -> "
-                  f"{rec['corrected_db_error']:.2f} {rec['runtime_s']:.1f} s", flush=True)
-    summary = outside.summarise_solid(records) if args.solid3d else outside.summarise_ooc(records)
+                  f"{rec['corrected_db_error']:.2f} (calibrated {rec['calibrated_db_error']:.2f}) "
+                  f"{rec['runtime_s']:.1f} s", flush=True)
+    summary = (outside.summarise_dataset(records) if args.solid3d_cases is not None else
+               outside.summarise_solid(records) if args.solid3d else outside.summarise_ooc(records))
     summary.update(command=" ".join(["benchmarks/bench_diagnosis.py", *sys.argv[1:]]),
                    wall_time_s=time.perf_counter() - t0, machine=machine(), workers=args.workers, seed=args.seed,
+                   seed_role=seed_role(args.seed),
                    load_average={"min": min(load), "max": max(load), "median": float(np.median(load))})
     print(json.dumps(summary, indent=1))
     out.write_text(json.dumps({"summary": summary, "trials": records}, indent=1))
@@ -697,6 +836,7 @@ def hybrid_summary(records: list[dict], args: argparse.Namespace, planned: int) 
                            "line_step_hz": 2.0, "noise": "taps 1 % + floor -50 dB of peak, 5 averages; "
                            "stored spindle FRFs 0.3 %", "plane": "spindle_nose", "kinds": list(args.kinds),
                            "trials_per_class_and_kind": args.trials_per_class, "seed": args.seed,
+                           "seed_role": seed_role(args.seed),
                            "direct_frf_length_log_sd": args.length_log_sd,
                            "workers": args.workers, "machine": machine()}
     for k in kinds:
@@ -731,12 +871,14 @@ def run_hybrid(args: argparse.Namespace) -> None:
     out.parent.mkdir(parents=True, exist_ok=True)
     partial = out.with_suffix(".partial.jsonl")  # every record as it comes: a run cut short can still be scored
     partial.write_text("")
+    load = [os.getloadavg()[0]]
     with ProcessPoolExecutor(max_workers=args.workers) as pool:
         futures = [pool.submit(run_hybrid_trial, i, e, k, args.seed, args.length_log_sd)
                    for i, (e, k) in enumerate(plan)]
         for n, fut in enumerate(futures):
             rec = fut.result()
             records.append(rec)
+            load.append(os.getloadavg()[0])
             with partial.open("a") as fh:
                 fh.write(json.dumps(rec) + "\n")
             print(f"[{n + 1}/{len(plan)}] {rec['kind']:16s} {rec['effect']:29s} -> {rec['status']:10s} "
@@ -744,6 +886,7 @@ def run_hybrid(args: argparse.Namespace) -> None:
                   f"{rec['runtime_s']:.1f} s", flush=True)
     summary = hybrid_summary(records, args, planned=len(plan))
     summary["wall_time_s"] = time.perf_counter() - t0
+    summary["settings"]["load_average"] = {"min": min(load), "max": max(load), "median": float(np.median(load))}
     out.write_text(json.dumps({"summary": summary, "trials": records}, indent=1))
     partial.unlink()
     print(f"wrote {out}")

@@ -116,3 +116,54 @@ def form_error(args: argparse.Namespace) -> None:
                              for r in pairs]) if pairs else float("nan")
             print(f"{rho:10.2f}  {ratio:11.2f}  {spurious:21.2f}  {found:17.2f}")
     Path(args.out).with_name("second_effect_calibration.json").write_text(json.dumps(rows, indent=1))
+
+
+# ---------------------------------------------------------------------------------- the claim rule
+#: Scales of Σ at which the claims of the best effects and the best model form are re-weighed.
+CLAIM_SCALES = (1.0, 1.25, 1.5, 2.0, 2.5, 3.0, 4.0)
+#: Effects (best ranked) whose ln BF is recorded at every scale (ambiguity at a scale).
+CLAIM_EFFECTS = 3
+
+
+def claim_data(a) -> dict:  # type: ignore[no-untyped-def]
+    """What an offline claim rule needs of one diagnosis: every candidate's stated fit, and for the
+    best :data:`CLAIM_EFFECTS` effects and the best model form their remainder and their ln BF at
+    :data:`CLAIM_SCALES`."""
+    from rcsa.analysis.diagnosis.attribution import Likelihood, fit_candidate
+
+    p = a.problem
+    fits = a.stated_fits
+    out: dict = {"fits": [[f.candidate.key, f.candidate.name, bool(f.candidate.model_form), f.log_bayes_factor,
+                           f.log_evidence] for f in fits]}
+    w = a.like.w
+    null = np.sum((a.disc.samples @ w.T) ** 2, axis=1)
+    judges = [Likelihood(p.measured_features, a.disc, np.arange(p.base_features.size), a.request.options.likelihood,
+                         scale=s) for s in CLAIM_SCALES]
+    effects = sorted((f for f in fits if not f.candidate.model_form), key=lambda x: -x.log_bayes_factor)
+    forms = sorted((f for f in fits if f.candidate.model_form), key=lambda x: -x.log_bayes_factor)
+    for tag, group in (("effects", effects[:CLAIM_EFFECTS]), ("forms", forms[:1])):
+        out[tag] = []
+        for f in group:
+            feats = a.features_at(f.candidate, f.map)
+            r = p.measured_features - (feats + a.disc.mu)
+            lnbf = [fit_candidate(f.group or f.candidate, a.features_at, j, float(j(p.base_features))
+                                  ).log_bayes_factor for j in judges]
+            out[tag].append({"key": f.candidate.key, "name": f.candidate.name,
+                             "chi2_remainder": float(np.sum((w @ r) ** 2)), "null_median": float(np.median(null)),
+                             "p_remainder": a.residual_p_value(feats),
+                             "chi2_shift": float(np.sum((w @ (feats - p.base_features)) ** 2)),
+                             "scale": a.remainder_scale(feats), "lnbf_at_scale": lnbf})
+    out["chi2_base"] = float(np.sum((w @ (p.measured_features - p.base_features - a.disc.mu)) ** 2))
+    out["p_base"] = a.residual_p_value(p.base_features)
+    return out
+
+
+def claim_trial(index: int, hidden: str, kind: str, seed: int, tolerance_scale: float = 1.0) -> dict:
+    """One tuning trial: ``kind`` a measured spindle's kind (hybrid) or ``matched`` (RA-1, FE truth)."""
+    from benchmarks import bench_diagnosis as bench
+
+    if kind == "matched":
+        rec = bench.run_trial(index, hidden, seed, tolerance_scale, extra=claim_data)
+        rec["kind"] = "matched" if tolerance_scale == 1.0 else f"scatter{tolerance_scale:g}"
+        return rec
+    return bench.run_hybrid_trial(index, hidden, kind, seed, extra=claim_data)

@@ -1187,8 +1187,59 @@ class DiagnosedEffect(_Response):
     evidence_method: str | None = None
     residual_p_value: float | None = None
     given: str | None = Field(None, description="A second effect: the first, held at its fit.")
+    proposed_model: str | None = Field(None, description="A model-form candidate (clamping_model, interface_scale): "
+                                                         "the holder-tool model form it proposes (point, bonded, "
+                                                         "contact).")
     corrected_h: list[ComplexArray] | None = Field(None, description="Per measurement, in request order: the "
                                                    "prediction with this effect added, m/N.")
+
+
+class ModelFormAlternative(_Response):
+    """One form a ``clamping_model`` candidate weighed (its evidence is their mean)."""
+
+    model: str = Field(description="point, bonded or contact.")
+    log_bayes_factor: float
+    parameters: dict[str, FittedParameter] = Field(default_factory=dict)
+
+
+class ModelFormCandidate(_Response):
+    """A model-form candidate: another form of the holder-tool model, not an effect inside it."""
+
+    candidate: str = Field(description="clamping_model or interface_scale.")
+    proposed_model: str = Field(description="The holder-tool model form it proposes (point, bonded, contact).")
+    log_bayes_factor: float = Field(description="Against the base model, at the stated tolerances.")
+    log_evidence_over_best_effect: float | None = Field(None, description="ln evidence over the best effect's "
+                                                                           "(positive: the form explains more).")
+    parameters: dict[str, FittedParameter] = Field(default_factory=dict)
+    physical: dict[str, float] = Field(default_factory=dict, description="The fit in physical terms.")
+    forms: list[ModelFormAlternative] | None = None
+
+
+class ModelFormProposal(_Response):
+    """The model form the verdict proposes."""
+
+    candidate: str
+    model: str
+
+
+class ModelForm(_Response):
+    """The model-form candidates beside the effects (extension)."""
+
+    base_model: str = Field(description="The base's holder-tool model form (point, bonded, contact).")
+    candidates: list[ModelFormCandidate] = Field(default_factory=list)
+    proposed: ModelFormProposal | None = Field(None, description="The form proposed as the verdict, if any.")
+    sentence: str
+
+
+class CalibratedModel(_Response):
+    """The verdict's model with the base's own parameters moved within their tolerances to where the
+    measurements put them (extension): the best prediction of what was measured."""
+
+    effects: list[str] = Field(description="The verdict's effect(s) or model form included (none: empty).")
+    h: list[ComplexArray] = Field(description="Per measurement, in request order, on its lines, m/N.")
+    gap_db: float = Field(description="dB rms to the measurements on the analysis lines.")
+    parameters_moved_sd: dict[str, float] = Field(description="Each nuisance parameter's move, in its own "
+                                                              "stated sd.")
 
 
 class DiagnosisResult(_Response):
@@ -1199,6 +1250,10 @@ class DiagnosisResult(_Response):
     effects: list[DiagnosedEffect] = Field(description="The verdict's effect(s), with corrected_h.")
     ranking: list[DiagnosedEffect] = Field(default_factory=list, description="Every candidate, best first "
                                                                              "(without FRFs).")
+    model_form: ModelForm | None = Field(None, description="The model-form candidates beside the effects: each "
+                                                            "form's ln BF, its margin over the best effect, and "
+                                                            "the form proposed, if any.")
+    calibrated: CalibratedModel | None = None
     not_observable_at_standstill: list[str] = Field(default_factory=list)
     not_observable_sentence: str | None = None
     not_applicable: list[NotApplicable] | None = Field(None, description="Effects that cannot exist on this "

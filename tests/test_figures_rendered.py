@@ -35,7 +35,7 @@ def test_the_readme_renders_its_figures_from_json():
     text = (REPO / "README.md").read_text(encoding="utf-8")
     names = {m["name"] for m in render_figures.MARKER.finditer(text)}
     assert {"benchmarks-table", "hybrid-accuracy-table", "modal-fit-sd", "clamping-cost",
-            "scatter2-false-claims"} <= names
+            "scatter2-false-claims", "diagnosis-evaluation-table", "solid3d-table"} <= names
     assert sum(1 for _ in render_figures.MARKER.finditer(text)) >= 25
 
 

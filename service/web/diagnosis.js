@@ -144,7 +144,8 @@
     const what = v.status === "none"
       ? (result.gap && result.gap.significant ? "Gap left unexplained by every candidate" : "No unmodelled effect needed")
       : v.status === "ambiguous" ? "Ambiguous: " + [v.effect].concat(v.ambiguous_with).join(", ")
-        : "Verdict: " + v.effect;
+        : "Verdict: " + v.effect + (result.effects[0] && result.effects[0].proposed_model
+          ? " → " + result.effects[0].proposed_model : "");
     $("diag-verdict-title").textContent = what + " (" + v.status + ")";
     $("diag-sentence").textContent = v.sentence;
     $("diag-gap").textContent = result.gap.summary || "";
@@ -154,6 +155,11 @@
         (e.held_out_gap_before_db !== null && e.held_out_gap_before_db !== undefined
           ? "; held out: " + web.fmt(e.held_out_gap_before_db, 3) + " → " + web.fmt(e.held_out_gap_after_db, 3) + " dB"
           : "") + "."
+      : "";
+    // the calibrated model: the verdict's effect with the base's own parameters where the data put them
+    const c = result.calibrated;
+    $("diag-shrink").textContent += c && c.gap_db !== null && c.gap_db !== undefined
+      ? " Calibrated model (tolerances where the measurements put them): " + web.fmt(c.gap_db, 3) + " dB."
       : "";
   }
 
@@ -242,7 +248,7 @@
       const series = [{ y: magnitudeUm(baseH[i]), cls: "series-base", id: "diag-base-" + i, label: "base model" }];
       if (effect && effect.corrected_h) {
         series.push({ y: magnitudeUm(effect.corrected_h[i]), cls: "series-corrected", id: "diag-corrected-" + i,
-          label: "base + " + effect.effect });
+          label: effect.proposed_model ? "base → " + effect.proposed_model : "base + " + effect.effect });
       }
       series.push({ y: magnitudeUm(m.h), cls: "series-measured", id: "diag-measured-" + i, label: "measured " + m.label });
       let lo = Infinity;

@@ -86,6 +86,32 @@ def test_diagnosis_summary_says_verdict_and_shrink():
     assert ranking.rows[1][3] == "—"  # no held-out ratio: said, not invented
 
 
+def test_diagnosis_summary_names_a_proposed_model_form_and_the_calibrated_model():
+    """A model form as the verdict reads ``clamping_model → bonded``; the calibrated model's gap and
+    its most moved nuisance parameter are shown; the model-form candidates get their own table."""
+    response = {
+        "gap": {"db_rms": 3.1, "chi2_per_feature": 12.0, "p_value": 0.005},
+        "verdict": {"effect": "clamping_model", "status": "identified", "sentence": "switch to bonded"},
+        "effects": [{"effect": "clamping_model", "proposed_model": "bonded", "log_bayes_factor": 14.2, "snr": 9.0,
+                     "confirmed_on_held_out": True, "gap_before_db": 3.2, "gap_after_db": 0.25}],
+        "ranking": [{"effect": "clamping_model", "log_bayes_factor": 14.2}],
+        "model_form": {"base_model": "point", "sentence": "Proposed: switching ...",
+                       "candidates": [{"candidate": "clamping_model", "proposed_model": "bonded",
+                                       "log_bayes_factor": 14.2, "log_evidence_over_best_effect": 8.1}],
+                       "proposed": {"candidate": "clamping_model", "model": "bonded"}},
+        "calibrated": {"effects": ["clamping_model"], "h": [], "gap_db": 0.21,
+                       "parameters_moved_sd": {"bearing_stiffness_scale": 0.4, "tool_youngs_scale": -1.6}},
+    }
+    tables = diagnosis_summary(response)
+    assert [t.title for t in tables] == ["Diagnosis", "Candidates, best first", "Model form (base: point)"]
+    rows = _rows(tables[0])
+    assert rows["verdict"] == ("clamping_model → bonded (identified)",)
+    assert rows["calibrated model"] == ("0.21 dB rms (clamping_model; tolerances where the data put them, most "
+                                        "moved: tool_youngs_scale -1.6 σ)",)
+    assert tables[2].rows == (("clamping_model → bonded", "14.2", "8.1"),)
+    assert tables[2].caption == "Proposed: switching ..."
+
+
 def test_diagnosis_summary_without_a_claim():
     response = {"gap": {"db_rms": 0.4, "chi2_per_feature": 0.9, "p_value": 0.6, "summary": "no gap"},
                 "verdict": {"effect": "none", "status": "none"}, "effects": [], "ranking": []}

@@ -43,6 +43,10 @@ def test_json_examples(client, name, path, model):
     if name == "diagnosis.json":
         assert result.verdict.effect == "holder_tool_joint" and result.verdict.status == "identified"
         assert len(result.effects[0].corrected_h) == 3
+        # the extensions of issue 31, typed: the model forms weighed and the calibrated model
+        assert result.model_form.base_model == "point" and result.model_form.proposed is None
+        assert [c.candidate for c in result.model_form.candidates] == ["clamping_model"]
+        assert len(result.calibrated.h) == 3 and result.calibrated.effects == ["holder_tool_joint"]
     if name == "identification.json":
         assert result.status == "identified"
         assert result.joints.holder_tool.stiffness_n_m == pytest.approx(5.7e6, rel=0.05)

@@ -4,32 +4,24 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from rcsa.analysis.effects.sensitivities import effects as _effects
-from rcsa.analysis.lobes.modal_model import ModalModel, modal_model_from_assembly
-from rcsa.analysis.lobes.request import LobesRequest, parse_lobes_request
-from rcsa.analysis.lobes.robust import (
-    RobustLobes,
-    RobustRequest,
-    robust_lobes,
-    split_robust_request,
-)
-from rcsa.analysis.lobes.robust_sdm import robust_sdm_limits
-from rcsa.analysis.lobes.semi_discretization import SemiDiscretizationResult
-from rcsa.analysis.lobes.zoa import LobeResult, frf_grid_notes
 from rcsa.analysis.progress import Progress
-from rcsa.app.predictions import predict, predict_draws
 from rcsa.app.stores import library_store, open_store, resolver
 from rcsa.errors import InputError, NotFoundError
-from rcsa.libraries.sync import LibraryStore
-from rcsa.measured.hybrid import MeasurementSource
 from rcsa.model.bounds import MAX_FREQUENCY_LINES
-from rcsa.model.contract import SpindleSpec, parse_assembly
-from rcsa.model.uncertainty import parse_prediction_request
-from rcsa.model.wire import complex_to_wire
+
+# Each analysis loads its own modules when it runs (lobes, effects, predictions and the stores
+# are a third of a second to import): a diagnosis in a fresh process pays only for its own.
+if TYPE_CHECKING:
+    from rcsa.analysis.lobes.modal_model import ModalModel
+    from rcsa.analysis.lobes.request import LobesRequest
+    from rcsa.analysis.lobes.robust import RobustLobes, RobustRequest
+    from rcsa.analysis.lobes.zoa import LobeResult
+    from rcsa.libraries.sync import LibraryStore
+    from rcsa.measured.hybrid import MeasurementSource
 
 __all__ = ["ANALYSIS_KINDS", "LobesAnswer", "cutting_conditions", "diagnose", "effects", "identify",
            "resolve_lobes_references", "run_analysis", "stability_lobes", "stability_lobes_answer",
@@ -43,6 +35,9 @@ ANALYSIS_KINDS = ("prediction", "lobes", "effects", "identification", "diagnosis
 
 def _parse_lobes(request: Mapping[str, Any]) -> tuple[LobesRequest, RobustRequest | None]:
     """A stability-lobes request and its robust part."""
+    from rcsa.analysis.lobes.request import parse_lobes_request
+    from rcsa.analysis.lobes.robust import split_robust_request
+
     body, robust = split_robust_request(request)
     parsed = parse_lobes_request(body)
     if parsed.assembly is not None and "uncertainty" in parsed.assembly:
@@ -83,6 +78,8 @@ class LobesAnswer:
         """The response's fields beside the nominal diagram: ``notes`` (all of them),
         ``flute_length_m`` (with an assembly), ``conditions``, the robust fields, and with ``"method": "auto"`` the method
         used and why (``method``, ``method_reason``)."""
+        from rcsa.analysis.lobes.semi_discretization import SemiDiscretizationResult
+
         own = self.nominal.to_dict().get("notes", [])
         out: dict[str, Any] = {"notes": [*own, *self.notes]}
         if self.method_reason:
@@ -103,6 +100,9 @@ class LobesAnswer:
 
 def _modes(parsed: LobesRequest, spec: Any, frequency_hz: np.ndarray, h: np.ndarray) -> ModalModel | None:
     """The SDM's modes of an assembly: its exact modes when analytical (None: fitted to ``h`` by solve)."""
+    from rcsa.analysis.lobes.modal_model import modal_model_from_assembly
+    from rcsa.model.contract import SpindleSpec
+
     if parsed.method.name != "semi_discretization" or not isinstance(spec.spindle, SpindleSpec):
         return None
     return modal_model_from_assembly(spec, modes_per_direction=parsed.method.modes_per_direction,
@@ -139,6 +139,8 @@ def cutting_conditions(parsed: LobesRequest) -> dict[str, Any]:
 def _described(parsed: LobesRequest, frequency_hz: np.ndarray, h: np.ndarray) -> dict[str, Any]:
     """The :class:`LobesAnswer` fields that say how a diagram was made: its conditions and, for
     zero-order lobes, the FRF grid's notes."""
+    from rcsa.analysis.lobes.zoa import frf_grid_notes
+
     zoa = parsed.method.name == "zoa"
     return {"notes": tuple(frf_grid_notes(frequency_hz, h)) if zoa else (), "conditions": cutting_conditions(parsed)}
 
@@ -161,6 +163,12 @@ def stability_lobes_answer(request: Mapping[str, Any], *, store: MeasurementSour
     -------
     LobesAnswer
     """
+    from rcsa.analysis.lobes.robust import RobustLobes, robust_lobes
+    from rcsa.analysis.lobes.robust_sdm import robust_sdm_limits
+    from rcsa.analysis.lobes.semi_discretization import SemiDiscretizationResult
+    from rcsa.app.predictions import predict, predict_draws
+    from rcsa.model.contract import parse_assembly
+
     parsed, robust = _parse_lobes(request)
     zoa = parsed.method.name == "zoa"
     if parsed.assembly is None:
@@ -283,6 +291,8 @@ def resolve_lobes_references(request: Mapping[str, Any], *, store: MeasurementSo
 
 def _stored_frf(store: MeasurementSource | None, measurement_id: str, field: str) -> dict[str, Any]:
     """A stored measurement's ``h`` as an inline FRF ``{"frequency_hz", "h": {"real", "imag"}}``."""
+    from rcsa.model.wire import complex_to_wire as _complex_to_wire
+
     try:
         measurement = (store if store is not None else open_store(None)).get(measurement_id)
     except NotFoundError as exc:  # as an unknown spindle measurement is
@@ -292,7 +302,7 @@ def _stored_frf(store: MeasurementSource | None, measurement_id: str, field: str
         raise InputError(f"{field}.measurement_id", f"measurement {measurement_id} holds no driving-point receptance "
                                                    f"h (it holds {', '.join(sorted(measurement.frfs))})")
     return {"frequency_hz": np.asarray(measurement.frequency_hz, dtype=float).tolist(),
-            "h": complex_to_wire(h)}
+            "h": _complex_to_wire(h)}
 
 
 def stability_lobes(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
@@ -329,7 +339,9 @@ def effects(request: Mapping[str, Any], *, store: MeasurementSource | None = Non
     (``"spindle": {"measurement_id": ...}``) is looked up (the default store when omitted);
     ``progress(done, total)`` is called at each step (:mod:`rcsa.analysis.progress`).
     """
-    return _effects(request, resolver(store), progress)
+    from rcsa.analysis.effects.sensitivities import effects as run
+
+    return run(request, resolver(store), progress)
 
 
 def identify(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
@@ -385,6 +397,8 @@ def validate(kind: str, request: Mapping[str, Any], *, store: MeasurementSource 
     elif kind == "lobes":
         _parse_lobes(request)
     elif kind == "prediction" and isinstance(request, Mapping) and "uncertainty" in request:
+        from rcsa.model.uncertainty import parse_prediction_request
+
         parse_prediction_request(request)  # the option is checked against the spindle and the grid
     # prediction and effects: the budget's estimate already parsed the assembly
 
@@ -399,6 +413,8 @@ def run_analysis(kind: str, request: Mapping[str, Any], *, store: MeasurementSou
         An unknown kind, or an invalid request.
     """
     if kind == "prediction":
+        from rcsa.app.predictions import predict
+
         return predict(request, store=store, max_lines=max_lines).to_dict()
     if kind == "lobes":
         return stability_lobes(request, store=store, max_lines=max_lines)

@@ -40,7 +40,7 @@ TOOL_OVERRIDES = ("material", "diameter_m", "shank_diameter_m", "overall_length_
 #: Candidate effects a diagnosis may be limited to (``diagnosis.candidates.CANDIDATE_NAMES``).
 DIAGNOSIS_EFFECTS = ("holder_tool_joint", "spindle_holder_joint", "bearings", "shear_and_rotary_inertia",
                      "fluted_section", "insertion_depth", "sensor_mass", "joint_damping",
-                     "spindle_rotational_receptance")
+                     "spindle_rotational_receptance", "clamping_model", "interface_scale")
 DIAGNOSIS_LIKELIHOODS = ("student_t", "gaussian")
 #: Diagnosis tolerances (1σ) and the largest value of each (``diagnosis.request.parse_request``).
 DIAGNOSIS_TOLERANCES = dict.fromkeys((

@@ -12,20 +12,25 @@ from __future__ import annotations
 import os
 import threading
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from rcsa.libraries.sync import DIRECTORY as LIBRARIES_DIRECTORY
-from rcsa.libraries.sync import LibraryStore
-from rcsa.measured.hybrid import MeasurementSource, base_resolver
-from rcsa.measured.store import Measurement, MeasurementStore, is_measurement_id
-from rcsa.model.spindle_side import BaseResolver
 from rcsa.physics.subassembly_cache import LruStore
+
+# The stores' modules (h5py, SQLite, the library formats) load when a store is opened, not with
+# this module: a diagnosis or prediction that needs no store does not pay for them.
+if TYPE_CHECKING:
+    from rcsa.libraries.sync import LibraryStore
+    from rcsa.measured.hybrid import MeasurementSource
+    from rcsa.measured.store import Measurement, MeasurementStore
+    from rcsa.model.spindle_side import BaseResolver
 
 __all__ = ["CachedMeasurements", "library_store", "open_store", "resolver", "spindle_reference"]
 
 
 def open_store(path: str | os.PathLike[str] | None = None) -> MeasurementStore:
     """The store at ``path`` (the default store when None), created on first use."""
+    from rcsa.measured.store import MeasurementStore
+
     return MeasurementStore(path)
 
 
@@ -39,6 +44,10 @@ def library_store(store_path: str | os.PathLike[str] | None = None) -> LibrarySt
     One :class:`LibraryStore` per directory and process (it sets its database up once),
     made again if the directory was removed. None: the default store's.
     """
+    from rcsa.libraries.sync import DIRECTORY as LIBRARIES_DIRECTORY
+    from rcsa.libraries.sync import LibraryStore
+    from rcsa.measured.store import MeasurementStore
+
     with _LIBRARY_STORES_LOCK:
         if store_path is not None:
             found = _LIBRARY_STORES.get(str(Path(store_path).expanduser() / LIBRARIES_DIRECTORY))
@@ -62,6 +71,8 @@ def spindle_reference(text: str) -> dict[str, Any] | None:
     >>> spindle_reference("ra1.json") is None
     True
     """
+    from rcsa.measured.store import is_measurement_id
+
     return {"spindle": {"measurement_id": text}} if is_measurement_id(text) else None
 
 
@@ -70,8 +81,10 @@ def resolver(store: MeasurementSource | None = None) -> BaseResolver:
     opened: list[MeasurementSource] = []
 
     def resolve(spindle, frequency_hz):  # type: ignore[no-untyped-def]
+        from rcsa.measured.hybrid import base_resolver
+
         if not opened:
-            opened.append(store if store is not None else MeasurementStore())
+            opened.append(store if store is not None else open_store())
         return base_resolver(opened[0])(spindle, frequency_hz)
 
     return resolve

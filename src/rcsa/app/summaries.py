@@ -159,26 +159,59 @@ def batch_summary(result: Mapping[str, Any]) -> list[Table]:
     return [Table("Batch", ("id", "status", "first mode", "static stiffness", "min Re h (µm/N)"), shown, caption)]
 
 
+def _verdict_text(verdict: Mapping[str, Any], named: Mapping[str, Any] | None) -> str:
+    """The verdict's effect, or the model form it proposes (``clamping_model → contact``), and its status."""
+    effect = verdict.get("effect")
+    proposed = (named or {}).get("proposed_model")
+    what = f"{effect} → {proposed}" if proposed else str(effect)
+    return f"{what} ({verdict.get('status')})"
+
+
+def _calibrated_text(calibrated: Mapping[str, Any]) -> str:
+    """The calibrated model's gap and the nuisance parameter it moved most (in its own σ)."""
+    moved = {k: _num(v) for k, v in (calibrated.get("parameters_moved_sd") or {}).items()}
+    moved = {k: v for k, v in moved.items() if v is not None}
+    with_ = ", ".join(str(e) for e in calibrated.get("effects") or []) or "no effect"
+    text = f"{_fmt(calibrated.get('gap_db'), 3, unit='dB')} rms ({with_}; tolerances where the data put them"
+    if moved:
+        name = max(moved, key=lambda k: abs(moved[k] or 0.0))
+        text += f", most moved: {name} {moved[name]:+.2g} σ"
+    return text + ")"
+
+
+def _model_form_table(block: Mapping[str, Any]) -> Table | None:
+    """The model-form candidates (``model_form`` of a diagnosis response), None without any."""
+    rows = [(f"{c.get('candidate')} → {c.get('proposed_model')}", _fmt(c.get("log_bayes_factor"), 3),
+             _fmt(c.get("log_evidence_over_best_effect"), 3))
+            for c in block.get("candidates") or []]
+    if not rows:
+        return None
+    return Table(f"Model form (base: {block.get('base_model')})", ("candidate", "ln BF", "ln over best effect"),
+                 tuple(rows), str(block.get("sentence") or ""))
+
+
 def diagnosis_summary(result: Mapping[str, Any]) -> list[Table]:
     """The verdict, how far the gap shrinks with it (all measurements and held-out ones), the
-    fitted values, and the ranking of the candidate effects (a diagnosis response).
+    calibrated model's gap, the fitted values, the ranking of the candidate effects and the
+    model-form candidates (a diagnosis response).
 
     Parameters
     ----------
     result : mapping
-        The diagnosis response (``docs/contract.md`` "Diagnosis").
+        The diagnosis response (``docs/contract.md`` "Diagnosis"; ``model_form`` and
+        ``calibrated`` are read when present).
 
     Returns
     -------
     list of Table
-        The verdict (its sentence as the caption), the named effect's fitted values, then the
-        ranking.
+        The verdict (its sentence as the caption), the named effect's fitted values, the
+        ranking, then the model-form candidates.
     """
     verdict = result.get("verdict") or {}
     gap = result.get("gap") or {}
     effect = verdict.get("effect")
     named = next((e for e in result.get("effects") or [] if e.get("effect") == effect), None)
-    rows = [("verdict", f"{effect} ({verdict.get('status')})"),
+    rows = [("verdict", _verdict_text(verdict, named)),
             ("gap to the base model", f"{_fmt(gap.get('db_rms'), 3, unit='dB')} rms; χ²/n "
                                       f"{_fmt(gap.get('chi2_per_feature'), 3)}, p {_fmt(gap.get('p_value'), 2)}")]
     if named is not None:
@@ -190,14 +223,18 @@ def diagnosis_summary(result: Mapping[str, Any]) -> list[Table]:
                                    f"{_fmt(named.get('held_out_gap_after_db'), 3)} dB rms (ratio "
                                    f"{_fmt(named.get('held_out_gap_ratio'), 2)})"),
         ]
+    calibrated = result.get("calibrated")
+    if isinstance(calibrated, Mapping):
+        rows.append(("calibrated model", _calibrated_text(calibrated)))
     table = Table("Diagnosis", ("", ""), tuple(rows), str(verdict.get("sentence") or gap.get("summary") or ""))
     fitted = Table("Fitted values", ("parameter", "value"),
                    tuple((k, _fmt(v, 4)) for k, v in ((named or {}).get("physical") or {}).items()))
     ranking = [(str(e.get("effect")), _fmt(e.get("log_bayes_factor"), 3), _fmt(e.get("posterior_probability"), 3),
                 _fmt(e.get("held_out_gap_ratio"), 2)) for e in result.get("ranking") or []]
     shown, more = _clipped(ranking, "candidates")
+    forms = _model_form_table(result["model_form"]) if isinstance(result.get("model_form"), Mapping) else None
     return [table, *([fitted] if fitted.rows else []), Table("Candidates, best first", ("effect", "ln BF", "posterior", "held-out gap ratio"), shown,
-                         more)]
+                         more), *([forms] if forms is not None else [])]
 
 
 def _pockets(speed: np.ndarray, depth: np.ndarray, chatter: np.ndarray, rule: PocketRule,

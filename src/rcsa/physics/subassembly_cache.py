@@ -53,6 +53,7 @@ import numpy as np
 from rcsa.physics.algebra2x2 import inv2
 from rcsa.physics.arrays import ComplexArray, FloatArray
 from rcsa.physics.chain import Beam, Chain, Grid, Sym
+from rcsa.physics.elementwise import local_scratch
 from rcsa.physics.elimination import march, static_condense
 from rcsa.physics.sections import Section
 from rcsa.physics.segments import SixTerms, Waves, segment_terms
@@ -211,6 +212,12 @@ class _Entry:
     value_key: tuple[object, ...]
 
 
+#: The work arrays the caching grid computes kept terms and waves in (never a march's own).
+_TERMS_SCRATCH = "subassembly-terms"
+#: The arrays a :class:`Waves` keeps (everything else it computes is a temporary).
+_KEPT_WAVE_ARRAYS = ("ra", "s", "q", "qq", "d", "k", "inv_k")
+
+
 class _CachingGrid(Grid):
     """A :class:`Grid` that keeps each beam's six terms and each section's waves (fresh arrays,
     not the work arrays; read-only), least recently used dropped first."""
@@ -221,20 +228,32 @@ class _CachingGrid(Grid):
         self._kept_waves: LruStore[Section, Waves] = LruStore(max(max_beams // 4, 1))
 
     def waves(self, section: Section) -> Waves:
-        """Wavenumbers of ``section`` (kept: a Monte Carlo makes new sections all the time)."""
+        """Wavenumbers of ``section`` (kept: a Monte Carlo makes new sections all the time).
+
+        Computed in this thread's reusable work arrays (:func:`~rcsa.physics.elementwise.local_scratch`:
+        a fresh :class:`Scratch` per section cost more in setting its arrays up than the
+        arithmetic), and the arrays it keeps copied out of them.
+        """
         try:
             hit = self._kept_waves.peek(section)
         except TypeError:  # a section stacked over several tools (unhashable): not kept, as the plain grid does
             return super().waves(section)
-        return hit if hit is not None else self._kept_waves.put(section, Waves(self.omega_rad_s, section))
+        if hit is not None:
+            return hit
+        wv = Waves(self.omega_rad_s, section, local_scratch(_TERMS_SCRATCH), "kept.")
+        for name in _KEPT_WAVE_ARRAYS:
+            setattr(wv, name, np.array(getattr(wv, name)))
+        return self._kept_waves.put(section, wv)
 
     def beam_terms(self, beam: Beam) -> SixTerms:
-        """The beam's terms on this grid, computed once, read-only."""
+        """The beam's terms on this grid, computed once (fresh arrays, their temporaries in this
+        thread's reusable work arrays), read-only."""
         if beam.is_stacked:
             return super().beam_terms(beam)
 
         def make() -> SixTerms:
-            a, b, c, e, f, g = segment_terms(self.omega_rad_s, beam.section, beam.length_m, self.waves(beam.section))
+            a, b, c, e, f, g = segment_terms(self.omega_rad_s, beam.section, beam.length_m, self.waves(beam.section),
+                                             scratch=local_scratch(_TERMS_SCRATCH))
             return _frozen(a), _frozen(b), _frozen(c), _frozen(e), _frozen(f), _frozen(g)
 
         return self._terms.get(beam, make)

@@ -149,6 +149,34 @@ def test_the_point_joint_prior_reaches_a_real_clamping_from_a_stiff_given_joint(
     assert ht1.lo[0] == -2.0 and -2.5 < ht1.lo[1] <= -2.0
 
 
+# ------------------------------------------------------------------------- claims at the remainder's scatter
+@pytest.mark.parametrize(("raw", "p_value", "weighed_at", "beyond"), [
+    (2.0, 0.005, 2.0, False),  # significant, within the scatter prior: weighed at ŝ
+    (2.0, 0.5, 1.0, False),  # within the null's own spread: not weighed
+    (10.0, 0.005, 1.0, True),  # beyond every scale the prior allows: structure, reported, not weighed
+])
+def test_a_claim_is_weighed_at_its_remainders_scatter_only_where_scatter_can_make_it(small_request, raw, p_value,
+                                                                                        weighed_at, beyond):
+    """The rule of :meth:`Analysis.claim_holds` (issue 31): ŝ weighs a claim only when the remainder
+    is significant and an understatement the scatter prior allows (ŝ ≤ MAX_SCATTER_SCALE) could
+    make it; a weighed claim is the candidate refitted with Σ·ŝ²."""
+    small_request["options"] = {"monte_carlo_draws": 60, "effects": ["sensor_mass", "fluted_section"]}
+    a = state.analyse(small_request)
+    best = a.decision.ranking[0]
+    assert (a.decision.status, best.candidate.name) == ("identified", "sensor_mass")
+    a.remainder_scale = lambda f, clip=True: min(raw, MAX_SCATTER_SCALE) if clip else raw  # type: ignore[method-assign]
+    a.residual_p_value = lambda f, whitener=None: p_value  # type: ignore[method-assign]
+    a.remainder_beyond_scatter = False
+    holds, scale, judge = a.claim_holds(best)
+    assert scale == weighed_at and a.remainder_beyond_scatter is beyond
+    if weighed_at == 1.0:
+        assert judge is a.like and holds == (best.log_bayes_factor > a.request.options.claim_threshold)
+    else:
+        wide = Likelihood(a.problem.measured_features, a.disc, np.arange(a.problem.base_features.size),
+                          a.request.options.likelihood, scale=weighed_at)
+        assert judge(a.problem.base_features) == pytest.approx(wide(a.problem.base_features), rel=1e-12)
+
+
 # ------------------------------------------------------------------------- measured-spindle gate
 @pytest.mark.slow
 def test_an_exact_spindle_is_not_blamed_for_the_first_effects_remainder(store, monkeypatch):  # noqa: F811
@@ -162,7 +190,7 @@ def test_an_exact_spindle_is_not_blamed_for_the_first_effects_remainder(store, m
     spindle gate decides: with two effects at once the first one's remainder would otherwise
     widen Σ.)
     """
-    monkeypatch.setattr(state.Analysis, "remainder_scale", lambda self, f: 1.0)
+    monkeypatch.setattr(state.Analysis, "remainder_scale", lambda self, f, clip=True: 1.0)
     st, ids = store
     r0 = nose_receptance()[0].real
     req = hybrid_request(ids, "point_receptance", "spindle_nose",
@@ -214,11 +242,13 @@ def test_cached_3d_truths_are_consistent(name):
 # ------------------------------------------------------------------------- reduced 3-D slice
 @pytest.mark.slow
 def test_a_soft_layer_in_3d_is_named_on_the_point_base_and_corrected_toward_the_truth():
-    """One cached 3-D truth (a 1e13 N/m³ layer), stiff point base: a clamping effect, the FRF closer."""
+    """One cached 3-D truth (a 1e13 N/m³ layer), stiff point base: the clamping named — as its
+    model form (issue 31) or as the point joint's compliance —, the FRF closer."""
     from benchmarks.diagnosis_outside import run_solid_trial
 
     rec = run_solid_trial(0, "layer_k1e13", "point", 20260601)
-    assert rec["status"] == "identified" and rec["verdict"] in {"holder_tool_joint", "insertion_depth"}, rec
+    assert rec["status"] == "identified" and rec["verdict"] in {"clamping_model", "holder_tool_joint",
+                                                                 "insertion_depth"}, rec
     assert rec["corrected_db_error"] < 0.6 * rec["base_db_error"]
 
 

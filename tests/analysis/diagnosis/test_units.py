@@ -142,9 +142,14 @@ def test_every_candidate_at_its_null_value_is_the_base_model(spec, solver):
     cands, notes = catalogue(spec, [spec.tool], solver)
     assert {c.name for c in cands} == {"holder_tool_joint", "spindle_holder_joint", "bearings",
                                       "shear_and_rotary_inertia", "fluted_section", "insertion_depth",
-                                      "sensor_mass", "joint_damping", "spindle_rotational_receptance"}
-    assert notes == []
+                                      "sensor_mass", "joint_damping", "spindle_rotational_receptance",
+                                      "clamping_model"}  # interface_scale: a point base has no interface
+    assert notes == ["interface_scale: not a candidate because the base model's holder-tool joint is a point "
+                     "joint: there is no clamping interface to scale (clamping_model proposes a clamping "
+                     "instead)."]
     for c in cands:
+        if c.model_form:  # another model, not an effect at its null value (tests/analysis/diagnosis/test_model_form.py)
+            continue
         h = solver.tip_h(config_parts(spec, spec.tool, c.apply(Knobs(), c.null)))
         np.testing.assert_allclose(h, h0, rtol=1e-12, err_msg=c.name)
         assert np.all(c.lo <= c.null) and np.all(c.null <= c.hi), c.name
@@ -197,3 +202,21 @@ def test_added_compliance_is_a_chain_item_adding_to_the_receptance(spec):
     beam = next(i for i in chain if hasattr(i, "section"))
     on_base = inv2(march((added, beam), omega, start_compliance=r)[0])
     np.testing.assert_allclose(on_base, inv2(march((beam,), omega, inv2(r + c))[0]), rtol=1e-8)
+
+
+def test_the_parabola_stencils_give_the_normal_equations_vertex():
+    """The per-line stencil (the least squares solved once per line) and the normal equations
+    solved per call give the same vertex; clipped stencils fall back to the latter."""
+    from rcsa.analysis.diagnosis.features import _vertex, parabola_stencils
+
+    rng = np.random.default_rng(4)
+    x = np.log(np.sort(rng.uniform(100.0, 6000.0, 300)))
+    y = -0.5 * ((x[None, :] - x[[80, 150, 220]][:, None]) / 0.02) ** 2 + 0.01 * rng.standard_normal((3, 300))
+    i = np.array([80, 150, 221])
+    lo, hi = np.array([40, 100, 200]), np.array([120, 200, 260])
+    for sign, yy in ((1.0, y), (-1.0, -y)):
+        plain = _vertex(x, yy, i, lo, hi, sign)
+        fast = _vertex(x, yy, i, lo, hi, sign, stencils=parabola_stencils(x))
+        np.testing.assert_allclose(fast[0], plain[0], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(fast[1], plain[1], rtol=1e-12)
+    assert np.all(np.abs(plain[0] - x[i]) < 0.02)  # a real vertex, not the fallback to the line

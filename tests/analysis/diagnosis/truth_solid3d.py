@@ -60,8 +60,9 @@ from tests.oracles.solid3d.case import (
 )
 from tests.oracles.solid3d.reduction import ReducedModel, tip_receptance
 
-__all__ = ["CLASSES", "DATA_DIR", "FREQUENCY_HZ", "STICKOUTS_M", "VARIANTS", "SolidTrial", "base_document",
-           "load_reduced", "make_solid_trial", "nuisance_knobs", "solid_case", "truth_h", "write_data"]
+__all__ = ["CLASSES", "DATA_DIR", "FREQUENCY_HZ", "STICKOUTS_M", "VARIANTS", "DatasetTrial", "SolidTrial",
+           "base_document", "dataset_base_document", "dataset_cases_outside_calibration", "load_reduced",
+           "make_dataset_trial", "make_solid_trial", "nuisance_knobs", "solid_case", "truth_h", "write_data"]
 
 DATA_DIR = Path(__file__).resolve().parents[2] / "data" / "diagnosis_solid3d"
 STICKOUTS_M = (0.030, 0.040, 0.050)
@@ -264,3 +265,80 @@ def nuisance_knobs(nz: SolidNuisance) -> Any:
                  structure_density_scale=s["rho"], loss_factor_scale=s["loss"], bearing_stiffness_scale=s["bearing_k"],
                  bearing_damping_scale=s["bearing_c"], sh_translational_scale=s["sh_kt"],
                  sh_rotational_scale=s["sh_kr"], sh_damping_scale=s["sh_c"])
+
+
+# ---------------------------------------------------------------------------------- any case of the data set
+#: Cases of ``tests/data/solid3d`` that are no holder family for the diagnosis: a holder tied rigid.
+NOT_A_HOLDER = ("rigid_holder",)
+
+
+def dataset_cases_outside_calibration(directory: Path | None = None) -> list[str]:
+    """The cases of the 3-D data set the clamping coefficients were not fitted on.
+
+    Every case of ``tests/data/solid3d/cases.json`` but the calibration's
+    (:data:`tests.oracles.solid3d.clamping_scores.CALIBRATION_CASES`, read when called: the list
+    follows the data set and its calibration) and :data:`NOT_A_HOLDER`.
+    """
+    from tests.oracles.solid3d import clamping_scores, dataset
+
+    index = json.loads(((directory or dataset.DATA_DIR) / "cases.json").read_text())
+    return [n for n in index["cases"] if n not in clamping_scores.CALIBRATION_CASES and n not in NOT_A_HOLDER]
+
+
+def dataset_base_document(case: dict[str, Any], model: str) -> dict[str, Any]:
+    """The diagnoser's base model of a data-set case on RA-1's spindle (no frequency grid).
+
+    The case's holder, tool and materials in the contract's terms as the data set states them
+    (only a real flute cross-section, which the contract has no field for, is left out: the
+    diagnosis must find what it does), RA-1's spindle and spindle–holder joint (the data set's
+    ``spindle`` base), and the
+    holder–tool joint of ``model``: ``"point"`` (the contract's default: left out, rigid),
+    ``"bonded"``, or ``"point_ra1"`` (RA-1's elastic point joint).
+    """
+    from rcsa.reference import ra1
+
+    doc = ra1()
+    del doc["frequency"]
+    doc["holder"] = copy.deepcopy(case["holder"])
+    doc["tool"] = {k: v for k, v in case["tool"].items() if k != "flutes"}
+    doc["materials"] = {**doc.get("materials", {}), **case["materials"]}
+    ht = doc["joints"]["holder_tool"]
+    doc["joints"] = {"spindle_holder": doc["joints"]["spindle_holder"]}
+    if model == "bonded":
+        doc["joints"]["holder_tool"] = {"model": "bonded"}
+    elif model == "point_ra1":
+        doc["joints"]["holder_tool"] = ht
+    elif model != "point":
+        raise ValueError(f"unknown base model {model!r}")
+    return doc
+
+
+@dataclass
+class DatasetTrial:
+    """One tap test of a data-set case: the request and the noise-free truth on its lines."""
+
+    case: str
+    request: dict[str, Any]
+    clean: list[np.ndarray]
+
+
+def make_dataset_trial(rng: np.random.Generator, case: str, model: str, step: int = 2,
+                       directory: Path | None = None) -> DatasetTrial:
+    """A tap test of one case of the 3-D data set, diagnosed against the ``model`` base.
+
+    The truth is the case's tool-point FRF on RA-1's spindle as stored (``h_spindle``, every
+    ``step``-th line of 100–6000 Hz), with the benchmark's noise (1 % + floor, 5 averages):
+    one stickout, no nuisance scatter (the stored solution is one spindle and one set of
+    moduli; the diagnoser is still told its default tolerances).
+    """
+    from tests.oracles.solid3d import dataset
+
+    data = dataset.load_case(case, directory or dataset.DATA_DIR)
+    f = data["frequency_hz"][::step]
+    h = data["h_spindle"][::step]
+    noisy, coherence = measure(h, rng)
+    request = {"assembly": dataset_base_document(data["case"], model),
+               "measurements": [{"tool": {}, "frequency_hz": f.tolist(),
+                                 "h": {"real": noisy.real.tolist(), "imag": noisy.imag.tolist()},
+                                 "coherence": coherence.tolist(), "n_averages": N_AVERAGES, "label": case}]}
+    return DatasetTrial(case, request, [h])

@@ -45,7 +45,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -173,6 +173,8 @@ class Fit:
     log_lik_map: float
     at_bound: list[bool]
     method: str
+    forms: list[Fit] = field(default_factory=list)
+    group: Candidate | None = None
 
 
 def _hessian(f: Callable[[np.ndarray], np.ndarray], x: np.ndarray, step: np.ndarray, lo: np.ndarray,
@@ -268,6 +270,9 @@ def evidence(loglik: Callable[[np.ndarray], np.ndarray], lo: np.ndarray, hi: np.
     >>> round(float(evidence(ll, np.array([-1.0]), np.array([1.0]))[0]), 4)   # = ln(1/2)
     -0.6931
     """
+    if lo.size == 0:  # no free parameter: the evidence is the likelihood
+        ll0 = float(loglik(np.zeros((1, 0)))[0])
+        return ll0, np.zeros(0), np.zeros(0), ll0, "exact"
     if lo.size == 1:
         return _evidence_1d(loglik, float(lo[0]), float(hi[0]))
     d = lo.size
@@ -342,8 +347,18 @@ def fit_candidate(candidate: Candidate, features_many: Callable[[Candidate, np.n
     """Evidence, MAP and sd of one candidate under one likelihood.
 
     ``features_many(candidate, values)`` maps parameter vectors (n, d) to model features
-    (n, nfeat).
+    (n, nfeat). A candidate with ``forms`` (``clamping_model``) chooses among them with equal
+    prior weight: its evidence is their mean, ``ln Z = ln(Σ_k Z_k / K)``, its MAP that of the
+    most probable form (whose candidate the fit carries; ``forms`` holds every form's fit and
+    ``group`` the candidate itself).
     """
+    if candidate.forms:
+        fits = [fit_candidate(c, features_many, like, log_z0) for c in candidate.forms]
+        z = np.array([f.log_evidence for f in fits])
+        log_z = float(z.max() + np.log(np.mean(np.exp(z - z.max()))))
+        best = fits[int(np.argmax(z))]
+        return Fit(best.candidate, log_z, log_z - log_z0, best.map, best.sd, best.log_lik_map, best.at_bound,
+                   best.method, fits, candidate)
     lo, hi = candidate.lo, candidate.hi
     log_z, x_map, sd, ll_map, method = evidence(lambda v: like(features_many(candidate, v)), lo, hi)
     tol = 0.01 * (hi - lo)

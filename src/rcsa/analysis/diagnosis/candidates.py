@@ -33,6 +33,19 @@ spindle_rotational_receptance     residual compliance added to the spindle's   0
                                   a ∈ [−0.5, 1.5], b ∈ [−0.5, 4]
 ================================  =========================================  ==============
 
+**Model form** (an extension of the contract's effects; ``docs/diagnosis.md`` §4.9): two more
+candidates change the form of the base's holder–tool model instead of adding to it —
+
+================================  =========================================  ==============
+clamping_model                    every form the base lacks: ``point``        the base's
+                                  (rigid joint, no parameter), ``bonded``     form
+                                  (none), ``contact`` (log10 k_n ∈ [11, 15]
+                                  N/m³); evidence: the mean over the forms
+interface_scale                   a clamping's interface per length,          0, 0
+                                  log10 of translation and of rotation
+                                  factors ∈ [−2, 1] (clamping bases)
+================================  =========================================  ==============
+
 ``m_max`` is 1.5 × the largest declared ``sensor_mass_kg`` of the measurements, or 20 g.
 Speed-dependent effects are listed in :data:`NOT_OBSERVABLE_AT_STANDSTILL`; they are never
 candidates for a standstill tap test.
@@ -57,20 +70,34 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rcsa.analysis.diagnosis.perturbed_model import Knobs, Solver, config_parts, null_shear_scale
+from rcsa.analysis.diagnosis.perturbed_model import (
+    RIGID_POINT,
+    Knobs,
+    Solver,
+    config_parts,
+    null_shear_scale,
+)
 from rcsa.model.contract import AssemblySpec, ClampingSpec, JointSpec, ToolSpec
-from rcsa.model.spindle_side import MeasuredBase
 from rcsa.physics.algebra2x2 import inv2
 
-__all__ = ["CANDIDATE_NAMES", "NOT_OBSERVABLE_AT_STANDSTILL", "STANDSTILL_SENTENCE", "Candidate",
-           "Parameter", "catalogue", "not_applicable", "shank_joint_reference"]
+if TYPE_CHECKING:  # types only: the measured spindle's module loads with a measured spindle
+    from rcsa.model.spindle_side import MeasuredBase
 
-CANDIDATE_NAMES = ("holder_tool_joint", "spindle_holder_joint", "bearings", "shear_and_rotary_inertia",
-                   "fluted_section", "insertion_depth", "sensor_mass", "joint_damping",
-                   "spindle_rotational_receptance")
+__all__ = ["CANDIDATE_NAMES", "EFFECT_NAMES", "MODEL_FORM_NAMES", "NOT_OBSERVABLE_AT_STANDSTILL",
+           "STANDSTILL_SENTENCE", "Candidate", "Parameter", "catalogue", "model_form_of", "not_applicable",
+           "shank_joint_reference"]
+
+EFFECT_NAMES = ("holder_tool_joint", "spindle_holder_joint", "bearings", "shear_and_rotary_inertia",
+                "fluted_section", "insertion_depth", "sensor_mass", "joint_damping",
+                "spindle_rotational_receptance")
+#: Model-form candidates (an extension of the contract's effects): another form of the base's
+#: holder–tool model, not an effect inside it (module docstring, "Model form").
+MODEL_FORM_NAMES = ("clamping_model", "interface_scale")
+CANDIDATE_NAMES = EFFECT_NAMES + MODEL_FORM_NAMES
 NOT_OBSERVABLE_AT_STANDSTILL = ("gyroscopic_coupling", "centrifugal_bearing_softening",
                                 "centrifugal_taper_expansion")
 STANDSTILL_SENTENCE = ("Speed-dependent effects (gyroscopic coupling, centrifugal softening of the bearings, "
@@ -95,12 +122,26 @@ class Parameter:
 
 @dataclass(frozen=True)
 class Candidate:
-    """A candidate effect: name, parameters and the add-on it makes to the base model."""
+    """A candidate effect: name, parameters and the add-on it makes to the base model.
+
+    A model-form candidate (``model_form``) proposes another form of the holder–tool model;
+    ``variant`` names the form it proposes (``point``, ``bonded``, ``contact``), and
+    ``forms`` holds the alternatives of a candidate that chooses among several (its evidence
+    is their average: :func:`rcsa.analysis.diagnosis.attribution.fit_candidate`).
+    """
 
     name: str
     parameters: tuple[Parameter, ...]
     apply: Callable[[Knobs, np.ndarray], Knobs]
     meaning: Callable[[np.ndarray], dict[str, float]]
+    variant: str = ""
+    model_form: bool = False
+    forms: tuple[Candidate, ...] = ()
+
+    @property
+    def key(self) -> str:
+        """Name and variant: what the model's features are cached under."""
+        return f"{self.name}:{self.variant}" if self.variant else self.name
 
     @property
     def null(self) -> np.ndarray:
@@ -130,6 +171,13 @@ FRONT_GAP_MAX_FRACTION = 0.6
 #: Largest loss factor joint_damping adds to a clamping's interface (micro-slip damping of
 #: shrink-fit and collet clamps: a few percent to tens of percent).
 INTERFACE_LOSS_MAX = 0.3
+#: log10 of a ``contact`` clamping's normal interface stiffness per area (N/m³) that
+#: ``clamping_model`` may propose: from a compliant sleeve (1e11) to a layer too stiff to
+#: tell from ``bonded`` (1e15: the 3-D reference's layer of 1e15 N/m³ is within 0.2 dB of bonded).
+CONTACT_LOG10_N_M3 = (11.0, 15.0)
+#: log10 of ``interface_scale``'s factors on a clamping's translational and rotational
+#: interface stiffness per length.
+INTERFACE_SCALE_LOG10 = (-2.0, 1.0)
 
 
 def shank_joint_reference(spec: AssemblySpec, tools: Sequence[ToolSpec]) -> tuple[float, float]:
@@ -239,6 +287,85 @@ def not_applicable(spec: AssemblySpec, tools: Sequence[ToolSpec], measured: Meas
     holder_len = spec.holder.length_m if spec.holder is not None else float("inf")
     if min(min(t.inserted_length_m for t in tools), holder_len) <= 0.0:
         out["insertion_depth"] = ("no tool shank is inserted in the holder", False)
+        out["clamping_model"] = ("no tool shank is inserted in the holder: there is no clamping along an insertion",
+                                 False)
+    if plane == "holder_tip":
+        out["clamping_model"] = ("the spindle was measured at the holder tip: the holder and the tool's clamping in "
+                                 "it are not modelled", True)
+    if "clamping_model" in out or not isinstance(ht, ClampingSpec):
+        out["interface_scale"] = out.get("clamping_model", (
+            "the base model's holder-tool joint is a point joint: there is no clamping interface to scale "
+            "(clamping_model proposes a clamping instead)", False))
+    return out
+
+
+def model_form_of(joint: JointSpec | ClampingSpec | None) -> str:
+    """The model form of a holder–tool joint: ``point``, ``bonded`` or ``contact``.
+
+    Parameters
+    ----------
+    joint : JointSpec, ClampingSpec or None
+
+    Returns
+    -------
+    str
+    """
+    return joint.model if isinstance(joint, ClampingSpec) else "point"
+
+
+def _clamping_form(name: str, form: ClampingSpec | str, params: tuple[Parameter, ...],
+                   make: Callable[[np.ndarray], ClampingSpec | str],
+                   meaning: Callable[[np.ndarray], dict[str, float]]) -> Candidate:
+    return Candidate(name, params, lambda k, v: replace(k, ht_form=make(v)), meaning,
+                     variant=form if isinstance(form, str) else form.model, model_form=True)
+
+
+def _model_form_candidates(spec: AssemblySpec, excluded: dict[str, tuple[str, bool]]) -> list[Candidate]:
+    """``clamping_model`` (the other forms of the holder–tool model) and ``interface_scale``.
+
+    ``clamping_model`` offers every form the base does not have: ``point`` (the contract's
+    point model, composite insertion and a rigid joint at the face), ``bonded`` (the
+    clamping as calibrated, no parameter) and ``contact`` (the same with an interface layer
+    of stiffness ``k_n`` per area in series, log10 k_n ∈ :data:`CONTACT_LOG10_N_M3`). A
+    clamping base keeps its front gap, contact length and loss factor in the other clamping
+    form. ``interface_scale`` (a clamping base) scales the interface's translational and
+    rotational stiffness per length separately, log10 each ∈ :data:`INTERFACE_SCALE_LOG10`:
+    how the interface is distributed between the two, which one common factor
+    (``holder_tool_joint``) cannot change.
+    """
+    out: list[Candidate] = []
+    ht = spec.holder_tool
+    base = model_form_of(ht)
+    keep = ht if isinstance(ht, ClampingSpec) else ClampingSpec("bonded")
+    if "clamping_model" not in excluded:
+        forms: list[Candidate] = []
+        if base != "bonded":
+            bonded = replace(keep, model="bonded", interface_stiffness_n_m3=None, interface_tangential_ratio=1.0,
+                             contact_pressure_pa=None, surface_roughness_m=None)
+            forms.append(_clamping_form("clamping_model", bonded, (), lambda v: bonded, lambda v: {}))
+        if base != "contact":
+            def contact(v: np.ndarray) -> ClampingSpec:
+                return replace(keep, model="contact", interface_stiffness_n_m3=float(10 ** v[0]),
+                               contact_pressure_pa=None, surface_roughness_m=None)
+            forms.append(_clamping_form(
+                "clamping_model", "contact",
+                (Parameter("log10_interface_stiffness_n_m3", *CONTACT_LOG10_N_M3, CONTACT_LOG10_N_M3[1], "1"),),
+                contact, lambda v: {"holder_tool.interface_stiffness_n_m3": float(10 ** v[0])}))
+        if base != "point":
+            forms.append(replace(_clamping_form("clamping_model", RIGID_POINT, (), lambda v: RIGID_POINT,
+                                                lambda v: {}), variant="point"))
+        out.append(Candidate("clamping_model", (), lambda k, v: k, lambda v: {}, model_form=True, forms=tuple(forms)))
+    if "interface_scale" not in excluded and isinstance(ht, ClampingSpec):
+        scale0 = ht.interface_stiffness_scale
+        out.append(Candidate(
+            "interface_scale",
+            (Parameter("log10_translational_interface_scale", *INTERFACE_SCALE_LOG10, 0.0, "1"),
+             Parameter("log10_rotational_interface_scale", *INTERFACE_SCALE_LOG10, 0.0, "1")),
+            lambda k, v: replace(k, ht_translational_scale=k.ht_translational_scale * 10 ** v[0],
+                                 ht_rotational_interface_scale=k.ht_rotational_interface_scale * 10 ** (v[1] - v[0])),
+            lambda v: {"holder_tool.interface_stiffness_scale": scale0 * float(10 ** v[0]),
+                       "rotational_interface_scale": float(10 ** v[1])},
+            variant=base, model_form=True))
     return out
 
 
@@ -374,6 +501,7 @@ def catalogue(spec: AssemblySpec, tools: Sequence[ToolSpec], solver: Solver,
             lambda v: {"joint_damping_scale": float(10 ** v[0])}))
 
     out.append(_rotational_candidate(spec, solver, measured))
+    out.extend(_model_form_candidates(spec, excluded))
 
     if names is not None:
         out = [c for c in out if c.name in names]

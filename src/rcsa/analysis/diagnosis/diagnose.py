@@ -7,12 +7,14 @@ The steps (:func:`rcsa.analysis.diagnosis.state.analyse`) and the response
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rcsa.analysis.diagnosis.report import build_response
 from rcsa.analysis.diagnosis.state import Analysis, analyse
 from rcsa.analysis.progress import Progress
-from rcsa.model.spindle_side import BaseResolver
+
+if TYPE_CHECKING:  # types only: the measured spindle's module loads with a measured spindle
+    from rcsa.model.spindle_side import BaseResolver
 
 __all__ = ["Analysis", "analyse", "diagnose"]
 

@@ -23,13 +23,15 @@ frequency or amplitude. Many FRFs are handled at once: arrays are ``(nfrf, nline
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from rcsa.model.peaks import peak_lines
 
-__all__ = ["Windows", "band_rms_db", "design_windows", "extract"]
+__all__ = ["Windows", "band_rms_db", "design_windows", "extract", "parabola_stencils"]
+
+_OFFSETS = np.arange(-2, 3)
 
 # Peaks smaller than this fraction of the largest one are not used as features: at the
 # benchmark's 1 % noise with a -50 dB floor their frequency would be mostly noise.
@@ -56,12 +58,16 @@ class Windows:
         Lines of the quasi-static band (empty slice: no static feature).
     names : tuple of str
         Feature names in vector order.
+    stencils : numpy.ndarray, shape (nlines, 3, 5), optional
+        The least-squares parabola of the five lines around each line (:func:`parabola_stencils`):
+        a vertex away from the window's edges is one small product, not the normal equations.
     """
 
     peaks_hz: np.ndarray
     edges: np.ndarray
     static: slice
     names: tuple[str, ...]
+    stencils: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     @property
     def size(self) -> int:
@@ -118,7 +124,7 @@ def design_windows(frequency_hz: np.ndarray, h_base: np.ndarray, max_modes: int 
         names += [f"peak{j}.frequency", f"peak{j}.amplitude", f"band{j}.level"]
         if j + 1 < peaks.size:
             names.append(f"antiresonance{j}.frequency")
-    return Windows(fp, edges, static, tuple(names))
+    return Windows(fp, edges, static, tuple(names), parabola_stencils(np.log(f)))
 
 
 def _edges(f: np.ndarray, peaks: np.ndarray, static_hi: float) -> np.ndarray:
@@ -135,15 +141,50 @@ def _edges(f: np.ndarray, peaks: np.ndarray, static_hi: float) -> np.ndarray:
     return edges
 
 
+def parabola_stencils(x: np.ndarray) -> np.ndarray:
+    """Least-squares parabola coefficients of the five lines around every line, as matrices.
+
+    ``c = P[i] @ y[i-2 … i+2]`` gives ``y ≈ c0 + c1 d + c2 d²`` with ``d = x − x[i]`` (the
+    normal equations of :func:`_vertex`, solved once per line); lines within two of an end
+    have no five-line stencil (zeros: never used).
+
+    Parameters
+    ----------
+    x : numpy.ndarray, shape (nlines,)
+        ln f of the analysis lines.
+
+    Returns
+    -------
+    numpy.ndarray, shape (nlines, 3, 5)
+    """
+    out = np.zeros((x.size, 3, 5))
+    if x.size >= 5:
+        i = np.arange(2, x.size - 2)
+        d = x[i[:, None] + np.arange(-2, 3)] - x[i][:, None]
+        v = np.stack([np.ones_like(d), d, d * d], axis=2)  # (m, 5, 3)
+        out[i] = np.linalg.solve(np.einsum("mki,mkj->mij", v, v), v.transpose(0, 2, 1))
+    return out
+
+
 def _vertex(x: np.ndarray, y: np.ndarray, i: np.ndarray, lo: np.ndarray, hi: np.ndarray, sign: float,
-            rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+            rows: np.ndarray | None = None, stencils: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Least-squares parabola through the lines ``i-2 … i+2`` (clipped to [lo, hi)); its vertex.
 
     ``sign`` = +1 for a maximum, −1 for a minimum. Falls back to the line itself when the
     parabola opens the wrong way. Vectorised: ``i``, ``lo``, ``hi`` (m,) on rows ``rows`` of
-    ``y`` (n, nlines) (default: row k for entry k).
+    ``y`` (n, nlines) (default: row k for entry k). With ``stencils`` (:func:`parabola_stencils`)
+    and no line clipped, the parabola is their product with the five values (the same least
+    squares, rounded otherwise: ~1e-15 relative).
     """
     rows = np.arange(y.shape[0]) if rows is None else rows
+    if stencils is not None and i.size and bool(np.all((i - 2 >= lo) & (i + 2 < hi))):
+        c = np.einsum("mkj,mj->mk", stencils[i], y[rows[:, None], i[:, None] + _OFFSETS])
+        good = sign * c[:, 2] < 0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            dv = np.where(good, -c[:, 1] / (2 * c[:, 2]), 0.0)
+        xi = x[i]
+        dv = np.clip(dv, x[i - 1] - xi, x[i + 1] - xi)
+        return xi + dv, np.where(good, c[:, 0] + dv * (c[:, 1] + c[:, 2] * dv), y[rows, i])
     offsets = np.arange(-2, 3)
     j = np.clip(i[:, None] + offsets, lo[:, None], hi[:, None] - 1)  # (m, 5)
     d = x[j] - x[i][:, None]
@@ -198,7 +239,8 @@ def extract(frequency_hz: np.ndarray, h: np.ndarray, w: Windows) -> np.ndarray:
     lo_w, hi_w = w.edges[:-1].astype(int), w.edges[1:].astype(int)
     peak_i = np.stack([lo + np.argmax(y[:, lo:hi], axis=1) for lo, hi in zip(lo_w, hi_w, strict=True)])  # (k, m)
     rows = np.tile(np.arange(m), k)
-    xf, yf = _vertex(x, y, peak_i.ravel(), np.repeat(lo_w, m), np.repeat(hi_w, m), +1.0, rows)  # all windows at once
+    xf, yf = _vertex(x, y, peak_i.ravel(), np.repeat(lo_w, m), np.repeat(hi_w, m), +1.0, rows,
+                     w.stencils)  # all windows at once
     xf, yf = xf.reshape(k, m), yf.reshape(k, m)
     anti = np.empty((max(k - 1, 0), m))
     if k > 1:
@@ -213,7 +255,7 @@ def extract(frequency_hz: np.ndarray, h: np.ndarray, w: Windows) -> np.ndarray:
         a, b = peak_i[:-1].ravel(), peak_i[1:].ravel()
         flat = ia.ravel()
         anti = _vertex(x, y, flat, np.minimum(a + 1, flat), np.maximum(b, flat + 1), -1.0,
-                       np.tile(np.arange(m), k - 1))[0].reshape(k - 1, m)
+                       np.tile(np.arange(m), k - 1), w.stencils)[0].reshape(k - 1, m)
     for j in range(k):
         out += [xf[j], yf[j], y[:, lo_w[j]:hi_w[j]].mean(axis=1)]
         if j + 1 < k:

@@ -47,6 +47,12 @@ different, physical realisations, see ``tests/analysis/diagnosis/truth.py``):
   its interface loss factor (``ht_interface_loss_added`` adds to it: a bonded clamping has none
   of its own), and ``insertion_offset_m`` is contact lost over that length
   at the front of the bore (its ``front_gap_length_m``): holder and tool keep their geometry.
+* ``ht_form`` replaces the base's holder–tool joint by another model form (the model-form
+  candidates ``clamping_model`` and ``interface_scale``): :data:`RIGID_POINT` (the contract's
+  point model with a rigid joint: composite insertion) or a :class:`ClampingSpec` (a clamping
+  along the insertion); the holder-tool knobs then act on it as on a base of that form.
+  ``ht_rotational_interface_scale`` multiplies the rotational interface stiffness of a clamping
+  alone (its translational one is ``ht_translational_scale``'s).
 """
 
 from __future__ import annotations
@@ -63,6 +69,7 @@ from rcsa.model.contract import (
     BearingSpec,
     ClampingSpec,
     HolderSpec,
+    JointSpec,
     SegmentSpec,
     SpindleSpec,
     ToolSpec,
@@ -75,8 +82,8 @@ from rcsa.physics.materials import Material
 from rcsa.physics.sections import BeamTheory, Section, ShearModel
 from rcsa.physics.subassembly_cache import Condensed, LruStore, SubassemblyCache
 
-__all__ = ["AddedCompliance", "BaseReceptance", "Knobs", "Parts", "PartsBuilder", "RotationRescale", "Solver",
-           "config_parts", "null_shear_scale"]
+__all__ = ["RIGID_POINT", "AddedCompliance", "BaseReceptance", "Knobs", "Parts", "PartsBuilder", "RotationRescale",
+           "Solver", "config_parts", "holder_tool_form", "null_shear_scale"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -111,6 +118,27 @@ class Knobs:
     nose_rotational_residual_rad_nm: float = 0.0
     base_rotation_scale: float = 1.0
     base_rotation_shape: float = 1.0
+    ht_form: ClampingSpec | str | None = None
+    ht_rotational_interface_scale: float = 1.0
+
+
+#: ``Knobs.ht_form`` of the contract's point model with a rigid holder–tool joint.
+RIGID_POINT = "rigid_point"
+
+
+def holder_tool_form(spec: AssemblySpec, k: Knobs) -> JointSpec | ClampingSpec | None:
+    """The holder–tool joint the knobs put in place of the base's (None: rigid point)."""
+    if k.ht_form is None:
+        return spec.holder_tool
+    return None if k.ht_form == RIGID_POINT else k.ht_form  # type: ignore[return-value]
+
+
+def _scale_rotational_interface(chain: Chain, s: float) -> Chain:
+    """The chain with every insertion's rotational interface stiffness times ``s``."""
+    if s == 1.0:
+        return chain
+    return tuple(Insertion(tuple(replace(p, interface_rotational_n=p.interface_rotational_n * s) for p in item.pieces),
+                           item.line_rows) if isinstance(item, Insertion) else item for item in chain)
 
 
 def null_shear_scale(spec: AssemblySpec) -> float:
@@ -306,8 +334,9 @@ class PartsBuilder:
             spindle = self._spindles.get((mkey, s, k.bearing_stiffness_scale, k.bearing_damping_scale),
                                          lambda: shear_scaled(_spindle_chain(_spindle(sp, k), mats, shear, theory)))
         # a clamping along the insertion belongs to the holder chain, with the holder-tool knobs
-        clamping = scaled_joint(spec.holder_tool, k.ht_translational_scale, k.ht_rotational_scale,
-                                k.ht_damping_scale) if isinstance(spec.holder_tool, ClampingSpec) else None
+        ht0 = holder_tool_form(spec, k)
+        clamping = scaled_joint(ht0, k.ht_translational_scale, k.ht_rotational_scale,
+                                k.ht_damping_scale) if isinstance(ht0, ClampingSpec) else None
         if clamping is not None and k.ht_interface_loss_added != 0.0:
             clamping = replace(clamping, interface_loss_factor=clamping.interface_loss_factor
                                + k.ht_interface_loss_added)
@@ -340,14 +369,18 @@ class PartsBuilder:
                                            k.sh_damping_scale))
             if sh is not None:
                 items.append(sh)
+            held = _holder_chain(holder, tool_of(), mats, shear, theory, clamping)
+            if clamping is not None:
+                held = _scale_rotational_interface(held, k.ht_rotational_interface_scale)
             items.extend(CachedInsertion(item) if isinstance(item, Insertion) else item
-                         for item in shear_scaled(_holder_chain(holder, tool_of(), mats, shear, theory, clamping)))
+                         for item in shear_scaled(held))
             if ring is not None:
                 items.append(ring)
             return tuple(items)
 
-        mid_key: tuple[object, ...] = (mkey, s, k.base_rotation_scale, k.base_rotation_shape, k.nose_cross_compliance_rad_n,
-                   k.nose_rotational_residual_rad_nm, clamping)
+        mid_key: tuple[object, ...] = (mkey, s, k.base_rotation_scale, k.base_rotation_shape,
+                                       k.nose_cross_compliance_rad_n, k.nose_rotational_residual_rad_nm, clamping,
+                                       k.ht_rotational_interface_scale if clamping is not None else 1.0)
         if self.plane != "holder_tip":
             assert spec.holder is not None
             # the holder chain sees the tool only through the inserted length inside the (trimmed) holder
@@ -359,8 +392,7 @@ class PartsBuilder:
 
         def tail() -> Chain:
             items: list[ChainItem] = []
-            ht = joint_spring(scaled_joint(spec.holder_tool, k.ht_translational_scale, k.ht_rotational_scale,
-                                           k.ht_damping_scale))
+            ht = joint_spring(scaled_joint(ht0, k.ht_translational_scale, k.ht_rotational_scale, k.ht_damping_scale))
             if ht is not None:
                 items.append(ht)
             items.extend(shear_scaled(_tool_chain(tool_of(), mats, shear, theory)))
@@ -369,7 +401,7 @@ class PartsBuilder:
             return tuple(items)
 
         tail_key = (mkey, s, tool, stickout, r_i, r_a, k.ht_translational_scale, k.ht_rotational_scale, k.ht_damping_scale,
-                    k.tip_mass_kg, k.tip_mass_distance_m)
+                    k.tip_mass_kg, k.tip_mass_distance_m, k.ht_form)
         return Parts(spindle, mid, self._tails.get(tail_key, tail), self.base if base is None else base)
 
 

@@ -19,6 +19,7 @@ import hashlib
 import json
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -32,8 +33,10 @@ from rcsa.analysis.diagnosis.features import Windows, band_rms_db, design_window
 from rcsa.analysis.diagnosis.perturbed_model import BaseReceptance, Knobs, PartsBuilder, Solver
 from rcsa.analysis.diagnosis.request import DEFAULT_NOISE_REL, MIN_VALID_LINES, Request
 from rcsa.errors import InputError
-from rcsa.model.spindle_side import MeasuredBase
 from rcsa.physics.subassembly_cache import LruStore
+
+if TYPE_CHECKING:  # types only: the measured spindle's module loads with a measured spindle
+    from rcsa.model.spindle_side import MeasuredBase
 
 __all__ = ["Problem", "VALID_COHERENCE"]
 
@@ -277,6 +280,44 @@ class Problem:
             for c, h in zip(out, self.h(knobs, bases[d]), strict=True):
                 c[d] = h
         return out
+
+    def draw_parameters(self, n_mc: int) -> tuple[np.ndarray, list[tuple[int | None, str, str]]]:
+        """The nuisance knobs of the Monte-Carlo draws (:meth:`_draws`) as latent parameters.
+
+        The draws are made again from the same seed (no model is solved): per draw, every
+        shared knob once and every per-measurement knob per measurement, each on the scale it
+        is drawn on (``rel``: the scale itself; ``log``: its logarithm; ``offset``: metres) —
+        the coordinates in which :meth:`rcsa.analysis.diagnosis.state.Analysis.calibrated_knobs`
+        updates them.
+
+        Parameters
+        ----------
+        n_mc : int
+
+        Returns
+        -------
+        values : numpy.ndarray, shape (n_mc, n_parameters)
+        names : list of (config or None, knob, kind)
+            ``config`` None for a shared knob.
+        """
+        from rcsa.model.tolerances import PER_CONFIG_KNOBS, SHARED_KNOBS
+
+        rng = np.random.default_rng([self.request.options.seed, 1])
+        m = self.measured
+        estimated = m is not None and m.effective_length_m is not None
+        names: list[tuple[int | None, str, str]] = [(None, k, kind) for k, _, kind in SHARED_KNOBS]
+        names += [(c, k, kind) for c in range(len(self.configs)) for k, _, kind in PER_CONFIG_KNOBS]
+        if estimated:
+            names += [(None, "base_rotation_scale", "log"), (None, "base_rotation_shape", "log")]
+        rows = []
+        for _ in range(n_mc):
+            knobs = draw_knobs(rng, self.request.tolerances, len(self.configs), estimated_rotations=estimated)
+            row = []
+            for c, k, kind in names:
+                v = getattr(knobs[0 if c is None else c], k)
+                row.append(np.log(v) if kind == "log" else v)
+            rows.append(row)
+        return np.array(rows, dtype=float), names
 
     def spindle_feature_covariance(self, n_draws: int = 60) -> np.ndarray | None:
         """Covariance of the features under the measured spindle's own uncertainty alone.

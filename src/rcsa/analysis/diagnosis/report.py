@@ -26,7 +26,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rcsa.analysis.diagnosis.attribution import Fit
-from rcsa.analysis.diagnosis.candidates import NOT_OBSERVABLE_AT_STANDSTILL, STANDSTILL_SENTENCE
+from rcsa.analysis.diagnosis.candidates import (
+    NOT_OBSERVABLE_AT_STANDSTILL,
+    STANDSTILL_SENTENCE,
+    model_form_of,
+)
 from rcsa.analysis.diagnosis.validation import HeldOut
 from rcsa.model.wire import complex_from_wire, complex_to_wire
 
@@ -35,7 +39,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from rcsa.analysis.diagnosis.state import Analysis
 
-__all__ = ["build_response", "diagnosis_figure", "gap_map"]
+__all__ = ["build_response", "calibrated_block", "diagnosis_figure", "gap_map", "model_form_block"]
 
 Z_FLAG = 3.0  # |z| above this is flagged in the gap map (docs/diagnosis.md §4.4)
 P_GAP = 0.05
@@ -142,6 +146,8 @@ def _effect(a: Analysis, fit: Fit, ho: HeldOut | None, probs: dict[str, float], 
         "evidence_method": fit.method,
         "residual_p_value": a.residual_p_value(feats),
     }
+    if fit.candidate.model_form:
+        entry["proposed_model"] = fit.candidate.variant
     if first is not None:  # a second effect: its ln BF is conditional on the first at its MAP
         entry["given"] = first.candidate.name
     if with_h:
@@ -163,6 +169,8 @@ def _sentence(a: Analysis, effects: list[dict[str, Any]]) -> str:
                     "(the gap map says where it lies)." + tail)
         return "No unmodelled effect is needed to explain these measurements." + tail
     e = effects[0]
+    if "proposed_model" in e:
+        return _form_sentence(a, e)
     held = ""
     if e["confirmed_on_held_out"] is not None:
         verdict = ("confirmed" if e["confirmed_on_held_out"] else
@@ -183,6 +191,120 @@ def _sentence(a: Analysis, effects: list[dict[str, Any]]) -> str:
                  "allow; the claim was weighed with them widened that much.")
     return (f"{d.effect} explains the gap (ln BF = {e['log_bayes_factor']:.1f} against the base model, "
             f"SNR {e['snr']:.1f}){held}.{flag}")
+
+
+def _held_sentence(e: dict[str, Any]) -> str:
+    if e["confirmed_on_held_out"] is None:
+        return ""
+    verdict = ("confirmed" if e["confirmed_on_held_out"] else
+               "NOT confirmed: the fit may only compensate on the fitted measurements")
+    return (f"; on held-out measurements the gap goes from {e['held_out_gap_before_db']:.2f} dB to "
+            f"{e['held_out_gap_after_db']:.2f} dB ({verdict})")
+
+
+def _form_what(name: str, model: str, base: str) -> str:
+    if name == "clamping_model":
+        return f"switching the holder-tool model from {base} to {model}"
+    return f"scaling the {base} clamping's interface stiffness (translation and rotation apart)"
+
+
+def _form_sentence(a: Analysis, e: dict[str, Any]) -> str:
+    d = a.decision
+    base = model_form_of(a.problem.spec.holder_tool)
+    what = _form_what(e["effect"], e["proposed_model"], base)
+    if d.status == "ambiguous":
+        return (f"The gap is a matter of model form: {', '.join([d.effect, *d.ambiguous_with])} explain it equally "
+                f"well (ln BF within {a.request.options.ambiguity_window:g}); the best is {what}{_held_sentence(e)}.")
+    effects = [f for f in a.stated_fits if not f.candidate.model_form]
+    top = max(effects, key=lambda f: f.log_evidence) if effects else None
+    why = ("no effect within the base model explains it" if not a.effect_claimed or top is None else
+           f"its evidence beats the best effect within the base model, {top.candidate.name}, by "
+           f"{a.form_proposed.log_evidence - top.log_evidence:.1f} in ln" if a.form_proposed is not None else "")
+    flag = ""
+    if e["residual_p_value"] < 0.05:
+        flag = (f" It does not explain everything: the remainder is still beyond tolerances and noise "
+                f"(p = {e['residual_p_value']:.3f}).")
+    return (f"{what[0].upper()}{what[1:]} explains the gap (ln BF = {e['log_bayes_factor']:.1f} against the base "
+            f"model, SNR {e['snr']:.1f}; {why}){_held_sentence(e)}.{flag}")
+
+
+def model_form_block(a: Analysis) -> dict[str, Any]:
+    """The model-form candidates' evidence beside the effects (``model_form`` of the response).
+
+    Parameters
+    ----------
+    a : Analysis
+
+    Returns
+    -------
+    dict
+        ``{"base_model", "candidates": [{"candidate", "proposed_model", "log_bayes_factor",
+        "log_evidence_over_best_effect", "parameters", "physical", "forms"?}], "proposed",
+        "sentence"}``; every ln BF at the stated tolerances, against the base model.
+    """
+    base = model_form_of(a.problem.spec.holder_tool)
+    effects = [f for f in a.stated_fits if not f.candidate.model_form]
+    top = max(effects, key=lambda f: f.log_evidence) if effects else None
+    cands = []
+    for f in sorted(a.form_fits, key=lambda f: -f.log_bayes_factor):
+        entry: dict[str, Any] = {
+            "candidate": f.candidate.name, "proposed_model": f.candidate.variant,
+            "log_bayes_factor": f.log_bayes_factor,
+            "log_evidence_over_best_effect": None if top is None else f.log_evidence - top.log_evidence,
+            "parameters": _params(f), "physical": {k: float(v) for k, v in f.candidate.meaning(f.map).items()}}
+        if f.forms:
+            entry["forms"] = [{"model": g.candidate.variant, "log_bayes_factor": g.log_bayes_factor,
+                               "parameters": _params(g)} for g in f.forms]
+        cands.append(entry)
+    proposed = a.form_proposed
+    if proposed is not None:
+        sentence = (f"Proposed: {_form_what(proposed.candidate.name, proposed.candidate.variant, base)} "
+                    f"(ln BF = {proposed.log_bayes_factor:.1f}).")
+    elif cands:
+        best = cands[0]
+        sentence = (f"No change of model form is proposed: the best, {best['candidate']} "
+                    f"({best['proposed_model']}), reaches ln BF = {best['log_bayes_factor']:.1f}"
+                    + ("" if best["log_evidence_over_best_effect"] is None else
+                       f", {best['log_evidence_over_best_effect']:+.1f} against the best effect") + ".")
+    else:
+        sentence = "No model-form candidate applies to this base model."
+    return {"base_model": base, "candidates": cands,
+            "proposed": None if proposed is None else {"candidate": proposed.candidate.name,
+                                                       "model": proposed.candidate.variant},
+            "sentence": sentence}
+
+
+def calibrated_block(a: Analysis) -> dict[str, Any]:
+    """The verdict's model with the base's own parameters where the measurements put them (``calibrated``).
+
+    The verdict's effect(s) (or model form) at their fitted values — none when the verdict is
+    ``none`` — and every nuisance parameter at its most probable value within its stated
+    tolerance given the measurements (:meth:`rcsa.analysis.diagnosis.state.Analysis.calibrated_knobs`):
+    the best prediction of what was measured, where ``corrected_h`` adds the effect alone.
+
+    Parameters
+    ----------
+    a : Analysis
+
+    Returns
+    -------
+    dict
+        ``{"effects", "h": [per measurement], "gap_db", "parameters_moved_sd"}``.
+    """
+    d = a.decision
+    cands, values = [], []
+    if d.status != "none":
+        best = d.ranking[0]
+        cands, values = [best.candidate], [best.map]
+        if a.second is not None:
+            cands.append(a.second[0].candidate)
+            values.append(a.second[0].map)
+    knobs, moves = a.calibrated_knobs(cands, values)
+    p = a.problem
+    h_lines = [a.problem.solver.tip_h(p.builder.parts(p.tools[c.index], knobs[c.index]), c.grid_lines)
+               for c in p.configs]
+    return {"effects": [c.name for c in cands], "h": [complex_to_wire(h) for h in a.full_h(cands, values, knobs)],
+            "gap_db": _db_rms(a, h_lines), "parameters_moved_sd": moves}
 
 
 def build_response(a: Analysis) -> dict[str, Any]:
@@ -245,6 +367,8 @@ def build_response(a: Analysis) -> dict[str, Any]:
                         f"treat the mechanism as uncertain between them." if rivals else "")},
         "effects": effects,
         "ranking": ranking,
+        "model_form": model_form_block(a),
+        "calibrated": calibrated_block(a),
         "not_applicable": [{"effect": e, "reason": reason} for e, (reason, _) in a.not_applicable.items()],
         "not_observable_at_standstill": list(NOT_OBSERVABLE_AT_STANDSTILL),
         "not_observable_sentence": STANDSTILL_SENTENCE,
@@ -259,6 +383,7 @@ def build_response(a: Analysis) -> dict[str, Any]:
                      "tolerances": dict(a.request.tolerances),
                      "log_evidence_base": a.log_z0,
                      "scatter_scale": a.scatter_scale,
+                     "remainder_beyond_scatter": a.remainder_beyond_scatter,
                      "timings_s": {**a.timings_s, "response": time.perf_counter() - response_started}},
         "notes": notes,
         **spindle,
@@ -303,6 +428,13 @@ def gap_map_label(feature: str) -> str:
     return f"{kind} {int(m.group(2)) + 1}{what}"
 
 
+def _corrected_label(effect: dict[str, Any]) -> str:
+    """Legend of a corrected FRF: ``+ effect``, or ``→ contact (clamping_model)`` for a model form."""
+    if effect.get("proposed_model"):
+        return f"→ {effect['proposed_model']} ({effect['effect']})"
+    return f"+ {effect['effect']}"
+
+
 def diagnosis_figure(a: Analysis, response: dict[str, Any] | None = None) -> Figure:
     """Measured, base and corrected FRFs per measurement, and the gap map before/after.
 
@@ -340,7 +472,7 @@ def diagnosis_figure(a: Analysis, response: dict[str, Any] | None = None) -> Fig
                   zorder=2)
         if corrected is not None:
             ax.loglog(m.frequency_hz, np.abs(corrected[i]) * 1e6, color="tab:red", lw=0.9,
-                      label=f"+ {effects[0]['effect']}", zorder=3)
+                      label=_corrected_label(effects[0]), zorder=3)
         log_frequency_ticks(ax, float(m.frequency_hz[0]), float(m.frequency_hz[-1]))
         ax.set_title(f"measurement {m.label} (stickout {m.tool.stickout_m * 1e3:.1f} mm)", fontsize=9)
         ax.set_ylabel("|h| [µm/N]", fontsize=8)

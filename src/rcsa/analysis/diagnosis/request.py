@@ -25,7 +25,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -36,7 +36,9 @@ from rcsa.errors import InputError
 from rcsa.model import fields
 from rcsa.model.bounds import MAX_SENSOR_MASS_KG
 from rcsa.model.contract import AssemblySpec, MeasuredSpindleSpec, ToolSpec, parse_assembly
-from rcsa.model.spindle_side import BaseResolver
+
+if TYPE_CHECKING:  # types only: the measured spindle's module loads with a measured spindle
+    from rcsa.model.spindle_side import BaseResolver
 
 __all__ = ["MAX_MEASUREMENTS", "MIN_VALID_LINES", "Measurement", "Options", "Request", "parse_request"]
 

@@ -16,8 +16,8 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
-from typing import Any
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -37,16 +37,22 @@ from rcsa.analysis.diagnosis.request import Request, parse_request
 from rcsa.analysis.diagnosis.validation import HeldOut, folds, held_out
 from rcsa.analysis.progress import Progress, report
 from rcsa.errors import InputError
-from rcsa.model.spindle_side import BaseResolver
+
+if TYPE_CHECKING:  # types only: the measured spindle's module loads with a measured spindle
+    from rcsa.model.spindle_side import BaseResolver
 
 __all__ = ["Analysis", "analyse", "validate"]
 
 # Signatures more collinear than this cannot be told apart: a second effect along the first
 # one's direction is refused (``docs/diagnosis.md`` §4.7).
 MAX_SIGNATURE_COSINE = 0.9
-# Held-out validation and parameter meanings are computed for the verdict's effects and for
-# this many best-ranked others (the rest is ranked by evidence only, to bound the runtime).
-RANKED_WITH_HELD_OUT = 3
+# Held-out validation is computed for the verdict's effects only (the reported ones); the rest is
+# ranked by evidence (a refit per fold of three more candidates was a fifth of a diagnosis).
+# A second effect is looked for among this many next-ranked effects.
+SECOND_CANDIDATES = 3
+# A claim is weighed at the scatter its remainder shows only when that remainder is this
+# significant (Monte-Carlo p-value; :meth:`Analysis.claim_holds`).
+SCATTER_P = 0.01
 # A second effect is only looked for when the first leaves a significant remainder.
 RESIDUAL_P = 0.05
 # A second effect must move the features by at least this fraction of the first's (whitened
@@ -130,30 +136,34 @@ class Analysis:
         for c in self.candidates:
             self.fits.append(fit_candidate(c, self.features_at, self.like, self.log_z0))
             report(progress, len(self.fits) + 1, steps)
-        self.decision: Decision = decide(self.fits, opts.claim_threshold, opts.ambiguity_window)
+        #: every candidate's fit at the stated Σ (``fits`` may be refitted at ŝ below)
+        self.stated_fits = list(self.fits)
+        self.form_fits = [f for f in self.fits if f.candidate.model_form]
+        effect_fits = [f for f in self.fits if not f.candidate.model_form]
+        self.decision: Decision = decide(effect_fits, opts.claim_threshold, opts.ambiguity_window)
         # The claim is judged at the scatter the data still show once the best effect is in:
         # tolerances understated by ŝ make every structured nuisance deviation look like an
         # effect, so the best one must still clear τ with Σ·ŝ² (the model features are cached).
         # The ranking and the ambiguity between candidates stay at the stated Σ: widening it
         # would only compress the differences between them.
         self.judge, self.scatter_scale = self.like, 1.0
+        #: whether a claim's remainder lay beyond every scatter scale the prior allows (not weighed)
+        self.remainder_beyond_scatter = False
         if self.decision.status != "none":
-            best = self.decision.ranking[0]
-            self.scatter_scale = self.remainder_scale(self.features_at(best.candidate, best.map))
-        if self.scatter_scale > 1.0:
-            self.judge = Likelihood(p.measured_features, self.disc, np.arange(n_feat), opts.likelihood,
-                                    scale=self.scatter_scale)
-            log_z0 = float(self.judge(p.base_features))
-            best = self.decision.ranking[0]
-            if fit_candidate(best.candidate, self.features_at, self.judge, log_z0).log_bayes_factor \
-                    <= opts.claim_threshold:
-                self.log_z0 = log_z0
-                self.fits = [fit_candidate(c, self.features_at, self.judge, self.log_z0) for c in self.candidates]
-                self.decision = decide(self.fits, float("inf"), opts.ambiguity_window)
+            holds, self.scatter_scale, self.judge = self.claim_holds(self.decision.ranking[0])
+            if not holds:
+                self.log_z0 = float(self.judge(p.base_features))
+                effect_fits = [fit_candidate(c, self.features_at, self.judge, self.log_z0) for c in self.candidates
+                               if not c.model_form]
+                self.fits = effect_fits + self.form_fits
+                self.decision = decide(effect_fits, float("inf"), opts.ambiguity_window)
+        #: whether an effect was claimed before model forms were weighed
+        self.effect_claimed = self.decision.status != "none"
+        self.form_proposed = self._propose_form()
         clock.mark("candidates")
         self.folds = folds([m.tool.stickout_m for m in self.request.measurements], opts.held_out)
         self.held: dict[str, HeldOut | None] = {}
-        shown = self.reported_names() + [f.candidate.name for f in self.decision.ranking[:RANKED_WITH_HELD_OUT]]
+        shown = self.reported_names()
         for f in self.decision.ranking:
             if f.candidate.name in shown:
                 self.held[f.candidate.name] = self._held_out([f.candidate], [f.map])
@@ -166,6 +176,73 @@ class Analysis:
         report(progress, steps, steps)
         self.timings_s = clock.phases
         self.runtime_s = time.perf_counter() - t0
+
+    # ------------------------------------------------------------------ claims
+    def claim_holds(self, fit: Fit) -> tuple[bool, float, Likelihood]:
+        """Whether ``fit``'s claim holds at the scatter its remainder shows, that scale, and the likelihood.
+
+        ``ŝ`` (:meth:`remainder_scale`) of the data about the fit's MAP. When the remainder is
+        significantly beyond the stated tolerances and noise (its Monte-Carlo p-value at most
+        :data:`SCATTER_P`, or beyond every draw), the candidate is refitted with Σ·ŝ² and must
+        still clear the claim threshold; a remainder within the null's own spread (ŝ up to
+        ~1.3 by chance with a few dozen features) weighs nothing (issue 31: weighing it turned
+        right effects of SNR 5-10 into ``none``), and so does one beyond every scale the scatter
+        prior allows (ŝ > ``MAX_SCATTER_SCALE`` unclipped): no understatement of the tolerances the
+        diagnosis allows for makes it, so it is structure the candidate lacks — a right effect
+        of another form at high SNR (a distributed contact fitted by the lumped joint leaves
+        ŝ ≈ 10) — which is reported as the remainder, not taken as scatter
+        (:attr:`remainder_beyond_scatter`).
+        """
+        opts, p = self.request.options, self.problem
+        feats = self.features_at(fit.candidate, fit.map)
+        raw = self.remainder_scale(feats, clip=False)
+        scale = min(raw, MAX_SCATTER_SCALE)
+        if scale > 1.0 and self.residual_p_value(feats) > max(SCATTER_P, 1.0 / (self.disc.samples.shape[0] + 1)):
+            scale = 1.0
+        if raw > MAX_SCATTER_SCALE:
+            # beyond every scatter scale the prior allows: the remainder is structure the
+            # candidate lacks (its form error, or another effect), not understated tolerances,
+            # and says nothing about how wide Σ is; it is reported (residual_p_value), not weighed
+            self.remainder_beyond_scatter = True
+            scale = 1.0
+        if scale <= 1.0:
+            return fit.log_bayes_factor > opts.claim_threshold, 1.0, self.like
+        judge = Likelihood(p.measured_features, self.disc, np.arange(p.base_features.size), opts.likelihood,
+                           scale=scale)
+        refit = fit_candidate(fit.group or fit.candidate, self.features_at, judge, float(judge(p.base_features)))
+        return refit.log_bayes_factor > opts.claim_threshold, scale, judge
+
+    def _propose_form(self) -> Fit | None:
+        """The model form that becomes the verdict, if any (``docs/diagnosis.md``, model form).
+
+        The best model-form candidate is proposed when its own claim holds (ln BF > τ, also at
+        its remainder's scatter) and either no effect is claimed (the gap would otherwise be
+        left unexplained) or its evidence exceeds the best effect's by more than the ambiguity
+        window (an effect that only stands in for the model's form: e.g. a fluted section
+        blamed for a clamping's compliance on a rigid point joint). Effects and model forms answer
+        different questions (a deviation inside the model, or the model itself), so they are
+        never ``ambiguous`` with each other; two model forms within the window are.
+        """
+        opts = self.request.options
+        forms = sorted(self.form_fits, key=lambda f: -f.log_bayes_factor)
+        if not forms or forms[0].log_bayes_factor <= opts.claim_threshold:
+            return None
+        best = forms[0]
+        effects = sorted((f for f in self.stated_fits if not f.candidate.model_form), key=lambda f: -f.log_bayes_factor)
+        if self.decision.status != "none":
+            top = effects[0]
+            if best.log_evidence - top.log_evidence <= opts.ambiguity_window:
+                return None
+        holds, scale, judge = self.claim_holds(best)
+        if not holds:
+            return None
+        rivals = [f.candidate.name for f in forms[1:] if f.log_bayes_factor > opts.claim_threshold
+                  and best.log_evidence - f.log_evidence < opts.ambiguity_window]
+        self.decision = Decision("ambiguous" if rivals else "identified", best.candidate.name, rivals,
+                                 [*forms, *effects])
+        self.scatter_scale, self.judge = scale, judge
+        self.log_z0 = float(self.like(self.problem.base_features))
+        return best
 
     # ------------------------------------------------------------------ model features
     def knobs_of(self, cands: Sequence[Candidate], values: Sequence[np.ndarray]) -> Knobs:
@@ -193,10 +270,10 @@ class Analysis:
         numpy.ndarray, shape (n, nfeat)
         """
         p = self.problem
-        prefix = tuple((c.name, tuple(np.round(np.asarray(v, float), 12))) for c, v in zip(cands[:-1], fixed,
-                                                                                          strict=True))
+        prefix = tuple((c.key, tuple(np.round(np.asarray(v, float), 12))) for c, v in zip(cands[:-1], fixed,
+                                                                                         strict=True))
         values = np.atleast_2d(np.asarray(values, dtype=float))
-        keys = [prefix + ((cands[-1].name, tuple(np.round(v, 12))),) for v in values]
+        keys = [prefix + ((cands[-1].key, tuple(np.round(v, 12))),) for v in values]
         todo: dict[tuple[object, ...], np.ndarray] = {}
         for k, v in zip(keys, values, strict=True):
             if k not in self._cache:
@@ -263,9 +340,9 @@ class Analysis:
         first = self.decision.ranking[0]
         f1 = self.features_at(first.candidate, first.map)
         p = self.problem
-        like = self.judge if form_error == 0.0 else Likelihood(
+        like = self.like if form_error == 0.0 else Likelihood(
             p.measured_features, self.with_form_error(f1 - p.base_features, form_error),
-            np.arange(p.base_features.size), self.request.options.likelihood, scale=self.scatter_scale)
+            np.arange(p.base_features.size), self.request.options.likelihood)
         return self.residual_p_value(f1, like.w), like, f1
 
     def _second_fit(self, c2: Candidate, like: Likelihood, f1: np.ndarray) -> tuple[Fit, float, float]:
@@ -299,29 +376,36 @@ class Analysis:
         p_value : float
             Remainder of the first effect against the Monte-Carlo null.
         candidates : list of SecondCandidate
-            The next :data:`RANKED_WITH_HELD_OUT` ranked effects.
+            The next :data:`SECOND_CANDIDATES` ranked effects.
         """
         p_value, like, f1 = self._second(form_error)
         out = []
-        for f in self.decision.ranking[1:1 + RANKED_WITH_HELD_OUT]:
+        for f in self._second_ranking():
             fit, cos, ratio = self._second_fit(f.candidate, like, f1)
             ho, improves = self._second_held_out(fit)
             out.append(SecondCandidate(fit, cos, ho, improves, ratio))
         return p_value, out
 
+    def _second_ranking(self) -> list[Fit]:
+        """The effects a second one is looked for among: the next best ranked (model forms never)."""
+        return [f for f in self.decision.ranking[1:] if not f.candidate.model_form][:SECOND_CANDIDATES]
+
     def _greedy_second(self) -> tuple[Fit, HeldOut | None, float] | None:
         """Best second effect with the first fixed at its MAP; accepted only if it passes every test.
 
         Tests (``docs/diagnosis.md`` §4.7): the first leaves a significant remainder; the second's
-        conditional ln BF > τ; its signature is not collinear with the first's; it moves the
-        features by at least :data:`MIN_SECOND_SHIFT_RATIO` of the first's shift (else it is
-        within the first effect's form error); held-out χ² improves (checked last: costliest).
+        conditional ln BF > τ, also at the scatter the remainder of both shows when that is
+        significant (as the first's claim, :meth:`claim_holds`); its signature is not collinear
+        with the first's; it moves the features by at least :data:`MIN_SECOND_SHIFT_RATIO` of
+        the first's shift (else it is within the first effect's form error); held-out χ²
+        improves (checked last: costliest). All at the stated Σ: the first's remainder is what
+        a second effect is looked for in, so it does not widen Σ against it.
         """
         p_value, like, f1 = self._second()
         if p_value >= RESIDUAL_P:
             return None  # the first effect leaves nothing that tolerances and noise do not explain
         best: tuple[Fit, HeldOut | None, float] | None = None
-        for f in self.decision.ranking[1:1 + RANKED_WITH_HELD_OUT]:
+        for f in self._second_ranking():
             if f.candidate.name == "spindle_rotational_receptance" and self.spindle_share(f1) < MIN_SPINDLE_SHARE:
                 continue  # the measured spindle's own uncertainty explains nothing of the remainder
             fit, cos, ratio = self._second_fit(f.candidate, like, f1)
@@ -329,23 +413,40 @@ class Analysis:
                     or ratio < MIN_SECOND_SHIFT_RATIO
                     or (best is not None and fit.log_bayes_factor <= best[0].log_bayes_factor)):
                 continue
+            if not self._second_claim_holds(fit):
+                continue
             ho, improves = self._second_held_out(fit)
             if improves:
                 best = (fit, ho, cos)
         return best
 
-    def remainder_scale(self, model_features: np.ndarray) -> float:
+    def _second_claim_holds(self, fit: Fit) -> bool:
+        """The second effect's conditional claim at the scatter the remainder of both shows (when significant)."""
+        opts, p = self.request.options, self.problem
+        first = self.decision.ranking[0]
+        f12 = self.features_of([first.candidate, fit.candidate], [first.map, fit.map])
+        scale = self.remainder_scale(f12)
+        if scale <= 1.0 or self.residual_p_value(f12) > max(SCATTER_P, 1.0 / (self.disc.samples.shape[0] + 1)):
+            return True
+        judge = Likelihood(p.measured_features, self.disc, np.arange(p.base_features.size), opts.likelihood,
+                           scale=scale)
+        f1 = self.features_at(first.candidate, first.map)
+        refit = fit_candidate(fit.candidate, lambda c, v: self.features_many([first.candidate, c], [first.map], v),
+                              judge, float(judge(f1)))
+        return refit.log_bayes_factor > opts.claim_threshold
+
+    def remainder_scale(self, model_features: np.ndarray, clip: bool = True) -> float:
         """How much more the data scatter about ``model_features`` than tolerances and noise allow.
 
         ``ŝ = √(χ² / median χ²_MC)``, the Mahalanobis χ² of the remainder over the median of
-        the Monte-Carlo null's (which carries the features' own non-Gaussian spread), kept in
-        ``[1, MAX_SCATTER_SCALE]``.
+        the Monte-Carlo null's (which carries the features' own non-Gaussian spread), at least 1
+        and, with ``clip``, at most ``MAX_SCATTER_SCALE``.
         """
         w = self.like.w
         r = self.problem.measured_features - (model_features + self.disc.mu)
         null = np.sum((self.disc.samples @ w.T) ** 2, axis=1)
         ratio = float(np.sum((w @ r) ** 2)) / max(float(np.median(null)), 1e-300)
-        return float(np.clip(np.sqrt(ratio), 1.0, MAX_SCATTER_SCALE))
+        return float(np.clip(np.sqrt(ratio), 1.0, MAX_SCATTER_SCALE if clip else np.inf))
 
     def spindle_share(self, model_features: np.ndarray) -> float:
         """Share of the expected scatter along the remainder that the measured spindle's own uncertainty makes.
@@ -383,7 +484,7 @@ class Analysis:
 
         Listed when the verdict's effect leaves a significant remainder (the truth is then
         neither form exactly, so an evidence difference between two collinear forms says which
-        approximates better, not which mechanism acts; ``docs/diagnosis.md`` §5.4).
+        approximates better, not which mechanism acts; ``docs/diagnosis.md`` §5.5).
         """
         d = self.decision
         if d.status == "none":
@@ -416,11 +517,62 @@ class Analysis:
         shift = self.features_of(cands, values) - self.problem.base_features
         return float(np.linalg.norm(self.like.w @ shift))
 
-    def full_h(self, cands: Sequence[Candidate], values: Sequence[np.ndarray]) -> list[np.ndarray]:
-        """Model ``h`` on every measurement's own (full) lines."""
+    def calibrated_knobs(self, cands: Sequence[Candidate], values: Sequence[np.ndarray]
+                         ) -> tuple[list[Knobs], dict[str, float]]:
+        """The candidates at their values and the nuisance at its most probable draw given the measurements.
+
+        The base model's own parameters may be anywhere within their stated tolerances; the
+        measurements say where. A linear (Kalman) update from the Monte-Carlo draws, which
+        pair each draw's nuisance parameters ``u`` with its noisy features ``f``:
+        ``u* = ū + C_uf Σ⁻¹ r``, ``r`` the remainder of the measured features about the model
+        with the candidates (``C_uf`` their sample cross-covariance, Σ the discrepancy). The
+        draws' spindle receptances (a measured spindle's noise) are not updated.
+
+        Parameters
+        ----------
+        cands : sequence of Candidate
+        values : sequence of numpy.ndarray
+
+        Returns
+        -------
+        knobs : list of Knobs
+            One per measurement.
+        moves : dict
+            Each updated parameter's move in prior standard deviations (``config:knob`` for
+            per-measurement knobs).
+        """
+        p = self.problem
+        u, names = p.draw_parameters(self.request.options.monte_carlo_draws)
+        s = self.disc.samples
+        n = min(u.shape[0], s.shape[0])
+        u, s = u[:n], s[:n]
+        du = u - u.mean(axis=0)
+        cross = du.T @ s / max(n - 1, 1)
+        r = p.measured_features - (self.features_of(cands, values) + self.disc.mu)
+        step = cross @ np.linalg.solve(self.disc.sigma, r)
+        latent = u.mean(axis=0) + step
+        sd = np.maximum(du.std(axis=0), 1e-300)
+        per: list[dict[str, float]] = [{} for _ in p.configs]
+        moves: dict[str, float] = {}
+        for (c, knob, kind), v, dv, sdv in zip(names, latent, step, sd, strict=True):
+            value = float(np.exp(v)) if kind == "log" else float(v)
+            for i in (range(len(p.configs)) if c is None else [c]):
+                per[i][knob] = value
+            moves[knob if c is None else f"{c}:{knob}"] = float(dv / sdv)
+        base = self.knobs_of(cands, values)
+        out = []
+        for fields in per:
+            # the drawn value replaces the base's own factor (1, or 0 m): the candidates' factors stay
+            out.append(replace(base, **{k: (getattr(base, k) + v if k == "stickout_offset_m"
+                                            else getattr(base, k) * v) for k, v in fields.items()}))
+        return out, moves
+
+    def full_h(self, cands: Sequence[Candidate], values: Sequence[np.ndarray],
+               knobs: Sequence[Knobs] | None = None) -> list[np.ndarray]:
+        """Model ``h`` on every measurement's own (full) lines (``knobs``: one per measurement instead)."""
         p = self.problem
         k = self.knobs_of(cands, values)
-        out = []
+        out: list[np.ndarray] = []
         solvers: dict[bytes, tuple[Solver, PartsBuilder]] = {}
         for m in self.request.measurements:
             key = m.frequency_hz.tobytes()
@@ -428,7 +580,7 @@ class Analysis:
             if hit is None:
                 base = None if p.measured is None else BaseReceptance(p.full_bases[key].receptance)
                 hit = solvers[key] = (Solver(m.frequency_hz, cache_size=4), PartsBuilder(p.spec, p.plane, base))
-            out.append(hit[0].tip_h(hit[1].parts(m.tool, k)))
+            out.append(hit[0].tip_h(hit[1].parts(m.tool, k if knobs is None else knobs[len(out)])))
         return out
 
 
