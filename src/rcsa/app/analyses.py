@@ -74,13 +74,12 @@ class LobesAnswer:
 
     def extras(self) -> dict[str, Any]:
         """The response's fields beside the nominal diagram: ``notes`` (all of them),
-        ``flute_length_m`` (with an assembly), the robust fields, and with ``"method": "auto"``
-        the method used and why (``method``, ``method_reason``)."""
+        ``flute_length_m`` (with an assembly), the robust fields, and the method used and why
+        (``method``, ``method_reason``)."""
         own = self.nominal.to_dict().get("notes", [])
         out: dict[str, Any] = {"notes": [*own, *self.notes]}
-        if self.method_reason:
-            out["method"] = "semi_discretization" if isinstance(self.nominal, SemiDiscretizationResult) else "zoa"
-            out["method_reason"] = self.method_reason
+        out["method"] = "semi_discretization" if isinstance(self.nominal, SemiDiscretizationResult) else "zoa"
+        out["method_reason"] = self.method_reason or f"{out['method']}: chosen by the request"
         if self.flute_length_m is not None:
             out["flute_length_m"] = self.flute_length_m
         if self.robust is not None:
@@ -120,9 +119,9 @@ def stability_lobes_answer(request: Mapping[str, Any], *, store: MeasurementStor
     """
     parsed, robust = _parse_lobes(request)
     zoa = parsed.method.name == "zoa"
-    if parsed.assembly is None:
-        assert parsed.frequency_hz is not None and parsed.frf_xx is not None
-        notes = frf_grid_notes(parsed.frequency_hz, parsed.frf_xx) if zoa else []
+    if parsed.assembly is None:  # inline FRFs or a modal table
+        notes = (frf_grid_notes(parsed.frequency_hz, parsed.frf_xx)
+                 if zoa and parsed.frequency_hz is not None and parsed.frf_xx is not None else [])
         return LobesAnswer(parsed.solve(), None, tuple(notes), None, parsed.method.reason)
     spec = parse_assembly(parsed.assembly, max_lines)
     flute = float(spec.tool.flute_length_m)
