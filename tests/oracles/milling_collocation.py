@@ -47,16 +47,20 @@ class Mode:
 
 @dataclass(frozen=True)
 class Limit:
-    """A depth limit (m) at two resolutions: ``points_per_cycle`` and about 1.4 times it."""
+    """A depth limit (m): the stable end of a bracket ``[depth_m, unstable_m]`` at ``points_per_cycle``,
+    and whether 1.4 times the points put the crossing inside the same bracket widened by ``rtol``.
+
+    Attributes
+    ----------
+    depth_m, unstable_m : float
+    points_per_cycle : float
+    finer_agrees : bool
+    """
 
     depth_m: float
-    finer_depth_m: float
+    unstable_m: float
     points_per_cycle: float
-
-    @property
-    def agreement(self) -> float:
-        """Relative difference of the two resolutions."""
-        return abs(self.finer_depth_m / self.depth_m - 1.0)
+    finer_agrees: bool
 
 
 def _angles(immersion: float, milling: str) -> tuple[float, float]:
@@ -133,7 +137,7 @@ def _period_map(modes: list[Mode], teeth: int, kt: float, kr: float, immersion: 
     cut = [(a, b, teeth_in) for a, b, teeth_in in elements if teeth_in]
     if not cut:
         raise ValueError("no tooth ever cuts")
-    sizes = [max(10, math.ceil(points_per_cycle * f_top * (b - a))) for a, b, _ in cut]
+    sizes = [max(16, math.ceil(points_per_cycle * f_top * (b - a))) for a, b, _ in cut]
     offsets = np.concatenate([[0], np.cumsum([(m + 1) * n for m in sizes])]).astype(int)
     total = int(offsets[-1])
     big_l = np.zeros((total, total))
@@ -172,7 +176,7 @@ def _period_map(modes: list[Mode], teeth: int, kt: float, kr: float, immersion: 
 
 
 def spectral_radius(modes: list[Mode], teeth: int, kt: float, kr: float, immersion: float, milling: str,
-                    rpm: float, depth_m: float, points_per_cycle: float = 6.0) -> float:
+                    rpm: float, depth_m: float, points_per_cycle: float = 8.0) -> float:
     """Largest modulus of the period map's eigenvalues.
 
     ``R`` acts only through its nonzero columns ``S`` (the delayed displacements and the state the
@@ -186,12 +190,15 @@ def spectral_radius(modes: list[Mode], teeth: int, kt: float, kr: float, immersi
 
 
 def _limit(modes: list[Mode], teeth: int, kt: float, kr: float, immersion: float, milling: str, rpm: float,
-           points_per_cycle: float, low_m: float, high_m: float, scan: int, rtol: float) -> float:
+           points_per_cycle: float, low_m: float, high_m: float, scan: int, rtol: float) -> tuple[float, float]:
     depths = np.geomspace(low_m, high_m, scan)
-    rho = [spectral_radius(modes, teeth, kt, kr, immersion, milling, rpm, b, points_per_cycle) for b in depths]
-    first = next((i for i, r in enumerate(rho) if r >= 1.0), None)
+    first = None
+    for i, b in enumerate(depths):  # upwards until the first unstable depth of the scan
+        if spectral_radius(modes, teeth, kt, kr, immersion, milling, rpm, b, points_per_cycle) >= 1.0:
+            first = i
+            break
     if first is None:
-        return math.nan
+        return math.nan, math.nan
     lo, hi = (depths[first - 1] if first else 0.0), depths[first]
     while hi - lo > rtol * hi:
         mid = 0.5 * (lo + hi) if lo == 0.0 else math.sqrt(lo * hi)
@@ -199,14 +206,20 @@ def _limit(modes: list[Mode], teeth: int, kt: float, kr: float, immersion: float
             hi = mid
         else:
             lo = mid
-    return lo
+    return lo, hi
 
 
 def depth_limit(modes: list[Mode], teeth: int, kt: float, kr: float, immersion: float, milling: str, rpm: float,
-                *, low_m: float, high_m: float, points_per_cycle: float = 6.0, scan: int = 40,
-                rtol: float = 1e-4) -> Limit:
-    """The smallest unstable depth (m, bracket's stable end, relative width ``rtol``) at one speed,
-    searched in ``[low_m, high_m]`` (NaN: stable there), at two resolutions."""
-    coarse = _limit(modes, teeth, kt, kr, immersion, milling, rpm, points_per_cycle, low_m, high_m, scan, rtol)
-    fine = _limit(modes, teeth, kt, kr, immersion, milling, rpm, 1.4 * points_per_cycle, low_m, high_m, scan, rtol)
-    return Limit(coarse, fine, points_per_cycle)
+                *, low_m: float, high_m: float, points_per_cycle: float = 8.0, scan: int = 40,
+                rtol: float = 1e-4, agreement: float = 1e-3) -> Limit:
+    """The smallest unstable depth (m, a bracket's stable end, relative width ``rtol``) at one speed,
+    searched upwards from ``low_m`` over a geometric scan to ``high_m`` (NaN: stable there), and
+    whether 1.4 times the points agree: stable at ``(1 − agreement)·lo``, unstable at
+    ``(1 + agreement)·hi``."""
+    lo, hi = _limit(modes, teeth, kt, kr, immersion, milling, rpm, points_per_cycle, low_m, high_m, scan, rtol)
+    if not math.isfinite(hi):
+        return Limit(lo, hi, points_per_cycle, True)
+    finer = 1.4 * points_per_cycle
+    below = spectral_radius(modes, teeth, kt, kr, immersion, milling, rpm, lo * (1 - agreement), finer) < 1.0
+    above = spectral_radius(modes, teeth, kt, kr, immersion, milling, rpm, hi * (1 + agreement), finer) >= 1.0
+    return Limit(lo, hi, points_per_cycle, below and above)

@@ -23,9 +23,9 @@ reason is true. The method is chosen per tool:
   ``safety_factor × flute length`` deep, so a speed without an SDM limit below it is stable to
   the flute length: the stepdown is then capped there (``limited_by: "flute_length"``, said in
   the tool's notes), never refused.
-* ``"auto"`` — semi-discretization where zero-order averaging is not trustworthy
-  (:func:`rcsa.analysis.lobes.options.auto_method`: fewer than one tooth in the cut on
-  average), else zero-order.
+* ``"auto"`` — zero-order only where it is exact
+  (:func:`rcsa.analysis.lobes.options.auto_method`: even-toothed slotting), else
+  semi-discretization.
 
 Robust pockets (a confidence and drawn FRFs) use the robust limit of
 :mod:`rcsa.analysis.lobes.robust` (zero-order: every draw's envelope; semi-discretization:
