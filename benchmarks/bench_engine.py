@@ -15,7 +15,8 @@ process:
 * ``import rcsa`` and ``rcsa --help`` in fresh interpreters.
 
 ``--slow-baselines`` adds the older yardsticks (the solver called per frequency line; each
-tool solved as a full assembly), which take about a minute.
+tool solved as a full assembly), which take about a minute. The figures are also written to
+``benchmarks/results/engine.json`` (``--out`` elsewhere; :mod:`record`).
 """
 
 from __future__ import annotations
@@ -47,6 +48,7 @@ from rcsa.physics.elimination import static_tip_receptance, tip_receptance
 from rcsa.physics.natural_frequencies import natural_frequencies_batch
 from rcsa.physics.subassembly_cache import SubassemblyCache
 from rcsa.reference import ra1
+from record import load_average, write
 
 
 def median_time_s(fn: Callable[[], object], repeats: int, warm: bool = True) -> float:
@@ -87,7 +89,7 @@ def fresh_interpreter_s(argv: list[str], repeats: int) -> float:
     return statistics.median(times)
 
 
-def ra1_section(repeats: int, slow: bool) -> None:
+def ra1_section(repeats: int, slow: bool) -> dict[str, object]:
     doc = ra1({"start_hz": 1.0, "stop_hz": 10000.0, "step_hz": 1.0})
     spec = parse_assembly(doc)
     model = build_model(spec)
@@ -127,6 +129,12 @@ def ra1_section(repeats: int, slow: bool) -> None:
     predictions.SIDES.size = 0
     print(f"  rcsa.predict, warm (spindle + holder kept from the call before)  {t_warm * 1e3:7.1f} ms   "
           f"block sweep ratio {t_block / t_warm:5.1f}x")
+    out: dict[str, object] = {
+        "lines": int(f.size), "load_average": load_average(), "predict_cold_ms": t_pred * 1e3,
+        "dense_numpy_ms": t_numpy * 1e3, "block_sweep_ms": t_block * 1e3, "dense_agreement": float(err),
+        "block_sweep_agreement": float(err_block), "beams": len(beams), "items": len(chain),
+        "block_sweep_beam_terms_ms": t_bterms * 1e3, "transcendentals_ms": t_floor * 1e3,
+        "predict_warm_ms": t_warm * 1e3}
 
     # where the time goes: each part of rcsa.predict timed on its own
     prefix, rest = model.to_holder_tip(), model.tool_side()
@@ -148,8 +156,10 @@ def ra1_section(repeats: int, slow: bool) -> None:
         "its JSON bytes from the arrays (rcsa.app.results.json_bytes)": lambda: json_bytes(result),
     }
     print("  where the time goes (each part alone, median):")
+    out["parts_ms"] = {}
     for name, fn in parts.items():
-        print(f"    {name:<64s} {median_time_s(fn, repeats) * 1e3:7.1f} ms")
+        out["parts_ms"][name.strip()] = part = median_time_s(fn, repeats) * 1e3  # type: ignore[index]
+        print(f"    {name:<64s} {part:7.1f} ms")
     print("    (rcsa.predict returns the Prediction; the document and its bytes are made when a caller serialises it)")
     if slow:
         sub = omega[::20]  # the loop is timed on 500 lines and scaled to 10 000
@@ -157,9 +167,11 @@ def ra1_section(repeats: int, slow: bool) -> None:
         t_loop = median_time_s(lambda: [tip_receptance(chain, sub[i:i + 1]) for i in range(sub.size)], 3) * 20
         print(f"  same solver per frequency line (loop)               {t_loop * 1e3:8.1f} ms   "
               f"ratio {t_loop / t_vec:5.0f}x the vectorised FRF")
+        out.update(per_line_loop_ms=t_loop * 1e3, vectorised_frf_ms=t_vec * 1e3)
+    return out
 
 
-def batch_section(n_tools: int, slow: bool) -> None:
+def batch_section(n_tools: int, slow: bool) -> dict[str, object]:
     doc = ra1()
     rng = np.random.default_rng(2026)
     grid = {"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 2.5}  # 1 999 lines
@@ -175,6 +187,8 @@ def batch_section(n_tools: int, slow: bool) -> None:
     print(f"{n_tools} tools on one spindle + holder, 1 999 lines ({load()})")
     print(f"  batch, FRFs + peaks + static stiffness          {t_frf:7.2f} s")
     print(f"  batch, + every tool's exact natural frequencies {t_full:7.2f} s   ({n_modes} modes)")
+    out: dict[str, object] = {"tools": n_tools, "lines": 1999, "load_average": load_average(),
+                              "frf_peaks_static_s": t_frf, "with_modes_s": t_full, "modes": n_modes}
     profile = cProfile.Profile()
     profile.enable()
     rcsa.predict_batch(request, arrays="numpy")
@@ -191,17 +205,21 @@ def batch_section(n_tools: int, slow: bool) -> None:
     for (file, _, name), (_, _, _, cum, _) in stats.stats.items():  # type: ignore[attr-defined]
         if name in wanted and "rcsa" in file:
             seen[name] = seen.get(name, 0.0) + cum
+    out["profile_share"] = {}
     for name, label in wanted.items():
         if name in seen:
+            out["profile_share"][label.strip()] = seen[name] / total  # type: ignore[index]
             print(f"    {label:<52s} {seen[name]:6.2f} s  {100 * seen[name] / total:4.0f} %")
     if slow:
         n_base = max(20, n_tools // 20)
         t_base = median_time_s(lambda: [rcsa.predict({**ra1(grid), "tool": c["tool"]}) for c in combos[:n_base]], 1,
                                warm=False) * n_tools / n_base
         print(f"  each tool as a full assembly (baseline)        {t_base:7.2f} s   ratio {t_base / t_full:5.1f}x")
+        out["full_assemblies_s"] = t_base
+    return out
 
 
-def startup_section(repeats: int) -> None:
+def startup_section(repeats: int) -> dict[str, object]:
     exe = sys.executable
     cli = str(Path(exe).with_name("rcsa"))
     t_python = fresh_interpreter_s([exe, "-c", "pass"], repeats)
@@ -211,6 +229,8 @@ def startup_section(repeats: int) -> None:
     print(f"  python -c pass         {t_python * 1e3:6.0f} ms")
     print(f"  python -c 'import rcsa' {t_import * 1e3:6.0f} ms")
     print(f"  rcsa --help            {t_help * 1e3:6.0f} ms")
+    return {"repeats": repeats, "load_average": load_average(), "python_pass_ms": t_python * 1e3,
+            "import_rcsa_ms": t_import * 1e3, "rcsa_help_ms": t_help * 1e3}
 
 
 def main() -> None:
@@ -218,12 +238,15 @@ def main() -> None:
     parser.add_argument("--tools", type=int, default=1000)
     parser.add_argument("--repeats", type=int, default=15)
     parser.add_argument("--slow-baselines", action="store_true", help="also the per-line loop and full assemblies")
+    parser.add_argument("--out", type=Path, default=None, help="the JSON (default benchmarks/results/engine.json)")
     args = parser.parse_args()
+    start = load_average()
     print(f"python {sys.version.split()[0]}, numpy {np.__version__}, {os.uname().machine}")
     predictions.SIDES.size = 0  # cold predictions: no spindle side kept across calls (the warm row says so)
-    ra1_section(args.repeats, args.slow_baselines)
-    batch_section(args.tools, args.slow_baselines)
-    startup_section(7)
+    figures = {"ra1": ra1_section(args.repeats, args.slow_baselines),
+               "batch": batch_section(args.tools, args.slow_baselines), "startup": startup_section(7),
+               "repeats": args.repeats}
+    write("engine", figures, load_start=start, out=args.out)
 
 
 if __name__ == "__main__":

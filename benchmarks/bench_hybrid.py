@@ -6,7 +6,8 @@ identification by the exact three-FRF method and by the finite-difference fallba
 the 74 mm tool coupled to the identified holder-tip receptance. Error = max |h − h_true|
 over 300–5000 Hz divided by the true peak (``docs/physics.md`` §4.6). Median over seeds.
 
-Run: ``.venv/bin/python benchmarks/bench_hybrid.py [--seeds 10]``
+Run: ``.venv/bin/python benchmarks/bench_hybrid.py [--seeds 10]`` (written to
+``benchmarks/results/hybrid.json``)
 """
 
 from __future__ import annotations
@@ -25,12 +26,16 @@ from tests.measured.test_hybrid import GRID, blank_frfs, hybrid_doc, put_blank  
 import rcsa  # noqa: E402
 from rcsa.measured.store import MeasurementStore  # noqa: E402
 from rcsa.reference import ra1  # noqa: E402
+from record import load_average, write  # noqa: E402
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--seeds", type=int, default=10)
+    parser.add_argument("--out", type=Path, default=None, help="the JSON (default benchmarks/results/hybrid.json)")
     args = parser.parse_args()
+    begin = load_average()
+    rows = []
     truth = rcsa.predict(ra1(GRID)).tool_point.h
     store = MeasurementStore(Path(tempfile.mkdtemp()) / "store")
     print("tool-point h error, fraction of the true peak, 300–5000 Hz (median over seeds)")
@@ -48,6 +53,11 @@ def main() -> None:
                 errors[method].append(max_error_of_peak(h[band], truth[band]))
         print(f"{noise * 100:7.1f}% {statistics.median(errors['exact']):12.2e} "
               f"{statistics.median(errors['finite_difference']):12.3f}")
+        rows.append({"noise_rel": noise, "seeds": args.seeds if noise else 1,
+                     "exact_three_frf": statistics.median(errors["exact"]),
+                     "finite_difference": statistics.median(errors["finite_difference"])})
+    write("hybrid", {"band_hz": [300.0, 5000.0], "error": "max |h - h_true| / true peak, median over seeds",
+                     "rows": rows}, load_start=begin, out=args.out)
 
 
 if __name__ == "__main__":

@@ -40,6 +40,7 @@ from rcsa.model.assembly import build_model  # noqa: E402
 from rcsa.model.contract import parse_assembly  # noqa: E402
 from rcsa.physics.elimination import tip_receptance  # noqa: E402
 from rcsa.reference import ra1  # noqa: E402
+from record import load_average, write  # noqa: E402
 
 GRID = {"start_hz": 2.5, "stop_hz": 5000.0, "step_hz": 2.5}  # 2 000 lines
 CUT = {"teeth": 4, "tangential_coefficient_n_m2": 6.0e8, "radial_ratio": 0.3, "radial_immersion": 0.5,
@@ -63,18 +64,28 @@ def _band(result: dict) -> np.ndarray:
     return np.array([u[k] for k in ("p05", "p50", "p95")])
 
 
-def _errors(reduced: dict, exact: dict) -> str:
-    """The band's and the natural frequencies' largest relative errors, as printed."""
+def _errors(reduced: dict, exact: dict) -> dict[str, float]:
+    """The band's and the natural frequencies' largest relative errors."""
     a, b = _band(reduced), _band(exact)
-    band = float(np.max(np.abs(a / b - 1.0)))
-    peak = float(np.max(np.abs(a - b)) / np.max(b))
-    text = f"band (p05/p50/p95 of |h|, pointwise) {band:.2%}, relative to the peak {peak:.3%}"
+    out = {"band_pointwise": float(np.max(np.abs(a / b - 1.0))), "band_of_peak": float(np.max(np.abs(a - b)) / np.max(b))}
     ra, rb = reduced["uncertainty"]["natural_frequencies_hz"], exact["uncertainty"]["natural_frequencies_hz"]
     if rb["mean"]:
-        mean = float(np.max(np.abs(np.array(ra["mean"]) / rb["mean"] - 1.0)))
-        sd = float(np.max(np.abs(np.array(ra["sd"]) / rb["sd"] - 1.0)))
-        text += f"; natural frequencies: mean {mean:.3%}, sd {sd:.2%}"
+        out["modes_mean"] = float(np.max(np.abs(np.array(ra["mean"]) / rb["mean"] - 1.0)))
+        out["modes_sd"] = float(np.max(np.abs(np.array(ra["sd"]) / rb["sd"] - 1.0)))
+    return out
+
+
+def _said(errors: dict[str, float]) -> str:
+    """:func:`_errors` as printed."""
+    text = (f"band (p05/p50/p95 of |h|, pointwise) {errors['band_pointwise']:.2%}, relative to the peak "
+            f"{errors['band_of_peak']:.3%}")
+    if "modes_mean" in errors:
+        text += f"; natural frequencies: mean {errors['modes_mean']:.3%}, sd {errors['modes_sd']:.2%}"
     return text
+
+
+def _times(t: tuple[float, float], plain: tuple[float, float]) -> dict[str, float]:
+    return {"wall_ms": t[0] * 1e3, "cpu_ms": t[1] * 1e3, "wall_ratio": t[0] / plain[0], "cpu_ratio": t[1] / plain[1]}
 
 
 def _line(label: str, t: tuple[float, float], plain: tuple[float, float]) -> str:
@@ -82,7 +93,7 @@ def _line(label: str, t: tuple[float, float], plain: tuple[float, float]) -> str
             f"CPU {t[1] * 1e3:7.1f} ms = {t[1] / plain[1]:5.1f}x one prediction")
 
 
-def _hybrid(draws: int, repeat: int) -> None:
+def _hybrid(draws: int, repeat: int) -> dict[str, object]:
     """RA-1 on its own modelled spindle stored as a direct FRF (rotations estimated)."""
     store = MeasurementStore(Path(tempfile.mkdtemp()) / "store")
     spec = parse_assembly(ra1(GRID))
@@ -92,8 +103,10 @@ def _hybrid(draws: int, repeat: int) -> None:
     doc = {**ra1(GRID), "spindle": {"measurement_id": ident}}
     plain = _median(lambda: app.predict(doc, store=store), repeat)
     print(f"measured spindle (RA-1's as a direct FRF), 2 000 lines: one prediction {plain[0] * 1e3:.1f} ms")
-    for label, option in (("no noise (rotation lengths drawn)", {"tolerances": {"spindle_noise_rel": 0.0}}),
-                          ("default noise (0.5 % on every line)", {})):
+    out: dict[str, object] = {"prediction_ms": plain[0] * 1e3}
+    for key, label, option in (("no_noise", "no noise (rotation lengths drawn)",
+                                {"tolerances": {"spindle_noise_rel": 0.0}}),
+                               ("default_noise", "default noise (0.5 % on every line)", {})):
         opt = {"draws": draws, "seed": 1, **option}
         reduced = _median(lambda o=opt: app.predict({**doc, "uncertainty": o}, store=store), repeat)
         exact = _median(lambda o=opt: app.predict({**doc, "uncertainty": {**o, "solver": "exact"}}, store=store),
@@ -102,8 +115,12 @@ def _hybrid(draws: int, repeat: int) -> None:
         print(_line("  the same, every draw exact", exact, plain))
         r = app.predict({**doc, "uncertainty": opt}, store=store)
         e = app.predict({**doc, "uncertainty": {**opt, "solver": "exact"}}, store=store)
-        print(f"    reduced vs exact: {_errors(r, e)}"
+        errors = _errors(r, e)
+        print(f"    reduced vs exact: {_said(errors)}"
               + ("" if "reduced_model" in r["uncertainty"] else " (solved exactly: noise on every line)"))
+        out[key] = {"reduced": _times(reduced, plain), "exact": _times(exact, plain), "errors": errors,
+                    "reduced_model_used": "reduced_model" in r["uncertainty"]}
+    return out
 
 
 def main() -> None:
@@ -112,7 +129,9 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--draws", type=int, default=200)
     parser.add_argument("--quick", action="store_true", help="RA-1 only: no measured spindle, no lobes")
+    parser.add_argument("--out", type=Path, default=None, help="the JSON (default benchmarks/results/uncertainty.json)")
     args = parser.parse_args()
+    begin = load_average()
     print(f"python {platform.python_version()}, numpy {np.__version__}, {platform.machine()}, "
           f"{os.cpu_count()} cores; load average {', '.join(f'{x:.2f}' for x in os.getloadavg())}")
     predictions.SIDES.size = 0  # cold predictions, as bench_engine.py times them: no spindle side kept across calls
@@ -127,13 +146,20 @@ def main() -> None:
     r = app.predict({**assembly, "uncertainty": option})
     e = app.predict({**assembly, "uncertainty": {**option, "solver": "exact"}})
     model = r["uncertainty"]["reduced_model"]
-    print(f"  reduced vs exact: {_errors(r, e)}")
+    errors = _errors(r, e)
+    print(f"  reduced vs exact: {_said(errors)}")
     print(f"  reduced model: {model['lines_per_draw_mean']:.0f} of 2 000 lines per draw, {model['resonances']} "
           f"resonances, largest check error {model['max_check_error']:.2%}, "
           f"{model['draws_solved_on_every_line']} draws solved on every line")
+    figures: dict[str, object] = {
+        "lines": 2000, "draws": args.draws, "repeat": args.repeat,
+        "ra1": {"prediction_wall_ms": plain[0] * 1e3, "prediction_cpu_ms": plain[1] * 1e3,
+                "reduced": _times(reduced, plain), "exact": _times(exact, plain), "errors": errors,
+                "lines_per_draw_mean": model["lines_per_draw_mean"], "load_average": load_average()}}
     if args.quick:
+        write("uncertainty", figures, load_start=begin, out=args.out)
         return
-    _hybrid(args.draws, args.repeat)
+    figures["measured_spindle"] = _hybrid(args.draws, args.repeat)
     nominal = _median(lambda: app.stability_lobes({"assembly": assembly, **CUT}), args.repeat)
     robust = _median(lambda: app.stability_lobes({"assembly": assembly, **CUT, "uncertainty": option}), args.repeat)
     robust_exact = _median(lambda: app.stability_lobes({"assembly": assembly, **CUT,
@@ -147,6 +173,10 @@ def main() -> None:
     y = np.array(b["depth_limit_robust_m"], dtype=float)
     print(f"  robust depth limit, reduced vs exact: largest relative difference {np.nanmax(np.abs(x / y - 1.0)):.2%}")
     print(f"load average at the end {', '.join(f'{x:.2f}' for x in os.getloadavg())}")
+    figures["robust_lobes"] = {"speeds": 500, "nominal_ms": nominal[0] * 1e3, "reduced_ms": robust[0] * 1e3,
+                               "exact_ms": robust_exact[0] * 1e3,
+                               "robust_limit_difference": float(np.nanmax(np.abs(x / y - 1.0)))}
+    write("uncertainty", figures, load_start=begin, out=args.out)
 
 
 if __name__ == "__main__":

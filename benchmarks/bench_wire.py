@@ -15,7 +15,7 @@ one process, median wall times with the machine's load:
   Targets: binary ≤ ⅓ of the JSON's bytes, ≥ 5× faster to write.
 
 The files go to a temporary directory (``--dir``; 3.7 GB of JSON at the full size) and are
-deleted afterwards.
+deleted afterwards. The figures are written to ``benchmarks/results/wire.json``.
 """
 
 from __future__ import annotations
@@ -41,6 +41,7 @@ from rcsa.app.results import json_bytes
 from rcsa.libraries.library_prediction import EntryResults
 from rcsa.model.batch import predict_batch
 from rcsa.reference import ra1
+from record import load_average, write
 
 
 def median_s(fn: Callable[[], object], repeats: int) -> float:
@@ -118,9 +119,9 @@ def batch_section(tools: int, lines: int, directory: Path, repeats: int) -> dict
     }
     out: dict[str, Any] = {"tools": tools, "lines": lines}
     json_s = json_bytes_n = None
-    for name, (suffix, write) in writers.items():
+    for name, (suffix, writer) in writers.items():
         path = directory / f"batch{suffix}"
-        times = [write_timed(path, write) for _ in range(repeats)]
+        times = [write_timed(path, writer) for _ in range(repeats)]
         t, size = statistics.median(times), path.stat().st_size
         path.unlink()
         if json_s is None:
@@ -142,17 +143,21 @@ def main() -> None:
     parser.add_argument("--batch-repeats", type=int, default=1)
     parser.add_argument("--dir", type=Path, default=None, help="where the batch files are written")
     parser.add_argument("--skip-batch", action="store_true")
+    parser.add_argument("--out", type=Path, default=None, help="the JSON (default benchmarks/results/wire.json)")
     args = parser.parse_args()
+    begin = load_average()
     print(f"python {sys.version.split()[0]}, orjson {orjson.__version__}")
     predictions.SIDES.size = 0  # cold predictions, the yardstick of bench_engine.py
-    prediction_section(args.repeats)
-    if args.skip_batch:
-        return
-    directory = Path(tempfile.mkdtemp(prefix="rcsa-wire-", dir=args.dir))
-    try:
-        batch_section(args.tools, args.lines, directory, args.batch_repeats)
-    finally:
-        shutil.rmtree(directory, ignore_errors=True)
+    figures: dict[str, Any] = {"prediction": {**prediction_section(args.repeats), "load_average": load_average()},
+                               "repeats": args.repeats}
+    if not args.skip_batch:
+        directory = Path(tempfile.mkdtemp(prefix="rcsa-wire-", dir=args.dir))
+        try:
+            figures["batch"] = {**batch_section(args.tools, args.lines, directory, args.batch_repeats),
+                                "load_average": load_average()}
+        finally:
+            shutil.rmtree(directory, ignore_errors=True)
+    write("wire", figures, load_start=begin, out=args.out)
 
 
 if __name__ == "__main__":

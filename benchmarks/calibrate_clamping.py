@@ -33,7 +33,7 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from tests.oracles.solid3d import clamping_scores, dataset  # noqa: E402
-from tests.oracles.solid3d.clamping_scores import CALIBRATION, INFORMATION, scores  # noqa: E402
+from tests.oracles.solid3d.clamping_scores import CALIBRATION_CASES, INFORMATION, scores  # noqa: E402
 
 import rcsa.model.clamping as clamping  # noqa: E402
 
@@ -81,7 +81,7 @@ def main() -> None:
     t0 = time.perf_counter()
     if args.fit:
         f_fit = load(names[0])["frequency_hz"][::_FIT_EVERY]
-        truths = {(n, b): load(n)[f"h_{b}"][::_FIT_EVERY] for n in CALIBRATION if n in names for b in dataset.BASES}
+        truths = {(n, b): load(n)[f"h_{b}"][::_FIT_EVERY] for n in CALIBRATION_CASES if n in names for b in dataset.BASES}
         start = np.log(np.array(list(asdict(clamping.BULK_COEFFICIENTS).values())) + 1e-3)
         res = minimize(_objective, start, args=(truths, f_fit), method="Nelder-Mead",
                        options={"maxfev": args.max_evaluations, "xatol": 1e-3, "fatol": 1e-4})
@@ -94,7 +94,7 @@ def main() -> None:
         for base in dataset.BASES:
             truth = data[f"h_{base}"]
             row: dict[str, Any] = {"case": name, "base": base,
-                                   "role": "calibration" if name in CALIBRATION else
+                                   "role": "calibration" if name in CALIBRATION_CASES else
                                    "information" if name in INFORMATION else "held-out"}
             for model in ("point", "clamping"):
                 if name == "rigid_holder" and model == "clamping":

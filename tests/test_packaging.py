@@ -131,3 +131,16 @@ def test_compose_workers_keep_freed_memory_as_the_backend_says(compose):
     for worker in workers:
         value = worker["environment"]["DASK_DISTRIBUTED__NANNY__PRE_SPAWN_ENVIRON"]
         assert ast.literal_eval(value) == DASK_WORKER_ENVIRON
+
+
+def test_the_license_and_the_python_version_are_stated_where_a_user_looks():
+    """pyproject says MIT and Python >= 3.11; the LICENSE file, the sdist and the README say the same."""
+    project = tomllib.loads((REPO / "pyproject.toml").read_text())
+    meta = project["project"]
+    assert meta["license"] == "MIT" and meta["license-files"] == ["LICENSE"]
+    license_text = (REPO / "LICENSE").read_text()
+    assert license_text.startswith("MIT License") and "WITHOUT WARRANTY OF ANY KIND" in license_text
+    assert "LICENSE" in project["tool"]["hatch"]["build"]["targets"]["sdist"]["include"]
+    assert meta["requires-python"] == ">=3.11"
+    assert project["tool"]["mypy"]["python_version"] == "3.11"
+    assert "Python ≥ 3.11" in (REPO / "README.md").read_text()

@@ -100,9 +100,13 @@ def test_lobes_figure_marks_assumed_y_and_unstable_point(frf):
         f, hxx, teeth=4, tangential_coefficient_n_m2=7e8, radial_ratio=0.3, radial_immersion=0.5,
         milling="down", spindle_speed_rpm=np.linspace(3000, 25000, 300),
     )  # fmt: skip
-    fig = lobes_figure(r, operating_point=(10000.0, 100 * r.min_depth_limit_m), show_lobes=False)
+    fig = lobes_figure(r, operating_point=(10000.0, 100 * r.min_depth_limit_m), show_lobes=False,
+                       conditions={"frf": "x_only"})
     (ax,) = fig.axes
     assert "Φyy = Φxx assumed" in ax.get_title()
+    # without conditions it says what the result itself knows (x used in y), assuming nothing more
+    untold = lobes_figure(r, show_lobes=False).axes[0].get_title()
+    assert "Φyy = Φxx (the x FRF used in y)" in untold and "assumed" not in untold
     gids = [line.get_gid() for line in ax.lines]
     assert not any(g and g.startswith("lobe-") for g in gids)
     op = next(line for line in ax.lines if line.get_gid() == "operating-point")
@@ -162,3 +166,54 @@ def test_no_pyplot_and_no_global_state():
         "PYTHONPATH": os.pathsep.join(filter(None, [src, os.environ.get("PYTHONPATH")])),
     }
     subprocess.run([sys.executable, "-c", code], check=True, env=env)
+
+
+CONDITIONS = {"teeth": 4, "tangential_coefficient_n_m2": 7e8, "radial_ratio": 0.3, "radial_immersion": 0.5,
+              "milling": "down", "method": "zoa", "frf": "assembly"}
+
+
+def test_lobes_figure_states_its_conditions_and_no_false_assumption(lobes):
+    """An assembly's diagram names its cutting conditions and method, and says the predicted tool
+    point is used in x and y — not that only an x FRF was given."""
+    fig = lobes_figure(lobes, conditions=CONDITIONS)
+    text = fig.axes[0].get_title()
+    for words in ("4 teeth", "a_e/D = 0.5", "down milling", "K_t = 700 N/mm²", "K_r/K_t = 0.3",
+                  "zero-order (Altintas–Budak)", "predicted tool point, in x and y"):
+        assert words in text, (words, text)
+    assert "assumed" not in text and "only x" not in text
+    assert fig._suptitle.get_text() == "Stability lobes"
+
+
+def test_lobes_figure_legend_stands_outside_the_data(lobes):
+    fig = lobes_figure(lobes, conditions=CONDITIONS)
+    (ax,) = fig.axes
+    renderer = fig.canvas.get_renderer()
+    legend = ax.get_legend().get_window_extent(renderer)
+    data = ax.get_window_extent(renderer)
+    assert legend.y1 <= data.y0  # wholly under the axes: no lobe is hidden behind it
+
+
+def test_lobes_figure_hatches_doubtful_speeds(lobes):
+    """Each reason's flagged speeds become hatched spans named once in the legend; contiguous
+    runs are one span each, reaching halfway to their unflagged neighbours."""
+    speed = lobes.spindle_speed_rpm
+    mask = (speed > 5000.0) & (speed < 6000.0) | (speed > 20000.0)
+    fig = lobes_figure(lobes, doubtful_speeds={"unresolved": mask})
+    (ax,) = fig.axes
+    spans = [p for p in ax.patches if p.get_gid() == "doubtful-unresolved"]
+    assert len(spans) == 2
+    lows = sorted(p.get_x() for p in spans)
+    first = np.flatnonzero(mask)[0]
+    assert lows[0] == pytest.approx(0.5 * (speed[first] + speed[first - 1]), rel=1e-12)
+    labels = ax.get_legend_handles_labels()[1]
+    assert sum("unresolved" in label for label in labels) == 1
+
+
+def test_frf_figure_marks_and_titles_the_natural_frequencies(frf):
+    f, hxx, _ = frf
+    fig = frf_figure(f, hxx, title="Tool point", natural_frequencies_hz=[800.0, 2100.0, 9000.0])
+    for ax in fig.axes:
+        marks = [line for line in ax.lines if line.get_gid() == "natural-frequency"]
+        assert [line.get_xdata()[0] for line in marks] == [800.0, 2100.0]  # 9 kHz is outside the band
+    title = fig._suptitle.get_text()
+    assert title.startswith("Tool point") and "800, 2100 Hz" in title

@@ -6,8 +6,10 @@ one, constrains rigid joint DOFs and condenses with ``numpy.linalg.solve``; each
 the largest entry the step combines (carried stiffness, element stiffness, result; measured
 ≤ 3e-13 over 40 random chains, 5 Hz–30 kHz). A result much smaller than what it is made of
 (cancellation) cannot be compared tighter than that, and along a whole chain such steps
-amplify the rounding: end to end, RA-1's tool point agrees to 1e-12 of each line's largest
-entry (measured 9e-13), a random chain at 30 kHz only to ~1e-7 (both solvers equally).
+amplify the rounding: end to end, RA-1's tool point agrees to 5e-12 of each line's largest
+entry (measured 9e-13 on one machine and 1.2e-12 on another: the BLAS kernels differ by CPU, and
+rounding accumulates over the chain's ~20 steps), a random chain at 30 kHz only to ~1e-7 (both
+solvers equally).
 """
 
 from __future__ import annotations
@@ -31,6 +33,8 @@ from rcsa.physics.subassembly_cache import SubassemblyCache
 from rcsa.reference import ra1
 
 RTOL = 1e-12
+#: A whole chain: the step's rounding accumulated over its steps (module docstring).
+CHAIN_RTOL = 5e-12
 OMEGA = 2 * np.pi * np.geomspace(5.0, 30000.0, 160)   # across the shear cut-off of the thick sections
 STEEL = Material(210.0e9, 0.30, 7850.0, 0.004)
 CARBIDE = Material(600.0e9, 0.22, 14500.0, 0.002)
@@ -91,7 +95,7 @@ def test_a_whole_assembly_equals_the_plain_elimination():
     doc = ra1({"start_hz": 5.0, "stop_hz": 10000.0, "step_hz": 5.0})
     chain = build_model(parse_assembly(doc)).chain()
     omega = 2 * np.pi * np.arange(5.0, 10001.0, 5.0)
-    _assert_lines_close(tip_receptance(chain, omega), reference_tip_receptance(chain, omega))
+    _assert_lines_close(tip_receptance(chain, omega), reference_tip_receptance(chain, omega), CHAIN_RTOL)
 
 
 def test_the_cache_condenses_and_marches_the_rest_as_the_plain_elimination_does():
@@ -105,9 +109,9 @@ def test_the_cache_condenses_and_marches_the_rest_as_the_plain_elimination_does(
         state = cache.condensed((prefix,))
         # the stiffness at the holder tip is a small difference of large beam terms: 4e-12 measured
         _assert_lines_close(state.stiffness, reference_march(prefix, omega), 1e-11)
-        _assert_lines_close(cache.tip_receptance(state, rest), expected)
+        _assert_lines_close(cache.tip_receptance(state, rest), expected, CHAIN_RTOL)
         np.testing.assert_allclose(cache.tip_h(state, rest), expected[:, 0, 0], rtol=0,
-                                   atol=RTOL * np.max(np.abs(expected)))
+                                   atol=CHAIN_RTOL * np.max(np.abs(expected)))
 
 
 def test_a_rigid_joint_dof_is_shared_and_a_fully_rigid_joint_changes_nothing():

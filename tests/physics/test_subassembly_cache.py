@@ -83,3 +83,40 @@ def test_the_lru_store_keeps_at_most_its_size():
         lru.get(k, lambda k=k: k * k)
     assert len(lru) == 3 and dropped == [0, 1, 2] and lru.peek(5) == 25
     assert LruStore(0).get("x", lambda: 1) == 1 and len(LruStore(0)) == 0
+
+
+def test_the_lru_store_makes_a_missing_value_outside_its_lock():
+    """A long ``make()`` does not block other threads' reads of the store (here one reads it
+    while ``make`` waits for it); ``clear`` empties it."""
+    import threading
+
+    lru = LruStore(4)
+    lru.put("kept", 1)
+    seen = []
+
+    def make():
+        reader = threading.Thread(target=lambda: seen.append(lru.peek("kept")))
+        reader.start()
+        reader.join(timeout=60)  # a deadlock guard, not a timing: the reader must have finished
+        return 2
+
+    assert lru.get("new", make) == 2 and seen == [1]
+    lru.clear()
+    assert len(lru) == 0 and lru.peek("kept") is None
+
+
+def test_src_has_one_eviction_policy():
+    """No bounded cache in src/ but LruStore: no functools.lru_cache, cachetools, or hand-written
+    OrderedDict LRU (``functools.cache`` of a single value evicts nothing and is allowed)."""
+    import re
+
+    from tests.helpers import REPO
+
+    home = REPO / "src" / "rcsa" / "physics" / "subassembly_cache.py"
+    pattern = re.compile(r"\blru_cache\b|\bcachetools\b|\bOrderedDict\b|\bLRUCache\b|\.popitem\(last=False\)")
+    found = [f"{p.relative_to(REPO)}:{n}: {line.strip()}"
+             for p in sorted((REPO / "src").rglob("*.py")) if p != home
+             for n, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1) if pattern.search(line)]
+    found += [f"service: {p}" for p in sorted((REPO / "service").rglob("*.py"))
+              if pattern.search(p.read_text(encoding="utf-8"))]
+    assert not found, "\n".join(found)

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import io
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any, Literal
 
@@ -28,6 +28,8 @@ import matplotlib
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.layout_engine import ConstrainedLayoutEngine
+from matplotlib.ticker import MaxNLocator
 
 from rcsa.analysis.effects.report import EffectReport
 from rcsa.analysis.lobes.zoa import LobeResult
@@ -206,6 +208,7 @@ def frf_figure(
     layout: FrfLayout = "full",
     title: str | None = None,
     band_m_n: tuple[object, object] | None = None,
+    natural_frequencies_hz: object | None = None,
 ) -> Figure:
     """Figure of one or more receptances, shown in µm/N.
 
@@ -225,12 +228,15 @@ def frf_figure(
     band_m_n : (array_like, array_like), optional
         Lower and upper ``|h|`` of an uncertainty band (e.g. p05 and p95), m/N, on the same
         grid: shaded on the magnitude axes (``gid`` ``"band"``).
+    natural_frequencies_hz : array_like of float, optional
+        Natural frequencies to mark, Hz: a dotted vertical line on every axes (``gid``
+        ``"natural-frequency"``, after the curves) and the values in the figure's title.
 
     Returns
     -------
     matplotlib.figure.Figure
         Each axes carries ``gid`` ``"real"``, ``"imag"``, ``"mag"`` or ``"phase"`` and
-        holds one line per curve, in input order.
+        holds one line per curve, in input order, then the natural frequencies' lines.
     """
     f, h = _frf_columns(frequency_hz, frf_m_n)
     if labels is not None and len(labels) != h.shape[1]:
@@ -264,13 +270,21 @@ def frf_figure(
         ax.grid(True, which="both", alpha=0.3)
         if name == "phase":
             ax.set_yticks(np.arange(-180, 181, 90))
+    given = () if natural_frequencies_hz is None else np.asarray(natural_frequencies_hz, dtype=float).ravel()
+    marked = [float(x) for x in given if f[0] <= x <= f[-1]]
+    for ax in axes:
+        for x in marked:
+            ax.axvline(x, color="0.45", lw=0.7, ls=":", gid="natural-frequency")
     for ax in axes[1::2]:
         ax.set_xlabel("Frequency (Hz)")
     axes[0].set_xlim(f[0], f[-1])
     if labels is not None:
         axes[0].legend(loc="best", fontsize="small")
-    if title:
-        fig.suptitle(checked_text(title, "title"))
+    heading = checked_text(title, "title") if title else "Receptance"
+    if natural_frequencies_hz is not None:
+        listed = ", ".join(f"{x:.0f}" for x in marked[:8]) + (", …" if len(marked) > 8 else "")
+        heading += f"\nnatural frequencies (dotted): {listed} Hz" if marked else "\nno natural frequency in the band"
+    fig.suptitle(heading, fontsize="medium")
     return freeze_layout(fig)
 
 
@@ -285,6 +299,8 @@ def lobes_figure(
     robust_label: str = "robust limit",
     flute_length_m: float | None = None,
     notes: Sequence[str] = (),
+    conditions: Mapping[str, Any] | None = None,
+    doubtful_speeds: Mapping[str, np.ndarray] | None = None,
 ) -> Figure:
     """Stability lobe diagram: axial depth limit (mm) against spindle speed (rpm).
 
@@ -311,12 +327,22 @@ def lobes_figure(
     notes : sequence of str
         Caveats of the diagram (under-resolved speeds, an FRF grid too coarse for the
         lobes), written under the axes.
+    conditions : mapping, optional
+        How the diagram was made (:func:`rcsa.app.analyses.cutting_conditions`: teeth, radial
+        immersion, milling, cutting coefficients, method, FRF source): written under the title.
+        Without it the method is told by the result's type and the FRF source by
+        ``result.same_frf_in_y``.
+    doubtful_speeds : mapping of str to numpy.ndarray, optional
+        Boolean masks over the speeds whose limit is not to be trusted as drawn, by reason
+        (:func:`rcsa.app.summaries.unsettled_speeds`): each reason's speeds are hatched grey
+        (``gid`` ``"doubtful-<reason>"``) and named in the legend.
 
     Returns
     -------
     matplotlib.figure.Figure
         One axes. Its lines carry ``gid`` ``"lobe-<k>"`` for the lobes and ``"envelope"``
-        for the lower envelope; the stable region under the envelope is shaded.
+        for the lower envelope; the stable region under the envelope is shaded. The legend
+        stands outside the axes, under them (``ax.get_legend()``).
     """
     fig = new_figure(8.0, 4.8)
     ax = fig.add_subplot()
@@ -381,24 +407,73 @@ def lobes_figure(
                    label=f"flute length {flute_mm:.3g} mm (no deeper stepdown)")
         if depth_max_mm is None and covered.any() and float(np.nanmax(env_mm)) > flute_mm:
             top = 1.15 * flute_mm  # deeper limits than the flute cannot be used
+    for k, (why, mask) in enumerate((doubtful_speeds or {}).items()):
+        hatch = ("////", "\\\\", "xx")[k % 3]
+        for i, (lo, hi) in enumerate(_speed_runs(speed, np.asarray(mask, dtype=bool))):
+            ax.axvspan(lo, hi, facecolor="0.85", edgecolor="0.55", hatch=hatch, lw=0, alpha=0.6, zorder=0.5,
+                       gid=f"doubtful-{why}", label=None if i else _DOUBTFUL.get(why, why))
     ax.set_xlim(speed[0], speed[-1])
     ax.set_ylim(0.0, top)
     ax.set_xlabel("Spindle speed (rpm)")
     ax.set_ylabel("Axial depth of cut limit (mm)")
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="upper left", fontsize="small")
-    note = "Φyy = Φxx assumed (only x given)" if result.same_frf_in_y else None
-    if title or note:
-        ax.set_title(" — ".join(t for t in (checked_text(title, "title") if title else None, note) if t),
-                     fontsize="medium")
+    ax.xaxis.set_major_locator(MaxNLocator(nbins=7))
+    # under the axes (below the speed label), never over the low-speed lobes
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), ncols=3, fontsize="small")
+    fig.suptitle(checked_text(title, "title") if title else "Stability lobes", fontsize="medium")
+    ax.set_title(_lobes_conditions(result, conditions), fontsize="small")
     if notes:
         import textwrap  # noqa: PLC0415 (only for diagrams with notes)
 
         text = "\n".join(textwrap.fill("• " + checked_text(n, "notes"), 150) for n in notes)
         share = min(0.05 + 0.025 * text.count("\n"), 0.3)  # of the height, under the axes
         fig.text(0.01, 0.005, text, fontsize=6.5, va="bottom", ha="left", gid="notes", color="tab:red")
-        fig.get_layout_engine().set(rect=(0.0, share, 1.0, 1.0 - share))
+        engine = fig.get_layout_engine()
+        assert isinstance(engine, ConstrainedLayoutEngine)  # every figure starts constrained (figure())
+        engine.set(rect=(0.0, share, 1.0, 1.0 - share))
     return freeze_layout(fig)
+
+
+#: What the hatched speeds of a lobe diagram mean, by the reason :func:`rcsa.app.summaries.unsettled_speeds` gives.
+_DOUBTFUL = {
+    "under-resolved": "under-resolved: < 8 SDM steps per chatter cycle",
+    "unresolved": "unresolved: two SDM resolutions differ > 1 %",
+    "coarse grid": "coarse grid: lobes drawn as straight chords",
+}
+
+
+def _speed_runs(speed: np.ndarray, mask: np.ndarray) -> list[tuple[float, float]]:
+    """The speed intervals of the contiguous runs of ``mask``, each reaching halfway to the
+    unflagged neighbours (a single flagged speed still gets a visible band)."""
+    if mask.size != speed.size or not mask.any():
+        return []
+    edges = np.concatenate([[speed[0]], 0.5 * (speed[1:] + speed[:-1]), [speed[-1]]])
+    change = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(np.int8), [0]])))
+    return [(float(edges[a]), float(edges[b])) for a, b in zip(change[::2], change[1::2], strict=True)]
+
+
+def _lobes_conditions(result: LobeResult, conditions: Mapping[str, Any] | None) -> str:
+    """The line under a lobe diagram's title: cutting conditions, method and where the FRF
+    came from (only what is known is said)."""
+    c = dict(conditions or {})
+    method = c.get("method") or ("semi_discretization" if hasattr(result, "steps_per_period") else "zoa")
+    steps = c.get("steps_per_period", getattr(result, "steps_per_period", None))
+    cutting = ""
+    if "teeth" in c:
+        cutting = (f"{c['teeth']} teeth · a_e/D = {float(c['radial_immersion']):g} · {c['milling']} milling · "
+                   f"K_t = {float(c['tangential_coefficient_n_m2']) / 1e6:g} N/mm² · "
+                   f"K_r/K_t = {float(c['radial_ratio']):g}\n")
+    scheme = getattr(result, "scheme", None)
+    resolving = "steps resolving the cut, checked per speed" if scheme == "cut_window" else \
+        "steps resolving the period, checked per speed"
+    fixed = c.get("steps_per_period") is not None
+    how = ("semi-discretization (" + (f"{steps} steps/period" if fixed else resolving) + ")"
+           if method == "semi_discretization" else "zero-order (Altintas–Budak)")
+    frf = {"assembly": "FRF: the assembly's predicted tool point, in x and y (symmetric tool)",
+           "x_only": "FRF: only x given, Φyy = Φxx assumed", "x_and_y": "FRF: x and y given",
+           "modal_table_x_only": "modal table of x, the same in y", "modal_table_x_and_y": "modal tables of x and y"}.get(
+        str(c.get("frf")), "FRF: Φyy = Φxx (the x FRF used in y)" if result.same_frf_in_y else "FRF: x and y given")
+    return checked_text(f"{cutting}{how} · {frf}", "conditions")
 
 
 def effects_figure(report: EffectReport, features: Sequence[str] = ("frequency_hz", "peak_magnitude_m_n",

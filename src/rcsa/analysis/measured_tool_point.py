@@ -19,8 +19,8 @@ import numpy as np
 
 from rcsa.errors import InputError
 from rcsa.model import fields
-from rcsa.model.bounds import MAX_FRF_VALUE
-from rcsa.model.contract import MAX_FREQUENCY_LINES, ToolSpec, parse_tool
+from rcsa.model.bounds import MAX_FREQUENCY_LINES, MAX_FRF_VALUE
+from rcsa.model.contract import ToolSpec, parse_tool
 from rcsa.model.wire import complex_from_wire, number_list
 from rcsa.physics.materials import Material
 from rcsa.physics.receptance import check_frequency_hz

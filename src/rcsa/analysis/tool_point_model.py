@@ -39,7 +39,7 @@ from rcsa.model.assembly import AssemblyModel, build_model
 from rcsa.model.contract import AssemblySpec
 from rcsa.model.parameters import set_parameter
 from rcsa.model.spindle_side import MeasuredBase
-from rcsa.physics.arrays import ComplexArray, FloatArray
+from rcsa.physics.arrays import ComplexArray, FloatArray, RealParam
 from rcsa.physics.chain import Chain, Spring
 from rcsa.physics.subassembly_cache import DEFAULT_BEAMS, LruStore, SubassemblyCache
 
@@ -187,18 +187,13 @@ class ToolPointModel:
             if nominal is None:
                 out.append(None)
                 continue
-            cols = {}
-            for field_name in ("stiffness_n_m", "damping_ns_m", "rotational_stiffness_nm_rad",
-                               "rotational_damping_nms_rad"):
-                default = getattr(nominal, field_name)
-                vals = [s.get(f"{joint}.{field_name}", default) for s in values_sets]
-                if default is None:
-                    cols[field_name] = None  # a rigid DOF stays rigid
-                elif len(values_sets) == 1 or all(v == vals[0] for v in vals):
-                    cols[field_name] = float(vals[0])
-                else:
-                    cols[field_name] = np.repeat(np.asarray(vals, dtype=float), nf)
-            out.append(Spring(**cols))
+            damping = _joint_column(values_sets, joint, "damping_ns_m", nominal.damping_ns_m, nf)
+            rotational_damping = _joint_column(values_sets, joint, "rotational_damping_nms_rad",
+                                               nominal.rotational_damping_nms_rad, nf)
+            assert damping is not None and rotational_damping is not None  # a damping is never None
+            out.append(Spring(_joint_column(values_sets, joint, "stiffness_n_m", nominal.stiffness_n_m, nf), damping,
+                              _joint_column(values_sets, joint, "rotational_stiffness_nm_rad",
+                                            nominal.rotational_stiffness_nm_rad, nf), rotational_damping))
         return out[0], out[1]
 
     def _cache(self, frequency_hz: FloatArray, rows: int) -> SubassemblyCache:
@@ -248,4 +243,17 @@ class ToolPointModel:
 
     def h(self, frequency_hz: FloatArray, values: Mapping[str, float] | None = None) -> ComplexArray:
         """Tool-point ``h`` at ``frequency_hz`` (Hz) for one parameter set, shape (nfreq,), m/N."""
-        return self.h_sets(frequency_hz, [values or {}])[0]
+        h: ComplexArray = self.h_sets(frequency_hz, [values or {}])[0]
+        return h
+
+
+def _joint_column(values_sets: Sequence[Mapping[str, float]], joint: str, field_name: str, nominal: RealParam | None,
+                  nf: int) -> RealParam | None:
+    """One joint value over the sets: None for a rigid DOF (it stays rigid), a float when every set
+    agrees, else one row per set (each repeated over the ``nf`` lines)."""
+    if nominal is None:
+        return None
+    vals = [s.get(f"{joint}.{field_name}", nominal) for s in values_sets]
+    if len(values_sets) == 1 or all(v == vals[0] for v in vals):
+        return float(vals[0])
+    return np.repeat(np.asarray(vals, dtype=float), nf)

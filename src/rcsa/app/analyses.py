@@ -25,13 +25,13 @@ from rcsa.app.predictions import predict, predict_draws
 from rcsa.app.stores import resolver
 from rcsa.errors import InputError
 from rcsa.measured.hybrid import MeasurementSource
-from rcsa.measured.store import MeasurementStore
 from rcsa.model.bounds import MAX_FREQUENCY_LINES
 from rcsa.model.contract import SpindleSpec, parse_assembly
 from rcsa.model.uncertainty import parse_prediction_request
 
-__all__ = ["ANALYSIS_KINDS", "LobesAnswer", "diagnose", "effects", "identify", "run_analysis", "stability_lobes",
-           "stability_lobes_answer", "stability_lobes_result", "stability_lobes_results", "validate"]
+__all__ = ["ANALYSIS_KINDS", "LobesAnswer", "cutting_conditions", "diagnose", "effects",
+           "identify", "run_analysis", "stability_lobes", "stability_lobes_answer", "stability_lobes_result",
+           "stability_lobes_results", "validate"]
 
 #: Single computations that may also run as jobs (``Prefer: respond-async``), by the name of
 #: their cost model in :mod:`rcsa.app.budget`.
@@ -64,6 +64,9 @@ class LobesAnswer:
         page cap the depth axis and the pockets there).
     method_reason : str
         Why ``"method": "auto"`` chose the method (empty otherwise).
+    conditions : dict or None
+        How the diagram was made (:func:`cutting_conditions`): written as the response's
+        ``conditions`` and on its pictures.
     """
 
     nominal: LobeResult
@@ -71,17 +74,20 @@ class LobesAnswer:
     notes: tuple[str, ...] = ()
     flute_length_m: float | None = None
     method_reason: str = ""
+    conditions: dict[str, Any] | None = None
 
     def extras(self) -> dict[str, Any]:
         """The response's fields beside the nominal diagram: ``notes`` (all of them),
-        ``flute_length_m`` (with an assembly), the robust fields, and the method used and why
-        (``method``, ``method_reason``)."""
+        ``flute_length_m`` (with an assembly), ``conditions``, the robust fields, and the method used
+        and why (``method``, ``method_reason``)."""
         own = self.nominal.to_dict().get("notes", [])
         out: dict[str, Any] = {"notes": [*own, *self.notes]}
         out["method"] = "semi_discretization" if isinstance(self.nominal, SemiDiscretizationResult) else "zoa"
         out["method_reason"] = self.method_reason or f"{out['method']}: chosen by the request"
         if self.flute_length_m is not None:
             out["flute_length_m"] = self.flute_length_m
+        if self.conditions is not None:
+            out["conditions"] = dict(self.conditions)
         if self.robust is not None:
             out.update(self.robust.to_dict())
         return out
@@ -99,7 +105,46 @@ def _modes(parsed: LobesRequest, spec: Any, frequency_hz: np.ndarray, h: np.ndar
                                      frequency_hz=frequency_hz, h=h)
 
 
-def stability_lobes_answer(request: Mapping[str, Any], *, store: MeasurementStore | None = None,
+def cutting_conditions(parsed: LobesRequest) -> dict[str, Any]:
+    """How a diagram was made, as its pictures and its response say it.
+
+    Parameters
+    ----------
+    parsed : LobesRequest
+
+    Returns
+    -------
+    dict
+        ``teeth``, ``tangential_coefficient_n_m2``, ``radial_ratio``, ``radial_immersion``,
+        ``milling``, ``method`` (``zoa`` or ``semi_discretization``, with its
+        ``steps_per_period`` — null: the steps that resolve the cut — and ``modes_per_direction``)
+        and ``frf``: ``"assembly"`` (the predicted tool point, used in x and y: a rotationally
+        symmetric tool), ``"x_only"`` (an inline x FRF, used in y too), ``"x_and_y"``,
+        ``"modal_table_x_only"`` (a modal table of x, used in y too) or ``"modal_table_x_and_y"``.
+    """
+    if parsed.assembly is not None:
+        frf = "assembly"
+    elif parsed.modal_model is not None:
+        frf = "modal_table_x_only" if parsed.modal_model.same_in_y else "modal_table_x_and_y"
+    else:
+        frf = "x_only" if parsed.frf_yy is None else "x_and_y"
+    out: dict[str, Any] = {"teeth": parsed.teeth, "tangential_coefficient_n_m2": parsed.tangential_coefficient_n_m2,
+                           "radial_ratio": parsed.radial_ratio, "radial_immersion": parsed.radial_immersion,
+                           "milling": parsed.milling, "method": parsed.method.name, "frf": frf}
+    if parsed.method.name == "semi_discretization":
+        out.update(steps_per_period=parsed.method.steps_per_period,
+                   modes_per_direction=parsed.method.modes_per_direction)
+    return out
+
+
+def _described(parsed: LobesRequest, frequency_hz: np.ndarray, h: np.ndarray) -> dict[str, Any]:
+    """The :class:`LobesAnswer` fields that say how a diagram was made: its conditions and, for
+    zero-order lobes, the FRF grid's notes."""
+    zoa = parsed.method.name == "zoa"
+    return {"notes": tuple(frf_grid_notes(frequency_hz, h)) if zoa else (), "conditions": cutting_conditions(parsed)}
+
+
+def stability_lobes_answer(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
                            max_lines: int = MAX_FREQUENCY_LINES) -> LobesAnswer:
     """Stability lobes (``docs/contract.md`` "Stability lobes"), robust ones when asked for, and notes.
 
@@ -120,9 +165,11 @@ def stability_lobes_answer(request: Mapping[str, Any], *, store: MeasurementStor
     parsed, robust = _parse_lobes(request)
     zoa = parsed.method.name == "zoa"
     if parsed.assembly is None:  # inline FRFs or a modal table
-        notes = (frf_grid_notes(parsed.frequency_hz, parsed.frf_xx)
-                 if zoa and parsed.frequency_hz is not None and parsed.frf_xx is not None else [])
-        return LobesAnswer(parsed.solve(), None, tuple(notes), None, parsed.method.reason)
+        if parsed.frequency_hz is not None and parsed.frf_xx is not None:
+            described = _described(parsed, parsed.frequency_hz, parsed.frf_xx)
+        else:  # a modal table: no FRF grid to be too coarse
+            described = {"notes": (), "conditions": cutting_conditions(parsed)}
+        return LobesAnswer(parsed.solve(), None, method_reason=parsed.method.reason, **described)
     spec = parse_assembly(parsed.assembly, max_lines)
     flute = float(spec.tool.flute_length_m)
     if robust is not None:
@@ -131,10 +178,10 @@ def stability_lobes_answer(request: Mapping[str, Any], *, store: MeasurementStor
         f, h = prediction.frequency_hz, prediction.tool_point.h
         modes = _modes(parsed, spec, f, h)
         nominal = parsed.solve(f, h, modal_model=modes)
-        notes = tuple(frf_grid_notes(f, h)) if zoa else ()
+        described = _described(parsed, f, h)
         if zoa:
-            return LobesAnswer(nominal, robust_lobes(parsed, nominal, f, draws.h, options, robust.confidence), notes,
-                               flute, parsed.method.reason)
+            return LobesAnswer(nominal, robust_lobes(parsed, nominal, f, draws.h, options, robust.confidence),
+                               flute_length_m=flute, method_reason=parsed.method.reason, **described)
         assert isinstance(nominal, SemiDiscretizationResult)
         per_draw: list[np.ndarray] = []
         limit = robust_sdm_limits(nominal.modal_model, f, h, draws.h, nominal, robust.confidence,
@@ -143,15 +190,15 @@ def stability_lobes_answer(request: Mapping[str, Any], *, store: MeasurementStor
                                   milling=parsed.milling, draws_out=per_draw)
         limit.flags.writeable = False
         return LobesAnswer(nominal, RobustLobes(limit, per_draw[0], robust.confidence, options,
-                                                method="semi_discretization"), notes, flute, parsed.method.reason)
+                                                method="semi_discretization"), flute_length_m=flute,
+                           method_reason=parsed.method.reason, **described)
     prediction = predict(spec, store=store, max_lines=max_lines)
     f, h = prediction.frequency_hz, prediction.tool_point.h
-    notes = tuple(frf_grid_notes(f, h)) if zoa else ()
-    return LobesAnswer(parsed.solve(f, h, modal_model=_modes(parsed, spec, f, h)), None, notes, flute,
-                       parsed.method.reason)
+    return LobesAnswer(parsed.solve(f, h, modal_model=_modes(parsed, spec, f, h)), None, flute_length_m=flute,
+                       method_reason=parsed.method.reason, **_described(parsed, f, h))
 
 
-def stability_lobes_results(request: Mapping[str, Any], *, store: MeasurementStore | None = None,
+def stability_lobes_results(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
                             max_lines: int = MAX_FREQUENCY_LINES) -> tuple[LobeResult, RobustLobes | None]:
     """The nominal and robust stability lobes of a request (:func:`stability_lobes_answer` without its notes).
 
@@ -164,7 +211,7 @@ def stability_lobes_results(request: Mapping[str, Any], *, store: MeasurementSto
     return answer.nominal, answer.robust
 
 
-def stability_lobes_result(request: Mapping[str, Any], *, store: MeasurementStore | None = None,
+def stability_lobes_result(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
                            max_lines: int = MAX_FREQUENCY_LINES) -> LobeResult:
     """The nominal stability lobes of a request (:func:`stability_lobes_results`, robust ones left out).
 
@@ -175,7 +222,7 @@ def stability_lobes_result(request: Mapping[str, Any], *, store: MeasurementStor
     return stability_lobes_results(request, store=store, max_lines=max_lines)[0]
 
 
-def stability_lobes(request: Mapping[str, Any], *, store: MeasurementStore | None = None,
+def stability_lobes(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
                     max_lines: int = MAX_FREQUENCY_LINES) -> dict[str, Any]:
     """The contract's stability-lobes response (see :func:`stability_lobes_result`).
 
@@ -269,7 +316,7 @@ def validate(kind: str, request: Mapping[str, Any], *, store: MeasurementSource 
     # prediction and effects: the budget's estimate already parsed the assembly
 
 
-def run_analysis(kind: str, request: Mapping[str, Any], *, store: MeasurementStore | None = None,
+def run_analysis(kind: str, request: Mapping[str, Any], *, store: MeasurementSource | None = None,
                  max_lines: int = MAX_FREQUENCY_LINES) -> dict[str, Any]:
     """Run one of :data:`ANALYSIS_KINDS` and return its result document (a job's result).
 

@@ -380,7 +380,7 @@ def _batch(request: Mapping[str, Any]) -> Cost:
                                                            "uncertainty")}
     combo = combos[worst]
     n = float(len(combos))
-    shrink = ("fewer combinations (split the batch)", *_ASSEMBLY_SHRINK)
+    shrink: tuple[str, ...] = ("fewer combinations (split the batch)", *_ASSEMBLY_SHRINK)
     try:
         spec = parse_assembly({**base, **{k: v for k, v in combo.items() if k not in ("id", "name")}})
     except (InputError, TypeError, AttributeError):  # that combination is refused by the batch itself

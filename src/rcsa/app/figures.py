@@ -23,6 +23,7 @@ from rcsa.analysis.progress import Progress
 from rcsa.app.analyses import stability_lobes_answer
 from rcsa.app.predictions import predict
 from rcsa.app.stores import resolver
+from rcsa.app.summaries import unsettled_speeds
 from rcsa.errors import InputError
 from rcsa.measured.hybrid import MeasurementSource
 from rcsa.model.bounds import MAX_FREQUENCY_LINES
@@ -41,6 +42,7 @@ __all__ = [
     "effects_with_figure",
     "frf_figure",
     "lobes_figure",
+    "prediction_figure",
     "robust_lobes_figure",
     "save_figure",
     "tool_point_curve",
@@ -67,12 +69,15 @@ class Curve:
         Where it came from (names the field of an error about it).
     band_m_n : tuple of numpy.ndarray or None
         The p05 and p95 ``|h|`` of an assembly predicted with ``uncertainty``, m/N.
+    natural_frequencies_hz : numpy.ndarray or None
+        An assembly's natural frequencies, Hz (marked on its picture).
     """
 
     frequency_hz: np.ndarray
     h_m_n: np.ndarray
     source: Literal["frf", "assembly"]
     band_m_n: tuple[np.ndarray, np.ndarray] | None = None
+    natural_frequencies_hz: np.ndarray | None = None
 
 
 def check_picture_path(path: str | os.PathLike[str], field: str) -> Path:
@@ -98,16 +103,32 @@ def save_figure(figure: Figure, path_or_format: str | os.PathLike[str]) -> bytes
 
 
 def frf_figure(frequency_hz: Any, h_m_n: Any, *, layout: str = "full", title: str | None = None,
-               labels: list[str] | None = None, band_m_n: tuple[Any, Any] | None = None) -> Figure:
+               labels: list[str] | None = None, band_m_n: tuple[Any, Any] | None = None,
+               natural_frequencies_hz: Any = None) -> Figure:
     """Real and imaginary parts, magnitude and phase of receptances (µm/N) against frequency;
-    ``band_m_n`` (low, high ``|h|``, m/N) is shaded on the magnitude axes."""
+    ``band_m_n`` (low, high ``|h|``, m/N) is shaded on the magnitude axes, the
+    ``natural_frequencies_hz`` are marked and listed in the title."""
     # matplotlib: only when a picture is asked for
     from rcsa.analysis.figures import frf_figure as draw
 
     if layout not in FRF_LAYOUTS:
         raise InputError("layout", f"must be one of {', '.join(FRF_LAYOUTS)}, got {layout!r}")
     return draw(frequency_hz, h_m_n, layout=layout, title=title, labels=labels,  # type: ignore[arg-type]
-                band_m_n=band_m_n)
+                band_m_n=band_m_n, natural_frequencies_hz=natural_frequencies_hz)
+
+
+def prediction_figure(result: Mapping[str, Any], *, layout: str = "full", title: str | None = None) -> Figure:
+    """The tool-point ``h`` of a prediction result (or a :class:`~rcsa.model.prediction.Prediction`),
+    titled, its natural frequencies marked (exact, or modal-fit estimates on a measured
+    spindle) and its uncertainty band shaded."""
+    tool_point = result.get("tool_point")
+    h = tool_point.get("h") if isinstance(tool_point, Mapping) else None
+    h = h if isinstance(h, np.ndarray) else complex_from_wire(h, "tool_point.h", finite=False)
+    fitted = result.get("natural_frequencies_method") == "modal_fit"
+    heading = title or ("Tool-point FRF h (measured spindle)" if fitted else "Tool-point FRF h")
+    freqs = result.get("natural_frequencies_hz")
+    return frf_figure(result.get("frequency_hz"), h, labels=["tool point h"], layout=layout, title=heading,
+                      band_m_n=band_of(result), natural_frequencies_hz=[] if freqs is None else freqs)
 
 
 def lobes_figure(result: LobeResult, **options: Any) -> Figure:
@@ -140,14 +161,18 @@ def band_of(result: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray] | None:
 def robust_lobes_figure(result: LobeResult, robust: Mapping[str, Any] | None, **options: Any) -> Figure:
     """:func:`lobes_figure` with what a response says beside the diagram: the robust limit
     (``depth_limit_robust_m`` and ``robust``, :meth:`rcsa.analysis.lobes.robust.RobustLobes.to_dict`)
-    drawn dashed, the tool's ``flute_length_m`` (a line; the depth axis stops just above it)
-    and the ``notes`` (under-resolved speeds, a grid too coarse for the lobes) written under it."""
+    drawn dashed, the tool's ``flute_length_m`` (a line; the depth axis stops just above it),
+    the ``conditions`` under the title, the speeds whose limit is doubtful hatched
+    (:func:`rcsa.app.summaries.unsettled_speeds`) and the ``notes`` written under it."""
     extra = dict(robust or {})
     notes = extra.get("notes")
     flute = extra.get("flute_length_m")
+    conditions = extra.get("conditions")
     options = {**options, "notes": [str(n) for n in notes] if isinstance(notes, list) else (),
                "flute_length_m": float(flute) if isinstance(flute, int | float) and not isinstance(flute, bool)
-               else None}
+               else None,
+               "conditions": conditions if isinstance(conditions, Mapping) else None,
+               "doubtful_speeds": unsettled_speeds({**result.to_dict(), **extra})}
     if extra.get("depth_limit_robust_m") is None:
         return lobes_figure(result, **options)
     depth = number_list(extra["depth_limit_robust_m"], "depth_limit_robust_m", finite=False)
@@ -176,7 +201,7 @@ def tool_point_curve(*, frf: Mapping[str, Any] | None = None, assembly: Mapping[
         return Curve(f, complex_from_wire(frf.get("h"), "frf.h", f.size, finite=False), "frf")
     result = predict(assembly, store=store, max_lines=max_lines)  # type: ignore[arg-type]
     band = None if result.uncertainty is None else band_of(result.to_dict())
-    return Curve(result.frequency_hz, result.tool_point.h, "assembly", band)
+    return Curve(result.frequency_hz, result.tool_point.h, "assembly", band, result.natural_frequencies_hz)
 
 
 def frf_picture(curve: Curve, *, fmt: str, layout: str = "full", title: str | None = None) -> bytes:
@@ -195,8 +220,9 @@ def frf_picture(curve: Curve, *, fmt: str, layout: str = "full", title: str | No
         raise InputError(f"{where}.h" if where == "frf" else where,
                          "h is zero at every line, so its magnitude cannot be drawn on a log scale; "
                          "use layout real_imag")
-    return save_figure(frf_figure(curve.frequency_hz, curve.h_m_n, layout=layout, title=title,  # type: ignore[return-value]
-                                  band_m_n=curve.band_m_n), fmt)
+    heading = title or ("Tool-point FRF h" if curve.source == "assembly" else "FRF h")
+    return save_figure(frf_figure(curve.frequency_hz, curve.h_m_n, layout=layout, title=heading,  # type: ignore[return-value]
+                                  band_m_n=curve.band_m_n, natural_frequencies_hz=curve.natural_frequencies_hz), fmt)
 
 
 def lobes_picture(result: LobeResult, *, fmt: str, robust: Mapping[str, Any] | None = None, **options: Any) -> bytes:
@@ -216,22 +242,19 @@ def document_figure(doc: object, *, layout: str = "full", store: MeasurementSour
     if not isinstance(doc, dict):
         raise InputError("", "the input must be a JSON object")
     if "tool_point" in doc:
-        tool_point = doc["tool_point"]
-        h = tool_point.get("h") if isinstance(tool_point, Mapping) else None
-        return frf_figure(doc.get("frequency_hz"), complex_from_wire(h, "tool_point.h", finite=False),
-                          labels=["tool point h"], layout=layout, band_m_n=band_of(doc))
+        return prediction_figure(doc, layout=layout)
     if "h" in doc and "frequency_hz" in doc:
+        where = ", ".join(str(doc[k]) for k in ("spindle_id", "direction", "plane") if isinstance(doc.get(k), str))
         return frf_figure(doc["frequency_hz"], complex_from_wire(doc["h"], "h", finite=False),
-                          labels=["measured h"], layout=layout)
+                          labels=["measured h"], layout=layout,
+                          title="Measured FRF h" + (f" ({where})" if where else ""))
     if isinstance(doc.get("spindle_speed_rpm"), list) and "depth_limit_m" in doc:
         return robust_lobes_figure(LobeResult.from_dict(doc), doc)  # a stability-lobes result
     if "tangential_coefficient_n_m2" in doc:
         answer = stability_lobes_answer(doc, store=store)
         return robust_lobes_figure(answer.nominal, answer.extras())
     if "tool" in doc and "spindle" in doc:
-        result = predict(doc, store=store)
-        return frf_figure(result.frequency_hz, result.tool_point.h, labels=["tool point h"], layout=layout,
-                          band_m_n=band_of(result.to_dict()) if result.uncertainty is not None else None)
+        return prediction_figure(predict(doc, store=store), layout=layout)
     raise InputError("", "not a prediction result, measurement, assembly, stability-lobes request or "
                          "stability-lobes result")
 

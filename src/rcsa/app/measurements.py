@@ -190,7 +190,7 @@ def read_measurement(data: bytes, *, file_name: str = "", fmt: str | None = None
 
 
 def measurement_from_document(doc: Mapping[str, Any], *, drop_nonpositive: bool = False,
-                              sensor_mass_kg: float | None = None):
+                              sensor_mass_kg: float | None = None) -> Measurement:
     """A measurement from the contract's JSON form, already parsed (a JSON request body)."""
     return measurement_from_contract(doc, drop_nonpositive=drop_nonpositive, sensor_mass_kg=sensor_mass_kg)
 
@@ -300,7 +300,8 @@ def delete_measurement(store: Any, measurement_id: str) -> dict[str, str]:
 
 def store_measurement(store: Any, measurement: Any) -> dict[str, Any]:
     """Put a measurement in the store; return its metadata (with the new ``id``)."""
-    return store.info(store.put(measurement)).to_dict()
+    info: dict[str, Any] = store.info(store.put(measurement)).to_dict()
+    return info
 
 
 def store_measurement_once(store: Any, measurement: Any, *, recorded_id: str | None,
@@ -334,7 +335,8 @@ def store_measurement_once(store: Any, measurement: Any, *, recorded_id: str | N
     """
     if recorded_id is not None:
         if recorded_id in store:
-            return store.info(recorded_id).to_dict()
+            kept: dict[str, Any] = store.info(recorded_id).to_dict()
+            return kept
         if store.was_deleted(recorded_id):
             raise ConflictError("measurement", recorded_id, "was stored by an earlier attempt of this request and "
                                                             "deleted since; send the upload with a new key")
@@ -342,7 +344,8 @@ def store_measurement_once(store: Any, measurement: Any, *, recorded_id: str | N
     else:
         mid = store.new_id()
         record(mid)
-    return store.info(store.put(measurement, measurement_id=mid)).to_dict()
+    stored: dict[str, Any] = store.info(store.put(measurement, measurement_id=mid)).to_dict()
+    return stored
 
 
 def check_store(store: Any) -> dict[str, Any]:

@@ -15,7 +15,7 @@ import orjson
 from rcsa.app.stores import resolver
 from rcsa.errors import InputError, NotFoundError
 from rcsa.libraries.library_prediction import select_tool_point
-from rcsa.measured.store import MeasurementStore
+from rcsa.measured.hybrid import MeasurementSource
 from rcsa.model import batch
 from rcsa.model.bounds import MAX_BATCH_COMBINATIONS, MAX_FREQUENCY_LINES
 from rcsa.model.contract import AssemblySpec, CommonSpec, MeasuredSpindleSpec
@@ -92,7 +92,7 @@ class SpindleSides:
         self._lock = threading.Lock()
 
     def side(self, document: Mapping[str, Any], common: CommonSpec,
-             store: MeasurementStore | None) -> SpindleSide:
+             store: MeasurementSource | None) -> SpindleSide:
         """The kept side of a request, or a new one (kept for the next).
 
         Parameters
@@ -137,7 +137,7 @@ def _identity(store: Any, measurement_id: str) -> Any:
 SIDES = SpindleSides()
 
 
-def predict(assembly: Mapping[str, Any] | AssemblySpec, *, store: MeasurementStore | None = None,
+def predict(assembly: Mapping[str, Any] | AssemblySpec, *, store: MeasurementSource | None = None,
             max_lines: int = MAX_FREQUENCY_LINES) -> Prediction:
     """Tool-point prediction of one assembly (``docs/contract.md`` "Python API").
 
@@ -199,7 +199,7 @@ def prediction_document(prediction: Prediction, tool_point: Sequence[str] | None
     return select_tool_point(out, list(tool_point)) if tool_point is not None else out
 
 
-def predict_draws(assembly: Mapping[str, Any], uncertainty: object, *, store: MeasurementStore | None = None,
+def predict_draws(assembly: Mapping[str, Any], uncertainty: object, *, store: MeasurementSource | None = None,
                   max_lines: int = MAX_FREQUENCY_LINES, path: str = "uncertainty"
                   ) -> tuple[Prediction, ToolPointDraws, UncertaintyOptions]:
     """The nominal prediction of an assembly and its drawn assemblies' tool-point ``h``.
@@ -241,7 +241,7 @@ def predict_draws(assembly: Mapping[str, Any], uncertainty: object, *, store: Me
     return prediction, side.tool_point_draws(spec, options, prediction), options
 
 
-def predict_batch(request: Mapping[str, Any], *, store: MeasurementStore | None = None,
+def predict_batch(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
                   max_lines: int = MAX_FREQUENCY_LINES, max_combinations: int = MAX_BATCH_COMBINATIONS,
                   progress: batch.Progress | None = None,
                   arrays: Literal["list", "numpy"] = "list") -> dict[str, Any]:

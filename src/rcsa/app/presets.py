@@ -94,7 +94,8 @@ def check_recommendation(data: bytes, options: Mapping[str, Any], *, file_name: 
 
 def _answer(file: FusionFile, file_name: str | None, source: FrfSource, options: RecommendOptions, *,
             progress: Callable[[int, int], None] | None = None, backend: Backend | None = None) -> PresetFile:
-    result = recommend_presets(file, source.entries, source.frfs, options, progress, pockets_on(backend))
+    entries: list[Mapping[str, Any]] = list(source.entries)
+    result = recommend_presets(file, entries, source.frfs, options, progress, pockets_on(backend))
     name = PurePath(file_name).name if file_name else ("library.tools" if file.kind == "tools" else "library.json")
     report = {"library": {"file_name": name, "format": "fusion-" + file.kind,
                           "sha256_before": hashlib.sha256(file.raw).hexdigest(),

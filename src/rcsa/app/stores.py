@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import os
 import threading
-from collections import OrderedDict
 from pathlib import Path
 from typing import Any
 
@@ -20,6 +19,7 @@ from rcsa.libraries.sync import LibraryStore
 from rcsa.measured.hybrid import MeasurementSource, base_resolver
 from rcsa.measured.store import Measurement, MeasurementStore, is_measurement_id
 from rcsa.model.spindle_side import BaseResolver
+from rcsa.physics.subassembly_cache import LruStore
 
 __all__ = ["CachedMeasurements", "library_store", "open_store", "resolver", "spindle_reference"]
 
@@ -99,26 +99,19 @@ class CachedMeasurements:
         self.store = store
         self.path = store.path
         self.size = int(size)
-        self._items: OrderedDict[str, tuple[Any, Measurement]] = OrderedDict()
-        self._lock = threading.Lock()
+        # the package's one eviction policy (least recently used first; atomic per operation)
+        self._items: LruStore[str, tuple[Any, Measurement]] = LruStore(self.size)
 
     def get(self, measurement_id: str) -> Measurement:
         """The measurement, from memory when its file is unchanged (``NotFoundError`` if gone,
         ``DamagedError`` if damaged)."""
         identity = self._identity(measurement_id)
-        if self.size and identity is not None:
-            with self._lock:
-                hit = self._items.get(measurement_id)
-                if hit is not None and hit[0] == identity:
-                    self._items.move_to_end(measurement_id)
-                    return hit[1]
-        m = self.store.get(measurement_id)
-        if self.size and identity is not None:
-            with self._lock:
-                self._items[measurement_id] = (identity, m)
-                while len(self._items) > self.size:
-                    self._items.popitem(last=False)
-        return m
+        if identity is None:
+            return self.store.get(measurement_id)
+        hit = self._items.peek(measurement_id)
+        if hit is not None and hit[0] == identity:
+            return hit[1]
+        return self._items.put(measurement_id, (identity, self.store.get(measurement_id)))[1]
 
     def __contains__(self, measurement_id: object) -> bool:
         return measurement_id in self.store

@@ -6,17 +6,24 @@ import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated, Any, TypeVar
+from typing import TYPE_CHECKING, Annotated, Any, TypeVar
 
 import typer
 
 from rcsa.errors import InputError, NotFoundError, RcsaError
 
-__all__ = ["QuietOption", "command_group", "fail", "progress_callback", "read_json", "run_guarded", "wrote",
-           "write_json", "write_results"]
+if TYPE_CHECKING:
+    from rcsa.app.summaries import Table
+
+__all__ = ["JsonOption", "QuietOption", "emit", "command_group", "fail", "is_terminal", "progress_callback",
+           "read_json", "run_guarded", "show_tables", "wrote", "write_json", "write_results"]
 
 #: ``--quiet/-q`` of the commands that draw a progress bar.
 QuietOption = Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar on stderr.")]
+#: ``--json`` of the commands that print a summary table on a terminal.
+JsonOption = Annotated[bool, typer.Option("--json", help=(
+    "For machines: the result JSON on stdout (or in -o OUT) and no table, even on a terminal. "
+    "Without it the JSON still goes to stdout when stdout is not a terminal (a pipe, a file)."))]
 
 T = TypeVar("T")
 
@@ -93,6 +100,59 @@ def write_results(document: Any, out: Path | None, kind: str, what: str | None =
         raise fail(f"cannot write {out}: {exc.strerror or exc}") from None
     if what is not None:
         wrote(out, what)
+
+
+def is_terminal(stream: Any) -> bool:
+    """Whether ``stream`` is an interactive terminal (where a person reads a table)."""
+    try:
+        return bool(stream.isatty())
+    except (AttributeError, ValueError):  # no isatty, or closed
+        return False
+
+
+def show_tables(tables: list[Table], stream: Any) -> None:
+    """Draw :class:`rcsa.app.summaries.Table` s as rich tables on ``stream``."""
+    # rich: only when a command has something to show (``rcsa --help`` stays fast)
+    from rich.console import Console
+    from rich.table import Table as RichTable
+
+    console = Console(file=stream, highlight=False, soft_wrap=False)
+    for table in tables:
+        drawn = RichTable(title=table.title, caption=table.caption or None, title_justify="left",
+                          caption_justify="left", show_header=any(table.columns), min_width=len(table.title) + 4)
+        for i, column in enumerate(table.columns):
+            drawn.add_column(column, justify="left" if i == 0 else "right", overflow="fold")
+        for row in table.rows:
+            drawn.add_row(*row)
+        console.print(drawn)
+
+
+def emit(document: Any, out: Path | None, *, what: str, tables: Callable[[], list[Table]], as_json: bool,
+           kind: str | None = None) -> None:
+    """Write a result for machines and show its summary to a person.
+
+    The JSON goes to ``out`` when given (as :func:`write_results`, ``kind`` naming a batch's
+    binary forms), else to stdout when ``as_json`` (``--json``) or when stdout is not a
+    terminal — so a pipe or a redirect always gets the JSON, as the contract's CLI says. The
+    summary ``tables()`` go to the terminal: stdout when it is one and the JSON is not going
+    there, else stderr when that is one; never with ``as_json``. On a terminal without ``-o``
+    or ``--json`` only the table is printed, and a line on stderr says how to get the JSON.
+    """
+    to_stdout = out is None and (as_json or not is_terminal(sys.stdout))
+    if out is not None and kind is not None:
+        write_results(document, out, kind, what)
+    elif out is not None:
+        write_json(document, out, what)
+    elif to_stdout:
+        write_json(document, None)
+    if as_json:
+        return
+    screen = sys.stdout if is_terminal(sys.stdout) and not to_stdout else \
+        sys.stderr if is_terminal(sys.stderr) else None
+    if screen is not None:
+        show_tables(tables(), screen)
+    if out is None and not to_stdout:
+        typer.echo(f"({what} as JSON: add --json, or -o OUT.json)", err=True)
 
 
 def run_guarded(fn: Callable[[], T]) -> T:

@@ -8,12 +8,13 @@ from typing import Annotated
 import typer
 
 from rcsa.cli._common import (
+    JsonOption,
     QuietOption,
+    emit,
     fail,
     progress_callback,
     read_json,
     run_guarded,
-    write_json,
     wrote,
 )
 from rcsa.cli.predict_cmd import StoreOption
@@ -30,15 +31,18 @@ def register(app: typer.Typer) -> None:
                                                                   "gap map to this .png or .svg file.")] = None,
         store: StoreOption = None,
         quiet: QuietOption = False,
+        as_json: JsonOption = False,
     ) -> None:
         """Where model and measurement part, which unmodelled effect explains it, and how far the gap shrinks.
 
         The base model's spindle may be a stored measurement ({"measurement_id": ...}), looked
-        up in the store.
+        up in the store. The response JSON goes to stdout (or to -o OUT); on a terminal the
+        verdict and the shrink are shown as a table instead (--json: the JSON there too).
         """
         # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
         from rcsa.app.figures import FIGURE_SUFFIXES, diagnosis_with_figure
         from rcsa.app.stores import open_store
+        from rcsa.app.summaries import diagnosis_summary
         if plot is not None and plot.suffix.lower() not in FIGURE_SUFFIXES:
             raise fail(f"--plot: the file must end in .png or .svg, got {plot.name!r}")
         doc = read_json(request)
@@ -50,4 +54,4 @@ def register(app: typer.Typer) -> None:
             raise fail(f"cannot write {plot}: {exc.strerror or exc}") from None
         if plot is not None:
             wrote(plot, "the diagnosis picture (FRFs and gap map)")
-        write_json(response, out, "the diagnosis")
+        emit(response, out, what="the diagnosis", tables=lambda: diagnosis_summary(response), as_json=as_json)

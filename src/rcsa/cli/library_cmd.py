@@ -291,10 +291,10 @@ def sync(
             work.check()  # before the progress bar starts
         return bench, work
 
-    binary = out is not None and out.suffix.lower() != ".json"
-    if binary:
+    binary = out if out is not None and out.suffix.lower() != ".json" else None
+    if binary is not None:
         from rcsa.app.results import format_of_suffix, require_format
-        run_guarded(lambda: require_format(format_of_suffix(out, allowed=("hdf5", "parquet"))))
+        run_guarded(lambda: require_format(format_of_suffix(binary, allowed=("hdf5", "parquet"))))
     bench, work = run_guarded(build)
     ident = work.request["library_id"]
     backend = run_guarded(lambda: compute_backend(dask_scheduler if work.size else None,
@@ -310,14 +310,14 @@ def sync(
                                                   plan=work.plan, backend=backend)).document
         finally:
             backend.close()
-    if binary:
+    if binary is not None:
         from rcsa.app.libraries import write_export
         from rcsa.app.stores import library_store
         try:
-            run_guarded(lambda: write_export(library_store(store), ident, out))
+            run_guarded(lambda: write_export(library_store(store), ident, binary))
         except OSError as exc:
             raise fail(f"cannot write {out}: {exc.strerror or exc}") from None
-    write_json(report, None if binary else out, None)  # the summary line below says where
+    write_json(report, None if binary is not None else out, None)  # the summary line below says where
     c, s = report["counts"], report["summary"]
     written = _wrote_to(out, "the library results" if binary else "the sync report")
     typer.echo(f"{written}{ident} revision {report['revision']}: {c['added']} added, {c['changed']} changed, "

@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from rcsa.cli._common import read_json, run_guarded, write_json, wrote
+from rcsa.cli._common import JsonOption, emit, read_json, run_guarded, wrote
 
 
 def register(app: typer.Typer) -> None:
@@ -19,20 +19,26 @@ def register(app: typer.Typer) -> None:
         out: Annotated[Path | None, typer.Option("-o", "--out", help="Write the result here instead of stdout.")] = None,
         plot: Annotated[Path | None, typer.Option("--plot", help="Also draw the lobe diagram (.png or .svg).")] = None,
         store: Annotated[Path | None, typer.Option("--store", help="Measurement store for hybrid assemblies.")] = None,
+        as_json: JsonOption = False,
     ) -> None:
         """Stability lobes from inline FRFs, modal tables or an assembly. "method" auto (the default:
         zero-order only where it is exact, even-toothed slotting; else the semi-discretization, every
         speed checked at two resolutions: "resolved"), zoa or semi_discretization.
         With "uncertainty" (and "robust": {"confidence"}) beside an assembly: depth_limit_robust_m too
-        (semi-discretization: from a reduced model of the draws)."""
+        (semi-discretization: from a reduced model of the draws).
+
+        The result JSON goes to stdout (or to -o OUT); on a terminal the absolute limit and the
+        best pockets are shown as a table instead (--json: the JSON there too)."""
         # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
         from rcsa.app.analyses import stability_lobes_answer
         from rcsa.app.figures import check_picture_path, robust_lobes_figure, save_figure
         from rcsa.app.stores import open_store
+        from rcsa.app.summaries import lobes_summary
         doc = read_json(request)
         answer = run_guarded(lambda: stability_lobes_answer(doc, store=open_store(store) if store else None))
         if plot is not None:
             run_guarded(lambda: save_figure(robust_lobes_figure(answer.nominal, answer.extras()),
                                             check_picture_path(plot, "--plot")))
             wrote(plot, "the lobe diagram")
-        write_json(answer.to_dict(), out, "the stability lobes")
+        result = answer.to_dict()
+        emit(result, out, what="the stability lobes", tables=lambda: lobes_summary(result), as_json=as_json)

@@ -22,13 +22,14 @@ much of a key matched. Secrets are never logged, stored or echoed after creation
 
 from __future__ import annotations
 
+import builtins
 import contextlib
 import hashlib
 import hmac
 import json
 import os
 import secrets
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -146,7 +147,7 @@ class KeyFile:
         """The key file of the store at ``store_path``."""
         return cls(Path(store_path) / KEY_FILE)
 
-    def records(self) -> list[KeyRecord]:
+    def records(self) -> builtins.list[KeyRecord]:
         """Every record in the file (revoked ones too); ``[]`` when there is no file."""
         try:
             text = self.path.read_text(encoding="utf-8")
@@ -171,7 +172,7 @@ class KeyFile:
             raise StoreError(f"cannot write the key file {self.path}: {e.strerror or e}") from None
 
     @contextlib.contextmanager
-    def _locked(self):
+    def _locked(self) -> Iterator[None]:
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             with filelock.FileLock(str(self._lock_path), timeout=30):
@@ -202,7 +203,7 @@ class KeyFile:
             self._write([*records, record])
         return record, secret
 
-    def list(self, *, include_revoked: bool = False) -> list[KeyRecord]:
+    def list(self, *, include_revoked: bool = False) -> builtins.list[KeyRecord]:
         """Records, oldest first; revoked ones only when asked."""
         return [r for r in self.records() if include_revoked or r.revoked_utc is None]
 

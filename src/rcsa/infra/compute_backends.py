@@ -85,7 +85,26 @@ class Backend(Protocol):
 
     def map(self, fn: ChunkFunction, chunks: Sequence[Any], *, shared: Any = None, ordered: bool = True,
             on_wait: Callable[[], None] | None = None) -> Iterator[tuple[int, Any]]:
-        """``(i, fn(chunks[i], shared))`` for every chunk (in chunk order when ``ordered``)."""
+        """``(i, fn(chunks[i], shared))`` for every chunk (in chunk order when ``ordered``).
+
+        Parameters
+        ----------
+        fn : callable
+            ``fn(chunk, shared) -> result``, importable by name where it runs.
+        chunks : sequence
+            The chunks.
+        shared : object, optional
+            What every chunk needs besides itself (sent once).
+        ordered : bool
+            Yield in chunk order (else as chunks finish).
+        on_wait : callable, optional
+            Called while waiting for results; whatever it raises stops the map.
+
+        Yields
+        ------
+        tuple of (int, object)
+            A chunk's index and ``fn``'s result for it.
+        """
         ...
 
     def describe(self) -> dict[str, Any]:
@@ -108,26 +127,8 @@ class LocalBackend:
 
     def map(self, fn: ChunkFunction, chunks: Sequence[Any], *, shared: Any = None, ordered: bool = True,
             on_wait: Callable[[], None] | None = None) -> Iterator[tuple[int, Any]]:
-        """``(i, fn(chunks[i], shared))`` for every chunk, computed here one after the other.
-
-        Parameters
-        ----------
-        fn : callable
-            ``fn(chunk, shared) -> result``, importable by name where it runs.
-        chunks : sequence
-            The chunks.
-        shared : object, optional
-            What every chunk needs besides itself (sent once).
-        ordered : bool
-            Yield in chunk order (else as chunks finish).
-        on_wait : callable, optional
-            Called while waiting for results; whatever it raises stops the map.
-
-        Yields
-        ------
-        tuple of (int, object)
-            A chunk's index and ``fn``'s result for it.
-        """
+        """``(i, fn(chunks[i], shared))`` for every chunk, computed here one after the other
+        (parameters: :meth:`Backend.map`)."""
         for i, chunk in enumerate(chunks):
             yield i, fn(chunk, shared)
 
@@ -271,26 +272,8 @@ class DaskBackend:
 
     def map(self, fn: ChunkFunction, chunks: Sequence[Any], *, shared: Any = None, ordered: bool = True,
             on_wait: Callable[[], None] | None = None) -> Iterator[tuple[int, Any]]:
-        """``(i, fn(chunks[i], shared))`` for every chunk, computed as tasks on the cluster.
-
-        Parameters
-        ----------
-        fn : callable
-            ``fn(chunk, shared) -> result``, importable by name where it runs.
-        chunks : sequence
-            The chunks.
-        shared : object, optional
-            What every chunk needs besides itself (sent once).
-        ordered : bool
-            Yield in chunk order (else as chunks finish).
-        on_wait : callable, optional
-            Called while waiting for results; whatever it raises stops the map.
-
-        Yields
-        ------
-        tuple of (int, object)
-            A chunk's index and ``fn``'s result for it.
-        """
+        """``(i, fn(chunks[i], shared))`` for every chunk, computed as tasks on the cluster
+        (parameters: :meth:`Backend.map`)."""
         from distributed.client import FutureCancelledError
         from distributed.scheduler import KilledWorker
 

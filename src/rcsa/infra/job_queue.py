@@ -54,6 +54,7 @@ Tables created by earlier versions get the new columns on first use; their
 
 from __future__ import annotations
 
+import builtins
 import contextlib
 import hashlib
 import json
@@ -269,7 +270,7 @@ class Job:
     result_evicted_utc: str | None = None
 
     @classmethod
-    def _from_row(cls, row: tuple) -> Job:
+    def _from_row(cls, row: tuple[Any, ...]) -> Job:
         (jid, kind, status, progress, created, started, finished, attempts, error, summary,
          sha, heartbeat, result_bytes, evicted) = row
         return cls(jid, kind, status, float(progress), created, started, finished, int(attempts),
@@ -403,7 +404,8 @@ class JobStore:
             row = con.execute("SELECT request FROM jobs WHERE id = ?", (job_id,)).fetchone()
         if row is None:
             raise NotFoundError("job", job_id)
-        return orjson.loads(row[0])
+        doc: dict[str, Any] = orjson.loads(row[0])
+        return doc
 
     def result_path(self, job_id: str) -> Path:
         """The result file of a succeeded job.
@@ -423,9 +425,9 @@ class JobStore:
             raise NotFoundError("result of job", job_id)
         return path
 
-    def list(self, status: str | None = None, limit: int = 100) -> list[Job]:
+    def list(self, status: str | None = None, limit: int = 100) -> builtins.list[Job]:
         """Jobs, newest first, optionally of one status."""
-        sql, args = f"SELECT {_COLUMNS} FROM jobs", []
+        sql, args = f"SELECT {_COLUMNS} FROM jobs", builtins.list[str | int]()
         if status is not None:
             sql += " WHERE status = ?"
             args.append(status)
@@ -559,7 +561,7 @@ class JobStore:
             raise
         self._unlink_evicted(evicted)
 
-    def evict(self, max_bytes: int) -> list[str]:
+    def evict(self, max_bytes: int) -> builtins.list[str]:
         """Delete the oldest kept results until the rest take at most ``max_bytes``; return their job ids.
 
         The newest result is always kept (even when it alone is larger). An evicted job keeps
@@ -570,7 +572,7 @@ class JobStore:
         self._unlink_evicted(evicted)
         return evicted
 
-    def _evict(self, con: sqlite3.Connection, max_bytes: int) -> list[str]:
+    def _evict(self, con: sqlite3.Connection, max_bytes: int) -> builtins.list[str]:
         """Mark the results to evict (inside the caller's transaction); :meth:`_unlink_evicted` after it."""
         rows = con.execute("SELECT id, result_bytes FROM jobs WHERE status = 'succeeded' AND result_file IS NOT "
                            "NULL ORDER BY finished_utc DESC, id DESC").fetchall()
@@ -589,7 +591,7 @@ class JobStore:
                             [(now, i) for i in evicted])
         return evicted
 
-    def _unlink_evicted(self, evicted: list[str]) -> None:
+    def _unlink_evicted(self, evicted: builtins.list[str]) -> None:
         for i in evicted:
             with contextlib.suppress(FileNotFoundError):
                 (self.results / f"{i}.json").unlink()

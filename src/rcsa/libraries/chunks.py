@@ -152,8 +152,9 @@ def compute_chunk(batch: Mapping[str, Any], *, base: MeasuredBase | None = None,
     """
     n = len(batch["combinations"])
     resolve = _shipped(base) if base is not None else resolver_of(store)
-    return batches.predict_batch(batch, resolve_base=resolve, max_lines=max_lines,
-                                 max_combinations=max(n, 1), arrays="numpy")["results"]
+    results: list[dict[str, Any]] = batches.predict_batch(batch, resolve_base=resolve, max_lines=max_lines,
+                                                          max_combinations=max(n, 1), arrays="numpy")["results"]
+    return results
 
 
 def run_chunk(compute: Any, combinations: list[Any], shared: Shared) -> list[dict[str, Any]]:

@@ -137,7 +137,7 @@ def read_library(source: LibrarySource, *, file_name: str | None = None, content
             fmt = "fusion"  # missing or too large: the reader says so
     else:
         data = bytes(source) if isinstance(source, (bytearray, memoryview)) else source
-        fmt = detect_format(data, file_name=file_name, content_type=content_type)  # type: ignore[arg-type]
+        fmt = detect_format(data, file_name=file_name, content_type=content_type)
     if fmt == "freecad":
         return load_freecad_library(source, holder=holder, file_name=file_name,  # type: ignore[arg-type]
                                     holder_name=holder_name)

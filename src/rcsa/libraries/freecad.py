@@ -38,6 +38,7 @@ import math
 import os
 import re
 from collections.abc import Mapping
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -207,28 +208,27 @@ def map_toolbit(tool_obj: Mapping[str, Any], tool_id: str, holder_obj: Mapping[s
     if isinstance(fluted_diameter_ratio, bool) or not isinstance(fluted_diameter_ratio, (int, float)) \
             or not 0 < fluted_diameter_ratio <= 1:
         raise InputError("fluted_diameter_ratio", f"must be a number in (0, 1], got {fluted_diameter_ratio!r}")
-    params = tool_obj.get("parameter") if isinstance(tool_obj.get("parameter"), dict) else {}
-    attrs = tool_obj.get("attribute") if isinstance(tool_obj.get("attribute"), dict) else {}
+    params: Mapping[str, Any] = tool_obj["parameter"] if isinstance(tool_obj.get("parameter"), dict) else {}
+    attrs: Mapping[str, Any] = tool_obj["attribute"] if isinstance(tool_obj.get("attribute"), dict) else {}
     shape = _shape(tool_obj)
     name = tool_obj.get("name")
     warnings: list[str] = []
-    base = {"id": tool_id if holder_id is None else f"{tool_id}@{holder_id}", "index": index, "number": number,
-            "description": name if isinstance(name, str) else "",
-            "teeth": _flutes(params.get("Flutes", attrs.get("Flutes")), warnings), "tool_type": shape}
+    entry = partial(Combination, tool_id if holder_id is None else f"{tool_id}@{holder_id}", index,
+                    number=number, description=name if isinstance(name, str) else "",
+                    teeth=_flutes(params.get("Flutes", attrs.get("Flutes")), warnings), tool_type=shape)
     if shape.lower() in _SKIPPED_SHAPES:
-        return Combination(status="skipped", reason=f"unsupported tool type: {_SKIPPED_SHAPES[shape.lower()]}",
-                           warnings=tuple(warnings), **base)
+        return entry(status="skipped", reason=f"unsupported tool type: {_SKIPPED_SHAPES[shape.lower()]}",
+                     warnings=tuple(warnings))
     if holder_obj is None:
-        return Combination(status="skipped", reason="no holder", warnings=tuple(warnings), **base)
+        return entry(status="skipped", reason="no holder", warnings=tuple(warnings))
     try:
         tool = _tool(params, attrs, float(stickout_m), tool_material_default, float(fluted_diameter_ratio),
                      warnings)
         segments = _holder_segments(holder_obj, tool["shank_diameter_m"], holder_segments_per_cone,
                                     holder_material, warnings)
     except InputError as err:
-        return Combination(status="error", reason=str(err), warnings=tuple(warnings), **base)
-    return Combination(status="ok", holder={"segments": segments}, tool=tool, warnings=tuple(warnings),
-                       **base)
+        return entry(status="error", reason=str(err), warnings=tuple(warnings))
+    return entry(status="ok", holder={"segments": segments}, tool=tool, warnings=tuple(warnings))
 
 
 def _shape(obj: Mapping[str, Any]) -> str:

@@ -70,6 +70,7 @@ import zlib
 from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path, PurePosixPath
 from typing import Any
 
@@ -333,7 +334,7 @@ def _ratio_option(value: object) -> float:
 def _shaft_origin_option(value: object) -> ShaftOrigin:
     if value not in ("shoulder", "flute_end"):
         raise InputError("shaft_origin", f"must be 'shoulder' or 'flute_end', got {value!r}")
-    return value  # type: ignore[return-value]
+    return value
 
 
 def _default_holder_option(value: object, lib: FusionLibrary) -> Mapping[str, Any] | None:
@@ -393,15 +394,15 @@ def _combination(index: int, item: object, ident: str, occurrence: int, opts: _O
         teeth = None
     if nof is not None and teeth is None:
         warnings.append(f"geometry.NOF {nof!r} is not an integer from 1 to {MAX_TEETH}; teeth unknown")
-    meta = {"description": desc if isinstance(desc, str) else "", "number": _t_number(item),
-            "teeth": teeth, "tool_type": tool_type}
+    entry = partial(Combination, ident, index, description=desc if isinstance(desc, str) else "",
+                    number=_t_number(item), teeth=teeth, tool_type=tool_type)
     try:
         holder, tool = _map_item(item, opts, warnings)
     except _Skip as skip:
-        return Combination(ident, index, "skipped", reason=str(skip), warnings=tuple(warnings), **meta)
+        return entry("skipped", reason=str(skip), warnings=tuple(warnings))
     except InputError as err:
-        return Combination(ident, index, "error", reason=str(err), warnings=tuple(warnings), **meta)
-    return Combination(ident, index, "ok", holder=holder, tool=tool, warnings=tuple(warnings), **meta)
+        return entry("error", reason=str(err), warnings=tuple(warnings))
+    return entry("ok", holder=holder, tool=tool, warnings=tuple(warnings))
 
 
 def _map_item(item: dict[str, Any], opts: _Options, warnings: list[str],

@@ -114,7 +114,7 @@ def stickout(geo: Mapping[str, Any], gauge_length_m: float | None, warnings: lis
 def face_mounted(geo: Mapping[str, Any], stickout_m: float) -> bool:
     """True for a tool whose whole length is below the holder (LB = OAL): a shell or face mill on an
     arbor, clamped on the arbor's face rather than in a bore."""
-    return abs(stickout_m - geo["OAL"]) <= _STICKOUT_TOL_M
+    return bool(abs(stickout_m - geo["OAL"]) <= _STICKOUT_TOL_M)
 
 
 def check_tool_lengths(geo: Mapping[str, Any], stickout_m: float) -> None:

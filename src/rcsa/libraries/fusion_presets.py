@@ -143,7 +143,8 @@ def with_presets(document: Mapping[str, Any], edits: Mapping[int, Mapping[str, A
 def _merge(old: list[Any], preset: Mapping[str, Any]) -> tuple[list[Any], int]:
     """The presets kept, and where the new one goes."""
     guid, name = str(preset["guid"]), str(preset["name"])
-    kept, at = [], None
+    kept: list[Any] = []
+    at: int | None = None
     for p in old:
         if is_replaced(p, guid, name):
             at = len(kept) if at is None else at

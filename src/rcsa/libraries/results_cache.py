@@ -427,7 +427,7 @@ class ResultCache:
 
     def status(self, key: str) -> str:
         """``status`` of a stored result (``ok`` or ``error``) without loading its arrays."""
-        return self.statuses([key])[key]["status"]
+        return str(self.statuses([key])[key]["status"])
 
     def statuses(self, keys: Iterable[str]) -> dict[str, dict[str, Any]]:
         """``{key: {"status", "error"}}`` of stored results, without loading their arrays.
@@ -509,7 +509,7 @@ def _check_key(key: str) -> None:
 
 
 def _encode(doc: Mapping[str, Any]) -> tuple[str, str, bytes | None, bytes | None, bytes | None, bytes | None,
-                                           bytes | None, bytes | None]:
+                                           bytes | None]:
     """A result document as a row: status, ``meta`` (UTF-8 JSON of every other field) and the
     float64 lines and complex128 receptances as little-endian bytes (None where absent)."""
     meta = {k: v for k, v in doc.items() if k not in ("id", "status", "frequency_hz", "tool_point")}
@@ -520,8 +520,9 @@ def _encode(doc: Mapping[str, Any]) -> tuple[str, str, bytes | None, bytes | Non
         for k, v in (doc.get("tool_point") or {}).items():
             blobs[k] = np.ascontiguousarray(complex_from_wire(v, f"tool_point.{k}", f.size, finite=False),
                                             dtype="<c16").tobytes()
+    h, l_, n, p = (blobs[k] for k in _ARRAYS)
     return (str(doc.get("status", "ok")), orjson.dumps(meta, option=orjson.OPT_SERIALIZE_NUMPY).decode(),
-            blobs["frequency_hz"], *(blobs[k] for k in _ARRAYS))
+            blobs["frequency_hz"], h, l_, n, p)
 
 
 def _decode(row: tuple[Any, ...]) -> dict[str, Any]:

@@ -37,6 +37,7 @@ and the service) may sync at once; each diff is taken against the commit before 
 
 from __future__ import annotations
 
+import builtins
 import contextlib
 import hashlib
 import json
@@ -277,16 +278,16 @@ class LibraryStore:
         with closing(self._connect()) as con:
             return con.execute("SELECT 1 FROM libraries WHERE id = ?", (library_id,)).fetchone() is not None
 
-    def ids(self) -> list[str]:
+    def ids(self) -> builtins.list[str]:
         """Ids of the stored libraries, sorted."""
         with closing(self._connect()) as con:
             return [r[0] for r in con.execute("SELECT id FROM libraries ORDER BY id")]
 
-    def list(self) -> list[dict[str, Any]]:
+    def list(self) -> builtins.list[dict[str, Any]]:
         """Summaries of every stored library (without the per-tool list), sorted by id."""
         with closing(self._connect()) as con:
             rows = con.execute(f"SELECT {_LIB_COLUMNS} FROM libraries ORDER BY id").fetchall()
-            counts = {lib: {} for lib, *_ in rows}
+            counts: dict[str, dict[str, int]] = {lib: {} for lib, *_ in rows}
             for lib, status, n in con.execute("SELECT library_id, status, COUNT(*) FROM tools GROUP BY 1, 2"):
                 counts.setdefault(lib, {})[status] = n
         return [_library_doc(r, counts.get(r[0], {})) for r in rows]
@@ -315,7 +316,7 @@ class LibraryStore:
         doc["tools"] = tools
         return doc
 
-    def _snapshot(self, library_id: str) -> tuple[tuple, list[dict[str, Any]]]:
+    def _snapshot(self, library_id: str) -> tuple[tuple[Any, ...], builtins.list[dict[str, Any]]]:
         if not is_library_id(library_id):
             raise NotFoundError("library", str(library_id))
         with closing(self._connect()) as con, transaction(con, immediate=False):
@@ -332,7 +333,7 @@ class LibraryStore:
                         "result_sha256": key, "revision": revision})
         return row, out
 
-    def results(self, library_id: str, tool_point: list[str] | None = None) -> dict[str, Any]:
+    def results(self, library_id: str, tool_point: builtins.list[str] | None = None) -> dict[str, Any]:
         """The library's results in the shape of a library prediction (``LibraryResult``).
 
         Parameters
@@ -473,7 +474,7 @@ _LIB_COLUMNS = ("id, revision, created_utc, synced_utc, source, library_sha256, 
                 "software_version, last_sync")
 
 
-def _library_doc(row: tuple, counts: Mapping[str, int]) -> dict[str, Any]:
+def _library_doc(row: tuple[Any, ...], counts: Mapping[str, int]) -> dict[str, Any]:
     (lib, revision, created, synced, source, sha, settings, msha, fsha, n, fmin, fmax, model, software,
      last) = row
     return {"id": lib, "revision": revision, "created_utc": created, "synced_utc": synced, "source": source,
@@ -486,7 +487,8 @@ def _library_doc(row: tuple, counts: Mapping[str, int]) -> dict[str, Any]:
 
 def _tool_rows(request: Mapping[str, Any], keys: tuple[str, ...]) -> list[dict[str, Any]]:
     """One row per library entry: id, index, status, fingerprint, result key, entry JSON."""
-    rows, position = [], 0
+    rows: list[dict[str, Any]] = []
+    position = 0
     for entry in request["entries"]:
         meta = {k: entry.get(k) for k in _HEAD[2:]}
         meta["warnings"] = list(entry.get("warnings") or [])

@@ -87,7 +87,8 @@ def _noise_rel(m: Measurement, name: str, f: np.ndarray) -> np.ndarray | None:
     if c is None:
         return None
     g2 = np.clip(np.interp(f, m.frequency_hz, c), 1e-3, 1.0)
-    return np.maximum(np.sqrt(1.0 - g2) / (np.sqrt(g2) * np.sqrt(2.0 * ASSUMED_N_AVERAGES)), _MIN_NOISE_REL)
+    out: np.ndarray = np.maximum(np.sqrt(1.0 - g2) / (np.sqrt(g2) * np.sqrt(2.0 * ASSUMED_N_AVERAGES)), _MIN_NOISE_REL)
+    return out
 
 
 def _noise_summary(sd: Mapping[str, np.ndarray | None], default_noise_rel: float) -> dict[str, Any]:
@@ -100,7 +101,8 @@ def _noise_summary(sd: Mapping[str, np.ndarray | None], default_noise_rel: float
 
 def _complex_noise(rng: np.random.Generator, shape: tuple[int, ...]) -> np.ndarray:
     e = rng.standard_normal((2, *shape))
-    return e[0] + 1j * e[1]
+    out: np.ndarray = e[0] + 1j * e[1]
+    return out
 
 
 @dataclass(frozen=True)
@@ -123,7 +125,9 @@ class _EntryNoise:
             return np.full(nf, default_noise_rel) if v is None else v
 
         if set(self.sd) == {"h"}:
-            return self.receptance * (1.0 + sd("h")[:, None, None] * _complex_noise(rng, (n, nf))[..., None, None])
+            drawn: np.ndarray = self.receptance * (1.0 + sd("h")[:, None, None]
+                                                   * _complex_noise(rng, (n, nf))[..., None, None])
+            return drawn
         out = np.array(np.broadcast_to(self.receptance, (n, *self.receptance.shape)))
         ln = 0.5 * (sd("l") + sd("n"))
         out[..., 0, 0] *= 1.0 + sd("h") * _complex_noise(rng, (n, nf))
@@ -162,7 +166,8 @@ class _ArtifactNoise:
             noisy[name] = v * (1.0 + sd * _complex_noise(rng, (n, nf)))
         centre = identify_exact_many(self.geometry, self.points_m, self.frequency_hz, self.frfs)
         drawn = identify_exact_many(self.geometry, self.points_m, self.frequency_hz, noisy)
-        return self.receptance + (drawn - centre)
+        out: np.ndarray = self.receptance + (drawn - centre)
+        return out
 
     def summary(self, default_noise_rel: float) -> dict[str, Any]:
         """See :meth:`rcsa.model.spindle_side.BaseUncertainty.summary`."""
@@ -221,13 +226,15 @@ def measured_base(measurement_id: str, frequency_hz: np.ndarray, store: Measurem
         report["method"] = "as_given"
         report["l_n_asymmetry"] = asym
     elif kind == "artifact_frfs":
+        points = m.meta.points_m
+        assert m.meta.artifact is not None and points is not None  # required for the kind (MeasurementMeta)
         geometry = artifact_from_meta(m.meta.artifact)
         artifact_d = geometry.diameter_m
         frfs = dict(m.frfs)
         if artifact_method == "exact":
-            s, info = identify_exact(geometry, m.meta.points_m, m.frequency_hz, frfs)
+            s, info = identify_exact(geometry, points, m.frequency_hz, frfs)
         elif artifact_method == "finite_difference":
-            s, info = identify_finite_difference(geometry, m.meta.points_m, m.frequency_hz, frfs)
+            s, info = identify_finite_difference(geometry, points, m.frequency_hz, frfs)
             notes.append("spindle receptance identified by the finite-difference fallback (P = N²/H): biased")
         else:
             raise InputError("spindle.artifact_method", "must be 'exact' or 'finite_difference'")
@@ -266,8 +273,8 @@ def _uncertainty(m: Measurement, f: np.ndarray, receptance: np.ndarray, artifact
         return _EntryNoise(receptance, {"h": _noise_rel(m, "h", f)})
     if artifact_method != "exact":
         return None
+    assert m.meta.artifact is not None and m.meta.points_m is not None  # required for the kind (MeasurementMeta)
     geometry = artifact_from_meta(m.meta.artifact)
-    assert m.meta.points_m is not None
     frfs = {k: _interpolate(m.frequency_hz, np.asarray(m.frfs[k]), f) for k in ("h11", "h21", "h22")}
     _, info = identify_exact(geometry, m.meta.points_m, f, frfs)
     return _ArtifactNoise(receptance, geometry, m.meta.points_m, f, frfs, {k: _noise_rel(m, k, f) for k in frfs},

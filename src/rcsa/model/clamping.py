@@ -39,7 +39,7 @@ from rcsa.physics.insertion import Insertion, InsertionPiece, contact_per_length
 from rcsa.physics.materials import Material
 from rcsa.physics.sections import BeamTheory, Section, ShearModel, tube
 
-__all__ = ["BULK_COEFFICIENTS", "CALIBRATED", "BulkCoefficients", "clamped_holder_chain", "clamping_notes", "face_contact", "interface_per_length"]
+__all__ = ["BULK_COEFFICIENTS", "CALIBRATED_GEOMETRY_RANGES", "BulkCoefficients", "clamped_holder_chain", "clamping_notes", "face_contact", "interface_per_length"]
 
 _TOL_M = 1e-12
 
@@ -83,7 +83,7 @@ BULK_COEFFICIENTS = BulkCoefficients(a_h=3.11, b_h=1.75, a_s=2.13, c_theta=2.04,
 CONE_PIECES = 4
 #: The ranges the calibration cases cover (``tests/data/solid3d``): the nose's outer diameter over
 #: the shank's, the shank diameter (m) and the inserted length in shank diameters.
-CALIBRATED = {"wall_ratio": (1.6, 4.0), "shank_diameter_m": (0.006, 0.020), "insertion_diameters": (2.0, 5.0)}
+CALIBRATED_GEOMETRY_RANGES = {"wall_ratio": (1.6, 4.0), "shank_diameter_m": (0.006, 0.020), "insertion_diameters": (2.0, 5.0)}
 
 
 def interface_per_length(clamping: ClampingSpec, holder_outer_diameter_m: float, bore_diameter_m: float,
@@ -311,7 +311,7 @@ def clamping_notes(holder: HolderSpec, tool: ToolSpec, clamping: ClampingSpec) -
               ("the shank diameter", d * 1e3, "shank_diameter_m", " mm"),
               ("the inserted length", inserted, "insertion_diameters", " shank diameters")]
     for what, value, key, unit in checks:
-        lo, hi = CALIBRATED[key]
+        lo, hi = CALIBRATED_GEOMETRY_RANGES[key]
         scale = 1e3 if key == "shank_diameter_m" else 1.0
         if not lo * scale * (1 - 1e-9) <= value <= hi * scale * (1 + 1e-9):
             notes.append(f"clamping model {clamping.model!r}: {what} ({value:.3g}{unit}) is outside the range it was "

@@ -11,13 +11,14 @@ stiffness) and, for ``contact``, ``holder_tool.interface_stiffness_n_m3``. :func
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import replace
 from typing import Any
 
 from rcsa.errors import InputError
 from rcsa.model.contract import AssemblySpec, ClampingSpec, SpindleSpec
 
-__all__ = ["get_parameter", "is_damping", "parameter_names", "set_parameter"]
+__all__ = ["chosen_parameters", "get_parameter", "is_damping", "parameter_names", "set_parameter"]
 
 _JOINT_FIELDS = ("stiffness_n_m", "damping_ns_m", "rotational_stiffness_nm_rad", "rotational_damping_nms_rad")
 _BEARING_FIELDS = ("stiffness_n_m", "damping_ns_m")
@@ -62,6 +63,45 @@ def _split(name: str) -> tuple[str, int | None, str]:
             raise InputError("parameters", f"bad bearing index in {name!r}")
         return "bearings", int(index), field
     return head, None, field
+
+
+def chosen_parameters(spec: AssemblySpec, requested: Sequence[str] | None,
+                      available: tuple[str, ...]) -> tuple[str, ...]:
+    """The parameters an analysis varies: ``requested`` checked against ``available``, or all of them.
+
+    Parameters
+    ----------
+    spec : AssemblySpec
+    requested : sequence of str or None
+        Names asked for (None: every available one).
+    available : tuple of str
+        The names the analysis can vary in ``spec`` (non-zero, non-rigid).
+
+    Raises
+    ------
+    InputError
+        ``parameters``: an unknown name, one that is zero or rigid in this assembly (its
+        normalised sensitivity is not defined), or a name given twice.
+
+    Examples
+    --------
+    >>> from rcsa.model.contract import parse_assembly
+    >>> from rcsa.reference import ra1
+    >>> spec = parse_assembly(ra1())
+    >>> chosen_parameters(spec, ["holder_tool.stiffness_n_m"], parameter_names(spec))
+    ('holder_tool.stiffness_n_m',)
+    """
+    if requested is None:
+        return available
+    names = tuple(requested)
+    for n in names:
+        if n not in available:
+            get_parameter(spec, n)  # raises for an unknown name
+            raise InputError("parameters", f"{n!r} is zero or rigid in this assembly: its normalised "
+                             "sensitivity is not defined")
+    if len(set(names)) != len(names):
+        raise InputError("parameters", "names must be unique")
+    return names
 
 
 def get_parameter(spec: AssemblySpec, name: str) -> float | None:

@@ -224,6 +224,10 @@ def apply_nuisance(base: _K, fields: Mapping[str, float]) -> _K:
 
 
 @overload
+def scaled_joint(joint: ClampingSpec, kt: float, kr: float, c: float) -> ClampingSpec: ...
+
+
+@overload
 def scaled_joint(joint: JointSpec | None, kt: float, kr: float, c: float) -> JointSpec | None: ...
 
 

@@ -123,18 +123,9 @@ def march(chain: Chain, omega_rad_s: FloatArray, start: ComplexArray | None = No
     scratch = local_scratch()
     for i0, i1 in [(0, n)] if grid is not None else _blocks(n):
         g = grid if grid is not None else Grid(w[i0:i1], scratch)
-        k = _start_sym(s0, i0, i1, real)
-        part = _rows(chain, i0, i1, n)
-        for item in part:
-            item.announce(g)
-        if real:
-            for item in part:
-                k = item.eliminate_undamped(k, g)
-        else:
-            for item in part:
-                k, negatives = item.eliminate(k, g, count)
-                if neg is not None and negatives is not None:
-                    neg[i0:i1] += negatives
+        k, negatives = _carry(_rows(chain, i0, i1, n), g, _start_sym(s0, i0, i1, real), real, count)
+        if neg is not None:
+            neg[i0:i1] += negatives
         _put_sym(out[i0:i1], k)
     return out, neg
 
@@ -221,20 +212,26 @@ def march_tools(stacked: Chain, omega_rad_s: FloatArray, n_tools: int, start: Co
         tool, line = np.divmod(np.arange(i0, i1), nf)
         g = Grid(w[line], scratch, tiling=None if tiling is None else tiling.repeated((i1 - i0) // nf))
         part = tuple(item.take_rows(tool) if item.is_stacked else item for item in stacked)
-        if s0 is None:
-            k = _start_sym(None, 0, i1 - i0, real)
-        else:
-            k = _start_sym(s0[line], 0, i1 - i0, real)
-        for item in part:
-            item.announce(g)
-        if real:
-            for item in part:
-                k = item.eliminate_undamped(k, g)
-        else:
-            for item in part:
-                k = item.eliminate(k, g)[0]
+        k, _ = _carry(part, g, _start_sym(None if s0 is None else s0[line], 0, i1 - i0, real), real)
         _put_sym(out[i0:i1], k)
     return out.reshape(n_tools, nf, 2, 2)
+
+
+def _carry(part: Chain, grid: Grid, k: Sym, real: bool, count: bool = False) -> tuple[Sym, IntArray]:
+    """``k`` carried across the items of ``part`` on ``grid`` (announced first), and with
+    ``count`` the negative eigenvalues of the pivots eliminated on the way (zeros without)."""
+    for item in part:
+        item.announce(grid)
+    negatives = np.zeros(grid.omega_rad_s.size, dtype=int)
+    if real:
+        for item in part:
+            k = item.eliminate_undamped(k, grid)
+        return k, negatives
+    for item in part:
+        k, more = item.eliminate(k, grid, count)
+        if more is not None:
+            negatives += more
+    return k, negatives
 
 
 def _start_sym(start: ComplexArray | FloatArray | None, i0: int, i1: int, real: bool) -> Sym:

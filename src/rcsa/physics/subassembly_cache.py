@@ -42,6 +42,7 @@ spindle + holder chains are equal but built apart share one condensation.
 
 from __future__ import annotations
 
+import threading
 from collections import OrderedDict
 from collections.abc import Callable, Hashable
 from dataclasses import dataclass
@@ -70,12 +71,16 @@ DEFAULT_BEAMS = 512
 class LruStore(Generic[K, V]):
     """A bounded mapping that drops the least recently used entry first: rcsa's one eviction policy.
 
+    Each operation is atomic (one re-entrant lock per store), so threads may share a store;
+    :meth:`get` does not hold the lock while ``make()`` runs (two threads missing the same key
+    may both make it; the later one is kept).
+
     Parameters
     ----------
     size : int
         Entries kept (>= 0; 0 keeps nothing).
     on_evict : callable, optional
-        Called with each dropped key and value.
+        Called with each dropped key and value (under the store's lock).
 
     Examples
     --------
@@ -90,6 +95,7 @@ class LruStore(Generic[K, V]):
         self.size = int(size)
         self._items: OrderedDict[K, V] = OrderedDict()
         self._on_evict = on_evict
+        self._lock = threading.RLock()
 
     def __contains__(self, key: object) -> bool:
         return key in self._items
@@ -99,7 +105,8 @@ class LruStore(Generic[K, V]):
 
     def values(self) -> list[V]:
         """The entries kept, least recently used first."""
-        return list(self._items.values())
+        with self._lock:
+            return list(self._items.values())
 
     def peek(self, key: K) -> V | None:
         """The entry of ``key`` (marked as just used), or None.
@@ -108,10 +115,11 @@ class LruStore(Generic[K, V]):
         ----------
         key : hashable
         """
-        hit = self._items.get(key)
-        if hit is not None:
-            self._items.move_to_end(key)
-        return hit
+        with self._lock:
+            hit = self._items.get(key)
+            if hit is not None:
+                self._items.move_to_end(key)
+            return hit
 
     def pop(self, key: K) -> V | None:
         """Drop the entry of ``key`` (None when there is none); ``on_evict`` is not called.
@@ -120,7 +128,13 @@ class LruStore(Generic[K, V]):
         ----------
         key : hashable
         """
-        return self._items.pop(key, None)
+        with self._lock:
+            return self._items.pop(key, None)
+
+    def clear(self) -> None:
+        """Drop every entry (``on_evict`` is not called)."""
+        with self._lock:
+            self._items.clear()
 
     def put(self, key: K, value: V) -> V:
         """Keep ``value`` under ``key`` (dropping the least recently used beyond :attr:`size`).
@@ -133,12 +147,13 @@ class LruStore(Generic[K, V]):
         """
         if self.size <= 0:
             return value
-        self._items[key] = value
-        self._items.move_to_end(key)
-        while len(self._items) > self.size:
-            old, dropped = self._items.popitem(last=False)
-            if self._on_evict is not None:
-                self._on_evict(old, dropped)
+        with self._lock:
+            self._items[key] = value
+            self._items.move_to_end(key)
+            while len(self._items) > self.size:
+                old, dropped = self._items.popitem(last=False)
+                if self._on_evict is not None:
+                    self._on_evict(old, dropped)
         return value
 
     def get(self, key: K, make: Callable[[], V]) -> V:

@@ -17,10 +17,10 @@ from rcsa.physics.chain import Ground
 from rcsa.physics.elimination import tip_receptance
 from tests.oracles.solid3d import dataset
 
-__all__ = ["CALIBRATION", "INFORMATION", "holder_tool", "load", "rcsa_h", "scores"]
+__all__ = ["CALIBRATION_CASES", "INFORMATION", "holder_tool", "load", "rcsa_h", "scores"]
 
 #: The cases the clamping coefficients are fitted on; every other bonded case is held out.
-CALIBRATION = ("base_d10", "diameter_d6", "diameter_d16", "nose_od1.6d", "nose_od3.2d", "insertion_2d",
+CALIBRATION_CASES = ("base_d10", "diameter_d6", "diameter_d16", "nose_od1.6d", "nose_od3.2d", "insertion_2d",
                "insertion_5d", "stickout_3d", "stickout_6d")
 #: Cases the clamping models do not describe (reported, not scored).
 INFORMATION = ("flutes_2", "flutes_4", "rigid_holder")

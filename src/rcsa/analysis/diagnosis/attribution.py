@@ -71,7 +71,8 @@ def _scale_log_prior(at_one: float = SCATTER_MASS_AT_ONE) -> np.ndarray:
     w[[0, -1]] *= 0.5
     w *= 1.0 - at_one
     w[0] += at_one
-    return np.log(w)
+    out: np.ndarray = np.log(w)
+    return out
 
 
 _SCALE_LOG_PRIOR = _scale_log_prior()
@@ -112,11 +113,13 @@ class Likelihood:
 
     def whitened(self, model_features: np.ndarray) -> np.ndarray:
         """``z = Σ^{-1/2} (f_meas − μ − f_model)`` on the rows, shape (..., nrows)."""
-        return (self.target - model_features[..., self.rows]) @ self.w.T
+        z: np.ndarray = (self.target - model_features[..., self.rows]) @ self.w.T
+        return z
 
     def chi2(self, model_features: np.ndarray) -> np.ndarray:
         """Mahalanobis χ² of the residual."""
-        return np.sum(self.whitened(model_features) ** 2, axis=-1)
+        chi2: np.ndarray = np.sum(self.whitened(model_features) ** 2, axis=-1)
+        return chi2
 
     def log_likelihood_by_scale(self, model_features: np.ndarray) -> np.ndarray:
         """ln L at every scatter scale of the grid, shape (..., nscales)."""
@@ -127,7 +130,8 @@ class Likelihood:
             fit = -0.5 * np.sum(z2, axis=-1)[..., None] / s2
         else:
             fit = -0.5 * (NU + 1) * np.sum(np.log1p(z2[..., None, :] / (NU * s2[:, None])), axis=-1)
-        return self.const - n * np.log(_SCALES) + fit
+        out: np.ndarray = self.const - n * np.log(_SCALES) + fit
+        return out
 
     def scatter_scale(self, model_features: np.ndarray) -> float:
         """The scatter the residual shows: the maximum-likelihood ``s`` on the grid [1, MAX_SCATTER_SCALE].
@@ -149,11 +153,12 @@ class Likelihood:
         if self.scatter:
             lp = self.log_likelihood_by_scale(model_features) + _SCALE_LOG_PRIOR
             top = lp.max(axis=-1)
-            return top + np.log(np.sum(np.exp(lp - top[..., None]), axis=-1))
+            marginal: np.ndarray = top + np.log(np.sum(np.exp(lp - top[..., None]), axis=-1))
+            return marginal
         z = self.whitened(model_features)
-        if self.kind == "gaussian":
-            return self.const - 0.5 * np.sum(z * z, axis=-1)
-        return self.const - 0.5 * (NU + 1) * np.sum(np.log1p(z * z / NU), axis=-1)
+        out: np.ndarray = (self.const - 0.5 * np.sum(z * z, axis=-1) if self.kind == "gaussian" else
+                           self.const - 0.5 * (NU + 1) * np.sum(np.log1p(z * z / NU), axis=-1))
+        return out
 
 
 @dataclass

@@ -83,7 +83,8 @@ def noise_sd_rel(coherence: np.ndarray, n_averages: float) -> np.ndarray:
         ``√(1−γ²) / (|γ| √(2 n_d))``; also the phase error in rad.
     """
     g2 = np.clip(np.asarray(coherence, dtype=float), 1e-3, 1.0)
-    return np.maximum(np.sqrt(1.0 - g2) / (np.sqrt(g2) * np.sqrt(2.0 * n_averages)), MIN_NOISE_REL)
+    out: np.ndarray = np.maximum(np.sqrt(1.0 - g2) / (np.sqrt(g2) * np.sqrt(2.0 * n_averages)), MIN_NOISE_REL)
+    return out
 
 
 def draw_knobs(rng: np.random.Generator, tol: Mapping[str, float], n_configs: int,
@@ -137,7 +138,8 @@ class Discrepancy:
         """``Σ_rows^{-1/2}`` (symmetric), shape (nrows, nrows)."""
         s = self.sigma[rows, rows] if isinstance(rows, slice) else self.sigma[np.ix_(rows, rows)]
         vals, vecs = np.linalg.eigh(s)
-        return (vecs / np.sqrt(vals)) @ vecs.T
+        w: np.ndarray = (vecs / np.sqrt(vals)) @ vecs.T
+        return w
 
     @property
     def sd(self) -> np.ndarray:

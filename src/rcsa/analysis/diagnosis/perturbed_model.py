@@ -53,7 +53,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
-from functools import lru_cache
 
 import numpy as np
 
@@ -73,8 +72,8 @@ from rcsa.physics.arrays import ComplexArray, FloatArray, IntArray
 from rcsa.physics.chain import Beam, Chain, ChainItem, Ground
 from rcsa.physics.insertion import Insertion
 from rcsa.physics.materials import Material
-from rcsa.physics.sections import Section
-from rcsa.physics.subassembly_cache import Condensed, SubassemblyCache
+from rcsa.physics.sections import BeamTheory, Section, ShearModel
+from rcsa.physics.subassembly_cache import Condensed, LruStore, SubassemblyCache
 
 __all__ = ["AddedCompliance", "BaseReceptance", "Knobs", "Parts", "PartsBuilder", "RotationRescale", "Solver",
            "config_parts", "null_shear_scale"]
@@ -177,20 +176,26 @@ def _scale_shear(chain: Chain, s: float) -> Chain:
     return tuple(item.map_sections(scaled) for item in chain)
 
 
-@lru_cache(maxsize=256)
-def _spindle_chain(spindle: SpindleSpec, mats: tuple, shear: object, theory: str) -> Chain:
-    return spindle_chain(spindle, dict(mats), shear, theory)  # type: ignore[arg-type]
+#: Spindle, holder and tool chains built from specs, by their arguments (each is built once
+#: across the problems of a process; the chains are immutable).
+_CHAINS: LruStore[tuple[object, ...], Chain] = LruStore(768)
 
 
-@lru_cache(maxsize=256)
-def _holder_chain(holder: HolderSpec, tool: ToolSpec, mats: tuple, shear: object, theory: str,
-                  clamping: ClampingSpec | None = None) -> Chain:
-    return holder_chain(holder, tool, dict(mats), shear, theory, clamping)  # type: ignore[arg-type]
+def _spindle_chain(spindle: SpindleSpec, mats: tuple[tuple[str, Material], ...], shear: ShearModel | float,
+                   theory: BeamTheory) -> Chain:
+    return _CHAINS.get(("spindle", spindle, mats, shear, theory),
+                       lambda: spindle_chain(spindle, dict(mats), shear, theory))
 
 
-@lru_cache(maxsize=256)
-def _tool_chain(tool: ToolSpec, mats: tuple, shear: object, theory: str) -> Chain:
-    return tool_chain(tool, dict(mats), shear, theory)  # type: ignore[arg-type]
+def _holder_chain(holder: HolderSpec, tool: ToolSpec, mats: tuple[tuple[str, Material], ...], shear: ShearModel | float,
+                  theory: BeamTheory, clamping: ClampingSpec | None = None) -> Chain:
+    return _CHAINS.get(("holder", holder, tool, mats, shear, theory, clamping),
+                       lambda: holder_chain(holder, tool, dict(mats), shear, theory, clamping))
+
+
+def _tool_chain(tool: ToolSpec, mats: tuple[tuple[str, Material], ...], shear: ShearModel | float,
+                theory: BeamTheory) -> Chain:
+    return _CHAINS.get(("tool", tool, mats, shear, theory), lambda: tool_chain(tool, dict(mats), shear, theory))
 
 
 def _with_mass(chain: list[ChainItem], mass_kg: float, distance_m: float) -> list[ChainItem]:
@@ -205,7 +210,7 @@ def _with_mass(chain: list[ChainItem], mass_kg: float, distance_m: float) -> lis
             if left < item.length_m:
                 return [*out[:i], Beam(item.section, item.length_m - left), Ground(mass_kg=mass_kg),
                         Beam(item.section, left), *out[i + 1:]]
-            left -= item.length_m
+            left -= float(item.length_m)
     raise ValueError("tip mass lies beyond the tool")
 
 
@@ -244,16 +249,8 @@ class Parts:
     base: BaseReceptance | None = None
 
 
+#: Sub-chains kept per builder and kind (materials, spindles, middles, tails).
 _MAX_CACHED = 4096
-
-
-def _cached(store: dict, key: tuple, make):  # type: ignore[no-untyped-def]
-    hit = store.get(key)
-    if hit is None:
-        if len(store) >= _MAX_CACHED:
-            store.clear()
-        hit = store[key] = make()
-    return hit
 
 
 class PartsBuilder:
@@ -281,19 +278,21 @@ class PartsBuilder:
         if plane == "spindle_nose" and spec.holder is None:
             raise TypeError("a spindle_nose base needs a holder")
         self.spec, self.plane, self.base = spec, plane, base
-        self._mats: dict = {}
-        self._spindles: dict = {}
-        self._middles: dict = {}
-        self._tails: dict = {}
+        # the package's one eviction policy: the sub-chains are shared by identity (the Solver's
+        # cache keys), so a kept one stays the very same object until it is the least recently used
+        self._mats: LruStore[tuple[float, ...], tuple[tuple[str, Material], ...]] = LruStore(_MAX_CACHED)
+        self._spindles: LruStore[tuple[object, ...], Chain] = LruStore(_MAX_CACHED)
+        self._middles: LruStore[tuple[object, ...], Chain] = LruStore(_MAX_CACHED)
+        self._tails: LruStore[tuple[object, ...], Chain] = LruStore(_MAX_CACHED)
 
     def parts(self, tool: ToolSpec, k: Knobs, base: BaseReceptance | None = None) -> Parts:
         """Sub-chains of the configuration with ``tool`` under ``k`` (on ``base``, default the builder's)."""
         spec = self.spec
         mkey = (k.tool_youngs_scale, k.tool_density_scale, k.structure_youngs_scale, k.structure_density_scale,
                 k.loss_factor_scale)
-        mats = _cached(self._mats, mkey, lambda: tuple(sorted(_materials(spec, k).items())))
+        mats = self._mats.get(mkey, lambda: tuple(sorted(_materials(spec, k).items())))
         s = null_shear_scale(spec) if k.shear_scale is None else k.shear_scale
-        theory = "euler_bernoulli" if (spec.beam_theory == "euler_bernoulli" and s == 0.0) else "timoshenko"
+        theory: BeamTheory = "euler_bernoulli" if (spec.beam_theory == "euler_bernoulli" and s == 0.0) else "timoshenko"
         scale = 1.0 if theory == "euler_bernoulli" else s
         shear = spec.shear_coefficient
 
@@ -304,8 +303,8 @@ class PartsBuilder:
         if self.plane is None:
             assert isinstance(spec.spindle, SpindleSpec)
             sp = spec.spindle
-            spindle = _cached(self._spindles, (mkey, s, k.bearing_stiffness_scale, k.bearing_damping_scale),
-                              lambda: shear_scaled(_spindle_chain(_spindle(sp, k), mats, shear, theory)))
+            spindle = self._spindles.get((mkey, s, k.bearing_stiffness_scale, k.bearing_damping_scale),
+                                         lambda: shear_scaled(_spindle_chain(_spindle(sp, k), mats, shear, theory)))
         # a clamping along the insertion belongs to the holder chain, with the holder-tool knobs
         clamping = scaled_joint(spec.holder_tool, k.ht_translational_scale, k.ht_rotational_scale,
                                 k.ht_damping_scale) if isinstance(spec.holder_tool, ClampingSpec) else None
@@ -347,7 +346,7 @@ class PartsBuilder:
                 items.append(ring)
             return tuple(items)
 
-        mid_key = (mkey, s, k.base_rotation_scale, k.base_rotation_shape, k.nose_cross_compliance_rad_n,
+        mid_key: tuple[object, ...] = (mkey, s, k.base_rotation_scale, k.base_rotation_shape, k.nose_cross_compliance_rad_n,
                    k.nose_rotational_residual_rad_nm, clamping)
         if self.plane != "holder_tip":
             assert spec.holder is not None
@@ -356,7 +355,7 @@ class PartsBuilder:
                                spec.holder.length_m - (0.0 if front_gap else k.insertion_offset_m)), 12)
             mid_key += (k.sh_translational_scale, k.sh_rotational_scale, k.sh_damping_scale, k.insertion_offset_m,
                         filled, tool.shank_diameter_m, tool.material)
-        mid = _cached(self._middles, mid_key, middle)
+        mid = self._middles.get(mid_key, middle)
 
         def tail() -> Chain:
             items: list[ChainItem] = []
@@ -371,7 +370,7 @@ class PartsBuilder:
 
         tail_key = (mkey, s, tool, stickout, r_i, r_a, k.ht_translational_scale, k.ht_rotational_scale, k.ht_damping_scale,
                     k.tip_mass_kg, k.tip_mass_distance_m)
-        return Parts(spindle, mid, _cached(self._tails, tail_key, tail), self.base if base is None else base)
+        return Parts(spindle, mid, self._tails.get(tail_key, tail), self.base if base is None else base)
 
 
 def config_parts(spec: AssemblySpec, tool: ToolSpec, k: Knobs, plane: str | None = None,

@@ -17,12 +17,10 @@ from __future__ import annotations
 
 import hashlib
 import json
-import threading
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from cachetools import LRUCache, cached
 
 from rcsa.analysis.diagnosis.discrepancy import (
     Discrepancy,
@@ -35,13 +33,14 @@ from rcsa.analysis.diagnosis.perturbed_model import BaseReceptance, Knobs, Parts
 from rcsa.analysis.diagnosis.request import DEFAULT_NOISE_REL, MIN_VALID_LINES, Request
 from rcsa.errors import InputError
 from rcsa.model.spindle_side import MeasuredBase
+from rcsa.physics.subassembly_cache import LruStore
 
 __all__ = ["Problem", "VALID_COHERENCE"]
 
 VALID_COHERENCE = 0.8
 #: Monte-Carlo draws of the last few problems, by content (:meth:`Problem._cache_key`): a
 #: repeated diagnosis of the same measurements (e.g. with another claim threshold) reuses them.
-_DRAW_CACHE: LRUCache[str, list[np.ndarray]] = LRUCache(maxsize=4)
+_DRAW_CACHE: LruStore[str, list[np.ndarray]] = LruStore(4)
 
 
 def _median_filter(x: np.ndarray, size: int) -> np.ndarray:
@@ -90,7 +89,8 @@ class Config:
 
     def db_error(self, h_model: np.ndarray) -> np.ndarray:
         """20 log10 |h_meas / h_model| on the good lines, dB."""
-        return 20.0 * np.log10(np.abs(self.h_meas[self.good] / h_model[self.good]))
+        db: np.ndarray = 20.0 * np.log10(np.abs(self.h_meas[self.good] / h_model[self.good]))
+        return db
 
 
 class Problem:
@@ -192,7 +192,7 @@ class Problem:
         spec = self.spec
         if base.plane == "holder_tip" and spec.holder is not None:
             raise InputError("assembly.holder", f"must be left out: the measured spindle "
-                                                f"{req.measured_spindle.measurement_id!r} (plane holder_tip) already "
+                                                f"{spindle.measurement_id!r} (plane holder_tip) already "
                                                 "contains its holder")
         if base.plane != "holder_tip" and spec.holder is None:
             raise InputError("assembly.holder", "is required: the measured spindle's plane is spindle_nose, so the "
@@ -251,8 +251,12 @@ class Problem:
             digest.update(json.dumps(self.spindle_uncertainty(), sort_keys=True, default=str).encode())
         return digest.hexdigest()
 
-    @cached(_DRAW_CACHE, key=lambda self, n_mc: self._cache_key(n_mc), lock=threading.Lock())
     def _draws(self, n_mc: int) -> list[np.ndarray]:
+        """Model ``h`` of every configuration under ``n_mc`` nuisance draws, each (n_mc, nlines),
+        kept by content for a repeated diagnosis (:data:`_DRAW_CACHE`)."""
+        return _DRAW_CACHE.get(self._cache_key(n_mc), lambda: self._draw(n_mc))
+
+    def _draw(self, n_mc: int) -> list[np.ndarray]:
         """Model ``h`` of every configuration under ``n_mc`` nuisance draws, each (n_mc, nlines).
 
         Each draw turns every tolerance (shared and per measurement) and, for a measured

@@ -240,7 +240,7 @@ def build_response(a: Analysis) -> dict[str, Any]:
                     "collinear_rivals": rivals,
                     "residual_p_value": first["residual_p_value"] if first else gap["p_value"],
                     "sentence": _sentence(a, effects) + (
-                        f" {', '.join(r['effect'] for r in rivals)} move(s) the features the same way "
+                        f" {', '.join(str(r['effect']) for r in rivals)} move(s) the features the same way "
                         f"(signature cosine > 0.9) and the best fit leaves a significant remainder: "
                         f"treat the mechanism as uncertain between them." if rivals else "")},
         "effects": effects,

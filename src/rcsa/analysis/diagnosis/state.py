@@ -119,7 +119,7 @@ class Analysis:
         self.candidates, self.notes = catalogue(p.spec, p.tools, p.solver,
                                                 1.5 * max(masses) if masses and max(masses) > 0 else None,
                                                 opts.effects, p.measured)
-        self._cache: dict[tuple, np.ndarray] = {}
+        self._cache: dict[tuple[object, ...], np.ndarray] = {}
         self._spindle_cov: np.ndarray | None = None
         n_feat = p.base_features.size
         self.like = Likelihood(p.measured_features, self.disc, np.arange(n_feat), opts.likelihood)
@@ -197,21 +197,22 @@ class Analysis:
                                                                                           strict=True))
         values = np.atleast_2d(np.asarray(values, dtype=float))
         keys = [prefix + ((cands[-1].name, tuple(np.round(v, 12))),) for v in values]
-        todo: dict[tuple, np.ndarray] = {}
+        todo: dict[tuple[object, ...], np.ndarray] = {}
         for k, v in zip(keys, values, strict=True):
             if k not in self._cache:
                 todo.setdefault(k, v)
         if todo:
             feats = p.features(p.h_many([self.knobs_of(cands, [*fixed, v]) for v in todo.values()]))
-            for row, k in enumerate(todo):
-                self._cache[k] = feats[row]
+            for row, key in enumerate(todo):
+                self._cache[key] = feats[row]
         return np.stack([self._cache[k] for k in keys])
 
     def features_of(self, cands: Sequence[Candidate], values: Sequence[np.ndarray]) -> np.ndarray:
         """Model features with every candidate at its value, shape (nfeat,)."""
         if not cands:
             return self.problem.base_features
-        return self.features_many(cands, values[:-1], np.asarray(values[-1], dtype=float)[None, :])[0]
+        features: np.ndarray = self.features_many(cands, values[:-1], np.asarray(values[-1], dtype=float)[None, :])[0]
+        return features
 
     def features_at(self, cand: Candidate, v: np.ndarray) -> np.ndarray:
         """Features with one candidate at ``v`` (shape (d,)), or at many values (shape (n, d))."""
@@ -274,8 +275,8 @@ class Analysis:
                             float(like(f1)))
         s1 = like.w @ (f1 - self.problem.base_features)
         s2 = like.w @ (self.features_of([first.candidate, c2], [first.map, fit.map]) - f1)
-        cos = float(s1 @ s2 / max(np.linalg.norm(s1) * np.linalg.norm(s2), 1e-300))
-        return fit, cos, float(np.linalg.norm(s2) / max(np.linalg.norm(s1), 1e-300))
+        n1, n2 = float(np.linalg.norm(s1)), float(np.linalg.norm(s2))
+        return fit, float(s1 @ s2 / max(n1 * n2, 1e-300)), n2 / max(n1, 1e-300)
 
     def _second_held_out(self, fit: Fit) -> tuple[HeldOut | None, bool]:
         """Held-out scores of first + second (the first at its per-fold fits), and whether they improve."""
@@ -358,10 +359,12 @@ class Analysis:
             return 1.0
         if self._spindle_cov is None:
             self._spindle_cov = self.problem.spindle_feature_covariance()
+        cov = self._spindle_cov
+        assert cov is not None  # a measured spindle has its covariance
         w = self.like.w
         u = w @ (self.problem.measured_features - (model_features + self.disc.mu))
         u = u / max(float(np.linalg.norm(u)), 1e-300)
-        return float(u @ (w @ self._spindle_cov @ w.T) @ u)
+        return float(u @ (w @ cov @ w.T) @ u)
 
     # ------------------------------------------------------------------ reporting
     def residual_p_value(self, model_features: np.ndarray, whitener: np.ndarray | None = None) -> float:
@@ -390,7 +393,7 @@ class Analysis:
         if self.residual_p_value(f_best) >= RESIDUAL_P:
             return []
         s_best = self.like.w @ (f_best - self.problem.base_features)
-        out = []
+        out: list[dict[str, float | str]] = []
         for f in d.ranking[1:]:
             if f.log_bayes_factor <= self.request.options.claim_threshold or f.candidate.name in d.ambiguous_with:
                 continue

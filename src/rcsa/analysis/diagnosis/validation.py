@@ -115,8 +115,11 @@ def held_out(fold_list: Sequence[tuple[list[int], list[int]]], rows_of: Callable
         like = Likelihood(measured, disc, rows_of(train), kind)
         x0 = np.clip(x_all, lo, hi)
         if x0.size:
-            res_x, _ = nelder_mead(lambda p, like=like, k=k: -float(like(features_at(k, np.clip(p, lo, hi)))), x0,
-                                   lo, hi, xatol=1e-4 * float(np.min(hi - lo)), fatol=1e-3, maxfev=30 * x0.size)
+            def objective(p: np.ndarray, like: Likelihood = like, k: int = k) -> float:
+                return -float(like(features_at(k, np.clip(p, lo, hi))))
+
+            res_x, _ = nelder_mead(objective, x0, lo, hi, xatol=1e-4 * float(np.min(hi - lo)), fatol=1e-3,
+                                   maxfev=30 * x0.size)
             x = np.clip(res_x, lo, hi)
         else:
             x = x0

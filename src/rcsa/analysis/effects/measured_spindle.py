@@ -30,7 +30,7 @@ from rcsa.analysis.tool_point_model import ToolPointModel
 from rcsa.errors import InputError
 from rcsa.model.contract import AssemblySpec
 from rcsa.model.modal_fit import FittedMode, modal_fit, refit_mode
-from rcsa.model.parameters import get_parameter, parameter_names
+from rcsa.model.parameters import chosen_parameters, get_parameter, parameter_names
 
 __all__ = ["BEARINGS_REASON", "HOLDER_TIP_REASON", "hybrid_effect_analysis", "split_parameters"]
 
@@ -53,21 +53,12 @@ def split_parameters(spec: AssemblySpec, plane: str, requested: Sequence[str] | 
         not_applicable["spindle_holder"] = HOLDER_TIP_REASON
     available = tuple(n for n in parameter_names(spec) if not (plane == "holder_tip"
                                                                  and n.startswith("spindle_holder.")))
-    if requested is None:
-        return available, not_applicable
-    names = tuple(requested)
-    for n in names:
+    for n in requested or ():
         if n.startswith("bearings["):
             raise InputError("parameters", f"{n}: {BEARINGS_REASON}")
         if plane == "holder_tip" and n.startswith("spindle_holder."):
             raise InputError("parameters", f"{n}: {HOLDER_TIP_REASON}")
-        if n not in available:
-            get_parameter(spec, n)  # raises for an unknown name
-            raise InputError("parameters", f"{n!r} is zero or rigid in this assembly: its normalised "
-                             "sensitivity is not defined")
-    if len(set(names)) != len(names):
-        raise InputError("parameters", "names must be unique")
-    return names, not_applicable
+    return chosen_parameters(spec, requested, available), not_applicable
 
 
 def _features(modes: Sequence[FittedMode | None], window_rel: np.ndarray) -> ModeFeatures:

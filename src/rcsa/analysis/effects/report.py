@@ -75,7 +75,8 @@ class EffectReport:
     def tip_participation(self) -> np.ndarray:
         """Tip residue relative to the largest in the band, shape (nmodes,), in [0, 1]."""
         r = np.abs(self.modes.tip_residue_1_kg)
-        return r / r.max() if r.size and r.max() > 0 else r
+        out: np.ndarray = r / r.max() if r.size and r.max() > 0 else r
+        return out
 
     def column(self, parameter: str, feature: str = "frequency_hz") -> np.ndarray:
         """Sensitivities of all modes to one parameter, shape (nmodes,)."""
@@ -144,9 +145,9 @@ class EffectReport:
             row: dict[str, Any] = {"parameter": name, "value": float(self.values[j])}
             for q in FEATURES:
                 row[q] = [_num(x) for x in self.sensitivity[q][:, j]]
-            i = self.controlled_mode(name)
-            row["controls_mode"] = i
-            row["controls_frequency_hz"] = None if i is None else float(self.frequency_hz[i])
+            mode = self.controlled_mode(name)
+            row["controls_mode"] = mode
+            row["controls_frequency_hz"] = None if mode is None else float(self.frequency_hz[mode])
             table.append(row)
         exact = self.modes_method == "wittrick_williams"
         out: dict[str, Any] = {
@@ -166,11 +167,6 @@ class EffectReport:
         if self.spindle_measurement is not None:
             out["spindle_measurement"] = dict(self.spindle_measurement)
         return out
-
-
-def _num(x: float) -> float | None:
-    x = float(x)
-    return x if math.isfinite(x) else None
 
 
 def _num(x: float) -> float | None:

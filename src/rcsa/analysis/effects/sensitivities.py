@@ -66,7 +66,13 @@ from rcsa.model.bounds import (
     MIN_RELATIVE_STEP,
 )
 from rcsa.model.contract import AssemblySpec, MeasuredSpindleSpec, SpindleSpec, parse_assembly
-from rcsa.model.parameters import get_parameter, is_damping, parameter_names, set_parameter
+from rcsa.model.parameters import (
+    chosen_parameters,
+    get_parameter,
+    is_damping,
+    parameter_names,
+    set_parameter,
+)
 from rcsa.model.spindle_side import BaseResolver
 from rcsa.physics.chain import Chain
 from rcsa.physics.natural_frequencies import natural_frequencies_hz
@@ -205,18 +211,7 @@ def effect_analysis(assembly: Mapping[str, Any] | AssemblySpec, *, parameters: S
         tpm.model_at({})  # the assembly's shape on this spindle's plane (holder present or not) is checked here
         names, not_applicable = split_parameters(spec, spindle.plane, parameters)
         return hybrid_effect_analysis(tpm, names, not_applicable, relative_step, _band_of(spec, band_hz), progress)
-    available = parameter_names(spec)
-    if parameters is None:
-        names = available
-    else:
-        names = tuple(parameters)
-        for n in names:
-            if n not in available:
-                get_parameter(spec, n)  # raises for an unknown name
-                raise InputError("parameters", f"{n!r} is zero or rigid in this assembly: its normalised "
-                                 "sensitivity is not defined")
-        if len(set(names)) != len(names):
-            raise InputError("parameters", "names must be unique")
+    names = chosen_parameters(spec, parameters, parameter_names(spec))
     band = _band_of(spec, band_hz)
     base = nominal_features(spec, band)
     report(progress, 1, len(names) + 1)

@@ -424,7 +424,7 @@ def _hybrid_notes(req: IdentificationRequest) -> list[str]:
                      + (f" (condition number up to {cond:.3g})" if isinstance(cond, int | float) else "")
                      + ": its noise makes the model noisy; that noise is estimated from the model itself and "
                      "added to the measurement's (noise_rel), and it is in the residual behind the uncertainties")
-    if spindle.plane == "holder_tip" and req.spindle.report.get("kind") == "artifact_frfs":
+    if spindle.plane == "holder_tip" and spindle.report.get("kind") == "artifact_frfs":
         notes.append("holder_tip artifact measurement: the artifact's clamping is inside it, so an identified "
                      "holder_tool joint is this tool's clamping relative to the artifact's")
     return notes

@@ -23,7 +23,7 @@ the field; the algorithm in :mod:`rcsa.analysis.joint_identification.identify` o
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -158,7 +158,7 @@ def _bounds(raw: object, base: AssemblySpec, names: tuple[str, ...], holder_tip:
     return out
 
 
-def _resolve(spindle: MeasuredSpindleSpec, base: AssemblySpec, tests: list[TapTest],
+def _resolve(spindle: MeasuredSpindleSpec, base: AssemblySpec, tests: Sequence[TapTest],
              resolve_base: BaseResolver | None) -> MeasuredSpindle:
     """The measured spindle on all the measurements' lines, checked against the assembly."""
     if resolve_base is None:

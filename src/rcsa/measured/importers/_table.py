@@ -169,11 +169,12 @@ def cut_column(last: list[str], rows_toks: list[list[str]]) -> int | None:
         got = _shape(tok)
         if not others or got is None or None in shapes:
             continue
+        known = {s for s in shapes if s is not None}
         if len(shapes) == 1:
-            ((decimals, exp_digits),) = shapes
+            ((decimals, exp_digits),) = known
             if got[1] < exp_digits or got[0] < decimals:
                 return j
-        if min(e for _, e in shapes) >= 0 and got[1] < min(e for _, e in shapes):
+        if min(e for _, e in known) >= 0 and got[1] < min(e for _, e in known):
             return j
         if _significant(tok) < min(_significant(t) for t in others):
             return j

@@ -261,7 +261,7 @@ def _with_declared(declared: list[tuple[str, str]], table: TextTable, spec: str,
 
 
 def _same(a: FrfUnit, b: FrfUnit) -> bool:
-    return a.quantity == b.quantity and np.isclose(a.factor_to_si, b.factor_to_si, rtol=1e-12)
+    return a.quantity == b.quantity and bool(np.isclose(a.factor_to_si, b.factor_to_si, rtol=1e-12))
 
 
 def _is_db(text: str | None) -> bool:
@@ -331,7 +331,7 @@ def _frf_unit(cols: list[_Col], units: str | None, meta: MeasurementMeta) -> tup
         unit, text = decl, str(units)
     elif strong:
         unit = strong[0][1]
-        text = strong[0][0].unit if strong[0][0].role != "db" else refs[0][1].text
+        text = (strong[0][0].unit or "") if strong[0][0].role != "db" else refs[0][1].text
     elif weak:
         c, u = weak[0]
         raise InputError(
@@ -489,6 +489,7 @@ def read_csv(
             if (nm, "mag") in col:
                 polar = col[(nm, "mag")] * unit.factor_to_si
             elif (nm, "db") in col:
+                assert db_si is not None  # a dB column has its reference (_frf_unit)
                 polar = db_si * 10.0 ** (col[(nm, "db")] / 20.0)
                 steps.append(f"{nm}: magnitude in dB -> linear, |H| = {db_si:.17g} * 10^(dB/20)")
             if polar is not None:
@@ -508,6 +509,7 @@ def read_csv(
                     _check_both_forms(nm, v, polar, freq, table.lines)
                     steps.append(f"{nm}: re/im read; its magnitude/phase columns agree")
             else:
+                assert polar is not None  # each name has re/im or magnitude/phase (checked with the roles)
                 v = polar
             values[nm] = v
             if (nm, "coh") in col:

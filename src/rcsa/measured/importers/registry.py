@@ -197,25 +197,28 @@ def read_upload(
         given["points_m"] = parse_points(given["points_m"])
     if "artifact" in given and not isinstance(given["artifact"], Mapping):
         raise InputError("artifact", "must be a JSON object")
-    common = {"sensor_mass_kg": _float(opts.get("sensor_mass_kg"), "sensor_mass_kg"), "file_name": file_name}
+    sensor_mass_kg = _float(opts.get("sensor_mass_kg"), "sensor_mass_kg")
     drop = fields.boolean(opts.get("drop_nonpositive", False), "drop_nonpositive", text=True)
     if form == "json":
         overrides = {k: (list(v) if isinstance(v, tuple) else v) for k, v in given.items()}
-        return read_contract_json(data, overrides=overrides, drop_nonpositive=drop, **common)
+        return read_contract_json(data, overrides=overrides, drop_nonpositive=drop, sensor_mass_kg=sensor_mass_kg,
+                                  file_name=file_name)
     for key in ("spindle_id", "direction", "plane"):
         if key not in given and not (key == "direction" and form == "uff"):  # UFF: the file says
             raise InputError(key, f"is required for format {form!r}")
     given.setdefault("kind", "direct_frf")
     if form == "uff":
         return read_uff(data, given, roles=parse_roles(opts.get("roles")), units=opts.get("units"),
-                        scalar_direction=opts.get("scalar_direction"), drop_nonpositive=drop, **common)
+                        scalar_direction=opts.get("scalar_direction"), drop_nonpositive=drop,
+                        sensor_mass_kg=sensor_mass_kg, file_name=file_name)
     meta = MeasurementMeta(**given)
     if form == "csv":
         return read_csv(data, meta, units=opts.get("units"), columns=opts.get("columns"),  # default: the header
                         frequency_unit=opts.get("frequency_unit"), phase_unit=opts.get("phase_unit"),
-                        drop_nonpositive=drop, **common)
+                        drop_nonpositive=drop, sensor_mass_kg=sensor_mass_kg, file_name=file_name)
     if form == "frf":
-        return read_cutpro(data, meta, units=opts.get("units"), drop_nonpositive=drop, **common)
+        return read_cutpro(data, meta, units=opts.get("units"), drop_nonpositive=drop, sensor_mass_kg=sensor_mass_kg,
+                           file_name=file_name)
     if drop:
         raise InputError("drop_nonpositive", "a tap FFT always drops its 0 Hz bin; leave the option out")
     for key in ("force_unit", "response_unit"):
@@ -227,7 +230,8 @@ def read_upload(
         sample_rate_hz=_float(opts.get("sample_rate_hz"), "sample_rate_hz"),
         force_window_s=_float(opts.get("force_window_s"), "force_window_s"),
         exponential_tau_s=_float(opts.get("exponential_tau_s"), "exponential_tau_s"),
-        max_frequency_hz=_float(opts.get("max_frequency_hz"), "max_frequency_hz"), **common)
+        max_frequency_hz=_float(opts.get("max_frequency_hz"), "max_frequency_hz"), sensor_mass_kg=sensor_mass_kg,
+        file_name=file_name)
 
 
 def read_any(path: str | os.PathLike[str], *, format: str | None = None,  # noqa: A002 (the option's name)

@@ -61,7 +61,8 @@ def add_sensor_mass(frequency_hz: np.ndarray, h: np.ndarray, mass_kg: float) -> 
     m = _mass(mass_kg)
     omega2 = (2.0 * np.pi * np.asarray(frequency_hz, dtype=float)) ** 2
     h = np.asarray(h, dtype=np.complex128)
-    return h / (1.0 - omega2 * m * h)
+    out: np.ndarray = h / (1.0 - omega2 * m * h)
+    return out
 
 
 def correct_sensor_mass(measurement: Measurement, mass_kg: float) -> Measurement:

@@ -86,7 +86,7 @@ def _last_digit_unit(x: float, digits: int) -> float:
     """One unit of the last printed digit of ``x`` (at least its float spacing)."""
     if x == 0.0:
         return 0.0
-    return max(10.0 ** (np.floor(np.log10(abs(x))) - digits + 1), float(np.spacing(abs(x))))
+    return max(float(10.0 ** (np.floor(np.log10(abs(x))) - digits + 1)), float(np.spacing(abs(x))))
 
 
 def roundest_within(x: float, tolerance: float) -> float:
@@ -255,7 +255,11 @@ def read_tap(
     )
     if not srcs:
         raise InputError("file", "no tap file given")
-    forces, responses, names, shas, rate = [], [], [], [], None
+    forces: list[np.ndarray] = []
+    responses: list[np.ndarray] = []
+    names: list[str] = []
+    shas: list[str] = []
+    rate: float | None = None
     rate_how = ""
     for k, src in enumerate(srcs):
         data, name, sha = read_source(src, file_name if len(srcs) == 1 else "")
@@ -323,6 +327,7 @@ def read_tap(
         steps.append(
             f"exponential window tau={exponential_tau_s:g} s on force and response (adds damping {1 / exponential_tau_s:g} 1/s)"
         )
+    assert rate is not None  # srcs is not empty
     _, h1, coh = h1_estimate(forces, responses, dt)
     freq = np.arange(h1.size) * rate / n  # k * rate / n: exact for an integer rate
     keep = freq > 0

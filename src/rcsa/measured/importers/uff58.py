@@ -68,6 +68,13 @@ FUNCTION_TYPES = {
     7: "auto correlation", 8: "cross correlation", 9: "power spectral density",
     12: "spectrum",
 }  # fmt: skip
+
+
+def _function_type(code: object) -> str:
+    """The name of a dataset 58 function type code (``unknown`` for anything else)."""
+    return FUNCTION_TYPES.get(code, "unknown") if isinstance(code, int) else "unknown"
+
+
 _NUMERATOR_QUANTITY = {8: "receptance", 11: "mobility", 12: "accelerance"}
 _FORCE_CODES = {9, 13}
 _AXES = {1: "X", 2: "Y", 3: "Z"}
@@ -197,7 +204,8 @@ class _File:
             raise InputError(
                 "file", f"dataset #{i + 1} (type {self.types[i]}) cannot be read: {e}"
             ) from None
-        return s
+        out: dict[str, Any] = s
+        return out
 
 
 def _classify(s: Mapping[str, Any]) -> str | int:
@@ -371,10 +379,10 @@ def _read(
     if not heads:
         raise InputError("file", "holds no dataset 58 (function at nodal DOF)")
     for k, s in heads:
-        if s.get("func_type") not in (4, 6):
-            ft = s.get("func_type")
+        ft = s.get("func_type")
+        if ft not in (4, 6):
             steps.append(
-                f"skipped {_describe(k, s)}: function type {ft} ({FUNCTION_TYPES.get(ft, 'unknown')})"
+                f"skipped {_describe(k, s)}: function type {ft} ({_function_type(ft)})"
             )
     frf_heads = [(k, s) for k, s in heads if s.get("func_type") == 4]
     if not frf_heads:
@@ -383,7 +391,7 @@ def _read(
             "func_type",
             "the file holds no FRF (function type 4); it holds "
             + ", ".join(
-                f"{n} dataset(s) 58 of function type {ft} ({FUNCTION_TYPES.get(ft, 'unknown')})"
+                f"{n} dataset(s) 58 of function type {ft} ({_function_type(ft)})"
                 for ft, n in sorted(found.items(), key=lambda kv: str(kv[0]))
             )
             + "; only 4 (FRF) is imported, with 6 (coherence) attached",
@@ -520,14 +528,14 @@ def _frfs_to_measurement(
             )
         origin = "declared"
     else:
-        unit = _unit_from_file(units164, list(chosen.values()), coded)
-        if unit is None:
+        from_file = _unit_from_file(units164, list(chosen.values()), coded)
+        if from_file is None:
             raise InputError(
                 "units",
                 "the file has no units dataset 164 and its axis unit labels are NONE; declare the FRF unit "
                 "(e.g. units='m/N', 'm/s^2/N' or 'g/N'; CLI --units)",
             )
-        origin = "from the file"
+        unit, origin = from_file, "from the file"
     if coded is not None and unit.quantity and unit.quantity != coded:
         raise InputError(
             "units",

@@ -82,11 +82,11 @@ class Catalogue:
 
     def remove(self, ids: Iterable[str]) -> None:
         """Drop the rows of ``ids`` (missing ones are ignored)."""
-        ids = [(i,) for i in ids]
-        if not ids:
+        rows = [(i,) for i in ids]
+        if not rows:
             return
         with closing(self._connect()) as con, transaction(con):
-            con.executemany("DELETE FROM measurements WHERE id = ?", ids)
+            con.executemany("DELETE FROM measurements WHERE id = ?", rows)
 
     def query(self, filters: Mapping[str, str | None]) -> list[MeasurementInfo]:
         """Rows matching every non-None filter (keys from :data:`FILTERS`), oldest first."""
