@@ -1,8 +1,8 @@
 """Converged stability limits of the cases of ``tests/analysis/lobes/converged_cases.py``.
 
 Each limit comes from the spectral-element collocation oracle (``tests/oracles/milling_collocation.py``:
-another family of method than the product's semi-discretization) at 8 collocation points per cycle
-of the highest mode, bracketed to 1e-4; 11.2 points per cycle must put the crossing within 0.1 % of
+another family of method than the product's semi-discretization) at 10 collocation points per cycle
+of the highest mode, bracketed to 1e-4; 14 points per cycle must put the crossing within 0.1 % of
 that bracket. The search runs upwards from 10 µm to 0.2 m (a 36-point geometric scan, ratio 1.32,
 then bisection).
 
@@ -39,7 +39,7 @@ def main() -> None:
     parser.add_argument("--write", action="store_true", help="store tests/data/lobes/converged_limits.json")
     parser.add_argument("--case", action="append", help="only these cases")
     args = parser.parse_args()
-    out = {"method": "spectral-element collocation (tests/oracles/milling_collocation.py), 8 and 11.2 points "
+    out = {"method": "spectral-element collocation (tests/oracles/milling_collocation.py), 10 and 14 points "
                       "per cycle of the highest mode", "cutting_coefficients": list(AL7075), "cases": {}}
     for name, case in CASES.items():
         if args.case and name not in args.case:
