@@ -13,7 +13,6 @@ at a_e/D = 0.5, before :func:`resolving_steps` took the highest mode).
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from rcsa.analysis.lobes.modal_model import ModalModel
 from rcsa.analysis.lobes.semi_discretization import (

@@ -16,7 +16,14 @@ import numpy as np
 from rcsa.analysis.lobes.modal_model import ModalModel, fit_modal_model, modal_model_from_table
 from rcsa.analysis.lobes.options import MAX_SDM_SPEED_COUNT, OPTION_KEYS, LobesMethod, parse_method
 from rcsa.analysis.lobes.semi_discretization import semi_discretization_lobes
-from rcsa.analysis.lobes.zoa import LobeResult, Milling, check_cut, check_frf, check_speed_grid, stability_lobes
+from rcsa.analysis.lobes.zoa import (
+    LobeResult,
+    Milling,
+    check_cut,
+    check_frf,
+    check_speed_grid,
+    stability_lobes,
+)
 from rcsa.errors import FrequencyMismatch, InputError
 from rcsa.model import fields
 from rcsa.model.bounds import (
@@ -27,12 +34,12 @@ from rcsa.model.bounds import (
     MAX_MODAL_MASS_KG,
     MAX_MODAL_STIFFNESS_N_M,
     MAX_MODAL_TABLE_MODES,
+    MAX_SPEED_COUNT,
+    MAX_SPEED_RPM,
     MIN_MODAL_DAMPING_RATIO,
     MIN_MODAL_FREQUENCY_HZ,
     MIN_MODAL_MASS_KG,
     MIN_MODAL_STIFFNESS_N_M,
-    MAX_SPEED_COUNT,
-    MAX_SPEED_RPM,
     MIN_SPEED_COUNT,
     MIN_SPEED_RPM,
 )

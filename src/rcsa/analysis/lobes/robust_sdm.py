@@ -46,7 +46,10 @@ import numpy as np
 
 from rcsa.analysis.lobes.modal_model import ModalModel
 from rcsa.analysis.lobes.robust import robust_depth_limit
-from rcsa.analysis.lobes.semi_discretization import SemiDiscretizationResult, semi_discretization_lobes_many
+from rcsa.analysis.lobes.semi_discretization import (
+    SemiDiscretizationResult,
+    semi_discretization_lobes_many,
+)
 from rcsa.errors import InputError
 
 __all__ = ["REDUCED_COST_DIAGRAMS", "VERIFY_DRAWS", "ModalRatios", "drawn_models", "modal_ratios",

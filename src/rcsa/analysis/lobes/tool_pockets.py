@@ -57,7 +57,10 @@ from rcsa.analysis.lobes.robust_sdm import (
     modal_ratios,
     robust_sdm_limits,
 )
-from rcsa.analysis.lobes.semi_discretization import SemiDiscretizationResult, semi_discretization_lobes_many
+from rcsa.analysis.lobes.semi_discretization import (
+    SemiDiscretizationResult,
+    semi_discretization_lobes_many,
+)
 from rcsa.analysis.lobes.zoa import LobeResult, Milling, depth_limit_envelopes, stability_lobes
 from rcsa.errors import InputError
 
