@@ -502,10 +502,12 @@ class SdmCostModel:
         return min(chunk, self.chunk_bytes) + t.speeds * self.mem_speed_bytes
 
 
-#: The semi-discretization's constants (``benchmarks/bench_budget.py --fit-sdm``; see
-#: ``benchmarks/results/budget_sdm.json`` for the grid, the load and the ratios).
-SDM_COST = SdmCostModel(evaluations=14.0, per_square_s=4.0e-8, per_cube_s=6.0e-9, rounds=120.0,
-                        per_round_step_s=4.0e-5, mem_pair_step_bytes=40.0, mem_speed_bytes=4096.0)
+#: The semi-discretization's constants, fitted by ``benchmarks/bench_budget.py --fit-sdm`` on 12 grid points
+#: (RA-1, 20–500 speeds from 1 000–8 000 rpm to 30 000, 1–4 teeth, a/D 0.05–0.5, 1–8 modes a direction, the
+#: default steps; load 4.2–4.5 on the 2-core VM, ``benchmarks/results/budget_sdm.json``): estimates 1.0–3.5×
+#: the measured CPU seconds, 1.0–2.5× the measured peak RSS (none below it).
+SDM_COST = SdmCostModel(evaluations=14.0, per_square_s=1.0e-7, per_cube_s=0.0, rounds=1.0, per_round_step_s=0.0031,
+                        mem_pair_step_bytes=1.8, mem_speed_bytes=7.6e5)
 
 
 def _speeds_of(request: Mapping[str, Any]) -> Any:
