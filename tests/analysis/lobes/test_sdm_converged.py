@@ -20,6 +20,7 @@ import json
 import numpy as np
 import pytest
 
+from rcsa.analysis.lobes.modal_model import MIN_PEAK_FRACTION
 from rcsa.app.analyses import stability_lobes
 from tests.analysis.lobes.converged_cases import AL7075, CASES, LIMITS, request
 from tests.oracles.milling_collocation import Mode, depth_limit
@@ -50,9 +51,15 @@ def test_default_lobes_are_right_at_every_speed_they_mark_resolved(name):
     # the answer names the method, the steps and the modes it used
     assert response["discretization"]["scheme"] in ("cut_window", "full_period")
     assert len(response["discretization"]["steps"]) == truth.size
-    table = CASES[name]
-    kept = response["modal_model"]["modes"]
-    assert len([m for m in kept if m["direction"] == "x"]) == len(table["modal_x"])  # every mode of the table
+    # every mode of the table with at least 5 % of the largest peak, and a note for each one left out
+    table = CASES[name]["modal_x"]
+    peak = np.array([1 / (2 * m["damping_ratio"] * m["modal_mass_kg"] * (2 * np.pi * m["frequency_hz"]) ** 2)
+                     for m in table])
+    kept = [m for m in response["modal_model"]["modes"] if m["direction"] == "x"]
+    assert len(kept) == int(np.sum(peak >= MIN_PEAK_FRACTION * peak.max()))
+    for m, p in zip(table, peak, strict=True):
+        if p < MIN_PEAK_FRACTION * peak.max():
+            assert any(f"mode at {m['frequency_hz']:.0f} Hz" in n and "left out" in n for n in response["notes"])
 
 
 @pytest.mark.parametrize("name", ["single_flute_down", "strong_high_mode", "ji2024_35mm"])
