@@ -6,6 +6,7 @@ from fastapi import APIRouter, Depends
 from starlette.requests import Request
 from starlette.responses import Response
 
+from rcsa.app import budget
 from rcsa.app.analyses import stability_lobes as lobes
 
 from ..bodies import require_json
@@ -27,8 +28,10 @@ def stability_lobes(body: LobesRequest, request: Request, state: StateDep, who: 
                     prefer: PreferHeader = None) -> Response:
     """Axial depth limit (m) versus spindle speed (rpm), its chatter frequency (Hz) and every
     lobe, from inline tool-point FRFs (``frf_x``, optional ``frf_y``) or an ``assembly``.
-    ``"method"``: ``zoa`` (zero-order, Altintas–Budak; the default) or ``semi_discretization``
-    (first-order, Insperger–Stépán: right at low radial immersion, and it finds the flip lobes).
+    ``"method"``: ``auto`` (the default: zero-order where it is exact, else the resolved
+    semi-discretization; zero-order, marked unresolved, where that would not fit an answer given
+    at once), ``zoa`` (zero-order, Altintas–Budak) or ``semi_discretization`` (Insperger–Stépán,
+    resolving the cut, every speed checked: right at low radial immersion, and it finds the flip lobes).
 
     Under the compute budget (speeds × lines, and the assembly's prediction); ``Prefer:
     respond-async`` runs it as a job."""
@@ -36,7 +39,7 @@ def stability_lobes(body: LobesRequest, request: Request, state: StateDep, who: 
 
     def run() -> Response:
         with state.metrics.timed("lobes"):
-            result = lobes(doc, store=state.reader, max_lines=state.settings.max_frequency_lines)
+            result = lobes(doc, store=state.reader, max_lines=state.settings.max_frequency_lines, within=budget.SYNC)
         return json_response(result)
 
     return compute(state, "lobes", doc, prefer=prefer, run=run, owner=caller(who, request))

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -21,6 +21,7 @@ from rcsa.analysis.lobes.robust_sdm import robust_sdm_limits
 from rcsa.analysis.lobes.semi_discretization import SemiDiscretizationResult
 from rcsa.analysis.lobes.zoa import LobeResult, frf_grid_notes
 from rcsa.analysis.progress import Progress
+from rcsa.app.budget import Limits, auto_lobes_fallback
 from rcsa.app.predictions import predict, predict_draws
 from rcsa.app.stores import resolver
 from rcsa.errors import InputError
@@ -38,14 +39,17 @@ __all__ = ["ANALYSIS_KINDS", "LobesAnswer", "cutting_conditions", "diagnose", "e
 ANALYSIS_KINDS = ("prediction", "lobes", "effects", "identification", "diagnosis")
 
 
-def _parse_lobes(request: Mapping[str, Any]) -> tuple[LobesRequest, RobustRequest | None]:
-    """A stability-lobes request and its robust part."""
-    body, robust = split_robust_request(request)
+def _parse_lobes(request: Mapping[str, Any], within: Limits | None = None
+                 ) -> tuple[LobesRequest, RobustRequest | None, str | None]:
+    """A stability-lobes request, its robust part and, where ``"auto"`` falls back to zero-order
+    lobes within ``within`` (:func:`rcsa.app.budget.auto_lobes_fallback`), why."""
+    fallback = None if within is None else auto_lobes_fallback(request, within)
+    body, robust = split_robust_request({**request, "method": "zoa"} if fallback else request)
     parsed = parse_lobes_request(body)
     if parsed.assembly is not None and "uncertainty" in parsed.assembly:
         raise InputError("assembly.uncertainty", "give uncertainty at the top of a stability-lobes request "
                                                  "(it asks for robust lobes there)")
-    return parsed, robust
+    return parsed, robust, fallback
 
 
 @dataclass(frozen=True)
@@ -75,6 +79,7 @@ class LobesAnswer:
     flute_length_m: float | None = None
     method_reason: str = ""
     conditions: dict[str, Any] | None = None
+    unchecked: bool = False
 
     def extras(self) -> dict[str, Any]:
         """The response's fields beside the nominal diagram: ``notes`` (all of them),
@@ -84,6 +89,9 @@ class LobesAnswer:
         out: dict[str, Any] = {"notes": [*own, *self.notes]}
         out["method"] = "semi_discretization" if isinstance(self.nominal, SemiDiscretizationResult) else "zoa"
         out["method_reason"] = self.method_reason or f"{out['method']}: chosen by the request"
+        if self.unchecked:  # "auto" answered zero-order within a budget: no speed checked
+            out["resolved"] = [False] * len(self.nominal.spindle_speed_rpm)
+            out["notes"].append(self.method_reason)
         if self.flute_length_m is not None:
             out["flute_length_m"] = self.flute_length_m
         if self.conditions is not None:
@@ -145,7 +153,7 @@ def _described(parsed: LobesRequest, frequency_hz: np.ndarray, h: np.ndarray) ->
 
 
 def stability_lobes_answer(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
-                           max_lines: int = MAX_FREQUENCY_LINES) -> LobesAnswer:
+                           max_lines: int = MAX_FREQUENCY_LINES, within: Limits | None = None) -> LobesAnswer:
     """Stability lobes (``docs/contract.md`` "Stability lobes"), robust ones when asked for, and notes.
 
     With an ``assembly``, its tool-point ``h`` is predicted first and used in x and y (the
@@ -156,13 +164,23 @@ def stability_lobes_answer(request: Mapping[str, Any], *, store: MeasurementSour
     drawn: zero-order, every draw's lobes are computed (:mod:`rcsa.analysis.lobes.robust`);
     semi-discretization, the reduced model of the draws gives every draw's limit
     (:mod:`rcsa.analysis.lobes.robust_sdm`). A zero-order diagram on an FRF grid too coarse for
-    it gets a note (:func:`~rcsa.analysis.lobes.zoa.frf_grid_notes`).
+    it gets a note (:func:`~rcsa.analysis.lobes.zoa.frf_grid_notes`). With ``within`` (the
+    service's limits of an answer given at once), ``"auto"`` answers zero-order lobes, marked
+    unresolved, where the resolved semi-discretization would exceed them
+    (:func:`rcsa.app.budget.auto_lobes_fallback`).
 
     Returns
     -------
     LobesAnswer
     """
-    parsed, robust = _parse_lobes(request)
+    parsed, robust, fallback = _parse_lobes(request, within)
+    if fallback is not None:
+        return replace(_answer(parsed, robust, store, max_lines), method_reason=fallback, unchecked=True)
+    return _answer(parsed, robust, store, max_lines)
+
+
+def _answer(parsed: LobesRequest, robust: RobustRequest | None, store: MeasurementSource | None,
+            max_lines: int) -> LobesAnswer:
     zoa = parsed.method.name == "zoa"
     if parsed.assembly is None:  # inline FRFs or a modal table
         if parsed.frequency_hz is not None and parsed.frf_xx is not None:
@@ -223,7 +241,7 @@ def stability_lobes_result(request: Mapping[str, Any], *, store: MeasurementSour
 
 
 def stability_lobes(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
-                    max_lines: int = MAX_FREQUENCY_LINES) -> dict[str, Any]:
+                    max_lines: int = MAX_FREQUENCY_LINES, within: Limits | None = None) -> dict[str, Any]:
     """The contract's stability-lobes response (see :func:`stability_lobes_result`).
 
     Parameters
@@ -234,6 +252,8 @@ def stability_lobes(request: Mapping[str, Any], *, store: MeasurementSource | No
         Where a measured spindle of the assembly is looked up (the default store when omitted).
     max_lines : int
         Largest accepted number of frequency lines.
+    within : Limits, optional
+        The limits of the answer (:func:`stability_lobes_answer`).
 
     Returns
     -------
@@ -244,7 +264,7 @@ def stability_lobes(request: Mapping[str, Any], *, store: MeasurementSource | No
         ``uncertainty``, also ``depth_limit_robust_m`` and ``robust``
         (:class:`rcsa.analysis.lobes.robust.RobustLobes`).
     """
-    return stability_lobes_answer(request, store=store, max_lines=max_lines).to_dict()
+    return stability_lobes_answer(request, store=store, max_lines=max_lines, within=within).to_dict()
 
 
 def effects(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
@@ -328,7 +348,9 @@ def run_analysis(kind: str, request: Mapping[str, Any], *, store: MeasurementSou
     if kind == "prediction":
         return predict(request, store=store, max_lines=max_lines).to_dict()
     if kind == "lobes":
-        return stability_lobes(request, store=store, max_lines=max_lines)
+        from rcsa.app.budget import JOB
+
+        return stability_lobes(request, store=store, max_lines=max_lines, within=JOB)
     if kind == "effects":
         return effects(request, store=store)
     if kind == "identification":

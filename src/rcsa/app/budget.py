@@ -55,6 +55,7 @@ __all__ = [
     "Limits",
     "Mode",
     "SdmCostModel",
+    "auto_lobes_fallback",
     "body_limit",
     "check",
     "check_work",
@@ -243,11 +244,59 @@ def check(operation: str, request: Mapping[str, Any], *, mode: Mode = "sync",
     ------
     BudgetExceeded
     """
-    cost = estimate(operation, request)
     lim = limits if limits is not None else (SYNC if mode == "sync" else JOB)
-    if cost.seconds > lim.seconds or cost.memory_bytes > lim.memory_bytes:
+    cost = estimate(operation, request)
+    if operation == "lobes" and not _within(cost, lim) and auto_lobes_fallback(request, lim) is not None:
+        cost = estimate(operation, {**request, "method": "zoa"})  # what "auto" will run within them
+    if not _within(cost, lim):
         raise BudgetExceeded(cost, lim, mode)
     return cost
+
+
+def _within(cost: Cost, limits: Limits) -> bool:
+    return cost.seconds <= limits.seconds and cost.memory_bytes <= limits.memory_bytes
+
+
+def auto_lobes_fallback(request: Mapping[str, Any], limits: Limits) -> str | None:
+    """Why ``"method": "auto"`` answers zero-order lobes within ``limits`` (None: it does not).
+
+    ``auto`` picks the resolved semi-discretization wherever zero-order averaging is not exact
+    (:func:`rcsa.analysis.lobes.options.auto_method`). Where that costs more than ``limits`` (a
+    synchronous answer's, :data:`SYNC`) and the zero-order lobes do not, the answer is zero-order,
+    says so, and marks every speed unresolved: a caller who needs resolved limits sends the
+    request as a job (``Prefer: respond-async``) or with fewer speeds. A request that names its
+    method is never changed.
+
+    Parameters
+    ----------
+    request : mapping
+        A stability-lobes request.
+    limits : Limits
+
+    Returns
+    -------
+    str or None
+    """
+    if request.get("method", "auto") != "auto":
+        return None
+    try:
+        from rcsa.analysis.lobes.options import auto_method, teeth_in_cut
+
+        teeth, immersion = int(request.get("teeth", 1)), float(request.get("radial_immersion", 1.0))
+        if auto_method(teeth, immersion)[0] != "semi_discretization":
+            return None
+        sdm = estimate("lobes", {**request, "method": "semi_discretization"})
+        zoa = estimate("lobes", {**request, "method": "zoa"})
+    except (InputError, TypeError, ValueError, ArithmeticError):
+        return None  # the parser says why
+    if _within(sdm, limits) or not _within(zoa, limits):
+        return None
+    return (f"auto: the resolved semi-discretization of these {sdm.terms.get('speeds', 0):.0f} speeds is estimated "
+            f"at {sdm.seconds:.0f} s and {sdm.memory_bytes / GiB:.1f} GiB, beyond the {limits.seconds:g} s and "
+            f"{limits.memory_bytes / GiB:g} GiB of an answer given at once: zero-order limits instead, not checked "
+            f"against it, every speed marked unresolved (with {teeth_in_cut(teeth, immersion):.2f} teeth in the cut "
+            "zero-order limits may lie tens of percent from the resolved ones at single speeds: README 'Which "
+            "method'); for resolved limits send the request as a job (Prefer: respond-async) or with fewer speeds")
 
 
 def time_limited(seconds: float | None) -> Any:
@@ -542,6 +591,11 @@ def _modal_extent(request: Mapping[str, Any], modes_cap: int) -> tuple[float, fl
         return (max(freqs) if freqs else 1.0), float(min(count, modes_cap))
     frf = request.get("frf_x")
     if isinstance(frf, Mapping):
+        peaks = [_frf_peaks_hz(frf, modes_cap)] + ([_frf_peaks_hz(request["frf_y"], modes_cap)]
+                                                   if isinstance(request.get("frf_y"), Mapping) else [])
+        if all(p is not None for p in peaks):
+            found = [p for p in peaks if p]
+            return (max(max(p) for p in found) if found else 1.0), float(max((len(p) for p in found), default=1))
         f = frf.get("frequency_hz")
         top = max((float(v) for v in f if isinstance(v, int | float)), default=1.0) if isinstance(f, list) else 1.0
         return top, float(modes_cap)
@@ -559,6 +613,25 @@ def _modal_extent(request: Mapping[str, Any], modes_cap: int) -> tuple[float, fl
             return top, float(min(max(count, 1), modes_cap))
         return top, float(modes_cap)
     return 1.0, float(modes_cap)
+
+
+def _frf_peaks_hz(frf: Mapping[str, Any], modes_cap: int) -> list[float] | None:
+    """The peaks an inline FRF's modal fit will keep (None where the FRF cannot be read: the
+    estimate then assumes the most modes up to the highest line, and the parser says why)."""
+    import numpy as np
+
+    from rcsa.analysis.lobes.modal_model import kept_peaks_hz
+
+    try:
+        h = frf["h"]
+        f = np.asarray(frf["frequency_hz"], dtype=float)
+        values = np.asarray(h["real"], dtype=float) + 1j * np.asarray(h["imag"], dtype=float)
+        if f.ndim != 1 or f.shape != values.shape or f.size < 3 or not np.all(np.isfinite(f)) \
+                or not np.all(np.isfinite(values)) or not np.all(np.diff(f) > 0):
+            return None
+        return kept_peaks_hz(f, values, modes_cap)
+    except (KeyError, TypeError, ValueError, OverflowError, MemoryError):
+        return None
 
 
 def sdm_terms(request: Mapping[str, Any]) -> SdmTerms:

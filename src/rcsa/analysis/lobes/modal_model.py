@@ -59,6 +59,7 @@ __all__ = [
     "DEFAULT_MODES_PER_DIRECTION",
     "MAX_MODES_PER_DIRECTION",
     "MIN_PEAK_FRACTION",
+    "kept_peaks_hz",
     "ModalModel",
     "fit_modal_model",
     "modal_model_from_assembly",
@@ -252,6 +253,27 @@ def _select_peaks(f: np.ndarray, h: np.ndarray, max_modes: int) -> tuple[list[fl
     keep = [p for p in ranked if p["magnitude_m_n"] >= MIN_PEAK_FRACTION * top][:max_modes]
     left = [(p["frequency_hz"], p["magnitude_m_n"] / top) for p in ranked if p not in keep]
     return sorted(p["frequency_hz"] for p in keep), sorted(left)
+
+
+def kept_peaks_hz(frequency_hz: np.ndarray, h: np.ndarray, modes_per_direction: int) -> list[float]:
+    """The FRF peaks a fit keeps, Hz, ascending: the largest ``modes_per_direction`` of ``|h|`` at
+    or above ``MIN_PEAK_FRACTION`` of the largest (what :func:`fit_modal_model` fits; found without
+    fitting, for a cost estimate).
+
+    Parameters
+    ----------
+    frequency_hz : numpy.ndarray, shape (nfreq,)
+        Grid, Hz.
+    h : numpy.ndarray, shape (nfreq,), complex
+        Direct receptance, m/N.
+    modes_per_direction : int
+        At most this many peaks.
+
+    Returns
+    -------
+    list of float
+    """
+    return _select_peaks(np.asarray(frequency_hz, dtype=float), np.asarray(h), modes_per_direction)[0]
 
 
 def _start(f: np.ndarray, h: np.ndarray, peak_hz: float) -> tuple[float, float]:
