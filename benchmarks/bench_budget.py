@@ -10,8 +10,8 @@ the estimate against the CPU time and the peak RSS measured. The stated bound
 Results go to ``benchmarks/results/budget.json``. ``--scale 0.1`` runs a tenth of the limit.
 
 ``--fit-sdm`` fits the semi-discretization's cost model instead (:data:`rcsa.app.budget.SDM_COST`):
-it runs SDM lobes of RA-1 over a grid of speeds, ``steps_per_period`` and
-``modes_per_direction``, each in a fresh process (CPU seconds and peak RSS), fits the
+it runs SDM lobes of RA-1 with the default steps over a grid of speeds, cuts (teeth, immersion,
+lowest speed) and ``modes_per_direction``, each in a fresh process (CPU seconds and peak RSS), fits the
 constants by non-negative least squares (on relative errors), prints the estimate against
 the measurement for every point and the ``SDM_COST = ...`` line to paste into
 ``src/rcsa/app/budget.py``, and writes ``benchmarks/results/budget_sdm.json``.
@@ -35,31 +35,36 @@ from tests.service.budget_cases import worst_cases  # noqa: E402
 
 from rcsa.app import budget  # noqa: E402
 
-#: (speeds, steps_per_period, modes_per_direction, radial immersion) of the SDM fit.
-SDM_GRID = [(s, k, m, ae) for s, k, m, ae in (
-    (20, 10, 1, 0.5), (20, 40, 1, 0.5), (20, 80, 1, 0.5), (20, 40, 3, 0.5), (20, 80, 3, 0.5), (20, 40, 6, 0.5),
-    (20, 120, 2, 0.5), (80, 40, 3, 0.5), (200, 40, 3, 0.5), (200, 20, 1, 0.5), (400, 40, 3, 0.5),
-    (20, 40, 3, 0.05), (20, 160, 3, 0.05), (80, 200, 2, 0.05), (20, 40, 8, 1.0),
-    (1000, 40, 3, 0.5), (300, 200, 3, 0.5), (1000, 200, 3, 0.5))]
+#: (speeds, teeth, radial immersion, modes_per_direction, low speed) of the SDM fit: the default
+#: (automatic) steps, RA-1's tool point.
+SDM_GRID = [
+    (20, 2, 0.05, 2, 2000), (100, 2, 0.05, 2, 2000), (300, 2, 0.05, 4, 2000), (60, 1, 0.05, 8, 1000),
+    (40, 1, 0.3, 4, 3000), (100, 2, 0.2, 3, 4000), (30, 4, 0.5, 2, 5000), (60, 4, 0.5, 4, 3000),
+    (200, 3, 0.1, 4, 6000), (20, 1, 0.05, 1, 3000), (500, 2, 0.05, 8, 2000), (80, 2, 0.5, 8, 8000),
+]
 
 
-def _sdm_request(speeds: int, steps: int, modes: int, immersion: float) -> dict:
+def _sdm_request(speeds: int, teeth: int, immersion: float, modes: int, low_rpm: float) -> dict:
     from rcsa.reference import ra1
 
-    return {"assembly": ra1({"start_hz": 100.0, "stop_hz": 5000.0, "step_hz": 5.0}), "teeth": 4,
+    return {"assembly": ra1({"start_hz": 100.0, "stop_hz": 5000.0, "step_hz": 5.0}), "teeth": teeth,
             "tangential_coefficient_n_m2": 6e8, "radial_ratio": 0.3, "radial_immersion": immersion,
-            "milling": "down", "method": "semi_discretization", "steps_per_period": steps,
-            "modes_per_direction": modes, "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": speeds}}
+            "milling": "down", "method": "semi_discretization", "modes_per_direction": modes,
+            "spindle_speed_rpm": {"start": low_rpm, "stop": 30000, "count": speeds}}
+
+
+def _label(point: tuple) -> str:
+    speeds, teeth, immersion, modes, low = point
+    return f"sdm {speeds} speeds {low:g}-30000 rpm N={teeth} ae/D={immersion} m<={modes}"
 
 
 def _measure_sdm() -> list[dict]:
     """Each grid point in its own fresh process (its peak RSS is its own); warm-up first."""
     rows = []
-    warm = _sdm_request(3, 10, 1, 0.5)
+    warm = _sdm_request(3, 2, 0.5, 1, 20000)
     base = None
-    for speeds, steps, modes, immersion in SDM_GRID:
-        job = [{"label": f"sdm {speeds} speeds k={steps} m={modes} ae/D={immersion}", "operation": "lobes",
-                "request": _sdm_request(speeds, steps, modes, immersion), "warmup": warm}]
+    for point in SDM_GRID:
+        job = [{"label": _label(point), "operation": "lobes", "request": _sdm_request(*point), "warmup": warm}]
         out = subprocess.run([sys.executable, "-m", "tests.service._budget_probe"], input=json.dumps(job),
                              capture_output=True, text=True, cwd=REPO, check=True)
         row = json.loads(out.stdout.splitlines()[-1])
@@ -68,11 +73,17 @@ def _measure_sdm() -> list[dict]:
                                    input=json.dumps([{**job[0], "request": warm}]), capture_output=True, text=True,
                                    cwd=REPO, check=True)
             base = json.loads(empty.stdout.splitlines()[-1])["peak_rss_bytes"]
-        row.update(speeds=speeds, steps=steps, modes=modes, immersion=immersion, base_rss_bytes=base)
+        row.update(point=list(point), base_rss_bytes=base)
         rows.append(row)
-        print(f"  {row['label']:42s} CPU {row['cpu_seconds']:7.2f} s  peak RSS {row['peak_rss_bytes'] / 2**20:6.0f} MiB",
+        print(f"  {row['label']:58s} CPU {row['cpu_seconds']:7.2f} s  peak RSS {row['peak_rss_bytes'] / 2**20:6.0f} MiB",
               flush=True)
     return rows
+
+
+def _terms(row: dict) -> tuple[dict, budget.SdmTerms, float]:
+    req = _sdm_request(*row["point"])
+    zoa = budget.estimate("lobes", {**req, "method": "zoa", "modes_per_direction": None}).seconds  # the prediction
+    return req, budget.sdm_terms(req), zoa
 
 
 def _fit_sdm(rows: list[dict]) -> budget.SdmCostModel:
@@ -80,33 +91,28 @@ def _fit_sdm(rows: list[dict]) -> budget.SdmCostModel:
     import numpy as np
     from scipy.optimize import nnls
 
-    chunk = budget.SDM_COST.chunk
+    evals = budget.SDM_COST.evaluations
     feats, mem_feats, cpu, mem = [], [], [], []
     for r in rows:
-        req = _sdm_request(r["speeds"], r["steps"], r["modes"], r["immersion"])
-        steps, modes, fraction = budget.sdm_terms(req)
-        n, k_cut, d = budget.SDM_COST.sizes(steps, modes, fraction)
-        zoa = budget.estimate("lobes", {**req, "method": "zoa", "steps_per_period": None,
-                                        "modes_per_direction": None}).seconds  # the assembly's prediction
-        s = r["speeds"]
-        feats.append([steps, s * steps * n, s * k_cut, s * k_cut * n, s * d**3])
+        _, t, zoa = _terms(r)
+        n = t.states
+        feats.append([evals * t.step_sum * n * n, evals * t.step_sum * n**3, t.step_max])
         cpu.append(max(r["cpu_seconds"] - zoa, 1e-3))
-        c = min(s, chunk)
-        mem_feats.append([c * steps * n, c * k_cut * n, c * d * d, s * steps * n])
+        mem_feats.append([t.speeds * t.step_max * n * (n + 8.0), t.speeds])
         mem.append(r["peak_rss_bytes"] - r["base_rss_bytes"])
-    a, t = np.array(feats), np.array(cpu)
-    x, _ = nnls(a / t[:, None], np.ones_like(t))  # relative errors
-    x = x / np.min(a @ x / t)  # no calibration point above its estimate
-    # memory: the points above 16 MiB beyond the base (smaller peaks are within the RSS's noise and
-    # would set the scale of every term); none of those above its estimate
+    a, c = np.array(feats), np.array(cpu)
+    x, _ = nnls(a / c[:, None], np.ones_like(c))  # relative errors
+    x = x / np.min(a @ x / c)  # no calibration point above its estimate
     am, m = np.array(mem_feats), np.array(mem)
-    big = m >= 16 * 2**20
-    y, _ = nnls(am[big] / m[big, None], np.ones(int(big.sum())))
-    y = y / np.min(am[big] @ y / m[big])
-    return budget.SdmCostModel(per_step_s=float(x[0]), per_state_s=float(x[1]), per_cut_s=float(x[2]),
-                               per_cut_state_s=float(x[3]), per_eig_s=float(x[4]), mem_state_bytes=float(y[0]),
-                               mem_cut_bytes=float(y[1]), mem_map_bytes=float(y[2]), mem_speed_bytes=float(y[3]),
-                               chunk=chunk)
+    big = m >= 16 * 2**20  # smaller peaks are within the RSS's noise
+    if big.sum() >= 2:
+        y, _ = nnls(am[big] / m[big, None], np.ones(int(big.sum())))
+        y = y / np.min(am[big] @ y / m[big])
+    else:
+        y = np.array([budget.SDM_COST.mem_pair_step_bytes, budget.SDM_COST.mem_speed_bytes])
+    return budget.SdmCostModel(evaluations=evals, per_square_s=float(x[0]), per_cube_s=float(x[1]),
+                               rounds=1.0, per_round_step_s=float(x[2]), mem_pair_step_bytes=float(y[0]),
+                               mem_speed_bytes=float(y[1]), chunk_bytes=budget.SDM_COST.chunk_bytes)
 
 
 def sdm(fit: bool, out_path: Path, reuse: bool = False) -> None:
@@ -121,22 +127,21 @@ def sdm(fit: bool, out_path: Path, reuse: bool = False) -> None:
         rows = _measure_sdm()
     model = _fit_sdm(rows) if fit else budget.SDM_COST
     if fit:
-        fields = ", ".join(f"{k}={v:.2g}" for k, v in model.__dict__.items() if k != "chunk")
+        fields = ", ".join(f"{k}={v:.2g}" for k, v in model.__dict__.items() if k != "chunk_bytes")
         print(f"SDM_COST = SdmCostModel({fields})")
     worst_t, worst_m = 0.0, 0.0
     for r in rows:
-        req = _sdm_request(r["speeds"], r["steps"], r["modes"], r["immersion"])
-        steps, modes, fraction = budget.sdm_terms(req)
-        est = budget.estimate("lobes", req).seconds - budget.SDM_COST.seconds(r["speeds"], steps, modes, fraction) \
-            + model.seconds(r["speeds"], steps, modes, fraction)
-        est_m = model.memory_bytes(r["speeds"], steps, modes, fraction) + r["base_rss_bytes"]
+        req, t, _ = _terms(r)
+        est = budget.estimate("lobes", req).seconds - budget.SDM_COST.seconds(t) + model.seconds(t)
+        est_m = model.memory_bytes(t) + r["base_rss_bytes"]
         rt, rm = est / r["cpu_seconds"], est_m / r["peak_rss_bytes"]
         worst_t, worst_m = max(worst_t, rt, 1 / rt), max(worst_m, rm, 1 / rm)
         r.update(estimated_seconds=est, estimated_peak_bytes=est_m)
-        print(f"  {r['label']:42s} estimate/measured: CPU {rt:5.2f}  peak RSS {rm:5.2f}")
+        print(f"  {r['label']:58s} estimate/measured: CPU {rt:5.2f}  peak RSS {rm:5.2f}")
     print(f"worst factor between estimate and measurement: CPU {worst_t:.2f}, peak RSS {worst_m:.2f}")
     out_path.parent.mkdir(parents=True, exist_ok=True)
-    out_path.write_text(json.dumps({"load_average": list(load), "model": model.__dict__, "rows": rows,
+    out_path.write_text(json.dumps({"load_average": list(load), "load_average_end": list(os.getloadavg()),
+                                    "model": model.__dict__, "rows": rows,
                                     "worst_factor": {"cpu": worst_t, "rss": worst_m}}, indent=1) + "\n")
 
 

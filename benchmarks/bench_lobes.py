@@ -1,26 +1,24 @@
-"""Stability lobes: semi-discretization (SDM) time for a web-page request, beside baselines.
+"""Stability lobes: the resolved semi-discretization a request with only the cut gets, timed (issue 29).
 
-Typical request: RA-1's tool point as 2 modes in x and 2 in y (its two most flexible modes,
-fitted to the predicted FRF), 4 teeth, half-immersion down-milling, 500 speeds
-2 000–30 000 rpm, 40 steps per tooth period. Printed:
+The yardstick of issue 29: RA-1's tool point (its exact modes, every one above the peak
+threshold: 4 a direction), 2 teeth, a/D = 0.05 down milling, 500 speeds 2 000–30 000 rpm, the
+default steps (resolving the cut, every speed checked at a second resolution, refined where they
+differ), against a warm ``rcsa.predict`` of RA-1 at 10 000 lines in the same process (its spindle
+side kept, as a user's second call; target ≤ 25×). Printed beside it:
 
-* SDM, vectorised over speeds (this library), median of ``--repeat`` runs;
-* a straightforward per-speed SDM (a Python loop over speeds: the period map built step by
-  step with ``scipy.linalg.expm`` of the augmented step matrix and the full delay chain,
-  dense eigenvalues, the same scan-and-bisect depth search), timed on every
-  ``--baseline-every``-th speed and scaled to 500 (its depths are checked against the SDM's);
-* ZOA (Altintas–Budak) on the predicted FRF for the same speeds;
-* the SDM with the default 3 modes per direction, at low immersion (a/D = 0.05, 2 teeth),
-  and end to end through the application layer (prediction + exact modes + SDM);
-* the issue-22.4 yardstick: the SDM time over ``rcsa.predict`` of RA-1 at 10 000 lines in the
-  same process (target ≤ 25×; in wall and in CPU time — on a loaded machine the CPU ratio is the
-  steadier figure), and the limits against those the replaced per-speed search gave
-  on the same three 500-speed cuts (``tests/data/lobes/sdm_reference.json``; target: within
-  0.5 %).
+* a straightforward per-speed loop of the same cut-window maps (``scipy.linalg.expm`` of the
+  augmented step matrix per step, the full chain of delayed samples, dense eigenvalues, a
+  scan-and-bisect search), timed on every ``--baseline-every``-th speed with each speed's final
+  steps and scaled to 500 (its depths are checked against the vectorised ones);
+* the last release's default for the same cut (40 steps over the period): faster, and wrong
+  where it is not resolved;
+* the request end to end through the application layer (prediction + exact modes + lobes);
+* the replaced solver's three 500-speed cuts (``tests/data/lobes/sdm_reference.json``) with its
+  40 steps over the period: the limits within 0.5 %.
 
 BLAS runs single-threaded here (``OPENBLAS_NUM_THREADS=1`` unless set): on this shared 2-core
-VM, threaded OpenBLAS makes the baseline's small 88 × 88 products ~100× slower, which would
-flatter the ratio; the vectorised SDM is unaffected (±5 %).
+VM, threaded OpenBLAS makes the baseline's small products far slower, which would flatter the
+ratio. Results: ``benchmarks/results/lobes.json``.
 
 Run: ``.venv/bin/python benchmarks/bench_lobes.py [--repeat 3] [--baseline-every 25]``
 """
@@ -43,14 +41,16 @@ from scipy.linalg import expm  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from benchmarks import record  # noqa: E402
+
 import rcsa  # noqa: E402
-from rcsa.analysis.lobes.modal_model import ModalModel, fit_modal_model  # noqa: E402
-from rcsa.analysis.lobes.semi_discretization import semi_discretization_lobes  # noqa: E402
+from rcsa.analysis.lobes.modal_model import ModalModel, modal_model_from_assembly  # noqa: E402
+from rcsa.analysis.lobes.semi_discretization import resolving_steps, semi_discretization_lobes  # noqa: E402
 from rcsa.analysis.lobes.zoa import (  # noqa: E402
     directional_factors,
     engagement_angles_rad,
-    stability_lobes,
 )
+from rcsa.model.contract import parse_assembly  # noqa: E402
 from rcsa.reference import ra1  # noqa: E402
 
 GRID = {"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 5.0}
@@ -73,25 +73,27 @@ def _timed(fn, repeat: int, cpu: list | None = None):
     return statistics.median(times), out
 
 
-def _loop_rho(model: ModalModel, rpm: float, depth: float) -> float:
-    """Spectral radius of the SDM map built the straightforward way (one speed, one depth)."""
-    teeth, kt, kr = CUT["teeth"], CUT["tangential_coefficient_n_m2"], CUT["radial_ratio"]
-    st, ex = engagement_angles_rad(CUT["radial_immersion"], CUT["milling"])
+def _window_rho(model: ModalModel, teeth: int, immersion: float, rpm: float, depth: float, steps: int) -> float:
+    """Spectral radius of the cut-window map built the straightforward way: ``scipy.linalg.expm`` of the
+    augmented step matrix per cutting step, one ``expm`` for the free flight, the full chain of the
+    window's delayed samples, dense eigenvalues (one speed, one depth)."""
+    kt, kr = CUT["tangential_coefficient_n_m2"], CUT["radial_ratio"]
+    st, ex = engagement_angles_rad(immersion, "down")
     w = 2 * np.pi * model.frequency_hz
     d = w.size
     c = np.zeros((2, d))
     c[model.direction, np.arange(d)] = np.sqrt(model.residue_1_kg)
-    dphi, h = 2 * np.pi / (teeth * STEPS), 60.0 / (rpm * teeth) / STEPS
-    size = 2 * d + 2 * STEPS
+    period = 60.0 / (rpm * teeth)
+    cut = teeth * (ex - st) / (2 * np.pi) * period
+    dphi, h = (ex - st) / steps, cut / steps
+    nodes = steps + 1
+    size = 2 * d + 2 * nodes  # [q; q̇; r_0 … r_K of the previous window]
     phi = np.eye(size)
-    for i in range(STEPS):
-        force = np.zeros((2, 2))
-        for j in range(teeth):
-            lo = min(max(i * dphi + j * 2 * np.pi / teeth, st), ex)
-            hi = min(max((i + 1) * dphi + j * 2 * np.pi / teeth, st), ex)
-            if hi > lo:
-                force += -0.5 * directional_factors(lo, hi, kr) / dphi
-        kf = depth * kt * force
+    state = np.eye(size)[: 2 * d]  # the state as a function of the start of the window
+    rows = []
+    for i in range(steps):
+        rows.append(c @ state[:d])
+        kf = depth * kt * (-0.5 * directional_factors(st + i * dphi, st + (i + 1) * dphi, kr) / dphi)
         aug = np.zeros((2 * d + 4, 2 * d + 4))
         aug[:d, d : 2 * d] = np.eye(d)
         aug[d : 2 * d, :d] = -np.diag(w**2) - c.T @ kf @ c
@@ -99,24 +101,29 @@ def _loop_rho(model: ModalModel, rpm: float, depth: float) -> float:
         aug[d : 2 * d, 2 * d : 2 * d + 2] = c.T @ kf
         aug[2 * d : 2 * d + 2, 2 * d + 2 :] = np.eye(2) / h
         e = expm(aug * h)
-        step = np.zeros((size, size))
-        step[: 2 * d, : 2 * d] = e[: 2 * d, : 2 * d]
-        step[: 2 * d, size - 2 :] += e[: 2 * d, 2 * d : 2 * d + 2] - e[: 2 * d, 2 * d + 2 :]
-        step[: 2 * d, size - 4 : size - 2] += e[: 2 * d, 2 * d + 2 :]
-        step[2 * d : 2 * d + 2, :d] = c
-        step[2 * d + 2 :, 2 * d : size - 2] = np.eye(2 * STEPS - 2)
-        phi = step @ phi
+        delayed = np.zeros((4, size))
+        delayed[:, 2 * d + 2 * i : 2 * d + 2 * i + 4] = np.eye(4)
+        state = e[: 2 * d, : 2 * d] @ state + np.hstack([e[: 2 * d, 2 * d : 2 * d + 2] - e[: 2 * d, 2 * d + 2 :],
+                                                        e[: 2 * d, 2 * d + 2 :]]) @ delayed
+    rows.append(c @ state[:d])
+    free = np.zeros((2 * d, 2 * d))
+    free[:d, d:] = np.eye(d)
+    free[d:, :d] = -np.diag(w**2)
+    free[d:, d:] = -np.diag(2 * model.damping_ratio * w)
+    phi[: 2 * d] = expm(free * (period - cut)) @ state
+    phi[2 * d :] = np.vstack(rows)
     return float(np.max(np.abs(np.linalg.eigvals(phi))))
 
 
-def _loop_depth(model: ModalModel, rpm: float, start_m: float, rtol: float = 1e-3) -> float:
+def _window_depth(model: ModalModel, teeth: int, immersion: float, rpm: float, steps: int, start_m: float,
+                  rtol: float = 1e-3) -> float:
     """Scan upward by 1.6× from ``start_m``, then bisect the first crossing of |μ| = 1."""
     lo, hi = 0.0, start_m
-    while _loop_rho(model, rpm, hi) < 1.0:
+    while _window_rho(model, teeth, immersion, rpm, hi, steps) < 1.0:
         lo, hi = hi, 1.6 * hi
     while hi - lo > rtol * hi:
         mid = 0.5 * (lo + hi)
-        lo, hi = (lo, mid) if _loop_rho(model, rpm, mid) >= 1.0 else (mid, hi)
+        lo, hi = (lo, mid) if _window_rho(model, teeth, immersion, rpm, mid, steps) >= 1.0 else (mid, hi)
     return lo
 
 
@@ -125,58 +132,60 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--baseline-every", type=int, default=25)
     args = parser.parse_args()
+    load = record.load_average()
+    spec = parse_assembly(ra1(GRID))
     prediction = rcsa.predict(ra1(GRID))
     f, h = prediction.frequency_hz, prediction.tool_point.h
-    typical = fit_modal_model(f, h, modes_per_direction=2)
-    default = fit_modal_model(f, h, modes_per_direction=3)
-    print(f"stability lobes, RA-1 tool point, {SPEEDS.size} speeds 2 000–30 000 rpm, 4 teeth, a/D = 0.5 "
-          f"down, k = {STEPS}  (load average {os.getloadavg()[0]:.1f})")
+    exact = modal_model_from_assembly(spec, frequency_hz=f, h=h)  # every mode above the threshold
+    low = {"teeth": 2, "radial_immersion": 0.05}
+    print(f"resolved stability lobes, RA-1's tool point ({exact.n_modes // 2} modes a direction), "
+          f"{SPEEDS.size} speeds 2 000–30 000 rpm, 2 teeth, a/D = 0.05 down (load average {load[0]:.1f})")
 
-    def sdm(model: ModalModel, **cut):
-        return semi_discretization_lobes(model, **{**CUT, **cut}, spindle_speed_rpm=SPEEDS,
-                                         steps_per_period=STEPS)
+    def resolved():
+        return semi_discretization_lobes(exact, **{**CUT, **low}, spindle_speed_rpm=SPEEDS)
 
-    cpu_sdm: list[float] = []
-    t_sdm, result = _timed(lambda: sdm(typical), args.repeat, cpu_sdm)
-    print(f"  SDM, 4 modes (2 in x, 2 in y), vectorised   {t_sdm:8.2f} s")
+    cpu: list[float] = []
+    t_sdm, result = _timed(resolved, args.repeat, cpu)
+    refined = int(np.count_nonzero(result.steps > resolving_steps(exact, 2, SPEEDS, radial_immersion=0.05)))
+    print(f"  resolved semi-discretization (default steps, checked, refined)  {t_sdm:8.2f} s   "
+          f"{int(result.resolved.sum())}/{SPEEDS.size} resolved, {refined} refined, steps "
+          f"{int(result.steps.min())}–{int(result.steps.max())}")
     sub = np.arange(0, SPEEDS.size, args.baseline_every)
-    start = result.depth_search_max_m / 64.0 / 4.0  # the SDM's own scan start, b_ref/4
     t0 = time.perf_counter()
-    loop = np.array([_loop_depth(typical, SPEEDS[i], start) for i in sub])
+    loop = np.array([_window_depth(exact, 2, 0.05, SPEEDS[i], int(result.steps[i]),
+                                   0.5 * float(np.nanmin(result.depth_limit_m))) for i in sub])
     t_loop = (time.perf_counter() - t0) * SPEEDS.size / sub.size
-    agree = np.max(np.abs(loop / result.depth_limit_m[sub] - 1))
-    print(f"  per-speed loop SDM (baseline, {sub.size} speeds × {SPEEDS.size / sub.size:g})"
-          f" {t_loop:8.1f} s   ratio {t_loop / t_sdm:6.0f}x   depths agree to {agree:.1e}")
-    t_zoa, _ = _timed(lambda: stability_lobes(f, h, **CUT, spindle_speed_rpm=SPEEDS), args.repeat)
-    print(f"  ZOA on the predicted FRF                     {t_zoa * 1e3:8.1f} ms")
-    t_def, _ = _timed(lambda: sdm(default), args.repeat)
-    print(f"  SDM, default 3 modes per direction (6 modes) {t_def:8.2f} s")
-    t_low, low = _timed(lambda: sdm(typical, teeth=2, radial_immersion=0.05), args.repeat)
-    print(f"  SDM, 4 modes, a/D = 0.05, 2 teeth            {t_low:8.2f} s   "
-          f"({int(np.sum(low.instability == 'flip'))} speeds flip-limited)")
-    request = {"assembly": ra1(GRID), **CUT, "method": "semi_discretization",
-               "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 500}}
-    t_app, _ = _timed(lambda: rcsa.stability_lobes(request), args.repeat)
-    print(f"  end to end (predict + exact modes + SDM, 3 per direction) {t_app:6.2f} s")
+    agree = float(np.nanmax(np.abs(loop / result.depth_limit_m[sub] - 1)))
+    print(f"  per-speed loop of the same maps (baseline, {sub.size} speeds × {SPEEDS.size / sub.size:g})"
+          f" {t_loop:8.1f} s   ratio {t_loop / t_sdm:6.1f}x   depths agree to {agree:.1e}")
+    t_old, _ = _timed(lambda: semi_discretization_lobes(exact, **{**CUT, **low}, spindle_speed_rpm=SPEEDS,
+                                                        steps_per_period=STEPS), args.repeat)
+    print(f"  the last release's default: 40 steps over the period, checked, not refined  {t_old:8.2f} s")
     big = ra1({"start_hz": 1.0, "stop_hz": 10000.0, "step_hz": 1.0})
-    from rcsa.app import predictions
-
     warm: list[float] = []
+    rcsa.predict(big)
     t_warm, _ = _timed(lambda: rcsa.predict(big), 5 * args.repeat, warm)
-    kept, predictions.SIDES.size = predictions.SIDES.size, 0  # cold, as bench_engine.py and the issue time it
-    cpu_pred: list[float] = []
-    t_pred, _ = _timed(lambda: rcsa.predict(big), 5 * args.repeat, cpu_pred)
-    predictions.SIDES.size = kept
-    print(f"  rcsa.predict of RA-1, 10 000 lines, cold       {t_pred * 1e3:8.1f} ms   SDM (4 modes) / prediction "
-          f"{t_sdm / t_pred:5.1f}x  (target <= 25x)")
-    print(f"    (warm, the spindle side kept from the call before: {t_warm * 1e3:.1f} ms, ratio {t_sdm / t_warm:.1f}x)")
-    print(f"  the same in CPU time: SDM {cpu_sdm[0]:.2f} s, prediction {cpu_pred[0] * 1e3:.1f} ms, "
-          f"ratio {cpu_sdm[0] / cpu_pred[0]:5.1f}x  (load average {os.getloadavg()[0]:.1f})")
-    _against_reference()
+    print(f"  rcsa.predict of RA-1, 10 000 lines, warm (spindle side kept)  {t_warm * 1e3:8.1f} ms   "
+          f"resolved lobes / prediction {t_sdm / t_warm:7.1f}x  (target <= 25x)")
+    print(f"  in CPU time: lobes {cpu[0]:.2f} s, prediction {warm[0] * 1e3:.1f} ms, ratio {cpu[0] / warm[0]:7.1f}x")
+    request = {"assembly": ra1(GRID), **CUT, **low, "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 500}}
+    t_app, _ = _timed(lambda: rcsa.stability_lobes(request), args.repeat)
+    print(f"  end to end, a request with only the cut (auto: predict + exact modes + resolved SDM) {t_app:6.2f} s")
+    figures = {"speeds": int(SPEEDS.size), "modes_per_direction": exact.n_modes // 2, "resolved_s": t_sdm,
+               "resolved_cpu_s": cpu[0], "resolved_speeds": int(result.resolved.sum()), "refined_speeds": refined,
+               "steps_min": int(result.steps.min()), "steps_max": int(result.steps.max()),
+               "baseline_loop_s": t_loop, "baseline_ratio": t_loop / t_sdm, "baseline_agreement": agree,
+               "old_default_k40_s": t_old, "warm_prediction_s": t_warm, "warm_prediction_cpu_s": warm[0],
+               "ratio_to_warm_prediction": t_sdm / t_warm, "cpu_ratio_to_warm_prediction": cpu[0] / warm[0],
+               "end_to_end_s": t_app}
+    figures["against_replaced_solver"] = _against_reference()
+    record.write("lobes", figures, load_start=load)
 
 
-def _against_reference() -> None:
-    """The three 500-speed cuts of tests/data/lobes/sdm_reference.json, solved again."""
+def _against_reference() -> list[dict]:
+    """The three 500-speed cuts of tests/data/lobes/sdm_reference.json, solved again with the replaced
+    solver's 40 steps over the period."""
+    out = []
     reference = json.loads((Path(__file__).resolve().parents[1] / "tests" / "data" / "lobes" /
                             "sdm_reference.json").read_text())
     for case in (c for c in reference["cases"] if c["benchmark_only"]):
@@ -185,13 +194,17 @@ def _against_reference() -> None:
         t0 = time.perf_counter()
         r = semi_discretization_lobes(model, **{k: case[k] for k in ("teeth", "tangential_coefficient_n_m2",
                                                                        "radial_ratio", "radial_immersion", "milling")},
-                                      spindle_speed_rpm=np.linspace(grid["start"], grid["stop"], grid["count"]))
+                                      spindle_speed_rpm=np.linspace(grid["start"], grid["stop"], grid["count"]),
+                                      steps_per_period=STEPS)
         elapsed = time.perf_counter() - t0
         old = np.array([np.nan if x is None else x for x in case["depth_limit_m"]])
         dev = np.nanmax(np.abs(r.depth_limit_m / old - 1))
         same_kind = np.mean(r.instability == np.array(case["instability"]))
         print(f"  vs the replaced solver, {case['name']:24s} {elapsed:6.2f} s   max |limit/old - 1| {dev:.1e}   "
               f"same kind at {same_kind:.0%} of speeds")
+        out.append({"case": case["name"], "seconds": elapsed, "max_deviation": float(dev),
+                    "same_kind": float(same_kind)})
+    return out
 
 
 if __name__ == "__main__":

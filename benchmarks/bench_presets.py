@@ -1,33 +1,38 @@
-"""Chatter-safe presets of a single-flute library, judged by dense semi-discretization (issue 20).
+"""Chatter-safe presets of tool libraries, judged by converged stability limits (issues 20 and 29).
 
-The library: ``tests/data/tool-libraries/fusion-single-flute`` (25 single-flute carbide flat
-end mills; see its SOURCE.md) on RA-1's spindle and joints, aluminium 7075, down milling,
-24 000 rpm machine, the default rule (±3 % window, safety factor 1.25, flute length cap).
-For a_e/D = 0.05 and 0.5 the library is recommended twice — ``method zoa`` (what the product
-did before issue 20) and ``method auto`` (the default now) — and every tool is judged:
+The libraries (``--library``): ``small`` — 25 single-flute O-flute carbide tools Ø1–6 mm, flute
+lengths 3–42 mm (``tests/data/tool-libraries/fusion-single-flute/single_flute_small_library.json``,
+the range of issue 29's vendor library), ``standard`` — 25 single-flute tools 2–12 mm
+(``single_flute_library.json``), ``multi`` — the multi-flute sample (``fusion-synthetic``), each on
+RA-1's spindle and joints, aluminium 7075, down milling, 24 000 rpm machine, the default rule (±3 %
+window, safety factor 1.25, flute length cap). For each a_e/D the library is recommended twice —
+``method zoa`` (for comparison) and ``method auto`` (the default) — and every tool is judged:
 
-* **unstable preset**: the preset's depth exceeds the semi-discretization limit somewhere in
-  its ±3 % window, solved densely (121 speeds, twice the steps per period the recommendation
-  uses to resolve the chatter — 20 per cycle —, the tool's modes fitted to its FRF as the
-  recommendation does);
+* **unstable preset**: the preset's depth exceeds the converged limit somewhere in its ±3 %
+  window: the window solved densely (121 speeds) by the semi-discretization with twice the steps
+  per cycle the recommendation uses (20), every speed checked at a second resolution and refined
+  until the two agree within 1 % (the tool's modes fitted to its FRF as the recommendation does);
+  with ``--oracle-sample N`` the weakest speed of N windows is also solved by the spectral-element
+  collocation oracle (``tests/oracles/milling_collocation.py``, another family of method);
 * **false refusal**: a tool refused with "cannot chatter", or refused while the dense
   semi-discretization finds a stable pocket under the same rule;
 * **productivity**: ``n · stepdown`` over the best the dense semi-discretization allows under
   the same rule (window, safety factor, speed range, flute length), on the fine pocket grid
   (relative spacing τ/10) over the whole speed range;
-* **time-domain**: a sample of stability-limited presets simulated by the independent oracle
-  (``tests/oracles/milling_time_domain``, 30 time steps per cycle of 1.2 × the highest mode):
-  the preset must not chatter, 1.25 × its window's limit (at the window's weakest speed, same
-  fine solution) must.
+* **time-domain**: a sample of stability-limited presets, the lowest speeds first, simulated by
+  the independent oracle (``tests/oracles/milling_time_domain``, 30 time steps per cycle of 1.2 ×
+  the highest mode): the preset must not chatter, 1.25 × its window's limit (at the window's
+  weakest speed, same fine solution) must.
 
 It also times the recommendation (prediction + pockets; 400 semi-discretization speeds per
 tool), and with ``--job-tools N`` runs a library of N tools (the 25, repeated with stickouts
 0.5 mm longer each round) as a job on a local backend or ``--dask`` a LocalCluster, printing
 its progress.
 
-Run: ``.venv/bin/python benchmarks/bench_presets.py [--immersions 0.05 0.5] [--sample 4]
-[--job-tools 1000 [--dask]]``; writes ``benchmarks/results/presets.json`` (``--immersions``
-given no value: only the job, into ``benchmarks/results/presets_job.json``).
+Run: ``.venv/bin/python benchmarks/bench_presets.py [--library small] [--immersions 0.05 0.5]
+[--sample 4] [--oracle-sample 3] [--job-tools 1000 [--dask]]``; writes
+``benchmarks/results/presets_<library>.json`` (``--immersions`` given no value: only the job, into
+``benchmarks/results/presets_job.json``).
 """
 
 from __future__ import annotations
@@ -48,11 +53,11 @@ import numpy as np  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from tests.oracles import milling_collocation as collocation  # noqa: E402
 from tests.oracles.milling_time_domain import Cut, Mode, resolving_steps, simulate  # noqa: E402
 
 from rcsa.analysis.lobes.modal_model import ModalModel, fit_modal_model  # noqa: E402
 from rcsa.analysis.lobes.pockets import PocketRule, best_pocket, pocket_speed_grid  # noqa: E402
-from rcsa.analysis.lobes.semi_discretization import resolving_steps as sdm_steps  # noqa: E402
 from rcsa.analysis.lobes.semi_discretization import semi_discretization_lobes_many  # noqa: E402
 from rcsa.app.jobs import Workbench  # noqa: E402
 from rcsa.app.presets import recommend_predicted  # noqa: E402
@@ -60,13 +65,18 @@ from rcsa.libraries.formats import read_library  # noqa: E402
 from rcsa.libraries.recommend_sources import predicted_frfs  # noqa: E402
 from rcsa.reference import ra1  # noqa: E402
 
-LIBRARY = ROOT / "tests" / "data" / "tool-libraries" / "fusion-single-flute" / "single_flute_library.json"
+LIBRARIES = {"small": ROOT / "tests" / "data" / "tool-libraries" / "fusion-single-flute" / "single_flute_small_library.json",
+             "standard": ROOT / "tests" / "data" / "tool-libraries" / "fusion-single-flute" / "single_flute_library.json",
+             "multi": ROOT / "tests" / "data" / "tool-libraries" / "fusion-synthetic" / "synthetic_library.json"}
+LIBRARY = LIBRARIES["small"]
+#: Steps per cycle the judge resolves with: twice the recommendation's.
+JUDGE_STEPS_PER_CYCLE = 20.0
 GRID = {"start_hz": 5.0, "stop_hz": 6000.0, "step_hz": 2.0}
 RA1 = ra1(GRID)
 SETTINGS = {"spindle": RA1["spindle"], "frequency": GRID, "joints": RA1["joints"]}
 OPTIONS = {"material": "aluminium-7075", "max_rpm": 24000, "milling": "down"}
 KT, KR = 1319.41e6, 788.83 / 1319.41
-OUT = ROOT / "benchmarks" / "results" / "presets.json"
+OUT = ROOT / "benchmarks" / "results" / "presets_{}.json"
 
 
 def _recommend(data: bytes, immersion: float, method: str) -> tuple[dict, float, float]:
@@ -77,22 +87,24 @@ def _recommend(data: bytes, immersion: float, method: str) -> tuple[dict, float,
 
 
 def _limits(model, teeth, immersion, speeds, floor_m, finer=1):
+    """The judge's limits: resolved semi-discretization (``finer`` times the default steps per cycle,
+    checked and refined); an unresolved speed's finest answer is kept and counted."""
     r = semi_discretization_lobes_many([model], teeth=teeth, tangential_coefficient_n_m2=KT, radial_ratio=KR,
                                        radial_immersion=immersion, milling="down", spindle_speed_rpm=[speeds],
-                                       steps_per_period=[finer * sdm_steps(model, teeth, speeds)],
-                                       min_depth_search_max_m=[floor_m])[0]
+                                       steps_per_cycle=10.0 * finer, min_depth_search_max_m=[floor_m])[0]
     return r, np.where(np.isfinite(r.depth_limit_m), r.depth_limit_m,
                        np.inf if r.depth_search_max_m >= floor_m else r.depth_search_max_m)
 
 
-def _judge(report: dict, frfs: dict, immersion: float, rule: PocketRule) -> list[dict]:
+def _judge(report: dict, frfs: dict, immersion: float, rule: PocketRule, library: dict) -> list[dict]:
     rows = []
     for tool in report["tools"]:
         frf = frfs.get(tool["id"])
         if tool.get("tool_type") != "flat end mill" or frf is None or isinstance(frf, str):
             continue
         model = fit_modal_model(frf.frequency_hz, frf.h)
-        teeth = 1
+        item = next(t for t in library["data"] if t.get("guid") == tool["id"])
+        teeth = int(item["geometry"]["NOF"])
         flute = tool.get("flute_length_m")
         lo, hi = (tool["speed_range"]["min_rpm"], tool["speed_range"]["max_rpm"]) if "speed_range" in tool else \
             (1000.0, 24000.0)
@@ -101,7 +113,6 @@ def _judge(report: dict, frfs: dict, immersion: float, rule: PocketRule) -> list
         # the best the dense SDM allows under the same rule
         fine = pocket_speed_grid(lo, hi, rule.speed_tolerance)
         if flute is None:
-            item = next(t for t in json.loads(LIBRARY.read_text())["data"] if t["guid"] == tool["id"])
             flute = item["geometry"]["LCF"] * (0.0254 if item["unit"] == "inches" else 1e-3)
         need = rule.safety_factor * flute * 1.02
         _, fine_limit = _limits(model, teeth, immersion, fine, need)
@@ -110,8 +121,11 @@ def _judge(report: dict, frfs: dict, immersion: float, rule: PocketRule) -> list
         if tool["status"] == "written":
             n, step = float(tool["spindle_speed_rpm"]), float(tool["stepdown_m"])
             window = np.geomspace(n * (1 - rule.speed_tolerance), n * (1 + rule.speed_tolerance), 121)
-            _, dense = _limits(model, teeth, immersion, window, need, finer=2)
-            row.update(spindle_speed_rpm=n, stepdown_m=step, window_min_m=float(np.min(dense)),
+            judged, dense = _limits(model, teeth, immersion, window, need, finer=2)
+            weakest = int(np.argmin(dense))
+            row.update(spindle_speed_rpm=n, stepdown_m=step, window_min_m=float(np.min(dense)), teeth=teeth,
+                       judge_unresolved=int(np.count_nonzero(~judged.resolved)),
+                       weakest_rpm=float(window[weakest]),
                        unstable=bool(np.min(dense) < step), productivity=None if best is None else
                        n * step / best.removal_index_rpm_m, limited_by=tool.get("limited_by"),
                        depth_limit_m=tool.get("depth_limit_m"))
@@ -123,18 +137,36 @@ def _judge(report: dict, frfs: dict, immersion: float, rule: PocketRule) -> list
     return rows
 
 
+def _oracle(rows: list[dict], immersion: float, sample: int) -> list[dict]:
+    """The weakest speed of ``sample`` written windows (the lowest speeds first) by the collocation oracle."""
+    picked = sorted([r for r in rows if r["status"] == "written" and np.isfinite(r["window_min_m"])],
+                    key=lambda r: r["spindle_speed_rpm"])[:sample]
+    out = []
+    for r in picked:
+        modes = [collocation.Mode(f, z, m, d) for f, z, m, d in r["modes"]]
+        truth = collocation.depth_limit(modes, r["teeth"], KT, KR, immersion, "down", r["weakest_rpm"],
+                                        low_m=r["window_min_m"] / 3, high_m=r["window_min_m"] * 3, scan=12)
+        out.append({"id": r["id"], "at_rpm": r["weakest_rpm"], "judge_m": r["window_min_m"],
+                    "oracle_m": truth.depth_m, "oracle_finer_agrees": truth.finer_agrees,
+                    "stepdown_m": r["stepdown_m"], "preset_over_oracle": r["stepdown_m"] / truth.depth_m})
+    return out
+
+
 def _time_domain(rows: list[dict], immersion: float, sample: int) -> list[dict]:
-    picked = [r for r in rows if r["status"] == "written" and r.get("limited_by") == "stability"][:sample]
+    picked = sorted([r for r in rows if r["status"] == "written" and r.get("limited_by") == "stability"],
+                    key=lambda r: r["spindle_speed_rpm"])[:sample]
     out = []
     for r in picked:
         modes = [Mode(f, z, m, d) for f, z, m, d in r["modes"]]
         n, step = r["spindle_speed_rpm"], r["stepdown_m"]
         window = np.geomspace(n * 0.97, n * 1.03, 61)
         f, z, mass, d = (np.array([x[i] for x in r["modes"]]) for i in range(4))
-        _, dense = _limits(ModalModel.of(f, z, 1.0 / mass, d.astype(int)), 1, immersion, window, 1.0, finer=2)
+        teeth = r["teeth"]
+        _, dense = _limits(ModalModel.of(f, z, 1.0 / mass, d.astype(int)), teeth, immersion, window, 1.0, finer=2)
         weakest = float(window[int(np.argmin(dense))])
         up = 1.25 * float(np.min(dense))
-        cuts = [Cut(n, step, 1, KT, KR, immersion, "down", 5e-5), Cut(weakest, up, 1, KT, KR, immersion, "down", 5e-5)]
+        cuts = [Cut(n, step, teeth, KT, KR, immersion, "down", 5e-5),
+                Cut(weakest, up, teeth, KT, KR, immersion, "down", 5e-5)]
         sim = simulate(modes, cuts, steps_per_period=resolving_steps(modes, cuts))
         out.append({"id": r["id"], "spindle_speed_rpm": n, "stepdown_m": step, "preset_stable": bool(sim.stable[0]),
                     "next_step_up_m": up, "at_rpm": weakest, "next_step_up_chatters": bool(sim.chatter[1]),
@@ -149,6 +181,7 @@ def _summary(rows: list[dict]) -> dict:
     return {"tools": len(rows), "written": len(written), "refused": len(refused),
             "unstable_by_sdm": sum(r["unstable"] for r in written),
             "worst_depth_over_window_limit": max((r["stepdown_m"] / r["window_min_m"] for r in written), default=None),
+            "judge_unresolved_speeds": sum(r.get("judge_unresolved", 0) for r in written),
             "false_refusals": sum(r["false_refusal"] for r in refused),
             "productivity_median": float(np.median(prod)) if prod else None,
             "productivity_min": float(np.min(prod)) if prod else None,
@@ -212,28 +245,41 @@ def _job(n_tools: int, dask: bool) -> dict:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--library", choices=sorted(LIBRARIES), default="small")
+    parser.add_argument("--methods", nargs="+", default=["zoa", "auto"], choices=["zoa", "semi_discretization", "auto"])
+    parser.add_argument("--oracle-sample", type=int, default=0,
+                        help="written windows per immersion whose weakest speed the collocation oracle solves")
     parser.add_argument("--immersions", type=float, nargs="*", default=[0.05, 0.5],
                         help="radial immersions a_e/D to judge (none: only the --job-tools run)")
     parser.add_argument("--sample", type=int, default=4, help="presets per immersion simulated in the time domain")
     parser.add_argument("--job-tools", type=int, default=0)
     parser.add_argument("--dask", action="store_true")
     args = parser.parse_args()
-    data = LIBRARY.read_bytes()
+    path = LIBRARIES[args.library]
+    data = path.read_bytes()
+    library = json.loads(data)
     rule = PocketRule()
-    frfs = predicted_frfs(read_library(data, file_name="single_flute.json"), **SETTINGS).frfs
-    results: dict = {"library": str(LIBRARY.relative_to(ROOT)), "machine_load": os.getloadavg(), "immersions": {}}
+    frfs = predicted_frfs(read_library(data, file_name="library.json"), **SETTINGS).frfs
+    results: dict = {"library": str(path.relative_to(ROOT)), "machine_load": os.getloadavg(), "cpu_count": os.cpu_count(),
+                     "immersions": {}}
     for ae in args.immersions:
         entry = {}
-        for method in ("zoa", "auto"):
+        for method in args.methods:
             report, wall, cpu = _recommend(data, ae, method)
-            rows = _judge(report, frfs, ae, rule)
+            rows = _judge(report, frfs, ae, rule, library)
             entry[method] = {"wall_s": wall, "cpu_s": cpu, "summary": _summary(rows), "tools": rows}
             s = entry[method]["summary"]
             print(f"a_e/D {ae}: method {method:5s} {wall:6.1f} s ({cpu:.1f} s CPU, load {os.getloadavg()[0]:.1f}): "
                   f"written {s['written']}, unstable by SDM {s['unstable_by_sdm']}, refused {s['refused']} "
                   f"({s['false_refusals']} falsely), productivity median {s['productivity_median']} "
                   f"min {s['productivity_min']}, methods {s['by_method']}", flush=True)
-        entry["time_domain"] = _time_domain(entry["auto"]["tools"], ae, args.sample)
+        entry["machine_load_after"] = os.getloadavg()
+        main_rows = entry[args.methods[-1]]["tools"]
+        entry["oracle"] = _oracle(main_rows, ae, args.oracle_sample)
+        for t in entry["oracle"]:
+            print(f"    oracle {t['id'][-4:]} at {t['at_rpm']:.0f} rpm: judge {t['judge_m'] * 1e3:.4f} mm, collocation "
+                  f"{t['oracle_m'] * 1e3:.4f} mm; preset / oracle {t['preset_over_oracle']:.3f}", flush=True)
+        entry["time_domain"] = _time_domain(main_rows, ae, args.sample)
         for t in entry["time_domain"]:
             print(f"    time domain {t['id'][-4:]}: preset {t['stepdown_m'] * 1e3:.3f} mm at {t['spindle_speed_rpm']:.0f} "
                   f"rpm stable={t['preset_stable']}; {t['next_step_up_m'] * 1e3:.3f} mm at {t['at_rpm']:.0f} rpm "
@@ -242,7 +288,7 @@ def main() -> None:
     if args.job_tools:
         results["job"] = _job(args.job_tools, args.dask)
         print("job:", results["job"])
-    out = OUT if args.immersions else OUT.with_name("presets_job.json")
+    out = Path(str(OUT).format(args.library)) if args.immersions else OUT.with_name("presets_job.json")
     out.write_text(json.dumps(results, indent=1, default=float) + "\n")
     print(f"wrote {out}")
 

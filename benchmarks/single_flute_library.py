@@ -1,4 +1,5 @@
-"""Write ``tests/data/tool-libraries/fusion-single-flute/single_flute_library.json``.
+"""Write ``tests/data/tool-libraries/fusion-single-flute/single_flute_library.json`` and
+``tests/data/tool-libraries/fusion-single-flute/single_flute_small_library.json``.
 
 25 single-flute ("O-flute") solid carbide flat end mills for aluminium in the Autodesk Fusion
 library format, each in the synthetic BT40-ER32 holder of ``fusion-synthetic`` (written for
@@ -8,7 +9,12 @@ just past the flutes to 4.5 diameters, shank equal to the cutter (a 3 mm shank u
 but they are not any vendor's catalogue (see tests/data/tool-libraries/SOURCE.md: no licensed vendor library or
 catalogue page with single-flute dimensions was available to us).
 
-Run: ``.venv/bin/python benchmarks/single_flute_library.py`` (deterministic; rewrites the file).
+The second file holds 25 small single-flute O-flute carbide tools for aluminium, Ø1–6 mm with
+flute lengths 3–42 mm (standard, long and extra-long flutes, stickout 2–4 mm past the flutes, shank
+equal to the cutter, a 3 mm shank under Ø1–2 mm, a 6 mm shank under Ø3–5 mm): the range of the vendor
+library of issue 29, whose dimensions are our own choice too.
+
+Run: ``.venv/bin/python benchmarks/single_flute_library.py`` (deterministic; rewrites both files).
 """
 
 from __future__ import annotations
@@ -19,6 +25,7 @@ from pathlib import Path
 OUT = Path(__file__).resolve().parents[1] / "tests" / "data" / "tool-libraries" / "fusion-single-flute" / \
     "single_flute_library.json"
 HOLDER_SOURCE = OUT.parents[1] / "fusion-synthetic" / "synthetic_library.json"
+OUT_SMALL = OUT.with_name("single_flute_small_library.json")
 
 # (unit, DC, LCF, LB (stickout), OAL, SFDM) — mm tools in mm, inch tools in inches
 TOOLS = [
@@ -32,6 +39,20 @@ TOOLS = [
     ("in", 0.1875, 0.5, 0.75, 2.0, 0.1875), ("in", 0.25, 0.5, 0.875, 2.5, 0.25), ("in", 0.25, 0.75, 1.0, 2.5, 0.25),
     ("in", 0.25, 1.0, 1.25, 3.0, 0.25), ("in", 0.375, 0.875, 1.25, 2.5, 0.375), ("in", 0.375, 1.125, 1.5, 3.0, 0.375),
     ("in", 0.5, 1.25, 1.75, 3.5, 0.5),
+]
+
+
+# (unit, DC, LCF, LB, OAL, SFDM): Ø1–6 mm, flute lengths 3–42 mm
+SMALL_TOOLS = [
+    ("mm", 1.0, 3.0, 5.0, 38.0, 3.0), ("mm", 1.0, 5.0, 7.0, 38.0, 3.0), ("mm", 1.5, 4.5, 7.0, 38.0, 3.0),
+    ("mm", 1.5, 7.5, 10.0, 38.0, 3.0), ("mm", 2.0, 6.0, 9.0, 38.0, 3.0), ("mm", 2.0, 10.0, 13.0, 50.0, 3.0),
+    ("mm", 2.0, 14.0, 17.0, 50.0, 3.0), ("mm", 2.5, 8.0, 11.0, 50.0, 3.0), ("mm", 3.0, 8.0, 11.0, 50.0, 6.0),
+    ("mm", 3.0, 12.0, 15.0, 50.0, 6.0), ("mm", 3.0, 18.0, 21.0, 60.0, 6.0), ("mm", 3.0, 22.0, 25.0, 64.0, 6.0),
+    ("mm", 4.0, 11.0, 14.0, 50.0, 6.0), ("mm", 4.0, 16.0, 19.0, 57.0, 6.0), ("mm", 4.0, 22.0, 26.0, 64.0, 6.0),
+    ("mm", 4.0, 28.0, 32.0, 75.0, 6.0), ("mm", 5.0, 13.0, 16.0, 57.0, 6.0), ("mm", 5.0, 20.0, 24.0, 64.0, 6.0),
+    ("mm", 5.0, 30.0, 34.0, 75.0, 6.0), ("mm", 6.0, 12.0, 16.0, 57.0, 6.0), ("mm", 6.0, 18.0, 22.0, 64.0, 6.0),
+    ("mm", 6.0, 22.0, 26.0, 64.0, 6.0), ("mm", 6.0, 28.0, 32.0, 75.0, 6.0), ("mm", 6.0, 35.0, 39.0, 83.0, 6.0),
+    ("mm", 6.0, 42.0, 46.0, 90.0, 6.0),
 ]
 
 
@@ -53,9 +74,10 @@ def _tool(i: int, unit: str, dc: float, lcf: float, lb: float, oal: float, sfdm:
 
 def main() -> None:
     holder = json.loads(HOLDER_SOURCE.read_text())["data"][0]["holder"]
-    tools = [_tool(i, *t, holder=holder) for i, t in enumerate(TOOLS)]
-    OUT.write_text(json.dumps({"data": tools, "version": 1}, indent=2) + "\n")
-    print(f"{OUT}: {len(tools)} tools")
+    for out, table, first in ((OUT, TOOLS, 0), (OUT_SMALL, SMALL_TOOLS, 0x100)):
+        tools = [_tool(first + i, *t, holder=holder) for i, t in enumerate(table)]
+        out.write_text(json.dumps({"data": tools, "version": 1}, indent=2) + "\n")
+        print(f"{out}: {len(tools)} tools")
 
 
 if __name__ == "__main__":

@@ -62,6 +62,11 @@ from rcsa.app.bounds import (
     MAX_INTERFACE_TANGENTIAL_RATIO,
     MAX_LENGTH_M,
     MAX_LOSS_FACTOR,
+    MAX_MODAL_DAMPING_RATIO,
+    MAX_MODAL_FREQUENCY_HZ,
+    MAX_MODAL_MASS_KG,
+    MAX_MODAL_STIFFNESS_N_M,
+    MAX_MODAL_TABLE_MODES,
     MAX_MODULUS_PA,
     MAX_NECK_SEGMENTS,
     MAX_POISSON_RATIO,
@@ -89,6 +94,10 @@ from rcsa.app.bounds import (
     MIN_INTERFACE_TANGENTIAL_RATIO,
     MIN_JOINT_STIFFNESS,
     MIN_LENGTH_M,
+    MIN_MODAL_DAMPING_RATIO,
+    MIN_MODAL_FREQUENCY_HZ,
+    MIN_MODAL_MASS_KG,
+    MIN_MODAL_STIFFNESS_N_M,
     MIN_MODULUS_PA,
     MIN_POISSON_RATIO,
     MIN_RADIAL_IMMERSION,
@@ -99,7 +108,6 @@ from rcsa.app.bounds import (
     MIN_SURFACE_ROUGHNESS_M,
     MIN_UNCERTAINTY_DRAWS,
     SDM_DEFAULT_MODES_PER_DIRECTION,
-    SDM_DEFAULT_STEPS_PER_PERIOD,
     SDM_MAX_MODES_PER_DIRECTION,
     SDM_MAX_STEPS_PER_PERIOD,
     SDM_MIN_MODES_PER_DIRECTION,
@@ -826,6 +834,24 @@ class SpeedRange(_Request):
     count: int = Field(ge=MIN_SPEED_COUNT, le=MAX_SPEED_COUNT, description="Number of speeds.")
 
 
+SpeedList = Annotated[list[Annotated[float, Field(ge=MIN_SPEED_RPM, le=MAX_SPEED_RPM)]],
+                      Field(min_length=MIN_SPEED_COUNT, max_length=MAX_SPEED_COUNT,
+                            description="The spindle speeds themselves, rpm, strictly increasing.")]
+
+
+class ModeIn(_Request):
+    """One mode of a modal table: natural frequency, damping ratio, and the modal mass or the modal stiffness."""
+
+    frequency_hz: float = Field(ge=MIN_MODAL_FREQUENCY_HZ, le=MAX_MODAL_FREQUENCY_HZ,
+                                description="Undamped natural frequency, Hz.")
+    damping_ratio: float = Field(ge=MIN_MODAL_DAMPING_RATIO, le=MAX_MODAL_DAMPING_RATIO,
+                                 description="Damping ratio ζ (dimensionless).")
+    modal_mass_kg: float | None = Field(None, ge=MIN_MODAL_MASS_KG, le=MAX_MODAL_MASS_KG,
+                                        description="Modal mass, kg (give this or stiffness_n_m).")
+    stiffness_n_m: float | None = Field(None, ge=MIN_MODAL_STIFFNESS_N_M, le=MAX_MODAL_STIFFNESS_N_M,
+                                        description="Modal stiffness k = (2πf)² m, N/m (give this or modal_mass_kg).")
+
+
 class Robust(_Request):
     """How sure the robust depth limit is."""
 
@@ -841,9 +867,14 @@ class LobesRequest(_Request):
         "radial_immersion": 0.5, "milling": "down", "spindle_speed_rpm": {"start": 2000, "stop": 30000,
                                                                           "count": 2000}}]})
 
-    frf_x: FrfRef | None = Field(None, description="Tool-point FRF in x, inline or a stored measurement's h "
-                                 "({\"measurement_id\": ...}); or give assembly or library_tool.")
-    frf_y: FrfRef | None = Field(None, description="FRF in y on the same grid; null: same as x.")
+    frf_x: FrfRef | None = Field(None, description="Tool-point FRF in x, the feed direction, inline or a stored "
+                                 "measurement's h ({\"measurement_id\": ...}); or give modal_x, assembly or library_tool.")
+    frf_y: FrfRef | None = Field(None, description="FRF in y, normal to the feed in the plane of the cut, on the same "
+                                                   "grid; null: the same as x (a round tool, holder and spindle).")
+    modal_x: list[ModeIn] | None = Field(None, max_length=MAX_MODAL_TABLE_MODES,
+                                         description="A modal table of the feed direction (x) instead of an FRF.")
+    modal_y: list[ModeIn] | None = Field(None, max_length=MAX_MODAL_TABLE_MODES,
+                                         description="The modal table of y; null: the same as x; []: rigid in y.")
     assembly: Assembly | None = Field(None, description="Predict the FRF of this assembly instead.")
     library_tool: LibraryToolRef | None = Field(None, description="Instead of assembly: a tool of a stored "
                                                 "library, by reference (its assembly is rebuilt from the library's "
@@ -857,18 +888,21 @@ class LobesRequest(_Request):
     radial_immersion: float = Field(ge=MIN_RADIAL_IMMERSION, le=1, description="Radial immersion ae/D "
                                                                                 "(dimensionless).")
     milling: Literal["up", "down"]
-    spindle_speed_rpm: SpeedRange
+    spindle_speed_rpm: SpeedRange | SpeedList
     uncertainty: Uncertainty | None = Field(None, description="Robust lobes: draw the assembly and give "
                                             "depth_limit_robust_m beside the nominal limit (zoa: every draw's "
                                             "lobes; semi_discretization: a reduced model of the draws).")
     robust: Robust | None = Field(None, description="Confidence of the robust limit (needs uncertainty).")
     method: Literal["zoa", "semi_discretization", "auto"] = Field(
-        "zoa", description="zoa: zero-order (Altintas–Budak); semi_discretization: first-order SDM "
-                           "(time-periodic force, flip lobes; slower); auto: semi_discretization where fewer than "
-                           "one tooth is in the cut on average, else zoa (the response says which: method, "
-                           "method_reason).")
+        "auto", description="auto (default): zoa only where it is exact (even-toothed slotting, 4 teeth or more), "
+                            "else semi_discretization (the response says which: method, method_reason); zoa: "
+                            "zero-order (Altintas–Budak); semi_discretization: first-order semi-discretization "
+                            "(time-periodic force, flip lobes) with the steps that resolve the cut, every speed "
+                            "checked at a second resolution (resolved).")
     steps_per_period: int | None = Field(None, ge=SDM_MIN_STEPS_PER_PERIOD, le=SDM_MAX_STEPS_PER_PERIOD,
-                                         description=f"SDM only: steps per tooth period (default {SDM_DEFAULT_STEPS_PER_PERIOD}).")
+                                         description="SDM only: fixed steps over the whole tooth period instead of "
+                                                     "the steps that resolve the cut (each speed is still checked: "
+                                                     "resolved).")
     modes_per_direction: int | None = Field(None, ge=SDM_MIN_MODES_PER_DIRECTION, le=SDM_MAX_MODES_PER_DIRECTION,
                                             description=f"SDM only: at most this many modes in x and in y (default "
                                                         f"{SDM_DEFAULT_MODES_PER_DIRECTION}).")
@@ -887,8 +921,15 @@ class LobesResult(_Response):
     depth_limit_m: list[float | None] = Field(description="Axial depth limit (lower envelope), m.")
     chatter_frequency_hz: list[float | None] = Field(description="Chatter frequency at the limit, Hz.")
     lobes: list[Lobe]
-    notes: list[str] | None = Field(None, description="Caveats: speeds whose semi-discretization limit is "
-                                                      "under-resolved, an FRF grid too coarse for zero-order lobes.")
+    notes: list[str] | None = Field(None, description="Caveats: speeds whose semi-discretization limit is not "
+                                                      "resolved, modes left out, an FRF grid too coarse for "
+                                                      "zero-order lobes.")
+    method: str | None = Field(None, description="The method used: zoa or semi_discretization.")
+    method_reason: str | None = Field(None, description="Why auto chose it.")
+    resolved: list[bool] | None = Field(None, description="Semi-discretization: per speed, whether the limits at two "
+                                                          "resolutions agree within 1 % (false: do not trust it).")
+    discretization: dict[str, Any] | None = Field(None, description="Semi-discretization: scheme (cut_window or "
+                                                                    "full_period), steps and check_steps per speed.")
     flute_length_m: float | None = Field(None, description="The assembly tool's flute length, m: no stepdown "
                                                            "exceeds it.")
 

@@ -326,8 +326,8 @@ _RECOMMEND_FIELDS = {
     "speed_tolerance": "Relative half-width of the speed window that must stay stable (default 0.03).",
     "max_surface_speed_m_min": "Surface-speed limit, m/min (default: the table's, for carbide tools).",
     "feed_per_tooth_m": "Feed per tooth for the preset's feeds, m (default: f_z of the tool's own first preset).",
-    "method": "Stability-lobe method: auto (default: semi_discretization where fewer than one tooth is in the cut on "
-              "average, else zoa), zoa or semi_discretization.",
+    "method": "Stability-lobe method: auto (default: zoa only where it is exact, even-toothed slotting; else "
+              "semi_discretization), zoa or semi_discretization.",
     "uncertainty": "Robust presets: the uncertainty option as JSON ({\"draws\": 200, \"seed\": 1, \"tolerances\": "
                    "{...}}); every tool's assembly is drawn with the stored sync's settings and the pocket chosen on "
                    "the robust depth limit.",

@@ -9,6 +9,7 @@ from pydantic import BaseModel
 from starlette.requests import Request
 from starlette.responses import Response
 
+from rcsa.app import budget
 from rcsa.app.analyses import resolve_lobes_references
 from rcsa.app.analyses import stability_lobes as lobes
 
@@ -32,8 +33,10 @@ def compute_stability_lobes(body: LobesRequest, request: Request, state: StateDe
                     prefer: PreferHeader = None) -> Response:
     """Axial depth limit (m) versus spindle speed (rpm), its chatter frequency (Hz) and every
     lobe, from inline tool-point FRFs (``frf_x``, optional ``frf_y``) or an ``assembly``.
-    ``"method"``: ``zoa`` (zero-order, Altintas–Budak; the default) or ``semi_discretization``
-    (first-order, Insperger–Stépán: right at low radial immersion, and it finds the flip lobes).
+    ``"method"``: ``auto`` (the default: zero-order where it is exact, else the resolved
+    semi-discretization; zero-order, marked unresolved, where that would not fit an answer given
+    at once), ``zoa`` (zero-order, Altintas–Budak) or ``semi_discretization`` (Insperger–Stépán,
+    resolving the cut, every speed checked: right at low radial immersion, and it finds the flip lobes).
 
     By reference instead of re-sending them: ``"library_tool": {"library_id", "tool_id"}`` (a stored
     library's tool: its assembly is rebuilt from the library's last sync; ``teeth`` defaults to
@@ -45,7 +48,7 @@ def compute_stability_lobes(body: LobesRequest, request: Request, state: StateDe
 
     def run() -> Response:
         with state.metrics.timed("lobes"):
-            result = lobes(doc, store=state.reader, max_lines=state.settings.max_frequency_lines)
+            result = lobes(doc, store=state.reader, max_lines=state.settings.max_frequency_lines, within=budget.SYNC)
         return json_response(result)
 
     return compute(state, "lobes", doc, prefer=prefer, run=run, owner=caller(who, request))

@@ -138,7 +138,8 @@ def plot_lobes(body: LobesPlotRequest, state: StateDep, _: ReadAccess, format: F
     request = lobes_document(body, state, exclude={"show_lobes", "operating_point", "depth_max_mm", "title"})
     budget.check("lobes", request, mode="sync")
     with state.metrics.timed("lobes"):
-        answer = stability_lobes_answer(request, store=state.reader, max_lines=state.settings.max_frequency_lines)
+        answer = stability_lobes_answer(request, store=state.reader, max_lines=state.settings.max_frequency_lines,
+                                        within=budget.SYNC)
     point = body.operating_point
     fmt = _image_format(format, accept)
     with state.metrics.timed("plot"), _RENDER_LOCK:
@@ -183,7 +184,8 @@ def export_lobes_csv(body: LobesRequest, state: StateDep, _: ReadAccess) -> Resp
     request = lobes_document(body, state)
     budget.check("lobes", request, mode="sync")
     with state.metrics.timed("lobes"):
-        doc = stability_lobes(request, store=state.reader, max_lines=state.settings.max_frequency_lines)
+        doc = stability_lobes(request, store=state.reader, max_lines=state.settings.max_frequency_lines,
+                              within=budget.SYNC)
     return _csv(exports.lobes_csv(doc), "stability-lobes")
 
 

@@ -798,6 +798,16 @@
         "series-lobe", "lobe-" + lobe.index + "-path");
     });
     line(ax, n, env, "series-envelope", "lobes-envelope-path");
+    // speeds whose semi-discretization limit two resolutions disagree on: greyed, not to be trusted
+    const unresolved = result.resolved ? result.resolved.map((ok) => !ok) : n.map(() => false);
+    unresolved.forEach((bad, i) => {
+      if (!bad) return;
+      const lo = i > 0 ? (n[i - 1] + n[i]) / 2 : n[i];
+      const hi = i < n.length - 1 ? (n[i] + n[i + 1]) / 2 : n[i];
+      const r = svgEl("rect", { class: "unresolved", x: ax.sx(lo).toFixed(2), y: ax.sy(top).toFixed(2),
+        width: Math.max(1, ax.sx(hi) - ax.sx(lo)).toFixed(2), height: (ax.sy(0) - ax.sy(top)).toFixed(2) }, ax.plot);
+      svgEl("title", {}, r).textContent = Math.round(n[i]) + " rpm: not resolved (two resolutions disagree by more than 1 %)";
+    });
     if (result.depth_limit_robust_m) {
       line(ax, n, result.depth_limit_robust_m.map((v) => (v === null ? null : v * MM_PER_M)), "series-robust",
         "lobes-robust-path");
@@ -814,10 +824,13 @@
         cx: ax.sx(point.spindle_speed_rpm), cy: ax.sy(point.depth_m * MM_PER_M), r: 7 }, ax.plot);
       svgEl("title", {}, c).textContent = stable ? "operating point: stable" : "operating point: chatter expected";
     }
-    legend(svg, left + 14, 34, [{ cls: "series-envelope", label: "stability limit" },
-      { cls: "limit", label: "absolute limit " + (minMm ? fmt(minMm, 3) + " mm" : "") }]);
+    const keys = [{ cls: "series-envelope", label: "stability limit" },
+      { cls: "limit", label: "absolute limit " + (minMm ? fmt(minMm, 3) + " mm" : "") }];
+    if (unresolved.some((b) => b)) keys.push({ cls: "unresolved", label: "not resolved: do not use" });
+    legend(svg, left + 14, 34, keys);
     attachReadout(svg, ax, n, (i) => Math.round(n[i]) + " rpm · limit " + (env[i] === null ? "—" : fmt(env[i], 3) + " mm") +
-      (result.chatter_frequency_hz[i] ? " · chatter " + fmt(result.chatter_frequency_hz[i], 5) + " Hz" : ""), "lobes-readout");
+      (result.chatter_frequency_hz[i] ? " · chatter " + fmt(result.chatter_frequency_hz[i], 5) + " Hz" : "") +
+      (unresolved[i] ? " · NOT RESOLVED" : ""), "lobes-readout");
   }
 
   /** Show the values under the pointer (nearest grid point) below the plot. */

@@ -25,7 +25,8 @@ def test_lobes_from_an_assembly_with_a_plot(tmp_path):
     assert result.exit_code == 0, result.stderr
     out = json.loads(result.stdout)
     assert out["frf_y_source"] == "same_as_x"
-    assert len(out["depth_limit_m"]) == 300 and out["lobes"][0]["index"] == 0
+    assert len(out["depth_limit_m"]) == 300 and out["lobes"]
+    assert out["method"] == "semi_discretization" and len(out["resolved"]) == 300  # auto at a/D 0.5, 4 teeth
     assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 

@@ -95,24 +95,32 @@ def test_semi_discretization_is_priced_by_speeds_steps_and_modes_not_as_zero_ord
     base = {"assembly": ra1({"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 5.0}), "teeth": 4,
             "tangential_coefficient_n_m2": 6e8, "radial_ratio": 0.3, "radial_immersion": 0.5, "milling": "down",
             "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 1000}}
+    zoa = {**base, "method": "zoa"}
     sdm = {**base, "method": "semi_discretization"}
-    zoa_s, sdm_cost = budget.estimate("lobes", base).seconds, budget.estimate("lobes", sdm)
+    zoa_s, sdm_cost = budget.estimate("lobes", zoa).seconds, budget.estimate("lobes", sdm)
+    assert budget.estimate("lobes", base).seconds == pytest.approx(sdm_cost.seconds)  # auto: the SDM here
     model = budget.SDM_COST
-    steps, modes, fraction = budget.sdm_terms(sdm)
-    assert (steps, modes, fraction) == (40.0, 3.0, 1.0)  # the defaults; a/D = 0.5 with 4 teeth: always one cutting
-    assert sdm_cost.seconds == pytest.approx(zoa_s + model.seconds(1000, 40, 3, 1.0), rel=1e-12)
-    assert sdm_cost.seconds > 20 * zoa_s and sdm_cost.terms["period_map_dimension"] == 4 * 3 + 2 * 40
-    # linear in the speeds beyond the fixed per-step part, and growing with steps and modes
-    per_speed = model.seconds(2000, 40, 3, 1.0) - model.seconds(1000, 40, 3, 1.0)
-    assert model.seconds(1000, 40, 3, 1.0) == pytest.approx(model.per_step_s * 40 + 1000 * per_speed / 1000, rel=1e-12)
-    assert model.seconds(1000, 80, 3, 1.0) > model.seconds(1000, 40, 3, 1.0) > model.seconds(1000, 40, 1, 1.0)
-    # memory: one chunk of speeds in flight, plus what every speed keeps for the whole search
-    chunked = model.memory_bytes(model.chunk, 40, 3, 1.0) - model.chunk * model.mem_speed_bytes * 40 * 12
-    assert model.memory_bytes(10 * model.chunk, 40, 3, 1.0) == pytest.approx(
-        chunked + 10 * model.chunk * model.mem_speed_bytes * 40 * 12, rel=1e-12)
-    assert model.memory_bytes(2 * model.chunk, 40, 3, 1.0) > model.memory_bytes(model.chunk, 40, 3, 1.0)
-    more = {**sdm, "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 5000}, "steps_per_period": 200}
-    with pytest.raises(budget.BudgetExceeded, match="steps_per_period"):
+    t = budget.sdm_terms(sdm)
+    # the steps that resolve the cut: 10 per cycle of 1.2 x the band's top (5 kHz) over the tooth period
+    # (4 teeth at a/D 0.5 always cut), at 2 000 rpm 450 -> the band 453; RA-1 has 7 modes in the band
+    assert t.speeds == 1000 and t.step_max == 453 and t.states == 4 * 7
+    assert sdm_cost.seconds == pytest.approx(zoa_s + model.seconds(t), rel=1e-12)
+    assert sdm_cost.seconds > 20 * zoa_s and sdm_cost.terms["steps_total"] == t.step_sum
+    # growing with the speeds, the steps (a lower speed, a higher band top) and the modes
+    fewer = budget.sdm_terms({**sdm, "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 500}})
+    slower = budget.sdm_terms({**sdm, "spindle_speed_rpm": {"start": 1000, "stop": 30000, "count": 1000}})
+    capped = budget.sdm_terms({**sdm, "modes_per_direction": 2})
+    assert model.seconds(fewer) < model.seconds(t) < model.seconds(slower)
+    assert capped.states == 8 and model.seconds(capped) < model.seconds(t)
+    fixed = budget.sdm_terms({**sdm, "steps_per_period": 40})
+    assert fixed.step_sum == 40 * 1000 and fixed.step_max == 40
+    # a list of speeds is priced as such
+    listed = budget.sdm_terms({**sdm, "spindle_speed_rpm": [20000.0, 25000.0, 30000.0]})
+    assert listed.speeds == 3 and listed.step_max < t.step_max
+    # memory: bounded by the chunk of period maps in flight, plus what every speed keeps
+    assert model.memory_bytes(t) <= model.chunk_bytes + t.speeds * model.mem_speed_bytes
+    more = {**sdm, "spindle_speed_rpm": {"start": 500, "stop": 30000, "count": 5000}}
+    with pytest.raises(budget.BudgetExceeded, match="fewer speeds"):
         budget.check("lobes", more)
     assert budget.check("lobes", more, mode="job").seconds > budget.SYNC.seconds
 
@@ -120,9 +128,9 @@ def test_semi_discretization_is_priced_by_speeds_steps_and_modes_not_as_zero_ord
 def test_the_lobes_figure_and_csv_of_semi_discretization_are_under_the_budget(client):
     sdm = {"assembly": ra1({"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 5.0}), "teeth": 4,
            "tangential_coefficient_n_m2": 6e8, "radial_ratio": 0.3, "radial_immersion": 0.5, "milling": "down",
-           "method": "semi_discretization", "steps_per_period": 200, "modes_per_direction": 8,
-           "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 5000}}
+           "method": "semi_discretization", "modes_per_direction": 8,
+           "spindle_speed_rpm": {"start": 500, "stop": 30000, "count": 5000}}
     for path in ("/v1/plots/lobes", "/v1/exports/lobes.csv", "/v1/stability-lobes"):
         problem = assert_problem(client.post(path, json=sdm), 422)
         assert problem["type"].endswith("compute-budget-exceeded"), (path, problem)
-        assert problem["budget"]["cost"]["terms"]["steps_per_period"] == 200
+        assert problem["budget"]["cost"]["terms"]["steps_max"] > 1000

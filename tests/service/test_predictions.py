@@ -137,7 +137,7 @@ def test_request_id_is_echoed_or_made_and_gzip_when_accepted(client, assembly):
 
 def test_stability_lobes_from_an_assembly_and_inline(client, assembly):
     base = {"teeth": 4, "tangential_coefficient_n_m2": 6.0e8, "radial_ratio": 0.3, "radial_immersion": 0.5,
-            "milling": "down", "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 200}}
+            "milling": "down", "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 200}, "method": "zoa"}
     r = client.post("/v1/stability-lobes", json={**base, "assembly": assembly})
     assert r.status_code == 200, r.text
     body = r.json()

@@ -219,6 +219,8 @@ def _lobes_document(path: Path, value: float) -> dict[str, Any]:
     for key in path[:-1]:
         node = node[key]
     field = path[-1]
+    if field not in _SDM_OPTIONS:  # the zero-order bounds (the semi-discretization allows fewer speeds)
+        doc["method"] = "zoa"
     if path[0] == "spindle_speed_rpm" and field in ("start", "stop"):
         # start < stop around the probed value
         node.update(start=value, stop=math.nextafter(value, math.inf)) if field == "start" else \
@@ -233,8 +235,10 @@ def _lobes_document(path: Path, value: float) -> dict[str, Any]:
 def test_schema_and_library_agree_on_the_stability_lobes_bounds(openapi):
     components = openapi["components"]["schemas"]
     schema = {"properties": {k: v for k, v in components["LobesRequest"]["properties"].items()
-                             if k not in ("assembly", "frf_x", "frf_y", "uncertainty", "robust")}}
-    bounds = list(_numeric_bounds(schema, components))
+                             if k not in ("assembly", "frf_x", "frf_y", "uncertainty", "robust", "modal_x",
+                                          "modal_y")}}  # the tables: test_modal_table_bounds_agree
+    # a speed list's items: tests/analysis/lobes/test_request.py
+    bounds = [b for b in _numeric_bounds(schema, components) if not any(isinstance(k, int) for k in b[0])]
     assert {p[0] for p, _, _ in bounds} >= {"teeth", "tangential_coefficient_n_m2", "radial_ratio",
                                             "radial_immersion", "spindle_speed_rpm"}
     disagreements = []
@@ -315,3 +319,21 @@ def test_the_effects_step_and_the_sensor_mass_are_bounded_alike_in_schema_and_li
         except InputError:
             imported = False
         assert imported is expected, (value, expected)
+
+
+def test_modal_table_bounds_agree():
+    """A modal table's row count and fields: the schema refuses what the library refuses."""
+    from service.schemas import LobesRequest as LobesSchema
+
+    from rcsa.analysis.lobes.request import parse_lobes_request
+
+    def doc(rows: list[dict[str, float]]) -> dict[str, Any]:
+        return {"modal_x": rows, "teeth": 2, "tangential_coefficient_n_m2": 6e8, "radial_ratio": 0.3,
+                "radial_immersion": 0.1, "milling": "down",
+                "spindle_speed_rpm": {"start": 2000.0, "stop": 30000.0, "count": 3}}
+
+    row = {"frequency_hz": 800.0, "damping_ratio": 0.03, "stiffness_n_m": 2e7}
+    for rows, expected in (([row] * 64, True), ([row] * 65, False), ([{**row, "damping_ratio": -0.1}], False),
+                           ([{**row, "frequency_hz": 0.0}], False)):
+        got = (_schema_accepts(LobesSchema, doc(rows)), _rcsa_accepts(parse_lobes_request, doc(rows)))
+        assert got == (expected, expected), (len(rows), rows[0], got)

@@ -16,7 +16,7 @@ from .conftest import assert_problem
 def _sdm_lobes() -> dict:
     return {"assembly": ra1({"start_hz": 100.0, "stop_hz": 5000.0, "step_hz": 10.0}), "teeth": 4,
             "tangential_coefficient_n_m2": 6e8, "radial_ratio": 0.3, "radial_immersion": 0.5, "milling": "down",
-            "method": "semi_discretization", "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 200}}
+            "method": "semi_discretization", "spindle_speed_rpm": {"start": 10000, "stop": 30000, "count": 40}}
 
 
 def test_a_computation_past_its_time_limit_is_a_503_problem_and_a_job_is_not_limited(make_client):
@@ -89,7 +89,7 @@ def test_a_real_server_answers_503_at_the_limit_and_stops_on_sigterm_without_wai
     base = f"http://127.0.0.1:{port}"
     try:
         wait_until_ready(base, proc, log)
-        heavy = {**_sdm_lobes(), "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 800}}
+        heavy = {**_sdm_lobes(), "spindle_speed_rpm": {"start": 8000, "stop": 30000, "count": 120}}
         r = httpx.post(base + "/v1/stability-lobes", json=heavy, timeout=120)
         assert r.status_code == 503 and r.json()["type"].endswith("compute-time-limit"), r.text[:300]
         proc.send_signal(signal.SIGTERM)

@@ -463,10 +463,15 @@ def _lobes_conditions(result: LobeResult, conditions: Mapping[str, Any] | None) 
         cutting = (f"{c['teeth']} teeth · a_e/D = {float(c['radial_immersion']):g} · {c['milling']} milling · "
                    f"K_t = {float(c['tangential_coefficient_n_m2']) / 1e6:g} N/mm² · "
                    f"K_r/K_t = {float(c['radial_ratio']):g}\n")
-    how = ("semi-discretization" + (f" ({steps} steps/period)" if steps else "") if method == "semi_discretization"
-           else "zero-order (Altintas–Budak)")
+    scheme = getattr(result, "scheme", None)
+    resolving = "steps resolving the cut, checked per speed" if scheme == "cut_window" else \
+        "steps resolving the period, checked per speed"
+    fixed = c.get("steps_per_period") is not None
+    how = ("semi-discretization (" + (f"{steps} steps/period" if fixed else resolving) + ")"
+           if method == "semi_discretization" else "zero-order (Altintas–Budak)")
     frf = {"assembly": "FRF: the assembly's predicted tool point, in x and y (symmetric tool)",
-           "x_only": "FRF: only x given, Φyy = Φxx assumed", "x_and_y": "FRF: x and y given"}.get(
+           "x_only": "FRF: only x given, Φyy = Φxx assumed", "x_and_y": "FRF: x and y given",
+           "modal_table_x_only": "modal table of x, the same in y", "modal_table_x_and_y": "modal tables of x and y"}.get(
         str(c.get("frf")), "FRF: Φyy = Φxx (the x FRF used in y)" if result.same_frf_in_y else "FRF: x and y given")
     return checked_text(f"{cutting}{how} · {frf}", "conditions")
 

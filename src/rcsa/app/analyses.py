@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -20,6 +20,7 @@ if TYPE_CHECKING:
     from rcsa.analysis.lobes.request import LobesRequest
     from rcsa.analysis.lobes.robust import RobustLobes, RobustRequest
     from rcsa.analysis.lobes.zoa import LobeResult
+    from rcsa.app.budget import Limits
     from rcsa.libraries.sync import LibraryStore
     from rcsa.measured.hybrid import MeasurementSource
 
@@ -33,17 +34,21 @@ __all__ = ["ANALYSIS_KINDS", "LobesAnswer", "cutting_conditions", "diagnose", "e
 ANALYSIS_KINDS = ("prediction", "lobes", "effects", "identification", "diagnosis")
 
 
-def _parse_lobes(request: Mapping[str, Any]) -> tuple[LobesRequest, RobustRequest | None]:
-    """A stability-lobes request and its robust part."""
+def _parse_lobes(request: Mapping[str, Any], within: Limits | None = None
+                 ) -> tuple[LobesRequest, RobustRequest | None, str | None]:
+    """A stability-lobes request, its robust part and, where ``"auto"`` falls back to zero-order
+    lobes within ``within`` (:func:`rcsa.app.budget.auto_lobes_fallback`), why."""
     from rcsa.analysis.lobes.request import parse_lobes_request
     from rcsa.analysis.lobes.robust import split_robust_request
+    from rcsa.app.budget import auto_lobes_fallback
 
-    body, robust = split_robust_request(request)
+    fallback = None if within is None else auto_lobes_fallback(request, within)
+    body, robust = split_robust_request({**request, "method": "zoa"} if fallback else request)
     parsed = parse_lobes_request(body)
     if parsed.assembly is not None and "uncertainty" in parsed.assembly:
         raise InputError("assembly.uncertainty", "give uncertainty at the top of a stability-lobes request "
                                                  "(it asks for robust lobes there)")
-    return parsed, robust
+    return parsed, robust, fallback
 
 
 @dataclass(frozen=True)
@@ -73,18 +78,21 @@ class LobesAnswer:
     flute_length_m: float | None = None
     method_reason: str = ""
     conditions: dict[str, Any] | None = None
+    unchecked: bool = False
 
     def extras(self) -> dict[str, Any]:
         """The response's fields beside the nominal diagram: ``notes`` (all of them),
-        ``flute_length_m`` (with an assembly), ``conditions``, the robust fields, and with ``"method": "auto"`` the method
-        used and why (``method``, ``method_reason``)."""
+        ``flute_length_m`` (with an assembly), ``conditions``, the robust fields, and the method used
+        and why (``method``, ``method_reason``)."""
         from rcsa.analysis.lobes.semi_discretization import SemiDiscretizationResult
 
         own = self.nominal.to_dict().get("notes", [])
         out: dict[str, Any] = {"notes": [*own, *self.notes]}
-        if self.method_reason:
-            out["method"] = "semi_discretization" if isinstance(self.nominal, SemiDiscretizationResult) else "zoa"
-            out["method_reason"] = self.method_reason
+        out["method"] = "semi_discretization" if isinstance(self.nominal, SemiDiscretizationResult) else "zoa"
+        out["method_reason"] = self.method_reason or f"{out['method']}: chosen by the request"
+        if self.unchecked:  # "auto" answered zero-order within a budget: no speed checked
+            out["resolved"] = [False] * len(self.nominal.spindle_speed_rpm)
+            out["notes"].append(self.method_reason)
         if self.flute_length_m is not None:
             out["flute_length_m"] = self.flute_length_m
         if self.conditions is not None:
@@ -121,15 +129,20 @@ def cutting_conditions(parsed: LobesRequest) -> dict[str, Any]:
     dict
         ``teeth``, ``tangential_coefficient_n_m2``, ``radial_ratio``, ``radial_immersion``,
         ``milling``, ``method`` (``zoa`` or ``semi_discretization``, with its
-        ``steps_per_period`` and ``modes_per_direction``) and ``frf``: ``"assembly"`` (the
-        predicted tool point, used in x and y: a rotationally symmetric tool), ``"x_only"``
-        (an inline x FRF, used in y too) or ``"x_and_y"``.
+        ``steps_per_period`` — null: the steps that resolve the cut — and ``modes_per_direction``)
+        and ``frf``: ``"assembly"`` (the predicted tool point, used in x and y: a rotationally
+        symmetric tool), ``"x_only"`` (an inline x FRF, used in y too), ``"x_and_y"``,
+        ``"modal_table_x_only"`` (a modal table of x, used in y too) or ``"modal_table_x_and_y"``.
     """
+    if parsed.assembly is not None:
+        frf = "assembly"
+    elif parsed.modal_model is not None:
+        frf = "modal_table_x_only" if parsed.modal_model.same_in_y else "modal_table_x_and_y"
+    else:
+        frf = "x_only" if parsed.frf_yy is None else "x_and_y"
     out: dict[str, Any] = {"teeth": parsed.teeth, "tangential_coefficient_n_m2": parsed.tangential_coefficient_n_m2,
                            "radial_ratio": parsed.radial_ratio, "radial_immersion": parsed.radial_immersion,
-                           "milling": parsed.milling, "method": parsed.method.name,
-                           "frf": "assembly" if parsed.assembly is not None else
-                           "x_only" if parsed.frf_yy is None else "x_and_y"}
+                           "milling": parsed.milling, "method": parsed.method.name, "frf": frf}
     if parsed.method.name == "semi_discretization":
         out.update(steps_per_period=parsed.method.steps_per_period,
                    modes_per_direction=parsed.method.modes_per_direction)
@@ -146,7 +159,7 @@ def _described(parsed: LobesRequest, frequency_hz: np.ndarray, h: np.ndarray) ->
 
 
 def stability_lobes_answer(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
-                           max_lines: int = MAX_FREQUENCY_LINES) -> LobesAnswer:
+                           max_lines: int = MAX_FREQUENCY_LINES, within: Limits | None = None) -> LobesAnswer:
     """Stability lobes (``docs/contract.md`` "Stability lobes"), robust ones when asked for, and notes.
 
     With an ``assembly``, its tool-point ``h`` is predicted first and used in x and y (the
@@ -157,24 +170,36 @@ def stability_lobes_answer(request: Mapping[str, Any], *, store: MeasurementSour
     drawn: zero-order, every draw's lobes are computed (:mod:`rcsa.analysis.lobes.robust`);
     semi-discretization, the reduced model of the draws gives every draw's limit
     (:mod:`rcsa.analysis.lobes.robust_sdm`). A zero-order diagram on an FRF grid too coarse for
-    it gets a note (:func:`~rcsa.analysis.lobes.zoa.frf_grid_notes`).
+    it gets a note (:func:`~rcsa.analysis.lobes.zoa.frf_grid_notes`). With ``within`` (the
+    service's limits of an answer given at once), ``"auto"`` answers zero-order lobes, marked
+    unresolved, where the resolved semi-discretization would exceed them
+    (:func:`rcsa.app.budget.auto_lobes_fallback`).
 
     Returns
     -------
     LobesAnswer
     """
+    parsed, robust, fallback = _parse_lobes(request, within)
+    if fallback is not None:
+        return replace(_answer(parsed, robust, store, max_lines), method_reason=fallback, unchecked=True)
+    return _answer(parsed, robust, store, max_lines)
+
+
+def _answer(parsed: LobesRequest, robust: RobustRequest | None, store: MeasurementSource | None,
+            max_lines: int) -> LobesAnswer:
     from rcsa.analysis.lobes.robust import RobustLobes, robust_lobes
     from rcsa.analysis.lobes.robust_sdm import robust_sdm_limits
     from rcsa.analysis.lobes.semi_discretization import SemiDiscretizationResult
     from rcsa.app.predictions import predict, predict_draws
     from rcsa.model.contract import parse_assembly
 
-    parsed, robust = _parse_lobes(request)
     zoa = parsed.method.name == "zoa"
-    if parsed.assembly is None:
-        assert parsed.frequency_hz is not None and parsed.frf_xx is not None
-        return LobesAnswer(parsed.solve(), None, method_reason=parsed.method.reason,
-                           **_described(parsed, parsed.frequency_hz, parsed.frf_xx))
+    if parsed.assembly is None:  # inline FRFs or a modal table
+        if parsed.frequency_hz is not None and parsed.frf_xx is not None:
+            described = _described(parsed, parsed.frequency_hz, parsed.frf_xx)
+        else:  # a modal table: no FRF grid to be too coarse
+            described = {"notes": (), "conditions": cutting_conditions(parsed)}
+        return LobesAnswer(parsed.solve(), None, method_reason=parsed.method.reason, **described)
     spec = parse_assembly(parsed.assembly, max_lines)
     flute = float(spec.tool.flute_length_m)
     if robust is not None:
@@ -306,7 +331,7 @@ def _stored_frf(store: MeasurementSource | None, measurement_id: str, field: str
 
 
 def stability_lobes(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
-                    max_lines: int = MAX_FREQUENCY_LINES) -> dict[str, Any]:
+                    max_lines: int = MAX_FREQUENCY_LINES, within: Limits | None = None) -> dict[str, Any]:
     """The contract's stability-lobes response (see :func:`stability_lobes_result`).
 
     Parameters
@@ -317,6 +342,8 @@ def stability_lobes(request: Mapping[str, Any], *, store: MeasurementSource | No
         Where a measured spindle of the assembly is looked up (the default store when omitted).
     max_lines : int
         Largest accepted number of frequency lines.
+    within : Limits, optional
+        The limits of the answer (:func:`stability_lobes_answer`).
 
     Returns
     -------
@@ -327,7 +354,7 @@ def stability_lobes(request: Mapping[str, Any], *, store: MeasurementSource | No
         ``uncertainty``, also ``depth_limit_robust_m`` and ``robust``
         (:class:`rcsa.analysis.lobes.robust.RobustLobes`).
     """
-    return stability_lobes_answer(request, store=store, max_lines=max_lines).to_dict()
+    return stability_lobes_answer(request, store=store, max_lines=max_lines, within=within).to_dict()
 
 
 def effects(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
@@ -417,7 +444,9 @@ def run_analysis(kind: str, request: Mapping[str, Any], *, store: MeasurementSou
 
         return predict(request, store=store, max_lines=max_lines).to_dict()
     if kind == "lobes":
-        return stability_lobes(request, store=store, max_lines=max_lines)
+        from rcsa.app.budget import JOB
+
+        return stability_lobes(request, store=store, max_lines=max_lines, within=JOB)
     if kind == "effects":
         return effects(request, store=store)
     if kind == "identification":

@@ -14,10 +14,9 @@ against the parser (a value just inside accepted, one just outside refused).
 
 from __future__ import annotations
 
-from rcsa.analysis.lobes.options import (
+from rcsa.analysis.lobes.modal_model import (
     DEFAULT_MODES_PER_DIRECTION as SDM_DEFAULT_MODES_PER_DIRECTION,
 )
-from rcsa.analysis.lobes.options import DEFAULT_STEPS_PER_PERIOD as SDM_DEFAULT_STEPS_PER_PERIOD
 from rcsa.analysis.lobes.options import MAX_MODES_PER_DIRECTION as SDM_MAX_MODES_PER_DIRECTION
 from rcsa.analysis.lobes.options import MAX_STEPS_PER_PERIOD as SDM_MAX_STEPS_PER_PERIOD
 from rcsa.analysis.lobes.options import MIN_MODES_PER_DIRECTION as SDM_MIN_MODES_PER_DIRECTION
@@ -25,7 +24,7 @@ from rcsa.analysis.lobes.options import MIN_STEPS_PER_PERIOD as SDM_MIN_STEPS_PE
 from rcsa.model.bounds import *  # noqa: F403 (the whole table, by design)
 from rcsa.model.bounds import __all__ as _MODEL_BOUNDS
 
-__all__ = [*_MODEL_BOUNDS, "SDM_DEFAULT_MODES_PER_DIRECTION", "SDM_DEFAULT_STEPS_PER_PERIOD",
+__all__ = [*_MODEL_BOUNDS, "SDM_DEFAULT_MODES_PER_DIRECTION",
            "SDM_MAX_MODES_PER_DIRECTION", "SDM_MAX_STEPS_PER_PERIOD", "SDM_MIN_MODES_PER_DIRECTION",
            "SDM_MIN_STEPS_PER_PERIOD", "ANALYSIS_MAX_MEASUREMENTS", "DIAGNOSIS_EFFECTS", "DIAGNOSIS_LIKELIHOODS",
            "DIAGNOSIS_OPTION_BOUNDS", "DIAGNOSIS_TOLERANCES", "EFFECTS_MAX_RELATIVE_STEP",

@@ -55,6 +55,7 @@ __all__ = [
     "Limits",
     "Mode",
     "SdmCostModel",
+    "auto_lobes_fallback",
     "body_limit",
     "check",
     "check_work",
@@ -243,11 +244,59 @@ def check(operation: str, request: Mapping[str, Any], *, mode: Mode = "sync",
     ------
     BudgetExceeded
     """
-    cost = estimate(operation, request)
     lim = limits if limits is not None else (SYNC if mode == "sync" else JOB)
-    if cost.seconds > lim.seconds or cost.memory_bytes > lim.memory_bytes:
+    cost = estimate(operation, request)
+    if operation == "lobes" and not _within(cost, lim) and auto_lobes_fallback(request, lim) is not None:
+        cost = estimate(operation, {**request, "method": "zoa"})  # what "auto" will run within them
+    if not _within(cost, lim):
         raise BudgetExceeded(cost, lim, mode)
     return cost
+
+
+def _within(cost: Cost, limits: Limits) -> bool:
+    return cost.seconds <= limits.seconds and cost.memory_bytes <= limits.memory_bytes
+
+
+def auto_lobes_fallback(request: Mapping[str, Any], limits: Limits) -> str | None:
+    """Why ``"method": "auto"`` answers zero-order lobes within ``limits`` (None: it does not).
+
+    ``auto`` picks the resolved semi-discretization wherever zero-order averaging is not exact
+    (:func:`rcsa.analysis.lobes.options.auto_method`). Where that costs more than ``limits`` (a
+    synchronous answer's, :data:`SYNC`) and the zero-order lobes do not, the answer is zero-order,
+    says so, and marks every speed unresolved: a caller who needs resolved limits sends the
+    request as a job (``Prefer: respond-async``) or with fewer speeds. A request that names its
+    method is never changed.
+
+    Parameters
+    ----------
+    request : mapping
+        A stability-lobes request.
+    limits : Limits
+
+    Returns
+    -------
+    str or None
+    """
+    if request.get("method", "auto") != "auto":
+        return None
+    try:
+        from rcsa.analysis.lobes.options import auto_method, teeth_in_cut
+
+        teeth, immersion = int(request.get("teeth", 1)), float(request.get("radial_immersion", 1.0))
+        if auto_method(teeth, immersion)[0] != "semi_discretization":
+            return None
+        sdm = estimate("lobes", {**request, "method": "semi_discretization"})
+        zoa = estimate("lobes", {**request, "method": "zoa"})
+    except (InputError, TypeError, ValueError, ArithmeticError):
+        return None  # the parser says why
+    if _within(sdm, limits) or not _within(zoa, limits):
+        return None
+    return (f"auto: the resolved semi-discretization of these {sdm.terms.get('speeds', 0):.0f} speeds is estimated "
+            f"at {sdm.seconds:.0f} s and {sdm.memory_bytes / GiB:.1f} GiB, beyond the {limits.seconds:g} s and "
+            f"{limits.memory_bytes / GiB:g} GiB of an answer given at once: zero-order limits instead, not checked "
+            f"against it, every speed marked unresolved (with {teeth_in_cut(teeth, immersion):.2f} teeth in the cut "
+            "zero-order limits may lie tens of percent from the resolved ones at single speeds: README 'Which "
+            "method'); for resolved limits send the request as a job (Prefer: respond-async) or with fewer speeds")
 
 
 def time_limited(seconds: float | None) -> Any:
@@ -437,93 +486,179 @@ LOBE_METHOD_S: dict[str, float] = {"zoa": 1.0e-9, "semi_discretization": 1.0e-9}
 
 
 @dataclass(frozen=True)
-class SdmCostModel:
-    """What semi-discretization lobes cost, from the request's speeds, steps and modes.
+class SdmTerms:
+    """What a semi-discretization request will solve, known before it runs.
 
-    The depth search evaluates the period map ~20 times per speed, all open speeds of a
-    chunk at once; each evaluation loops over the ``k`` steps of a tooth period (a Python
-    loop whose numpy calls cost about the same whatever the chunk), updates the modal state
-    ``n = 4 m`` (``m`` modes per direction, x and y, position and velocity) on every step,
-    couples the ``k_cut`` steps in cut to their delayed samples, and takes the eigenvalues of
-    the period map of dimension ``D = n + 2 k_cut``. Hence, for ``S`` speeds (and ``draws``
-    more diagrams: robust lobes add :data:`rcsa.analysis.lobes.robust_sdm.REDUCED_COST_DIAGRAMS`,
-    whatever the number of drawn assemblies)::
-
-        seconds = (1 + draws) · (per_step_s · k
-                                 + S · (per_state_s · k·n + k_cut · (per_cut_s + per_cut_state_s · n)
-                                        + per_eig_s · D³))
-        memory  = min(S, chunk) · (mem_state_bytes · k·n + mem_cut_bytes · k_cut·n + mem_map_bytes · D²)
-                  + S · mem_speed_bytes · k·n
-
-    (the chunk in flight, and what every speed keeps for the whole search).
-
-    The constants are fitted by ``.venv/bin/python benchmarks/bench_budget.py --fit-sdm``
-    (non-negative least squares on the relative error of measured CPU seconds and peak RSS
-    over a grid of speeds, ``steps_per_period``, ``modes_per_direction`` and immersions, then
-    scaled up so that no measured point exceeds its estimate), which prints the line to
-    paste here; refit after any change of the SDM solver (``--check-sdm`` compares the
-    constants in force with new measurements).
+    Attributes
+    ----------
+    speeds : float
+    step_sum : float
+        ``Σ_s k_s``: the steps of every speed (the steps that resolve the cut,
+        :func:`rcsa.analysis.lobes.semi_discretization.resolving_steps`, or ``steps_per_period``).
+    step_max : float
+        The largest ``k_s``.
+    states : float
+        ``n``: twice the modes in x and y (an upper bound: every mode of the band, at most
+        ``modes_per_direction`` per direction).
     """
 
-    per_step_s: float
-    per_state_s: float
-    per_cut_s: float
-    per_cut_state_s: float
-    per_eig_s: float
-    mem_state_bytes: float
-    mem_cut_bytes: float
-    mem_map_bytes: float
+    speeds: float
+    step_sum: float
+    step_max: float
+    states: float
+
+
+@dataclass(frozen=True)
+class SdmCostModel:
+    """What semi-discretization lobes cost, from :class:`SdmTerms`.
+
+    The search evaluates the period map ``E`` times per speed on average (the scan, the bracket,
+    the check at a second resolution and the refinements it may ask for); an evaluation of a speed
+    with ``k`` steps builds ``k`` step exponentials of the ``n``-state system (``n³`` each), a
+    blocked period map (``n²·k``) and runs Arnoldi on it; every round of evaluations also passes over
+    the steps in Python. Hence::
+
+        seconds = (1 + draws) · (E · Σ_s k_s · (per_square_s · n² + per_cube_s · n³)
+                                 + rounds · per_round_step_s · k_max)
+        memory  = min(speeds · mem_pair_step_bytes · k_max · n (n + 8), chunk_bytes) + speeds · mem_speed_bytes
+
+    (the evaluations run in chunks of at most ``chunk_bytes`` of period maps).
+
+    The constants are fitted by ``.venv/bin/python benchmarks/bench_budget.py --fit-sdm`` (CPU
+    seconds and peak RSS measured over a grid of cuts, speeds and modes, each in a fresh process;
+    the fit is scaled so that no measured point exceeds its estimate), which prints the line to
+    paste here; refit after any change of the solver (``--check-sdm`` compares).
+    """
+
+    evaluations: float
+    per_square_s: float
+    per_cube_s: float
+    rounds: float
+    per_round_step_s: float
+    mem_pair_step_bytes: float
     mem_speed_bytes: float
-    chunk: int = 256
+    chunk_bytes: float = 3.0 * 96 * 2**20
 
-    def sizes(self, steps: float, modes: float, cut_fraction: float) -> tuple[float, float, float]:
-        """``(n, k_cut, D)``: the modal state, the steps in cut and the period map's dimension."""
-        n = 4.0 * modes
-        k_cut = float(math.ceil(steps * min(1.0, max(cut_fraction, 1.0 / steps))))
-        return n, k_cut, n + 2.0 * k_cut
-
-    def seconds(self, speeds: float, steps: float, modes: float, cut_fraction: float, draws: float = 0.0) -> float:
+    def seconds(self, t: SdmTerms, draws: float = 0.0) -> float:
         """Estimated CPU seconds on the reference machine."""
-        n, k_cut, d = self.sizes(steps, modes, cut_fraction)
-        per_speed = (self.per_state_s * steps * n + k_cut * (self.per_cut_s + self.per_cut_state_s * n)
-                     + self.per_eig_s * d**3)
-        return (1.0 + draws) * (self.per_step_s * steps + speeds * per_speed)
+        n = t.states
+        work = self.evaluations * t.step_sum * (self.per_square_s * n * n + self.per_cube_s * n**3)
+        return (1.0 + draws) * (work + self.rounds * self.per_round_step_s * t.step_max)
 
-    def memory_bytes(self, speeds: float, steps: float, modes: float, cut_fraction: float) -> float:
+    def memory_bytes(self, t: SdmTerms) -> float:
         """Estimated peak memory of the search, bytes (beyond the process's base)."""
-        n, k_cut, d = self.sizes(steps, modes, cut_fraction)
-        return (min(speeds, self.chunk) * (self.mem_state_bytes * steps * n + self.mem_cut_bytes * k_cut * n
-                                           + self.mem_map_bytes * d * d)
-                + speeds * self.mem_speed_bytes * steps * n)
+        chunk = t.speeds * self.mem_pair_step_bytes * t.step_max * t.states * (t.states + 8.0)
+        return min(chunk, self.chunk_bytes) + t.speeds * self.mem_speed_bytes
 
 
-#: The semi-discretization's constants, fitted by ``benchmarks/bench_budget.py --fit-sdm`` on 18
-#: grid points (20–1 000 speeds, k = 10–200, 1–8 modes per direction, a/D = 0.05–1; refitted after
-#: the SDM was batched over speeds and tools, load 0.9–1.2 on the 2-core VM): estimates 1.0–2.2×
-#: the measured CPU seconds, 1.00–1.27× the measured peak RSS (none below it).
-SDM_COST = SdmCostModel(per_step_s=0.0012, per_state_s=0.0, per_cut_s=2.8e-05, per_cut_state_s=5.5e-06,
-                        per_eig_s=9.5e-11, mem_state_bytes=0.0, mem_cut_bytes=5.7e+02, mem_map_bytes=1.0,
-                        mem_speed_bytes=1.5e+02)
+#: The semi-discretization's constants, fitted by ``benchmarks/bench_budget.py --fit-sdm`` on 12 grid points
+#: (RA-1, 20–500 speeds from 1 000–8 000 rpm to 30 000, 1–4 teeth, a/D 0.05–0.5, 1–8 modes a direction, the
+#: default steps; load 4.2–4.5 on the 2-core VM, ``benchmarks/results/budget_sdm.json``): estimates 1.0–3.5×
+#: the measured CPU seconds, 1.0–2.5× the measured peak RSS (none below it).
+SDM_COST = SdmCostModel(evaluations=14.0, per_square_s=1.0e-7, per_cube_s=0.0, rounds=1.0, per_round_step_s=0.0031,
+                        mem_pair_step_bytes=1.8, mem_speed_bytes=7.6e5)
 
 
-def sdm_terms(request: Mapping[str, Any]) -> tuple[float, float, float]:
-    """``(steps_per_period, modes_per_direction, fraction of a tooth period in cut)`` of a lobes request."""
+def _speeds_of(request: Mapping[str, Any]) -> Any:
+    """The request's speed grid as an array (empty when it cannot be read: the parser says why)."""
+    import numpy as np
+
+    value = request.get("spindle_speed_rpm")
+    try:
+        if isinstance(value, list):
+            grid = np.asarray(value, dtype=float)
+        elif isinstance(value, Mapping):
+            grid = np.linspace(float(value["start"]), float(value["stop"]), int(value["count"]))
+        else:
+            return np.empty(0)
+    except (KeyError, TypeError, ValueError, OverflowError, MemoryError):
+        return np.empty(0)
+    return grid[np.isfinite(grid) & (grid > 0)] if grid.ndim == 1 and grid.size <= 10**6 else np.empty(0)
+
+
+def _modal_extent(request: Mapping[str, Any], modes_cap: int) -> tuple[float, float]:
+    """``(f_top, modes per direction)`` bounds of a lobes request before anything is solved: a
+    modal table's own; an inline FRF's highest frequency line; an assembly's band top and the
+    number of its natural frequencies in the band (an analytical spindle), at most ``modes_cap``."""
+    table = request.get("modal_x")
+    if isinstance(table, list):
+        freqs = [float(m.get("frequency_hz", 0.0)) for m in table if isinstance(m, Mapping)
+                 and isinstance(m.get("frequency_hz"), int | float)]
+        y = request.get("modal_y")
+        freqs += [float(m.get("frequency_hz", 0.0)) for m in (y if isinstance(y, list) else [])
+                  if isinstance(m, Mapping) and isinstance(m.get("frequency_hz"), int | float)]
+        count = max(len(table), len(y) if isinstance(y, list) else 0)
+        return (max(freqs) if freqs else 1.0), float(min(count, modes_cap))
+    frf = request.get("frf_x")
+    if isinstance(frf, Mapping):
+        peaks = [_frf_peaks_hz(frf, modes_cap)] + ([_frf_peaks_hz(request["frf_y"], modes_cap)]
+                                                   if isinstance(request.get("frf_y"), Mapping) else [])
+        if all(p is not None for p in peaks):
+            found = [p for p in peaks if p]
+            return (max(max(p) for p in found) if found else 1.0), float(max((len(p) for p in found), default=1))
+        f = frf.get("frequency_hz")
+        top = max((float(v) for v in f if isinstance(v, int | float)), default=1.0) if isinstance(f, list) else 1.0
+        return top, float(modes_cap)
+    assembly = request.get("assembly")
+    if isinstance(assembly, Mapping):
+        try:
+            spec = _parse(assembly, "assembly")
+        except InputError:
+            return 1.0, float(modes_cap)
+        top = float(spec.frequency_hz[-1])
+        if isinstance(spec.spindle, SpindleSpec):
+            from rcsa.physics.natural_frequencies import natural_frequencies_hz
+
+            count = natural_frequencies_hz(_chain(spec), float(spec.frequency_hz[0]), top).size
+            return top, float(min(max(count, 1), modes_cap))
+        return top, float(modes_cap)
+    return 1.0, float(modes_cap)
+
+
+def _frf_peaks_hz(frf: Mapping[str, Any], modes_cap: int) -> list[float] | None:
+    """The peaks an inline FRF's modal fit will keep (None where the FRF cannot be read: the
+    estimate then assumes the most modes up to the highest line, and the parser says why)."""
+    import numpy as np
+
+    from rcsa.analysis.lobes.modal_model import kept_peaks_hz
+
+    try:
+        h = frf["h"]
+        f = np.asarray(frf["frequency_hz"], dtype=float)
+        values = np.asarray(h["real"], dtype=float) + 1j * np.asarray(h["imag"], dtype=float)
+        if f.ndim != 1 or f.shape != values.shape or f.size < 3 or not np.all(np.isfinite(f)) \
+                or not np.all(np.isfinite(values)) or not np.all(np.diff(f) > 0):
+            return None
+        return kept_peaks_hz(f, values, modes_cap)
+    except (KeyError, TypeError, ValueError, OverflowError, MemoryError):
+        return None
+
+
+def sdm_terms(request: Mapping[str, Any]) -> SdmTerms:
+    """:class:`SdmTerms` of a lobes request (its parsers say why, where it cannot be read)."""
+    import numpy as np
+
+    from rcsa.analysis.lobes.modal_model import ModalModel
     from rcsa.analysis.lobes.options import parse_method
-    from rcsa.analysis.lobes.zoa import engagement_angles_rad
+    from rcsa.analysis.lobes.semi_discretization import cut_scheme, resolving_steps
 
     try:
-        method = parse_method(request, teeth=int(request.get("teeth", 1)),
-                              radial_immersion=float(request.get("radial_immersion", 1.0)))
+        teeth, immersion = int(request.get("teeth", 1)), float(request.get("radial_immersion", 1.0))
+        milling = str(request.get("milling", "down"))
+        method = parse_method({**request, "method": "semi_discretization"}, teeth=teeth, radial_immersion=immersion)
+        cut_scheme(teeth, immersion, milling)  # type: ignore[arg-type]
     except (InputError, TypeError, ValueError):  # the request's parser says why
-        method = parse_method({})
-    try:
-        phi_st, phi_ex = engagement_angles_rad(float(request.get("radial_immersion", 1.0)),
-                                               str(request.get("milling", "down")))  # type: ignore[arg-type]
-        teeth = float(request.get("teeth", 1))
-        fraction = (phi_ex - phi_st) * teeth / (2.0 * math.pi)
-    except (InputError, TypeError, ValueError):  # the request's parser says why
-        fraction = 1.0
-    return float(method.steps_per_period), float(method.modes_per_direction), fraction
+        return SdmTerms(0.0, 0.0, 0.0, 0.0)
+    speeds = _speeds_of(request)
+    f_top, modes = _modal_extent(request, method.modes_per_direction)
+    if method.steps_per_period is not None:
+        steps = np.full(speeds.size, float(method.steps_per_period))
+    elif speeds.size:
+        probe = ModalModel.of([f_top], [0.02], [1.0], [0])
+        steps = resolving_steps(probe, teeth, speeds, radial_immersion=immersion, milling=milling)  # type: ignore[arg-type]
+    else:
+        steps = np.zeros(0)
+    return SdmTerms(float(speeds.size), float(steps.sum()), float(steps.max()) if steps.size else 0.0, 4.0 * modes)
 
 
 @cost_model("lobes")
@@ -539,11 +674,9 @@ def _lobes(request: Mapping[str, Any]) -> Cost:
         frf = request.get("frf_x")
         lines = float(_count(frf.get("frequency_hz"))) if isinstance(frf, Mapping) else 0.0
         terms["lines"] = lines
-    speeds = request.get("spindle_speed_rpm")
-    count = speeds.get("count", 0) if isinstance(speeds, Mapping) else 0
-    count = float(count) if isinstance(count, int | float) and not isinstance(count, bool) else 0.0
+    count = float(_speeds_of(request).size)
     method = request.get("method")
-    name = method if isinstance(method, str) else (method.get("name", "zoa") if isinstance(method, Mapping) else "zoa")
+    name = "auto" if method is None else method
     if name == "auto":  # the method the request's parser will pick
         from rcsa.analysis.lobes.options import auto_method
 
@@ -558,15 +691,15 @@ def _lobes(request: Mapping[str, Any]) -> Cost:
     if name == "semi_discretization":
         from rcsa.analysis.lobes.robust_sdm import REDUCED_COST_DIAGRAMS
 
-        steps, modes, fraction = sdm_terms(request)
+        t = sdm_terms(request)
         # robust: the reduced model of the draws solves a few diagrams more, whatever the draws
         extra = REDUCED_COST_DIAGRAMS if _draws(request) > 0 else 0.0
-        seconds += SDM_COST.seconds(count, steps, modes, fraction, extra)
-        memory += SDM_COST.memory_bytes(count, steps, modes, fraction)
-        terms = {**terms, "steps_per_period": steps, "modes_per_direction": modes,
-                 "period_map_dimension": SDM_COST.sizes(steps, modes, fraction)[2]}
-        shrink = ("fewer speeds (spindle_speed_rpm.count)", "fewer steps_per_period",
-                  "fewer modes_per_direction", "fewer frequency lines")
+        seconds += SDM_COST.seconds(t, extra)
+        memory += SDM_COST.memory_bytes(t)
+        terms = {**terms, "steps_total": t.step_sum, "steps_max": t.step_max, "modal_states": t.states}
+        shrink = ("fewer speeds (spindle_speed_rpm.count), or higher ones (fewer vibration cycles in a cut need "
+                  "fewer steps)", "a lower top of the frequency band (the highest mode sets the steps)",
+                  "fewer modes_per_direction")
     return Cost("lobes", seconds, memory, {**terms, "speeds": count}, shrink)
 
 

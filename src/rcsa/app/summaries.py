@@ -327,11 +327,12 @@ def lobes_summary(result: Mapping[str, Any]) -> list[Table]:
 def unsettled_speeds(result: Mapping[str, Any]) -> dict[str, np.ndarray]:
     """The speeds of a stability-lobes result whose limit is not to be trusted as drawn, by why.
 
-    * ``"under-resolved"``: a semi-discretization with fewer than
+    * ``"unresolved"``: two resolutions of the semi-discretization disagree by more than 1 %
+      (``resolved`` false);
+    * ``"under-resolved"``: a semi-discretization result without ``resolved`` (from before the
+      per-speed check) with fewer than
       :data:`~rcsa.analysis.lobes.semi_discretization.MIN_STEPS_PER_CHATTER_CYCLE` steps per
       chatter cycle there (``steps_per_chatter_cycle``);
-    * ``"unresolved"``: two resolutions of the semi-discretization disagree by more than 1 %
-      (``resolved`` false, where the result has that field);
     * ``"coarse grid"``: the envelope is a straight chord there, longer than :data:`MAX_CHORD`
       of the speed: zero-order lobes pass through one point per FRF line, so a coarse FRF grid
       draws them as polygons, and a lobe's minimum between two lines is missed.
@@ -351,12 +352,12 @@ def unsettled_speeds(result: Mapping[str, Any]) -> dict[str, np.ndarray]:
     n = len(result.get("spindle_speed_rpm") or [])
     out: dict[str, np.ndarray] = {}
     steps = result.get("steps_per_chatter_cycle")
-    if isinstance(steps, list) and len(steps) == n:
-        cycles = np.asarray([np.inf if s is None else s for s in steps], dtype=float)
-        out["under-resolved"] = cycles < MIN_STEPS_PER_CHATTER_CYCLE
     resolved = result.get("resolved")
     if isinstance(resolved, list) and len(resolved) == n:
         out["unresolved"] = ~np.asarray([bool(r) for r in resolved])
+    elif isinstance(steps, list) and len(steps) == n:
+        cycles = np.asarray([np.inf if s is None else s for s in steps], dtype=float)
+        out["under-resolved"] = cycles < MIN_STEPS_PER_CHATTER_CYCLE
     chords = _long_chords(result, n)
     if chords is not None:
         out["coarse grid"] = chords

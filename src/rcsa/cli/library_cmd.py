@@ -394,8 +394,8 @@ def recommend(
                                                                  "table's, carbide tools only).")] = None,
     feed_per_tooth_mm: Annotated[float | None, typer.Option(help="Feed per tooth for the preset's feeds, mm "
                                                                  "(default: f_z of the tool's own preset).")] = None,
-    method: Annotated[str, typer.Option(help="Lobe method: auto (semi_discretization where fewer than one tooth "
-                                             "is in the cut on average, else zoa), zoa or semi_discretization.")
+    method: Annotated[str, typer.Option(help="Lobe method: auto (zoa only where it is exact, even-toothed "
+                                             "slotting; else semi_discretization), zoa or semi_discretization.")
                       ] = "auto",
     uncertainty: UncertaintyOption = None,
     confidence: Annotated[float | None, typer.Option(help="With --uncertainty: choose the pocket on the robust "

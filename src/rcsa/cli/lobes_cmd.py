@@ -21,8 +21,9 @@ def register(app: typer.Typer) -> None:
         store: Annotated[Path | None, typer.Option("--store", help="Measurement store for hybrid assemblies.")] = None,
         as_json: JsonOption = False,
     ) -> None:
-        """Stability lobes from inline FRFs or an assembly: zero-order (Altintas–Budak, the default) or
-        "method": "semi_discretization" in the request (Insperger–Stépán, for low radial immersion).
+        """Stability lobes from inline FRFs, modal tables or an assembly. "method" auto (the default:
+        zero-order only where it is exact, even-toothed slotting; else the semi-discretization, every
+        speed checked at two resolutions: "resolved"), zoa or semi_discretization.
         With "uncertainty" (and "robust": {"confidence"}) beside an assembly: depth_limit_robust_m too
         (semi-discretization: from a reduced model of the draws). A stored library's tool
         ("library_tool": {"library_id", "tool_id"}) or a stored measurement's FRF ("frf_x":

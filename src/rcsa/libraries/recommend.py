@@ -11,8 +11,8 @@ predicted on the fly), :func:`recommend_presets`
    caller's ``max_surface_speed_m_min``) and the speed ``n`` of the tool's own presets for
    this material (a vendor's preset named e.g. "Aluminum": the tool's own limit);
 3. computes the stability lobes (the same FRF in x and y) by the method asked for — zero-order,
-   semi-discretization, or ``"auto"``: semi-discretization wherever fewer than one tooth is in
-   the cut on average — and picks the best pocket
+   semi-discretization, or ``"auto"``: zero-order only where it is exact (even-toothed slotting),
+   else the semi-discretization — and picks the best pocket
    (:func:`rcsa.analysis.lobes.tool_pockets.tool_pockets`, the rule of
    :mod:`rcsa.analysis.lobes.pockets`: the speed maximising ``n · a_p`` whose ± tolerance
    window stays stable at the stepdown times the safety factor; the stepdown at most the flute
@@ -450,8 +450,9 @@ def recommend_presets(file: FusionFile, entries: list[Mapping[str, Any]], frfs: 
                  "objective": "maximise n * stepdown (material removal rate at a fixed a_e and f_z)",
                  "window": "the depth limit is the smallest within n * (1 +/- speed_tolerance)",
                  "stepdown": "window depth limit / safety_factor, at most LCF",
-                 "method": "auto: semi_discretization where fewer than one tooth is in the cut on average "
-                           "(N acos(1 - 2 a_e/D) / 2 pi < 1), else zoa"},
+                 "method": "auto: zoa only where it is exact (slotting with an even number of teeth, 4 or "
+                           "more), else semi_discretization with the steps that resolve the cut, checked at "
+                           "two resolutions"},
         "preset_name": preset_name(options), "summary": summary, "tools": tools})
 
 

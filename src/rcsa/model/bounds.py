@@ -16,6 +16,15 @@ negative values are told "must be > 0") and the sanity minimum after it.
 from __future__ import annotations
 
 __all__ = [
+    "MAX_MODAL_STIFFNESS_N_M",
+    "MIN_MODAL_STIFFNESS_N_M",
+    "MAX_MODAL_MASS_KG",
+    "MIN_MODAL_MASS_KG",
+    "MAX_MODAL_DAMPING_RATIO",
+    "MIN_MODAL_DAMPING_RATIO",
+    "MAX_MODAL_FREQUENCY_HZ",
+    "MIN_MODAL_FREQUENCY_HZ",
+    "MAX_MODAL_TABLE_MODES",
     "MAX_BATCH_COMBINATIONS",
     "MAX_BEARINGS",
     "MAX_COHERENCE",
@@ -203,6 +212,14 @@ MIN_RADIAL_IMMERSION = 1.0e-4
 MIN_SPEED_RPM, MAX_SPEED_RPM = 1.0e-3, 1.0e6
 #: Speeds of a lobes grid.
 MIN_SPEED_COUNT, MAX_SPEED_COUNT = 2, 100_000
+#: Rows of a modal table of one direction (a lobes request's ``modal_x`` / ``modal_y``).
+MAX_MODAL_TABLE_MODES = 64
+#: A modal table's natural frequencies (Hz), damping ratios, modal masses (kg) and modal
+#: stiffnesses (N/m).
+MIN_MODAL_FREQUENCY_HZ, MAX_MODAL_FREQUENCY_HZ = 1.0, 1.0e5
+MIN_MODAL_DAMPING_RATIO, MAX_MODAL_DAMPING_RATIO = 1.0e-5, 0.95
+MIN_MODAL_MASS_KG, MAX_MODAL_MASS_KG = 1.0e-9, 1.0e6
+MIN_MODAL_STIFFNESS_N_M, MAX_MODAL_STIFFNESS_N_M = 1.0, MAX_STIFFNESS
 
 # ---------------------------------------------------------------------------- effect analysis
 

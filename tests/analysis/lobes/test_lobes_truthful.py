@@ -34,16 +34,17 @@ def test_a_grid_too_coarse_for_the_dominant_mode_is_said(step, warned):
 
 def test_the_response_carries_the_flute_length_and_the_grid_note():
     coarse = stability_lobes({"assembly": ra1({"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 20.0}), **CUT,
-                              "radial_immersion": 0.5, "spindle_speed_rpm": {"start": 4000, "stop": 24000, "count": 50}})
+                              "radial_immersion": 0.5, "method": "zoa", "spindle_speed_rpm": {"start": 4000, "stop": 24000, "count": 50}})
     assert coarse["flute_length_m"] == pytest.approx(ra1()["tool"]["flute_length_m"])
     assert any("FRF grid" in n for n in coarse["notes"])
     fine = stability_lobes({"assembly": ra1({"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 1.0}), **CUT,
-                            "radial_immersion": 0.5, "spindle_speed_rpm": {"start": 4000, "stop": 24000, "count": 50}})
+                            "radial_immersion": 0.5, "method": "zoa", "spindle_speed_rpm": {"start": 4000, "stop": 24000, "count": 50}})
     assert fine["notes"] == []
 
 
 def test_auto_says_which_method_and_why():
-    assert parse_method({"method": "auto"}, teeth=4, radial_immersion=0.5).name == "zoa"
+    assert parse_method({"method": "auto"}, teeth=4, radial_immersion=1.0).name == "zoa"  # exact there
+    assert parse_method({"method": "auto"}, teeth=4, radial_immersion=0.5).name == "semi_discretization"
     with pytest.raises(InputError) as err:
         parse_method({"method": "auto"})
     assert err.value.field == "method"
@@ -59,7 +60,7 @@ def test_the_picture_draws_the_flute_length_the_notes_and_no_limit_speeds_as_sta
                                      "steps_per_period": 20,
                                      "spindle_speed_rpm": {"start": 6000, "stop": 24000, "count": 40}})
     extras = answer.extras()
-    assert extras["notes"] and "under-resolved" in extras["notes"][0]  # 20 steps: low speeds under-resolved
+    assert extras["notes"] and "not resolved" in extras["notes"][0]  # 20 steps over the period: too few
     fig = robust_lobes_figure(answer.nominal, extras)
     ax = fig.axes[0]
     gids = {a.get_gid() for a in [*ax.lines, *fig.texts]}

@@ -15,7 +15,7 @@ from rcsa.reference import ra1
 
 GRID = {"start_hz": 100.0, "stop_hz": 5000.0, "step_hz": 10.0}
 CUT = {"teeth": 4, "tangential_coefficient_n_m2": 6.0e8, "radial_ratio": 0.3, "radial_immersion": 0.5,
-       "milling": "down", "spindle_speed_rpm": {"start": 3000, "stop": 24000, "count": 600}}
+       "milling": "down", "spindle_speed_rpm": {"start": 3000, "stop": 24000, "count": 600}, "method": "zoa"}
 OPTION = {"draws": 24, "seed": 11}
 
 
@@ -31,7 +31,7 @@ def robust_response():
 def test_every_draws_envelope_equals_its_own_lobe_diagram():
     _, draws, _ = predict_draws(ra1(GRID), {"draws": 6, "seed": 2})
     speeds = np.linspace(3000.0, 24000.0, 600)
-    cut = {k: v for k, v in CUT.items() if k != "spindle_speed_rpm"}
+    cut = {k: v for k, v in CUT.items() if k not in ("spindle_speed_rpm", "method")}
     f = np.arange(100.0, 5000.0 + 1e-9, 10.0)
     together = depth_limit_envelopes(f, draws.h, spindle_speed_rpm=speeds, **cut)
     one_by_one = [stability_lobes(f, h, spindle_speed_rpm=speeds, **cut).depth_limit_m for h in draws.h]

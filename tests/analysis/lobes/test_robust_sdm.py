@@ -13,7 +13,7 @@ import pytest
 
 from rcsa.analysis.lobes.modal_model import ModalModel
 from rcsa.analysis.lobes.robust_sdm import drawn_models, modal_ratios, robust_sdm_limits
-from rcsa.analysis.lobes.semi_discretization import resolving_steps, semi_discretization_lobes_many
+from rcsa.analysis.lobes.semi_discretization import semi_discretization_lobes_many
 from rcsa.app.analyses import stability_lobes
 from rcsa.model.tolerances import DEFAULT_TOLERANCES
 from rcsa.reference import ra1
@@ -33,8 +33,7 @@ def _draws(base: ModalModel, n: int, seed: int):
 
 
 def _full(models, speeds):
-    out = semi_discretization_lobes_many(models, **CUT, spindle_speed_rpm=[speeds] * len(models),
-                                         steps_per_period=[resolving_steps(m, 1, speeds) for m in models])
+    out = semi_discretization_lobes_many(models, **CUT, spindle_speed_rpm=[speeds] * len(models))
     return np.array([r.depth_limit_m for r in out])
 
 
@@ -55,8 +54,7 @@ def test_one_mode_the_reduced_model_is_the_full_one_but_for_its_interpolations()
     base = ModalModel.of([1400.0], [0.015], [50.0], [0])
     models, h_draws, _ = _draws(base, 16, 2)
     speeds = np.geomspace(14000.0, 24000.0, 50)
-    nominal = semi_discretization_lobes_many([base], **CUT, spindle_speed_rpm=[speeds],
-                                             steps_per_period=[resolving_steps(base, 1, speeds)])[0]
+    nominal = semi_discretization_lobes_many([base], **CUT, spindle_speed_rpm=[speeds])[0]
     per_draw: list[np.ndarray] = []
     robust = robust_sdm_limits(base, F, base.receptance(F, 0), h_draws, nominal, 0.9, **CUT, draws_out=per_draw)
     full = _full(models, speeds)
@@ -76,5 +74,6 @@ def test_zero_tolerances_give_the_nominal_semi_discretization_limit():
     nominal = np.array([np.nan if v is None else v for v in response["depth_limit_m"]])
     robust = np.array([np.nan if v is None else v for v in response["depth_limit_robust_m"]])
     assert response["robust"]["method"] == "semi_discretization" and "reduced model" in response["robust"]["rule"]
-    np.testing.assert_allclose(robust, nominal, rtol=1e-2)  # the reduced model's own grid and 0.5 % brackets
+    # the reduced model's own grid and 0.5 % brackets, and its diagrams unchecked (each resolution within ~1 %)
+    np.testing.assert_allclose(robust, nominal, rtol=1.5e-2)
     assert np.all(robust <= nominal * (1 + 1e-12))

@@ -13,7 +13,6 @@ at a_e/D = 0.5, before :func:`resolving_steps` took the highest mode).
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from rcsa.analysis.lobes.modal_model import ModalModel
 from rcsa.analysis.lobes.semi_discretization import (
@@ -33,25 +32,26 @@ def _model() -> ModalModel:
     return ModalModel.of(f, z, 1.0 / m, np.repeat([0, 1], len(MODES)))
 
 
-def _window_minimum(steps: np.ndarray | int) -> tuple[float, object]:
+def _window_minimum(steps: np.ndarray | int | None) -> tuple[float, object]:
     speeds = np.geomspace(19066 * 0.97, 19066 * 1.03, 9)
-    k = np.broadcast_to(np.asarray(steps), speeds.shape).astype(np.int64)
+    k = None if steps is None else [np.broadcast_to(np.asarray(steps), speeds.shape).astype(np.int64)]
     r = semi_discretization_lobes_many([_model()], teeth=1, tangential_coefficient_n_m2=KT, radial_ratio=KR,
                                        radial_immersion=0.5, milling="down", spindle_speed_rpm=[speeds],
-                                       steps_per_period=[k], min_depth_search_max_m=[0.02])[0]
+                                       steps_per_period=k, min_depth_search_max_m=[0.02])[0]
     return float(np.nanmin(r.depth_limit_m)), r
 
 
 def test_the_resolving_steps_find_the_weak_high_modes_chatter():
     model = _model()
     speeds = np.geomspace(19066 * 0.97, 19066 * 1.03, 9)
-    steps = resolving_steps(model, 1, speeds)
-    # 10 steps per cycle of 1.2 x 6.23 kHz at ~19 000 rpm (one tooth): 236 -> 240
-    assert steps.min() >= 240
-    limit, r = _window_minimum(steps)
-    # first-order SDM converges from above as 1/k^2 (module docstring): at ~12 steps per chatter
-    # cycle about 2 % high; the safety factor (1.25) covers it
-    assert limit == pytest.approx(CONVERGED_M, rel=0.03)
+    # a quarter of the period in the cut (one flute, half immersion: 90 degrees): 10 steps per cycle of
+    # 1.2 x 6.23 kHz over 0.79 ms: 59 -> the band 64
+    steps = resolving_steps(model, 1, speeds, radial_immersion=0.5)
+    assert steps.min() >= 59
+    limit, r = _window_minimum(None)  # the default: those steps, checked at 1/sqrt(2) of them, refined
+    assert r.scheme == "cut_window" and r.resolved.all()
+    # converged within the 1 % two resolutions agree to (first-order SDM converges from above)
+    assert CONVERGED_M * (1 - 0.005) <= limit <= CONVERGED_M * 1.015
     chatter = r.chatter_frequency_hz[np.isfinite(r.depth_limit_m)]
     assert chatter.size == 9 and np.all((chatter > 6000) & (chatter < 6700))  # every speed: the 6.2 kHz mode
     assert r.notes() == []
@@ -61,5 +61,5 @@ def test_too_few_steps_for_the_high_mode_are_noted():
     limit, r = _window_minimum(40)
     assert limit > 2.5 * CONVERGED_M  # the instability of the 6.2 kHz mode is not seen at all ...
     assert np.all(r.top_mode_steps_per_cycle < MIN_STEPS_PER_CHATTER_CYCLE)
-    notes = r.notes()
+    notes = [n for n in r.notes() if "highest mode" in n]
     assert len(notes) == 1 and "highest mode (6235 Hz)" in notes[0] and "can be missed" in notes[0]  # ... but said

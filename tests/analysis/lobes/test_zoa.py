@@ -525,6 +525,7 @@ def _body(**over):
     f = [400.0, 800.0, 1200.0]
     h = single_mode(np.array(f), 800.0, 0.03, 2e7)
     body = {
+        "method": "zoa",
         "frf_x": {"frequency_hz": f, "h": {"real": h.real.tolist(), "imag": h.imag.tolist()}},
         "frf_y": None,
         "assembly": None,

@@ -9,7 +9,11 @@ terms are not modelled) and contributes
 to that direction's direct receptance: a real (proportionally damped) mode with residue
 ``R_r = φ_r² = 1/m_r`` (1/kg), modal stiffness ``k_r = ω_r²/R_r``.
 
-Two sources:
+Three sources:
+
+* :func:`modal_model_from_table` — a modal table per direction (natural frequency, damping
+  ratio, modal mass or modal stiffness), as CutPro and MetalMAX users have them from a modal fit
+  of their own tap tests.
 
 * :func:`modal_model_from_assembly` — an analytical assembly: its exact undamped natural
   frequencies (Wittrick–Williams), the exact undamped tip residue of each mode and the
@@ -36,6 +40,7 @@ References
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -53,14 +58,19 @@ from rcsa.physics.natural_frequencies import natural_frequencies_hz
 __all__ = [
     "DEFAULT_MODES_PER_DIRECTION",
     "MAX_MODES_PER_DIRECTION",
+    "MIN_PEAK_FRACTION",
+    "kept_peaks_hz",
     "ModalModel",
     "fit_modal_model",
     "modal_model_from_assembly",
+    "modal_model_from_table",
 ]
 
-#: Modes per direction kept (the most flexible ones), default and upper bound.
-DEFAULT_MODES_PER_DIRECTION = 3
+#: Modes per direction kept (the most flexible ones above ``MIN_PEAK_FRACTION``), at most; by
+#: default every one up to this bound (a mode left out moved limits by −32 %…+60 % on a published
+#: five-mode table: README "Modes").
 MAX_MODES_PER_DIRECTION = 8
+DEFAULT_MODES_PER_DIRECTION = MAX_MODES_PER_DIRECTION
 #: Modes whose peak ``|h|`` is below this fraction of the largest are left out.
 MIN_PEAK_FRACTION = 0.05
 
@@ -151,6 +161,13 @@ class ModalModel:
         """Number of modes (both directions)."""
         return int(self.frequency_hz.size)
 
+    def frf_grid(self) -> np.ndarray:
+        """A frequency grid (Hz) that resolves every mode: 2 000 lines from half the lowest to twice
+        the highest natural frequency, and 400 lines across ``0.8–1.25 ×`` each."""
+        fn = np.asarray(self.frequency_hz, dtype=float)
+        return np.unique(np.concatenate([np.geomspace(0.5 * fn.min(), 2.0 * fn.max(), 2000)]
+                                        + [f * np.linspace(0.8, 1.25, 400) for f in fn]))
+
     def receptance(self, frequency_hz: np.ndarray, direction: int) -> np.ndarray:
         """Direct receptance of one direction, m/N, shape (nfreq,) (zero without modes)."""
         w = _TWO_PI * np.asarray(frequency_hz, dtype=float)[:, None]
@@ -179,6 +196,21 @@ class ModalModel:
                 "relative_rms_error": {d: num(float(e)) for d, e in zip(_DIRECTIONS, self.relative_rms_error,
                                                                          strict=True)},
                 "omitted_modes": omitted}
+
+    def notes(self) -> list[str]:
+        """Plain-language notes: every mode (or FRF peak) left out, with its share of the largest peak.
+
+        Modes without a peak at the tool point (an assembly's modes the tool point does not take
+        part in) are listed in :meth:`to_dict` only; a mode left out in x and y alike is named once.
+        """
+        seen: dict[tuple[float, float], list[str]] = {}
+        for d, f, share in self.omitted:
+            if math.isfinite(share):
+                seen.setdefault((round(f, 3), round(share, 6)), []).append(_DIRECTIONS[d])
+        return [f"mode at {f:.0f} Hz in {' and '.join(dirs)} left out ({share:.0%} of the largest peak: "
+                + (f"below the {MIN_PEAK_FRACTION:.0%} threshold)" if share < MIN_PEAK_FRACTION
+                   else "beyond modes_per_direction)")
+                for (f, share), dirs in seen.items()]
 
     def with_quality(self, frequency_hz: np.ndarray, h_by_direction: tuple[np.ndarray | None, np.ndarray | None]
                      ) -> ModalModel:
@@ -221,6 +253,27 @@ def _select_peaks(f: np.ndarray, h: np.ndarray, max_modes: int) -> tuple[list[fl
     keep = [p for p in ranked if p["magnitude_m_n"] >= MIN_PEAK_FRACTION * top][:max_modes]
     left = [(p["frequency_hz"], p["magnitude_m_n"] / top) for p in ranked if p not in keep]
     return sorted(p["frequency_hz"] for p in keep), sorted(left)
+
+
+def kept_peaks_hz(frequency_hz: np.ndarray, h: np.ndarray, modes_per_direction: int) -> list[float]:
+    """The FRF peaks a fit keeps, Hz, ascending: the largest ``modes_per_direction`` of ``|h|`` at
+    or above ``MIN_PEAK_FRACTION`` of the largest (what :func:`fit_modal_model` fits; found without
+    fitting, for a cost estimate).
+
+    Parameters
+    ----------
+    frequency_hz : numpy.ndarray, shape (nfreq,)
+        Grid, Hz.
+    h : numpy.ndarray, shape (nfreq,), complex
+        Direct receptance, m/N.
+    modes_per_direction : int
+        At most this many peaks.
+
+    Returns
+    -------
+    list of float
+    """
+    return _select_peaks(np.asarray(frequency_hz, dtype=float), np.asarray(h), modes_per_direction)[0]
 
 
 def _start(f: np.ndarray, h: np.ndarray, peak_hz: float) -> tuple[float, float]:
@@ -417,3 +470,60 @@ def modal_model_from_assembly(spec: AssemblySpec, *, modes_per_direction: int = 
     if frequency_hz is None or h is None:
         return model
     return model.with_quality(np.asarray(frequency_hz, dtype=float), (np.asarray(h), np.asarray(h)))
+
+
+def modal_model_from_table(modes_x: Sequence[tuple[float, float, float]],
+                           modes_y: Sequence[tuple[float, float, float]] | None = None, *,
+                           modes_per_direction: int = DEFAULT_MODES_PER_DIRECTION) -> ModalModel:
+    """Modes given as a table per direction: ``(frequency_hz, damping_ratio, modal_mass_kg)`` rows.
+
+    The rows are taken as they are (natural frequency ``f``, damping ratio ``ζ``, modal mass
+    ``m``: residue ``1/m``; a modal stiffness ``k`` is the mass ``k/(2πf)²``). Modes whose peak
+    ``|h(ω_r)| ≈ 1/(2ζ k)`` is below ``MIN_PEAK_FRACTION`` of the largest of their direction, and
+    those beyond the ``modes_per_direction`` largest, are left out and listed (``omitted``).
+
+    Parameters
+    ----------
+    modes_x : sequence of (float, float, float)
+        The feed direction's modes.
+    modes_y : sequence of (float, float, float), optional
+        The normal direction's; None: the same as x (``same_in_y``); empty: rigid in y.
+    modes_per_direction : int
+
+    Returns
+    -------
+    ModalModel
+        ``source="given"``.
+
+    Examples
+    --------
+    Mode 1 of a published table (Ji & Liu 2024, 35 mm overhang, x):
+
+    >>> m = modal_model_from_table([(565.1, 0.0322, 0.1966)])
+    >>> m.source, m.same_in_y, round(float(m.residue_1_kg[0]), 3), m.n_modes
+    ('given', True, 5.086, 2)
+    """
+    def pick(rows: Sequence[tuple[float, float, float]], d: int) -> tuple[list[tuple[float, float, float]],
+                                                                           list[tuple[int, float, float]]]:
+        if not rows:
+            return [], []
+        f = np.array([r[0] for r in rows], dtype=float)
+        z = np.array([r[1] for r in rows], dtype=float)
+        mass = np.array([r[2] for r in rows], dtype=float)
+        peak = 1.0 / (2.0 * z * mass * (_TWO_PI * f) ** 2)
+        top = float(peak.max())
+        ranked = np.argsort(-peak, kind="stable")
+        keep = [int(i) for i in ranked if peak[i] >= MIN_PEAK_FRACTION * top][:modes_per_direction]
+        left = [(d, float(f[i]), float(peak[i] / top)) for i in range(f.size) if i not in keep]
+        return [rows[i] for i in sorted(keep, key=lambda i: f[i])], sorted(left, key=lambda x: x[1])
+
+    kept_x, left_x = pick(modes_x, 0)
+    if not kept_x:
+        raise InputError("modal_x", "give at least one mode of the feed direction")
+    same = modes_y is None
+    kept_y, left_y = (kept_x, [(1, f, p) for _, f, p in left_x]) if same else pick(modes_y or [], 1)
+    rows = kept_x + kept_y
+    return ModalModel(np.array([r[0] for r in rows]), np.array([r[1] for r in rows]),
+                      np.array([1.0 / r[2] for r in rows]),
+                      np.array([0] * len(kept_x) + [1] * len(kept_y), dtype=np.int64), source="given",
+                      same_in_y=same, omitted=tuple(left_x) + tuple(left_y))

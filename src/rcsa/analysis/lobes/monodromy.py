@@ -40,8 +40,9 @@ References
 
 from __future__ import annotations
 
+import functools
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Literal
 
@@ -54,11 +55,21 @@ __all__ = [
     "CuttingPlan",
     "PeriodMaps",
     "StateSpace",
+    "BLOCK_STEPS",
+    "BlockedPeriodMap",
     "apply_period",
+    "blockable",
+    "blocked_period_map",
+    "chatter_frequency",
     "critical_multipliers",
+    "cut_window_fraction",
+    "cut_window_plan",
     "cutting_plan",
     "free_maps",
+    "matrix_free_cheaper",
     "monodromy_matrix",
+    "padded_cut_window",
+    "period_displacement",
     "period_maps",
     "state_space",
     "state_spaces",
@@ -99,7 +110,13 @@ class CuttingPlan:
     slot : numpy.ndarray, shape (steps,)
         Position of the delayed sample ``r_{s−k}`` in the reduced state, −1 if unread.
     free_length : numpy.ndarray, shape (nfree,)
-        Steps of each free stretch.
+        Length of each free stretch in steps (a float: the free flight of a cut-window plan is
+        not a whole number of steps).
+    step_fraction : float
+        One step ``h`` over the tooth period ``T`` (``1/steps`` for a full-period plan).
+    scheme : {"full_period", "cut_window"}
+        :func:`cutting_plan` (equal steps over the whole period) or :func:`cut_window_plan`
+        (equal steps over the time in the cut, the free flight as one exact step).
     """
 
     steps: int
@@ -108,6 +125,8 @@ class CuttingPlan:
     segments: tuple[tuple[int, int, int], ...]
     slot: np.ndarray
     free_length: np.ndarray
+    step_fraction: float
+    scheme: str = "full_period"
 
     @property
     def n_samples(self) -> int:
@@ -167,7 +186,66 @@ def cutting_plan(teeth: int, steps: int, phi_start_rad: float, phi_exit_rad: flo
         free.append(j - i)
         i = j
     return CuttingPlan(steps, force[cut_step], cut_step, tuple(segments), slot,
-                       np.array(free, dtype=np.int64))
+                       np.array(free, dtype=float), 1.0 / steps)
+
+
+def cut_window_fraction(teeth: int, phi_start_rad: float, phi_exit_rad: float) -> float:
+    """Share of the tooth period spent in the cut, ``N (φex − φst) / 2π`` (below 1: one tooth at a time).
+
+    Examples
+    --------
+    >>> round(cut_window_fraction(1, float(np.arccos(-0.9)), np.pi), 4)  # one flute, a_e/D = 0.05, down
+    0.0718
+    """
+    return teeth * (phi_exit_rad - phi_start_rad) / _TWO_PI
+
+
+@functools.lru_cache(maxsize=512)
+def cut_window_plan(teeth: int, cut_steps: int, phi_start_rad: float, phi_exit_rad: float,
+                    radial_ratio: float) -> CuttingPlan:
+    """A period map that discretises only the time in the cut (fewer than one tooth in the cut).
+
+    While no tooth cuts, the tool vibrates freely: that stretch, ``T (1 − w)`` long (``w``:
+    :func:`cut_window_fraction`), is one exact step (the exponential of the free system). The
+    cut, ``w T`` long, is cut into ``cut_steps`` equal steps that start where the tooth enters
+    (``φst``) and end where it leaves (``φex``), so no step is partly in the cut. The delay is
+    one tooth period, so the delayed displacement a cutting step reads lies in the previous
+    period's cut window, at the same nodes: the state keeps those ``cut_steps + 1`` samples only
+    (Insperger & Stépán 2011, §5.2 on the free-flight part; Bayly et al. 2003 treat the
+    interrupted cut as a free flight and a short cut in the same way). Plans are cached (their
+    arrays are read-only).
+
+    The period starts at the tooth's entry: steps ``0 … cut_steps − 1`` cut, step
+    ``cut_steps`` is the free flight (its sample ``r`` at the exit is the last one a cutting step
+    reads).
+
+    Examples
+    --------
+    A single flute at 5 % immersion spends 7.2 % of its period in the cut:
+
+    >>> st, ex = float(np.arccos(-0.9)), np.pi
+    >>> plan = cut_window_plan(1, 20, float(st), ex, 0.3)
+    >>> plan.scheme, plan.steps, plan.n_samples, round(plan.step_fraction * 20, 4)
+    ('cut_window', 21, 21, 0.0718)
+    >>> bool(np.allclose(plan.force.sum(axis=0) * (ex - st) / 20, -0.5 * directional_factors(st, ex, 0.3)))
+    True
+    """
+    fraction = cut_window_fraction(teeth, phi_start_rad, phi_exit_rad)
+    if not 0.0 < fraction < 1.0:
+        raise ValueError(f"a cut-window plan needs fewer than one tooth in the cut, got {fraction:.3f}")
+    dphi = (phi_exit_rad - phi_start_rad) / cut_steps
+    edges = phi_start_rad + dphi * np.arange(cut_steps + 1)
+    edges[-1] = phi_exit_rad
+    force = np.stack([directional_factors(float(lo), float(hi), radial_ratio)
+                      for lo, hi in zip(edges[:-1], edges[1:], strict=True)]) * (-0.5 / dphi)
+    steps = cut_steps + 1
+    segments = tuple((i, i, 1) for i in range(cut_steps)) + ((-1, cut_steps, 1),)
+    free = np.array([(1.0 - fraction) / fraction * cut_steps])
+    plan = CuttingPlan(steps, force, np.arange(cut_steps), segments, np.arange(steps), free,
+                       fraction / cut_steps, "cut_window")
+    for array in (plan.force, plan.cut_step, plan.slot, plan.free_length):
+        array.flags.writeable = False  # shared: the plans are cached
+    return plan
 
 
 # --------------------------------------------------------------------------- dynamics
@@ -284,9 +362,10 @@ def step_exponentials(z: np.ndarray, beta: np.ndarray) -> tuple[np.ndarray, np.n
     (``e^M = [[e^Z, φ1 β, φ2 β], …]``), computed without forming ``M`` and without an
     inverse of ``Z`` (a singular ``A_i``, the cutting stiffness cancelling a mode, is
     harmless): scaling ``Z/2^s`` to ``‖·‖₁ <= 1``, a degree-12 Taylor polynomial in
-    Paterson–Stockmeyer form (tail below 1/13! ≈ 2e-10), then ``s`` squarings of the block
+    Paterson–Stockmeyer form (tail below 1/13! ≈ 2e-10; degree 8 where ``‖Z‖₁ <= 1/4``, tail
+    below 7e-12), then ``s`` squarings of the block
     matrix, ``[[E, X, Y], [0, I, cI], [0, 0, I]]² = [[E², EX + X, EY + cX + Y], [0, I, 2cI], …]``,
-    which cost one full and one thin product each. Matrices are grouped by ``s``.
+    which cost one full and one thin product each. Matrices are grouped by ``s`` and degree.
 
     Parameters
     ----------
@@ -314,12 +393,15 @@ def step_exponentials(z: np.ndarray, beta: np.ndarray) -> tuple[np.ndarray, np.n
     bf = beta.reshape(-1, n, t)
     norm = np.abs(zf).sum(axis=-2).max(axis=-1)
     squarings = np.ceil(np.log2(np.maximum(norm, 1e-300))).clip(0).astype(np.int64)
+    # short steps (‖Z‖₁ <= 1/4, the usual case of a resolving discretisation) need only degree 8:
+    # tail below (1/4)^9/9! ≈ 7e-12
+    blocks = np.where(norm <= _SHORT_NORM, 2, 3)
     eye = np.eye(n)
     e_out = np.empty_like(zf)
     x_out = np.empty_like(bf)
     y_out = np.empty_like(bf)
-    for s in np.unique(squarings):
-        idx = np.flatnonzero(squarings == s)
+    for s, m in {(int(a), int(b)) for a, b in zip(squarings, blocks, strict=True)}:
+        idx = np.flatnonzero((squarings == s) & (blocks == m))
         c = 1.0 / float(2**s)
         zz = zf[idx] * c
         bb = bf[idx] * c
@@ -327,15 +409,19 @@ def step_exponentials(z: np.ndarray, beta: np.ndarray) -> tuple[np.ndarray, np.n
         pw = (eye, zz, z2, z2 @ zz)  # Z^0..Z^3
         w = z2 @ z2  # Z^4
         zb = (bb, zz @ bb, z2 @ bb, pw[3] @ bb)  # Z^i β
-        e = np.broadcast_to(eye / _FACT[12], zz.shape)
-        x = zb[0] * (1.0 / _FACT[13])
-        y = zb[0] * (1.0 / _FACT[14])
-        for block in (2, 1, 0):  # Horner in Z^4 over blocks of four Taylor terms
+        top = 4 * m  # the Taylor degree
+        e = w * (1.0 / _FACT[top])  # Z^4 · I/top!: the first Horner product without a product
+        x = w @ zb[0] * (1.0 / _FACT[top + 1])
+        y = w @ zb[0] * (1.0 / _FACT[top + 2])
+        for block in range(m - 1, -1, -1):  # Horner in Z^4 over blocks of four Taylor terms
             j = 4 * block
             ce = eye / _FACT[j] + zz / _FACT[j + 1] + z2 / _FACT[j + 2] + pw[3] / _FACT[j + 3]
             cx = zb[0] / _FACT[j + 1] + zb[1] / _FACT[j + 2] + zb[2] / _FACT[j + 3] + zb[3] / _FACT[j + 4]
             cy = zb[0] / _FACT[j + 2] + zb[1] / _FACT[j + 3] + zb[2] / _FACT[j + 4] + zb[3] / _FACT[j + 5]
-            e, x, y = ce + w @ e, cx + w @ x, cy + w @ y
+            if block == m - 1:  # e, x, y already hold Z^4 times the top terms
+                e, x, y = ce + e, cx + x, cy + y
+            else:
+                e, x, y = ce + w @ e, cx + w @ x, cy + w @ y
         y = c * y
         for _ in range(s):
             y = e @ y + c * x + y
@@ -346,6 +432,7 @@ def step_exponentials(z: np.ndarray, beta: np.ndarray) -> tuple[np.ndarray, np.n
     return (e_out.reshape(lead + (n, n)), x_out.reshape(lead + (n, t)), y_out.reshape(lead + (n, t)))
 
 
+_SHORT_NORM = 0.25
 _FACT = [float(math.factorial(j)) for j in range(_TAYLOR_DEGREE + 3)]
 
 
@@ -363,12 +450,22 @@ class PeriodMaps:
         Exponential of each free stretch.
     step : numpy.ndarray, shape (nb, n, n)
         ``e^{A0 h}``, one free step (for trajectories).
+    active : numpy.ndarray of int, shape (nb,), optional
+        Cut-window plans padded to a common step count (:func:`padded_cut_window`): each
+        member's own cutting steps, the rest of the cut being steps of zero length (``P = I``,
+        ``G = 0``: they repeat the exit state, so the multipliers are the member's own plus zeros).
     """
 
     p: np.ndarray
     g: np.ndarray
     free: np.ndarray
     step: np.ndarray
+    active: np.ndarray | None = None
+
+    def take(self, idx: np.ndarray) -> PeriodMaps:
+        """The maps of the members ``idx``."""
+        return PeriodMaps(self.p[idx], self.g[idx], self.free[idx], self.step[idx],
+                          None if self.active is None else self.active[idx])
 
     @property
     def batch(self) -> int:
@@ -386,7 +483,8 @@ def free_maps(system: StateSpace, plan: CuttingPlan, step_s: np.ndarray) -> tupl
 
 def period_maps(system: StateSpace, plan: CuttingPlan, tangential_coefficient_n_m2: float,
                 step_s: np.ndarray, depth_m: np.ndarray,
-                free: tuple[np.ndarray, np.ndarray]) -> PeriodMaps:
+                free: tuple[np.ndarray, np.ndarray], *, force: np.ndarray | None = None,
+                active: np.ndarray | None = None) -> PeriodMaps:
     """Step maps ``P_i``, ``G_i`` for each (step length h, depth b) of the batch.
 
     Parameters
@@ -395,24 +493,65 @@ def period_maps(system: StateSpace, plan: CuttingPlan, tangential_coefficient_n_
     plan : CuttingPlan
     tangential_coefficient_n_m2 : float
         ``Kt``, N/m².
-    step_s : numpy.ndarray, shape (nb,)
-        ``h = T/k``, s.
+    step_s : numpy.ndarray, shape (nb,) or (nb, ncut)
+        ``h``, s: one per member, or one per member and cutting step (padded plans).
     depth_m : numpy.ndarray, shape (nb,)
         Axial depth ``b``, m.
     free : (numpy.ndarray, numpy.ndarray)
         :func:`free_maps` of the same step lengths.
+    force, active : numpy.ndarray, optional
+        Per-member step means of ``W`` (nb, ncut, 2, 2) and cutting steps (nb,) of a padded
+        plan (:func:`padded_cut_window`); default ``plan.force`` for every member.
     """
     n, d = system.n, system.n // 2
     a0, c_out, c_in = system.per_step()
-    h = np.asarray(step_s, dtype=float)[:, None, None, None]
-    kf = (tangential_coefficient_n_m2 * np.asarray(depth_m, dtype=float))[:, None, None, None] * plan.force[None]
+    h_in = np.asarray(step_s, dtype=float)
+    h = h_in[:, :, None, None] if h_in.ndim == 2 else h_in[:, None, None, None]
+    w = plan.force[None] if force is None else force
+    kf = (tangential_coefficient_n_m2 * np.asarray(depth_m, dtype=float))[:, None, None, None] * w
     coupling = c_in @ kf  # (nb, ncut, d, 2): modal force per delayed displacement
     a = np.broadcast_to(a0, coupling.shape[:2] + (n, n)).copy()
     a[..., d:, :] -= coupling @ c_out
     beta = np.zeros(coupling.shape[:2] + (n, 2))
     beta[..., d:, :] = h * coupling  # h B_i
     p, g1, g2 = step_exponentials(a * h, beta)
-    return PeriodMaps(p, np.concatenate([g1 - g2, g2], axis=-1), free[0], free[1])
+    return PeriodMaps(p, np.concatenate([g1 - g2, g2], axis=-1), free[0], free[1], active)
+
+
+def padded_cut_window(teeth: int, steps: np.ndarray, phi_start_rad: float, phi_exit_rad: float,
+                      radial_ratio: float) -> tuple[CuttingPlan, np.ndarray, np.ndarray]:
+    """Cut-window plans of several step counts as one plan of the largest (members solved together).
+
+    Member ``j`` keeps its own ``steps[j]`` cutting steps (the force of
+    :func:`cut_window_plan` with that count) and pads the cut with steps of zero length, which
+    change nothing (``P = I``, ``G = 0``); its multipliers are those of its own plan, plus zeros.
+
+    Returns
+    -------
+    plan : CuttingPlan
+        The cut-window plan of ``K = max(steps)`` steps (its structure: segments and samples).
+    force : numpy.ndarray, shape (nb, K, 2, 2)
+    step_fraction : numpy.ndarray, shape (nb, K)
+        Each step's length over the tooth period (0 on padding).
+
+    Examples
+    --------
+    >>> st = float(np.arccos(-0.9))
+    >>> plan, force, frac = padded_cut_window(1, np.array([16, 20]), st, np.pi, 0.3)
+    >>> plan.steps, force.shape, bool(np.allclose(frac.sum(axis=1), frac.sum(axis=1)[0]))
+    (21, (2, 20, 2, 2), True)
+    """
+    steps = np.asarray(steps, dtype=np.int64)
+    big = int(steps.max())
+    plan = cut_window_plan(teeth, big, phi_start_rad, phi_exit_rad, radial_ratio)
+    force = np.zeros((steps.size, big, 2, 2))
+    frac = np.zeros((steps.size, big))
+    for k in np.unique(steps):  # a loop over the few step counts of a batch
+        rows = np.flatnonzero(steps == k)
+        own = plan if k == big else cut_window_plan(teeth, int(k), phi_start_rad, phi_exit_rad, radial_ratio)
+        force[rows, :k] = own.force
+        frac[rows, :k] = own.step_fraction
+    return plan, force, frac
 
 
 def apply_period(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps, z: np.ndarray) -> np.ndarray:
@@ -439,6 +578,131 @@ def apply_period(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps, z: np.
     kept = np.flatnonzero(plan.slot >= 0)  # slots are numbered in step order
     out = system.per_step()[1] @ states[:, kept]  # (nb, ns, 2, p)
     return np.concatenate([x, out.reshape(nb, -1, cols)], axis=1)
+
+
+#: Steps of one block of :class:`BlockedPeriodMap`.
+BLOCK_STEPS = 16
+
+
+@dataclass(frozen=True)
+class BlockedPeriodMap:
+    """The period map of a cut-window plan compressed into blocks of ``L`` steps, for matrix-free solvers.
+
+    Over a block of ``L`` cutting steps starting at node ``bL``, the state at the block's end and
+    the displacement samples at its ``L`` nodes are linear in the state at its start ``x_b`` and in
+    the ``L + 1`` delayed samples it reads (nodes ``bL … bL + L`` of the previous period). Those
+    maps are formed once per batch of period maps (one pass over the steps); applying the period
+    map is then one product per block instead of one per step — what an Arnoldi iteration repeats
+    ``p`` times. Steps past the plan's last (a partial last block) are identities.
+
+    Attributes
+    ----------
+    steps : int
+        Cutting steps ``K`` (nodes ``0 … K``, node ``K`` the exit).
+    block : int
+        ``L``.
+    pi : numpy.ndarray, shape (nb, nblk, n, n)
+        State at a block's end from its start.
+    w : numpy.ndarray, shape (nb, nblk, n, 2(L+1))
+        State at a block's end from its delayed samples.
+    o : numpy.ndarray, shape (nb, nblk, 2L, n)
+        Samples at a block's nodes from its start state.
+    r : numpy.ndarray, shape (nb, nblk, 2L, 2(L+1))
+        Samples at a block's nodes from its delayed samples.
+    c_out : numpy.ndarray, shape (nb, 2, n)
+    free : numpy.ndarray, shape (nb, n, n), or None
+        The free flight (None: a full-period plan whose every step cuts; its last step reads the
+        sample ``r_0 = C u_0`` that closes the period, and it keeps the samples of nodes
+        ``0 … K−1``).
+    """
+
+    steps: int
+    block: int
+    pi: np.ndarray
+    w: np.ndarray
+    o: np.ndarray
+    r: np.ndarray
+    c_out: np.ndarray
+    free: np.ndarray | None
+
+    def take(self, idx: np.ndarray) -> BlockedPeriodMap:
+        """The maps of the members ``idx``."""
+        if idx.size == self.pi.shape[0]:
+            return self
+        return BlockedPeriodMap(self.steps, self.block, self.pi[idx], self.w[idx], self.o[idx], self.r[idx],
+                                self.c_out[idx], None if self.free is None else self.free[idx])
+
+    def apply(self, z: np.ndarray) -> np.ndarray:
+        """The period map applied to states ``z``, shape (nb, N) → (nb, N) (as :func:`apply_period`)."""
+        nb, n, k, ell = z.shape[0], self.pi.shape[-1], self.steps, self.block
+        nblk = self.pi.shape[1]
+        x = z[:, :n]
+        if self.free is None:  # the closing sample r_0 = C u_0 is read by the last step
+            delay = np.concatenate([z[:, n:].reshape(nb, k, 2), (self.c_out @ x[:, :, None])[:, None, :, 0]], axis=1)
+        else:
+            delay = z[:, n:].reshape(nb, k + 1, 2)
+        reads = np.minimum(np.arange(nblk)[:, None] * ell + np.arange(ell + 1)[None, :], k)
+        dblk = delay[:, reads].reshape(nb, nblk, 2 * (ell + 1), 1)
+        px = (self.w @ dblk)[..., 0]
+        pr = (self.r @ dblk)[..., 0]
+        xs = np.empty((nb, nblk, n), dtype=np.result_type(z, self.pi))
+        for b in range(nblk):  # the blocks of one period
+            xs[:, b] = x
+            x = (self.pi[:, b] @ x[:, :, None])[:, :, 0] + px[:, b]
+        nodes = ((self.o @ xs[..., None])[..., 0] + pr).reshape(nb, nblk * ell * 2)[:, : 2 * k]
+        if self.free is None:
+            return np.concatenate([x, nodes], axis=1)
+        exit_r = (self.c_out @ x[:, :, None])[:, :, 0]
+        return np.concatenate([(self.free @ x[:, :, None])[:, :, 0], nodes, exit_r], axis=1)
+
+
+def blocked_period_map(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps,
+                       block: int = BLOCK_STEPS) -> BlockedPeriodMap:
+    """:class:`BlockedPeriodMap` of a cut-window plan, or of a full-period plan whose every step cuts
+    (one pass over its steps, all members at once).
+
+    Examples
+    --------
+    It applies the same map as :func:`apply_period`:
+
+    >>> from rcsa.analysis.lobes.modal_model import ModalModel
+    >>> system = state_space(ModalModel.of([900.0, 2500.0], [0.02, 0.03], [20.0, 5.0], [0, 1]))
+    >>> plan = cut_window_plan(1, 37, float(np.arccos(-0.9)), np.pi, 0.3)
+    >>> h = np.array([0.02 * plan.step_fraction])
+    >>> maps = period_maps(system, plan, 6e8, h, np.array([1e-3]), free_maps(system, plan, h))
+    >>> z = np.random.default_rng(1).standard_normal((1, system.n + 2 * plan.n_samples))
+    >>> bool(np.allclose(blocked_period_map(system, plan, maps).apply(z),
+    ...                  apply_period(system, plan, maps, z[:, :, None])[:, :, 0], rtol=1e-12, atol=1e-14))
+    True
+    """
+    window = plan.scheme == "cut_window"
+    if not (window or plan.cut_step.size == plan.steps):
+        raise ValueError("blocked_period_map() compresses a cut-window plan or a full-period one that always cuts")
+    n, k, ell, nb = system.n, plan.steps - 1 if window else plan.steps, int(block), maps.batch
+    nblk = -(-k // ell)
+    c = system.c_out
+    c = np.broadcast_to(c, (nb, 2, n)) if c.ndim == 2 else c
+    width = n + 2 * (ell + 1)
+    pi = np.empty((nb, nblk, n, n))
+    w = np.empty((nb, nblk, n, width - n))
+    rows = np.empty((nb, nblk, 2 * ell, width))
+    for b in range(nblk):  # the blocks of one period
+        x = np.zeros((nb, n, width))
+        x[:, :, :n] = np.eye(n)
+        for j in range(ell):  # the steps of one block
+            rows[:, b, 2 * j : 2 * j + 2] = c @ x
+            step = b * ell + j
+            if step < k:
+                x = maps.p[:, step] @ x
+                x[:, :, n + 2 * j : n + 2 * j + 4] += maps.g[:, step]
+        pi[:, b], w[:, b] = x[:, :, :n], x[:, :, n:]
+    return BlockedPeriodMap(k, ell, pi, w, np.ascontiguousarray(rows[..., :n]), np.ascontiguousarray(rows[..., n:]),
+                            np.ascontiguousarray(c), maps.free[:, 0] if window else None)
+
+
+def blockable(plan: CuttingPlan) -> bool:
+    """Whether :func:`blocked_period_map` takes the plan."""
+    return plan.scheme == "cut_window" or plan.cut_step.size == plan.steps
 
 
 def monodromy_matrix(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps) -> np.ndarray:
@@ -478,12 +742,14 @@ def monodromy_matrix(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps) ->
 
 
 def trajectory(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps, z: np.ndarray) -> np.ndarray:
-    """Displacements ``r_s``, ``s = 0 … k−1``, over one period from states ``z`` (nb, N).
+    """Displacements at the nodes of a full-period plan, ``r_s``, ``s = 0 … k−1``, from states ``z`` (nb, N).
 
     Returns
     -------
     numpy.ndarray, shape (nb, k, 2)
     """
+    if plan.scheme != "full_period":
+        raise ValueError("trajectory() samples a full-period plan; use period_displacement()")
     n, k = system.n, plan.steps
     nb = z.shape[0]
     x0 = z[:, :n, None]
@@ -497,10 +763,111 @@ def trajectory(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps, z: np.nd
             rb = delay[:, plan.slot[start + 1]] if start + 1 < k else c @ x0
             x = maps.p[:, cut] @ x + maps.g[:, cut] @ np.concatenate([delay[:, plan.slot[start]], rb], axis=1)
         else:
-            for s in range(start, start + length):
+            for s in range(start, start + int(length)):
                 r[:, s] = (c @ x)[..., 0]
                 x = maps.step @ x
     return r
+
+
+#: :func:`period_displacement` samples the free flight at least this many times per cycle of the
+#: model's highest natural frequency (and the period at least this many times).
+SAMPLES_PER_CYCLE = 4.0
+MIN_PERIOD_SAMPLES = 64
+
+
+def period_displacement(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps, z: np.ndarray,
+                        period_s: np.ndarray) -> np.ndarray:
+    """Displacements at equally spaced times ``t_m = m T / M`` over one period, from states ``z`` (nb, N).
+
+    A full-period plan gives its nodes (``M = k``, :func:`trajectory`). A cut-window plan gives
+    the cut at its nodes (linear between them, as the semi-discretization takes the delayed
+    displacement) and the free flight in closed form: each mode's damped free vibration from the
+    state at the exit (``q(s) = e^{−ζωs}[q₀ cos ω_d s + (q̇₀ + ζω q₀)/ω_d sin ω_d s]``), sampled
+    ``M = 2^⌈log₂ max(64, 4 f_top T)⌉`` times a period (``f_top``: the highest natural frequency
+    of the batch).
+
+    Parameters
+    ----------
+    system, plan, maps
+        As for :func:`critical_multipliers`.
+    z : numpy.ndarray, shape (nb, N)
+    period_s : numpy.ndarray, shape (nb,)
+        Tooth periods ``T``, s.
+
+    Returns
+    -------
+    numpy.ndarray, shape (nb, M, 2)
+    """
+    if plan.scheme == "full_period":
+        return trajectory(system, plan, maps, z)
+    n, d = system.n, system.n // 2
+    k = plan.steps - 1  # cutting steps; node k is the exit
+    nb = z.shape[0]
+    active = np.full(nb, k) if maps.active is None else np.asarray(maps.active)
+    a0, c_out, _ = system.per_step()
+    a0 = np.broadcast_to(a0, (nb, n, n)) if a0.ndim == 2 else a0[:, 0]
+    c_out = np.broadcast_to(c_out, (nb, 2, n)) if c_out.ndim == 2 else c_out[:, 0]
+    delay = z[:, n:].reshape(nb, -1, 2, 1)
+    x = z[:, :n, None]
+    nodes = np.empty((nb, k + 1, 2), dtype=z.dtype)
+    for i in range(k):  # the cutting steps of one period
+        nodes[:, i] = (c_out @ x)[..., 0]
+        x = maps.p[:, i] @ x + maps.g[:, i] @ np.concatenate([delay[:, i], delay[:, i + 1]], axis=1)
+    nodes[:, k] = (c_out @ x)[..., 0]
+    w = np.diagonal(a0[:, :d, d:], axis1=1, axis2=2)  # ω per mode, (nb, d)
+    zeta = -np.diagonal(a0[:, d:, d:], axis1=1, axis2=2) / (2.0 * w)
+    period = np.asarray(period_s, dtype=float)
+    f_top = float(np.max(w)) / _TWO_PI
+    samples = int(2 ** math.ceil(math.log2(max(MIN_PERIOD_SAMPLES, SAMPLES_PER_CYCLE * f_top * float(period.max())))))
+    frac = plan.step_fraction * k  # share of the period in the cut (the same for every member)
+    t_rel = np.arange(samples) / samples  # t / T
+    r = np.empty((nb, samples, 2), dtype=z.dtype)
+    inside = t_rel <= frac
+    pos = t_rel[inside][None, :] * (active[:, None] / frac)  # in each member's own steps, (nb, m)
+    lo = np.minimum(pos.astype(np.int64), active[:, None] - 1)
+    frac_step = (pos - lo)[:, :, None]
+    rows = np.arange(nb)[:, None]
+    r[:, inside] = nodes[rows, lo] * (1.0 - frac_step) + nodes[rows, lo + 1] * frac_step
+    s = (t_rel[~inside] - frac)[None, :, None] * period[:, None, None]  # time since the exit, (nb, m, 1)
+    q0 = (x[:, :d, 0] / w)[:, None, :]
+    v0 = x[:, d:, 0][:, None, :]
+    wd = (w * np.sqrt(1.0 - zeta**2))[:, None, :]
+    zw = (zeta * w)[:, None, :]
+    q = np.exp(-zw * s) * (q0 * np.cos(wd * s) + (v0 + zw * q0) / wd * np.sin(wd * s))  # (nb, m, d)
+    r[:, ~inside] = (w[:, None, :] * q) @ c_out[:, :, :d].transpose(0, 2, 1)
+    return r
+
+
+def chatter_frequency(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps, mu: np.ndarray,
+                      vec: np.ndarray, period_s: np.ndarray) -> np.ndarray:
+    """Dominant vibration frequency (Hz) of critical eigenvectors.
+
+    The motion of a Floquet solution with multiplier ``μ = |μ| e^{iθ}`` contains the frequencies
+    ``f_j = (θ/2π + j)/T``; the one with the largest amplitude in the displacement over one
+    period (:func:`period_displacement`, the growth ``μ^{t/T}`` removed, a discrete Fourier
+    series) is the chatter frequency (Dombovári, Zatarain & Insperger 2010).
+
+    Parameters
+    ----------
+    system, plan, maps
+        As for :func:`critical_multipliers` (the batch of ``vec``).
+    mu : numpy.ndarray, shape (nb,), complex
+    vec : numpy.ndarray, shape (nb, N), complex
+    period_s : numpy.ndarray, shape (nb,)
+
+    Returns
+    -------
+    numpy.ndarray, shape (nb,)
+    """
+    r = period_displacement(system, plan, maps, vec, period_s)  # (nb, M, 2)
+    samples = r.shape[1]
+    log_mu = np.log(mu.astype(complex))
+    floquet = np.exp(-np.outer(log_mu, np.arange(samples) / samples))  # remove the growth μ^{t/T}
+    coef = np.fft.fft(r * floquet[:, :, None], axis=1)
+    power = (np.abs(coef) ** 2).sum(axis=2)
+    j = np.fft.fftfreq(samples, d=1.0 / samples)[np.argmax(power, axis=1)]
+    theta = np.angle(mu)
+    return np.asarray(np.abs(theta / (2 * np.pi) + j) / period_s)
 
 
 # --------------------------------------------------------------------------- spectra
@@ -510,14 +877,17 @@ def critical_multipliers(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps
                          vectors: bool | Literal["unstable"] = False) -> tuple[np.ndarray, np.ndarray | None]:
     """The multiplier of largest modulus of each map in the batch (and its eigenvector).
 
-    The monodromy matrices are formed once (:func:`monodromy_matrix`: one pass over the
-    steps of a period for all columns). Reduced sizes ``N <= DENSE_MAX_SIZE`` are solved
-    densely. Larger ones use ``max(KRYLOV_DIM, n + 12)`` steps of Arnoldi on those matrices
-    (Gram–Schmidt twice, fixed seeded start). A batch member is accepted when its leading
-    Ritz value has a residual below ``RITZ_TOL`` and no other Ritz value ``θ`` with residual
-    ``ρ`` could hide a larger eigenvalue (``|θ| + ρ`` not above the leading modulus);
-    otherwise it falls back to the dense solver, so the answer is always a converged
-    eigenvalue.
+    Reduced sizes ``N <= DENSE_MAX_SIZE`` form the monodromy matrices
+    (:func:`monodromy_matrix`: one pass over the steps of a period for all columns) and solve
+    them densely. Larger ones run ``max(KRYLOV_DIM, n + 12)`` steps of Arnoldi (Gram–Schmidt
+    twice, fixed seeded start), on the formed matrices or — where a period's steps are many, so
+    that forming ``N`` columns costs more than the Arnoldi steps' own passes over the period
+    (:func:`_matrix_free_cheaper`) — on :func:`apply_period` directly, without ever forming
+    them. A batch member is accepted when its leading Ritz value has a residual below
+    ``RITZ_TOL`` and no other Ritz value ``θ`` with residual ``ρ`` could hide a larger
+    eigenvalue (``|θ| + ρ`` not above the leading modulus); otherwise it is solved again with a
+    Krylov space twice as large (matrix-free) and, failing that, densely, so the answer is
+    always a converged eigenvalue.
 
     Parameters
     ----------
@@ -538,10 +908,33 @@ def critical_multipliers(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps
     nb = maps.batch
     mu = np.empty(nb, dtype=complex)
     vec = np.full((nb, size), np.nan + 0j) if vectors else None
-    phi = monodromy_matrix(system, plan, maps)
-    dense = np.ones(nb, dtype=bool)
-    if size > DENSE_MAX_SIZE:
-        k_mu, k_vec, ok = _arnoldi(phi, system.n, vectors is not False)
+    want = vectors is not False
+    todo = np.arange(nb)
+    free = size > DENSE_MAX_SIZE and matrix_free_cheaper(system.n, plan)
+    if free:
+        krylov = min(max(KRYLOV_DIM, system.n + KRYLOV_EXTRA), size)
+        blocked = blocked_period_map(system, plan, maps) if blockable(plan) else None
+        for dim in (krylov, min(2 * krylov, size)):
+            sub_sys, sub = system.take(todo), maps.take(todo)
+            if blocked is not None:
+                apply = blocked.take(todo).apply
+            else:
+                def apply(v: np.ndarray, s: StateSpace = sub_sys, m: PeriodMaps = sub) -> np.ndarray:
+                    return apply_period(s, plan, m, v[:, :, None])[:, :, 0]
+            k_mu, k_vec, ok = _arnoldi(apply, todo.size, size, dim, want)
+            mu[todo[ok]] = k_mu[ok]
+            if vec is not None and k_vec is not None:
+                vec[todo[ok]] = k_vec[ok]
+            todo = todo[~ok]
+            if not todo.size or dim == size:
+                break
+        if not todo.size:
+            return mu, vec
+    phi = monodromy_matrix(system.take(todo), plan, maps.take(todo))
+    dense = np.ones(todo.size, dtype=bool)
+    if size > DENSE_MAX_SIZE and not free:
+        krylov = min(max(KRYLOV_DIM, system.n + KRYLOV_EXTRA), size)
+        k_mu, k_vec, ok = _arnoldi(lambda v: (phi @ v[:, :, None])[:, :, 0], nb, size, krylov, want)
         mu[ok] = k_mu[ok]
         if vec is not None and k_vec is not None:
             vec[ok] = k_vec[ok]
@@ -549,12 +942,26 @@ def critical_multipliers(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps
     if np.any(dense):
         rows = np.flatnonzero(dense)
         ev = np.linalg.eigvals(phi[rows])
-        mu[rows] = ev[np.arange(rows.size), np.argmax(np.abs(ev), axis=1)]
+        mu[todo[rows]] = ev[np.arange(rows.size), np.argmax(np.abs(ev), axis=1)]
         if vec is not None:
-            need = rows if vectors is True else rows[np.abs(mu[rows]) >= 1.0]
+            need = rows if vectors is True else rows[np.abs(mu[todo[rows]]) >= 1.0]
             if need.size:
-                vec[need] = _inverse_iteration(phi[need], mu[need])
+                vec[todo[need]] = _inverse_iteration(phi[need], mu[todo[need]])
     return mu, vec
+
+
+#: Forming the monodromy matrix costs ``steps · n² · N`` per member; Arnoldi on :func:`apply_period`
+#: ``p · steps · n²`` but ``p`` passes of Python steps instead of one. Matrix-free wins once ``N``
+#: exceeds ``p`` by this factor (measured in benchmarks/bench_lobes.py on batches of 64–512).
+MATRIX_FREE_RATIO = 2.0
+
+
+def matrix_free_cheaper(n: int, plan: CuttingPlan) -> bool:
+    """Whether Arnoldi without forming the matrix beats forming it: always for a plan
+    :func:`blocked_period_map` takes (a product per block, not per step), else past
+    ``MATRIX_FREE_RATIO``."""
+    size = n + 2 * plan.n_samples
+    return blockable(plan) or size > MATRIX_FREE_RATIO * max(KRYLOV_DIM, n + KRYLOV_EXTRA)
 
 
 def _inverse_iteration(phi: np.ndarray, mu: np.ndarray) -> np.ndarray:
@@ -571,21 +978,16 @@ def _inverse_iteration(phi: np.ndarray, mu: np.ndarray) -> np.ndarray:
     return v
 
 
-def _take(maps: PeriodMaps, idx: np.ndarray) -> PeriodMaps:
-    return PeriodMaps(maps.p[idx], maps.g[idx], maps.free[idx], maps.step[idx])
-
-
-def _arnoldi(phi: np.ndarray, n: int, vectors: bool) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
-    """Batched Arnoldi on monodromy matrices (nb, N, N) of state size ``n``: leading Ritz value
-    (and vector) and whether it converged."""
-    nb, size = phi.shape[0], phi.shape[-1]
-    p = min(max(KRYLOV_DIM, n + KRYLOV_EXTRA), size)
+def _arnoldi(matvec: Callable[[np.ndarray], np.ndarray], nb: int, size: int, p: int,
+             vectors: bool) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
+    """Batched Arnoldi: ``p`` steps of ``matvec`` (nb, N) → (nb, N) from a fixed seeded start;
+    the leading Ritz value (and vector) of each member and whether it converged."""
     basis = np.zeros((nb, size, p + 1))
     hess = np.zeros((nb, p + 1, p))
     start = np.random.default_rng(_KRYLOV_SEED).standard_normal(size)
     basis[:, :, 0] = start / np.linalg.norm(start)
     for j in range(p):
-        w = (phi @ basis[:, :, j : j + 1])[:, :, 0]
+        w = matvec(basis[:, :, j])
         v = basis[:, :, : j + 1]
         vt = v.transpose(0, 2, 1)
         coef = (vt @ w[:, :, None])[:, :, 0]

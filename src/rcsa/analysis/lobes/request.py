@@ -13,17 +13,33 @@ from typing import Any
 
 import numpy as np
 
-from rcsa.analysis.lobes.modal_model import ModalModel, fit_modal_model
+from rcsa.analysis.lobes.modal_model import ModalModel, fit_modal_model, modal_model_from_table
 from rcsa.analysis.lobes.options import MAX_SDM_SPEED_COUNT, OPTION_KEYS, LobesMethod, parse_method
 from rcsa.analysis.lobes.semi_discretization import semi_discretization_lobes
-from rcsa.analysis.lobes.zoa import LobeResult, Milling, check_cut, check_frf, stability_lobes
+from rcsa.analysis.lobes.zoa import (
+    LobeResult,
+    Milling,
+    check_cut,
+    check_frf,
+    check_speed_grid,
+    stability_lobes,
+)
 from rcsa.errors import FrequencyMismatch, InputError
 from rcsa.model import fields
 from rcsa.model.bounds import (
     MAX_FREQUENCY_LINES,
     MAX_FRF_VALUE,
+    MAX_MODAL_DAMPING_RATIO,
+    MAX_MODAL_FREQUENCY_HZ,
+    MAX_MODAL_MASS_KG,
+    MAX_MODAL_STIFFNESS_N_M,
+    MAX_MODAL_TABLE_MODES,
     MAX_SPEED_COUNT,
     MAX_SPEED_RPM,
+    MIN_MODAL_DAMPING_RATIO,
+    MIN_MODAL_FREQUENCY_HZ,
+    MIN_MODAL_MASS_KG,
+    MIN_MODAL_STIFFNESS_N_M,
     MIN_SPEED_COUNT,
     MIN_SPEED_RPM,
 )
@@ -38,22 +54,27 @@ __all__ = ["LobesRequest", "parse_lobes_request"]
 class LobesRequest:
     """A validated stability-lobes request (contract "Stability lobes").
 
-    Either the inline FRFs (``frequency_hz``, ``frf_xx`` and optionally ``frf_yy``) or
-    ``assembly`` (returned untouched for the caller to predict the tool-point FRF) is set.
+    Exactly one of the inline FRFs (``frequency_hz``, ``frf_xx`` and optionally ``frf_yy``),
+    a modal table (``modal_model``) or ``assembly`` (returned untouched for the caller to
+    predict the tool-point FRF) is set. ``x`` is the feed direction, ``y`` the normal to the
+    feed in the plane of the cut; a request with one direction only uses it for both (a tool
+    whose holder and spindle are round), and the result says so.
 
     Attributes
     ----------
     frequency_hz : numpy.ndarray or None, shape (nfreq,)
     frf_xx, frf_yy : numpy.ndarray or None, shape (nfreq,)
         Complex receptances, m/N.
+    modal_model : ModalModel or None
+        A modal table's modes (``modal_x``, ``modal_y``).
     assembly : Mapping or None
         The request's ``assembly`` object, unvalidated here.
     teeth, tangential_coefficient_n_m2, radial_ratio, radial_immersion, milling
         As in :func:`stability_lobes`.
     spindle_speed_rpm : numpy.ndarray, shape (count,)
-        ``linspace(start, stop, count)``, rpm.
+        ``linspace(start, stop, count)`` or the list given, rpm.
     method : LobesMethod
-        ``"zoa"`` (default) or ``"semi_discretization"`` and its options.
+        ``"zoa"`` or ``"semi_discretization"`` (``"auto"``, the default, resolved) and its options.
     """
 
     frequency_hz: np.ndarray | None
@@ -67,6 +88,7 @@ class LobesRequest:
     milling: Milling
     spindle_speed_rpm: np.ndarray
     method: LobesMethod = LobesMethod()
+    modal_model: ModalModel | None = None
 
     def solve(
         self,
@@ -78,18 +100,27 @@ class LobesRequest:
     ) -> LobeResult:
         """Run :func:`stability_lobes` (or the semi-discretization) with this request.
 
-        The inline receptances are used unless given here (e.g. the tool-point FRF the
-        caller predicted from ``assembly``); ``frf_yy=None`` then means "same as x". With
-        ``method.name == "semi_discretization"`` the modes are ``modal_model`` when given
-        (e.g. the exact modes of an analytical assembly), else fitted to the receptances
-        (:func:`~rcsa.analysis.lobes.modal_model.fit_modal_model`).
+        The inline receptances (or the modal table) are used unless given here (e.g. the
+        tool-point FRF the caller predicted from ``assembly``); ``frf_yy=None`` then means "same
+        as x". With ``method.name == "semi_discretization"`` the modes are ``modal_model`` when
+        given (e.g. the exact modes of an analytical assembly), else the request's table, else
+        fitted to the receptances (:func:`~rcsa.analysis.lobes.modal_model.fit_modal_model`).
+        Zero-order lobes of a modal table use its receptances on a grid that resolves every
+        mode (:meth:`ModalModel.frf_grid`).
         """
+        table = self.modal_model
         if frequency_hz is None:
-            if self.frequency_hz is None:
+            if self.frequency_hz is None and table is None:
                 raise InputError(
                     "frf_x", "the request has an assembly: predict its FRF and pass it to solve()"
                 )
-            frequency_hz, frf_xx, frf_yy = self.frequency_hz, self.frf_xx, self.frf_yy
+            if table is not None and self.frequency_hz is None:
+                grid = table.frf_grid()
+                frequency_hz, frf_xx = grid, table.receptance(grid, 0)
+                frf_yy = None if table.same_in_y else table.receptance(grid, 1)
+                modal_model = modal_model or table
+            else:
+                frequency_hz, frf_xx, frf_yy = self.frequency_hz, self.frf_xx, self.frf_yy
         if self.method.name == "semi_discretization":
             if modal_model is None:
                 modal_model = fit_modal_model(
@@ -124,6 +155,8 @@ class LobesRequest:
 _REQUEST_KEYS = {
     "frf_x",
     "frf_y",
+    "modal_x",
+    "modal_y",
     "assembly",
     "teeth",
     "tangential_coefficient_n_m2",
@@ -164,19 +197,70 @@ def _parse_frf(value: object, field: str) -> tuple[np.ndarray, np.ndarray]:
     return f, check_frf(h, f.size, field)
 
 
+_MODE_KEYS = {"frequency_hz", "damping_ratio", "modal_mass_kg", "stiffness_n_m"}
+
+
+def _parse_modal_table(value: object, field: str) -> list[tuple[float, float, float]]:
+    """A modal table of one direction: ``[{"frequency_hz", "damping_ratio", "modal_mass_kg" |
+    "stiffness_n_m"}, ...]`` → ``(f, ζ, m)`` rows."""
+    if not isinstance(value, list):
+        raise InputError(field, f"must be a list of modes, got {type(value).__name__}")
+    check_count(len(value), field, MAX_MODAL_TABLE_MODES, "modes")
+    rows = []
+    for i, item in enumerate(value):
+        where = f"{field}[{i}]"
+        mode = fields.Fields(item, where, sorted(_MODE_KEYS))
+        f = mode.number("frequency_hz", gt=0.0, ge=MIN_MODAL_FREQUENCY_HZ, le=MAX_MODAL_FREQUENCY_HZ)
+        zeta = mode.number("damping_ratio", gt=0.0, ge=MIN_MODAL_DAMPING_RATIO, le=MAX_MODAL_DAMPING_RATIO)
+        given = [k for k in ("modal_mass_kg", "stiffness_n_m") if mode.value.get(k) is not None]
+        if len(given) != 1:
+            raise InputError(fields.join(where, "modal_mass_kg"),
+                             "give exactly one of modal_mass_kg or stiffness_n_m (the modal stiffness)")
+        if given[0] == "modal_mass_kg":
+            mass = mode.number("modal_mass_kg", gt=0.0, ge=MIN_MODAL_MASS_KG, le=MAX_MODAL_MASS_KG)
+        else:
+            k = mode.number("stiffness_n_m", gt=0.0, ge=MIN_MODAL_STIFFNESS_N_M, le=MAX_MODAL_STIFFNESS_N_M)
+            mass = k / (2.0 * np.pi * f) ** 2
+        rows.append((f, zeta, mass))
+    return rows
+
+
+def _parse_speeds(value: object) -> np.ndarray:
+    """``{"start", "stop", "count"}`` (equally spaced) or a list of speeds (strictly increasing), rpm."""
+    if isinstance(value, list):
+        check_count(len(value), "spindle_speed_rpm", MAX_SPEED_COUNT, "speeds")
+        if len(value) < MIN_SPEED_COUNT:
+            raise InputError("spindle_speed_rpm", f"give at least {MIN_SPEED_COUNT} speeds, got {len(value)}")
+        return check_speed_grid(number_list(value, "spindle_speed_rpm"))
+    speed = fields.Fields(_mapping(value, "spindle_speed_rpm", {"start", "stop", "count"}), "spindle_speed_rpm")
+    start = speed.number("start", gt=0.0, ge=MIN_SPEED_RPM, le=MAX_SPEED_RPM)
+    stop = speed.number("stop", gt=0.0, ge=MIN_SPEED_RPM, le=MAX_SPEED_RPM)
+    if not start < stop:
+        raise InputError(
+            "spindle_speed_rpm.stop", f"must be greater than start ({start}), got {stop}"
+        )
+    count = speed.integer("count", ge=MIN_SPEED_COUNT, le=MAX_SPEED_COUNT)
+    grid = np.linspace(start, stop, count)
+    grid.flags.writeable = False
+    return grid
+
+
 def parse_lobes_request(body: object) -> LobesRequest:
     """Validate a stability-lobes request body (contract "Stability lobes").
 
     Parameters
     ----------
     body : Mapping
-        Parsed JSON: ``frf_x`` (``{"frequency_hz": [...], "h": {"real": [...],
-        "imag": [...]}}``) or ``assembly``, optional ``frf_y`` (same form and grid as
-        ``frf_x``; null = same as x), ``teeth``, ``tangential_coefficient_n_m2``,
+        Parsed JSON: one of ``frf_x`` (``{"frequency_hz": [...], "h": {"real": [...],
+        "imag": [...]}}``, the feed direction), ``modal_x`` (a modal table of the feed direction:
+        ``[{"frequency_hz", "damping_ratio", "modal_mass_kg" or "stiffness_n_m"}, ...]``) or
+        ``assembly``; optional ``frf_y`` / ``modal_y`` (the normal direction, same form; null =
+        same as x; ``modal_y: []`` = rigid in y), ``teeth``, ``tangential_coefficient_n_m2``,
         ``radial_ratio``, ``radial_immersion``, ``milling`` (``"up"``/``"down"``) and
-        ``spindle_speed_rpm`` (``{"start", "stop", "count"}``); optional ``method``
-        (``"zoa"``, ``"semi_discretization"`` or ``"auto"``, with ``steps_per_period`` and
-        ``modes_per_direction``: :func:`~rcsa.analysis.lobes.options.parse_method`).
+        ``spindle_speed_rpm`` (``{"start", "stop", "count"}`` or a list of speeds); optional
+        ``method`` (``"auto"``, the default, ``"zoa"`` or ``"semi_discretization"``, with
+        ``steps_per_period`` and ``modes_per_direction``:
+        :func:`~rcsa.analysis.lobes.options.parse_method`).
 
     Returns
     -------
@@ -187,7 +271,7 @@ def parse_lobes_request(body: object) -> LobesRequest:
     InputError
         Unknown or missing fields, wrong types, or a rule broken (``teeth`` integer ≥ 1,
         ``Kt > 0``, ``0 < radial_immersion <= 1``, ``start < stop``,
-        ``2 <= count <= MAX_SPEED_COUNT``, exactly one of ``frf_x``/``assembly``).
+        ``2 <= count <= MAX_SPEED_COUNT``, exactly one of ``frf_x``/``modal_x``/``assembly``).
 
     Examples
     --------
@@ -196,8 +280,14 @@ def parse_lobes_request(body: object) -> LobesRequest:
     ...     "teeth": 4, "tangential_coefficient_n_m2": 6e8, "radial_ratio": 0.3,
     ...     "radial_immersion": 0.5, "milling": "down",
     ...     "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 3}})
-    >>> req.spindle_speed_rpm.tolist(), req.frf_yy is None
-    ([2000.0, 16000.0, 30000.0], True)
+    >>> req.spindle_speed_rpm.tolist(), req.frf_yy is None, req.method.name
+    ([2000.0, 16000.0, 30000.0], True, 'semi_discretization')
+    >>> req = parse_lobes_request({
+    ...     "modal_x": [{"frequency_hz": 565.1, "damping_ratio": 0.0322, "modal_mass_kg": 0.1966}],
+    ...     "teeth": 3, "tangential_coefficient_n_m2": 7.96e8, "radial_ratio": 0.3,
+    ...     "radial_immersion": 0.17, "milling": "down", "spindle_speed_rpm": [3000, 10000, 15000]})
+    >>> req.modal_model.source, req.spindle_speed_rpm.tolist()
+    ('given', [3000.0, 10000.0, 15000.0])
     """
     body = _mapping(body, "", _REQUEST_KEYS)
     for key in _REQUIRED_KEYS:
@@ -205,9 +295,15 @@ def parse_lobes_request(body: object) -> LobesRequest:
             raise InputError(key, "is required")
 
     frf_x, frf_y, assembly = body.get("frf_x"), body.get("frf_y"), body.get("assembly")
-    if (frf_x is None) == (assembly is None):
-        raise InputError("frf_x", "give exactly one of frf_x (inline FRF) or assembly")
+    modal_x, modal_y = body.get("modal_x"), body.get("modal_y")
+    if sum(v is not None for v in (frf_x, modal_x, assembly)) != 1:
+        raise InputError("frf_x", "give exactly one of frf_x (inline FRF), modal_x (a modal table) or assembly")
+    if frf_y is not None and frf_x is None:
+        raise InputError("frf_y", "only allowed together with frf_x (an assembly gives both directions)")
+    if modal_y is not None and modal_x is None:
+        raise InputError("modal_y", "only allowed together with modal_x")
     freq = hxx = hyy = None
+    table_x = table_y = None
     if frf_x is not None:
         freq, hxx = _parse_frf(frf_x, "frf_x")
         if frf_y is not None:
@@ -216,32 +312,23 @@ def parse_lobes_request(body: object) -> LobesRequest:
                 raise FrequencyMismatch(
                     "frf_y.frequency_hz", "must equal frf_x.frequency_hz exactly"
                 )
-    else:
-        if frf_y is not None:
-            raise InputError(
-                "frf_y", "only allowed together with frf_x (an assembly gives both directions)"
-            )
-        if not isinstance(assembly, Mapping):
-            raise InputError("assembly", f"must be an object, got {type(assembly).__name__}")
+    elif modal_x is not None:
+        table_x = _parse_modal_table(modal_x, "modal_x")
+        if not table_x:
+            raise InputError("modal_x", "give at least one mode of the feed direction")
+        table_y = None if modal_y is None else _parse_modal_table(modal_y, "modal_y")
+    elif not isinstance(assembly, Mapping):
+        raise InputError("assembly", f"must be an object, got {type(assembly).__name__}")
 
     cut = check_cut(body["teeth"], body["tangential_coefficient_n_m2"], body["radial_ratio"],
                     body["radial_immersion"], body["milling"])
-
-    speed = fields.Fields(_mapping(body["spindle_speed_rpm"], "spindle_speed_rpm", {"start", "stop", "count"}),
-                          "spindle_speed_rpm")
-    start = speed.number("start", gt=0.0, ge=MIN_SPEED_RPM, le=MAX_SPEED_RPM)
-    stop = speed.number("stop", gt=0.0, ge=MIN_SPEED_RPM, le=MAX_SPEED_RPM)
-    if not start < stop:
-        raise InputError(
-            "spindle_speed_rpm.stop", f"must be greater than start ({start}), got {stop}"
-        )
-    count = speed.integer("count", ge=MIN_SPEED_COUNT, le=MAX_SPEED_COUNT)
+    grid = _parse_speeds(body["spindle_speed_rpm"])
     method = parse_method(body, teeth=cut.teeth, radial_immersion=cut.radial_immersion)
-    if method.name == "semi_discretization" and count > MAX_SDM_SPEED_COUNT:
+    if method.name == "semi_discretization" and grid.size > MAX_SDM_SPEED_COUNT:
         raise InputError("spindle_speed_rpm.count",
-                         f"at most {MAX_SDM_SPEED_COUNT} speeds with method 'semi_discretization', got {count}")
-    grid = np.linspace(start, stop, count)
-    grid.flags.writeable = False
+                         f"at most {MAX_SDM_SPEED_COUNT} speeds with method 'semi_discretization', got {grid.size}")
+    table = None if table_x is None else modal_model_from_table(table_x, table_y,
+                                                                modes_per_direction=method.modes_per_direction)
 
     return LobesRequest(
         frequency_hz=freq,
@@ -255,4 +342,5 @@ def parse_lobes_request(body: object) -> LobesRequest:
         milling=cut.milling,
         spindle_speed_rpm=grid,
         method=method,
+        modal_model=table,
     )

@@ -97,13 +97,20 @@ from rcsa.errors import InputError
 from rcsa.model.wire import complex_to_wire, json_float, json_list
 
 __all__ = [
+    "CUT_WINDOW",
     "DEFAULT_STEPS_PER_PERIOD",
+    "FULL_PERIOD",
     "MANY_FIELDS",
+    "MAX_REFINEMENTS",
     "MAX_STEPS_PER_PERIOD",
+    "MIN_CUT_STEPS",
+    "MIN_PERIOD_STEPS",
     "MIN_STEPS_PER_PERIOD",
-    "SemiDiscretizationResult",
-    "MAX_RESOLVING_STEPS",
+    "RESOLVED_RTOL",
     "RESOLVING_STEPS_PER_CYCLE",
+    "SemiDiscretizationResult",
+    "band_steps",
+    "cut_scheme",
     "resolving_steps",
     "semi_discretization_lobes",
     "semi_discretization_lobes_many",
@@ -137,6 +144,33 @@ _GUIDE_ROUNDS = 3
 #: Neighbours' slopes of log|μ| in log b that differ by more than this factor are not used.
 _SLOPE_SPREAD = 1.5
 
+#: Automatic steps (:func:`resolving_steps`): this many steps per cycle of a vibration just above
+#: the highest natural frequency kept (``1.2 f_top``), over the time in the cut (cut-window scheme)
+#: or the tooth period (full-period scheme). First-order semi-discretization over-estimates the
+#: limit by about ``C/s²`` (s steps per cycle): 3–5 % at 10 where that mode governs the cut, 1–1.4 %
+#: at 20, 0.4–0.7 % at 28 (measured against 40–60 steps a cycle on single-flute and
+#: Insperger–Stépán cuts; README "Resolution"), far less where a lower mode governs. Every speed is
+#: checked at ``1/√2`` of its steps and refined where the two differ by more than
+#: ``RESOLVED_RTOL``, so the steps start where they usually suffice and grow only where needed.
+RESOLVING_STEPS_PER_CYCLE = 10.0
+#: Fewest steps over the cut (cut-window scheme) and over the period (full-period scheme).
+MIN_CUT_STEPS = 16
+MIN_PERIOD_STEPS = DEFAULT_STEPS_PER_PERIOD
+#: Step counts are rounded up to ``⌈least · 2^(j/4)⌉`` (four per octave) so that speeds share
+#: batches; the convergence check takes the count two places below (``1/√2`` of the steps).
+_BANDS_PER_OCTAVE = 4
+_CHECK_BANDS = 2
+#: A speed is resolved when the limit with ``1/√2`` of its steps lies within this relative
+#: distance of its own (first-order error ∝ h²: the difference then equals the error of the
+#: finer answer, so the answer is within about this of the converged one).
+RESOLVED_RTOL = 0.01
+#: Unresolved speeds are solved again with √2 times the steps (compared with the answer before),
+#: at most this many times.
+MAX_REFINEMENTS = 3
+#: Schemes of the period map.
+CUT_WINDOW, FULL_PERIOD = "cut_window", "full_period"
+
+
 # --------------------------------------------------------------------------- result
 
 
@@ -161,19 +195,28 @@ class SemiDiscretizationResult(LobeResult):
     lobe_kinds : tuple of str
         Kind of each entry of ``lobes``.
     steps_per_period : int
+        The largest step count used (over the cut for ``scheme == "cut_window"``).
     steps_per_chatter_cycle : numpy.ndarray, shape (nspeed,)
-        ``k / (f_c T)``: how finely the steps sample the chatter; below
-        ``MIN_STEPS_PER_CHATTER_CYCLE`` the limit is under-resolved (raise
-        ``steps_per_period``; ZOA is the cheaper answer at such many-wave, low speeds).
+        ``1 / (f_c h)``: how finely the steps sample the chatter (``h``: one step, s).
     depth_search_max_m : float
         Ceiling of the depth search, m.
     modal_model : ModalModel
         The modes the map was built from (with their source and fit report).
     top_mode_steps_per_cycle : numpy.ndarray, shape (nspeed,)
-        ``k / (1.2 f_top T)``: how finely the steps sample a vibration just above the model's
+        ``1 / (1.2 f_top h)``: how finely the steps sample a vibration just above the model's
         highest mode ``f_top``. Below ``MIN_STEPS_PER_CHATTER_CYCLE`` an instability of that
         mode can be missed altogether (too coarse a discretisation damps it), so such speeds
         are noted even where the limit found looks resolved.
+    scheme : {"cut_window", "full_period"}
+        What the steps discretise: the time in the cut (the free flight one exact step) or
+        the whole tooth period.
+    steps : numpy.ndarray of int, shape (nspeed,)
+        Steps of each speed's answer.
+    check_steps : numpy.ndarray of int, shape (nspeed,)
+        Steps of the second resolution it was compared with (0: not checked).
+    resolved : numpy.ndarray of bool, shape (nspeed,)
+        The limits at ``steps`` and ``check_steps`` agree within ``RESOLVED_RTOL`` (both
+        without a limit below the search ceiling counts as agreeing).
     """
 
     instability: np.ndarray
@@ -184,24 +227,31 @@ class SemiDiscretizationResult(LobeResult):
     depth_search_max_m: float
     modal_model: ModalModel
     top_mode_steps_per_cycle: np.ndarray
+    scheme: str
+    steps: np.ndarray
+    check_steps: np.ndarray
+    resolved: np.ndarray
 
     def __post_init__(self) -> None:
         LobeResult.__post_init__(self)
-        for name in ("instability", "critical_multiplier", "steps_per_chatter_cycle", "top_mode_steps_per_cycle"):
+        for name in ("instability", "critical_multiplier", "steps_per_chatter_cycle", "top_mode_steps_per_cycle",
+                     "steps", "check_steps", "resolved"):
             getattr(self, name).flags.writeable = False
 
     @property
     def under_resolved(self) -> np.ndarray:
-        """Speeds whose limit has fewer than ``MIN_STEPS_PER_CHATTER_CYCLE`` steps per chatter cycle."""
-        return np.asarray(self.steps_per_chatter_cycle < MIN_STEPS_PER_CHATTER_CYCLE)
+        """Speeds whose limit is not resolved (``~resolved``)."""
+        return np.asarray(~self.resolved)
 
     def to_dict(self) -> dict[str, Any]:
         """The contract's response (as :meth:`LobeResult.to_dict`) plus the SDM's fields.
 
         Added: ``method`` (``"semi_discretization"``), ``instability`` (per speed, null
         where none), ``critical_multiplier`` (``{"real", "imag"}``), ``kind`` on every lobe,
-        ``steps_per_period``, ``steps_per_chatter_cycle``, ``depth_search_max_m``,
-        ``modal_model`` (:meth:`ModalModel.to_dict`) and ``notes`` (under-resolved speeds).
+        ``resolved`` (per speed), ``discretization`` (``scheme``, per-speed ``steps`` and
+        ``check_steps``, ``resolved_rtol``), ``steps_per_period`` (the largest step count),
+        ``steps_per_chatter_cycle``, ``depth_search_max_m``, ``modal_model``
+        (:meth:`ModalModel.to_dict`) and ``notes`` (unresolved speeds, modes left out).
         """
         out = LobeResult.to_dict(self)
         for lobe, kind in zip(out["lobes"], self.lobe_kinds, strict=True):
@@ -211,6 +261,10 @@ class SemiDiscretizationResult(LobeResult):
             method="semi_discretization",
             instability=[str(k) if k else None for k in self.instability.tolist()],
             critical_multiplier=complex_to_wire(mu, nonfinite_as_none=True),
+            resolved=[bool(v) for v in self.resolved.tolist()],
+            discretization={"scheme": self.scheme, "steps": [int(v) for v in self.steps.tolist()],
+                            "check_steps": [int(v) for v in self.check_steps.tolist()],
+                            "resolved_rtol": RESOLVED_RTOL},
             steps_per_period=self.steps_per_period,
             steps_per_chatter_cycle=json_list(self.steps_per_chatter_cycle),
             depth_search_max_m=json_float(self.depth_search_max_m),
@@ -222,19 +276,23 @@ class SemiDiscretizationResult(LobeResult):
     def notes(self) -> list[str]:
         """Plain-language caveats of this result."""
         out = []
-        bad = self.spindle_speed_rpm[self.under_resolved]
+        checked = self.check_steps > 0
+        bad = self.spindle_speed_rpm[~self.resolved & checked]
         if bad.size:
-            out.append(f"{bad.size} speed(s) between {bad.min():.0f} and {bad.max():.0f} rpm have fewer than "
-                       f"{MIN_STEPS_PER_CHATTER_CYCLE:g} steps per chatter cycle: their limits are under-resolved "
-                       f"(raise steps_per_period, or use method zoa there)")
-        coarse = self.spindle_speed_rpm[(self.top_mode_steps_per_cycle < MIN_STEPS_PER_CHATTER_CYCLE)
-                                        & ~self.under_resolved]
+            out.append(f"{bad.size} speed(s) between {bad.min():.0f} and {bad.max():.0f} rpm are not resolved: their "
+                       f"limits at two resolutions differ by more than {RESOLVED_RTOL:.0%} (marked resolved: false; "
+                       "do not choose a depth there from this answer)")
+        unchecked = self.spindle_speed_rpm[~checked]
+        if unchecked.size:
+            out.append(f"{unchecked.size} speed(s) were not checked at a second resolution (a screening pass)")
+        coarse = self.spindle_speed_rpm[(self.top_mode_steps_per_cycle < MIN_STEPS_PER_CHATTER_CYCLE)]
         if coarse.size:
             f_top = float(np.max(self.modal_model.frequency_hz))
             out.append(f"{coarse.size} speed(s) between {coarse.min():.0f} and {coarse.max():.0f} rpm sample "
                        f"a vibration of the highest mode ({f_top:.0f} Hz) with fewer than "
                        f"{MIN_STEPS_PER_CHATTER_CYCLE:g} steps per cycle: an instability of that mode can be "
-                       f"missed there (raise steps_per_period, or leave the mode out)")
+                       f"missed there (leave steps_per_period out: the steps are then chosen to resolve it)")
+        out.extend(self.modal_model.notes())
         return out
 
 
@@ -243,21 +301,25 @@ class SemiDiscretizationResult(LobeResult):
 
 class _Evaluator:
     """Largest multiplier of the period map for batches of (pair, depth); a pair is one speed
-    of one system (tool). Every unstable evaluation also records its chatter frequency, so the
-    critical multiplier and frequency at the final unstable end of each bracket are known when
-    the search ends (no extra evaluation)."""
+    of one system (tool), with its own step count ``steps``. Full-period pairs of one count share
+    a plan; cut-window pairs whose counts lie within a factor ``_PAD_RATIO`` are solved as one
+    padded plan (:func:`~rcsa.analysis.lobes.monodromy.padded_cut_window`: exactly each pair's
+    own multipliers, far fewer passes over the steps); chunks are bounded in memory. Every
+    unstable evaluation also records its chatter frequency, so the critical multiplier and
+    frequency at the final unstable end of each bracket are known when the search ends (no
+    extra evaluation)."""
 
-    def __init__(self, systems: md.StateSpace, system_of_pair: np.ndarray, plan: md.CuttingPlan, kt: float,
+    def __init__(self, systems: md.StateSpace, system_of_pair: np.ndarray, cut: _Cut, steps: np.ndarray,
                  period_s: np.ndarray) -> None:
         self.systems = systems
         self.system_of_pair = system_of_pair
-        self.plan = plan
-        self.kt = kt
+        self.cut = cut
+        self.kt = cut.kt
         self.period_s = period_s
-        self.step_s = period_s / plan.steps
-        parts = [md.free_maps(self._system(np.arange(lo, min(lo + _CHUNK, period_s.size))), plan,
-                              self.step_s[lo : lo + _CHUNK]) for lo in range(0, period_s.size, _CHUNK)]
-        self.free = (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]))
+        self.steps = np.asarray(steps, dtype=np.int64)
+        self.plans = {int(k): cut.plan(int(k)) for k in np.unique(self.steps)}
+        self.step_s = period_s * np.array([self.plans[int(k)].step_fraction for k in self.steps])
+        self._free: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self.mu_unstable = np.full(period_s.size, np.nan + 0j)
         self.freq_unstable = np.full(period_s.size, np.nan)
         self.evaluations = 0
@@ -265,9 +327,59 @@ class _Evaluator:
     def _system(self, idx: np.ndarray) -> md.StateSpace:
         return self.systems.take(self.system_of_pair[idx])
 
-    def maps(self, idx: np.ndarray, depth_m: np.ndarray) -> md.PeriodMaps:
-        return md.period_maps(self._system(idx), self.plan, self.kt, self.step_s[idx], depth_m,
-                              (self.free[0][idx], self.free[1][idx]))
+    def _free_maps(self, key: int, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The depth-free exponentials of the pairs ``idx``, computed once per pair: the free
+        flight (cut window: ``key = 0``, the same for every step count) or the free stretches of
+        the full-period plan of ``key`` steps."""
+        if key not in self._free:
+            pairs = np.arange(self.steps.size) if key == 0 else np.flatnonzero(self.steps == key)
+            where = np.full(self.steps.size, -1)
+            where[pairs] = np.arange(pairs.size)
+            parts = []
+            for lo in range(0, pairs.size, _CHUNK):  # bounded batches of exponentials
+                sel = pairs[lo : lo + _CHUNK]
+                if key == 0:
+                    plan = self.plans[int(self.steps[sel[0]])]
+                    seconds = self.period_s[sel] * (1.0 - plan.step_fraction * (plan.steps - 1))
+                    parts.append(md.free_maps(self._system(sel), plan, seconds / plan.free_length[0]))
+                else:
+                    parts.append(md.free_maps(self._system(sel), self.plans[key], self.step_s[sel]))
+            self._free[key] = (where, np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]))
+        where, free, step = self._free[key]
+        return free[where[idx]], step[where[idx]]
+
+    def _groups(self, idx: np.ndarray) -> list[np.ndarray]:
+        """Rows of ``idx`` solved together: one step count (full period), or counts within
+        ``_PAD_RATIO`` (cut window), each group split into memory-bounded chunks."""
+        steps = self.steps[idx]
+        out = []
+        if self.cut.scheme == CUT_WINDOW:
+            order = np.argsort(steps, kind="stable")
+            start = 0
+            while start < order.size:
+                end = int(np.searchsorted(steps[order], _PAD_RATIO * steps[order[start]], side="right"))
+                chunk = _chunk_size(self.systems.n, self.plans[int(steps[order[end - 1]])])
+                end = min(end, start + chunk)
+                out.append(order[start:end])
+                start = end
+            return out
+        for k in np.unique(steps):  # pairs of one step count share a plan
+            rows = np.flatnonzero(steps == k)
+            chunk = _chunk_size(self.systems.n, self.plans[int(k)])
+            out.extend(rows[lo : lo + chunk] for lo in range(0, rows.size, chunk))
+        return out
+
+    def maps(self, idx: np.ndarray, depth_m: np.ndarray) -> tuple[md.CuttingPlan, md.PeriodMaps]:
+        """The plan and period maps of the pairs ``idx`` (one group of :meth:`_groups`) at ``depth_m``."""
+        steps = self.steps[idx]
+        if self.cut.scheme == CUT_WINDOW:
+            plan, force, frac = md.padded_cut_window(self.cut.teeth, steps, self.cut.phi_st, self.cut.phi_ex,
+                                                     self.cut.kr)
+            return plan, md.period_maps(self._system(idx), plan, self.kt, self.period_s[idx, None] * frac, depth_m,
+                                        self._free_maps(0, idx), force=force, active=steps)
+        k = int(steps[0])
+        return self.plans[k], md.period_maps(self._system(idx), self.plans[k], self.kt, self.step_s[idx], depth_m,
+                                             self._free_maps(k, idx))
 
     def __call__(self, idx: np.ndarray, depth_m: np.ndarray, record_stable: bool = False) -> np.ndarray:
         """``μ`` of each (pair, depth); ``record_stable``: stable evaluations record theirs too
@@ -276,38 +388,42 @@ class _Evaluator:
         check_time()  # every round of evaluations: a sync request's time limit stops the search
         self.evaluations += idx.size
         mu = np.empty(idx.size, dtype=complex)
-        for lo in range(0, idx.size, _CHUNK):
-            part = slice(lo, lo + _CHUNK)
-            mu[part] = self._chunk(idx[part], depth_m[part], record_stable)
+        for rows in self._groups(idx):
+            mu[rows] = self._chunk(idx[rows], depth_m[rows], record_stable)
         return mu
 
     def _chunk(self, idx: np.ndarray, depth_m: np.ndarray, record_stable: bool) -> np.ndarray:
-        system, maps = self._system(idx), self.maps(idx, depth_m)
-        mu, vec = md.critical_multipliers(system, self.plan, maps, vectors=True if record_stable else "unstable")
+        system = self._system(idx)
+        plan, maps = self.maps(idx, depth_m)
+        mu, vec = md.critical_multipliers(system, plan, maps, vectors=True if record_stable else "unstable")
         assert vec is not None
         up = np.abs(mu) >= 1.0
         keep = np.flatnonzero(up | record_stable)
         if keep.size:
-            sub = md.PeriodMaps(maps.p[keep], maps.g[keep], maps.free[keep], maps.step[keep])
             on_circle = np.where(mu[keep].imag == 0.0, np.sign(mu[keep].real) + 0j, np.exp(1j * np.angle(mu[keep])))
             self.mu_unstable[idx[keep]] = np.where(up[keep], mu[keep], on_circle)
-            self.freq_unstable[idx[keep]] = _chatter_frequency(system.take(keep), self.plan, sub, mu[keep],
+            self.freq_unstable[idx[keep]] = md.chatter_frequency(system.take(keep), plan, maps.take(keep), mu[keep],
                                                                vec[keep], self.period_s[idx[keep]])
         return mu
 
 
-def _chatter_frequency(system: md.StateSpace, plan: md.CuttingPlan, maps: md.PeriodMaps, mu: np.ndarray,
-                       vec: np.ndarray, period_s: np.ndarray) -> np.ndarray:
-    """Dominant vibration frequency (Hz) of critical eigenvectors (module docstring)."""
-    k = plan.steps
-    r = md.trajectory(system, plan, maps, vec)  # (nb, k, 2)
-    log_mu = np.log(mu.astype(complex))
-    floquet = np.exp(-np.outer(log_mu, np.arange(k) / k))  # remove the growth μ^{s/k}
-    coef = np.fft.fft(r * floquet[:, :, None], axis=1)
-    power = (np.abs(coef) ** 2).sum(axis=2)
-    j = np.fft.fftfreq(k, d=1.0 / k)[np.argmax(power, axis=1)]
-    theta = np.angle(mu)
-    return np.asarray(np.abs(theta / (2 * np.pi) + j) / period_s)
+#: Cut-window pairs whose step counts differ by at most this factor are padded to one plan.
+_PAD_RATIO = 1.6
+
+
+#: Working memory of one chunk of evaluations, bytes (the period maps, the Krylov basis, and the
+#: monodromy matrices where they are formed).
+_CHUNK_BYTES = 96 * 2**20
+
+
+def _chunk_size(n: int, plan: md.CuttingPlan) -> int:
+    """Pairs evaluated together: at most ``_CHUNK``, and within ``_CHUNK_BYTES``."""
+    size = n + 2 * plan.n_samples
+    ncut = plan.cut_step.size
+    per_pair = 8 * (ncut * n * (n + 4) + 2 * size * (md.KRYLOV_DIM + n + md.KRYLOV_EXTRA) + plan.steps * n * 2)
+    if size <= md.DENSE_MAX_SIZE or not md.matrix_free_cheaper(n, plan):
+        per_pair += 8 * size * size * 2
+    return int(max(1, min(_CHUNK, _CHUNK_BYTES // per_pair)))
 
 
 def _log_modulus(mu: np.ndarray) -> np.ndarray:
@@ -385,9 +501,7 @@ def _refine(evaluate: _Evaluator, idx: np.ndarray, br: _Brackets, rtol: float) -
 def _reference_depth(model: ModalModel, teeth: int, kt: float, alpha: np.ndarray) -> float:
     """ZOA absolute limit of the modal model (scale of the depth search), m."""
     fn = np.asarray(model.frequency_hz, dtype=float)
-    grid = np.unique(np.concatenate(
-        [np.geomspace(0.5 * fn.min(), 2.0 * fn.max(), 2000)]
-        + [f * np.linspace(0.8, 1.25, 400) for f in fn]))
+    grid = model.frf_grid()
     hxx, hyy = model.receptance(grid, 0), model.receptance(grid, 1)
     depth, _ = zoa_depth_limit(hxx, hyy, teeth=teeth, tangential_coefficient_n_m2=kt, alpha=alpha)
     if np.any(np.isfinite(depth)):
@@ -635,8 +749,10 @@ def _segments(speed: np.ndarray, depth: np.ndarray, kind: np.ndarray, lobe: np.n
 
 def _check_arguments(teeth: object, kt: float, kr: float, steps: object, speed: np.ndarray) -> None:
     """The scalar rules of :func:`semi_discretization_lobes` (the request parser checks them first)."""
-    for field, value, low, high in (("teeth", teeth, 1, None),
-                                    ("steps_per_period", steps, MIN_STEPS_PER_PERIOD, _API_MAX_STEPS)):
+    rules = [("teeth", teeth, 1, None)]
+    if steps is not None:
+        rules.append(("steps_per_period", steps, MIN_STEPS_PER_PERIOD, _API_MAX_STEPS))
+    for field, value, low, high in rules:
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low or (
                 high is not None and value > high):
             raise InputError(field, f"must be an integer >= {low}" + (f" and <= {high}" if high else "")
@@ -658,8 +774,10 @@ def semi_discretization_lobes(
     radial_immersion: float,
     milling: Milling,
     spindle_speed_rpm: np.ndarray,
-    steps_per_period: int = DEFAULT_STEPS_PER_PERIOD,
+    steps_per_period: int | None = None,
     depth_rtol: float = DEPTH_RTOL,
+    steps_per_cycle: float | None = None,
+    refinements: int = MAX_REFINEMENTS,
 ) -> SemiDiscretizationResult:
     """Depth limit, kind of instability and chatter frequency per speed, by SDM.
 
@@ -678,10 +796,17 @@ def semi_discretization_lobes(
     milling : {"up", "down"}
     spindle_speed_rpm : numpy.ndarray, shape (nspeed,)
         Validated speed grid, rpm.
-    steps_per_period : int
-        ``k``: steps per tooth period (error ∝ 1/k²); 8 … 4000 here, 8 … 200 in requests.
+    steps_per_period : int, optional
+        Fixed steps per tooth period, over the whole period (error ∝ 1/k²; 8 … 4000 here,
+        8 … 200 in requests); each speed is still checked (``resolved``) but never refined.
+        None (default): the steps resolve the cut (:func:`resolving_steps`), each speed is
+        checked and, where unresolved, solved again with more steps
+        (:func:`semi_discretization_lobes_many`).
     depth_rtol : float
         Relative width of the final depth bracket.
+    steps_per_cycle, refinements
+        The automatic steps' resolution and the refinements allowed (as in
+        :func:`semi_discretization_lobes_many`).
 
     Returns
     -------
@@ -706,61 +831,108 @@ def semi_discretization_lobes(
     ...     radial_ratio=1 / 3, radial_immersion=0.05, milling="down",
     ...     spindle_speed_rpm=np.array([18000.0]))
     >>> str(r.instability[0]), round(float(r.depth_limit_m[0]) * 1e3, 2), round(float(r.chatter_frequency_hz[0]), 6)
-    ('flip', 1.31, 900.0)
+    ('flip', 1.3, 900.0)
+    >>> r.scheme, bool(r.resolved[0]), int(r.steps[0])
+    ('cut_window', True, 16)
     """
     return semi_discretization_lobes_many(
         [model], teeth=teeth, tangential_coefficient_n_m2=tangential_coefficient_n_m2, radial_ratio=radial_ratio,
         radial_immersion=radial_immersion, milling=milling, spindle_speed_rpm=[spindle_speed_rpm],
-        steps_per_period=steps_per_period, depth_rtol=depth_rtol)[0]
+        steps_per_period=steps_per_period, depth_rtol=depth_rtol, steps_per_cycle=steps_per_cycle,
+        refinements=refinements)[0]
 
 
-#: :func:`resolving_steps`: steps per cycle of the chatter it aims at, and the largest step
-#: count it gives.
-RESOLVING_STEPS_PER_CYCLE = 10.0
-MAX_RESOLVING_STEPS = 320
 
 
-def resolving_steps(model: ModalModel, teeth: int, spindle_speed_rpm: np.ndarray, *,
-                    chatter_frequency_hz: np.ndarray | None = None,
-                    steps_per_cycle: float = RESOLVING_STEPS_PER_CYCLE,
-                    max_steps: int = MAX_RESOLVING_STEPS) -> np.ndarray:
-    """Steps per tooth period that resolve the chatter at each speed: a band per speed.
+def cut_scheme(teeth: int, radial_immersion: float, milling: Milling) -> tuple[str, float]:
+    """The scheme for a cut and the share of the tooth period in the cut.
 
-    Chatter lies a little above a natural frequency: without ``chatter_frequency_hz`` the
-    highest natural frequency of the model (×1.2) sets the vibration cycles per tooth period
-    ``c``. Not the mode with the largest peak: a weaker, higher mode can govern a pocket of the
-    strongest one (a single flute at half immersion chatters at a 6.2 kHz tool mode of 0.6 × the
-    largest peak, 4.1 mm deep, where steps resolving only the 635 Hz mode saw 12 mm — too few
-    steps per cycle hide a mode's instability instead of flagging it), and every mode of a
-    :class:`ModalModel` fitted to an FRF has a peak of at least
-    ``rcsa.analysis.lobes.modal_model.MIN_PEAK_FRACTION`` of the largest. With
-    ``chatter_frequency_hz`` (e.g. from an under-resolved first solve) the larger of that
-    frequency and the highest mode does. The steps are
-    ``steps_per_cycle · c`` rounded up to a multiple of 20, between
-    ``DEFAULT_STEPS_PER_PERIOD`` and ``max_steps`` (speeds needing more keep ``max_steps`` and
-    are flagged by ``steps_per_chatter_cycle``). First-order SDM errs by about 2 % at 12 steps
-    per chatter cycle (module docstring); few bands keep the batches large.
+    Fewer than one tooth in the cut (``N (φex − φst)/2π < 1``): ``"cut_window"`` — only the time
+    in the cut is discretised (:func:`~rcsa.analysis.lobes.monodromy.cut_window_plan`); else
+    ``"full_period"`` (:func:`~rcsa.analysis.lobes.monodromy.cutting_plan`).
+
+    Examples
+    --------
+    >>> cut_scheme(1, 0.05, "down")[0], cut_scheme(4, 0.5, "down")
+    ('cut_window', ('full_period', 1.0))
+    """
+    phi_st, phi_ex = engagement_angles_rad(radial_immersion, milling)
+    fraction = md.cut_window_fraction(teeth, phi_st, phi_ex)
+    if fraction < 1.0 - 1e-9:
+        return CUT_WINDOW, fraction
+    return FULL_PERIOD, 1.0
+
+
+def band_steps(band: np.ndarray | int, least: int) -> np.ndarray:
+    """Step count of band ``j``: ``⌈least · 2^(j/4)⌉`` (``j`` may be negative; at least 4).
+
+    Examples
+    --------
+    >>> band_steps(np.array([-2, 0, 1, 2, 4]), 16).tolist()
+    [12, 16, 20, 23, 32]
+    """
+    j = np.asarray(band, dtype=float)
+    return np.maximum(np.ceil(least * 2.0 ** (j / _BANDS_PER_OCTAVE) - 1e-9), 4).astype(np.int64)
+
+
+def _band_of(steps: np.ndarray, least: int) -> np.ndarray:
+    """The smallest band whose step count is at least ``steps`` (and at least band 0)."""
+    j = np.ceil(_BANDS_PER_OCTAVE * np.log2(np.maximum(steps, least) / least) - 1e-9).astype(np.int64)
+    return np.where(band_steps(j - 1, least) >= steps, j - 1, j).clip(0)
+
+
+def resolving_steps(model: ModalModel, teeth: int, spindle_speed_rpm: np.ndarray, *, radial_immersion: float = 1.0,
+                    milling: Milling = "down", steps_per_cycle: float = RESOLVING_STEPS_PER_CYCLE,
+                    chatter_frequency_hz: np.ndarray | None = None) -> np.ndarray:
+    """Steps that resolve the cut at each speed (over the cut, or over the period: :func:`cut_scheme`).
+
+    A vibration just above the highest natural frequency of the model (``1.2 f_top``; with
+    ``chatter_frequency_hz``, the larger of the two) goes through ``c`` cycles in the time the
+    scheme discretises (the time in the cut, or the tooth period); the steps are
+    ``steps_per_cycle · c`` rounded up to a band (:func:`band_steps`), at least
+    ``MIN_CUT_STEPS`` / ``MIN_PERIOD_STEPS``. There is no upper cap: the cost is bounded by the
+    caller's budget (``rcsa.app.budget``), never by quietly fewer steps. Not the mode with the
+    largest peak: a weaker, higher mode can govern a pocket of the strongest one (a single flute
+    at half immersion chatters at a 6.2 kHz tool mode of 0.6 × the largest peak, 4.1 mm deep,
+    where steps resolving only the 635 Hz mode saw 12 mm).
 
     Examples
     --------
     >>> m = ModalModel.of([1400.0, 4000.0], [0.02, 0.03], [1.0, 0.5], [0, 0])
-    >>> resolving_steps(m, 1, np.array([3000.0, 12000.0, 24000.0])).tolist()
-    [320, 240, 120]
-    >>> resolving_steps(m, 1, np.array([24000.0]), chatter_frequency_hz=np.array([5100.0])).tolist()
-    [140]
+    >>> resolving_steps(m, 1, np.array([3000.0, 12000.0, 24000.0]), radial_immersion=0.05).tolist()
+    [77, 20, 16]
+    >>> resolving_steps(m, 4, np.array([3000.0, 24000.0]), radial_immersion=0.5).tolist()
+    [270, 40]
     """
     speed = np.asarray(spindle_speed_rpm, dtype=float)
+    scheme, fraction = cut_scheme(teeth, radial_immersion, milling)
     f_top = np.full(speed.shape, 1.2 * float(np.max(np.asarray(model.frequency_hz, dtype=float))))
     if chatter_frequency_hz is not None:
         f_top = np.maximum(f_top, np.where(np.isfinite(chatter_frequency_hz), chatter_frequency_hz, 0.0))
-    cycles = f_top * 60.0 / (teeth * speed)
-    k = np.ceil(steps_per_cycle * cycles / 20.0) * 20
-    return np.clip(k, DEFAULT_STEPS_PER_PERIOD, max_steps).astype(np.int64)
+    cycles = f_top * fraction * 60.0 / (teeth * speed)
+    least = MIN_CUT_STEPS if scheme == CUT_WINDOW else MIN_PERIOD_STEPS
+    return band_steps(_band_of(np.ceil(steps_per_cycle * cycles), least), least)
 
 
 #: What :func:`semi_discretization_lobes_many` shares across its models (one cut).
-MANY_FIELDS = ("teeth", "tangential_coefficient_n_m2", "radial_ratio", "radial_immersion", "milling",
-               "steps_per_period")
+MANY_FIELDS = ("teeth", "tangential_coefficient_n_m2", "radial_ratio", "radial_immersion", "milling")
+
+
+@dataclass(frozen=True)
+class _Cut:
+    """One cut (shared by every model of a call)."""
+
+    teeth: int
+    kt: float
+    kr: float
+    phi_st: float
+    phi_ex: float
+    scheme: str
+
+    def plan(self, steps: int) -> md.CuttingPlan:
+        if self.scheme == CUT_WINDOW:
+            return md.cut_window_plan(self.teeth, steps, self.phi_st, self.phi_ex, self.kr)
+        return md.cutting_plan(self.teeth, steps, self.phi_st, self.phi_ex, self.kr)
 
 
 def semi_discretization_lobes_many(
@@ -772,12 +944,15 @@ def semi_discretization_lobes_many(
     radial_immersion: float,
     milling: Milling,
     spindle_speed_rpm: Sequence[np.ndarray],
-    steps_per_period: int | Sequence[np.ndarray] = DEFAULT_STEPS_PER_PERIOD,
+    steps_per_period: int | Sequence[np.ndarray] | None = None,
     depth_rtol: float = DEPTH_RTOL,
     progress: Callable[[int, int], None] | None = None,
     min_depth_search_max_m: Sequence[float] | None = None,
     scan_from_neighbours: bool = False,
     scan_start_m: Sequence[np.ndarray] | None = None,
+    steps_per_cycle: float | None = None,
+    refinements: int = MAX_REFINEMENTS,
+    check: bool = True,
 ) -> list[SemiDiscretizationResult]:
     """SDM lobes of several modal models (tools) in one cut, solved together.
 
@@ -786,6 +961,15 @@ def semi_discretization_lobes_many(
     result of each model is the one :func:`semi_discretization_lobes` gives for it alone (the
     same search, the same brackets).
 
+    **Resolution.** By default (``steps_per_period=None``) each speed gets the steps that
+    resolve its cut (:func:`resolving_steps`, the scheme of :func:`cut_scheme`), and is then
+    *checked*: its limit is solved again — two evaluations around it — with ``1/√2`` of the
+    steps. Where the two lie within ``RESOLVED_RTOL`` the speed is ``resolved``. Where not, it is
+    solved again with ``√2`` times the steps and compared with the answer before, up to
+    ``refinements`` times; a speed still apart is reported with its finest answer and
+    ``resolved = False`` (said in the notes). A speed without a limit below the search ceiling is
+    resolved when the check finds it stable there too.
+
     Parameters
     ----------
     models : sequence of ModalModel
@@ -793,12 +977,11 @@ def semi_discretization_lobes_many(
         :func:`~rcsa.analysis.lobes.monodromy.state_spaces`).
     teeth, tangential_coefficient_n_m2, radial_ratio, radial_immersion, milling, depth_rtol
         As in :func:`semi_discretization_lobes` (the same for every model).
-    steps_per_period : int or sequence of numpy.ndarray
-        One step count for all, or one per speed of each model (:func:`resolving_steps`): the
-        speeds of each step count are solved as one band; a result's ``steps_per_period`` is
-        then its largest.
     spindle_speed_rpm : sequence of numpy.ndarray
         One speed grid (rpm) per model.
+    steps_per_period : int or sequence of numpy.ndarray, optional
+        Fixed steps per tooth period over the whole period (the full-period scheme), one for all
+        or one per speed of each model: checked, never refined. None: automatic (above).
     progress : callable, optional
         ``progress(done, total)`` after each level of the coarse-to-fine search.
     min_depth_search_max_m : sequence of float, optional
@@ -814,6 +997,12 @@ def semi_discretization_lobes_many(
         Per model, per speed: where a speed solved from scratch starts its scan (m; NaN or
         below the usual start: the usual start), e.g. half a limit known from a coarser
         solution; the same caveat.
+    steps_per_cycle : float, optional
+        Automatic steps' resolution (default ``RESOLVING_STEPS_PER_CYCLE``).
+    refinements : int
+        Refinements allowed per speed (automatic steps only).
+    check : bool
+        Check each speed's resolution (False: a screening pass; ``resolved`` is then False).
 
     Returns
     -------
@@ -833,23 +1022,36 @@ def semi_discretization_lobes_many(
     ...     radial_ratio=1 / 3, radial_immersion=0.05, milling="down",
     ...     spindle_speed_rpm=[np.array([18000.0]), np.array([18000.0])])
     >>> round(float(ra.depth_limit_m[0]) * 1e3, 2), str(rb.instability[0])
-    (1.31, 'flip')
+    (1.3, 'flip')
     """
     if len(spindle_speed_rpm) != len(models) or not models:
         raise InputError("spindle_speed_rpm", f"give one speed grid per model ({len(models)}), got "
                                               f"{len(spindle_speed_rpm)}")
     kt = float(tangential_coefficient_n_m2)
     speeds = [np.array(s, dtype=float) for s in spindle_speed_rpm]  # copies: the results freeze their arrays
-    per_speed = not isinstance(steps_per_period, (int, np.integer))
-    steps = ([np.asarray(k) for k in steps_per_period] if per_speed  # type: ignore[union-attr]
-             else [np.full(s.size, steps_per_period) for s in speeds])
-    if len(steps) != len(models) or any(k.shape != s.shape for k, s in zip(steps, speeds, strict=True)):
-        raise InputError("steps_per_period", "give one step count per speed of each model, or one for all")
-    for speed, k in zip(speeds, steps, strict=True):
-        for value in np.unique(k) if k.size else [DEFAULT_STEPS_PER_PERIOD]:
-            _check_arguments(teeth, kt, radial_ratio, value.item() if isinstance(value, np.generic) else value,
-                             speed)
+    automatic = steps_per_period is None
+    per_cycle = RESOLVING_STEPS_PER_CYCLE if steps_per_cycle is None else float(steps_per_cycle)
+    if not (math.isfinite(per_cycle) and 2.0 <= per_cycle <= 1000.0):
+        raise InputError("steps_per_cycle", f"must lie within 2 … 1000, got {steps_per_cycle!r}")
     phi_st, phi_ex = engagement_angles_rad(radial_immersion, milling)
+    if automatic:
+        for speed in speeds:
+            _check_arguments(teeth, kt, radial_ratio, None, speed)
+        scheme = cut_scheme(teeth, radial_immersion, milling)[0]
+        steps = [resolving_steps(m, teeth, s, radial_immersion=radial_immersion, milling=milling,
+                                 steps_per_cycle=per_cycle) for m, s in zip(models, speeds, strict=True)]
+    else:
+        scheme = FULL_PERIOD
+        per_speed = not isinstance(steps_per_period, (int, np.integer))
+        steps = ([np.asarray(k) for k in steps_per_period] if per_speed  # type: ignore[union-attr]
+                 else [np.full(s.size, steps_per_period) for s in speeds])
+        if len(steps) != len(models) or any(k.shape != s.shape for k, s in zip(steps, speeds, strict=True)):
+            raise InputError("steps_per_period", "give one step count per speed of each model, or one for all")
+        for speed, k in zip(speeds, steps, strict=True):
+            for value in np.unique(k) if k.size else [DEFAULT_STEPS_PER_PERIOD]:
+                _check_arguments(teeth, kt, radial_ratio, value.item() if isinstance(value, np.generic) else value,
+                                 speed)
+    cut = _Cut(int(teeth), kt, float(radial_ratio), phi_st, phi_ex, scheme)
     alpha = directional_factors(phi_st, phi_ex, radial_ratio)
     b_ref = np.array([_reference_depth(m, teeth, kt, alpha) for m in models])
     ceiling = _SCAN_CEILING * b_ref
@@ -862,53 +1064,179 @@ def semi_discretization_lobes_many(
               else [np.full(s.size, np.nan) for s in speeds])
     if len(starts) != len(speeds) or any(x.shape != sp.shape for x, sp in zip(starts, speeds, strict=True)):
         raise InputError("scan_start_m", "give one start depth per speed of each model")
-    fields = [{name: np.full(s.size, fill, dtype=dtype) for name, fill, dtype in _FIELDS} for s in speeds]
-    bands = sorted({int(k) for ks in steps for k in ks})
-    done = 0
-    total = sum(s.size for s in speeds)
-    for k in bands:  # one search per step count (a few bands)
-        members = [i for i in range(len(models)) if np.any(steps[i] == k)]
-        picks = [np.flatnonzero(steps[i] == k) for i in members]
-
-        def band_progress(part: int, _total: int, base: int = done) -> None:
-            if progress is not None:
-                progress(base + part, total)
-
-        solved = _solve_band([models[i] for i in members], [speeds[i][p] for i, p in zip(members, picks, strict=True)],
-                             k, teeth, kt, radial_ratio, phi_st, phi_ex, b_ref[members], ceiling[members], depth_rtol,
-                             band_progress, scan_from_neighbours,
-                             np.concatenate([starts[i][p] for i, p in zip(members, picks, strict=True)]))
-        for i, p, part in zip(members, picks, solved, strict=True):
-            for name, values in part.items():
-                fields[i][name][p] = values
-        done += sum(p.size for p in picks)
-    return [_result(models[i], speeds[i], fields[i], steps[i], teeth, float(ceiling[i])) for i in range(len(models))]
+    solve = _Solver(models, speeds, cut, b_ref, ceiling, depth_rtol, scan_from_neighbours)
+    fields = solve.bands(steps, starts, progress)
+    least = MIN_CUT_STEPS if scheme == CUT_WINDOW else MIN_PERIOD_STEPS
+    for f, k in zip(fields, steps, strict=True):
+        f["steps"] = k.astype(np.int64)
+        f["check_steps"] = np.zeros(k.size, dtype=np.int64)
+        f["resolved"] = np.zeros(k.size, dtype=bool)
+    if check:
+        check_steps = [band_steps(_band_of(k, least) - _CHECK_BANDS, least) if automatic
+                       else np.maximum(np.round(k / math.sqrt(2.0)), 4).astype(np.int64) for k in steps]
+        solve.check(fields, check_steps)
+        if automatic:
+            for _ in range(refinements):
+                todo = [np.flatnonzero(~f["resolved"]) for f in fields]
+                if not any(t.size for t in todo):
+                    break
+                solve.refine(fields, todo, least)
+    return [_result(models[i], speeds[i], fields[i], teeth, float(ceiling[i]), scheme) for i in range(len(models))]
 
 
 # Per-speed arrays of a result: name, fill value, dtype.
-_FIELDS = (("depth", np.nan, float), ("mu", np.nan + 0j, complex), ("freq", np.nan, float), ("kind", "", "<U4"),
-           ("lobe", -1, np.int64), ("cycles", np.nan, float))
+_FIELDS = (("depth", np.nan, float), ("hi", np.nan, float), ("mu", np.nan + 0j, complex), ("freq", np.nan, float),
+           ("kind", "", "<U4"), ("lobe", -1, np.int64), ("step_s", np.nan, float))
 
 
-def _solve_band(models: Sequence[ModalModel], speeds: Sequence[np.ndarray], steps: int, teeth: int, kt: float,
-                kr: float, phi_st: float, phi_ex: float, b_ref: np.ndarray, ceiling: np.ndarray, rtol: float,
-                progress: Callable[[int, int], None] | None,
-                scan_from_neighbours: bool = False, scan_start_m: np.ndarray | None = None) -> list[dict[str, np.ndarray]]:
-    """The search (:func:`_search`) for the given models and speeds at one step count; per-speed arrays."""
-    plan = md.cutting_plan(teeth, steps, phi_st, phi_ex, kr)
+class _Solver:
+    """The searches and checks of one call: every (model, speed) pair at a given step count is one
+    batch of period maps (:class:`_Evaluator`), a step count at a time."""
+
+    def __init__(self, models: Sequence[ModalModel], speeds: Sequence[np.ndarray], cut: _Cut, b_ref: np.ndarray,
+                 ceiling: np.ndarray, rtol: float, scan_from_neighbours: bool) -> None:
+        self.models, self.speeds, self.cut = models, speeds, cut
+        self.b_ref, self.ceiling, self.rtol = b_ref, ceiling, rtol
+        self.scan_from_neighbours = scan_from_neighbours
+
+    def bands(self, steps: Sequence[np.ndarray], starts: Sequence[np.ndarray],
+              progress: Callable[[int, int], None] | None = None,
+              picks: Sequence[np.ndarray] | None = None) -> list[dict[str, np.ndarray]]:
+        """Search every speed (of ``picks``, default all) at its own step count, all speeds of all
+        models in one coarse-to-fine search; per-model per-speed fields."""
+        picks = [np.arange(s.size) for s in self.speeds] if picks is None else picks
+        members = [i for i, p in enumerate(picks) if p.size]
+        fields = [{name: np.full(p.size, fill, dtype=dtype) for name, fill, dtype in _FIELDS} for p in picks]
+        if not members:
+            return fields
+        solved = _solve_band([self.models[i] for i in members], [self.speeds[i][picks[i]] for i in members],
+                             [steps[i][picks[i]] for i in members], self.cut, self.b_ref[members],
+                             self.ceiling[members], self.rtol, progress, self.scan_from_neighbours,
+                             np.concatenate([starts[i][picks[i]] for i in members]))
+        for i, part in zip(members, solved, strict=True):
+            fields[i] = part
+        return fields
+
+    def check(self, fields: list[dict[str, np.ndarray]], check_steps: Sequence[np.ndarray]) -> None:
+        """Mark each speed resolved when its limit at ``check_steps`` lies within ``RESOLVED_RTOL``
+        (stable at ``(1 − RESOLVED_RTOL)·lo``, unstable at ``(1 + RESOLVED_RTOL)·hi``; a speed
+        without a limit: stable at the ceiling)."""
+        lo, hi = [], []
+        for i, (f, k) in enumerate(zip(fields, check_steps, strict=True)):  # a loop over models
+            f["check_steps"] = k
+            found = np.isfinite(f["depth"])
+            lo.append(np.where(found, f["depth"] * (1.0 - RESOLVED_RTOL), self.ceiling[i]))
+            hi.append(np.where(found, f["hi"] * (1.0 + RESOLVED_RTOL), np.nan))
+        evaluate = self._evaluator(check_steps)
+        lo_m, hi_m = np.concatenate(lo), np.concatenate(hi)
+        pairs = np.arange(lo_m.size)
+        with_hi = np.flatnonzero(np.isfinite(hi_m))
+        g = _log_modulus(evaluate(np.concatenate([pairs, with_hi]), np.concatenate([lo_m, hi_m[with_hi]])))
+        ok = g[: pairs.size] < 0.0
+        ok[with_hi] &= g[pairs.size :] >= 0.0
+        at = 0
+        for f in fields:  # a loop over models
+            f["resolved"] = ok[at : at + f["depth"].size]
+            at += f["depth"].size
+
+    def refine(self, fields: list[dict[str, np.ndarray]], todo: Sequence[np.ndarray], least: int) -> None:
+        """Solve the speeds ``todo`` (per model) again with √2 times their steps; resolved when the
+        new limit lies within ``RESOLVED_RTOL`` of the one before (both without a limit: resolved).
+
+        The search starts around the limit before (:func:`_solve_near`): first-order
+        semi-discretization errs by ``C h²``, so the new limit lies a few per cent below it."""
+        steps = [f["steps"].copy() for f in fields]
+        for i, t in enumerate(todo):  # a loop over models
+            steps[i][t] = band_steps(_band_of(steps[i][t], least) + _CHECK_BANDS, least)
+        members = [i for i, t in enumerate(todo) if t.size]
+        new = _solve_near([self.models[i] for i in members], [self.speeds[i][todo[i]] for i in members],
+                          [steps[i][todo[i]] for i in members], self.cut, self.ceiling[members], self.rtol,
+                          np.concatenate([fields[i]["depth"][todo[i]] for i in members]))
+        for i, part in zip(members, new, strict=True):  # a loop over models
+            f, t = fields[i], todo[i]
+            old = f["depth"][t]
+            with np.errstate(invalid="ignore", divide="ignore"):
+                close = np.abs(np.log(part["depth"] / old)) <= math.log1p(RESOLVED_RTOL) + self.rtol
+            both_free = ~np.isfinite(old) & ~np.isfinite(part["depth"])
+            f["check_steps"][t] = f["steps"][t]
+            f["steps"][t] = steps[i][t]
+            for name in part:
+                f[name][t] = part[name]
+            f["resolved"][t] = close | both_free
+
+    def _evaluator(self, steps: Sequence[np.ndarray]) -> _Evaluator:
+        """One evaluator over every speed of every model, each with its step count."""
+        return _evaluator(self.models, self.speeds, steps, self.cut)
+
+
+def _evaluator(models: Sequence[ModalModel], speeds: Sequence[np.ndarray], steps: Sequence[np.ndarray],
+               cut: _Cut) -> _Evaluator:
     sizes = np.array([s.size for s in speeds])
-    system_of_pair = np.repeat(np.arange(len(models)), sizes)
     speed = np.concatenate(speeds)
-    period = 60.0 / (teeth * speed)
     systems = md.state_space(models[0]) if len(models) == 1 else md.state_spaces(models)
-    evaluate = _Evaluator(systems, system_of_pair if len(models) > 1 else np.zeros(speed.size, dtype=np.int64),
-                          plan, kt, period)
+    system_of_pair = (np.repeat(np.arange(len(models)), sizes) if len(models) > 1
+                      else np.zeros(speed.size, dtype=np.int64))
+    return _Evaluator(systems, system_of_pair, cut, np.concatenate(steps), 60.0 / (cut.teeth * speed))
+
+
+def _solve_band(models: Sequence[ModalModel], speeds: Sequence[np.ndarray], steps: Sequence[np.ndarray], cut: _Cut,
+                b_ref: np.ndarray, ceiling: np.ndarray, rtol: float, progress: Callable[[int, int], None] | None,
+                scan_from_neighbours: bool = False, scan_start_m: np.ndarray | None = None) -> list[dict[str, np.ndarray]]:
+    """The search (:func:`_search`) for the given models and speeds, each speed with its step count."""
+    sizes = np.array([s.size for s in speeds])
+    evaluate = _evaluator(models, speeds, steps, cut)
+    system_of_pair = np.repeat(np.arange(len(models)), sizes)
+    period = evaluate.period_s
     slowest = np.array([np.min(m.damping_ratio * 2 * np.pi * m.frequency_hz) for m in models])
     g0 = -slowest[system_of_pair] * period  # log|μ| at b = 0 (exact)
     offsets = np.concatenate([[0], np.cumsum(sizes)])
     grids = [np.arange(offsets[i], offsets[i + 1]) for i in range(len(models))]
     br = _search(evaluate, grids, g0, (_SCAN_START * b_ref)[system_of_pair], ceiling[system_of_pair], rtol, progress,
                  scan_from_neighbours, scan_start_m)
+    return _fields(br, evaluate, sizes)
+
+
+#: :func:`_solve_near` brackets a refined limit this far (relative, each side) around the one before.
+_NEAR_DELTA = 0.04
+
+
+def _solve_near(models: Sequence[ModalModel], speeds: Sequence[np.ndarray], steps: Sequence[np.ndarray], cut: _Cut,
+                ceiling: np.ndarray, rtol: float, guess_m: np.ndarray) -> list[dict[str, np.ndarray]]:
+    """Limits of the given speeds, searched around known estimates ``guess_m`` (NaN: stable to the ceiling).
+
+    Each pair is straddled at ``guess·e^{∓δ}`` (:func:`_guided`, ``δ = _NEAR_DELTA``) and the
+    bracket refined; a pair the straddle does not bracket is solved from scratch (scan from a
+    quarter of its guess — lower, if unstable there — then refined), so a limit far from the guess
+    is still found.
+    """
+    sizes = np.array([s.size for s in speeds])
+    evaluate = _evaluator(models, speeds, steps, cut)
+    system_of_pair = np.repeat(np.arange(len(models)), sizes)
+    period = evaluate.period_s
+    top = ceiling[system_of_pair]
+    slowest = np.array([np.min(m.damping_ratio * 2 * np.pi * m.frequency_hz) for m in models])
+    g0 = -slowest[system_of_pair] * period
+    br = _Brackets.empty(g0.size)
+    br.g_lo[:] = g0
+    pairs = np.arange(g0.size)
+    known = np.isfinite(guess_m)
+    scratch = [pairs[~known]]
+    if known.any():
+        p = pairs[known]
+        scratch.append(_guided(evaluate, p, guess_m[known], np.full(p.size, _NEAR_DELTA), br, rtol, top,
+                               np.full(p.size, np.nan)))
+    fresh = np.concatenate(scratch)
+    if fresh.size:
+        br.lo[fresh], br.g_lo[fresh], br.hi[fresh] = 0.0, g0[fresh], np.nan
+        start = np.where(np.isfinite(guess_m[fresh]), 0.25 * guess_m[fresh], _SCAN_START * top[fresh] / _SCAN_CEILING)
+        _scan(evaluate, fresh, br, start, top[fresh])
+    _refine(evaluate, pairs[np.isfinite(br.hi)], br, rtol)
+    return _fields(br, evaluate, sizes)
+
+
+def _fields(br: _Brackets, evaluate: _Evaluator, sizes: np.ndarray) -> list[dict[str, np.ndarray]]:
+    """Per-model per-speed result arrays of a finished search."""
+    period = evaluate.period_s
     found = np.isfinite(br.hi)
     depth = np.where(found, br.lo, np.nan)
     mu = np.where(found, evaluate.mu_unstable, np.nan + 0j)
@@ -916,19 +1244,22 @@ def _solve_band(models: Sequence[ModalModel], speeds: Sequence[np.ndarray], step
     real = mu.imag == 0.0
     kind = np.where(found, np.where(real, np.where(mu.real < 0, "flip", "fold"), "hopf"), "").astype("<U4")
     lobe = np.where(np.isfinite(freq), np.floor(freq * period + 1e-9), -1).astype(np.int64)
+    hi = np.where(found, br.hi, np.nan)
+    offsets = np.concatenate([[0], np.cumsum(sizes)])
+    return [{"depth": depth[a:b], "hi": hi[a:b], "mu": mu[a:b], "freq": freq[a:b], "kind": kind[a:b],
+             "lobe": lobe[a:b], "step_s": evaluate.step_s[a:b]} for a, b in zip(offsets[:-1], offsets[1:], strict=True)]
+
+
+def _result(model: ModalModel, speed: np.ndarray, f: dict[str, np.ndarray], teeth: int,
+            ceiling: float, scheme: str) -> SemiDiscretizationResult:
+    depth, mu, freq, kind, lobe, step_s = (f[k] for k in ("depth", "mu", "freq", "kind", "lobe", "step_s"))
     with np.errstate(divide="ignore", invalid="ignore"):  # a fold at 0 Hz is resolved by any step
-        cycles = steps / (freq * period)
-    return [{"depth": depth[a:b], "mu": mu[a:b], "freq": freq[a:b], "kind": kind[a:b], "lobe": lobe[a:b],
-             "cycles": cycles[a:b]} for a, b in zip(offsets[:-1], offsets[1:], strict=True)]
-
-
-def _result(model: ModalModel, speed: np.ndarray, f: dict[str, np.ndarray], steps: np.ndarray, teeth: int,
-            ceiling: float) -> SemiDiscretizationResult:
-    depth, mu, freq, kind, lobe, cycles = (f[k] for k in ("depth", "mu", "freq", "kind", "lobe", "cycles"))
-    top_cycles = 1.2 * float(np.max(model.frequency_hz)) * 60.0 / (teeth * speed)  # per tooth period
+        cycles = 1.0 / (freq * step_s)
+    top = 1.0 / (1.2 * float(np.max(model.frequency_hz)) * step_s)
     lobes, kinds, lowest = _segments(speed, depth, kind, lobe)
     found = np.isfinite(depth)
     best = int(np.nanargmin(depth)) if found.any() else -1
+    steps = f["steps"]
     return SemiDiscretizationResult(
         spindle_speed_rpm=speed,
         depth_limit_m=depth,
@@ -946,5 +1277,9 @@ def _result(model: ModalModel, speed: np.ndarray, f: dict[str, np.ndarray], step
         steps_per_chatter_cycle=cycles,
         depth_search_max_m=ceiling,
         modal_model=model,
-        top_mode_steps_per_cycle=steps / top_cycles,
+        top_mode_steps_per_cycle=top,
+        scheme=scheme,
+        steps=steps,
+        check_steps=f["check_steps"],
+        resolved=f["resolved"],
     )

@@ -13,17 +13,19 @@ reason is true. The method is chosen per tool:
   (:func:`~rcsa.analysis.lobes.modal_model.fit_modal_model`) and all tools of one tooth
   count are solved together (:func:`~rcsa.analysis.lobes.semi_discretization.
   semi_discretization_lobes_many`) on a geometric grid of ``sdm_speed_count`` speeds. The
-  pocket rule is applied on that grid, then the best candidates' ``±τ`` windows are solved
-  densely (``_VERIFY_POINTS`` speeds each, plus the grid speeds bracketing them) and a
-  candidate is kept only with the depth its dense window allows; candidates are verified
+  pocket rule is applied on that grid (a screening pass: fewer steps, no check), then the best
+  candidates' ``±τ`` windows are solved densely (``_VERIFY_POINTS`` speeds each, plus the grid
+  speeds bracketing them) with the steps that resolve the cut, every speed checked at a second
+  resolution (an unresolved speed counts as unstable), and a candidate is kept only with the
+  depth its dense window allows; candidates are verified
   best-first until the best verified one beats every unverified candidate's grid score
   (:func:`_verify`). The search reaches at least
   ``safety_factor × flute length`` deep, so a speed without an SDM limit below it is stable to
   the flute length: the stepdown is then capped there (``limited_by: "flute_length"``, said in
   the tool's notes), never refused.
-* ``"auto"`` — semi-discretization where zero-order averaging is not trustworthy
-  (:func:`rcsa.analysis.lobes.options.auto_method`: fewer than one tooth in the cut on
-  average), else zero-order.
+* ``"auto"`` — zero-order only where it is exact
+  (:func:`rcsa.analysis.lobes.options.auto_method`: even-toothed slotting), else
+  semi-discretization.
 
 Robust pockets (a confidence and drawn FRFs) use the robust limit of
 :mod:`rcsa.analysis.lobes.robust` (zero-order: every draw's envelope; semi-discretization:
@@ -56,9 +58,7 @@ from rcsa.analysis.lobes.robust_sdm import (
     robust_sdm_limits,
 )
 from rcsa.analysis.lobes.semi_discretization import (
-    MIN_STEPS_PER_CHATTER_CYCLE,
     SemiDiscretizationResult,
-    resolving_steps,
     semi_discretization_lobes_many,
 )
 from rcsa.analysis.lobes.zoa import LobeResult, Milling, depth_limit_envelopes, stability_lobes
@@ -90,11 +90,12 @@ _VERIFY_SLACK = 0.05
 #: The search reaches this much deeper than ``safety_factor × flute length``.
 _CAP_MARGIN = 1.02
 #: The coarse grid screens candidates: its limits are bracketed to this relative width (the
-#: verified windows to ``_VERIFY_RTOL``), with at most this many steps per tooth period (low
-#: speeds with many waves per tooth period are then under-resolved in the screening only;
-#: every verified window is solved with the steps that resolve its chatter).
+#: verified windows to ``_VERIFY_RTOL``), with this many steps per cycle of the highest mode over
+#: the cut and no check (first-order semi-discretization then over-estimates by about 6 %, never
+#: by a multiple: candidates are ranked, not trusted; every verified window is solved with the
+#: resolving steps, checked at a second resolution and refined where the two differ).
 _SCREEN_RTOL = 0.05
-_SCREEN_MAX_STEPS = 80
+_SCREEN_STEPS_PER_CYCLE = 8.0
 #: Relative width of the verified windows' brackets: the limit kept is the bracket's stable
 #: end, so a preset can only lose this fraction of its depth, never exceed the limit.
 _VERIFY_RTOL = 0.005
@@ -361,11 +362,10 @@ def _sdm_pockets(tools: Sequence[ToolCut], settings: CutSettings, reasons: Seque
     kw = {"teeth": cuts[0].teeth, "tangential_coefficient_n_m2": settings.tangential_coefficient_n_m2,
           "radial_ratio": settings.radial_ratio, "radial_immersion": settings.radial_immersion,
           "milling": settings.milling}
-    steps = [resolving_steps(m, cuts[0].teeth, g, max_steps=_SCREEN_MAX_STEPS) for m, g in zip(models, grids,
-                                                                                                  strict=True)]
-    coarse = semi_discretization_lobes_many(models, **kw, spindle_speed_rpm=grids, steps_per_period=steps,  # type: ignore[arg-type]
+    coarse = semi_discretization_lobes_many(models, **kw, spindle_speed_rpm=grids,  # type: ignore[arg-type]
                                             progress=progress, min_depth_search_max_m=needed, depth_rtol=_SCREEN_RTOL,
-                                            scan_from_neighbours=True)
+                                            scan_from_neighbours=True, steps_per_cycle=_SCREEN_STEPS_PER_CYCLE,
+                                            check=False)
     robust: list[np.ndarray | None] = [None] * len(cuts)
     drawn: list[list[ModalModel] | None] = [None] * len(cuts)
     if settings.confidence is not None:
@@ -387,18 +387,19 @@ class _Dense:
 
     speed: np.ndarray = field(default_factory=lambda: np.empty(0))
     limit: np.ndarray = field(default_factory=lambda: np.empty(0))
-    cycles: np.ndarray = field(default_factory=lambda: np.empty(0))
+    resolved: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=bool))
 
-    def add(self, speed: np.ndarray, limit: np.ndarray, cycles: np.ndarray) -> None:
+    def add(self, speed: np.ndarray, limit: np.ndarray, resolved: np.ndarray) -> None:
+        """Merge densely solved speeds; an unresolved one counts as unstable (its limit is not known)."""
         order = np.argsort(np.concatenate([self.speed, speed]))
         self.speed = np.concatenate([self.speed, speed])[order]
-        self.limit = np.concatenate([self.limit, limit])[order]
-        self.cycles = np.concatenate([self.cycles, cycles])[order]
+        self.limit = np.concatenate([self.limit, np.where(resolved, limit, np.nan)])[order]
+        self.resolved = np.concatenate([self.resolved, resolved])[order]
 
-    def under_resolved(self, n: float, tol: float) -> bool:
-        """A dense speed of the window has fewer steps per chatter cycle than the SDM trusts."""
+    def unresolved(self, n: float, tol: float) -> int:
+        """Dense speeds of the window whose limit two resolutions did not agree on."""
         inside = (self.speed >= n * (1 - tol)) & (self.speed <= n * (1 + tol))
-        return bool(np.any(self.cycles[inside] < MIN_STEPS_PER_CHATTER_CYCLE))
+        return int(np.count_nonzero(~self.resolved[inside]))
 
     def covers(self, n: float, tol: float) -> bool:
         """Dense speeds span the window ``n (1 ± tol)`` with no gap wider than the verification step."""
@@ -477,10 +478,10 @@ def _verify(models: Sequence[ModalModel], cuts: Sequence[ToolCut], grids: Sequen
         robust_dense = _robust_windows(drawn, solved, needed, kw, settings.confidence)
         for j, r in solved:  # a loop over tools
             nom = _pocket_limit(r.depth_limit_m, r.depth_search_max_m, needed[j])
-            dense_nominal[j].add(r.spindle_speed_rpm, nom, r.steps_per_chatter_cycle)
+            dense_nominal[j].add(r.spindle_speed_rpm, nom, r.resolved)
             if j in robust_dense:
                 nom = np.fmin(robust_dense[j], nom)
-            dense[j].add(r.spindle_speed_rpm, nom, r.steps_per_chatter_cycle)
+            dense[j].add(r.spindle_speed_rpm, nom, r.resolved)
             g = grids[j]
             for i in np.flatnonzero(np.isfinite(score[j]) & np.isnan(verified[j])):  # candidates now covered
                 n = float(g[i])
@@ -501,39 +502,19 @@ def _solve_windows(models: Sequence[ModalModel], todo: dict[int, list[float]], n
                    kw: dict[str, Any], tol: float, coarse: Sequence[tuple[np.ndarray, np.ndarray]]
                    ) -> list[tuple[int, SemiDiscretizationResult]]:
     """The windows ``n (1 ± tol)`` of ``todo`` (tool → centre speeds) solved densely, each speed
-    with the steps per period that resolve its chatter (:func:`resolving_steps`); a speed solved
-    from scratch starts its depth scan at half the coarse limit there (``coarse``: each tool's
-    grid and pocket-form limits; the smaller of the two grid speeds around it)."""
+    with the steps that resolve its cut, checked at a second resolution and refined where the two
+    differ (:func:`semi_discretization_lobes_many`); a speed solved from scratch starts its depth
+    scan at half the coarse limit there (``coarse``: each tool's grid and pocket-form limits; the
+    smaller of the two grid speeds around it)."""
     order = sorted(todo)
-    speeds, steps = [], []
-    for j in order:  # a loop over tools: each window in one step count (its largest), so it is one search
+    speeds = []
+    for j in order:  # a loop over tools
         windows = [np.geomspace(n * (1 - tol), n * (1 + tol), _VERIFY_POINTS) for n in todo[j]]
-        ks = [np.full(w.size, resolving_steps(models[j], kw["teeth"], w).max()) for w in windows]
-        sp, first = np.unique(np.concatenate(windows), return_index=True)
-        speeds.append(sp)
-        steps.append(np.concatenate(ks)[first])
+        speeds.append(np.unique(np.concatenate(windows)))
     starts = [_coarse_start(*coarse[j], sp, needed[j]) for j, sp in zip(order, speeds, strict=True)]
-    solved = semi_discretization_lobes_many([models[j] for j in order], **kw, steps_per_period=steps,
-                                            spindle_speed_rpm=speeds, min_depth_search_max_m=[needed[j] for j in order],
+    solved = semi_discretization_lobes_many([models[j] for j in order], **kw, spindle_speed_rpm=speeds,
+                                            min_depth_search_max_m=[needed[j] for j in order],
                                             depth_rtol=_VERIFY_RTOL, scan_start_m=starts)
-    # speeds whose chatter (above the highest mode) the steps did not resolve: again, with steps for its
-    # frequency — only where that gives more steps (a speed already at MAX_RESOLVING_STEPS keeps its limit,
-    # flagged by steps_per_chatter_cycle: solving it again with the same steps would give the same answer)
-    finer = [resolving_steps(models[j], kw["teeth"], speeds[i], chatter_frequency_hz=r.chatter_frequency_hz)
-             for i, (j, r) in enumerate(zip(order, solved, strict=True))]
-    redo = [(i, (r.steps_per_chatter_cycle < MIN_STEPS_PER_CHATTER_CYCLE) & (finer[i] > steps[i]))
-            for i, r in enumerate(solved)]
-    redo = [(i, bad) for i, bad in redo if np.any(bad)]
-    if redo:
-        again = semi_discretization_lobes_many(
-            [models[order[i]] for i, _ in redo], **kw,
-            steps_per_period=[finer[i][bad] for i, bad in redo],
-            spindle_speed_rpm=[speeds[i][bad] for i, bad in redo],
-            min_depth_search_max_m=[needed[order[i]] for i, _ in redo], depth_rtol=_VERIFY_RTOL,
-            scan_start_m=[starts[i][bad] for i, bad in redo])
-        for (i, bad), r in zip(redo, again, strict=True):  # a loop over the few tools concerned
-            keep = ~bad
-            solved[i] = _merged(solved[i], keep, r)
     return list(zip(order, solved, strict=True))
 
 
@@ -554,44 +535,24 @@ def _robust_windows(drawn: Sequence[list[ModalModel] | None], solved: list[tuple
     jobs = [(j, r) for j, r in solved if drawn[j]]
     if not jobs:
         return {}
-    models, speeds, steps, depth, owner = [], [], [], [], []
+    models, speeds, depth, owner = [], [], [], []
     for j, r in jobs:  # a loop over robust tools
         for m in drawn[j] or []:
             models.append(m)
             speeds.append(r.spindle_speed_rpm)
-            steps.append(resolving_steps(m, kw["teeth"], r.spindle_speed_rpm))
             depth.append(needed[j])
             owner.append(j)
-    results = semi_discretization_lobes_many(models, **kw, spindle_speed_rpm=speeds, steps_per_period=steps,
+    results = semi_discretization_lobes_many(models, **kw, spindle_speed_rpm=speeds,
                                              min_depth_search_max_m=depth, depth_rtol=_VERIFY_RTOL)
     out = {}
     for j, _ in jobs:  # a loop over robust tools
-        rows = [_pocket_limit(res.depth_limit_m, res.depth_search_max_m, needed[j])
+        rows = [np.where(res.resolved, _pocket_limit(res.depth_limit_m, res.depth_search_max_m, needed[j]), np.nan)
                 for res, o in zip(results, owner, strict=True) if o == j]
         table = np.where(np.isinf(np.array(rows)), 1e3, np.array(rows))
         q = np.percentile(np.where(np.isnan(table), -np.inf, table), 100.0 * (1.0 - confidence), axis=0,
                           method="lower")
         out[j] = np.where(q >= 1e2, np.inf, q)
     return out
-
-
-def _merged(first: SemiDiscretizationResult, keep: np.ndarray, second: SemiDiscretizationResult
-            ) -> SemiDiscretizationResult:
-    """``first`` at the speeds ``keep``, ``second`` at the others (speed order)."""
-    speed = np.concatenate([first.spindle_speed_rpm[keep], second.spindle_speed_rpm])
-    order = np.argsort(speed)
-
-    def cat(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        return np.concatenate([a[keep], b])[order]
-
-    return replace(first, spindle_speed_rpm=speed[order], depth_limit_m=cat(first.depth_limit_m, second.depth_limit_m),
-                   chatter_frequency_hz=cat(first.chatter_frequency_hz, second.chatter_frequency_hz),
-                   governing_lobe=cat(first.governing_lobe, second.governing_lobe),
-                   instability=cat(first.instability, second.instability),
-                   critical_multiplier=cat(first.critical_multiplier, second.critical_multiplier),
-                   steps_per_chatter_cycle=cat(first.steps_per_chatter_cycle, second.steps_per_chatter_cycle),
-                   top_mode_steps_per_cycle=cat(first.top_mode_steps_per_cycle, second.top_mode_steps_per_cycle),
-                   steps_per_period=max(first.steps_per_period, second.steps_per_period), lobes=(), lobe_kinds=())
 
 
 def _make(cut: ToolCut, grid: np.ndarray, lobes: SemiDiscretizationResult, limit: np.ndarray, nominal: np.ndarray,
@@ -628,9 +589,10 @@ def _make(cut: ToolCut, grid: np.ndarray, lobes: SemiDiscretizationResult, limit
                         pocket_high_rpm=float(grid[high]),
                         chatter_frequency_hz=float(lobes.chatter_frequency_hz[weakest]),
                         governing_lobe=int(lobes.governing_lobe[weakest]), removal_index_rpm_m=n * stepdown)
-        if dense.under_resolved(n, tol):
-            notes.append(f"the limit in this speed window is under-resolved (fewer than "
-                         f"{MIN_STEPS_PER_CHATTER_CYCLE:g} semi-discretization steps per chatter cycle)")
+        unresolved = dense_nominal.unresolved(n, tol)
+        if unresolved:  # never the chosen window (unresolved speeds count as unstable); said for the record
+            notes.append(f"{unresolved} speed(s) of this window are not resolved (two resolutions differ by more "
+                         "than 1 %)")
         if capped:
             deep = (f"no semi-discretization limit below {needed * 1e3:.4g} mm in the window"
                     if not math.isfinite(window) else f"the window's limit is {window * 1e3:.4g} mm")

@@ -57,6 +57,7 @@ from rcsa.model.wire import json_float, json_list
 from rcsa.physics.receptance import check_frequency_hz
 
 __all__ = [
+    "check_speed_grid",
     "MIN_LINES_PER_HALF_POWER_BAND",
     "frf_grid_notes",
     "MAX_AUTO_LOBES",
@@ -647,7 +648,7 @@ def stability_lobes(
     hyy = hxx if same_y else check_frf(frf_yy, f.size, "frf_y")
     n_teeth, kt, kr, immersion, milling = check_cut(teeth, tangential_coefficient_n_m2, radial_ratio,
                                                     radial_immersion, milling)
-    grid = _speed_grid(spindle_speed_rpm)
+    grid = check_speed_grid(spindle_speed_rpm)
 
     phi_st, phi_ex = engagement_angles_rad(immersion, milling)
     alpha = directional_factors(phi_st, phi_ex, kr)
@@ -747,7 +748,14 @@ def check_frf(values: object, nfreq: int, field: str) -> np.ndarray:
     return h
 
 
-def _speed_grid(values: object) -> np.ndarray:
+def check_speed_grid(values: object) -> np.ndarray:
+    """A validated, read-only grid of spindle speeds (rpm): 1-D, finite, within the bounds, strictly increasing.
+
+    Raises
+    ------
+    InputError
+        Naming ``spindle_speed_rpm``.
+    """
     n = np.array(values, dtype=float)
     field = "spindle_speed_rpm"
     if n.ndim != 1 or n.size == 0:
@@ -864,7 +872,7 @@ def depth_limit_envelopes(
         raise InputError("frf_y", f"expected finite values of shape {hxx.shape}, got {hyy.shape}")
     n_teeth, kt, kr, immersion, milling = check_cut(teeth, tangential_coefficient_n_m2, radial_ratio,
                                                     radial_immersion, milling)
-    grid = _speed_grid(spindle_speed_rpm)
+    grid = check_speed_grid(spindle_speed_rpm)
     alpha = directional_factors(*engagement_angles_rad(immersion, milling), kr)
     depth, epsilon = zoa_depth_limit(hxx, hyy, teeth=n_teeth, tangential_coefficient_n_m2=kt, alpha=alpha)
     rows = hxx.shape[0]
