@@ -4,7 +4,7 @@ The truth is ``tests/data/solid3d`` (quadratic tetrahedra of holder and tool, th
 face clamped, or coupled to RA-1's spindle; ``benchmarks/bench_solid3d.py --write-data``
 regenerates it), a model family outside rcsa's beams. ``benchmarks/calibrate_clamping.py`` fits
 :data:`rcsa.model.clamping.BULK_COEFFICIENTS` on its named calibration cases; the cases here are
-not among them. Targets (issue "Closer to reality", README "Clamping along the insertion"):
+not among them. Targets (issue "Closer to reality", manual "Clamping along the insertion"):
 mean |dB| over 100–6000 Hz ≤ 1.5 dB, largest peak within 1.5 % in frequency and 15 % in
 height; the contract's point model (composite insertion, rigid point joint) misses them by far,
 which the last test pins so that the comparison cannot pass by accident.

@@ -50,7 +50,7 @@ AUTO = "auto"
 #: ``"auto"`` uses zero-order averaging only when at least this many teeth are in the cut on
 #: average (``N (φex − φst) / 2π``): then the cutting force never drops to zero and its time
 #: variation is mild. Below it the force is a train of pulses and the zero-order limit is unsafe
-#: or far too cautious; measured in ``benchmarks/bench_zoa_vs_sdm.py`` (README, "Which method").
+#: or far too cautious; measured in ``benchmarks/bench_zoa_vs_sdm.py`` (``docs/presets.md`` "Which method").
 AUTO_MIN_TEETH_IN_CUT = 1.0
 MIN_MODES_PER_DIRECTION = 1
 #: Largest speed grid with ``"semi_discretization"`` (about 6 ms a speed: 30 s).
