@@ -21,7 +21,7 @@ The documents: the front page ``README.md``, the manual's pages (``docs/*.md``, 
 
   Some lines are not run here, and ``NOT_RUN`` says which and why: installing and the suite
   itself (``.ci/run`` runs exactly the README's line on a fresh machine), the lock's refresh
-  from PyPI, and the ``docker`` lines (they need a Docker daemon; ``docker/smoke.sh`` checks
+  from PyPI, the manual's build (``tests/test_docs_site.py`` runs it) and the ``docker`` lines (they need a Docker daemon; ``docker/smoke.sh`` checks
   the image where there is one).
 * ``python`` blocks of the documents are executed.
 * Every example file is used by a command of ``examples/README.md``.
@@ -65,6 +65,7 @@ NOT_RUN = {"python3 -m venv": "installing: .ci/run does it on a fresh machine",
            ".venv/bin/pip install": "installing: .ci/run does it on a fresh machine",
            ".venv/bin/python -m pytest": "the suite itself: .ci/run runs exactly this line",
            "scripts/update-constraints.sh": "rewrites the lock from PyPI (network), by hand after a dependency change",
+           ".venv/bin/mkdocs build": "the manual's build: tests/test_docs_site.py runs it strictly, into a temporary folder",
            "docker ": "needs a Docker daemon: docker/smoke.sh checks the image where there is one"}
 _ASSIGN = re.compile(r"^(\w+)=\$\((.*)\)\s*(#.*)?$")
 
