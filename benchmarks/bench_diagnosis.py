@@ -587,7 +587,7 @@ def calibrate(kind: str, evaluations: int = 400) -> dict[str, float]:
 
 
 def example(request_path: Path, png_path: Path, effect: str = "holder_tool_joint", seed: int = 3) -> None:
-    """The README's worked example: one trial's request, its diagnosis and the figure."""
+    """The worked example of docs/diagnosis.md: one trial's request, its diagnosis and the figure."""
     from rcsa.analysis.diagnosis.report import diagnosis_figure
     from rcsa.analysis.figures import save_figure
 
@@ -626,7 +626,7 @@ def main() -> None:
     ap.add_argument("--calibrate", choices=["holder_tool", "spindle_holder"],
                     help="only refit the distributed contact closest to the base joint")
     ap.add_argument("--example", nargs=2, type=Path, metavar=("REQUEST_JSON", "PNG"),
-                    help="only write the README example's request and figure")
+                    help="only write the worked example's request and figure (docs/diagnosis.md)")
     ap.add_argument("--example-effect", default="holder_tool_joint", choices=truth.EFFECTS)
     ap.add_argument("--timing", action="store_true",
                     help="only time one diagnosis per kind of spindle, cold and warm, with its phases")

@@ -21,6 +21,24 @@ REPO = Path(__file__).resolve().parents[1]
 #: (e.g. a work tree whose shared directory is not its sibling). Never copied into the repo.
 SHARED_DATA = Path(os.environ.get("RCSA_SHARED_DATA") or REPO.parent / "shared" / "data")
 
+
+def manual_pages() -> list[Path]:
+    """The manual's pages, ``docs/*.md``, in the order of ``mkdocs.yml``'s ``nav`` (reading order)."""
+    import yaml
+
+    def walk(node: object) -> list[str]:
+        if isinstance(node, str):
+            return [node]
+        if isinstance(node, dict):
+            return [page for value in node.values() for page in walk(value)]
+        if isinstance(node, list):
+            return [page for item in node for page in walk(item)]
+        return []
+
+    config = yaml.safe_load((REPO / "mkdocs.yml").read_text(encoding="utf-8"))
+    return [REPO / config.get("docs_dir", "docs") / page for page in walk(config["nav"])]
+
+
 #: algebraic identities evaluated in double precision (a few hundred flops per entry)
 RTOL_ALGEBRA = 1e-10
 #: golden values regenerated from this implementation

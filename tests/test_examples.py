@@ -1,6 +1,9 @@
-"""The examples and every command of the READMEs work exactly as written.
+"""The examples and every command of the documents work exactly as written.
 
-* Every line of every ``bash`` block of ``README.md`` and ``examples/README.md`` is run, in
+The documents: the front page ``README.md``, the manual's pages (``docs/*.md``, in the order of
+``mkdocs.yml``'s nav) and ``examples/README.md``.
+
+* Every line of every ``bash`` block of the documents is run, in
   order (a line already run is not run again), in a fresh folder (``examples/`` linked in, a
   temporary ``RCSA_STORE``), as a shell would, with a small interpreter:
 
@@ -18,13 +21,14 @@
 
   Some lines are not run here, and ``NOT_RUN`` says which and why: installing and the suite
   itself (``.ci/run`` runs exactly the README's line on a fresh machine), the lock's refresh
-  from PyPI, and the ``docker`` lines (they need a Docker daemon; ``docker/smoke.sh`` checks
+  from PyPI, the manual's build (``tests/test_docs_site.py`` runs it) and the ``docker`` lines (they need a Docker daemon; ``docker/smoke.sh`` checks
   the image where there is one).
-* ``python`` blocks of the READMEs are executed.
+* ``python`` blocks of the documents are executed.
 * Every example file is used by a command of ``examples/README.md``.
 * ``make_examples.py`` writes the committed files again (numbers equal to rounding).
-* Every ``rcsa`` command in a README code block is written as ``.venv/bin/rcsa`` (runnable
-  after the install line, without activating the venv).
+* Every ``rcsa`` command in a code block of the documents is written as ``.venv/bin/rcsa``
+  (runnable after the install line, without activating the venv).
+* Every page of the manual is in ``mkdocs.yml``'s nav, so that none is left unrun.
 """
 
 from __future__ import annotations
@@ -48,10 +52,11 @@ import pytest
 from typer.testing import CliRunner
 
 from rcsa.cli import app
-from tests.helpers import REPO
+from tests.helpers import REPO, manual_pages
 
 EXAMPLES = REPO / "examples"
-READMES = (REPO / "README.md", EXAMPLES / "README.md")
+#: The documents whose commands run, in reading order: the front page, the manual, the examples.
+DOCUMENTS = (REPO / "README.md", *manual_pages(), EXAMPLES / "README.md")
 #: Commands whose progress bar must show (drawn because the env below makes rich interactive).
 WITH_PROGRESS = ("effects", "identify", "diagnose")
 _ENV = {"TTY_INTERACTIVE": "1", "TTY_COMPATIBLE": "1", "COLUMNS": "100"}
@@ -60,6 +65,7 @@ NOT_RUN = {"python3 -m venv": "installing: .ci/run does it on a fresh machine",
            ".venv/bin/pip install": "installing: .ci/run does it on a fresh machine",
            ".venv/bin/python -m pytest": "the suite itself: .ci/run runs exactly this line",
            "scripts/update-constraints.sh": "rewrites the lock from PyPI (network), by hand after a dependency change",
+           ".venv/bin/mkdocs build": "the manual's build: tests/test_docs_site.py runs it strictly, into a temporary folder",
            "docker ": "needs a Docker daemon: docker/smoke.sh checks the image where there is one"}
 _ASSIGN = re.compile(r"^(\w+)=\$\((.*)\)\s*(#.*)?$")
 
@@ -224,12 +230,11 @@ def shell(scratch):
 
 
 @pytest.mark.slow
-def test_every_readme_command_runs_as_written(scratch, shell):
-    for readme in READMES:
-        lines = _lines(readme)
-        assert lines, readme
-        for line in lines:
+def test_every_command_of_the_documents_runs_as_written(scratch, shell):
+    for document in DOCUMENTS:
+        for line in _lines(document):
             shell.run(line)
+    assert _lines(REPO / "README.md") and _lines(EXAMPLES / "README.md")
     # only installing, the suite itself (both .ci/run's), the lock's refresh and docker are not run here
     assert shell.skipped and all(any(s.endswith(why) for why in NOT_RUN.values()) for s in shell.skipped)
     assert shell.serve, "no rcsa serve line found"
@@ -274,7 +279,7 @@ def _free_port() -> int:
 
 @pytest.mark.slow
 def test_every_serve_command_starts_a_service(scratch):
-    commands = [shlex.split(part, comments=True) for readme in READMES for line in _lines(readme)
+    commands = [shlex.split(part, comments=True) for document in DOCUMENTS for line in _lines(document)
                 for part in line.split(" && ") if part.strip().startswith(".venv/bin/rcsa serve")]
     assert len(commands) >= 2, commands
     for words in commands:
@@ -306,14 +311,14 @@ def test_every_serve_command_starts_a_service(scratch):
             proc.stderr.close()
 
 
-def test_the_python_blocks_of_the_readmes_run(scratch):
+def test_the_python_blocks_of_the_documents_run(scratch):
     # the files the README's reading snippet opens, made as its text says (rcsa predict BATCH.json -o ...)
     for out in ("out.h5", "out.parquet"):
         result = CliRunner().invoke(app, ["predict", "examples/batch.json", "-o", out])
         assert result.exit_code == 0, result.stderr
-    for readme in READMES:
-        for block in _blocks(readme, "python"):
-            exec(compile("\n".join(block), f"{readme.name} python block", "exec"), {})  # noqa: S102
+    for document in DOCUMENTS:
+        for block in _blocks(document, "python"):
+            exec(compile("\n".join(block), f"{document.name} python block", "exec"), {})  # noqa: S102
 
 
 def _assert_same(a: Any, b: Any, where: str) -> None:
@@ -332,10 +337,17 @@ def _assert_same(a: Any, b: Any, where: str) -> None:
         assert a == b, (where, a, b)
 
 
-def test_readme_rcsa_commands_are_runnable_as_written():
-    for readme in READMES:
+def test_rcsa_commands_of_the_documents_are_runnable_as_written():
+    for document in DOCUMENTS:
         for language in ("bash", "console"):
-            for block in _blocks(readme, language):
+            for block in _blocks(document, language):
                 for line in block:
                     text = line.removeprefix("$ ").strip()
-                    assert not re.match(r"rcsa\s", text), f"{readme.name}: write .venv/bin/rcsa: {line!r}"
+                    assert not re.match(r"rcsa\s", text), f"{document.name}: write .venv/bin/rcsa: {line!r}"
+
+
+def test_every_page_of_the_manual_is_read():
+    """A page left out of mkdocs.yml's nav would be neither built into the site's menu nor run here."""
+    pages = {p.name for p in (REPO / "docs").glob("*.md")}
+    assert pages == {p.name for p in manual_pages()}, pages ^ {p.name for p in manual_pages()}
+    assert all(p.is_file() for p in manual_pages())

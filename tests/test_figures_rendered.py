@@ -30,9 +30,12 @@ def test_every_document_agrees_with_its_json():
     assert not stale, "run scripts/render_figures.py:\n" + "\n".join(stale)
 
 
-def test_the_readme_renders_its_figures_from_json():
-    """The check is not vacuous: the README's benchmark table and the named figures are marked."""
-    text = (REPO / "README.md").read_text(encoding="utf-8")
+def test_the_manual_renders_its_figures_from_json():
+    """The check is not vacuous: the manual's benchmark table and the named figures are marked,
+    and every page of the manual and the front page are among the documents rendered."""
+    documents = set(render_figures.documents())
+    assert {REPO / "README.md", *(REPO / "docs").glob("*.md")} <= documents
+    text = "\n".join(p.read_text(encoding="utf-8") for p in sorted((REPO / "docs").glob("*.md")))
     names = {m["name"] for m in render_figures.MARKER.finditer(text)}
     assert {"benchmarks-table", "hybrid-accuracy-table", "modal-fit-sd", "clamping-cost",
             "scatter2-false-claims", "diagnosis-evaluation-table", "solid3d-table"} <= names

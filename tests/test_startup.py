@@ -1,7 +1,7 @@
 """Start-up stays light: ``import rcsa`` and ``rcsa --help`` load none of the heavy libraries.
 
 Checked by what is in ``sys.modules`` of a fresh interpreter (not by timing: the figures
-are in the README's benchmark table, from ``benchmarks/bench_engine.py``).
+are in the manual's benchmark table, from ``benchmarks/bench_engine.py``).
 """
 
 from __future__ import annotations

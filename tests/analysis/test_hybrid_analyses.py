@@ -39,7 +39,7 @@ GRID = {"start_hz": 300.0, "stop_hz": 4500.0, "step_hz": 2.0}
 SPEC = parse_assembly(ra1(GRID))
 F = SPEC.frequency_hz
 W = 2 * np.pi * F
-#: joint identification on a measured RA-1 spindle, 2x the README's figures (worst of the
+#: joint identification on a measured RA-1 spindle, 2x the manual's figures (worst of the
 #: spindle kinds here: stiffness 1.2e-4, damping 9.2e-3 on artifact FRFs)
 RTOL_STIFFNESS, RTOL_DAMPING = 2.5e-4, 2e-2
 #: relative noise of the artifact FRFs (the exact identification amplifies it ~60× in places)

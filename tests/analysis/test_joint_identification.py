@@ -23,7 +23,7 @@ from rcsa.reference import ra1
 TRUE = {"spindle_holder": {"stiffness_n_m": 3.05e7, "damping_ns_m": 365.0},
         "holder_tool": {"stiffness_n_m": 1.14e7, "damping_ns_m": 34.0}}
 NOISE = 0.01
-#: 2x what the README states for these seeded cases (stiffnesses within 1e-4, dampings within
+#: 2x what the manual states for these seeded cases (stiffnesses within 1e-4, dampings within
 #: 4e-3; measured 4.4e-5 and 3.1e-3) — far inside the brief's acceptance of 5 % and 20 %
 RTOL_STIFFNESS, RTOL_DAMPING = 2e-4, 8e-3
 

@@ -46,7 +46,7 @@ def ra1_frf():
 def test_auto_picks_zero_order_only_where_it_is_exact():
     """Even-toothed slotting (4 teeth or more): the directional matrix is constant; anywhere else
     zero-order averaging was measured up to +11 % above the converged limit even with a tooth always
-    in the cut (README "Which method"), so the semi-discretization."""
+    in the cut (docs/presets.md "Which method"), so the semi-discretization."""
     assert teeth_in_cut(4, 0.5) == pytest.approx(1.0) and teeth_in_cut(2, 1.0) == pytest.approx(1.0)
     assert [auto_method(n, 1.0)[0] for n in (4, 6, 8)] == ["zoa"] * 3
     assert [auto_method(n, ae)[0] for n, ae in ((4, 0.5), (6, 0.3), (3, 0.75), (2, 1.0), (3, 1.0), (1, 1.0),

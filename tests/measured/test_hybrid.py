@@ -120,7 +120,7 @@ def test_artifact_route_noise_free_is_exact(store, ra1_truth):
 @pytest.mark.parametrize("noise, bound", [(0.002, 0.15), (0.01, 0.6)])
 def test_artifact_route_with_noise(store, ra1_truth, noise, bound):
     # docs/physics.md §4.6 measured 0.043 (0.2 %) and 0.288 (1 %) of peak over 300–5000 Hz; the
-    # bounds leave room for the noise draw. The README reports the benchmark figures.
+    # bounds leave room for the noise draw. The manual reports the benchmark figures.
     f, frfs = blank_frfs(noise)
     mid = put_blank(store, frfs, f)
     h = rcsa.predict(hybrid_doc(mid, holder=False), store=store).tool_point.h
@@ -137,7 +137,7 @@ def test_finite_difference_fallback_is_labelled_and_biased(store, ra1_truth):
     assert result["spindle_measurement"]["method"] == "finite_difference_fallback"
     assert any("finite-difference" in n for n in result["notes"])
     err = max_error_of_peak(result.tool_point.h[f >= 300], ra1_truth[f >= 300, 0, 0])
-    assert 0.058 < err < 0.23  # README and docs/physics.md §4.6: 0.116 of peak, noise-free (within 2× either way)
+    assert 0.058 < err < 0.23  # manual and docs/physics.md §4.6: 0.116 of peak, noise-free (within 2× either way)
 
 
 def test_holder_tip_requires_the_matching_shank(store):
@@ -163,7 +163,7 @@ def test_direct_frf_is_labelled_with_its_uncertainty(store, ra1_model, ra1_truth
     assert any("estimated" in n for n in result["notes"])
     # Honest labelling: on RA-1 the nominal estimate errs by ≈0.57 of the peak (the rotations of a
     # multi-mode spindle are not one cantilever), and the reported spread (≈0.99) covers it.
-    # The model is deterministic (no noise): both are pinned to the README's two digits.
+    # The model is deterministic (no noise): both are pinned to the manual's two digits.
     error = max_error_of_peak(result.tool_point.h, ra1_truth[:, 0, 0])
     assert error < unc["max_relative_spread_of_peak"]
     assert error == pytest.approx(0.57, rel=0.01) and unc["max_relative_spread_of_peak"] == pytest.approx(0.99, rel=0.01)

@@ -20,7 +20,7 @@ from rcsa.reference import ra1
 from tests.oracles.milling_time_domain import Cut, Mode, resolving_steps, simulate
 
 BENCHMARK = [Mode(922.0, 0.011, 0.03993, 0)]  # Insperger & Stépán (2004): m 0.03993 kg, 922 Hz, ζ 0.011, in x
-AL7075 = {"kt": 1319.41e6, "kr": 788.83 / 1319.41}  # the README's aluminium 7075 row
+AL7075 = {"kt": 1319.41e6, "kr": 788.83 / 1319.41}  # the manual's aluminium 7075 row
 
 
 def test_free_decay_per_tooth_period_is_that_of_the_mode():

@@ -152,7 +152,7 @@ def test_o13_receptance_path_equals_dynamic_stiffness(ra1_model, f_hz, rtol):
     # RCSA path (free-free receptances, LM-FBS spindle, Özgüven bearings, Budak joints) vs
     # the dynamic-stiffness elimination. docs/physics.md §6 O13 asks for 1e-8 at ≥10 Hz, 1e-10 at
     # ≥100 Hz; measured elementwise 9.2e-9 at 10 Hz, 2.0e-11 at 100 Hz, ≤ 7.8e-14 from 900 Hz
-    # on (README), asserted at 1e-8, 5e-11 and 1e-12 (rounding of a 2×2 inverse chain).
+    # on (manual), asserted at 1e-8, 5e-11 and 1e-12 (rounding of a 2×2 inverse chain).
     w = np.array([2 * np.pi * f_hz])
     assert_receptance_close(tool_point_receptance(ra1_model, w), tip_receptance(ra1_model.chain(), w),
                             rtol=rtol, atol_scale=rtol)

@@ -122,8 +122,8 @@ def test_rotational_stiffness_matters_an_order_of_magnitude_less(report, joint):
     trans = np.max(np.abs(report.column(f"{joint}.stiffness_n_m")[visible]))
     assert trans >= 0.2
     assert rot < 0.1 * trans, f"finding 4 ({SOURCE}): {joint} k_r {rot:.3g} vs k_t {trans:.3g}"
-    # the README's figure: |S| <= 0.012 for either rotational stiffness on the visible modes
-    assert rot <= 0.024, f"{joint} k_r {rot:.3g} (README: <= 0.012)"
+    # the manual's figure: |S| <= 0.012 for either rotational stiffness on the visible modes
+    assert rot <= 0.024, f"{joint} k_r {rot:.3g} (manual: <= 0.012)"
 
 
 def test_caveat_the_6081_hz_mode_is_a_rotational_one(report):

@@ -68,7 +68,7 @@ DEPTH_GRID_M = np.linspace(0.05e-3, 10e-3, 200)  # the program's 0–10 mm range
 RTOL_TRANSCRIPTION = 1e-3
 # Two implementations of the same first-order map, each bracketing the root to 1e-3
 # (ours, DEPTH_RTOL) resp. 1e-4 (the oracle) relative: at most 1.1e-3 apart (measured 7.0e-4,
-# README; 2.2e-7 when both bisect to 1e-6): 1.5e-3.
+# manual; 2.2e-7 when both bisect to 1e-6): 1.5e-3.
 RTOL_ORACLE = 1.5e-3
 # Distance to the converged boundary at k = 40: the zeroth-order program's measured worst
 # case is +4.4 % (8 500 rpm, 12 steps per chatter cycle), the first-order SDM's +2.1 %.

@@ -98,7 +98,7 @@ def full_band():
 
 def test_tool_point_h_matches_reference_csv(full_band):
     # Issue 2 asked for 2e-4 of the peak magnitude at every line of the reference CSV; the
-    # model and the CSV's exact RCSA prototype agree to 2.0e-8 (README), asserted at 5e-8.
+    # model and the CSV's exact RCSA prototype agree to 2.0e-8 (manual), asserted at 5e-8.
     ref = np.loadtxt(REPO / "tests/data/ra1/ra1_tool_point_h.csv", delimiter=",")
     idx = np.searchsorted(full_band.frequency_hz, ref[:, 0])
     np.testing.assert_array_equal(full_band.frequency_hz[idx], ref[:, 0])

@@ -368,7 +368,7 @@ def export(
 def recommend(
     library: Annotated[Path, typer.Argument(metavar="LIBRARY", help="Autodesk Fusion tool library (.json or .tools).")],
     material: Annotated[str, typer.Option(help="Workpiece material: a table entry (aluminium-7075, aluminium-6082, "
-                                               "carbon-steel, ...; see the README) or your own name with "
+                                               "carbon-steel, ...; see docs/presets.md) or your own name with "
                                                "--tangential-coefficient-n-m2 and --radial-ratio.")],
     max_rpm: Annotated[float, typer.Option(help="The machine's highest spindle speed, rpm.")],
     spindle: Annotated[Path | None, typer.Option(help="Predict the FRFs now on this spindle JSON (or assembly JSON "

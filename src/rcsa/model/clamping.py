@@ -18,7 +18,7 @@ The bulk terms (holder wall and shank) are elasticity solved in 3-D, not beam th
 dimensionless form is fixed by the problem (``k_w / E`` depends on ``D/d`` and ν only; ``k_θ /
 (E d²)`` likewise) and the coefficients of :data:`BULK_COEFFICIENTS` are fitted to the 3-D
 finite-element reference of ``tests/oracles/solid3d`` (``benchmarks/calibrate_clamping.py``
-regenerates them; README "Clamping models" gives the fit, its validity range and its error).
+regenerates them; ``docs/model.md`` "Clamping along the insertion" gives the fit, its validity range and its error).
 
 A clamping given by its pressure instead of its stiffness uses the stated contact model
 :func:`rcsa.physics.insertion.contact_stiffness_n_m3` (``k_n = p / σ``).

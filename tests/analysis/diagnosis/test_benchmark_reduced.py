@@ -2,13 +2,13 @@
 
 Five classes × three trials from the independent FE truth (``tests/analysis/diagnosis/truth.py``),
 4 Hz lines to keep it under ~2 minutes. The trials are seeded, so the outcome is fixed for a
-given numpy; the thresholds sit within 2× of what the README states for the full benchmark
+given numpy; the thresholds sit within 2× of what the manual states for the full benchmark
 (top-1 0.91 of all effect trials, i.e. 9 % missed; no false claim in 25; median held-out gap
 ratio 0.53): no false claim in the three no-effect trials, at least 10 of the 12 effect
 trials identified correctly (≥ 0.82; this seed gives 10: two are ``ambiguous`` at SNR ≈ 5),
 median gap ratio of the correct ones below 0.65 (this seed: 0.55). The hybrid part runs one
 trial per class and kind of measured spindle (``tests/analysis/diagnosis/truth_hybrid.py``;
-README: top-1 0.91 at SNR ≥ 10, 2 false claims in 75): no false claim in three, at least 8
+manual: top-1 0.91 at SNR ≥ 10, 2 false claims in 75): no false claim in three, at least 8
 of the 9 effects identified (this seed: 9, all at SNR ≥ 10), bearings never blamed.
 """
 

@@ -3,7 +3,7 @@
 Oracle: one full semi-discretization per drawn modal model. For a single mode the reduced
 model is exact but for its interpolations (the similarity law ``b = (ω²/R) Φ(n/ω, ζ)``); with
 two modes that shift differently it is an approximation whose error is measured here (and
-stated in the module docstring and the README).
+stated in the module docstring and the manual).
 """
 
 from __future__ import annotations

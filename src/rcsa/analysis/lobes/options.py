@@ -95,7 +95,7 @@ def auto_method(teeth: int, radial_immersion: float) -> tuple[Method, str]:
 
     Zero-order averaging only where it is exact (:func:`zoa_is_exact`); everywhere else the
     semi-discretization with the steps that resolve the cut. Measured against converged
-    semi-discretization (``benchmarks/bench_zoa_vs_sdm.py``, README "Which method"), zero-order
+    semi-discretization (``benchmarks/bench_zoa_vs_sdm.py``, docs/presets.md "Which method"), zero-order
     limits lie 0.44–2.2× the truth at low immersion and still up to +11 % above it with one or more
     teeth always cutting (two-flute slotting, four flutes at half immersion): outside the −10 %…+5 %
     a default answer must keep, so it is not the default there.
