@@ -295,7 +295,7 @@ def auto_lobes_fallback(request: Mapping[str, Any], limits: Limits) -> str | Non
             f"at {sdm.seconds:.0f} s and {sdm.memory_bytes / GiB:.1f} GiB, beyond the {limits.seconds:g} s and "
             f"{limits.memory_bytes / GiB:g} GiB of an answer given at once: zero-order limits instead, not checked "
             f"against it, every speed marked unresolved (with {teeth_in_cut(teeth, immersion):.2f} teeth in the cut "
-            "zero-order limits may lie tens of percent from the resolved ones at single speeds: README 'Which "
+            "zero-order limits may lie tens of percent from the resolved ones at single speeds: docs/presets.md 'Which "
             "method'); for resolved limits send the request as a job (Prefer: respond-async) or with fewer speeds")
 
 

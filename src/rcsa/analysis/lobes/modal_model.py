@@ -68,7 +68,7 @@ __all__ = [
 
 #: Modes per direction kept (the most flexible ones above ``MIN_PEAK_FRACTION``), at most; by
 #: default every one up to this bound (a mode left out moved limits by −32 %…+60 % on a published
-#: five-mode table: README "Modes").
+#: five-mode table: docs/lobes.md "Modes").
 MAX_MODES_PER_DIRECTION = 8
 DEFAULT_MODES_PER_DIRECTION = MAX_MODES_PER_DIRECTION
 #: Modes whose peak ``|h|`` is below this fraction of the largest are left out.

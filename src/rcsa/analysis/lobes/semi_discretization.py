@@ -149,7 +149,7 @@ _SLOPE_SPREAD = 1.5
 #: or the tooth period (full-period scheme). First-order semi-discretization over-estimates the
 #: limit by about ``C/s²`` (s steps per cycle): 3–5 % at 10 where that mode governs the cut, 1–1.4 %
 #: at 20, 0.4–0.7 % at 28 (measured against 40–60 steps a cycle on single-flute and
-#: Insperger–Stépán cuts; README "Resolution"), far less where a lower mode governs. Every speed is
+#: Insperger–Stépán cuts; docs/lobes.md "Resolution"), far less where a lower mode governs. Every speed is
 #: checked at ``1/√2`` of its steps and refined where the two differ by more than
 #: ``RESOLVED_RTOL``, so the steps start where they usually suffice and grow only where needed.
 RESOLVING_STEPS_PER_CYCLE = 10.0
