@@ -27,7 +27,7 @@ from tests.oracles.milling_collocation import Mode, depth_limit
 
 REFERENCES = json.loads(LIMITS.read_text())["cases"]
 #: The band a default answer must keep at every speed it marks resolved (issue 29: −10 %…+5 %);
-#: what it keeps is tighter (README "Resolution"): the two resolutions it compares agree within 1 %.
+#: what it keeps is tighter (docs/lobes.md "Resolution"): the two resolutions it compares agree within 1 %.
 LOW, HIGH = -0.10, 0.05
 MEASURED_LOW, MEASURED_HIGH = -0.015, 0.02
 
