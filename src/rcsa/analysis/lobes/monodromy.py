@@ -40,7 +40,6 @@ References
 
 from __future__ import annotations
 
-import functools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -50,6 +49,7 @@ import numpy as np
 
 from rcsa.analysis.lobes.modal_model import ModalModel
 from rcsa.analysis.lobes.zoa import directional_factors
+from rcsa.physics.subassembly_cache import LruStore
 
 __all__ = [
     "CuttingPlan",
@@ -200,7 +200,6 @@ def cut_window_fraction(teeth: int, phi_start_rad: float, phi_exit_rad: float) -
     return teeth * (phi_exit_rad - phi_start_rad) / _TWO_PI
 
 
-@functools.lru_cache(maxsize=512)
 def cut_window_plan(teeth: int, cut_steps: int, phi_start_rad: float, phi_exit_rad: float,
                     radial_ratio: float) -> CuttingPlan:
     """A period map that discretises only the time in the cut (fewer than one tooth in the cut).
@@ -230,6 +229,16 @@ def cut_window_plan(teeth: int, cut_steps: int, phi_start_rad: float, phi_exit_r
     >>> bool(np.allclose(plan.force.sum(axis=0) * (ex - st) / 20, -0.5 * directional_factors(st, ex, 0.3)))
     True
     """
+    key = (teeth, cut_steps, phi_start_rad, phi_exit_rad, radial_ratio)
+    return _CUT_WINDOW_PLANS.get(key, lambda: _cut_window_plan(*key))
+
+
+#: Cut-window plans kept (the one eviction policy, :class:`rcsa.physics.subassembly_cache.LruStore`).
+_CUT_WINDOW_PLANS: LruStore[tuple[int, int, float, float, float], CuttingPlan] = LruStore(512)
+
+
+def _cut_window_plan(teeth: int, cut_steps: int, phi_start_rad: float, phi_exit_rad: float,
+                     radial_ratio: float) -> CuttingPlan:
     fraction = cut_window_fraction(teeth, phi_start_rad, phi_exit_rad)
     if not 0.0 < fraction < 1.0:
         raise ValueError(f"a cut-window plan needs fewer than one tooth in the cut, got {fraction:.3f}")
