@@ -83,9 +83,11 @@ def test_the_worst_requests_inside_the_budget_take_what_it_says():
                         only=("prediction: segments", "prediction: band top", "effects", "diagnosis", "lobes sdm"))
     memory = ra1({"start_hz": 1.0, "stop_hz": 200_000.0, "step_hz": 1.0})  # the most lines a request may have
     assert budget.check("prediction", memory).memory_bytes > 0.5 * budget.SYNC.memory_bytes
-    cases.append({"label": "prediction: 200 000 lines", "operation": "prediction", "request": memory})
-    results = _probe(cases)
-    assert len(results) == len(cases)
+    # in a process of its own: a peak RSS is the process's largest so far, and the worst lobes case before it
+    # may reach the budget's memory
+    results = _probe(cases) + _probe([{"label": "prediction: 200 000 lines", "operation": "prediction",
+                                       "request": memory}])
+    assert len(results) == len(cases) + 1
     for r in results:
         assert r["peak_rss_bytes"] <= budget.STATED_SYNC_BOUND.memory_bytes, r
     assert results[-1]["peak_rss_bytes"] <= results[-1]["estimated_memory_bytes"] + 256 * 2**20, results[-1]

@@ -170,7 +170,7 @@ def test_predict_ra1_draw_frf_and_lobes_and_download(server, browser, downloads)
     browser.find_element(By.ID, "op-depth").send_keys("0.2")
     browser.find_element(By.ID, "lobes").click()
     _wait_state(browser, "lobes")
-    assert _points(browser, "lobes-envelope-path") > 500  # 1000 speeds
+    assert _points(browser, "lobes-envelope-path") >= 250  # the page asks for 300 speeds
     assert browser.find_elements(By.CSS_SELECTOR, "#lobes-plot polygon.stable")
     assert browser.find_elements(By.ID, "operating-point")
     assert " mm (chatter at " in browser.find_element(By.ID, "lobes-min-depth").text
@@ -212,7 +212,7 @@ def test_uncertainty_draws_give_a_band_and_robust_lobes(server, browser, downloa
     assert band.count(",") > 8000  # p95 forward and p05 back over 4 996 lines
     browser.find_element(By.ID, "lobes").click()
     _wait_state(browser, "lobes")
-    assert _points(browser, "lobes-robust-path") > 500
+    assert _points(browser, "lobes-robust-path") >= 250
     before = {p.name for p in downloads.iterdir()}  # the folder may hold other tests' downloads
     browser.find_element(By.ID, "download-frf-csv").click()
 
