@@ -33,17 +33,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import expm
 
+# the same description of a mode (no shared numerics)
+from tests.oracles.milling_time_domain import Mode
+
 __all__ = ["Limit", "Mode", "depth_limit", "spectral_radius"]
-
-
-@dataclass(frozen=True)
-class Mode:
-    """A real mode: natural frequency (Hz), damping ratio, modal mass (kg), 0 = x / 1 = y."""
-
-    frequency_hz: float
-    damping_ratio: float
-    mass_kg: float
-    direction: int
 
 
 @dataclass(frozen=True)
