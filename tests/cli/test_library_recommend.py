@@ -16,6 +16,9 @@ SAMPLES = REPO / "tests" / "data" / "tool-libraries"
 GRID = {"start_hz": 5.0, "stop_hz": 5000.0, "step_hz": 5.0}
 NAME = "rcsa chatter-safe: aluminium 7075"
 runner = CliRunner()
+#: These tests are about files, flags and reports, not the lobes method: zero-order keeps each
+#: recommendation to ~1 s (``auto`` verifies every preset by the resolved semi-discretization, ~15 s a
+#: tool; that path is tests/libraries/test_recommend_methods.py's).
 
 
 def test_recommend_on_a_spindle_writes_a_new_file_and_the_report(tmp_path):
@@ -24,7 +27,7 @@ def test_recommend_on_a_spindle_writes_a_new_file_and_the_report(tmp_path):
     lib = SAMPLES / "fusion-synthetic" / "synthetic_library.tools"
     out, report = tmp_path / "with presets.tools", tmp_path / "report.json"
     args = ["library", "recommend", str(lib), "--spindle", str(spindle), "--material", "aluminium-7075",
-            "--max-rpm", "24000", "-o", str(out), "--report", str(report), "-q"]
+            "--max-rpm", "24000", "--method", "zoa", "-o", str(out), "--report", str(report), "-q"]
     r = runner.invoke(app, args)
     assert r.exit_code == 0, r.stderr
     doc = json.loads(report.read_text())
@@ -39,7 +42,7 @@ def test_recommend_on_a_spindle_writes_a_new_file_and_the_report(tmp_path):
     copy = tmp_path / "shop.tools"
     copy.write_bytes(lib.read_bytes())
     in_place = ["library", "recommend", str(copy), "--spindle", str(spindle), "--material", "7075",
-                "--max-rpm", "24000", "--in-place", "-q"]
+                "--max-rpm", "24000", "--method", "zoa", "--in-place", "-q"]
     r = runner.invoke(app, in_place)
     assert r.exit_code == 0, r.stderr
     assert json.loads(r.stdout)["tools"][0]["preset"]["replaced"] is False
@@ -74,7 +77,7 @@ def test_recommend_robust_presets_with_uncertainty_and_confidence(tmp_path):
     spindle.write_text(json.dumps(ra1(GRID)))
     lib = SAMPLES / "fusion-synthetic" / "synthetic_library.json"
     args = ["library", "recommend", str(lib), "--spindle", str(spindle), "--material", "aluminium-7075",
-            "--max-rpm", "24000", "-o", str(tmp_path / "robust.json"), "-q",
+            "--max-rpm", "24000", "--method", "zoa", "-o", str(tmp_path / "robust.json"), "-q",
             "--uncertainty", '{"draws": 12, "seed": 2}', "--confidence", "0.9"]
     r = runner.invoke(app, args)
     assert r.exit_code == 0, r.stderr

@@ -14,7 +14,7 @@ from rcsa.reference import ra1
 runner = CliRunner()
 GRID = {"start_hz": 100.0, "stop_hz": 5000.0, "step_hz": 2.0}
 LOBES = {"teeth": 4, "tangential_coefficient_n_m2": 6.0e8, "radial_ratio": 0.3, "radial_immersion": 0.5,
-         "milling": "down", "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 300}}
+         "milling": "down", "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 120}}
 
 
 def test_lobes_from_an_assembly_with_a_plot(tmp_path):
@@ -25,8 +25,8 @@ def test_lobes_from_an_assembly_with_a_plot(tmp_path):
     assert result.exit_code == 0, result.stderr
     out = json.loads(result.stdout)
     assert out["frf_y_source"] == "same_as_x"
-    assert len(out["depth_limit_m"]) == 300 and out["lobes"]
-    assert out["method"] == "semi_discretization" and len(out["resolved"]) == 300  # auto at a/D 0.5, 4 teeth
+    assert len(out["depth_limit_m"]) == 120 and out["lobes"]
+    assert out["method"] == "semi_discretization" and len(out["resolved"]) == 120  # auto at a/D 0.5, 4 teeth
     assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
@@ -60,7 +60,7 @@ def test_plot_refuses_unknown_documents_and_formats(tmp_path):
 def test_plot_a_lobes_result_as_it_is(tmp_path):
     """`rcsa lobes ... -o out.json` then `rcsa plot out.json`: the result is drawn, not re-solved."""
     request = tmp_path / "lobes.json"
-    request.write_text(json.dumps({"assembly": ra1(GRID), **LOBES}))
+    request.write_text(json.dumps({"assembly": ra1(GRID), **LOBES, "method": "zoa"}))  # drawing, not solving
     out = tmp_path / "result.json"
     assert runner.invoke(app, ["lobes", str(request), "-o", str(out)]).exit_code == 0
     picture = tmp_path / "lobes.svg"
@@ -81,7 +81,7 @@ def test_plot_a_lobes_result_as_it_is(tmp_path):
 
 def test_robust_lobes_on_the_command_line_with_their_plot(tmp_path):
     request = tmp_path / "lobes.json"
-    small = {**LOBES, "spindle_speed_rpm": {"start": 3000, "stop": 24000, "count": 100}}
+    small = {**LOBES, "method": "zoa", "spindle_speed_rpm": {"start": 3000, "stop": 24000, "count": 100}}
     request.write_text(json.dumps({"assembly": ra1(GRID), **small, "uncertainty": {"draws": 4, "seed": 5}}))
     picture = tmp_path / "lobes.svg"
     result = runner.invoke(app, ["lobes", str(request), "--plot", str(picture)])
