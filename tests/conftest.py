@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import os
 import shutil
+import signal
+import sys
 import tempfile
 
 import numpy as np
@@ -92,3 +94,32 @@ def tmp_store_path(tmp_path, monkeypatch):
     path = tmp_path / "store"
     monkeypatch.setenv("RCSA_STORE", str(path))
     return path
+
+
+def _sigpipe_ignored() -> bool:
+    """Whether this process ignores SIGPIPE, read from the kernel (``/proc/self/status``), which
+    also sees a disposition changed by C code behind the ``signal`` module's back."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as status:
+            for line in status:
+                if line.startswith("SigIgn:"):
+                    return bool(int(line.split()[1], 16) & (1 << (signal.SIGPIPE - 1)))
+    except OSError:
+        pass
+    return signal.getsignal(signal.SIGPIPE) == signal.SIG_IGN
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_protocol(item: pytest.Item, nextitem: pytest.Item | None):
+    """Every test starts with SIGPIPE ignored, as Python starts a process.
+
+    A client socket written after the server closed it (the hostile and slow-client tests do
+    that on purpose) raises ``BrokenPipeError`` only while SIGPIPE is ignored; with the default
+    disposition the kernel kills the process without a traceback, which under xdist is a
+    worker "node down: Not properly terminated" and a run that hangs. Whatever set it back to
+    the default during an earlier test is named on stderr, and the disposition restored.
+    """
+    if hasattr(signal, "SIGPIPE") and not _sigpipe_ignored():
+        print(f"conftest: SIGPIPE was not ignored before {item.nodeid}; restored", file=sys.stderr)
+        signal.signal(signal.SIGPIPE, signal.SIG_IGN)
+    yield

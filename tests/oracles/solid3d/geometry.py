@@ -10,6 +10,8 @@ toward the flange. The quarter model keeps x ≥ 0, y ≥ 0, the half model y �
 from __future__ import annotations
 
 import math
+import signal
+import threading
 from dataclasses import dataclass
 from typing import Literal
 
@@ -388,6 +390,12 @@ def mesh_pieces(pieces: tuple[Piece, ...], size: MeshSize, quarter: bool, fine: 
                 parts.append(np.full(t.shape[1], part, dtype=np.int8))
     finally:
         gmsh.finalize()
+        # gmsh.initialize sets SIGPIPE back to the default disposition (terminate) in this
+        # process; Python ignores it so that a write to a closed socket raises BrokenPipeError.
+        # Left so, the next test that writes to a socket its server closed (the hostile and
+        # slow-client tests do) killed the xdist worker without a traceback.
+        if threading.current_thread() is threading.main_thread():
+            signal.signal(signal.SIGPIPE, signal.SIG_IGN)
     t = np.hstack(tets)
     used, inverse = np.unique(t, return_inverse=True)
     t = inverse.reshape(t.shape).astype(np.int64)
