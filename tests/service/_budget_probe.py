@@ -3,7 +3,8 @@
 Reads ``[{"operation": ..., "request": {...}}, ...]`` as JSON on stdin. A small warm-up
 request of each operation runs first (imports, caches), then every request in turn; prints
 one JSON line per request: its estimate, the CPU seconds it took (user + system, this
-process and its threads) and the peak resident memory of the process afterwards, bytes.
+process and its threads) the peak resident memory of the process before the request (imports, warm-up and earlier
+requests) and afterwards, bytes.
 """
 
 from __future__ import annotations
@@ -24,13 +25,14 @@ def main() -> None:
             analyses.run_analysis(operation, request)
     for job in jobs:
         cost = budget.estimate(job["operation"], job["request"])
+        base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
         t0, w0 = time.process_time(), time.perf_counter()
         analyses.run_analysis(job["operation"], job["request"])
         cpu, wall = time.process_time() - t0, time.perf_counter() - w0
         rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
         print(json.dumps({"label": job.get("label", job["operation"]), "estimated_seconds": cost.seconds,
                           "estimated_memory_bytes": cost.memory_bytes, "cpu_seconds": cpu, "wall_seconds": wall,
-                          "peak_rss_bytes": rss, "terms": dict(cost.terms)}), flush=True)
+                          "peak_rss_bytes": rss, "base_rss_bytes": base, "terms": dict(cost.terms)}), flush=True)
 
 
 if __name__ == "__main__":
