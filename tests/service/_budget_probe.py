@@ -3,8 +3,9 @@
 Reads ``[{"operation": ..., "request": {...}}, ...]`` as JSON on stdin. A small warm-up
 request of each operation runs first (imports, caches), then every request in turn; prints
 one JSON line per request: its estimate, the CPU seconds it took (user + system, this
-process and its threads) the peak resident memory of the process before the request (imports, warm-up and earlier
-requests) and afterwards, bytes.
+process and its threads), and the process's peak resident memory before the request
+(imports, warm-up, earlier requests: ``base_rss_bytes``) and after it (``peak_rss_bytes``),
+bytes — both in a failing assertion's message.
 """
 
 from __future__ import annotations
