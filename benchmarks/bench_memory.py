@@ -31,8 +31,9 @@ GRID = [(n, lines, mode) for mode in ("job", "sync") for n, lines in (
 QUICK = [(50, 2_000, "job"), (200, 20_000, "job"), (50, 2_000, "sync"), (50, 20_000, "sync")]
 
 _PROBE = r"""
-import json, os, resource, sys, tempfile
+import json, os, sys, tempfile
 from rcsa.app import budget
+from tests.service._budget_probe import peak_rss_bytes  # the process's own peak (VmHWM), not the parent's
 from rcsa.app.jobs import run_work, stream_work, Workbench
 from rcsa.app.libraries import prepare_batch
 from rcsa.reference import ra1
@@ -47,7 +48,7 @@ def batch(n, lines):
 bench = Workbench(store=None)
 import orjson
 run_work(bench, "batch", prepare_batch(bench, batch(3, 200)).request)  # warm-up: imports and caches
-base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+base = peak_rss_bytes()
 req = prepare_batch(bench, batch(n, lines)).request
 cost = budget.check_work("batch", req, n, mode=mode, limits=budget.Limits(1e12, 1e15))
 if mode == "sync":
@@ -57,7 +58,7 @@ if mode == "sync":
 else:
     with tempfile.TemporaryFile() as fh:
         stream_work(bench, "batch", req).write(fh)
-peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+peak = peak_rss_bytes()
 print(json.dumps({"n": n, "lines": lines, "mode": mode, "base_rss_bytes": base, "peak_rss_bytes": peak,
                   "estimated_bytes": cost.memory_bytes, "estimated_base_bytes": budget.MEM_BASE_BYTES}))
 """

@@ -73,10 +73,9 @@ def test_every_route_states_its_body_limit_and_enforces_it(client):
 
 
 def _probe(cases: list[dict]) -> list[dict]:
-    """Run ``cases`` in a fresh process with an empty default store of its own, not the
-    worker's private ``$XDG_DATA_HOME`` that earlier tests wrote into. Once, in a full run,
-    the 200 000-line prediction peaked at 1010 MiB there (estimate 650 MiB); alone, in an
-    empty store, it peaks at 155 MiB every time. Why is not yet known."""
+    """Run ``cases`` in a fresh process with an empty default store of its own (not the
+    worker's private ``$XDG_DATA_HOME`` that earlier tests wrote into), measuring each
+    request's peak memory as that process's own (``_budget_probe.peak_rss_bytes``)."""
     with tempfile.TemporaryDirectory(prefix="rcsa-budget-probe-") as home:
         out = subprocess.run([sys.executable, "-m", "tests.service._budget_probe"], input=json.dumps(cases),
                              capture_output=True, text=True, cwd=REPO, timeout=600,
