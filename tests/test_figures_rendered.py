@@ -5,7 +5,8 @@
 rendering fails, naming the figure, its text and what the JSON says (run the script to
 rewrite them). The renderer's own pieces are checked too: a changed number is caught, an
 unknown figure or key is an error, and the exact binomial bound agrees with SciPy's beta
-quantile.
+quantile. A picture drawn from a JSON (``docs/default_lobes.png``,
+``benchmarks/plot_default_lobes.py``) carries the digest of the JSON it shows.
 """
 
 from __future__ import annotations
@@ -23,6 +24,29 @@ assert _SPEC is not None and _SPEC.loader is not None
 render_figures = importlib.util.module_from_spec(_SPEC)
 sys.modules["render_figures"] = render_figures
 _SPEC.loader.exec_module(render_figures)
+_PLOT = importlib.util.spec_from_file_location("plot_default_lobes", REPO / "benchmarks" / "plot_default_lobes.py")
+assert _PLOT is not None and _PLOT.loader is not None
+plot_default_lobes = importlib.util.module_from_spec(_PLOT)
+_PLOT.loader.exec_module(plot_default_lobes)
+
+
+def _png_source(path) -> str | None:
+    from PIL import Image
+
+    with Image.open(path) as image:
+        return image.text.get("Source")  # type: ignore[attr-defined]
+
+
+def test_the_default_lobes_picture_shows_the_json_of_today():
+    expected = plot_default_lobes.source_digest(plot_default_lobes.RESULTS.read_bytes())
+    assert _png_source(plot_default_lobes.OUT) == expected, "run benchmarks/plot_default_lobes.py"
+
+
+def test_the_default_lobes_picture_is_drawn_with_its_digest(tmp_path):
+    data = plot_default_lobes.RESULTS.read_bytes()
+    out = plot_default_lobes.draw(data, tmp_path / "lobes.png")
+    assert _png_source(out) == plot_default_lobes.source_digest(data)
+    assert _png_source(out) != plot_default_lobes.source_digest(data + b" ")
 
 
 def test_every_document_agrees_with_its_json():
