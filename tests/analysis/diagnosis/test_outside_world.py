@@ -253,9 +253,11 @@ def test_a_soft_layer_in_3d_is_named_on_the_point_base_and_corrected_toward_the_
 
 
 @pytest.mark.slow
+@pytest.mark.benchmark
 def test_no_effect_scattering_twice_the_stated_tolerances_is_rarely_blamed_on_an_effect():
     """Three no-effect FE truths with every tolerance doubled (4 Hz lines): at most one claim,
-    and none that takes more than half of the held-out gap."""
+    and none that takes more than half of the held-out gap. A reduced statistical benchmark
+    (``pytest -m benchmark``; the full one is ``bench_diagnosis.py --tolerance-scale 2``)."""
     from rcsa.analysis.diagnosis.report import build_response
 
     f = np.arange(50.0, 8000.0 + 1e-9, 4.0)
