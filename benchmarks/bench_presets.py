@@ -53,6 +53,7 @@ import numpy as np  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from benchmarks import record  # noqa: E402
 from tests.oracles import milling_collocation as collocation  # noqa: E402
 from tests.oracles.milling_time_domain import Cut, Mode, resolving_steps, simulate  # noqa: E402
 
@@ -76,7 +77,6 @@ RA1 = ra1(GRID)
 SETTINGS = {"spindle": RA1["spindle"], "frequency": GRID, "joints": RA1["joints"]}
 OPTIONS = {"material": "aluminium-7075", "max_rpm": 24000, "milling": "down"}
 KT, KR = 1319.41e6, 788.83 / 1319.41
-OUT = ROOT / "benchmarks" / "results" / "presets_{}.json"
 
 
 def _recommend(data: bytes, immersion: float, method: str) -> tuple[dict, float, float]:
@@ -260,7 +260,7 @@ def main() -> None:
     library = json.loads(data)
     rule = PocketRule()
     frfs = predicted_frfs(read_library(data, file_name="library.json"), **SETTINGS).frfs
-    results: dict = {"library": str(path.relative_to(ROOT)), "machine_load": os.getloadavg(), "cpu_count": os.cpu_count(),
+    results: dict = {"library": str(path.relative_to(ROOT)), "machine_load": record.load_average(),
                      "immersions": {}}
     for ae in args.immersions:
         entry = {}
@@ -285,13 +285,17 @@ def main() -> None:
                   f"rpm stable={t['preset_stable']}; {t['next_step_up_m'] * 1e3:.3f} mm at {t['at_rpm']:.0f} rpm "
                   f"chatters={t['next_step_up_chatters']}", flush=True)
         results["immersions"][str(ae)] = entry
+        _write(results, args)  # after each immersion: a long run killed later keeps what it measured
     if args.job_tools:
         results["job"] = _job(args.job_tools, args.dask)
         print("job:", results["job"])
-    out = Path(str(OUT).format(args.library)) if args.immersions else OUT.with_name("presets_job.json")
-    out.write_text(json.dumps(results, indent=1, default=float) + "\n")
-    print(f"wrote {out}")
+    print(f"wrote {_write(results, args)}")
 
+
+def _write(results: dict, args: argparse.Namespace) -> Path:
+    """``results`` as the library's record (``benchmarks/results/presets_<library>.json``), or the job's."""
+    name = f"presets_{args.library}" if args.immersions else "presets_job"
+    return record.write(name, results, load_start=results["machine_load"])
 
 if __name__ == "__main__":
     main()

@@ -320,12 +320,15 @@ def _analysis_rows() -> list[list[str]]:
                      f"{r['reduced_ms'] / 1e3:.2f} s (reduced draws) against {r['exact_ms'] / 1e3:.2f} s (exact draws) "
                      f"and {r['nominal_ms']:.0f} ms nominal; robust limit within {pct(r['robust_limit_difference'], 2)}",
                      "", load_text(u["ra1"]["load_average"]), "uncertainty.json"])
-    presets = value("presets", "immersions")
-    rows.append(["chatter-safe presets, 25 single-flute tools by the rule of `auto` (semi-discretization below one "
-                 "tooth in cut; `bench_presets.py`): a_e/D = 0.05 / 0.5",
-                 " / ".join(f"{presets[k]['auto']['wall_s']:.1f} s" for k in ("0.05", "0.5")),
-                 goal("≤ 15 s", max(presets[k]["auto"]["wall_s"] for k in ("0.05", "0.5")) <= 15),
-                 load_text(value("presets", "machine_load")), "presets.json"])
+    presets = value("presets_small", "figures.immersions")
+    done = [k for k in ("0.05", "0.5") if k in presets]
+    rows.append(["chatter-safe presets, 25 single-flute tools Ø1–6 mm (issue 29's range), the default `auto` "
+                 "(`bench_presets.py --library small`): a_e/D = " + " / ".join(done),
+                 " / ".join(f"{presets[k]['auto']['wall_s']:.1f} s ({presets[k]['auto']['cpu_s']:.1f} s CPU)"
+                            for k in done),
+                 goal("≤ 15 s", len(done) == 2 and max(presets[k]["auto"]["wall_s"] for k in done) <= 15),
+                 load_text(value("presets_small", "figures.machine_load"),
+                           *(presets[k]["machine_load_after"] for k in done)), "presets_small.json"])
     rows.append([f"chatter-safe presets: {count(job['tools'])} tools as a `library-recommend` job on a 2-worker Dask "
                  "`LocalCluster` (`bench_presets.py --job-tools 1000 --dask`)",
                  f"{job['recommend_job_s']:.0f} s, {count(job['summary']['written'])} presets written", "",
@@ -663,6 +666,31 @@ def hostile_run() -> str:
             f"— {statuses}")
 
 
+def presets_safety_table() -> str:
+    """How safe and how productive the default presets are, per immersion (``bench_presets.py --library small``)."""
+    f = value("presets_small", "figures")
+    rows = []
+    for ae, entry in f["immersions"].items():
+        for method in (m for m in ("auto", "zoa", "semi_discretization") if m in entry):
+            s = entry[method]["summary"]
+            worst = s["worst_depth_over_window_limit"]
+            rows.append([ae, f"`{method}`", f"{s['written']} of {s['tools']}",
+                         f"**{s['unstable_by_sdm']}** (deepest {worst:.2f}× its window's limit)" if worst else "—",
+                         f"{s['refused']} ({s['false_refusals']} falsely)",
+                         f"{s['productivity_median']:.2f} ({s['productivity_min']:.2f})",
+                         f"{entry[method]['wall_s']:.1f} s ({entry[method]['cpu_s']:.1f} s CPU)"])
+        oracle = entry.get("oracle", [])
+        td = entry.get("time_domain", [])
+        rows.append([ae, "checks of `auto`",
+                     f"collocation oracle at the weakest speed of {len(oracle)} windows: preset / oracle limit "
+                     + ", ".join(f"{o['preset_over_oracle']:.2f}" for o in oracle),
+                     f"time domain: {sum(t['preset_stable'] for t in td)} of {len(td)} presets stable, "
+                     f"{sum(t['next_step_up_chatters'] for t in td)} of {len(td)} chatter at 1.25× the window's limit",
+                     "", "", ""])
+    return table(["a_e/D", "method", "presets written", "unstable by the dense SDM over the window",
+                  "refused", "productivity, median (min)", "time, 25 tools"], rows)
+
+
 #: Named figures: each renders Markdown from the results files.
 FIGURES: dict[str, Callable[[], str]] = {
     "benchmarks-table": benchmarks_table,
@@ -690,6 +718,7 @@ FIGURES: dict[str, Callable[[], str]] = {
     "crash-losses": crash_losses,
     "soak-memory": soak_memory,
     "hostile-run": hostile_run,
+    "presets-safety-table": presets_safety_table,
 }
 
 
