@@ -108,6 +108,34 @@ def test_step_exponentials_match_expm_of_the_augmented_matrix(rng, scale):
             np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9 * np.abs(want).max())
 
 
+def test_step_exponentials_of_a_mixed_batch_equal_each_alone(rng):
+    """Matrices grouped by their squarings and degree, zero ones (padding) set exactly: every
+    member of a batch mixing scales and zeros gets what it gets alone."""
+    scales = np.array([0.0, 1e-3, 0.1, 0.0, 2.0, 40.0, 0.3])
+    z = rng.standard_normal((scales.size, 4, 4)) * scales[:, None, None]
+    beta = rng.standard_normal((scales.size, 4, 2)) * (scales > 0)[:, None, None]
+    e, x, y = md.step_exponentials(z, beta)
+    for j in range(scales.size):
+        alone = md.step_exponentials(z[j : j + 1], beta[j : j + 1])
+        for got, want in zip((e[j], x[j], y[j]), alone, strict=True):
+            np.testing.assert_array_equal(got, want[0])
+    np.testing.assert_array_equal(e[0], np.eye(4))
+
+
+def test_a_speeds_chatter_frequency_does_not_depend_on_the_speeds_solved_beside_it():
+    """Each member samples its free flight at its own period's count (``displacement_samples``):
+    a low speed beside a high one does not change the high one's answer."""
+    together = lobes(BENCHMARK, teeth=2, immersion=0.05, speeds=(2500.0, 21000.0))
+    for i, n in enumerate((2500.0, 21000.0)):
+        alone = lobes(BENCHMARK, teeth=2, immersion=0.05, speeds=(n,))
+        assert together.chatter_frequency_hz[i] == pytest.approx(alone.chatter_frequency_hz[0], rel=1e-9)
+        assert together.depth_limit_m[i] == pytest.approx(alone.depth_limit_m[0], rel=1e-9)
+    system = md.state_space(BENCHMARK)
+    periods = 60.0 / (2 * np.array([2500.0, 21000.0]))
+    assert md.displacement_samples(system, periods).tolist() == [64 * 2 ** math.ceil(math.log2(4 * 922 * periods[0] / 64)),
+                                                                 64]
+
+
 def test_step_exponentials_of_a_singular_matrix():
     """``A_i`` singular (cutting stiffness cancels a mode): no inverse, φ1(0) = I, φ2(0) = I/2."""
     e, x, y = md.step_exponentials(np.zeros((1, 3, 3)), np.ones((1, 3, 1)))

@@ -69,6 +69,7 @@ __all__ = [
     "matrix_free_cheaper",
     "monodromy_matrix",
     "padded_cut_window",
+    "displacement_samples",
     "period_displacement",
     "period_maps",
     "state_space",
@@ -409,8 +410,13 @@ def step_exponentials(z: np.ndarray, beta: np.ndarray) -> tuple[np.ndarray, np.n
     e_out = np.empty_like(zf)
     x_out = np.empty_like(bf)
     y_out = np.empty_like(bf)
-    for s, m in {(int(a), int(b)) for a, b in zip(squarings, blocks, strict=True)}:
-        idx = np.flatnonzero((squarings == s) & (blocks == m))
+    # Z = 0 (the zero-length steps that pad a plan): e^0 = I, φ1(0) β = β, φ2(0) β = β/2, exactly
+    zero = norm == 0.0
+    e_out[zero], x_out[zero], y_out[zero] = eye, bf[zero], 0.5 * bf[zero]
+    group = np.where(zero, -1, 4 * squarings + blocks)
+    for key in np.unique(group[~zero]):  # a loop over (squarings, degree) classes, a handful
+        s, m = divmod(int(key), 4)
+        idx = np.flatnonzero(group == key)
         c = 1.0 / float(2**s)
         zz = zf[idx] * c
         bb = bf[idx] * c
@@ -784,6 +790,34 @@ SAMPLES_PER_CYCLE = 4.0
 MIN_PERIOD_SAMPLES = 64
 
 
+def displacement_samples(system: StateSpace, period_s: np.ndarray) -> np.ndarray:
+    """Samples per period a cut-window :func:`period_displacement` takes for each member:
+    ``M = 2^⌈log₂ max(64, 4 f_top T)⌉`` with the member's own highest natural frequency and period.
+
+    Parameters
+    ----------
+    system : StateSpace
+        One system, or one per member.
+    period_s : numpy.ndarray, shape (nb,)
+        Tooth periods ``T``, s.
+
+    Returns
+    -------
+    numpy.ndarray of int, shape (nb,)
+
+    Examples
+    --------
+    >>> s = state_space(ModalModel.of([1000.0], [0.02], [1.0], [0]))
+    >>> displacement_samples(s, np.array([0.001, 0.06])).tolist()   # 4 samples a cycle of 1 kHz
+    [64, 256]
+    """
+    d = system.n // 2
+    w = np.diagonal(system.a0[..., :d, d:], axis1=-2, axis2=-1)  # ω of each mode, (d,) or (nb, d)
+    f_top = np.max(w, axis=-1) / _TWO_PI
+    need = np.maximum(MIN_PERIOD_SAMPLES, SAMPLES_PER_CYCLE * f_top * np.asarray(period_s, dtype=float))
+    return np.asarray(2 ** np.ceil(np.log2(need)), dtype=np.int64)
+
+
 def period_displacement(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps, z: np.ndarray,
                         period_s: np.ndarray) -> np.ndarray:
     """Displacements at equally spaced times ``t_m = m T / M`` over one period, from states ``z`` (nb, N).
@@ -792,8 +826,8 @@ def period_displacement(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps,
     the cut at its nodes (linear between them, as the semi-discretization takes the delayed
     displacement) and the free flight in closed form: each mode's damped free vibration from the
     state at the exit (``q(s) = e^{−ζωs}[q₀ cos ω_d s + (q̇₀ + ζω q₀)/ω_d sin ω_d s]``), sampled
-    ``M = 2^⌈log₂ max(64, 4 f_top T)⌉`` times a period (``f_top``: the highest natural frequency
-    of the batch).
+    ``M`` times a period: the most any member needs (:func:`displacement_samples`; callers group
+    members by it).
 
     Parameters
     ----------
@@ -826,8 +860,7 @@ def period_displacement(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps,
     w = np.diagonal(a0[:, :d, d:], axis1=1, axis2=2)  # ω per mode, (nb, d)
     zeta = -np.diagonal(a0[:, d:, d:], axis1=1, axis2=2) / (2.0 * w)
     period = np.asarray(period_s, dtype=float)
-    f_top = float(np.max(w)) / _TWO_PI
-    samples = int(2 ** math.ceil(math.log2(max(MIN_PERIOD_SAMPLES, SAMPLES_PER_CYCLE * f_top * float(period.max())))))
+    samples = int(np.max(displacement_samples(system, period)))
     frac = plan.step_fraction * k  # share of the period in the cut (the same for every member)
     t_rel = np.arange(samples) / samples  # t / T
     r = np.empty((nb, samples, 2), dtype=z.dtype)
@@ -868,15 +901,25 @@ def chatter_frequency(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps, m
     -------
     numpy.ndarray, shape (nb,)
     """
-    r = period_displacement(system, plan, maps, vec, period_s)  # (nb, M, 2)
-    samples = r.shape[1]
-    log_mu = np.log(mu.astype(complex))
-    floquet = np.exp(-np.outer(log_mu, np.arange(samples) / samples))  # remove the growth μ^{t/T}
-    coef = np.fft.fft(r * floquet[:, :, None], axis=1)
-    power = (np.abs(coef) ** 2).sum(axis=2)
-    j = np.fft.fftfreq(samples, d=1.0 / samples)[np.argmax(power, axis=1)]
-    theta = np.angle(mu)
-    return np.asarray(np.abs(theta / (2 * np.pi) + j) / period_s)
+    period = np.asarray(period_s, dtype=float)
+    if plan.scheme == "full_period":
+        groups = [np.arange(mu.size)]
+    else:  # members that need fewer samples (shorter periods, lower modes) are not sampled at the batch's most
+        need = displacement_samples(system, period)
+        groups = [np.flatnonzero(need == m) for m in np.unique(need)]
+    out = np.empty(mu.size)
+    for rows in groups:  # a loop over sample counts (powers of two)
+        whole = rows.size == mu.size
+        r = period_displacement(system if whole else system.take(rows), plan, maps if whole else maps.take(rows),
+                                vec[rows], period[rows])  # (nr, M, 2)
+        samples = r.shape[1]
+        log_mu = np.log(mu[rows].astype(complex))
+        floquet = np.exp(-np.outer(log_mu, np.arange(samples) / samples))  # remove the growth μ^{t/T}
+        coef = np.fft.fft(r * floquet[:, :, None], axis=1)
+        power = (np.abs(coef) ** 2).sum(axis=2)
+        j = np.fft.fftfreq(samples, d=1.0 / samples)[np.argmax(power, axis=1)]
+        out[rows] = np.abs(np.angle(mu[rows]) / (2 * np.pi) + j) / period[rows]
+    return out
 
 
 # --------------------------------------------------------------------------- spectra
