@@ -63,7 +63,7 @@ def test_limits_equal_those_of_the_replaced_solver(case):
 
 
 def test_tools_solved_together_give_each_tool_its_own_limits():
-    """Models of different sizes (2 and 4 modes, padded) and speed grids in one batch."""
+    """Models of different sizes (2 and 4 modes: one batch per size) and speed grids in one call."""
     cases = [c for c in CASES if c["teeth"] == 2]
     solved = [_solve(c) for c in cases]
     common = {k: solved[0][1][k] for k in ("teeth", "tangential_coefficient_n_m2", "radial_immersion", "milling")}

@@ -973,8 +973,9 @@ def semi_discretization_lobes_many(
     Parameters
     ----------
     models : sequence of ModalModel
-        The tools' modes (any numbers of modes: smaller models are padded with inert modes,
-        :func:`~rcsa.analysis.lobes.monodromy.state_spaces`).
+        The tools' modes (any numbers of modes: models of one size are solved together, each
+        size on its own; :func:`~rcsa.analysis.lobes.monodromy.state_spaces` pads smaller
+        models with inert modes where a caller stacks them).
     teeth, tangential_coefficient_n_m2, radial_ratio, radial_immersion, milling, depth_rtol
         As in :func:`semi_discretization_lobes` (the same for every model).
     spindle_speed_rpm : sequence of numpy.ndarray
@@ -1027,6 +1028,13 @@ def semi_discretization_lobes_many(
     if len(spindle_speed_rpm) != len(models) or not models:
         raise InputError("spindle_speed_rpm", f"give one speed grid per model ({len(models)}), got "
                                               f"{len(spindle_speed_rpm)}")
+    if len({m.n_modes for m in models}) > 1:  # one batch per size: a padded system costs (n_max / n)³ per product
+        return _by_size(models, progress, spindle_speed_rpm=spindle_speed_rpm, steps_per_period=steps_per_period,
+                        min_depth_search_max_m=min_depth_search_max_m, scan_start_m=scan_start_m,
+                        common={"teeth": teeth, "tangential_coefficient_n_m2": tangential_coefficient_n_m2,
+                                "radial_ratio": radial_ratio, "radial_immersion": radial_immersion,
+                                "milling": milling, "depth_rtol": depth_rtol, "scan_from_neighbours": scan_from_neighbours,
+                                "steps_per_cycle": steps_per_cycle, "refinements": refinements, "check": check})
     kt = float(tangential_coefficient_n_m2)
     speeds = [np.array(s, dtype=float) for s in spindle_speed_rpm]  # copies: the results freeze their arrays
     automatic = steps_per_period is None
@@ -1082,6 +1090,42 @@ def semi_discretization_lobes_many(
                     break
                 solve.refine(fields, todo, least)
     return [_result(models[i], speeds[i], fields[i], teeth, float(ceiling[i]), scheme) for i in range(len(models))]
+
+
+def _by_size(models: Sequence[ModalModel], progress: Callable[[int, int], None] | None, *,
+             spindle_speed_rpm: Sequence[np.ndarray], steps_per_period: int | Sequence[np.ndarray] | None,
+             min_depth_search_max_m: Sequence[float] | None, scan_start_m: Sequence[np.ndarray] | None,
+             common: dict[str, Any]) -> list[SemiDiscretizationResult]:
+    """:func:`semi_discretization_lobes_many` of models of several sizes: one call per number of
+    modes (a smaller model batched with a larger one is padded with inert modes, and every product
+    of its period maps costs the larger size's), the results in the models' order; ``progress``
+    counts the models' share of the calls."""
+    sizes = sorted({m.n_modes for m in models})
+    out: list[SemiDiscretizationResult | None] = [None] * len(models)
+    done = 0
+    for size in sizes:  # a loop over model sizes (a handful)
+        idx = [i for i, m in enumerate(models) if m.n_modes == size]
+
+        def part(d: int, t: int, base: int = done, share: int = len(idx)) -> None:
+            if progress is not None:
+                progress(base + int(share * d / max(t, 1)), len(models))
+
+        steps = steps_per_period if steps_per_period is None or isinstance(steps_per_period, (int, np.integer)) \
+            else _pick(steps_per_period, idx)
+        results = semi_discretization_lobes_many([models[i] for i in idx], **common,
+                                                 spindle_speed_rpm=[spindle_speed_rpm[i] for i in idx],
+                                                 steps_per_period=steps, progress=part,
+                                                 min_depth_search_max_m=_pick(min_depth_search_max_m, idx),
+                                                 scan_start_m=_pick(scan_start_m, idx))
+        for i, r in zip(idx, results, strict=True):
+            out[i] = r
+        done += len(idx)
+    return [r for r in out if r is not None]
+
+
+def _pick(seq: Sequence[Any] | None, idx: list[int]) -> list[Any] | None:
+    """The entries ``idx`` of a per-model sequence (None stays None)."""
+    return None if seq is None else [seq[i] for i in idx]
 
 
 # Per-speed arrays of a result: name, fill value, dtype.
