@@ -937,9 +937,9 @@ def critical_multipliers(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps
     (:func:`_matrix_free_cheaper`) — on :func:`apply_period` directly, without ever forming
     them. A batch member is accepted when its leading Ritz value has a residual below
     ``RITZ_TOL`` and no other Ritz value ``θ`` with residual ``ρ`` could hide a larger
-    eigenvalue (``|θ| + ρ`` not above the leading modulus); otherwise it is solved again with a
-    Krylov space twice as large (matrix-free) and, failing that, densely, so the answer is
-    always a converged eigenvalue.
+    eigenvalue (``|θ| + ρ`` not above the leading modulus); otherwise it is solved again in a
+    Krylov space twice as large, and so on up to ``KRYLOV_MAX`` (:func:`krylov_dims`), and only
+    failing that densely, so the answer is always a converged eigenvalue.
 
     Parameters
     ----------
@@ -962,37 +962,27 @@ def critical_multipliers(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps
     vec = np.full((nb, size), np.nan + 0j) if vectors else None
     want = vectors is not False
     todo = np.arange(nb)
+    krylov = min(max(KRYLOV_DIM, system.n + KRYLOV_EXTRA), size)
     free = size > DENSE_MAX_SIZE and matrix_free_cheaper(system.n, plan)
     if free:
-        krylov = min(max(KRYLOV_DIM, system.n + KRYLOV_EXTRA), size)
         blocked = blocked_period_map(system, plan, maps) if blockable(plan) else None
-        for dim in (krylov, min(2 * krylov, size)):
-            sub_sys, sub = system.take(todo), maps.take(todo)
+
+        def matvec(rows: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
             if blocked is not None:
-                apply = blocked.take(todo).apply
-            else:
-                def apply(v: np.ndarray, s: StateSpace = sub_sys, m: PeriodMaps = sub) -> np.ndarray:
-                    return apply_period(s, plan, m, v[:, :, None])[:, :, 0]
-            k_mu, k_vec, ok = _arnoldi(apply, todo.size, size, dim, want)
-            mu[todo[ok]] = k_mu[ok]
-            if vec is not None and k_vec is not None:
-                vec[todo[ok]] = k_vec[ok]
-            todo = todo[~ok]
-            if not todo.size or dim == size:
-                break
+                return blocked.take(rows).apply
+            sub_sys, sub = system.take(rows), maps.take(rows)
+            return lambda v: apply_period(sub_sys, plan, sub, v[:, :, None])[:, :, 0]
+
+        todo = _krylov_solve(matvec, todo, size, krylov, want, mu, vec)
         if not todo.size:
             return mu, vec
     phi = monodromy_matrix(system.take(todo), plan, maps.take(todo))
-    dense = np.ones(todo.size, dtype=bool)
+    dense = np.arange(todo.size)
     if size > DENSE_MAX_SIZE and not free:
-        krylov = min(max(KRYLOV_DIM, system.n + KRYLOV_EXTRA), size)
-        k_mu, k_vec, ok = _arnoldi(lambda v: (phi @ v[:, :, None])[:, :, 0], nb, size, krylov, want)
-        mu[ok] = k_mu[ok]
-        if vec is not None and k_vec is not None:
-            vec[ok] = k_vec[ok]
-        dense = ~ok
-    if np.any(dense):
-        rows = np.flatnonzero(dense)
+        dense = _krylov_solve(lambda rows: lambda v: (phi[rows] @ v[:, :, None])[:, :, 0], dense, size, krylov,
+                              want, mu, vec, out_rows=todo)
+    if dense.size:
+        rows = dense
         ev = np.linalg.eigvals(phi[rows])
         mu[todo[rows]] = ev[np.arange(rows.size), np.argmax(np.abs(ev), axis=1)]
         if vec is not None:
@@ -1000,6 +990,51 @@ def critical_multipliers(system: StateSpace, plan: CuttingPlan, maps: PeriodMaps
             if need.size:
                 vec[todo[need]] = _inverse_iteration(phi[need], mu[todo[need]])
     return mu, vec
+
+
+#: The largest Krylov space tried before a member is solved densely. A clustered spectrum (many
+#: multipliers of nearly one modulus, e.g. half immersion resolved with a thousand delayed
+#: states) may need far more than ``2 · KRYLOV_DIM``; 320 Arnoldi steps on N = 1 734 cost a
+#: fraction of the dense eigenvalues of that matrix (about 2 s each).
+KRYLOV_MAX = 320
+#: Working memory of one batch of Arnoldi bases, bytes (larger spaces solve fewer members at a time).
+_ARNOLDI_BYTES = 64 * 2**20
+
+
+def krylov_dims(first: int, size: int) -> list[int]:
+    """The Krylov spaces tried in turn: ``first``, doubled each time, up to ``KRYLOV_MAX`` or ``size``.
+
+    >>> krylov_dims(32, 1734), krylov_dims(32, 100)
+    ([32, 64, 128, 256, 320], [32, 64, 100])
+    """
+    dims = [min(first, size)]
+    while dims[-1] < min(size, KRYLOV_MAX):
+        dims.append(min(2 * dims[-1], size, KRYLOV_MAX))
+    return dims
+
+
+def _krylov_solve(matvec: Callable[[np.ndarray], Callable[[np.ndarray], np.ndarray]], todo: np.ndarray, size: int,
+                  first: int, want: bool, mu: np.ndarray, vec: np.ndarray | None,
+                  out_rows: np.ndarray | None = None) -> np.ndarray:
+    """Arnoldi on the members ``todo`` in growing Krylov spaces (:func:`krylov_dims`), each batch
+    within ``_ARNOLDI_BYTES``; converged members' multipliers (and vectors) written into ``mu``
+    and ``vec`` (at ``out_rows[member]`` when given); returns the members left unconverged.
+    ``matvec(rows)`` is the map applied to the members ``rows``."""
+    where = (lambda r: r) if out_rows is None else (lambda r: out_rows[r])  # noqa: E731
+    for dim in krylov_dims(first, size):
+        per = max(1, _ARNOLDI_BYTES // (8 * size * (dim + 1) * (2 if want else 1)))
+        left = []
+        for lo in range(0, todo.size, per):  # a loop over memory-bounded batches of members
+            rows = todo[lo : lo + per]
+            k_mu, k_vec, ok = _arnoldi(matvec(rows), rows.size, size, dim, want)
+            mu[where(rows[ok])] = k_mu[ok]
+            if vec is not None and k_vec is not None:
+                vec[where(rows[ok])] = k_vec[ok]
+            left.append(rows[~ok])
+        todo = np.concatenate(left) if left else todo[:0]
+        if not todo.size or dim == size:
+            break
+    return todo
 
 
 #: Forming the monodromy matrix costs ``steps · n² · N`` per member; Arnoldi on :func:`apply_period`
