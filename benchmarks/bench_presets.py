@@ -260,8 +260,8 @@ def main() -> None:
     library = json.loads(data)
     rule = PocketRule()
     frfs = predicted_frfs(read_library(data, file_name="library.json"), **SETTINGS).frfs
-    results: dict = {"library": str(path.relative_to(ROOT)), "machine_load": record.load_average(),
-                     "immersions": {}}
+    load_start = record.load_average()
+    results: dict = {"library": str(path.relative_to(ROOT)), "immersions": {}}
     for ae in args.immersions:
         entry = {}
         for method in args.methods:
@@ -285,17 +285,18 @@ def main() -> None:
                   f"rpm stable={t['preset_stable']}; {t['next_step_up_m'] * 1e3:.3f} mm at {t['at_rpm']:.0f} rpm "
                   f"chatters={t['next_step_up_chatters']}", flush=True)
         results["immersions"][str(ae)] = entry
-        _write(results, args)  # after each immersion: a long run killed later keeps what it measured
+        _write(results, args, load_start)  # after each immersion: a long run killed later keeps what it measured
     if args.job_tools:
         results["job"] = _job(args.job_tools, args.dask)
         print("job:", results["job"])
-    print(f"wrote {_write(results, args)}")
+    print(f"wrote {_write(results, args, load_start)}")
 
 
-def _write(results: dict, args: argparse.Namespace) -> Path:
+def _write(results: dict, args: argparse.Namespace, load_start: list[float]) -> Path:
     """``results`` as the library's record (``benchmarks/results/presets_<library>.json``), or the job's."""
     name = f"presets_{args.library}" if args.immersions else "presets_job"
-    return record.write(name, results, load_start=results["machine_load"])
+    return record.write(name, results, load_start=load_start)
+
 
 if __name__ == "__main__":
     main()

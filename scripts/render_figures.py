@@ -278,13 +278,22 @@ def _wire_rows() -> list[list[str]]:
     return rows
 
 
+def _presets_job() -> tuple[dict[str, Any], str]:
+    """The library job of ``bench_presets.py --job-tools`` and its load: a ``benchmarks/record.py``
+    record (``figures.job``), or the first runs' plain file (``job``, ``machine_load``)."""
+    r = result("presets_job")
+    if "figures" in r:
+        return r["figures"]["job"], load_text(r["load_average_start"], r["load_average_end"])
+    return r["job"], load_text(r["machine_load"])
+
+
 def _analysis_rows() -> list[list[str]]:
     j = value("jointid", "figures")
     sync = result("sync")
     timing = value("diagnosis_timing_fresh", "timing_fresh")
     ex, five = timing["example"], timing["analytical5"]
     u = value("uncertainty", "figures")
-    job = value("presets_job", "job")
+    job, job_load = _presets_job()
     rows = [
         ["joint identification, one RA-1 measurement of 4 951 lines, start 3× off (`bench_jointid.py`): "
          "analytical / measured spindle",
@@ -327,12 +336,12 @@ def _analysis_rows() -> list[list[str]]:
                  " / ".join(f"{presets[k]['auto']['wall_s']:.1f} s ({presets[k]['auto']['cpu_s']:.1f} s CPU)"
                             for k in done),
                  goal("≤ 15 s", len(done) == 2 and max(presets[k]["auto"]["wall_s"] for k in done) <= 15),
-                 load_text(value("presets_small", "figures.machine_load"),
+                 load_text(value("presets_small", "load_average_start"),
                            *(presets[k]["machine_load_after"] for k in done)), "presets_small.json"])
     rows.append([f"chatter-safe presets: {count(job['tools'])} tools as a `library-recommend` job on a 2-worker Dask "
                  "`LocalCluster` (`bench_presets.py --job-tools 1000 --dask`)",
                  f"{job['recommend_job_s']:.0f} s, {count(job['summary']['written'])} presets written", "",
-                 load_text(value("presets_job", "machine_load")), "presets_job.json"])
+                 job_load, "presets_job.json"])
     return rows
 
 

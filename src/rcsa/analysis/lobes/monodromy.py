@@ -65,11 +65,11 @@ __all__ = [
     "cut_window_fraction",
     "cut_window_plan",
     "cutting_plan",
+    "displacement_samples",
     "free_maps",
     "matrix_free_cheaper",
     "monodromy_matrix",
     "padded_cut_window",
-    "displacement_samples",
     "period_displacement",
     "period_maps",
     "state_space",
@@ -1020,16 +1020,16 @@ def _krylov_solve(matvec: Callable[[np.ndarray], Callable[[np.ndarray], np.ndarr
     within ``_ARNOLDI_BYTES``; converged members' multipliers (and vectors) written into ``mu``
     and ``vec`` (at ``out_rows[member]`` when given); returns the members left unconverged.
     ``matvec(rows)`` is the map applied to the members ``rows``."""
-    where = (lambda r: r) if out_rows is None else (lambda r: out_rows[r])  # noqa: E731
     for dim in krylov_dims(first, size):
         per = max(1, _ARNOLDI_BYTES // (8 * size * (dim + 1) * (2 if want else 1)))
         left = []
         for lo in range(0, todo.size, per):  # a loop over memory-bounded batches of members
             rows = todo[lo : lo + per]
             k_mu, k_vec, ok = _arnoldi(matvec(rows), rows.size, size, dim, want)
-            mu[where(rows[ok])] = k_mu[ok]
+            done = rows[ok] if out_rows is None else out_rows[rows[ok]]
+            mu[done] = k_mu[ok]
             if vec is not None and k_vec is not None:
-                vec[where(rows[ok])] = k_vec[ok]
+                vec[done] = k_vec[ok]
             left.append(rows[~ok])
         todo = np.concatenate(left) if left else todo[:0]
         if not todo.size or dim == size:
