@@ -3,7 +3,9 @@
 The libraries (``--library``): ``small`` — 25 single-flute O-flute carbide tools Ø1–6 mm, flute
 lengths 3–42 mm (``tests/data/tool-libraries/fusion-single-flute/single_flute_small_library.json``,
 the range of issue 29's vendor library), ``standard`` — 25 single-flute tools 2–12 mm
-(``single_flute_library.json``), ``multi`` — the multi-flute sample (``fusion-synthetic``), each on
+(``single_flute_library.json``), ``multi`` — 25 two-, three- and four-flute tools Ø3–16 mm
+(``fusion-multi-flute/multi_flute_library.json``), ``sample`` — the three-tool sample of
+``fusion-synthetic``, each on
 RA-1's spindle and joints, aluminium 7075, down milling, 24 000 rpm machine, the default rule (±3 %
 window, safety factor 1.25, flute length cap). For each a_e/D the library is recommended twice —
 ``method zoa`` (for comparison) and ``method auto`` (the default) — and every tool is judged:
@@ -68,7 +70,8 @@ from rcsa.reference import ra1  # noqa: E402
 
 LIBRARIES = {"small": ROOT / "tests" / "data" / "tool-libraries" / "fusion-single-flute" / "single_flute_small_library.json",
              "standard": ROOT / "tests" / "data" / "tool-libraries" / "fusion-single-flute" / "single_flute_library.json",
-             "multi": ROOT / "tests" / "data" / "tool-libraries" / "fusion-synthetic" / "synthetic_library.json"}
+             "multi": ROOT / "tests" / "data" / "tool-libraries" / "fusion-multi-flute" / "multi_flute_library.json",
+             "sample": ROOT / "tests" / "data" / "tool-libraries" / "fusion-synthetic" / "synthetic_library.json"}
 LIBRARY = LIBRARIES["small"]
 #: Steps per cycle the judge resolves with: twice the recommendation's.
 JUDGE_STEPS_PER_CYCLE = 20.0

@@ -111,9 +111,11 @@ __all__ = [
     "SemiDiscretizationResult",
     "band_steps",
     "cut_scheme",
+    "merged_result",
     "resolving_steps",
     "semi_discretization_lobes",
     "semi_discretization_lobes_many",
+    "stable_at_depth_many",
 ]
 
 #: Steps per tooth period (Insperger & Stépán use 40); range accepted in requests (the
@@ -1089,7 +1091,108 @@ def semi_discretization_lobes_many(
                 if not any(t.size for t in todo):
                     break
                 solve.refine(fields, todo, least)
-    return [_result(models[i], speeds[i], fields[i], teeth, float(ceiling[i]), scheme) for i in range(len(models))]
+    return [_result(models[i], speeds[i], fields[i], float(ceiling[i]), scheme) for i in range(len(models))]
+
+
+def stable_at_depth_many(
+    models: Sequence[ModalModel],
+    *,
+    teeth: int,
+    tangential_coefficient_n_m2: float,
+    radial_ratio: float,
+    radial_immersion: float,
+    milling: Milling,
+    spindle_speed_rpm: Sequence[np.ndarray],
+    depth_m: Sequence[float | np.ndarray],
+    steps_per_cycle: float | None = None,
+) -> list[np.ndarray]:
+    """Whether each speed of each model is stable at its depth: one evaluation of the
+    period map per speed (no search), with the steps that resolve the cut at ``steps_per_cycle``
+    (:func:`resolving_steps`) and no check — the same answer as "the limit found with these
+    steps is at least ``depth_m``", up to the search's bracket width.
+
+    Parameters
+    ----------
+    models, teeth, tangential_coefficient_n_m2, radial_ratio, radial_immersion, milling
+        As in :func:`semi_discretization_lobes_many`.
+    spindle_speed_rpm : sequence of numpy.ndarray
+        One speed grid (rpm) per model.
+    depth_m : sequence of float or numpy.ndarray
+        Per model, one axial depth (m) or one per speed.
+    steps_per_cycle : float, optional
+        Default ``RESOLVING_STEPS_PER_CYCLE``.
+
+    Returns
+    -------
+    list of numpy.ndarray of bool
+        Per model, per speed: all multipliers inside the unit circle.
+
+    Examples
+    --------
+    >>> m = ModalModel.of([922.0], [0.011], [1 / 0.03993], [0])
+    >>> [s.tolist() for s in stable_at_depth_many([m], teeth=2, tangential_coefficient_n_m2=6e8, radial_ratio=1 / 3,
+    ...     radial_immersion=0.05, milling="down", spindle_speed_rpm=[np.array([18000.0, 18000.0])], depth_m=[1e-3])]
+    [[True, True]]
+    """
+    kt = float(tangential_coefficient_n_m2)
+    speeds = [np.asarray(s, dtype=float) for s in spindle_speed_rpm]
+    if len(speeds) != len(models) or len(depth_m) != len(models):
+        raise InputError("depth_m", f"give one speed grid and its depths per model ({len(models)})")
+    try:
+        depths = [np.broadcast_to(np.asarray(d, dtype=float), s.shape) for d, s in zip(depth_m, speeds, strict=True)]
+    except ValueError:
+        raise InputError("depth_m", "give one depth per model or one per speed") from None
+    if not all(np.all(np.isfinite(d) & (d > 0)) for d in depths):
+        raise InputError("depth_m", "depths must be finite and > 0 (m)")
+    per_cycle = RESOLVING_STEPS_PER_CYCLE if steps_per_cycle is None else float(steps_per_cycle)
+    for speed in speeds:
+        _check_arguments(teeth, kt, radial_ratio, None, speed)
+    phi_st, phi_ex = engagement_angles_rad(radial_immersion, milling)
+    cut = _Cut(int(teeth), kt, float(radial_ratio), phi_st, phi_ex, cut_scheme(teeth, radial_immersion, milling)[0])
+    out: list[np.ndarray] = [np.empty(0, dtype=bool)] * len(models)
+    for size in sorted({m.n_modes for m in models}):  # a loop over model sizes (a handful): none padded
+        idx = [i for i, m in enumerate(models) if m.n_modes == size]
+        steps = [resolving_steps(models[i], teeth, speeds[i], radial_immersion=radial_immersion, milling=milling,
+                                 steps_per_cycle=per_cycle) for i in idx]
+        evaluate = _evaluator([models[i] for i in idx], [speeds[i] for i in idx], steps, cut)
+        sizes = [speeds[i].size for i in idx]
+        mu = evaluate(np.arange(sum(sizes)), np.concatenate([depths[i] for i in idx]))
+        for i, part in zip(idx, np.split(np.abs(mu) < 1.0, np.cumsum(sizes)[:-1]), strict=True):
+            out[i] = part
+    return out
+
+
+def merged_result(parts: Sequence[SemiDiscretizationResult]) -> SemiDiscretizationResult:
+    """One result over the speeds of ``parts`` together, in speed order: the same model and cut
+    solved in separate calls on disjoint speeds (e.g. a screening pass band by band), each speed
+    keeping its own answer; the envelope's segments and its lowest point are those of the union.
+
+    Parameters
+    ----------
+    parts : sequence of SemiDiscretizationResult
+        One model, scheme and search ceiling (the first part's ceiling is kept).
+
+    Returns
+    -------
+    SemiDiscretizationResult
+    """
+    if not parts:
+        raise InputError("parts", "give at least one result")
+    first = parts[0]
+    if any(p.modal_model is not first.modal_model or p.scheme != first.scheme for p in parts):
+        raise InputError("parts", "results of one model (the same object) and one scheme only")
+    speed = np.concatenate([p.spindle_speed_rpm for p in parts])
+    order = np.argsort(speed, kind="stable")
+    f_top = 1.2 * float(np.max(first.modal_model.frequency_hz))
+
+    def cat(name: str) -> np.ndarray:
+        return np.concatenate([np.asarray(getattr(p, name)) for p in parts])[order]
+
+    fields = {"depth": cat("depth_limit_m"), "mu": cat("critical_multiplier"), "freq": cat("chatter_frequency_hz"),
+              "kind": cat("instability"), "lobe": cat("governing_lobe"),
+              "step_s": 1.0 / (f_top * cat("top_mode_steps_per_cycle")), "steps": cat("steps"),
+              "check_steps": cat("check_steps"), "resolved": cat("resolved")}
+    return _result(first.modal_model, speed[order], fields, first.depth_search_max_m, first.scheme)
 
 
 def _by_size(models: Sequence[ModalModel], progress: Callable[[int, int], None] | None, *,
@@ -1294,8 +1397,8 @@ def _fields(br: _Brackets, evaluate: _Evaluator, sizes: np.ndarray) -> list[dict
              "lobe": lobe[a:b], "step_s": evaluate.step_s[a:b]} for a, b in zip(offsets[:-1], offsets[1:], strict=True)]
 
 
-def _result(model: ModalModel, speed: np.ndarray, f: dict[str, np.ndarray], teeth: int,
-            ceiling: float, scheme: str) -> SemiDiscretizationResult:
+def _result(model: ModalModel, speed: np.ndarray, f: dict[str, np.ndarray], ceiling: float,
+            scheme: str) -> SemiDiscretizationResult:
     depth, mu, freq, kind, lobe, step_s = (f[k] for k in ("depth", "mu", "freq", "kind", "lobe", "step_s"))
     with np.errstate(divide="ignore", invalid="ignore"):  # a fold at 0 Hz is resolved by any step
         cycles = 1.0 / (freq * step_s)

@@ -19,7 +19,13 @@ reason is true. The method is chosen per tool:
   resolution (an unresolved speed counts as unstable), and a candidate is kept only with the
   depth its dense window allows; candidates are verified
   best-first until the best verified one beats every unverified candidate's grid score
-  (:func:`_verify`). The search reaches at least
+  (:func:`_verify`). The grid is screened by branch and bound (:func:`_screen_pruned`): its
+  top band first, verified; then only the slower windows that can still beat the best
+  verified one — not those whose speed times the flute length falls short, nor those holding a
+  speed found unstable (one evaluation) at the depth they would need — so the slow speeds,
+  whose cut holds the most steps, are mostly never searched, and the pocket is the one the
+  whole grid gives (their limits unknown, the absolute depth limit is then NaN; robust pockets
+  screen the whole grid). The search reaches at least
   ``safety_factor × flute length`` deep, so a speed without an SDM limit below it is stable to
   the flute length: the stepdown is then capped there (``limited_by: "flute_length"``, said in
   the tool's notes), never refused.
@@ -59,7 +65,9 @@ from rcsa.analysis.lobes.robust_sdm import (
 )
 from rcsa.analysis.lobes.semi_discretization import (
     SemiDiscretizationResult,
+    merged_result,
     semi_discretization_lobes_many,
+    stable_at_depth_many,
 )
 from rcsa.analysis.lobes.zoa import LobeResult, Milling, depth_limit_envelopes, stability_lobes
 from rcsa.errors import InputError
@@ -81,8 +89,10 @@ PRESET_METHODS: tuple[PresetMethod, ...] = ("zoa", "semi_discretization", "auto"
 DEFAULT_SDM_SPEED_COUNT = 400
 #: Speeds solved densely across each verified ``±τ`` window.
 _VERIFY_POINTS = 31
-#: Windows verified per tool and round, and rounds at most.
+#: Windows verified per tool and round (the first round: the best candidate alone — a tool
+#: stable to its flute length at its best speed is then done), and rounds at most.
 _VERIFY_PER_ROUND = 3
+_VERIFY_FIRST_ROUND = 1
 _VERIFY_ROUNDS = 3
 #: A tool is done when its best verified ``n · stepdown`` is within this fraction of every
 #: unverified candidate's coarse score (the search's productivity slack).
@@ -99,6 +109,15 @@ _SCREEN_STEPS_PER_CYCLE = 8.0
 #: Relative width of the verified windows' brackets: the limit kept is the bracket's stable
 #: end, so a preset can only lose this fraction of its depth, never exceed the limit.
 _VERIFY_RTOL = 0.005
+#: The first screening pass takes the speeds from this fraction of the grid's top speed up
+#: (:func:`_screen_pruned`), and counts for this share of the progress.
+_TOP_BAND = 0.5
+_TOP_SHARE = 0.2
+#: Speeds below a pruned grid checked at once while a pocket is followed down (:func:`_pocket_extent`).
+_EXTENT_CHUNK = 16
+#: The first round of refutation probes takes every this-many grid speed (a window holds about
+#: ``2τ / (τ/10) = 20`` speeds of the pocket grid, and at least 7 of the default 400-speed grid).
+_PROBE_STRIDE = 4
 
 
 
@@ -183,7 +202,8 @@ class ToolPocket:
     robust_depth_limit_m : float or None
         The robust one, when asked for.
     absolute_depth_limit_m : float
-        The smallest limit of the diagram, m (NaN when it has none).
+        The smallest limit of the diagram, m (NaN when it has none, or when slow speeds that
+        cannot win were not screened: :func:`_screen_pruned`).
     stable_to_flute_length : bool
         The stepdown is the flute length and the window is stable at least to
         ``safety_factor × flute length``.
@@ -357,28 +377,194 @@ def _sdm_pockets(tools: Sequence[ToolCut], settings: CutSettings, reasons: Seque
     models = [fits[i] for i in ok]
     assert all(isinstance(m, ModalModel) for m in models)
     cuts = [tools[i] for i in ok]
-    grids = [_sdm_grid(t, settings) for t in cuts]
+    full = [_sdm_grid(t, settings) for t in cuts]
     needed = [settings.rule.safety_factor * t.flute_length_m * _CAP_MARGIN for t in cuts]
     kw = {"teeth": cuts[0].teeth, "tangential_coefficient_n_m2": settings.tangential_coefficient_n_m2,
           "radial_ratio": settings.radial_ratio, "radial_immersion": settings.radial_immersion,
           "milling": settings.milling}
-    coarse = semi_discretization_lobes_many(models, **kw, spindle_speed_rpm=grids,  # type: ignore[arg-type]
-                                            progress=progress, min_depth_search_max_m=needed, depth_rtol=_SCREEN_RTOL,
-                                            scan_from_neighbours=True, steps_per_cycle=_SCREEN_STEPS_PER_CYCLE,
-                                            check=False)
     robust: list[np.ndarray | None] = [None] * len(cuts)
     drawn: list[list[ModalModel] | None] = [None] * len(cuts)
-    if settings.confidence is not None:
+    if settings.confidence is None:
+        coarse, state = _screen_pruned(models, cuts, full, needed, settings, kw, progress)
+    else:  # robust limits are drawn on the whole coarse diagram: nothing pruned
+        coarse = _screen(models, full, needed, kw, progress)
         solve = robust_sdm or robust_sdm_limits
         for j, (cut, model, lobes) in enumerate(zip(cuts, models, coarse, strict=True)):  # a loop over tools
             if cut.h_draws is None:
                 raise InputError("uncertainty", "no drawn FRFs for this tool: robust presets need them")
             robust[j] = solve(model, cut.frequency_hz, cut.h, cut.h_draws, lobes, settings.confidence, **kw)
             drawn[j] = drawn_models(model, modal_ratios(model, cut.frequency_hz, cut.h, cut.h_draws), VERIFY_DRAWS)
-    verified = _verify(models, cuts, grids, coarse, robust, needed, settings, kw, drawn)
+        state = _verify(models, cuts, coarse, robust, needed, settings, kw, drawn)
     for j, i in enumerate(ok):
-        out[i] = verified[j](reasons[i])
+        best = state.best(j)
+        extent = _pocket_extent(models[j], full[j], coarse[j], state.limits[j], best, settings, kw, state, j)
+        out[i] = _make(cuts[j], full[j], coarse[j], state, j, best, extent, settings, needed[j],
+                       robust[j] is not None)(reasons[i])
     return out
+
+
+def _screen(models: Sequence[ModalModel], grids: Sequence[np.ndarray], needed: Sequence[float], kw: dict[str, Any],
+            progress: Callable[[int, int], None] | None) -> list[SemiDiscretizationResult]:
+    """The screening pass (:data:`_SCREEN_STEPS_PER_CYCLE`, ``_SCREEN_RTOL``, no check) of each tool's speeds."""
+    return semi_discretization_lobes_many(models, **kw, spindle_speed_rpm=grids,  # type: ignore[arg-type]
+                                          progress=progress, min_depth_search_max_m=needed, depth_rtol=_SCREEN_RTOL,
+                                          scan_from_neighbours=True, steps_per_cycle=_SCREEN_STEPS_PER_CYCLE,
+                                          check=False)
+
+
+def _screen_pruned(models: Sequence[ModalModel], cuts: Sequence[ToolCut], grids: Sequence[np.ndarray],
+                   needed: Sequence[float], settings: CutSettings, kw: dict[str, Any],
+                   progress: Callable[[int, int], None] | None) -> tuple[list[SemiDiscretizationResult], _Verified]:
+    """Screen and verify each tool's top speeds first, then only the slower windows that can still win.
+
+    Branch and bound on the pocket's score ``S = n × stepdown`` (rpm·m). The grid's top band
+    (from ``_TOP_BAND × max``) is screened and verified; its best verified score ``S₁`` is a
+    score the final pocket reaches. A slower window centred on ``n`` can beat it only when
+
+    * ``n × flute length > S₁`` (the stepdown is capped at the flute length), and
+    * every speed ``m`` of its window (the grid speeds in it and the two bracketing it, as the
+      rule takes them) is stable at ``D(m) = safety_factor × S₁ × (1 − τ) / (m r²)`` (``r``: the
+      grid's ratio; ``D(m)`` is at most the depth any window holding ``m`` needs to beat
+      ``S₁``, so one unstable ``m`` refutes all of them).
+
+    Speeds outside every window of the first kind are not looked at; the others are probed
+    with one evaluation each at ``D(m)`` (:func:`stable_at_depth_many`, the screening's steps,
+    so a refuted speed's screened limit would have been below ``D(m)`` too) — every
+    ``_PROBE_STRIDE``-th speed first, then the other speeds of the windows still open — and
+    only the windows no probe refutes are screened. The verification then runs on every screened speed,
+    a window being a candidate only when all its speeds were screened, sharing the first pass's
+    densely solved windows. The pocket chosen is the one screening the whole grid gives. A
+    tool with no verified window in the top band is screened whole.
+    """
+    tol, sf = settings.rule.speed_tolerance, settings.rule.safety_factor
+    split = [int(np.searchsorted(g, max(g[0], _TOP_BAND * g[-1]))) for g in grids]
+    first = _screen(models, [g[s:] for g, s in zip(grids, split, strict=True)], needed, kw,
+                    _share(progress, 0.0, _TOP_SHARE))
+    none: list[Any] = [None] * len(cuts)
+    state = _verify(models, cuts, first, none, needed, settings, kw, none)
+    ranges = [_window_ranges(g, tol) for g in grids]
+    alive, depth = [], []
+    for j, (cut, g, s) in enumerate(zip(cuts, grids, split, strict=True)):  # a loop over tools
+        best = state.best_score(j)
+        alive.append((np.arange(g.size) < s) & (g * cut.flute_length_m >= best * (1 - 1e-12)))
+        ratio = g[1] / g[0] if g.size > 1 else 1.0
+        depth.append(np.minimum(sf * best * (1 - tol) / (g * ratio**2), needed[j]) if best > 0 else None)
+    refuted = [np.zeros(g.size, dtype=bool) for g in grids]
+    probed = [np.zeros(g.size, dtype=bool) for g in grids]
+    for stride in (_PROBE_STRIDE, 1):  # every few speeds first: one unstable speed refutes every window holding it
+        probes = []
+        for j, (g, s) in enumerate(zip(grids, split, strict=True)):  # a loop over tools
+            lo, hi = ranges[j]
+            open_ = alive[j] & (_count(refuted[j], lo, hi) == 0)
+            touched = _covered(lo[open_], hi[open_], g.size) & ~probed[j]
+            touched[s:] = False
+            touched[np.arange(g.size) % stride != 0] = False
+            probes.append(np.flatnonzero(touched) if depth[j] is not None else np.empty(0, dtype=np.int64))
+        asked = [j for j, pr in enumerate(probes) if pr.size]
+        if not asked:
+            continue
+        answers = stable_at_depth_many([models[j] for j in asked], **kw,
+                                       spindle_speed_rpm=[grids[j][probes[j]] for j in asked],
+                                       depth_m=[depth[j][probes[j]] for j in asked],  # type: ignore[index]
+                                       steps_per_cycle=_SCREEN_STEPS_PER_CYCLE)
+        for j, stable in zip(asked, answers, strict=True):  # a loop over tools
+            probed[j][probes[j]] = True
+            refuted[j][probes[j][~stable]] = True
+    screened, lower = [], []
+    for j, (g, s) in enumerate(zip(grids, split, strict=True)):  # a loop over tools
+        lo, hi = ranges[j]
+        survive = alive[j] & (_count(refuted[j], lo, hi) == 0)
+        wanted = _covered(lo[survive], hi[survive], g.size)
+        wanted[s:] = False
+        lower.append(np.flatnonzero(wanted))
+        wanted[s:] = True
+        screened.append(wanted)
+    todo = [j for j, low in enumerate(lower) if low.size]
+    second = _screen([models[j] for j in todo], [grids[j][lower[j]] for j in todo], [needed[j] for j in todo], kw,
+                     _share(progress, _TOP_SHARE, 1.0)) if todo else []
+    coarse = list(first)
+    for j, part in zip(todo, second, strict=True):  # a loop over tools
+        coarse[j] = merged_result([part, first[j]])
+    eligible = []
+    for j, (g, s) in enumerate(zip(grids, split, strict=True)):  # a loop over tools
+        lo, hi = ranges[j]
+        whole = _count(~screened[j], lo, hi) == 0
+        eligible.append((whole & (alive[j] | (np.arange(g.size) >= s)))[screened[j]])
+    state = _verify(models, cuts, coarse, none, needed, settings, kw, none, dense=state.dense,
+                    dense_nominal=state.dense_nominal, eligible=eligible)
+    return coarse, state
+
+
+def _window_ranges(grid: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per grid speed, the first and last grid index of its window with the two bracketing speeds
+    (as :func:`~rcsa.analysis.lobes.pockets.window_minimum` takes them)."""
+    lo = np.maximum(np.searchsorted(grid, grid * (1.0 - tol) * (1.0 + 1e-12), side="right") - 1, 0)
+    hi = np.minimum(np.searchsorted(grid, grid * (1.0 + tol) * (1.0 - 1e-12), side="left"), grid.size - 1)
+    return lo, hi
+
+
+def _covered(lo: np.ndarray, hi: np.ndarray, n: int) -> np.ndarray:
+    """Mask of the ``n`` indices inside any of the ranges ``lo[i] … hi[i]``."""
+    edges = np.zeros(n + 1, dtype=np.int64)
+    np.add.at(edges, lo, 1)
+    np.add.at(edges, hi + 1, -1)
+    return np.cumsum(edges)[:n] > 0
+
+
+def _count(mask: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """How many of ``mask`` are true in each range ``lo … hi``."""
+    total = np.concatenate([[0], np.cumsum(mask)])
+    return total[hi + 1] - total[lo]
+
+
+def _share(progress: Callable[[int, int], None] | None, lo: float, hi: float) -> Callable[[int, int], None] | None:
+    """``progress`` of a pass that is the fraction ``lo … hi`` of the screening."""
+    if progress is None:
+        return None
+
+    def part(done: int, total: int) -> None:
+        progress(int(1000 * (lo + (hi - lo) * done / max(total, 1))), 1000)
+
+    return part
+
+
+def _pocket_extent(model: ModalModel, full: np.ndarray, lobes: SemiDiscretizationResult, limit: np.ndarray,
+                   best: int, settings: CutSettings, kw: dict[str, Any], state: _Verified,
+                   j: int) -> tuple[float, float]:
+    """The chosen speed's pocket: the speeds of the full grid around it, contiguous, whose limit
+    reaches the stepdown times the safety factor — a screened speed by its coarse limit, a speed
+    not screened (:func:`_screen_pruned`) checked at that depth (one evaluation at the
+    screening's steps: :func:`stable_at_depth_many`), a run of them at a time."""
+    if best < 0:
+        return math.nan, math.nan
+    need = state.stepdown(j, best, settings) * settings.rule.safety_factor * (1 - 1e-12)
+    at = np.searchsorted(full, lobes.spindle_speed_rpm * (1 - 1e-12))
+    known = np.zeros(full.size, dtype=bool)
+    known[at] = True
+    ok = np.zeros(full.size, dtype=bool)
+    ok[at] = limit >= need  # inf (stable to the flute length) counts; NaN does not
+
+    def walk(i: int, step: int) -> int:
+        """The last index of the pocket from ``i`` (inside it) in direction ``step``."""
+        while 0 <= i + step < full.size:
+            nxt = i + step
+            if known[nxt]:
+                if not ok[nxt]:
+                    return i
+                i = nxt
+                continue
+            run = [nxt]
+            while len(run) < _EXTENT_CHUNK and 0 <= run[-1] + step < full.size and not known[run[-1] + step]:
+                run.append(run[-1] + step)
+            stable = stable_at_depth_many([model], **kw, spindle_speed_rpm=[full[run]], depth_m=[need],
+                                          steps_per_cycle=_SCREEN_STEPS_PER_CYCLE)[0]
+            if not stable.all():
+                return run[int(np.argmin(stable))] - step
+            i = run[-1]
+        return i
+
+    centre = int(at[best])
+    return float(full[walk(centre, -1)]), float(full[walk(centre, 1)])
 
 
 @dataclass
@@ -425,39 +611,90 @@ class _Dense:
         return float(np.min(np.where(np.isnan(values), -np.inf, values)))
 
 
-def _verify(models: Sequence[ModalModel], cuts: Sequence[ToolCut], grids: Sequence[np.ndarray],
-            coarse: Sequence[SemiDiscretizationResult], robust: Sequence[np.ndarray | None], needed: Sequence[float],
-            settings: CutSettings, kw: dict[str, Any],
-            drawn: Sequence[list[ModalModel] | None]) -> list[Callable[[str], ToolPocket]]:
+@dataclass
+class _Verified:
+    """The verification's state over each tool's coarse grid: pocket-form limits, verified
+    scores (``n · stepdown``; NaN: not verified) and the densely solved speeds."""
+
+    grids: list[np.ndarray]
+    limits: list[np.ndarray]
+    nominal: list[np.ndarray]
+    verified: list[np.ndarray]
+    dense: list[_Dense]
+    dense_nominal: list[_Dense]
+    flute_m: list[float]
+
+    def best(self, j: int) -> int:
+        """Index of tool ``j``'s best verified grid speed (-1: none positive)."""
+        v = np.where(np.isnan(self.verified[j]), -np.inf, self.verified[j])
+        return int(np.argmax(v)) if np.any(np.isfinite(v) & (v > 0)) else -1
+
+    def best_score(self, j: int) -> float:
+        """Tool ``j``'s best verified ``n · stepdown`` (rpm·m; 0 when none)."""
+        i = self.best(j)
+        return float(self.verified[j][i]) if i >= 0 else 0.0
+
+    def window(self, j: int, i: int, tol: float) -> float:
+        """The limit of grid speed ``i``'s window: its coarse window's and the dense speeds' smallest."""
+        n = float(self.grids[j][i])
+        return min(float(window_minimum(self.grids[j], self.limits[j], tol)[i]), self.dense[j].window_min(n, tol))
+
+    def stepdown(self, j: int, i: int, settings: CutSettings) -> float:
+        """The stepdown the rule allows at grid speed ``i``, m."""
+        return min(self.window(j, i, settings.rule.speed_tolerance) / settings.rule.safety_factor, self.flute_m[j])
+
+
+def _verify(models: Sequence[ModalModel], cuts: Sequence[ToolCut], coarse: Sequence[SemiDiscretizationResult],
+            robust: Sequence[np.ndarray | None], needed: Sequence[float], settings: CutSettings, kw: dict[str, Any],
+            drawn: Sequence[list[ModalModel] | None], *, dense: list[_Dense] | None = None,
+            dense_nominal: list[_Dense] | None = None, eligible: Sequence[np.ndarray] | None = None) -> _Verified:
     """Choose each tool's pocket on its coarse grid, then verify the best windows densely.
 
     A speed's verified window limit is the smallest of its coarse window limit (the grid
     speeds in the window and the two bracketing it, as the rule takes them) and of every
     densely solved speed inside the window, so a verified score never exceeds the coarse
     one. Per round and tool the best unverified candidates (up to ``_VERIFY_PER_ROUND``
-    distinct windows) are solved at ``_VERIFY_POINTS`` speeds across their window; every
-    candidate whose window the dense speeds then cover is verified too. A tool is done when
+    distinct windows, ``_VERIFY_FIRST_ROUND`` in the first round) are solved at ``_VERIFY_POINTS`` speeds across their window; every
+    candidate whose window the dense speeds then cover (or already covered: ``dense`` from an
+    earlier pass) is verified too. Only ``eligible`` grid speeds are candidates (default all). A tool is done when
     its best verified score is at least ``1 − _VERIFY_SLACK`` of every unverified candidate's
     coarse score (or after ``_VERIFY_ROUNDS`` rounds). A robust
     tool's dense speeds are also solved for its drawn modal models (``drawn``: every draw's own
     modes), and their ``(1 − confidence)`` quantile, never above the nominal, is its limit there.
     """
     tol, sf = settings.rule.speed_tolerance, settings.rule.safety_factor
+    grids = [r.spindle_speed_rpm for r in coarse]
     nominal = [_pocket_limit(r.depth_limit_m, r.depth_search_max_m, need) for r, need in zip(coarse, needed,
                                                                                              strict=True)]
     limits = [nom if rob is None else np.fmin(_pocket_limit(rob, r.depth_search_max_m, need), nom)
               for nom, rob, r, need in zip(nominal, robust, coarse, needed, strict=True)]
     coarse_window = [window_minimum(g, lim, tol) for g, lim in zip(grids, limits, strict=True)]
     score, verified = [], []
-    for cut, g, w in zip(cuts, grids, coarse_window, strict=True):  # a loop over tools
+    for j, (cut, g, w) in enumerate(zip(cuts, grids, coarse_window, strict=True)):  # a loop over tools
         allowed = np.minimum(w / sf, cut.flute_length_m)
         ok = (g >= cut.min_rpm * (1 - 1e-12)) & (g <= cut.max_rpm * (1 + 1e-12)) & np.isfinite(allowed) & (allowed > 0)
+        if eligible is not None:
+            ok &= eligible[j]
         score.append(np.where(ok, g * np.where(ok, allowed, 0.0), -np.inf))
         verified.append(np.full(g.size, np.nan))
-    dense = [_Dense() for _ in cuts]
-    dense_nominal = [_Dense() for _ in cuts]
+    dense = [_Dense() for _ in cuts] if dense is None else dense
+    dense_nominal = [_Dense() for _ in cuts] if dense_nominal is None else dense_nominal
+
+    def mark_covered(j: int) -> None:
+        g = grids[j]
+        for i in np.flatnonzero(np.isfinite(score[j]) & np.isnan(verified[j])):  # candidates now covered
+            n = float(g[i])
+            if not dense[j].covers(n, tol):
+                continue
+            allowed = min(min(coarse_window[j][i], dense[j].window_min(n, tol)) / sf, cuts[j].flute_length_m)
+            verified[j][i] = n * allowed if allowed > 0 else -np.inf
+
+    for j in range(len(cuts)):  # a loop over tools: windows an earlier pass solved
+        if dense[j].speed.size:
+            mark_covered(j)
     open_ = [j for j in range(len(cuts)) if np.any(np.isfinite(score[j]))]
-    for _ in range(_VERIFY_ROUNDS):
+    for round_ in range(_VERIFY_ROUNDS):
+        per_round = _VERIFY_FIRST_ROUND if round_ == 0 else _VERIFY_PER_ROUND
         todo: dict[int, list[float]] = {}
         for j in open_:  # a loop over tools
             unverified = np.where(np.isnan(verified[j]), score[j], -np.inf)
@@ -466,7 +703,7 @@ def _verify(models: Sequence[ModalModel], cuts: Sequence[ToolCut], grids: Sequen
                 continue
             chosen: list[float] = []
             for i in np.argsort(-unverified):
-                if len(chosen) >= _VERIFY_PER_ROUND or not np.isfinite(unverified[i]):
+                if len(chosen) >= per_round or not np.isfinite(unverified[i]):
                     break
                 n = float(grids[j][i])
                 if all(abs(n / c - 1) >= tol for c in chosen):
@@ -482,20 +719,8 @@ def _verify(models: Sequence[ModalModel], cuts: Sequence[ToolCut], grids: Sequen
             if j in robust_dense:
                 nom = np.fmin(robust_dense[j], nom)
             dense[j].add(r.spindle_speed_rpm, nom, r.resolved)
-            g = grids[j]
-            for i in np.flatnonzero(np.isfinite(score[j]) & np.isnan(verified[j])):  # candidates now covered
-                n = float(g[i])
-                if not dense[j].covers(n, tol):
-                    continue
-                allowed = min(min(coarse_window[j][i], dense[j].window_min(n, tol)) / sf, cuts[j].flute_length_m)
-                verified[j][i] = n * allowed if allowed > 0 else -np.inf
-    out = []
-    for j, cut in enumerate(cuts):  # a loop over tools
-        v = np.where(np.isnan(verified[j]), -np.inf, verified[j])
-        best = int(np.argmax(v)) if np.any(np.isfinite(v) & (v > 0)) else -1
-        out.append(_make(cut, grids[j], coarse[j], limits[j], nominal[j], dense[j], dense_nominal[j], best, settings,
-                         needed[j], robust[j] is not None))
-    return out
+            mark_covered(j)
+    return _Verified(grids, limits, nominal, verified, dense, dense_nominal, [c.flute_length_m for c in cuts])
 
 
 def _solve_windows(models: Sequence[ModalModel], todo: dict[int, list[float]], needed: Sequence[float],
@@ -555,41 +780,41 @@ def _robust_windows(drawn: Sequence[list[ModalModel] | None], solved: list[tuple
     return out
 
 
-def _make(cut: ToolCut, grid: np.ndarray, lobes: SemiDiscretizationResult, limit: np.ndarray, nominal: np.ndarray,
-          dense: _Dense, dense_nominal: _Dense, best: int, settings: CutSettings, needed: float,
-          robust: bool) -> Callable[[str], ToolPocket]:
+def _make(cut: ToolCut, full: np.ndarray, lobes: SemiDiscretizationResult, state: _Verified, j: int, best: int,
+          extent: tuple[float, float], settings: CutSettings, needed: float, robust: bool) -> Callable[[str], ToolPocket]:
     def build(reason: str) -> ToolPocket:
         method = "semi_discretization"
         tol, sf = settings.rule.speed_tolerance, settings.rule.safety_factor
+        grid = lobes.spindle_speed_rpm
         notes: list[str] = []
         absolute = lobes.min_depth_limit_m
+        if grid.size < full.size:  # pruned: some slow speeds' limits are not known
+            absolute = math.nan
+            notes.append(f"{full.size - grid.size} of {full.size} grid speeds (below {grid[-1]:.0f} rpm) were not "
+                         "screened: no window holding them can beat this tool's best verified window (n x flute "
+                         "length is below its n x stepdown, or one speed of the window is unstable at the depth it "
+                         "would need), so the absolute depth limit (the smallest over all speeds) is not known")
         if best < 0:
             return ToolPocket(cut.key, method, reason, refusal=(
                 f"no speed between {cut.min_rpm:.0f} and {cut.max_rpm:.0f} rpm keeps a ±{tol:.0%} window stable"
                 + (" at the robust limit" if robust else "") + " (semi_discretization lobes)"),
                 absolute_depth_limit_m=absolute, lobes=lobes, notes=tuple(notes))
         n = float(grid[best])
-        window = min(float(window_minimum(grid, limit, tol)[best]), dense.window_min(n, tol))
-        nominal_window = min(float(window_minimum(grid, nominal, tol)[best]), dense_nominal.window_min(n, tol))
+        window = state.window(j, best, tol)
+        nominal_window = min(float(window_minimum(grid, state.nominal[j], tol)[best]),
+                             state.dense_nominal[j].window_min(n, tol))
         stepdown = min(window / sf, cut.flute_length_m)
         capped = stepdown >= cut.flute_length_m
-        need = stepdown * sf * (1 - 1e-12)
-        ok = limit >= need  # inf (stable to the flute length) counts; NaN does not
-        low = high = best
-        while low > 0 and ok[low - 1]:
-            low -= 1
-        while high < grid.size - 1 and ok[high + 1]:
-            high += 1
         w_lo = max(int(np.searchsorted(grid, n * (1 - tol) * (1 + 1e-12), side="right")) - 1, 0)
         w_hi = min(int(np.searchsorted(grid, n * (1 + tol) * (1 - 1e-12), side="left")), grid.size - 1)
         part = lobes.depth_limit_m[w_lo : w_hi + 1]
         weakest = w_lo + int(np.argmin(np.where(np.isfinite(part), part, np.inf)))
         pocket = Pocket(spindle_speed_rpm=n, depth_limit_m=window, stepdown_m=stepdown,
-                        limited_by="flute_length" if capped else "stability", pocket_low_rpm=float(grid[low]),
-                        pocket_high_rpm=float(grid[high]),
+                        limited_by="flute_length" if capped else "stability", pocket_low_rpm=extent[0],
+                        pocket_high_rpm=extent[1],
                         chatter_frequency_hz=float(lobes.chatter_frequency_hz[weakest]),
                         governing_lobe=int(lobes.governing_lobe[weakest]), removal_index_rpm_m=n * stepdown)
-        unresolved = dense_nominal.unresolved(n, tol)
+        unresolved = state.dense_nominal[j].unresolved(n, tol)
         if unresolved:  # never the chosen window (unresolved speeds count as unstable); said for the record
             notes.append(f"{unresolved} speed(s) of this window are not resolved (two resolutions differ by more "
                          "than 1 %)")

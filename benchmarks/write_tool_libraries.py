@@ -1,5 +1,6 @@
-"""Write ``tests/data/tool-libraries/fusion-single-flute/single_flute_library.json`` and
-``tests/data/tool-libraries/fusion-single-flute/single_flute_small_library.json``.
+"""Write the benchmark tool libraries: ``tests/data/tool-libraries/fusion-single-flute/
+single_flute_library.json``, ``.../single_flute_small_library.json`` and
+``tests/data/tool-libraries/fusion-multi-flute/multi_flute_library.json``.
 
 25 single-flute ("O-flute") solid carbide flat end mills for aluminium in the Autodesk Fusion
 library format, each in the synthetic BT40-ER32 holder of ``fusion-synthetic`` (written for
@@ -14,7 +15,12 @@ flute lengths 3–42 mm (standard, long and extra-long flutes, stickout 2–4 mm
 equal to the cutter, a 3 mm shank under Ø1–2 mm, a 6 mm shank under Ø3–5 mm): the range of the vendor
 library of issue 29, whose dimensions are our own choice too.
 
-Run: ``.venv/bin/python benchmarks/single_flute_library.py`` (deterministic; rewrites both files).
+The third file holds 25 multi-flute solid carbide flat end mills for aluminium (issue 29's "multi-flute
+libraries"): 8 two-flute (Ø3–12 mm), 8 three-flute (Ø4–16 mm) and 9 four-flute (Ø6–16 mm), flute lengths
+2–4 diameters, stickouts a few millimetres past the flutes, shank equal to the cutter, in the same holder;
+the dimensions are our own choice, spanning what such cutters are sold as.
+
+Run: ``.venv/bin/python benchmarks/write_tool_libraries.py`` (deterministic; rewrites the three files).
 """
 
 from __future__ import annotations
@@ -26,6 +32,7 @@ OUT = Path(__file__).resolve().parents[1] / "tests" / "data" / "tool-libraries" 
     "single_flute_library.json"
 HOLDER_SOURCE = OUT.parents[1] / "fusion-synthetic" / "synthetic_library.json"
 OUT_SMALL = OUT.with_name("single_flute_small_library.json")
+OUT_MULTI = OUT.parents[1] / "fusion-multi-flute" / "multi_flute_library.json"
 
 # (unit, DC, LCF, LB (stickout), OAL, SFDM) — mm tools in mm, inch tools in inches
 TOOLS = [
@@ -56,17 +63,34 @@ SMALL_TOOLS = [
 ]
 
 
-def _tool(i: int, unit: str, dc: float, lcf: float, lb: float, oal: float, sfdm: float, holder: dict) -> dict:
+# (flutes, DC, LCF, LB, OAL, SFDM), all mm: 2, 3 and 4 flutes
+MULTI_TOOLS = [
+    (2, 3.0, 8.0, 12.0, 50.0, 3.0), (2, 4.0, 11.0, 15.0, 50.0, 4.0), (2, 6.0, 13.0, 20.0, 57.0, 6.0),
+    (2, 6.0, 25.0, 32.0, 75.0, 6.0), (2, 8.0, 19.0, 26.0, 63.0, 8.0), (2, 10.0, 22.0, 30.0, 72.0, 10.0),
+    (2, 12.0, 26.0, 36.0, 83.0, 12.0), (2, 12.0, 45.0, 55.0, 110.0, 12.0),
+    (3, 4.0, 11.0, 16.0, 50.0, 4.0), (3, 5.0, 13.0, 18.0, 57.0, 5.0), (3, 6.0, 16.0, 22.0, 57.0, 6.0),
+    (3, 8.0, 20.0, 28.0, 63.0, 8.0), (3, 10.0, 25.0, 35.0, 72.0, 10.0), (3, 12.0, 30.0, 42.0, 83.0, 12.0),
+    (3, 16.0, 32.0, 45.0, 92.0, 16.0), (3, 16.0, 50.0, 65.0, 120.0, 16.0),
+    (4, 6.0, 13.0, 20.0, 57.0, 6.0), (4, 6.0, 24.0, 30.0, 75.0, 6.0), (4, 8.0, 19.0, 26.0, 63.0, 8.0),
+    (4, 10.0, 22.0, 32.0, 72.0, 10.0), (4, 10.0, 40.0, 50.0, 100.0, 10.0), (4, 12.0, 26.0, 38.0, 83.0, 12.0),
+    (4, 12.0, 38.0, 50.0, 100.0, 12.0), (4, 16.0, 32.0, 45.0, 92.0, 16.0), (4, 16.0, 60.0, 75.0, 150.0, 16.0),
+]
+
+_FLUTES = {1: "single flute (O-flute)", 2: "2-flute", 3: "3-flute", 4: "4-flute"}
+
+
+def _tool(i: int, unit: str, dc: float, lcf: float, lb: float, oal: float, sfdm: float, holder: dict,
+          flutes: int = 1) -> dict:
     inch = unit == "in"
     size = f'{dc:g}"' if inch else f"{dc:g}mm"
-    geometry = {"CSP": False, "HAND": True, "DC": dc, "NOF": 1, "OAL": oal, "LCF": lcf, "LB": lb, "SFDM": sfdm,
+    geometry = {"CSP": False, "HAND": True, "DC": dc, "NOF": flutes, "OAL": oal, "LCF": lcf, "LB": lb, "SFDM": sfdm,
                 "RE": 0, "shoulder-length": lb if sfdm > dc else lcf, "shoulder-diameter": dc,
                 "assemblyGaugeLength": round(holder["gaugeLength"] / (25.4 if inch else 1.0) + lb, 6)}
     return {"BMC": "carbide", "GRADE": "Mill Generic",
-            "description": f"SYNTH {size} single flute (O-flute) aluminium end mill, {lb:g}{'in' if inch else 'mm'} "
+            "description": f"SYNTH {size} {_FLUTES[flutes]} aluminium end mill, {lb:g}{'in' if inch else 'mm'} "
                            "stickout",
             "guid": f"00000000-0000-4000-8000-{0x500 + i:012x}", "type": "flat end mill",
-            "unit": "inches" if inch else "millimeters", "vendor": "Synthetic", "product-id": f"SYNTH-SF-{i + 1:02d}",
+            "unit": "inches" if inch else "millimeters", "vendor": "Synthetic", "product-id": f"SYNTH-{'SF' if flutes == 1 else 'MF'}-{i + 1:02d}",
             "product-link": "", "geometry": geometry, "holder": holder,
             "post-process": {"break-control": False, "comment": "", "diameter-offset": i + 1, "length-offset": i + 1,
                              "live": True, "manual-tool-change": False, "number": i + 1, "turret": 0}}
@@ -74,8 +98,11 @@ def _tool(i: int, unit: str, dc: float, lcf: float, lb: float, oal: float, sfdm:
 
 def main() -> None:
     holder = json.loads(HOLDER_SOURCE.read_text())["data"][0]["holder"]
-    for out, table, first in ((OUT, TOOLS, 0), (OUT_SMALL, SMALL_TOOLS, 0x100)):
-        tools = [_tool(first + i, *t, holder=holder) for i, t in enumerate(table)]
+    multi = [("mm", *t[1:], t[0]) for t in MULTI_TOOLS]
+    for out, table, first in ((OUT, TOOLS, 0), (OUT_SMALL, SMALL_TOOLS, 0x100), (OUT_MULTI, multi, 0x200)):
+        out.parent.mkdir(parents=True, exist_ok=True)
+        tools = [_tool(first + i, *t[:6], holder=holder, flutes=t[6] if len(t) > 6 else 1)
+                 for i, t in enumerate(table)]
         out.write_text(json.dumps({"data": tools, "version": 1}, indent=2) + "\n")
         print(f"{out}: {len(tools)} tools")
 
