@@ -329,15 +329,17 @@ def _analysis_rows() -> list[list[str]]:
                      f"{r['reduced_ms'] / 1e3:.2f} s (reduced draws) against {r['exact_ms'] / 1e3:.2f} s (exact draws) "
                      f"and {r['nominal_ms']:.0f} ms nominal; robust limit within {pct(r['robust_limit_difference'], 2)}",
                      "", load_text(u["ra1"]["load_average"]), "uncertainty.json"])
-    presets = value("presets_small", "figures.immersions")
-    done = [k for k in ("0.05", "0.5") if k in presets]
-    rows.append(["chatter-safe presets, 25 single-flute tools Ø1–6 mm (issue 29's range), the default `auto` "
-                 "(`bench_presets.py --library small`): a_e/D = " + " / ".join(done),
-                 " / ".join(f"{presets[k]['auto']['wall_s']:.1f} s ({presets[k]['auto']['cpu_s']:.1f} s CPU)"
-                            for k in done),
-                 goal("≤ 15 s", len(done) == 2 and max(presets[k]["auto"]["wall_s"] for k in done) <= 15),
-                 load_text(value("presets_small", "load_average_start"),
-                           *(presets[k]["machine_load_after"] for k in done)), "presets_small.json"])
+    for library, what in (("small", "25 single-flute tools Ø1–6 mm (issue 29's range)"),
+                          ("multi", "25 two-, three- and four-flute tools Ø3–16 mm")):
+        presets = value(f"presets_{library}", "figures.immersions")
+        done = [k for k in ("0.05", "0.5") if k in presets]
+        rows.append([f"chatter-safe presets, {what}, the default `auto` (`bench_presets.py --library {library}`): "
+                     "a_e/D = " + " / ".join(done),
+                     " / ".join(f"{presets[k]['auto']['wall_s']:.1f} s ({presets[k]['auto']['cpu_s']:.1f} s CPU)"
+                                for k in done),
+                     goal("≤ 15 s", len(done) == 2 and max(presets[k]["auto"]["wall_s"] for k in done) <= 15),
+                     load_text(value(f"presets_{library}", "load_average_start"),
+                               *(presets[k]["machine_load_after"] for k in done)), f"presets_{library}.json"])
     rows.append([f"chatter-safe presets: {count(job['tools'])} tools as a `library-recommend` job on a 2-worker Dask "
                  "`LocalCluster` (`bench_presets.py --job-tools 1000 --dask`)",
                  f"{job['recommend_job_s']:.0f} s, {count(job['summary']['written'])} presets written", "",
@@ -675,9 +677,9 @@ def hostile_run() -> str:
             f"— {statuses}")
 
 
-def presets_safety_table() -> str:
-    """How safe and how productive the default presets are, per immersion (``bench_presets.py --library small``)."""
-    f = value("presets_small", "figures")
+def presets_safety_table(library: str = "small") -> str:
+    """How safe and how productive the default presets are, per immersion (``bench_presets.py --library LIBRARY``)."""
+    f = value(f"presets_{library}", "figures")
     rows = []
     for ae, entry in f["immersions"].items():
         for method in (m for m in ("auto", "zoa", "semi_discretization") if m in entry):
@@ -728,6 +730,7 @@ FIGURES: dict[str, Callable[[], str]] = {
     "soak-memory": soak_memory,
     "hostile-run": hostile_run,
     "presets-safety-table": presets_safety_table,
+    "presets-safety-table-multi": lambda: presets_safety_table("multi"),
 }
 
 

@@ -638,3 +638,21 @@ def test_a_zip_of_too_many_files_is_refused_before_it_is_opened():
             zf.writestr(f"t{i}.fctb", b"")
     with pytest.raises(InputError, match=f"more than {MAX_LIBRARY_ITEMS} files"):
         read_library(buffer.getvalue(), file_name="tools.zip")
+
+
+# --------------------------------------------------------------------------- the benchmark libraries
+
+
+@pytest.mark.parametrize(("folder", "name", "teeth"), [
+    ("fusion-single-flute", "single_flute_small_library.json", {1}),
+    ("fusion-single-flute", "single_flute_library.json", {1}),
+    ("fusion-multi-flute", "multi_flute_library.json", {2, 3, 4}),
+])
+def test_the_benchmark_libraries_read_whole_with_their_flutes(folder, name, teeth):
+    """The presets benchmark's libraries (``benchmarks/write_tool_libraries.py``): every tool
+    becomes an assembly, with the flutes it was written with."""
+    path = DATA.parent / folder / name
+    result = library_combinations(json.loads(path.read_text()))
+    assert len(result.combinations) == 25 and all(c.status == "ok" for c in result.combinations)
+    flutes = {item["geometry"]["NOF"] for item in json.loads(path.read_text())["data"]}
+    assert flutes == teeth

@@ -47,7 +47,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from rcsa.analysis.lobes.modal_model import ModalModel, fit_modal_model
+from rcsa.analysis.lobes.modal_model import DEFAULT_MODES_PER_DIRECTION, ModalModel, fit_modal_model
 from rcsa.analysis.lobes.options import auto_method
 from rcsa.analysis.lobes.pockets import (
     Pocket,
@@ -115,9 +115,11 @@ _TOP_BAND = 0.5
 _TOP_SHARE = 0.2
 #: Speeds below a pruned grid checked at once while a pocket is followed down (:func:`_pocket_extent`).
 _EXTENT_CHUNK = 16
-#: The first round of refutation probes takes every this-many grid speed (a window holds about
-#: ``2τ / (τ/10) = 20`` speeds of the pocket grid, and at least 7 of the default 400-speed grid).
-_PROBE_STRIDE = 4
+#: The first round of refutation probes takes every this-many grid speed: a window with its two
+#: bracketing speeds holds about 20 speeds of the pocket grid (spacing τ/10) and 9–10 of the
+#: default 400-speed grid over 1 000–24 000 rpm, so each holds a probe (the stride is only a cost:
+#: the second round probes the other speeds of every window still open).
+_PROBE_STRIDE = 8
 
 
 
@@ -167,7 +169,9 @@ class CutSettings:
     sdm_speed_count : int
         Speeds of each tool's semi-discretization grid.
     modes_per_direction : int
-        Modes fitted per tool for the semi-discretization.
+        Modes fitted per tool for the semi-discretization, at most (default: the maximum,
+        ``DEFAULT_MODES_PER_DIRECTION``; every peak above the fit's threshold is kept up to it,
+        and any mode left out is named in the tool's notes).
     """
 
     tangential_coefficient_n_m2: float
@@ -178,7 +182,7 @@ class CutSettings:
     method: PresetMethod = "auto"
     confidence: float | None = None
     sdm_speed_count: int = DEFAULT_SDM_SPEED_COUNT
-    modes_per_direction: int = 3
+    modes_per_direction: int = DEFAULT_MODES_PER_DIRECTION
 
 
 @dataclass(frozen=True)
@@ -786,7 +790,7 @@ def _make(cut: ToolCut, full: np.ndarray, lobes: SemiDiscretizationResult, state
         method = "semi_discretization"
         tol, sf = settings.rule.speed_tolerance, settings.rule.safety_factor
         grid = lobes.spindle_speed_rpm
-        notes: list[str] = []
+        notes: list[str] = list(lobes.modal_model.notes())  # every mode left out, with its share of the peak
         absolute = lobes.min_depth_limit_m
         if grid.size < full.size:  # pruned: some slow speeds' limits are not known
             absolute = math.nan
