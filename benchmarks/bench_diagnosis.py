@@ -102,15 +102,11 @@ def _first_calls(case: str, run, modules_before_first_call: bool) -> dict:
         yardstick.append((time.process_time() - c0, time.perf_counter() - t0))
     pc = float(np.median([x[0] for x in yardstick]))
     pw = float(np.median([x[1] for x in yardstick]))
-    # warm: caches filled (the spindle side kept across calls, as a running service has it)
+    # warm: the spindle side kept across calls, as a running service has it, the prediction computed
     predictions.SIDES.size = predictions.SIDES_KEPT
-    rcsa.predict(assembly)
-    warm_pred = []
-    for _ in range(9):
-        c0 = time.process_time()
-        rcsa.predict(assembly)
-        warm_pred.append(time.process_time() - c0)
-    pwc = float(np.median(warm_pred))
+    from benchmarks._yardstick import warm_ra1_prediction_s
+
+    pwc = warm_ra1_prediction_s(9)[1]
     return {"case": case, "first_cpu_s": first[0], "first_wall_s": first[1], "warm_cpu_s": warm[0],
             "warm_prediction_cpu_s": pwc, "first_over_warm_prediction_cpu": first[0] / pwc,
             "bytecode_cached": bool(sys.pycache_prefix) or not sys.dont_write_bytecode,

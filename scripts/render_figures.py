@@ -329,6 +329,16 @@ def _analysis_rows() -> list[list[str]]:
                      f"{r['reduced_ms'] / 1e3:.2f} s (reduced draws) against {r['exact_ms'] / 1e3:.2f} s (exact draws) "
                      f"and {r['nominal_ms']:.0f} ms nominal; robust limit within {pct(r['robust_limit_difference'], 2)}",
                      "", load_text(u["ra1"]["load_average"]), "uncertainty.json"])
+    lobes = result("lobes")
+    lf = lobes["figures"]
+    rows.append([f"resolved stability lobes (the default semi-discretization), RA-1's tool point, {lf['speeds']} speeds "
+                 "2 000–30 000 rpm, 2 teeth, a/D = 0.05, against a warm `rcsa.predict` of RA-1 at 10 000 lines "
+                 "(spindle side kept, prediction computed) (`bench_lobes.py`)",
+                 f"{lf['resolved_s']:.2f} s = {lf['ratio_to_warm_prediction']:.0f}× warm "
+                 f"({lf['warm_prediction_s'] * 1e3:.1f} ms); {lf['resolved_speeds']} of {lf['speeds']} speeds resolved; "
+                 f"{lf['baseline_ratio']:.1f}× faster than a per-speed loop of the same maps",
+                 goal("≤ 25×", lf["ratio_to_warm_prediction"] <= 25),
+                 load_text(lobes["load_average_start"], lobes["load_average_end"]), "lobes.json"])
     for library, what in (("small", "25 single-flute tools Ø1–6 mm (issue 29's range)"),
                           ("multi", "25 two-, three- and four-flute tools Ø3–16 mm")):
         presets = value(f"presets_{library}", "figures.immersions")
