@@ -27,7 +27,10 @@ window, safety factor 1.25, flute length cap). For each a_e/D the library is rec
   weakest speed, same fine solution) must.
 
 It also times the recommendation (prediction + pockets; 400 semi-discretization speeds per
-tool), and with ``--job-tools N`` runs a library of N tools (the 25, repeated with stickouts
+tool) in this process, and the default method again as a user runs it — ``rcsa library recommend``
+in a process of its own with ``--workers 2`` (``--workers``; the CLI's default is one worker process
+per core, so this is the default on the 2-core development VM), its start and its workers' CPU time
+counted, its presets compared with the in-process ones — and with ``--job-tools N`` runs a library of N tools (the 25, repeated with stickouts
 0.5 mm longer each round) as a job on a local backend or ``--dask`` a LocalCluster, printing
 its progress.
 
@@ -45,7 +48,10 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # before numpy is imported
 
 import argparse  # noqa: E402
 import json  # noqa: E402
+import resource  # noqa: E402
+import subprocess  # noqa: E402
 import sys  # noqa: E402
+import tempfile  # noqa: E402
 import time  # noqa: E402
 from dataclasses import replace  # noqa: E402
 from pathlib import Path  # noqa: E402
@@ -87,6 +93,34 @@ def _recommend(data: bytes, immersion: float, method: str) -> tuple[dict, float,
     result = recommend_predicted(Workbench(None), data, {**OPTIONS, "radial_immersion": immersion, "method": method},
                                  file_name="single_flute.json", **SETTINGS)
     return result.report, time.perf_counter() - t0, time.process_time() - c0
+
+
+def _recommend_with_the_cli(data: bytes, immersion: float, method: str, workers: int, alone: dict) -> dict:
+    """The same recommendation as a user runs it: ``rcsa library recommend`` in a process of its own with
+    ``--workers`` (its start, imports and worker processes counted; RA-1 with this benchmark's grid
+    given as the spindle document), its CPU time with its children's, and how far its presets are from
+    the in-process ones (``alone``)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        lib, spindle, report = Path(tmp) / "library.json", Path(tmp) / "ra1.json", Path(tmp) / "report.json"
+        lib.write_bytes(data)
+        spindle.write_text(json.dumps(RA1))
+        command = [str(Path(sys.executable).with_name("rcsa")), "library", "recommend", str(lib), "--spindle",
+                   str(spindle), "--material", OPTIONS["material"], "--max-rpm", str(OPTIONS["max_rpm"]),
+                   "--milling", OPTIONS["milling"], "--radial-immersion", str(immersion), "--method", method,
+                   "-o", str(Path(tmp) / "out.json"), "--report", str(report), "-q", "--workers", str(workers)]
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        t0 = time.perf_counter()
+        subprocess.run(command, check=True, capture_output=True)
+        wall = time.perf_counter() - t0
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        got = json.loads(report.read_text())
+    pairs = list(zip(alone["tools"], got["tools"], strict=True))
+    depth = [abs(b["depth_limit_m"] / a["depth_limit_m"] - 1) for a, b in pairs
+             if a.get("depth_limit_m") and b.get("depth_limit_m")]
+    return {"workers": workers, "wall_s": wall,
+            "cpu_s": (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime),
+            "same_speeds": all(a.get("spindle_speed_rpm") == b.get("spindle_speed_rpm") for a, b in pairs),
+            "max_depth_limit_difference": max(depth, default=0.0)}
 
 
 def _limits(model, teeth, immersion, speeds, floor_m, finer=1):
@@ -209,7 +243,6 @@ def _job(n_tools: int, dask: bool) -> dict:
         t["geometry"]["OAL"] = round(t["geometry"]["OAL"] + k * step, 6)
         items.append(t)
     data = json.dumps({"data": items, "version": 1}).encode()
-    import tempfile
 
     cluster = None
     with tempfile.TemporaryDirectory() as tmp:
@@ -257,6 +290,8 @@ def main() -> None:
     parser.add_argument("--sample", type=int, default=4, help="presets per immersion simulated in the time domain")
     parser.add_argument("--job-tools", type=int, default=0)
     parser.add_argument("--dask", action="store_true")
+    parser.add_argument("--workers", type=int, default=2,
+                        help="also time the default method through the CLI with --workers N (0: not)")
     args = parser.parse_args()
     path = LIBRARIES[args.library]
     data = path.read_bytes()
@@ -276,6 +311,11 @@ def main() -> None:
                   f"written {s['written']}, unstable by SDM {s['unstable_by_sdm']}, refused {s['refused']} "
                   f"({s['false_refusals']} falsely), productivity median {s['productivity_median']} "
                   f"min {s['productivity_min']}, methods {s['by_method']}", flush=True)
+            if method == "auto" and args.workers > 1:
+                par = entry[method]["cli"] = _recommend_with_the_cli(data, ae, method, args.workers, report)
+                print(f"    rcsa library recommend --workers {par['workers']}: {par['wall_s']:.1f} s ({par['cpu_s']:.1f} s "
+                      f"CPU with its workers'), same speeds {par['same_speeds']}, depth limits within "
+                      f"{par['max_depth_limit_difference']:.1e}", flush=True)
         entry["machine_load_after"] = os.getloadavg()
         main_rows = entry[args.methods[-1]]["tools"]
         entry["oracle"] = _oracle(main_rows, ae, args.oracle_sample)

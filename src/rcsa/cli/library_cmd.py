@@ -163,6 +163,10 @@ QuietOption = Annotated[bool, typer.Option("--quiet", "-q", help="No progress ba
 DaskOption = Annotated[str | None, typer.Option(
     "--dask-scheduler", envvar="RCSA_DASK_SCHEDULER",
     help="Compute on this Dask cluster (tcp://HOST:8786; needs pip install 'rcsa[dask]') instead of here.")]
+WorkersOption = Annotated[int, typer.Option(
+    "--workers", envvar="RCSA_WORKERS", min=0,
+    help="Worker processes on this machine when the work has several chunks (0: one per CPU core; 1: in this "
+         "process). Ignored with --dask-scheduler.")]
 DaskTimeoutOption = Annotated[float, typer.Option(
     "--dask-connect-timeout", envvar="RCSA_DASK_CONNECT_TIMEOUT_S", min=0.1,
     help="Seconds to try to reach the Dask scheduler before giving up.")]
@@ -194,6 +198,7 @@ def predict(
     quiet: QuietOption = False,
     dask_scheduler: DaskOption = None,
     dask_connect_timeout: DaskTimeoutOption = 10.0,
+    workers: WorkersOption = 0,
     holder: HolderOption = None,
 ) -> None:
     """Predict the tool-point FRF of every tool in a Fusion or FreeCAD library on one spindle."""
@@ -220,7 +225,8 @@ def predict(
         from rcsa.app.results import format_of_suffix, require_format
         run_guarded(lambda: require_format(format_of_suffix(out)))  # before computing anything
     bench, work = run_guarded(build)
-    backend = run_guarded(lambda: compute_backend(dask_scheduler, connect_timeout_s=dask_connect_timeout))
+    backend = run_guarded(lambda: compute_backend(dask_scheduler, connect_timeout_s=dask_connect_timeout,
+                                                  workers=workers))
     with _progress_bar(quiet) as bar:
         task = bar.add_task("tools", total=max(work.size, 1))
 
@@ -268,6 +274,7 @@ def sync(
     quiet: QuietOption = False,
     dask_scheduler: DaskOption = None,
     dask_connect_timeout: DaskTimeoutOption = 10.0,
+    workers: WorkersOption = 0,
     holder: HolderOption = None,
 ) -> None:
     """Keep a library's tool-point FRFs in the store, computing only new or changed tools."""
@@ -298,7 +305,7 @@ def sync(
     bench, work = run_guarded(build)
     ident = work.request["library_id"]
     backend = run_guarded(lambda: compute_backend(dask_scheduler if work.size else None,
-                                                        connect_timeout_s=dask_connect_timeout))
+                                                  connect_timeout_s=dask_connect_timeout, workers=workers))
     with _progress_bar(quiet) as bar:
         task = bar.add_task(f"{ident}: computing", total=max(work.size, 1))
 
@@ -406,6 +413,9 @@ def recommend(
     options: ImportOptions = None,
     store: StoreOption = None,
     quiet: QuietOption = False,
+    dask_scheduler: DaskOption = None,
+    dask_connect_timeout: DaskTimeoutOption = 10.0,
+    workers: WorkersOption = 0,
 ) -> None:
     """Write chatter-safe presets (spindle speed and stepdown in a stable pocket) into a Fusion library."""
     # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
@@ -417,6 +427,7 @@ def recommend(
         write_preset_file,
     )
     from rcsa.app.stores import open_store
+    from rcsa.infra.compute_backends import compute_backend
     if sum(x is not None for x in (spindle, measurement, library_id)) != 1:
         raise fail("give exactly one of --spindle SPINDLE.json, --measurement ID or --library-id ID")
     if (out is None) == (not in_place):
@@ -435,13 +446,18 @@ def recommend(
         raise fail(f"cannot read {library}: {exc.strerror or exc}") from None
     run_guarded(lambda: check_recommendation(data, settings, file_name=library.name))  # before any progress bar
 
+    backend = run_guarded(lambda: compute_backend(dask_scheduler, connect_timeout_s=dask_connect_timeout,
+                                                  workers=workers))
+
     def stored() -> PresetFile:
         st = open_store(store)
-        return recommend_stored(Workbench(st, st.path), str(library_id), data, settings, file_name=library.name)
+        return recommend_stored(Workbench(st, st.path, backend=backend), str(library_id), data, settings,
+                                file_name=library.name)
 
     def predicted() -> PresetFile:
         base = _spindle_document(spindle) if spindle is not None else {"spindle": {"measurement_id": measurement}}
-        bench = Workbench(open_store(store) if (store is not None or measurement is not None) else None)
+        bench = Workbench(open_store(store) if (store is not None or measurement is not None) else None,
+                          backend=backend)
         fields = _settings(base, frequency, joints, bench.store if measurement is not None else None, holder_tool)
         with _progress_bar(quiet) as bar:
             task = bar.add_task("tools", total=1)
@@ -452,7 +468,10 @@ def recommend(
             return recommend_predicted(bench, data, settings, file_name=library.name, progress=progress,
                                        import_options=_options_json(options), **fields)
 
-    result = run_guarded(stored if library_id is not None else predicted)
+    try:
+        result = run_guarded(stored if library_id is not None else predicted)
+    finally:
+        backend.close()
     try:
         write_preset_file(result, target)  # type: ignore[arg-type]
     except OSError as exc:

@@ -6,6 +6,13 @@ is the caller's business; nothing here knows the domain.
 
 * :class:`LocalBackend` (the default) runs the chunks one after the other in the calling
   thread. It needs nothing beyond the standard library.
+* :class:`ProcessBackend` runs them in worker processes of this machine (the standard
+  library's process pool, started with ``spawn``: safe beside the threads of a server or a
+  progress bar). The pool starts when a map first has two chunks or more — a map of one chunk
+  runs in the calling thread, so small work pays no start-up — and lives until
+  :meth:`~ProcessBackend.close`. Like a cluster's workers, the processes share nothing with
+  the caller: ``fn`` must be importable by name, and a script that builds one must guard its
+  main code with ``if __name__ == "__main__":`` (a spawned process imports the main module).
 * :class:`DaskBackend` runs them as tasks on a Dask cluster (``pip install 'rcsa[dask]'``;
   ``dask.distributed`` is imported here only, when one is built). The workers share nothing
   with the caller but the network: ``fn``, each chunk and ``shared`` travel by value
@@ -28,7 +35,13 @@ Faults on a cluster:
 
 ``on_wait``, called about every ``poll_s`` while a map waits for results, lets the caller
 stop it (e.g. a job's time limit or a lost claim): whatever it raises cancels the chunks
-still in flight and propagates.
+still in flight and propagates. A :class:`ProcessBackend` stops its workers the same way (it
+terminates them: a time limit set in the caller does not reach another process), and a
+worker process that dies mid-chunk fails the map with :class:`ChunkFailed`.
+
+``parallel_chunks`` says how many chunks a backend computes at once — 1 here, the worker
+processes of a :class:`ProcessBackend`, None on a cluster (its size changes) — so that a caller
+can cut work that has no natural chunk size into as many chunks as run at once.
 """
 
 from __future__ import annotations
@@ -36,16 +49,20 @@ from __future__ import annotations
 import contextlib
 import itertools
 import logging
+import multiprocessing
+import os
 import secrets
 import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from typing import Any, Protocol
 
 from rcsa.errors import RcsaError
 
 __all__ = ["DASK_WORKER_ENVIRON", "Backend", "ChunkFailed", "ComputeUnavailable", "DaskBackend", "LocalBackend",
-           "compute_backend"]
+           "ProcessBackend", "compute_backend", "cores_available"]
 
 log = logging.getLogger("rcsa.infra.compute_backends")
 
@@ -82,6 +99,8 @@ class Backend(Protocol):
     """Runs a function over chunks (:class:`LocalBackend`, :class:`DaskBackend`)."""
 
     name: str
+    #: Chunks computed at once (None: it varies, as a cluster's workers come and go).
+    parallel_chunks: int | None
 
     def map(self, fn: ChunkFunction, chunks: Sequence[Any], *, shared: Any = None, ordered: bool = True,
             on_wait: Callable[[], None] | None = None) -> Iterator[tuple[int, Any]]:
@@ -124,6 +143,7 @@ class LocalBackend:
     """Runs every chunk in the calling thread, in order."""
 
     name = "local"
+    parallel_chunks = 1
 
     def map(self, fn: ChunkFunction, chunks: Sequence[Any], *, shared: Any = None, ordered: bool = True,
             on_wait: Callable[[], None] | None = None) -> Iterator[tuple[int, Any]]:
@@ -146,6 +166,138 @@ class LocalBackend:
 
     def __repr__(self) -> str:
         return "LocalBackend()"
+
+
+def cores_available() -> int:
+    """The CPU cores this process may run on (its affinity mask where the platform has one)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+#: What a worker process sets before it imports numpy: one BLAS thread per process, as on a
+#: cluster's workers (``DASK_WORKER_ENVIRON``), so that N processes do not each start N threads.
+#: (It takes effect because a spawned worker imports numpy only with its first chunk — unless
+#: the caller's main module imports it itself; then the caller's own setting holds.)
+_WORKER_THREADS_ENVIRON = {k: str(v) for k, v in DASK_WORKER_ENVIRON.items() if k.endswith("_NUM_THREADS")}
+
+
+def _start_worker() -> None:
+    """A worker process's initializer: :data:`_WORKER_THREADS_ENVIRON` (what the caller set is kept)."""
+    for key, value in _WORKER_THREADS_ENVIRON.items():
+        os.environ.setdefault(key, value)
+
+
+class ProcessBackend:
+    """Runs chunks in ``workers`` processes of this machine (module docstring).
+
+    Parameters
+    ----------
+    workers : int
+        Worker processes (>= 1; 1 computes in the calling thread, as :class:`LocalBackend`).
+    poll_s : float
+        How often a waiting map looks at its chunks and calls ``on_wait``, s.
+
+    Examples
+    --------
+    >>> import operator
+    >>> backend = ProcessBackend(2)
+    >>> sorted(backend.map(operator.mul, [1, 2, 3], shared=10))
+    [(0, 10), (1, 20), (2, 30)]
+    >>> backend.close()
+    """
+
+    name = "processes"
+
+    def __init__(self, workers: int, *, poll_s: float = 0.05) -> None:
+        if int(workers) < 1:
+            raise ValueError(f"a process backend needs at least one worker process, not {workers}")
+        self.workers = int(workers)
+        self.poll_s = float(poll_s)
+        self._lock = threading.Lock()
+        self._pool: ProcessPoolExecutor | None = None
+
+    @property
+    def parallel_chunks(self) -> int:
+        """The worker processes."""
+        return self.workers
+
+    def __repr__(self) -> str:
+        return f"ProcessBackend({self.workers})"
+
+    def _executor(self) -> ProcessPoolExecutor:
+        with self._lock:
+            if self._pool is None:
+                self._pool = ProcessPoolExecutor(self.workers, mp_context=multiprocessing.get_context("spawn"),
+                                                 initializer=_start_worker)
+            return self._pool
+
+    def _stop_workers(self) -> None:
+        """Cancel what waits and terminate the workers (a chunk in a worker cannot be interrupted
+        otherwise); the next map starts a new pool."""
+        with self._lock:
+            pool, self._pool = self._pool, None
+        if pool is None:
+            return
+        processes = list((getattr(pool, "_processes", None) or {}).values())  # the standard pool keeps them here
+        pool.shutdown(wait=False, cancel_futures=True)
+        for process in processes:
+            with contextlib.suppress(Exception):
+                process.terminate()
+        for process in processes:
+            with contextlib.suppress(Exception):
+                process.join(5.0)
+
+    def map(self, fn: ChunkFunction, chunks: Sequence[Any], *, shared: Any = None, ordered: bool = True,
+            on_wait: Callable[[], None] | None = None) -> Iterator[tuple[int, Any]]:
+        """``(i, fn(chunks[i], shared))`` for every chunk, computed in the worker processes
+        (``shared`` is sent with every chunk; parameters: :meth:`Backend.map`)."""
+        n = len(chunks)
+        if n <= 1 or self.workers == 1:  # no process to start for one chunk
+            yield from LocalBackend().map(fn, chunks, shared=shared, ordered=ordered)
+            return
+        pool = self._executor()
+        index: dict[Future, int] = {pool.submit(fn, chunk, shared): i for i, chunk in enumerate(chunks)}
+        pending, ready, next_out, finished_cleanly = set(index), {}, 0, False
+        try:
+            while pending or ready:
+                done, pending = wait(pending, timeout=self.poll_s, return_when=FIRST_COMPLETED)
+                for future in done:
+                    i = index[future]
+                    try:
+                        ready[i] = future.result()
+                    except BrokenProcessPool:
+                        raise ChunkFailed(f"a worker process died while chunk {i + 1} of {n} was running (killed, "
+                                          "or out of memory); the work was stopped") from None
+                if ordered:
+                    while next_out in ready:
+                        yield next_out, ready.pop(next_out)
+                        next_out += 1
+                else:
+                    for i in sorted(ready):
+                        yield i, ready.pop(i)
+                if not done and on_wait is not None:
+                    on_wait()
+            finished_cleanly = True
+        finally:
+            if not finished_cleanly:  # raised, or the caller stopped early: stop what still runs
+                self._stop_workers()
+
+    def describe(self) -> dict[str, Any]:
+        """``{"backend": "processes", "workers": N}``."""
+        return {"backend": self.name, "workers": self.workers}
+
+    def ready(self, timeout_s: float = 2.0) -> str:
+        """Always ``"ok"``: this machine computes."""
+        return "ok"
+
+    def close(self) -> None:
+        """Stop the worker processes (idempotent; the next map starts them again)."""
+        with self._lock:
+            pool, self._pool = self._pool, None
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _identity(value: Any) -> Any:
@@ -178,6 +330,7 @@ class DaskBackend:
     """
 
     name = "dask"
+    parallel_chunks = None
 
     def __init__(self, address: str, *, connect_timeout_s: float = 10.0, retries: int = 3,
                  window: int | None = None, poll_s: float = 0.05) -> None:
@@ -337,8 +490,10 @@ def _quietly(probe: Callable[[], str], address: str) -> str:
         return f"error: the Dask scheduler at {address} is unavailable ({type(exc).__name__}: {exc})"
 
 
-def compute_backend(scheduler: str | None, *, connect_timeout_s: float = 10.0, retries: int = 3) -> Backend:
-    """A :class:`DaskBackend` on ``scheduler`` when one is given, else a :class:`LocalBackend`.
+def compute_backend(scheduler: str | None, *, connect_timeout_s: float = 10.0, retries: int = 3,
+                    workers: int = 1) -> Backend:
+    """A :class:`DaskBackend` on ``scheduler`` when one is given, else a :class:`ProcessBackend` of
+    ``workers`` processes (0: :func:`cores_available`), else (one worker) a :class:`LocalBackend`.
 
     Raises
     ------
@@ -349,4 +504,7 @@ def compute_backend(scheduler: str | None, *, connect_timeout_s: float = 10.0, r
         backend = DaskBackend(scheduler, connect_timeout_s=connect_timeout_s, retries=retries)
         log.info("computing on the Dask cluster at %s: %s", scheduler, backend.describe())
         return backend
-    return LocalBackend()
+    workers = cores_available() if int(workers) == 0 else int(workers)
+    if workers < 0:
+        raise ValueError(f"workers must be >= 0 (0: one per core), not {workers}")
+    return ProcessBackend(workers) if workers > 1 else LocalBackend()

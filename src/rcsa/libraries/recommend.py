@@ -69,6 +69,7 @@ from rcsa.analysis.lobes.workpiece_materials import (
     workpiece_material,
 )
 from rcsa.analysis.lobes.zoa import Milling, check_cut
+from rcsa.analysis.progress import check_time
 from rcsa.errors import InputError
 from rcsa.infra.compute_backends import Backend, LocalBackend
 from rcsa.libraries.fusion_geometry import tool_geometry
@@ -79,6 +80,7 @@ from rcsa.model.bounds import MAX_CONFIDENCE, MAX_SPEED_RPM, MIN_CONFIDENCE
 
 __all__ = [
     "DEFAULT_MIN_RPM",
+    "MIN_POCKET_TOOLS_PER_PROCESS",
     "POCKET_CHUNK_TOOLS",
     "LOBE_METHODS",
     "MILLING_TOOL_TYPES",
@@ -90,6 +92,7 @@ __all__ = [
     "RecommendOptions",
     "parse_recommend_options",
     "pocket_chunk",
+    "pocket_chunk_tools",
     "pockets_on",
     "preset_guid",
     "preset_name",
@@ -97,8 +100,13 @@ __all__ = [
 ]
 
 #: Tools per chunk of pocket work (a chunk's semi-discretization runs as one batch; chunks run
-#: on the workbench's backend: this process, or a Dask cluster).
+#: on the workbench's backend: this process, its worker processes, or a Dask cluster).
 POCKET_CHUNK_TOOLS = 25
+#: On a backend that runs a few chunks at once (worker processes), a library is cut into that many
+#: chunks, none under this many tools: a worker's start (~1 s of imports) must pay for itself, and
+#: a chunk's tools share their batches (25 multi-flute tools at a_e/D 0.5: 17-18 s in one process,
+#: 10.6 s in two of 13 and 12 tools, benchmarks/bench_presets.py).
+MIN_POCKET_TOOLS_PER_PROCESS = 6
 #: Name of every preset rcsa writes: ``"rcsa chatter-safe: <material>"``.
 PRESET_PREFIX = "rcsa chatter-safe: "
 #: Default lowest spindle speed, rpm.
@@ -347,24 +355,44 @@ def pocket_chunk(chunk: list[ToolCut], settings: CutSettings) -> list[ToolPocket
 PocketFinder = Callable[[list[ToolCut], CutSettings, Callable[[int, int], None] | None], list[ToolPocket]]
 
 
-def pockets_on(backend: Backend | None = None, tools_per_chunk: int = POCKET_CHUNK_TOOLS) -> PocketFinder:
+def pocket_chunk_tools(n_tools: int, parallel_chunks: int | None) -> int:
+    """Tools per chunk of pocket work for ``n_tools`` on a backend that computes ``parallel_chunks``
+    chunks at once: as many equal chunks as run at once, none under :data:`MIN_POCKET_TOOLS_PER_PROCESS`
+    tools (fewer chunks where the tools are few), none over :data:`POCKET_CHUNK_TOOLS`.
+
+    >>> [pocket_chunk_tools(n, p) for n, p in [(25, 1), (25, 2), (8, 4), (14, 4), (1000, 2), (25, None)]]
+    [25, 13, 8, 7, 25, 25]
+    """
+    if not parallel_chunks or parallel_chunks <= 1:
+        return POCKET_CHUNK_TOOLS
+    chunks = max(1, min(int(parallel_chunks), int(n_tools) // MIN_POCKET_TOOLS_PER_PROCESS))
+    return max(1, min(POCKET_CHUNK_TOOLS, -(-int(n_tools) // chunks)))
+
+
+def pockets_on(backend: Backend | None = None, tools_per_chunk: int | None = None) -> PocketFinder:
     """Find pockets in chunks of tools on a compute backend (default: this process), with progress.
 
     Tools are ordered by tooth count (a chunk of one count is one semi-discretization batch)
-    and cut into chunks of ``tools_per_chunk``; each chunk is :func:`pocket_chunk`, sent to
-    ``backend`` (:mod:`rcsa.infra.compute`). ``progress(done, total)`` is called as chunks finish.
-    The result is the same whichever backend computes it.
+    and cut into chunks of ``tools_per_chunk`` (default: :func:`pocket_chunk_tools` of the
+    backend); each chunk is :func:`pocket_chunk`, sent to ``backend``
+    (:mod:`rcsa.infra.compute_backends`), which is stopped at the caller's time limit
+    (:func:`~rcsa.analysis.progress.check_time`, checked while it waits: also where chunks run in other
+    processes).
+    ``progress(done, total)`` is called as chunks finish. The pockets are the same whichever
+    backend computes them (to rounding: a chunk's tools are batched together).
     """
     def run(cuts: list[ToolCut], settings: CutSettings,
             progress: Callable[[int, int], None] | None = None) -> list[ToolPocket]:
+        on = backend or LocalBackend()
+        size = tools_per_chunk or pocket_chunk_tools(len(cuts), on.parallel_chunks)
         order = sorted(range(len(cuts)), key=lambda i: cuts[i].teeth)
-        chunks = [order[a : a + tools_per_chunk] for a in range(0, len(order), tools_per_chunk)]
+        chunks = [order[a : a + size] for a in range(0, len(order), size)]
         out: list[ToolPocket | None] = [None] * len(cuts)
         done = 0
         if progress is not None:
             progress(0, len(cuts))
-        for i, found in (backend or LocalBackend()).map(pocket_chunk, [[cuts[j] for j in c] for c in chunks],
-                                                        shared=settings, ordered=False):
+        for i, found in on.map(pocket_chunk, [[cuts[j] for j in c] for c in chunks], shared=settings,
+                               ordered=False, on_wait=check_time):
             for j, pocket in zip(chunks[i], found, strict=True):
                 out[j] = pocket
             done += len(chunks[i])
