@@ -38,10 +38,6 @@ stop it (e.g. a job's time limit or a lost claim): whatever it raises cancels th
 still in flight and propagates. A :class:`ProcessBackend` stops its workers the same way (it
 terminates them: a time limit set in the caller does not reach another process), and a
 worker process that dies mid-chunk fails the map with :class:`ChunkFailed`.
-
-``parallel_chunks`` says how many chunks a backend computes at once — 1 here, the worker
-processes of a :class:`ProcessBackend`, None on a cluster (its size changes) — so that a caller
-can cut work that has no natural chunk size into as many chunks as run at once.
 """
 
 from __future__ import annotations
@@ -99,8 +95,6 @@ class Backend(Protocol):
     """Runs a function over chunks (:class:`LocalBackend`, :class:`DaskBackend`)."""
 
     name: str
-    #: Chunks computed at once (None: it varies, as a cluster's workers come and go).
-    parallel_chunks: int | None
 
     def map(self, fn: ChunkFunction, chunks: Sequence[Any], *, shared: Any = None, ordered: bool = True,
             on_wait: Callable[[], None] | None = None) -> Iterator[tuple[int, Any]]:
@@ -143,7 +137,6 @@ class LocalBackend:
     """Runs every chunk in the calling thread, in order."""
 
     name = "local"
-    parallel_chunks = 1
 
     def map(self, fn: ChunkFunction, chunks: Sequence[Any], *, shared: Any = None, ordered: bool = True,
             on_wait: Callable[[], None] | None = None) -> Iterator[tuple[int, Any]]:
@@ -217,11 +210,6 @@ class ProcessBackend:
         self.poll_s = float(poll_s)
         self._lock = threading.Lock()
         self._pool: ProcessPoolExecutor | None = None
-
-    @property
-    def parallel_chunks(self) -> int:
-        """The worker processes."""
-        return self.workers
 
     def __repr__(self) -> str:
         return f"ProcessBackend({self.workers})"
@@ -330,7 +318,6 @@ class DaskBackend:
     """
 
     name = "dask"
-    parallel_chunks = None
 
     def __init__(self, address: str, *, connect_timeout_s: float = 10.0, retries: int = 3,
                  window: int | None = None, poll_s: float = 0.05) -> None:

@@ -80,7 +80,6 @@ from rcsa.model.bounds import MAX_CONFIDENCE, MAX_SPEED_RPM, MIN_CONFIDENCE
 
 __all__ = [
     "DEFAULT_MIN_RPM",
-    "MIN_POCKET_TOOLS_PER_PROCESS",
     "POCKET_CHUNK_TOOLS",
     "LOBE_METHODS",
     "MILLING_TOOL_TYPES",
@@ -92,21 +91,20 @@ __all__ = [
     "RecommendOptions",
     "parse_recommend_options",
     "pocket_chunk",
-    "pocket_chunk_tools",
+    "pocket_chunks",
     "pockets_on",
     "preset_guid",
     "preset_name",
     "recommend_presets",
 ]
 
-#: Tools per chunk of pocket work (a chunk's semi-discretization runs as one batch; chunks run
-#: on the workbench's backend: this process, its worker processes, or a Dask cluster).
-POCKET_CHUNK_TOOLS = 25
-#: On a backend that runs a few chunks at once (worker processes), a library is cut into that many
-#: chunks, none under this many tools: a worker's start (~1 s of imports) must pay for itself, and
-#: a chunk's tools share their batches (25 multi-flute tools at a_e/D 0.5: 17-18 s in one process,
-#: 10.6 s in two of 13 and 12 tools, benchmarks/bench_presets.py).
-MIN_POCKET_TOOLS_PER_PROCESS = 6
+#: Most tools per chunk of pocket work: a library is cut into ``ceil(n / this)`` chunks of equal size
+#: (a chunk's semi-discretization runs as one batch; chunks run on the workbench's backend: this
+#: process, its worker processes or a Dask cluster). The cut depends on the library only, so every
+#: backend computes the same batches and writes the same presets — the batch a tool is solved in
+#: moves rounding, which can move a search's bracket within its tolerance (0.4 % seen between 25-
+#: and 13-tool batches). 13: 25 tools run as two chunks, one per core on two cores.
+POCKET_CHUNK_TOOLS = 13
 #: Name of every preset rcsa writes: ``"rcsa chatter-safe: <material>"``.
 PRESET_PREFIX = "rcsa chatter-safe: "
 #: Default lowest spindle speed, rpm.
@@ -355,44 +353,39 @@ def pocket_chunk(chunk: list[ToolCut], settings: CutSettings) -> list[ToolPocket
 PocketFinder = Callable[[list[ToolCut], CutSettings, Callable[[int, int], None] | None], list[ToolPocket]]
 
 
-def pocket_chunk_tools(n_tools: int, parallel_chunks: int | None) -> int:
-    """Tools per chunk of pocket work for ``n_tools`` on a backend that computes ``parallel_chunks``
-    chunks at once: as many equal chunks as run at once, none under :data:`MIN_POCKET_TOOLS_PER_PROCESS`
-    tools (fewer chunks where the tools are few), none over :data:`POCKET_CHUNK_TOOLS`.
+def pocket_chunks(order: list[int], most: int = POCKET_CHUNK_TOOLS) -> list[list[int]]:
+    """``order`` cut into the fewest chunks of at most ``most`` items, of equal size (± 1).
 
-    >>> [pocket_chunk_tools(n, p) for n, p in [(25, 1), (25, 2), (8, 4), (14, 4), (1000, 2), (25, None)]]
-    [25, 13, 8, 7, 25, 25]
+    >>> [len(c) for c in pocket_chunks(list(range(25)))], [len(c) for c in pocket_chunks(list(range(27)))]
+    ([12, 13], [9, 9, 9])
     """
-    if not parallel_chunks or parallel_chunks <= 1:
-        return POCKET_CHUNK_TOOLS
-    chunks = max(1, min(int(parallel_chunks), int(n_tools) // MIN_POCKET_TOOLS_PER_PROCESS))
-    return max(1, min(POCKET_CHUNK_TOOLS, -(-int(n_tools) // chunks)))
+    n = len(order)
+    count = max(1, -(-n // int(most)))
+    bounds = [n * k // count for k in range(count + 1)]
+    return [order[a:b] for a, b in zip(bounds[:-1], bounds[1:], strict=True) if b > a]
 
 
-def pockets_on(backend: Backend | None = None, tools_per_chunk: int | None = None) -> PocketFinder:
+def pockets_on(backend: Backend | None = None, tools_per_chunk: int = POCKET_CHUNK_TOOLS) -> PocketFinder:
     """Find pockets in chunks of tools on a compute backend (default: this process), with progress.
 
     Tools are ordered by tooth count (a chunk of one count is one semi-discretization batch)
-    and cut into chunks of ``tools_per_chunk`` (default: :func:`pocket_chunk_tools` of the
-    backend); each chunk is :func:`pocket_chunk`, sent to ``backend``
+    and cut into equal chunks of at most ``tools_per_chunk`` (:func:`pocket_chunks`; the cut
+    depends on the library only); each chunk is :func:`pocket_chunk`, sent to ``backend``
     (:mod:`rcsa.infra.compute_backends`), which is stopped at the caller's time limit
     (:func:`~rcsa.analysis.progress.check_time`, checked while it waits: also where chunks run in other
     processes).
     ``progress(done, total)`` is called as chunks finish. The pockets are the same whichever
-    backend computes them (to rounding: a chunk's tools are batched together).
+    backend computes them.
     """
     def run(cuts: list[ToolCut], settings: CutSettings,
             progress: Callable[[int, int], None] | None = None) -> list[ToolPocket]:
-        on = backend or LocalBackend()
-        size = tools_per_chunk or pocket_chunk_tools(len(cuts), on.parallel_chunks)
-        order = sorted(range(len(cuts)), key=lambda i: cuts[i].teeth)
-        chunks = [order[a : a + size] for a in range(0, len(order), size)]
+        chunks = pocket_chunks(sorted(range(len(cuts)), key=lambda i: cuts[i].teeth), tools_per_chunk)
         out: list[ToolPocket | None] = [None] * len(cuts)
         done = 0
         if progress is not None:
             progress(0, len(cuts))
-        for i, found in on.map(pocket_chunk, [[cuts[j] for j in c] for c in chunks], shared=settings,
-                               ordered=False, on_wait=check_time):
+        for i, found in (backend or LocalBackend()).map(pocket_chunk, [[cuts[j] for j in c] for c in chunks],
+                                                        shared=settings, ordered=False, on_wait=check_time):
             for j, pocket in zip(chunks[i], found, strict=True):
                 out[j] = pocket
             done += len(chunks[i])
