@@ -55,6 +55,12 @@ def test_results_equal_the_in_process_ones_in_order_and_as_they_finish(backend):
     assert list(backend.map(helpers.scaled, chunks, shared=3)) == here
     assert sorted(backend.map(helpers.scaled, chunks, shared=3, ordered=False)) == here
     assert backend.describe() == {"backend": "processes", "workers": 2}
+    narrow = ProcessBackend(2, window=1)  # one chunk in flight at a time: the same results
+    try:
+        assert list(narrow.map(helpers.scaled, chunks, shared=3)) == here
+        assert sorted(narrow.map(helpers.scaled, chunks, shared=3, ordered=False)) == here
+    finally:
+        narrow.close()
 
 
 def test_chunks_run_in_other_processes_and_one_chunk_runs_here(backend):

@@ -191,6 +191,9 @@ class ProcessBackend:
         Worker processes (>= 1; 1 computes in the calling thread, as :class:`LocalBackend`).
     poll_s : float
         How often a waiting map looks at its chunks and calls ``on_wait``, s.
+    window : int, optional
+        Most chunks in flight per map (submitted, or computed and not yet handed over; default
+        twice the workers), so that results wait at the caller in bounded memory.
 
     Examples
     --------
@@ -203,11 +206,12 @@ class ProcessBackend:
 
     name = "processes"
 
-    def __init__(self, workers: int, *, poll_s: float = 0.05) -> None:
+    def __init__(self, workers: int, *, poll_s: float = 0.05, window: int | None = None) -> None:
         if int(workers) < 1:
             raise ValueError(f"a process backend needs at least one worker process, not {workers}")
         self.workers = int(workers)
         self.poll_s = float(poll_s)
+        self.window = max(1, int(window)) if window is not None else 2 * self.workers
         self._lock = threading.Lock()
         self._pool: ProcessPoolExecutor | None = None
 
@@ -246,10 +250,17 @@ class ProcessBackend:
             yield from LocalBackend().map(fn, chunks, shared=shared, ordered=ordered)
             return
         pool = self._executor()
-        index: dict[Future, int] = {pool.submit(fn, chunk, shared): i for i, chunk in enumerate(chunks)}
-        pending, ready, next_out, finished_cleanly = set(index), {}, 0, False
+        index: dict[Future, int] = {}
+        pending: set[Future] = set()
+        ready: dict[int, Any] = {}
+        submitted, next_out, finished_cleanly = 0, 0, False
         try:
-            while pending or ready:
+            while next_out < n:
+                while submitted < n and len(pending) + len(ready) < self.window:  # results wait in bounded memory
+                    future = pool.submit(fn, chunks[submitted], shared)
+                    index[future] = submitted
+                    pending.add(future)
+                    submitted += 1
                 done, pending = wait(pending, timeout=self.poll_s, return_when=FIRST_COMPLETED)
                 for future in done:
                     i = index[future]
@@ -265,6 +276,7 @@ class ProcessBackend:
                 else:
                     for i in sorted(ready):
                         yield i, ready.pop(i)
+                        next_out += 1
                 if not done and on_wait is not None:
                     on_wait()
             finished_cleanly = True
