@@ -250,8 +250,8 @@ class ProcessBackend:
             yield from LocalBackend().map(fn, chunks, shared=shared, ordered=ordered)
             return
         pool = self._executor()
-        index: dict[Future, int] = {}
-        pending: set[Future] = set()
+        index: dict[Future[Any], int] = {}
+        pending: set[Future[Any]] = set()
         ready: dict[int, Any] = {}
         submitted, next_out, finished_cleanly = 0, 0, False
         try:
