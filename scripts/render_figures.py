@@ -721,6 +721,26 @@ def presets_safety_table(library: str = "small") -> str:
                   "refused", "productivity, median (min)", "time, 25 tools: in one process; the CLI"], rows)
 
 
+def presets_cli_summary() -> str:
+    """The presets benchmarks' command-line runs beside their in-process ones, per library and immersion."""
+    parts, diffs, same = [], [], True
+    for library, what in (("small", "single-flute library"), ("multi", "multi-flute library")):
+        imm = value(f"presets_{library}", "figures.immersions")
+        runs = [(k, imm[k]["auto"]) for k in ("0.05", "0.5") if k in imm and "cli" in imm[k]["auto"]]
+        if not runs:
+            continue
+        workers = runs[0][1]["cli"]["workers"]
+        parts.append(f"the {what} at a_e/D " + " and ".join(
+            f"{k} in {a['cli']['wall_s']:.1f} s ({a['cli']['cpu_s']:.1f} s CPU; in one process {a['wall_s']:.1f} s)"
+            for k, a in runs) + f" with {workers} workers")
+        diffs += [a["cli"]["max_depth_limit_difference"] for _, a in runs]
+        same &= all(a["cli"]["same_speeds"] for _, a in runs)
+    if not parts:
+        return "(no command-line runs recorded)"
+    return ("; ".join(parts) + f". Speeds {'the same' if same else 'NOT the same'} in every run, depth limits within "
+            f"{max(diffs):.1e} of the in-process ones.")
+
+
 #: Named figures: each renders Markdown from the results files.
 FIGURES: dict[str, Callable[[], str]] = {
     "benchmarks-table": benchmarks_table,
@@ -750,6 +770,7 @@ FIGURES: dict[str, Callable[[], str]] = {
     "hostile-run": hostile_run,
     "presets-safety-table": presets_safety_table,
     "presets-safety-table-multi": lambda: presets_safety_table("multi"),
+    "presets-cli-summary": presets_cli_summary,
 }
 
 
