@@ -217,14 +217,10 @@ def test_readyz_says_not_ready_with_the_reason_when_the_scheduler_is_gone(tmp_pa
 def test_chatter_safe_pockets_on_dask_equal_the_local_ones(dask):
     """Issue 20: a library's pockets are found in chunks of tools on the cluster (a large
     recommendation job's path); each tool gets the pocket it gets here, with progress."""
-    import rcsa
-    from rcsa.analysis.lobes.tool_pockets import CutSettings, ToolCut
     from rcsa.libraries.recommend import pockets_on
+    from tests.infra.pocket_cases import pocket_case
 
-    p = rcsa.predict(ra1({"start_hz": 200.0, "stop_hz": 3000.0, "step_hz": 2.0}))
-    cuts = [ToolCut(f"t{i}", p.frequency_hz, p.tool_point.h * (1 + 0.2 * i), 1 + i % 2, 0.02, 21000.0, 24000.0)
-            for i in range(3)]
-    settings = CutSettings(1319.41e6, 0.5979, 0.05, "down", method="semi_discretization", sdm_speed_count=40)
+    cuts, settings = pocket_case(3)
     seen = []
     there = pockets_on(dask, tools_per_chunk=1)(cuts, settings, lambda d, t: seen.append((d, t)))
     here = pockets_on(LocalBackend())(cuts, settings)

@@ -117,15 +117,10 @@ def test_compute_backend_picks_processes_by_the_worker_count():
 def test_chatter_safe_pockets_in_two_processes_equal_the_ones_computed_here(backend):
     """Issue 29: a library's pockets found by two worker processes (a chunk of tools each) are the
     pockets found in this process, with progress over the chunks."""
-    import rcsa
-    from rcsa.analysis.lobes.tool_pockets import CutSettings, ToolCut
     from rcsa.libraries.recommend import pockets_on
-    from rcsa.reference import ra1
+    from tests.infra.pocket_cases import pocket_case
 
-    p = rcsa.predict(ra1({"start_hz": 200.0, "stop_hz": 3000.0, "step_hz": 2.0}))
-    cuts = [ToolCut(f"t{i}", p.frequency_hz, p.tool_point.h * (1 + 0.2 * i), 1 + i % 2, 0.02, 21000.0, 24000.0)
-            for i in range(4)]
-    settings = CutSettings(1319.41e6, 0.5979, 0.05, "down", method="semi_discretization", sdm_speed_count=40)
+    cuts, settings = pocket_case(4)
     seen = []
     there = pockets_on(backend, tools_per_chunk=2)(cuts, settings, lambda d, t: seen.append((d, t)))
     here = pockets_on(LocalBackend(), tools_per_chunk=2)(cuts, settings)

@@ -133,6 +133,23 @@ class Backend(Protocol):
         ...
 
 
+def _hand_over(ready: dict[int, Any], next_out: int, ordered: bool) -> list[tuple[int, Any]]:
+    """The results a map can hand over now, taken out of ``ready`` (chunk index → result): in chunk
+    order from ``next_out`` while they are consecutive when ``ordered``, else all of them.
+
+    >>> ready = {0: "a", 2: "c"}
+    >>> _hand_over(ready, 0, True), ready
+    ([(0, 'a')], {2: 'c'})
+    """
+    if not ordered:
+        return [(i, ready.pop(i)) for i in sorted(ready)]
+    out: list[tuple[int, Any]] = []
+    while next_out + len(out) in ready:
+        i = next_out + len(out)
+        out.append((i, ready.pop(i)))
+    return out
+
+
 class LocalBackend:
     """Runs every chunk in the calling thread, in order."""
 
@@ -269,14 +286,9 @@ class ProcessBackend:
                     except BrokenProcessPool:
                         raise ChunkFailed(f"a worker process died while chunk {i + 1} of {n} was running (killed, "
                                           "or out of memory); the work was stopped") from None
-                if ordered:
-                    while next_out in ready:
-                        yield next_out, ready.pop(next_out)
-                        next_out += 1
-                else:
-                    for i in sorted(ready):
-                        yield i, ready.pop(i)
-                        next_out += 1
+                for item in _hand_over(ready, next_out, ordered):
+                    yield item
+                    next_out += 1
                 if not done and on_wait is not None:
                     on_wait()
             finished_cleanly = True
@@ -460,14 +472,9 @@ class DaskBackend:
                                           "may need more memory than a worker has") from None
                     finally:
                         future.release()
-                if ordered:
-                    while next_out in ready:
-                        yield next_out, ready.pop(next_out)
-                        next_out += 1
-                else:
-                    for i in sorted(ready):
-                        yield i, ready.pop(i)
-                        next_out += 1
+                for item in _hand_over(ready, next_out, ordered):
+                    yield item
+                    next_out += 1
                 if not finished and next_out < n:
                     if client.status not in ("running", "connecting"):
                         raise ComputeUnavailable(f"lost the Dask scheduler at {self.address} (client "
