@@ -27,7 +27,8 @@ window, safety factor 1.25, flute length cap). For each a_e/D the library is rec
   weakest speed, same fine solution) must.
 
 It also times the recommendation (prediction + pockets; 400 semi-discretization speeds per
-tool) in this process, and the default method again as a user runs it — ``rcsa library recommend``
+tool) in this process — every timing first, at every immersion, before the judge starts, so that the
+long judge cannot load the machine under a timing (``timing_load_after`` records the load they saw) — and the default method again as a user runs it — ``rcsa library recommend``
 in a process of its own with ``--workers 2`` (``--workers``; the CLI's default is one worker process
 per core, so this is the default on the 2-core development VM), its start and its workers' CPU time
 counted, its presets compared with the in-process ones — and with ``--job-tools N`` runs a library of N tools (the 25, repeated with stickouts
@@ -300,22 +301,32 @@ def main() -> None:
     frfs = predicted_frfs(read_library(data, file_name="library.json"), **SETTINGS).frfs
     load_start = record.load_average()
     results: dict = {"library": str(path.relative_to(ROOT)), "immersions": {}}
+    # First every timing (in this process and through the CLI), while the machine is as idle as it was
+    # at the start; then the judge, whose answers do not depend on the load and which takes most of the run.
+    timed: dict = {}
     for ae in args.immersions:
-        entry = {}
+        entry = results["immersions"][str(ae)] = {}
         for method in args.methods:
             report, wall, cpu = _recommend(data, ae, method)
-            rows = _judge(report, frfs, ae, rule, library)
-            entry[method] = {"wall_s": wall, "cpu_s": cpu, "summary": _summary(rows), "tools": rows}
-            s = entry[method]["summary"]
-            print(f"a_e/D {ae}: method {method:5s} {wall:6.1f} s ({cpu:.1f} s CPU, load {os.getloadavg()[0]:.1f}): "
-                  f"written {s['written']}, unstable by SDM {s['unstable_by_sdm']}, refused {s['refused']} "
-                  f"({s['false_refusals']} falsely), productivity median {s['productivity_median']} "
-                  f"min {s['productivity_min']}, methods {s['by_method']}", flush=True)
+            timed[(ae, method)] = report
+            entry[method] = {"wall_s": wall, "cpu_s": cpu}
+            print(f"a_e/D {ae}: method {method:5s} {wall:6.1f} s ({cpu:.1f} s CPU, load {os.getloadavg()[0]:.1f})",
+                  flush=True)
             if method == "auto" and args.workers > 1:
                 par = entry[method]["cli"] = _recommend_with_the_cli(data, ae, method, args.workers, report)
                 print(f"    rcsa library recommend --workers {par['workers']}: {par['wall_s']:.1f} s ({par['cpu_s']:.1f} s "
                       f"CPU with its workers'), same speeds {par['same_speeds']}, depth limits within "
                       f"{par['max_depth_limit_difference']:.1e}", flush=True)
+        entry["timing_load_after"] = record.load_average()
+    for ae in args.immersions:
+        entry = results["immersions"][str(ae)]
+        for method in args.methods:
+            rows = _judge(timed[(ae, method)], frfs, ae, rule, library)
+            entry[method].update(summary=_summary(rows), tools=rows)
+            s = entry[method]["summary"]
+            print(f"a_e/D {ae}: method {method:5s} written {s['written']}, unstable by SDM {s['unstable_by_sdm']}, "
+                  f"refused {s['refused']} ({s['false_refusals']} falsely), productivity median "
+                  f"{s['productivity_median']} min {s['productivity_min']}, methods {s['by_method']}", flush=True)
         entry["machine_load_after"] = os.getloadavg()
         main_rows = entry[args.methods[-1]]["tools"]
         entry["oracle"] = _oracle(main_rows, ae, args.oracle_sample)
@@ -327,7 +338,6 @@ def main() -> None:
             print(f"    time domain {t['id'][-4:]}: preset {t['stepdown_m'] * 1e3:.3f} mm at {t['spindle_speed_rpm']:.0f} "
                   f"rpm stable={t['preset_stable']}; {t['next_step_up_m'] * 1e3:.3f} mm at {t['at_rpm']:.0f} rpm "
                   f"chatters={t['next_step_up_chatters']}", flush=True)
-        results["immersions"][str(ae)] = entry
         _write(results, args, load_start)  # after each immersion: a long run killed later keeps what it measured
     if args.job_tools:
         results["job"] = _job(args.job_tools, args.dask)

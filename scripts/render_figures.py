@@ -355,7 +355,8 @@ def _analysis_rows() -> list[list[str]]:
                      goal("≤ 15 s", len(done) == 2 and max((c["wall_s"] for c in cli) if by_cli else
                                                            (presets[k]["auto"]["wall_s"] for k in done)) <= 15),
                      load_text(value(f"presets_{library}", "load_average_start"),
-                               *(presets[k]["machine_load_after"] for k in done)), f"presets_{library}.json"])
+                               *(presets[k].get("timing_load_after", presets[k]["machine_load_after"]) for k in done)),
+                     f"presets_{library}.json"])
     rows.append([f"chatter-safe presets: {count(job['tools'])} tools as a `library-recommend` job on a 2-worker Dask "
                  "`LocalCluster` (`bench_presets.py --job-tools 1000 --dask`)",
                  f"{job['recommend_job_s']:.0f} s, {count(job['summary']['written'])} presets written", "",
