@@ -1490,6 +1490,19 @@ class RecommendedFile(_Response):
     content_base64: str = Field(description="The file's bytes, base64.")
 
 
+class RecommendedPocket(_Response):
+    """The stable pocket around a preset's speed: the contiguous speeds whose limit reaches the stepdown
+    times the safety factor."""
+
+    low_rpm: float
+    high_rpm: float
+    width_rpm: float
+    low_open: bool = Field(False, description="Followed only this far down (semi-discretization pockets are "
+                                              "followed at most twice slower than their speed): stable here, it "
+                                              "may go on below.")
+    high_open: bool = Field(False, description="Likewise above (at most twice faster).")
+
+
 class RecommendedTool(_Response):
     """One library item: the preset written (speed, depth, pocket), or why not."""
 
@@ -1506,7 +1519,7 @@ class RecommendedTool(_Response):
     depth_limit_m: float | None = Field(None, description="The smallest depth limit within the speed window, m.")
     safety_factor: float | None = None
     robust_depth_limit_m: float | None = Field(None, description="The robust limit used, when uncertainty is given.")
-    pocket: dict[str, float] | None = Field(None, description="low_rpm, high_rpm, width_rpm of the stable pocket.")
+    pocket: RecommendedPocket | None = Field(None, description="The stable pocket around the preset's speed.")
     lobe_method: str | None = None
 
 

@@ -117,3 +117,24 @@ def test_presets_keep_every_mode_of_the_tool_point():
     found = tool_pockets([cut], CutSettings(*AL, 0.05, "down", PocketRule(), method="semi_discretization"))[0]
     assert found.lobes is not None and found.lobes.modal_model.n_modes == 10
     assert not any("left out" in n for n in found.notes)
+
+
+def test_a_pocket_is_followed_at_most_twice_slower_and_says_where_it_is_open(ra1_frf, monkeypatch):
+    """Below the screened speeds every speed followed costs an evaluation growing as 1/n: the pocket is
+    followed at most ``POCKET_FOLLOWED_SPAN`` times slower (or faster), and the report says it is open
+    there. Oracle: the same search followed without a bound (the span made 100)."""
+    f, h = ra1_frf
+    cut = ToolCut("short", f, h, 1, 3e-3, 3000.0, 24000.0)  # stable to its flute length far down
+    bounded = _pockets([cut])[0]
+    monkeypatch.setattr(tp, "POCKET_FOLLOWED_SPAN", 100.0)
+    followed = _pockets([cut])[0]
+    p, q = bounded.pocket, followed.pocket
+    assert p is not None and q is not None
+    assert p.spindle_speed_rpm == q.spindle_speed_rpm and p.stepdown_m == q.stepdown_m
+    assert q.pocket_low_rpm < p.spindle_speed_rpm / 2 and not q.pocket_low_open  # it does go on further down
+    step = 1 + PocketRule().speed_tolerance / 10  # the pocket grid's spacing
+    assert p.pocket_low_open and p.pocket_low_rpm == pytest.approx(p.spindle_speed_rpm / 2, rel=step - 1)
+    assert p.pocket_high_rpm == q.pocket_high_rpm and not p.pocket_high_open  # the grid's end is a true end
+    assert p.pocket_dict()["low_open"] is True and q.pocket_dict()["low_open"] is False
+    assert any("may extend further below" in n for n in bounded.notes)
+    assert not any("may extend further" in n for n in followed.notes)

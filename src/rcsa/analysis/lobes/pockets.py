@@ -113,6 +113,10 @@ class Pocket:
         Lobe governing at that speed (−1 when not given).
     removal_index_rpm_m : float
         ``n · stepdown``, rpm·m (proportional to the material removal rate).
+    pocket_low_open, pocket_high_open : bool
+        The pocket was followed only that far (stable there, the speed grid going on beyond): a
+        semi-discretization pocket is followed at most a factor
+        :data:`rcsa.analysis.lobes.tool_pockets.POCKET_FOLLOWED_SPAN` either side of its speed.
     """
 
     spindle_speed_rpm: float
@@ -124,11 +128,18 @@ class Pocket:
     chatter_frequency_hz: float
     governing_lobe: int
     removal_index_rpm_m: float
+    pocket_low_open: bool = False
+    pocket_high_open: bool = False
 
     @property
     def pocket_width_rpm(self) -> float:
         """Width of the pocket, rpm."""
         return self.pocket_high_rpm - self.pocket_low_rpm
+
+    def pocket_dict(self) -> dict[str, Any]:
+        """The pocket's wire form: its ends and width, rpm, and whether it is open at each end."""
+        return {"low_rpm": self.pocket_low_rpm, "high_rpm": self.pocket_high_rpm, "width_rpm": self.pocket_width_rpm,
+                "low_open": self.pocket_low_open, "high_open": self.pocket_high_open}
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready result (NaN as None)."""
@@ -136,8 +147,7 @@ class Pocket:
             return float(x) if math.isfinite(x) else None
         return {"spindle_speed_rpm": self.spindle_speed_rpm, "depth_limit_m": self.depth_limit_m,
                 "stepdown_m": self.stepdown_m, "limited_by": self.limited_by,
-                "pocket": {"low_rpm": self.pocket_low_rpm, "high_rpm": self.pocket_high_rpm,
-                           "width_rpm": self.pocket_width_rpm},
+                "pocket": self.pocket_dict(),
                 "chatter_frequency_hz": num(self.chatter_frequency_hz), "governing_lobe": self.governing_lobe,
                 "removal_index_rpm_m": self.removal_index_rpm_m}
 

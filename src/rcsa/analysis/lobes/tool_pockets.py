@@ -74,6 +74,7 @@ from rcsa.errors import InputError
 
 __all__ = [
     "DEFAULT_SDM_SPEED_COUNT",
+    "POCKET_FOLLOWED_SPAN",
     "PRESET_METHODS",
     "CutSettings",
     "PresetMethod",
@@ -115,6 +116,11 @@ _TOP_BAND = 0.5
 _TOP_SHARE = 0.2
 #: Speeds below a pruned grid checked at once while a pocket is followed down (:func:`_pocket_extent`).
 _EXTENT_CHUNK = 16
+#: A semi-discretization pocket is followed at most this factor slower and faster than its speed
+#: (the report says where it is open): below the screened speeds every speed costs one evaluation
+#: at the screening's steps, and those grow as 1/n — a pocket followed from 24 000 rpm down to
+#: 1 000 rpm cost 15 s for one three-flute tool, 25 times what following it to 12 000 rpm costs.
+POCKET_FOLLOWED_SPAN = 2.0
 #: The first round of refutation probes takes every this-many grid speed: a window with its two
 #: bracketing speeds holds about 20 speeds of the pocket grid (spacing τ/10) and 9–10 of the
 #: default 400-speed grid over 1 000–24 000 rpm, so each holds a probe (the stride is only a cost:
@@ -534,23 +540,30 @@ def _share(progress: Callable[[int, int], None] | None, lo: float, hi: float) ->
 
 def _pocket_extent(model: ModalModel, full: np.ndarray, lobes: SemiDiscretizationResult, limit: np.ndarray,
                    best: int, settings: CutSettings, kw: dict[str, Any], state: _Verified,
-                   j: int) -> tuple[float, float]:
+                   j: int) -> tuple[float, float, bool, bool]:
     """The chosen speed's pocket: the speeds of the full grid around it, contiguous, whose limit
     reaches the stepdown times the safety factor — a screened speed by its coarse limit, a speed
     not screened (:func:`_screen_pruned`) checked at that depth (one evaluation at the
-    screening's steps: :func:`stable_at_depth_many`), a run of them at a time."""
+    screening's steps: :func:`stable_at_depth_many`), a run of them at a time — followed at most
+    :data:`POCKET_FOLLOWED_SPAN` times slower or faster than the chosen speed.
+
+    Returns the pocket's lowest and highest speed, rpm, and whether it is open there (stable as far
+    as it was followed, the grid going on beyond)."""
     if best < 0:
-        return math.nan, math.nan
+        return math.nan, math.nan, False, False
     need = state.stepdown(j, best, settings) * settings.rule.safety_factor * (1 - 1e-12)
     at = np.searchsorted(full, lobes.spindle_speed_rpm * (1 - 1e-12))
     known = np.zeros(full.size, dtype=bool)
     known[at] = True
     ok = np.zeros(full.size, dtype=bool)
     ok[at] = limit >= need  # inf (stable to the flute length) counts; NaN does not
+    centre = int(at[best])
+    lowest = int(np.searchsorted(full, full[centre] / POCKET_FOLLOWED_SPAN * (1 - 1e-12)))
+    highest = int(np.searchsorted(full, full[centre] * POCKET_FOLLOWED_SPAN * (1 + 1e-12), side="right")) - 1
 
-    def walk(i: int, step: int) -> int:
-        """The last index of the pocket from ``i`` (inside it) in direction ``step``."""
-        while 0 <= i + step < full.size:
+    def walk(i: int, step: int, end: int) -> int:
+        """The last index of the pocket from ``i`` (inside it) towards ``end`` in direction ``step``."""
+        while i != end:
             nxt = i + step
             if known[nxt]:
                 if not ok[nxt]:
@@ -558,7 +571,7 @@ def _pocket_extent(model: ModalModel, full: np.ndarray, lobes: SemiDiscretizatio
                 i = nxt
                 continue
             run = [nxt]
-            while len(run) < _EXTENT_CHUNK and 0 <= run[-1] + step < full.size and not known[run[-1] + step]:
+            while len(run) < _EXTENT_CHUNK and run[-1] != end and not known[run[-1] + step]:
                 run.append(run[-1] + step)
             stable = stable_at_depth_many([model], **kw, spindle_speed_rpm=[full[run]], depth_m=[need],
                                           steps_per_cycle=_SCREEN_STEPS_PER_CYCLE)[0]
@@ -567,8 +580,8 @@ def _pocket_extent(model: ModalModel, full: np.ndarray, lobes: SemiDiscretizatio
             i = run[-1]
         return i
 
-    centre = int(at[best])
-    return float(full[walk(centre, -1)]), float(full[walk(centre, 1)])
+    low, high = walk(centre, -1, lowest), walk(centre, 1, highest)
+    return float(full[low]), float(full[high]), low == lowest > 0, high == highest < full.size - 1
 
 
 @dataclass
@@ -785,7 +798,7 @@ def _robust_windows(drawn: Sequence[list[ModalModel] | None], solved: list[tuple
 
 
 def _make(cut: ToolCut, full: np.ndarray, lobes: SemiDiscretizationResult, state: _Verified, j: int, best: int,
-          extent: tuple[float, float], settings: CutSettings, needed: float, robust: bool) -> Callable[[str], ToolPocket]:
+          extent: tuple[float, float, bool, bool], settings: CutSettings, needed: float, robust: bool) -> Callable[[str], ToolPocket]:
     def build(reason: str) -> ToolPocket:
         method = "semi_discretization"
         tol, sf = settings.rule.speed_tolerance, settings.rule.safety_factor
@@ -815,9 +828,13 @@ def _make(cut: ToolCut, full: np.ndarray, lobes: SemiDiscretizationResult, state
         weakest = w_lo + int(np.argmin(np.where(np.isfinite(part), part, np.inf)))
         pocket = Pocket(spindle_speed_rpm=n, depth_limit_m=window, stepdown_m=stepdown,
                         limited_by="flute_length" if capped else "stability", pocket_low_rpm=extent[0],
-                        pocket_high_rpm=extent[1],
+                        pocket_high_rpm=extent[1], pocket_low_open=extent[2], pocket_high_open=extent[3],
                         chatter_frequency_hz=float(lobes.chatter_frequency_hz[weakest]),
                         governing_lobe=int(lobes.governing_lobe[weakest]), removal_index_rpm_m=n * stepdown)
+        if extent[2] or extent[3]:
+            ends = " and ".join(e for e, o in (("below", extent[2]), ("above", extent[3])) if o)
+            notes.append(f"pocket followed from {extent[0]:.0f} to {extent[1]:.0f} rpm (at most {POCKET_FOLLOWED_SPAN:g} "
+                         f"times slower or faster than its speed) and stable that far: it may extend further {ends}")
         unresolved = state.dense_nominal[j].unresolved(n, tol)
         if unresolved:  # never the chosen window (unresolved speeds count as unstable); said for the record
             notes.append(f"{unresolved} speed(s) of this window are not resolved (two resolutions differ by more "
