@@ -122,6 +122,21 @@ def test_step_exponentials_of_a_mixed_batch_equal_each_alone(rng):
     np.testing.assert_array_equal(e[0], np.eye(4))
 
 
+def test_step_exponentials_of_a_batch_larger_than_the_cache_pieces_match_expm(rng):
+    """A class of matrices is summed in pieces of ``_CACHE_CHUNK``: members on either side of every
+    piece's edge, and in the short last piece, get the augmented matrix's exponential."""
+    count = 2 * md._CACHE_CHUNK + 7
+    z = rng.standard_normal((count, 4, 4)) * rng.choice([0.05, 0.6, 5.0], size=count)[:, None, None]
+    beta = rng.standard_normal((count, 4, 2))
+    e, x, y = md.step_exponentials(z, beta)
+    for j in sorted({0, md._CACHE_CHUNK - 1, md._CACHE_CHUNK, 2 * md._CACHE_CHUNK, count - 1, *rng.integers(0, count, 8)}):
+        aug = np.zeros((8, 8))
+        aug[:4, :4], aug[:4, 4:6], aug[4:6, 6:8] = z[j], beta[j], np.eye(2)
+        ref = expm(aug)
+        for got, want in ((e[j], ref[:4, :4]), (x[j], ref[:4, 4:6]), (y[j], ref[:4, 6:8])):
+            np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9 * np.abs(want).max())
+
+
 def test_a_speeds_chatter_frequency_does_not_depend_on_the_speeds_solved_beside_it():
     """Each member samples its free flight at its own period's count (``displacement_samples``):
     a low speed beside a high one does not change the high one's answer."""
