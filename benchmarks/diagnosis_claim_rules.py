@@ -10,6 +10,9 @@ benchmark scores it (:func:`bench_diagnosis._false_claim`, top-1 at SNR ≥ 10, 
   ln BF margin divided by ``ŝ²`` is below the ambiguity window joins the verdict's set (the
   margins between candidates compressed as the claim's own evidence is; an approximation: the
   rivals are not refitted at Σ·ŝ²);
+* ``claim_threshold_<10 τ>`` — a lower claim threshold τ: a trial answered ``none`` whose best
+  stated ln BF lies in (τ, 3] names it (with the rivals within the window by ln BF); trials
+  refused at their remainder's scatter stay ``none``;
 * ``held_out_gap_ratio_at_most_<100 r>`` — a claim whose first effect leaves more than ``r`` of the held-out
   gap becomes ``none``.
 
@@ -38,6 +41,7 @@ from rcsa.analysis.diagnosis.request import Options  # noqa: E402
 #: The diagnosis's ambiguity window in ln evidence (its default option).
 AMBIGUITY_WINDOW = Options().ambiguity_window
 GAP_RATIOS = (1.0, 0.95, 0.9, 0.85)
+CLAIM_THRESHOLDS = (2.5, 2.0, 1.5)
 
 
 def ambiguity_at_scatter(r: dict) -> dict:
@@ -61,6 +65,19 @@ def gap_ratio_gate(limit: float) -> Callable[[dict], dict]:
     return rule
 
 
+def claim_threshold(tau: float) -> Callable[[dict], dict]:
+    """The verdict under claim threshold ``tau`` (below the diagnosis's 3) for trials answered ``none``."""
+    def rule(r: dict) -> dict:
+        if r["status"] != "none" or not r["ranking"]:
+            return r
+        top, best = r["ranking"][0]
+        if best > Options().claim_threshold or best <= tau:  # refused at its scatter, or still below τ
+            return r
+        rivals = [name for name, lnbf in r["ranking"][1:] if best - lnbf < AMBIGUITY_WINDOW]
+        return {**r, "status": "ambiguous" if rivals else "identified", "verdict": top, "ambiguous_with": rivals}
+    return rule
+
+
 def score(trials: list[dict], rule: Callable[[dict], dict]) -> dict:
     """False claims, top-1 at SNR ≥ 10 and misses of the trials re-decided by ``rule``."""
     rs = [rule(r) for r in trials]
@@ -80,6 +97,7 @@ def main() -> None:
     args = ap.parse_args()
     trials = json.loads(args.record.read_text())["trials"]
     rules: dict[str, Callable[[dict], dict]] = {"as_run": lambda r: r, "ambiguity_at_scatter": ambiguity_at_scatter}
+    rules.update({f"claim_threshold_{round(10 * t)}": claim_threshold(t) for t in CLAIM_THRESHOLDS})
     rules.update({f"held_out_gap_ratio_at_most_{round(100 * x)}": gap_ratio_gate(x) for x in GAP_RATIOS})
     out = {"record": args.record.name, "rules": {name: score(trials, rule) for name, rule in rules.items()},
            "false_claims_as_run": [{"index": r["index"], "effect": r["effect"], "verdict": r["verdict"],
