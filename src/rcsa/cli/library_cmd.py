@@ -61,6 +61,23 @@ library_app = command_group("Tool-point FRFs of whole CAM tool libraries (Autode
                             short_help="Tool-point FRFs and presets of whole CAM tool libraries.")
 
 
+def written_preset_line(tool: dict[str, Any]) -> str:
+    """The line the recommendation prints for a written preset (a report's tool entry): speed, stepdown,
+    the limit it comes from and the pocket, saying where the pocket was followed no further.
+
+    >>> written_preset_line({"id": "t1", "spindle_speed_rpm": 23930, "depth_limit_m": 5.6e-4, "safety_factor": 1.25,
+    ...     "stepdown": {"value": 0.448, "unit": "millimeters"},
+    ...     "pocket": {"low_rpm": 11965.0, "high_rpm": 24720.0, "low_open": True, "high_open": False}})
+    't1: 23930 rpm, stepdown 0.448 millimeters (limit 0.56 mm / 1.25, pocket 11965-24720 rpm, followed no further below)'
+    """
+    sd, pocket = tool["stepdown"], tool["pocket"]
+    open_ends = [end for end, key in (("below", "low_open"), ("above", "high_open")) if pocket.get(key)]
+    return (f"{tool['id']}: {tool['spindle_speed_rpm']} rpm, stepdown {sd['value']:g} {sd['unit']} "
+            f"(limit {tool['depth_limit_m'] * 1e3:.3g} mm / {tool['safety_factor']:g}, pocket "
+            f"{pocket['low_rpm']:.0f}-{pocket['high_rpm']:.0f} rpm"
+            + (f", followed no further {' and '.join(open_ends)}" if open_ends else "") + ")")
+
+
 def parse_frequency_option(text: str) -> dict[str, Any]:
     """``START:STOP:STEP`` (Hz, stop included) or a JSON frequency object."""
     # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
@@ -479,10 +496,7 @@ def recommend(
     write_json(result.report, report, "the recommendation report")
     for t in result.report["tools"]:
         if t["status"] == "written":
-            sd = t["stepdown"]
-            typer.echo(f"{t['id']}: {t['spindle_speed_rpm']} rpm, stepdown {sd['value']:g} {sd['unit']} "
-                       f"(limit {t['depth_limit_m'] * 1e3:.3g} mm / {t['safety_factor']:g}, pocket "
-                       f"{t['pocket']['low_rpm']:.0f}-{t['pocket']['high_rpm']:.0f} rpm)", err=True)
+            typer.echo(written_preset_line(t), err=True)
         else:
             typer.echo(f"{t['id']}: {t['status']}: {t['reason']}", err=True)
     s = result.report["summary"]
