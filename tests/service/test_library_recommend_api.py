@@ -37,6 +37,8 @@ def test_report_with_the_file_then_the_file_itself(client):
     assert report["frf_source"] == {"kind": "stored", "library_id": "shop", "revision": 1}
     tool = report["tools"][0]
     assert tool["status"] == "written" and tool["lobe_method"] == "zoa" and tool["pocket"]["width_rpm"] > 0
+    # a zero-order pocket is read off the whole grid: never left open (booleans on the wire, not 0.0)
+    assert tool["pocket"]["low_open"] is False and tool["pocket"]["high_open"] is False
     assert tool["depth_limit_m"] >= tool["stepdown_m"] * tool["safety_factor"] * (1 - 1e-12)
     data = base64.b64decode(report["file"]["content_base64"])
     assert hashlib.sha256(data).hexdigest() == report["file"]["sha256"] == report["library"]["sha256_after"]
