@@ -357,6 +357,16 @@ def _analysis_rows() -> list[list[str]]:
                      load_text(value(f"presets_{library}", "load_average_start"),
                                *(presets[k].get("timing_load_after", presets[k]["machine_load_after"]) for k in done)),
                      f"presets_{library}.json"])
+    ext = result("pocket_extent")
+    rows.append(["chatter-safe presets on the example grid (5–10 000 Hz), the multi-flute library at a_e/D 0.5, "
+                 "pockets followed at most 2× from their speed against followed over the whole range "
+                 "(`bench_pocket_extent.py`): its three-flute Ø4 mm tool / the 25 tools, CPU",
+                 f"{ext['figures']['bounded']['tool_cpu_s']:.1f} s / {ext['figures']['bounded']['library_cpu_s']:.1f} s "
+                 f"against {ext['figures']['whole_range']['tool_cpu_s']:.1f} s / "
+                 f"{ext['figures']['whole_range']['library_cpu_s']:.1f} s ({ext['figures']['tool_ratio']:.1f}× / "
+                 f"{ext['figures']['library_ratio']:.2f}×); the same presets: "
+                 f"{'yes' if ext['figures']['same_presets'] else 'NO'}", "",
+                 load_text(ext["load_average_start"], ext["load_average_end"]), "pocket_extent.json"])
     rows.append([f"chatter-safe presets: {count(job['tools'])} tools as a `library-recommend` job on a 2-worker Dask "
                  "`LocalCluster` (`bench_presets.py --job-tools 1000 --dask`)",
                  f"{job['recommend_job_s']:.0f} s, {count(job['summary']['written'])} presets written", "",

@@ -118,8 +118,8 @@ _TOP_SHARE = 0.2
 _EXTENT_CHUNK = 16
 #: A semi-discretization pocket is followed at most this factor slower and faster than its speed
 #: (the report says where it is open): below the screened speeds every speed costs one evaluation
-#: at the screening's steps, and those grow as 1/n — one three-flute tool whose pocket was followed
-#: from 24 000 rpm down to 970 rpm took 12.5 s of CPU, followed to 12 000 rpm 2.6 s (docs/presets.md).
+#: at the screening's steps, and those grow as 1/n: one three-flute tool whose pocket reaches the
+#: bottom of the range costs 4-5x more followed all the way (benchmarks/bench_pocket_extent.py).
 POCKET_FOLLOWED_SPAN = 2.0
 #: The first round of refutation probes takes every this-many grid speed: a window with its two
 #: bracketing speeds holds about 20 speeds of the pocket grid (spacing τ/10) and 9–10 of the
