@@ -38,8 +38,9 @@ from benchmarks.bench_diagnosis import _false_claim, _names  # noqa: E402
 
 from rcsa.analysis.diagnosis.request import Options  # noqa: E402
 
-#: The diagnosis's ambiguity window in ln evidence (its default option).
+#: The diagnosis's ambiguity window in ln evidence and its claim threshold in ln BF (its default options).
 AMBIGUITY_WINDOW = Options().ambiguity_window
+CLAIM_THRESHOLD = Options().claim_threshold
 GAP_RATIOS = (1.0, 0.95, 0.9, 0.85)
 CLAIM_THRESHOLDS = (2.5, 2.0, 1.5)
 
@@ -71,7 +72,7 @@ def claim_threshold(tau: float) -> Callable[[dict], dict]:
         if r["status"] != "none" or not r["ranking"]:
             return r
         top, best = r["ranking"][0]
-        if best > Options().claim_threshold or best <= tau:  # refused at its scatter, or still below τ
+        if best > CLAIM_THRESHOLD or best <= tau:  # refused at its scatter, or still below τ
             return r
         rivals = [name for name, lnbf in r["ranking"][1:] if best - lnbf < AMBIGUITY_WINDOW]
         return {**r, "status": "ambiguous" if rivals else "identified", "verdict": top, "ambiguous_with": rivals}
