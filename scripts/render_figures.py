@@ -336,7 +336,12 @@ def _analysis_rows() -> list[list[str]]:
                  "(spindle side kept, prediction computed) (`bench_lobes.py`)",
                  f"{lf['resolved_s']:.2f} s = {lf['ratio_to_warm_prediction']:.0f}× warm "
                  f"({lf['warm_prediction_s'] * 1e3:.1f} ms); {lf['resolved_speeds']} of {lf['speeds']} speeds resolved; "
-                 f"{lf['baseline_ratio']:.1f}× faster than a per-speed loop of the same maps",
+                 f"{lf['baseline_ratio']:.1f}× faster than a per-speed loop of the same maps"
+                 + (f"; its speeds shared by 2 worker processes (`rcsa lobes`' default here), end to end: "
+                    f"{lf['spread_2_workers_fresh_s']:.2f} s = {lf['spread_fresh_ratio_to_warm_prediction']:.0f}× "
+                    f"with the workers started in the call, {lf['spread_2_workers_kept_s']:.2f} s = "
+                    f"{lf['spread_kept_ratio_to_warm_prediction']:.0f}× with them kept "
+                    f"(one process: {lf['end_to_end_s']:.2f} s)" if "spread_2_workers_fresh_s" in lf else ""),
                  goal("≤ 25×", lf["ratio_to_warm_prediction"] <= 25),
                  load_text(lobes["load_average_start"], lobes["load_average_end"]), "lobes.json"])
     for library, what in (("small", "25 single-flute tools Ø1–6 mm (issue 29's range)"),

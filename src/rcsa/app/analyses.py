@@ -17,15 +17,17 @@ from rcsa.model.bounds import MAX_FREQUENCY_LINES
 # are a third of a second to import): a diagnosis in a fresh process pays only for its own.
 if TYPE_CHECKING:
     from rcsa.analysis.lobes.modal_model import ModalModel
-    from rcsa.analysis.lobes.request import LobesRequest
+    from rcsa.analysis.lobes.request import LobesRequest, SdmSolver
     from rcsa.analysis.lobes.robust import RobustLobes, RobustRequest
+    from rcsa.analysis.lobes.semi_discretization import SemiDiscretizationResult
     from rcsa.analysis.lobes.zoa import LobeResult
     from rcsa.app.budget import Limits
+    from rcsa.infra.compute_backends import Backend
     from rcsa.libraries.sync import LibraryStore
     from rcsa.measured.hybrid import MeasurementSource
 
 __all__ = ["ANALYSIS_KINDS", "LobesAnswer", "cutting_conditions", "diagnose", "effects", "identify",
-           "resolve_lobes_references", "run_analysis", "stability_lobes", "stability_lobes_answer",
+           "resolve_lobes_references", "run_analysis", "spread_sdm_solver", "stability_lobes", "stability_lobes_answer",
            "stability_lobes_result",
            "stability_lobes_results", "validate"]
 
@@ -158,8 +160,77 @@ def _described(parsed: LobesRequest, frequency_hz: np.ndarray, h: np.ndarray) ->
     return {"notes": tuple(frf_grid_notes(frequency_hz, h)) if zoa else (), "conditions": cutting_conditions(parsed)}
 
 
+#: Fewest speeds in a part when a semi-discretization is spread over workers (:func:`spread_sdm_solver`):
+#: smaller parts lose more to their own coarse searches than a worker gains (``benchmarks/bench_lobes.py``).
+SDM_MIN_SPEEDS_PER_PART = 32
+#: Parts per worker slot: cost-balanced parts (:func:`~rcsa.analysis.lobes.semi_discretization.speed_parts`),
+#: two a slot so that one part costing more than its estimate does not leave the others idle.
+SDM_PARTS_PER_SLOT = 2
+
+
+def _sdm_part(speeds_rpm: np.ndarray, shared: tuple[ModalModel, dict[str, Any]]) -> SemiDiscretizationResult:
+    """One part of a spread semi-discretization, where a worker runs it: the speeds ``speeds_rpm``."""
+    from rcsa.analysis.lobes.semi_discretization import semi_discretization_lobes
+
+    model, settings = shared
+    return semi_discretization_lobes(model, spindle_speed_rpm=speeds_rpm, **settings)
+
+
+def _slots(backend: Backend) -> int:
+    """Chunks ``backend`` computes at once: its Dask threads, or its worker processes (2 when it does not say)."""
+    described = backend.describe()
+    return max(1, int(described.get("threads") or described.get("workers") or 2))
+
+
+def spread_sdm_solver(backend: Backend) -> SdmSolver | None:
+    """A semi-discretization solver (:data:`~rcsa.analysis.lobes.request.SdmSolver`) that cuts the
+    speed grid into consecutive parts of about equal cost
+    (:func:`~rcsa.analysis.lobes.semi_discretization.speed_parts`: :data:`SDM_PARTS_PER_SLOT` per
+    worker slot, at least :data:`SDM_MIN_SPEEDS_PER_PART` speeds each), solves them on ``backend``
+    and joins them (:func:`~rcsa.analysis.lobes.semi_discretization.merged_result`); None for a
+    backend that computes here (one call over every speed is then the fastest).
+
+    Each speed's limit is searched, bracketed and checked on its own, so the parts give the
+    answers of one call over every speed; only where each search starts differs (its guess comes
+    from other neighbours). A speed whose two resolutions agree just at the edge of
+    ``RESOLVED_RTOL`` may be refined in one and not in the other: the two answers then differ by
+    less than that, never in kind (``tests/app/test_lobes_spread.py``).
+
+    Parameters
+    ----------
+    backend : Backend
+        Worker processes of this machine or a Dask cluster (:mod:`rcsa.infra.compute_backends`).
+
+    Returns
+    -------
+    SdmSolver or None
+    """
+    if backend.name == "local":
+        return None
+
+    def solve(model: ModalModel, speeds_rpm: np.ndarray, settings: dict[str, Any]) -> SemiDiscretizationResult:
+        from rcsa.analysis.lobes.semi_discretization import (
+            merged_result,
+            semi_discretization_lobes,
+            speed_parts,
+        )
+
+        n_parts = min(SDM_PARTS_PER_SLOT * _slots(backend), speeds_rpm.size // SDM_MIN_SPEEDS_PER_PART)
+        if n_parts <= 1:
+            return semi_discretization_lobes(model, spindle_speed_rpm=speeds_rpm, **settings)
+        parts = speed_parts(model, speeds_rpm, n_parts, teeth=settings["teeth"],
+                            radial_immersion=settings["radial_immersion"], milling=settings["milling"],
+                            steps_per_period=settings["steps_per_period"])
+        solved = [r for _, r in backend.map(_sdm_part, parts, shared=(model, settings))]
+        # a part computed elsewhere carries a copy of the model: the joined result names the caller's
+        return merged_result([replace(r, modal_model=model) for r in solved])
+
+    return solve
+
+
 def stability_lobes_answer(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
-                           max_lines: int = MAX_FREQUENCY_LINES, within: Limits | None = None) -> LobesAnswer:
+                           max_lines: int = MAX_FREQUENCY_LINES, within: Limits | None = None,
+                           backend: Backend | None = None) -> LobesAnswer:
     """Stability lobes (``docs/contract.md`` "Stability lobes"), robust ones when asked for, and notes.
 
     With an ``assembly``, its tool-point ``h`` is predicted first and used in x and y (the
@@ -173,20 +244,23 @@ def stability_lobes_answer(request: Mapping[str, Any], *, store: MeasurementSour
     it gets a note (:func:`~rcsa.analysis.lobes.zoa.frf_grid_notes`). With ``within`` (the
     service's limits of an answer given at once), ``"auto"`` answers zero-order lobes, marked
     unresolved, where the resolved semi-discretization would exceed them
-    (:func:`rcsa.app.budget.auto_lobes_fallback`).
+    (:func:`rcsa.app.budget.auto_lobes_fallback`). With ``backend`` (worker processes or a Dask
+    cluster) the nominal semi-discretization's speeds are shared among its workers
+    (:func:`spread_sdm_solver`); robust limits are computed here.
 
     Returns
     -------
     LobesAnswer
     """
     parsed, robust, fallback = _parse_lobes(request, within)
+    solver = None if backend is None else spread_sdm_solver(backend)
     if fallback is not None:
-        return replace(_answer(parsed, robust, store, max_lines), method_reason=fallback, unchecked=True)
-    return _answer(parsed, robust, store, max_lines)
+        return replace(_answer(parsed, robust, store, max_lines, solver), method_reason=fallback, unchecked=True)
+    return _answer(parsed, robust, store, max_lines, solver)
 
 
 def _answer(parsed: LobesRequest, robust: RobustRequest | None, store: MeasurementSource | None,
-            max_lines: int) -> LobesAnswer:
+            max_lines: int, solver: SdmSolver | None = None) -> LobesAnswer:
     from rcsa.analysis.lobes.robust import RobustLobes, robust_lobes
     from rcsa.analysis.lobes.robust_sdm import robust_sdm_limits
     from rcsa.analysis.lobes.semi_discretization import SemiDiscretizationResult
@@ -199,7 +273,7 @@ def _answer(parsed: LobesRequest, robust: RobustRequest | None, store: Measureme
             described = _described(parsed, parsed.frequency_hz, parsed.frf_xx)
         else:  # a modal table: no FRF grid to be too coarse
             described = {"notes": (), "conditions": cutting_conditions(parsed)}
-        return LobesAnswer(parsed.solve(), None, method_reason=parsed.method.reason, **described)
+        return LobesAnswer(parsed.solve(sdm_solver=solver), None, method_reason=parsed.method.reason, **described)
     spec = parse_assembly(parsed.assembly, max_lines)
     flute = float(spec.tool.flute_length_m)
     if robust is not None:
@@ -207,7 +281,7 @@ def _answer(parsed: LobesRequest, robust: RobustRequest | None, store: Measureme
                                                    max_lines=max_lines)
         f, h = prediction.frequency_hz, prediction.tool_point.h
         modes = _modes(parsed, spec, f, h)
-        nominal = parsed.solve(f, h, modal_model=modes)
+        nominal = parsed.solve(f, h, modal_model=modes, sdm_solver=solver)
         described = _described(parsed, f, h)
         if zoa:
             return LobesAnswer(nominal, robust_lobes(parsed, nominal, f, draws.h, options, robust.confidence),
@@ -224,7 +298,8 @@ def _answer(parsed: LobesRequest, robust: RobustRequest | None, store: Measureme
                            method_reason=parsed.method.reason, **described)
     prediction = predict(spec, store=store, max_lines=max_lines)
     f, h = prediction.frequency_hz, prediction.tool_point.h
-    return LobesAnswer(parsed.solve(f, h, modal_model=_modes(parsed, spec, f, h)), None, flute_length_m=flute,
+    return LobesAnswer(parsed.solve(f, h, modal_model=_modes(parsed, spec, f, h), sdm_solver=solver), None,
+                       flute_length_m=flute,
                        method_reason=parsed.method.reason, **_described(parsed, f, h))
 
 

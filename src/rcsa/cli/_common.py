@@ -15,7 +15,7 @@ from rcsa.errors import InputError, NotFoundError, RcsaError
 if TYPE_CHECKING:
     from rcsa.app.summaries import Table
 
-__all__ = ["JsonOption", "QuietOption", "emit", "command_group", "fail", "is_terminal", "progress_callback",
+__all__ = ["DaskOption", "DaskTimeoutOption", "JsonOption", "QuietOption", "WorkersOption", "emit", "command_group", "fail", "is_terminal", "progress_callback",
            "read_json", "run_guarded", "show_tables", "wrote", "write_json", "write_results"]
 
 #: ``--quiet/-q`` of the commands that draw a progress bar.
@@ -24,6 +24,19 @@ QuietOption = Annotated[bool, typer.Option("--quiet", "-q", help="No progress ba
 JsonOption = Annotated[bool, typer.Option("--json", help=(
     "For machines: the result JSON on stdout (or in -o OUT) and no table, even on a terminal. "
     "Without it the JSON still goes to stdout when stdout is not a terminal (a pipe, a file)."))]
+
+#: ``--dask-scheduler``, ``--dask-connect-timeout`` and ``--workers`` of the commands whose work
+#: runs in chunks (:func:`rcsa.infra.compute_backends.compute_backend`).
+DaskOption = Annotated[str | None, typer.Option(
+    "--dask-scheduler", envvar="RCSA_DASK_SCHEDULER",
+    help="Compute on this Dask cluster (tcp://HOST:8786; needs pip install 'rcsa[dask]') instead of here.")]
+DaskTimeoutOption = Annotated[float, typer.Option(
+    "--dask-connect-timeout", envvar="RCSA_DASK_CONNECT_TIMEOUT_S", min=0.1,
+    help="Seconds to try to reach the Dask scheduler before giving up.")]
+WorkersOption = Annotated[int, typer.Option(
+    "--workers", envvar="RCSA_WORKERS", min=0,
+    help="Worker processes on this machine when the work has several chunks (0: one per CPU core; 1: in this "
+         "process). Ignored with --dask-scheduler.")]
 
 T = TypeVar("T")
 

@@ -40,6 +40,10 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from rcsa.cli._common import (
+    DaskOption,
+    DaskTimeoutOption,
+    QuietOption,
+    WorkersOption,
     command_group,
     fail,
     read_json,
@@ -176,17 +180,6 @@ ImportOptions = Annotated[str | None, typer.Option(
 NaturalFrequenciesOption = Annotated[bool, typer.Option(help="Compute exact natural frequencies.")]
 UncertaintyOption = Annotated[str | None, typer.Option(
     help='Every tool\'s uncertainty band as JSON, e.g. \'{"draws": 200, "seed": 1}\' (p05/p50/p95 of |h|).')]
-QuietOption = Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")]
-DaskOption = Annotated[str | None, typer.Option(
-    "--dask-scheduler", envvar="RCSA_DASK_SCHEDULER",
-    help="Compute on this Dask cluster (tcp://HOST:8786; needs pip install 'rcsa[dask]') instead of here.")]
-WorkersOption = Annotated[int, typer.Option(
-    "--workers", envvar="RCSA_WORKERS", min=0,
-    help="Worker processes on this machine when the work has several chunks (0: one per CPU core; 1: in this "
-         "process). Ignored with --dask-scheduler.")]
-DaskTimeoutOption = Annotated[float, typer.Option(
-    "--dask-connect-timeout", envvar="RCSA_DASK_CONNECT_TIMEOUT_S", min=0.1,
-    help="Seconds to try to reach the Dask scheduler before giving up.")]
 LibraryArgument = Annotated[Path, typer.Argument(metavar="LIBRARY", help="Fusion tool library (.json, .tools) or FreeCAD toolbits "
                                                       "(.fctb, .fctl, a folder or a zip of them).")]
 HolderOption = Annotated[Path | None, typer.Option(help="FreeCAD holder (.fcholder) for the toolbits, when the "

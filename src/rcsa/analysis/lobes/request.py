@@ -7,7 +7,7 @@ the offending field. No web framework is imported here.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -15,7 +15,10 @@ import numpy as np
 
 from rcsa.analysis.lobes.modal_model import ModalModel, fit_modal_model, modal_model_from_table
 from rcsa.analysis.lobes.options import MAX_SDM_SPEED_COUNT, OPTION_KEYS, LobesMethod, parse_method
-from rcsa.analysis.lobes.semi_discretization import semi_discretization_lobes
+from rcsa.analysis.lobes.semi_discretization import (
+    SemiDiscretizationResult,
+    semi_discretization_lobes,
+)
 from rcsa.analysis.lobes.zoa import (
     LobeResult,
     Milling,
@@ -47,7 +50,19 @@ from rcsa.model.input_policy import check_count
 from rcsa.model.wire import complex_from_wire, number_list
 from rcsa.physics.receptance import check_frequency_hz
 
-__all__ = ["LobesRequest", "parse_lobes_request"]
+__all__ = ["LobesRequest", "SdmSolver", "parse_lobes_request"]
+
+#: How a semi-discretization is solved: ``solver(modal_model, spindle_speed_rpm, settings)`` with
+#: ``settings`` the keywords of :func:`semi_discretization_lobes` besides those two — by default
+#: that function itself, in this process; the application layer may spread the speeds over
+#: worker processes or a cluster and merge the parts (:func:`~rcsa.analysis.lobes.
+#: semi_discretization.merged_result`).
+SdmSolver = Callable[[ModalModel, np.ndarray, dict[str, Any]], SemiDiscretizationResult]
+
+
+def _here(model: ModalModel, spindle_speed_rpm: np.ndarray, settings: dict[str, Any]) -> SemiDiscretizationResult:
+    """:data:`SdmSolver` in this process: :func:`semi_discretization_lobes` over every speed at once."""
+    return semi_discretization_lobes(model, spindle_speed_rpm=spindle_speed_rpm, **settings)
 
 
 @dataclass(frozen=True, slots=True)
@@ -90,6 +105,13 @@ class LobesRequest:
     method: LobesMethod = LobesMethod()
     modal_model: ModalModel | None = None
 
+    def sdm_settings(self) -> dict[str, Any]:
+        """The keywords of :func:`semi_discretization_lobes` this request sets besides the modes and
+        the speeds (the cut and ``steps_per_period``)."""
+        return {"teeth": self.teeth, "tangential_coefficient_n_m2": self.tangential_coefficient_n_m2,
+                "radial_ratio": self.radial_ratio, "radial_immersion": self.radial_immersion,
+                "milling": self.milling, "steps_per_period": self.method.steps_per_period}
+
     def solve(
         self,
         frequency_hz: object | None = None,
@@ -97,6 +119,7 @@ class LobesRequest:
         frf_yy: object | None = None,
         *,
         modal_model: ModalModel | None = None,
+        sdm_solver: SdmSolver | None = None,
     ) -> LobeResult:
         """Run :func:`stability_lobes` (or the semi-discretization) with this request.
 
@@ -106,7 +129,8 @@ class LobesRequest:
         given (e.g. the exact modes of an analytical assembly), else the request's table, else
         fitted to the receptances (:func:`~rcsa.analysis.lobes.modal_model.fit_modal_model`).
         Zero-order lobes of a modal table use its receptances on a grid that resolves every
-        mode (:meth:`ModalModel.frf_grid`).
+        mode (:meth:`ModalModel.frf_grid`). ``sdm_solver`` solves the semi-discretization
+        (:data:`SdmSolver`; default: here, every speed at once).
         """
         table = self.modal_model
         if frequency_hz is None:
@@ -129,16 +153,7 @@ class LobesRequest:
                     None if frf_yy is None else np.asarray(frf_yy, dtype=complex),
                     modes_per_direction=self.method.modes_per_direction,
                 )
-            return semi_discretization_lobes(
-                modal_model,
-                teeth=self.teeth,
-                tangential_coefficient_n_m2=self.tangential_coefficient_n_m2,
-                radial_ratio=self.radial_ratio,
-                radial_immersion=self.radial_immersion,
-                milling=self.milling,
-                spindle_speed_rpm=self.spindle_speed_rpm,
-                steps_per_period=self.method.steps_per_period,
-            )
+            return (sdm_solver or _here)(modal_model, self.spindle_speed_rpm, self.sdm_settings())
         return stability_lobes(
             frequency_hz,
             frf_xx,

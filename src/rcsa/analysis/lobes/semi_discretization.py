@@ -115,6 +115,7 @@ __all__ = [
     "resolving_steps",
     "semi_discretization_lobes",
     "semi_discretization_lobes_many",
+    "speed_parts",
     "stable_at_depth_many",
 ]
 
@@ -1193,6 +1194,53 @@ def merged_result(parts: Sequence[SemiDiscretizationResult]) -> SemiDiscretizati
               "step_s": 1.0 / (f_top * cat("top_mode_steps_per_cycle")), "steps": cat("steps"),
               "check_steps": cat("check_steps"), "resolved": cat("resolved")}
     return _result(first.modal_model, speed[order], fields, first.depth_search_max_m, first.scheme)
+
+
+#: A speed's cost in :func:`speed_parts` besides its steps, in steps: the search's share that does
+#: not grow with the steps. Chosen by hand on ``benchmarks/bench_lobes.py``'s cut (500 speeds,
+#: steps 16–153): its four parts cost 1.5, 2.0, 1.6 and 1.1 s CPU (by count alone: 2.8 … 0.8 s).
+_SPEED_COST_STEPS = 8
+
+
+def speed_parts(model: ModalModel, spindle_speed_rpm: np.ndarray, parts: int, *, teeth: int, radial_immersion: float,
+                milling: Milling, steps_per_period: int | None = None) -> list[np.ndarray]:
+    """The speed grid cut into ``parts`` consecutive parts of about equal cost, to be solved apart
+    (each by :func:`semi_discretization_lobes`) and joined again (:func:`merged_result`).
+
+    A speed costs about its steps (:func:`resolving_steps` — a slow speed has many cycles of the
+    top mode in its cut — or ``steps_per_period``) plus ``_SPEED_COST_STEPS``, so slow speeds go
+    in shorter parts.
+
+    Parameters
+    ----------
+    model : ModalModel
+    spindle_speed_rpm : numpy.ndarray, shape (nspeed,)
+        rpm, in the order the parts keep.
+    parts : int
+        How many parts (at most one per speed; at least 1).
+    teeth, radial_immersion, milling, steps_per_period
+        As in :func:`semi_discretization_lobes`.
+
+    Returns
+    -------
+    list of numpy.ndarray
+        Consecutive, non-empty, together the grid.
+
+    Examples
+    --------
+    >>> m = ModalModel.of([1400.0, 4000.0], [0.02, 0.03], [1.0, 0.5], [0, 0])
+    >>> [p.size for p in speed_parts(m, np.linspace(2000.0, 30000.0, 100), 2, teeth=2,
+    ...                              radial_immersion=0.05, milling="down")]
+    [32, 68]
+    """
+    speed = np.asarray(spindle_speed_rpm, dtype=float)
+    n = max(1, min(int(parts), speed.size))
+    steps = (resolving_steps(model, teeth, speed, radial_immersion=radial_immersion, milling=milling)
+             if steps_per_period is None else np.full(speed.size, int(steps_per_period)))
+    cost = np.cumsum(steps + _SPEED_COST_STEPS, dtype=float)
+    cuts = np.searchsorted(cost, cost[-1] * np.arange(1, n) / n, side="right")
+    cuts = np.unique(np.clip(cuts, 1, speed.size - 1)) if speed.size > 1 else np.empty(0, dtype=np.int64)
+    return np.split(speed, cuts)
 
 
 def _by_size(models: Sequence[ModalModel], progress: Callable[[int, int], None] | None, *,
