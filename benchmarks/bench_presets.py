@@ -327,7 +327,7 @@ def main() -> None:
             print(f"a_e/D {ae}: method {method:5s} written {s['written']}, unstable by SDM {s['unstable_by_sdm']}, "
                   f"refused {s['refused']} ({s['false_refusals']} falsely), productivity median "
                   f"{s['productivity_median']} min {s['productivity_min']}, methods {s['by_method']}", flush=True)
-        entry["machine_load_after"] = os.getloadavg()
+        entry["machine_load_after"] = record.load_average()
         main_rows = entry[args.methods[-1]]["tools"]
         entry["oracle"] = _oracle(main_rows, ae, args.oracle_sample)
         for t in entry["oracle"]:
