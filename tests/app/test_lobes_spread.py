@@ -60,7 +60,7 @@ def one_call():
     return stability_lobes_answer(REQUEST)
 
 
-def _assert_same_answers(spread: dict[str, Any], whole: dict[str, Any]) -> None:
+def assert_same_answers(spread: dict[str, Any], whole: dict[str, Any]) -> None:
     a, b = np.array(spread["depth_limit_m"], dtype=float), np.array(whole["depth_limit_m"], dtype=float)
     assert np.array_equal(np.isnan(a), np.isnan(b))
     ok = np.isfinite(b)
@@ -76,7 +76,7 @@ def test_the_parts_are_consecutive_and_cover_every_speed_once(one_call):
     spread = stability_lobes_answer(REQUEST, backend=backend)
     assert len(backend.parts) == 2 * SDM_PARTS_PER_SLOT and all(p.size >= SDM_MIN_SPEEDS_PER_PART for p in backend.parts)
     np.testing.assert_array_equal(np.concatenate(backend.parts), one_call.nominal.spindle_speed_rpm)
-    _assert_same_answers(spread.to_dict(), one_call.to_dict())
+    assert_same_answers(spread.to_dict(), one_call.to_dict())
     assert spread.nominal.modal_model is not None and spread.nominal.scheme == one_call.nominal.scheme
 
 
@@ -101,4 +101,4 @@ def test_rcsa_lobes_on_two_worker_processes_answers_as_in_one(tmp_path, one_call
     runner = CliRunner()
     two = runner.invoke(app, ["lobes", str(request), "--json", "--workers", "2"])
     assert two.exit_code == 0, two.stderr
-    _assert_same_answers(json.loads(two.stdout), one_call.to_dict())
+    assert_same_answers(json.loads(two.stdout), one_call.to_dict())
