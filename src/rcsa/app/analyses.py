@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from rcsa.analysis.progress import Progress
+from rcsa.analysis.progress import Progress, check_time
 from rcsa.app.stores import library_store, open_store, resolver
 from rcsa.errors import InputError, NotFoundError
 from rcsa.model.bounds import MAX_FREQUENCY_LINES
@@ -221,7 +221,7 @@ def spread_sdm_solver(backend: Backend) -> SdmSolver | None:
         parts = speed_parts(model, speeds_rpm, n_parts, teeth=settings["teeth"],
                             radial_immersion=settings["radial_immersion"], milling=settings["milling"],
                             steps_per_period=settings["steps_per_period"])
-        solved = [r for _, r in backend.map(_sdm_part, parts, shared=(model, settings))]
+        solved = [r for _, r in backend.map(_sdm_part, parts, shared=(model, settings), on_wait=check_time)]
         # a part computed elsewhere carries a copy of the model: the joined result names the caller's
         return merged_result([replace(r, modal_model=model) for r in solved])
 
@@ -406,7 +406,8 @@ def _stored_frf(store: MeasurementSource | None, measurement_id: str, field: str
 
 
 def stability_lobes(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
-                    max_lines: int = MAX_FREQUENCY_LINES, within: Limits | None = None) -> dict[str, Any]:
+                    max_lines: int = MAX_FREQUENCY_LINES, within: Limits | None = None,
+                    backend: Backend | None = None) -> dict[str, Any]:
     """The contract's stability-lobes response (see :func:`stability_lobes_result`).
 
     Parameters
@@ -419,6 +420,9 @@ def stability_lobes(request: Mapping[str, Any], *, store: MeasurementSource | No
         Largest accepted number of frequency lines.
     within : Limits, optional
         The limits of the answer (:func:`stability_lobes_answer`).
+    backend : Backend, optional
+        Worker processes or a Dask cluster that share a semi-discretization's speeds
+        (:func:`spread_sdm_solver`; default: this process).
 
     Returns
     -------
@@ -429,7 +433,7 @@ def stability_lobes(request: Mapping[str, Any], *, store: MeasurementSource | No
         ``uncertainty``, also ``depth_limit_robust_m`` and ``robust``
         (:class:`rcsa.analysis.lobes.robust.RobustLobes`).
     """
-    return stability_lobes_answer(request, store=store, max_lines=max_lines, within=within).to_dict()
+    return stability_lobes_answer(request, store=store, max_lines=max_lines, within=within, backend=backend).to_dict()
 
 
 def effects(request: Mapping[str, Any], *, store: MeasurementSource | None = None,
@@ -506,8 +510,11 @@ def validate(kind: str, request: Mapping[str, Any], *, store: MeasurementSource 
 
 
 def run_analysis(kind: str, request: Mapping[str, Any], *, store: MeasurementSource | None = None,
-                 max_lines: int = MAX_FREQUENCY_LINES) -> dict[str, Any]:
+                 max_lines: int = MAX_FREQUENCY_LINES, backend: Backend | None = None) -> dict[str, Any]:
     """Run one of :data:`ANALYSIS_KINDS` and return its result document (a job's result).
+
+    ``backend`` (a job's: the service's Dask cluster when it has one) shares a lobes request's
+    semi-discretization among its workers (:func:`spread_sdm_solver`); the other kinds run here.
 
     Raises
     ------
@@ -521,7 +528,7 @@ def run_analysis(kind: str, request: Mapping[str, Any], *, store: MeasurementSou
     if kind == "lobes":
         from rcsa.app.budget import JOB
 
-        return stability_lobes(request, store=store, max_lines=max_lines, within=JOB)
+        return stability_lobes(request, store=store, max_lines=max_lines, within=JOB, backend=backend)
     if kind == "effects":
         return effects(request, store=store)
     if kind == "identification":

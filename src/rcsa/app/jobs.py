@@ -222,7 +222,7 @@ def run_work(bench: Workbench, kind: str, request: Mapping[str, Any], *,
             summary = {**document["counts"], **report.summary, "computed": report.computed}
             computed = report.computed
         elif kind in ANALYSIS_KINDS:
-            document = run_analysis(kind, request, store=bench.store, max_lines=bench.max_lines)
+            document = run_analysis(kind, request, store=bench.store, max_lines=bench.max_lines, backend=backend)
             summary, computed = {}, 1
         else:
             raise InputError("kind", f"no work of kind {kind!r} (known: {', '.join(JOB_KINDS)})")
