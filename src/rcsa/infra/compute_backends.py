@@ -150,6 +150,32 @@ def _hand_over(ready: dict[int, Any], next_out: int, ordered: bool) -> list[tupl
     return out
 
 
+def _windowed(n: int, window: int, submit: Callable[[int], None], in_flight: Callable[[], int],
+              finished: Callable[[], dict[int, Any]], idle: Callable[[], None], ordered: bool
+              ) -> Iterator[tuple[int, Any]]:
+    """The loop of a pool's map: at most ``window`` chunks submitted or waiting to be handed over
+    (``submit(i)`` sends chunk ``i``; ``in_flight()`` counts those sent and not finished), the
+    results ``finished()`` returns (chunk index → result; it may wait a little) handed over by
+    :func:`_hand_over`, and ``idle()`` called whenever a round finished nothing."""
+    ready: dict[int, Any] = {}
+    submitted = next_out = 0
+    while next_out < n:
+        while submitted < n and in_flight() + len(ready) < window:  # results wait in bounded memory
+            submit(submitted)
+            submitted += 1
+        done = finished()
+        ready.update(done)
+        for item in _hand_over(ready, next_out, ordered):
+            yield item
+            next_out += 1
+        if not done and next_out < n:
+            idle()
+
+
+def _nothing() -> None:
+    """An ``idle`` that does nothing (a map without ``on_wait``)."""
+
+
 class LocalBackend:
     """Runs every chunk in the calling thread, in order."""
 
@@ -269,28 +295,29 @@ class ProcessBackend:
         pool = self._executor()
         index: dict[Future[Any], int] = {}
         pending: set[Future[Any]] = set()
-        ready: dict[int, Any] = {}
-        submitted, next_out, finished_cleanly = 0, 0, False
+
+        def submit(i: int) -> None:
+            future = pool.submit(fn, chunks[i], shared)
+            index[future] = i
+            pending.add(future)
+
+        def finished() -> dict[int, Any]:
+            done, still = wait(pending, timeout=self.poll_s, return_when=FIRST_COMPLETED)
+            pending.intersection_update(still)
+            out = {}
+            for future in done:
+                i = index.pop(future)
+                try:
+                    out[i] = future.result()
+                except BrokenProcessPool:
+                    raise ChunkFailed(f"a worker process died while chunk {i + 1} of {n} was running (killed, "
+                                      "or out of memory); the work was stopped") from None
+            return out
+
+        finished_cleanly = False
         try:
-            while next_out < n:
-                while submitted < n and len(pending) + len(ready) < self.window:  # results wait in bounded memory
-                    future = pool.submit(fn, chunks[submitted], shared)
-                    index[future] = submitted
-                    pending.add(future)
-                    submitted += 1
-                done, pending = wait(pending, timeout=self.poll_s, return_when=FIRST_COMPLETED)
-                for future in done:
-                    i = index[future]
-                    try:
-                        ready[i] = future.result()
-                    except BrokenProcessPool:
-                        raise ChunkFailed(f"a worker process died while chunk {i + 1} of {n} was running (killed, "
-                                          "or out of memory); the work was stopped") from None
-                for item in _hand_over(ready, next_out, ordered):
-                    yield item
-                    next_out += 1
-                if not done and on_wait is not None:
-                    on_wait()
+            yield from _windowed(n, self.window, submit, lambda: len(pending), finished,
+                                 on_wait if on_wait is not None else _nothing, ordered)
             finished_cleanly = True
         finally:
             if not finished_cleanly:  # raised, or the caller stopped early: stop what still runs
@@ -449,39 +476,38 @@ class DaskBackend:
         token = secrets.token_hex(6)
         shared_future = client.submit(_identity, shared, key=f"rcsa-shared-{token}", pure=False)
         pending: dict[int, Any] = {}
-        ready: dict[int, Any] = {}
-        submitted = 0
-        next_out = 0
+
+        def submit(i: int) -> None:
+            pending[i] = client.submit(fn, chunks[i], shared_future, retries=self.retries,
+                                       key=f"rcsa-chunk-{token}-{i}", pure=False)
+
+        def finished() -> dict[int, Any]:
+            out = {}
+            for i in [i for i, f in pending.items() if f.done()]:
+                future = pending.pop(i)
+                try:
+                    out[i] = future.result()
+                except FutureCancelledError:
+                    raise ComputeUnavailable(f"lost the Dask scheduler at {self.address} while chunk {i + 1} of "
+                                             f"{n} was running (client {client.status}); the work was "
+                                             "stopped, submit it again once the cluster is back") from None
+                except KilledWorker as exc:
+                    raise ChunkFailed(f"chunk {i + 1} of {n} killed every Dask worker it ran on ({exc}); it "
+                                      "may need more memory than a worker has") from None
+                finally:
+                    future.release()
+            return out
+
+        def idle() -> None:
+            if client.status not in ("running", "connecting"):
+                raise ComputeUnavailable(f"lost the Dask scheduler at {self.address} (client "
+                                         f"{client.status}); the work was stopped")
+            if on_wait is not None:
+                on_wait()
+            time.sleep(self.poll_s)
+
         try:
-            while next_out < n:
-                while submitted < n and len(pending) + len(ready) < window:
-                    pending[submitted] = client.submit(fn, chunks[submitted], shared_future, retries=self.retries,
-                                                       key=f"rcsa-chunk-{token}-{submitted}", pure=False)
-                    submitted += 1
-                finished = [i for i, f in pending.items() if f.done()]
-                for i in finished:
-                    future = pending.pop(i)
-                    try:
-                        ready[i] = future.result()
-                    except FutureCancelledError:
-                        raise ComputeUnavailable(f"lost the Dask scheduler at {self.address} while chunk {i + 1} of "
-                                                 f"{n} was running (client {client.status}); the work was "
-                                                 "stopped, submit it again once the cluster is back") from None
-                    except KilledWorker as exc:
-                        raise ChunkFailed(f"chunk {i + 1} of {n} killed every Dask worker it ran on ({exc}); it "
-                                          "may need more memory than a worker has") from None
-                    finally:
-                        future.release()
-                for item in _hand_over(ready, next_out, ordered):
-                    yield item
-                    next_out += 1
-                if not finished and next_out < n:
-                    if client.status not in ("running", "connecting"):
-                        raise ComputeUnavailable(f"lost the Dask scheduler at {self.address} (client "
-                                                 f"{client.status}); the work was stopped")
-                    if on_wait is not None:
-                        on_wait()
-                    time.sleep(self.poll_s)
+            yield from _windowed(n, window, submit, lambda: len(pending), finished, idle, ordered)
         finally:
             leftover = list(itertools.chain(pending.values(), [shared_future]))
             if leftover and client.status == "running":
