@@ -18,6 +18,7 @@ import pytest
 from typer.testing import CliRunner
 
 from rcsa.analysis.lobes.semi_discretization import DEPTH_RTOL, RESOLVED_RTOL
+from rcsa.app import analyses
 from rcsa.app.analyses import (
     SDM_MIN_SPEEDS_PER_PART,
     SDM_PARTS_PER_SLOT,
@@ -60,6 +61,12 @@ def one_call():
     return stability_lobes_answer(REQUEST)
 
 
+@pytest.fixture
+def spread_any_cost(monkeypatch):
+    """The request here costs too little to be worth workers by default: spread it all the same."""
+    monkeypatch.setattr(analyses, "SDM_MIN_SPREAD_COST", 0.0)
+
+
 def assert_same_answers(spread: dict[str, Any], whole: dict[str, Any]) -> None:
     """The same answers within ``AGREE_RTOL``, and solved apart: where each speed's search starts
     moves some limits within their brackets (a call that was not split gives them bit for bit)."""
@@ -74,7 +81,7 @@ def assert_same_answers(spread: dict[str, Any], whole: dict[str, Any]) -> None:
     assert set(spread) == set(whole)
 
 
-def test_the_parts_are_consecutive_and_cover_every_speed_once(one_call):
+def test_the_parts_are_consecutive_and_cover_every_speed_once(one_call, spread_any_cost):
     backend = InlineBackend()
     spread = stability_lobes_answer(REQUEST, backend=backend)
     assert len(backend.parts) == 2 * SDM_PARTS_PER_SLOT and all(p.size >= SDM_MIN_SPEEDS_PER_PART for p in backend.parts)
@@ -83,11 +90,18 @@ def test_the_parts_are_consecutive_and_cover_every_speed_once(one_call):
     assert spread.nominal.modal_model is not None and spread.nominal.scheme == one_call.nominal.scheme
 
 
-def test_a_few_speeds_or_this_process_are_not_split():
+def test_a_few_speeds_or_this_process_are_not_split(spread_any_cost):
     assert spread_sdm_solver(LocalBackend()) is None
     backend = InlineBackend()
     few = {**REQUEST, "spindle_speed_rpm": {"start": 5000, "stop": 25000, "count": 2 * SDM_MIN_SPEEDS_PER_PART - 1}}
     stability_lobes_answer(few, backend=backend)
+    assert backend.parts == []
+
+
+def test_work_cheaper_than_starting_workers_is_not_split():
+    """150 speeds of one mode, 16 steps each: 3 600 steps of cost, about a second of one core."""
+    backend = InlineBackend()
+    stability_lobes_answer(REQUEST, backend=backend)
     assert backend.parts == []
 
 
@@ -98,7 +112,7 @@ def test_zero_order_lobes_are_not_split():
     assert backend.parts == []
 
 
-def test_rcsa_lobes_on_two_worker_processes_answers_as_in_one(tmp_path, one_call):
+def test_rcsa_lobes_on_two_worker_processes_answers_as_in_one(tmp_path, one_call, spread_any_cost):
     request = tmp_path / "lobes.json"
     request.write_text(json.dumps(REQUEST))
     runner = CliRunner()

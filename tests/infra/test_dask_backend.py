@@ -228,12 +228,14 @@ def test_chatter_safe_pockets_on_dask_equal_the_local_ones(dask):
     assert seen[-1] == (3, 3) and len(seen) == 4
 
 
-def test_a_lobes_job_on_the_cluster_answers_as_here(dask):
+def test_a_lobes_job_on_the_cluster_answers_as_here(dask, monkeypatch):
     """A lobes job of a service with a Dask cluster (and ``rcsa lobes --dask-scheduler``): the
     semi-discretization's speeds in parts on the cluster's workers, joined to the answer of one
     process (``tests/app/test_lobes_spread.py`` says how close)."""
+    from rcsa.app import analyses
     from rcsa.app.analyses import stability_lobes
     from tests.app.test_lobes_spread import REQUEST, assert_same_answers
 
+    monkeypatch.setattr(analyses, "SDM_MIN_SPREAD_COST", 0.0)  # a small request, spread all the same
     there = run_work(Workbench(None, backend=dask), "lobes", REQUEST).document
     assert_same_answers(there, stability_lobes(REQUEST))

@@ -166,6 +166,11 @@ SDM_MIN_SPEEDS_PER_PART = 32
 #: Parts per worker slot: cost-balanced parts (:func:`~rcsa.analysis.lobes.semi_discretization.speed_parts`),
 #: two a slot so that one part costing more than its estimate does not leave the others idle.
 SDM_PARTS_PER_SLOT = 2
+#: Least cost (:func:`~rcsa.analysis.lobes.semi_discretization.speed_costs`, in steps) worth spreading:
+#: about 2–3 s of one core. Below it one process answers sooner than workers start (a spawned
+#: worker imports NumPy, SciPy and rcsa: about a second on a 2-core VM; a 300-speed single-mode
+#: diagram of 7 200 took 3.1 s on two workers, 2.6 s in one process).
+SDM_MIN_SPREAD_COST = 8000.0
 
 
 def _sdm_part(speeds_rpm: np.ndarray, shared: tuple[ModalModel, dict[str, Any]]) -> SemiDiscretizationResult:
@@ -187,8 +192,9 @@ def spread_sdm_solver(backend: Backend) -> SdmSolver | None:
     speed grid into consecutive parts of about equal cost
     (:func:`~rcsa.analysis.lobes.semi_discretization.speed_parts`: :data:`SDM_PARTS_PER_SLOT` per
     worker slot, at least :data:`SDM_MIN_SPEEDS_PER_PART` speeds each), solves them on ``backend``
-    and joins them (:func:`~rcsa.analysis.lobes.semi_discretization.merged_result`); None for a
-    backend that computes here (one call over every speed is then the fastest).
+    and joins them (:func:`~rcsa.analysis.lobes.semi_discretization.merged_result`); work that
+    costs less than :data:`SDM_MIN_SPREAD_COST` is solved here in one call. None for a backend
+    that computes here (one call over every speed is then the fastest).
 
     Each speed's limit is searched, bracketed and checked on its own, so the parts give the
     answers of one call over every speed; only where each search starts differs (its guess comes
@@ -212,15 +218,16 @@ def spread_sdm_solver(backend: Backend) -> SdmSolver | None:
         from rcsa.analysis.lobes.semi_discretization import (
             merged_result,
             semi_discretization_lobes,
+            speed_costs,
             speed_parts,
         )
 
         n_parts = min(SDM_PARTS_PER_SLOT * _slots(backend), speeds_rpm.size // SDM_MIN_SPEEDS_PER_PART)
-        if n_parts <= 1:
+        cost = speed_costs(model, speeds_rpm, teeth=settings["teeth"], radial_immersion=settings["radial_immersion"],
+                           milling=settings["milling"], steps_per_period=settings["steps_per_period"])
+        if n_parts <= 1 or float(cost.sum()) < SDM_MIN_SPREAD_COST:
             return semi_discretization_lobes(model, spindle_speed_rpm=speeds_rpm, **settings)
-        parts = speed_parts(model, speeds_rpm, n_parts, teeth=settings["teeth"],
-                            radial_immersion=settings["radial_immersion"], milling=settings["milling"],
-                            steps_per_period=settings["steps_per_period"])
+        parts = speed_parts(speeds_rpm, cost, n_parts)
         solved = [r for _, r in backend.map(_sdm_part, parts, shared=(model, settings), on_wait=check_time)]
         # a part computed elsewhere carries a copy of the model: the joined result names the caller's
         return merged_result([replace(r, modal_model=model) for r in solved])

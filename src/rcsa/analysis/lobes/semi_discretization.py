@@ -115,6 +115,7 @@ __all__ = [
     "resolving_steps",
     "semi_discretization_lobes",
     "semi_discretization_lobes_many",
+    "speed_costs",
     "speed_parts",
     "stable_at_depth_many",
 ]
@@ -1196,30 +1197,54 @@ def merged_result(parts: Sequence[SemiDiscretizationResult]) -> SemiDiscretizati
     return _result(first.modal_model, speed[order], fields, first.depth_search_max_m, first.scheme)
 
 
-#: A speed's cost in :func:`speed_parts` besides its steps, in steps: the search's share that does
+#: A speed's cost in :func:`speed_costs` besides its steps, in steps: the search's share that does
 #: not grow with the steps. Chosen by hand on ``benchmarks/bench_lobes.py``'s cut (500 speeds,
-#: steps 16–153): its four parts cost 1.5, 2.0, 1.6 and 1.1 s CPU (by count alone: 2.8 … 0.8 s).
+#: steps 16–153): its four parts cost 1.5, 2.0, 1.6 and 1.1 s CPU (cut by count alone: 2.8 … 0.8 s).
 _SPEED_COST_STEPS = 8
 
 
-def speed_parts(model: ModalModel, spindle_speed_rpm: np.ndarray, parts: int, *, teeth: int, radial_immersion: float,
-                milling: Milling, steps_per_period: int | None = None) -> list[np.ndarray]:
-    """The speed grid cut into ``parts`` consecutive parts of about equal cost, to be solved apart
-    (each by :func:`semi_discretization_lobes`) and joined again (:func:`merged_result`).
-
-    A speed costs about its steps (:func:`resolving_steps` — a slow speed has many cycles of the
-    top mode in its cut — or ``steps_per_period``) plus ``_SPEED_COST_STEPS``, so slow speeds go
-    in shorter parts.
+def speed_costs(model: ModalModel, spindle_speed_rpm: np.ndarray, *, teeth: int, radial_immersion: float,
+                milling: Milling, steps_per_period: int | None = None) -> np.ndarray:
+    """What each speed of a semi-discretization costs, in steps: its steps (:func:`resolving_steps` —
+    a slow speed has many cycles of the top mode in its cut — or ``steps_per_period``) plus
+    ``_SPEED_COST_STEPS``. About 0.2–0.35 ms of one core each on the 2-core VMs of the benchmarks
+    (RA-1's 16 states; a smaller model costs a little less: the per-step work dominates).
 
     Parameters
     ----------
     model : ModalModel
     spindle_speed_rpm : numpy.ndarray, shape (nspeed,)
-        rpm, in the order the parts keep.
-    parts : int
-        How many parts (at most one per speed; at least 1).
     teeth, radial_immersion, milling, steps_per_period
         As in :func:`semi_discretization_lobes`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (nspeed,)
+
+    Examples
+    --------
+    >>> m = ModalModel.of([1400.0, 4000.0], [0.02, 0.03], [1.0, 0.5], [0, 0])
+    >>> speed_costs(m, np.array([3000.0, 24000.0]), teeth=1, radial_immersion=0.05, milling="down").tolist()
+    [85.0, 24.0]
+    """
+    speed = np.asarray(spindle_speed_rpm, dtype=float)
+    steps = (resolving_steps(model, teeth, speed, radial_immersion=radial_immersion, milling=milling)
+             if steps_per_period is None else np.full(speed.size, int(steps_per_period)))
+    return np.asarray(steps, dtype=float) + _SPEED_COST_STEPS
+
+
+def speed_parts(spindle_speed_rpm: np.ndarray, cost: np.ndarray, parts: int) -> list[np.ndarray]:
+    """The speed grid cut into ``parts`` consecutive parts of about equal ``cost`` (:func:`speed_costs`),
+    to be solved apart (each by :func:`semi_discretization_lobes`) and joined again (:func:`merged_result`).
+
+    Parameters
+    ----------
+    spindle_speed_rpm : numpy.ndarray, shape (nspeed,)
+        rpm, in the order the parts keep.
+    cost : numpy.ndarray, shape (nspeed,)
+        Each speed's cost (any positive unit).
+    parts : int
+        How many parts (at most one per speed; at least 1).
 
     Returns
     -------
@@ -1228,17 +1253,15 @@ def speed_parts(model: ModalModel, spindle_speed_rpm: np.ndarray, parts: int, *,
 
     Examples
     --------
-    >>> m = ModalModel.of([1400.0, 4000.0], [0.02, 0.03], [1.0, 0.5], [0, 0])
-    >>> [p.size for p in speed_parts(m, np.linspace(2000.0, 30000.0, 100), 2, teeth=2,
-    ...                              radial_immersion=0.05, milling="down")]
-    [32, 68]
+    >>> [p.tolist() for p in speed_parts(np.arange(6.0), np.array([4.0, 4.0, 1.0, 1.0, 1.0, 1.0]), 2)]
+    [[0.0], [1.0, 2.0, 3.0, 4.0, 5.0]]
+    >>> [p.size for p in speed_parts(np.arange(6.0), np.ones(6), 3)]
+    [2, 2, 2]
     """
     speed = np.asarray(spindle_speed_rpm, dtype=float)
     n = max(1, min(int(parts), speed.size))
-    steps = (resolving_steps(model, teeth, speed, radial_immersion=radial_immersion, milling=milling)
-             if steps_per_period is None else np.full(speed.size, int(steps_per_period)))
-    cost = np.cumsum(steps + _SPEED_COST_STEPS, dtype=float)
-    cuts = np.searchsorted(cost, cost[-1] * np.arange(1, n) / n, side="right")
+    total = np.cumsum(np.asarray(cost, dtype=float))
+    cuts = np.searchsorted(total, total[-1] * np.arange(1, n) / n, side="right")
     cuts = np.unique(np.clip(cuts, 1, speed.size - 1)) if speed.size > 1 else np.empty(0, dtype=np.int64)
     return np.split(speed, cuts)
 
