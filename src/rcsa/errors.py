@@ -7,6 +7,8 @@ print one line and the service can answer ``422`` with ``application/problem+jso
 
 from __future__ import annotations
 
+from typing import Any
+
 __all__ = [
     "ConflictError",
     "DamagedError",
@@ -20,8 +22,33 @@ __all__ = [
 ]
 
 
+def _rebuilt(cls: type[RcsaError], args: tuple[Any, ...], state: dict[str, Any]) -> RcsaError:
+    """An :class:`RcsaError` as it was pickled: made without its ``__init__`` (whose parameters
+    differ from class to class), with its message and attributes as they were."""
+    error = cls.__new__(cls)
+    error.args = args
+    error.__dict__.update(state)
+    return error
+
+
 class RcsaError(Exception):
-    """Base class of every error raised on purpose by :mod:`rcsa`."""
+    """Base class of every error raised on purpose by :mod:`rcsa`.
+
+    Every one survives pickling with its class, message and attributes (``field``, ``rule``,
+    ``seconds``, …), so an error raised in a worker process or on a Dask worker reaches the
+    caller as itself, not as a failure to unpickle it (the standard exception pickling calls
+    ``cls(message)``, which the errors with several parameters refuse).
+
+    Examples
+    --------
+    >>> import pickle
+    >>> e = pickle.loads(pickle.dumps(InputError("teeth", "must be >= 1")))
+    >>> type(e).__name__, e.field, e.rule, str(e)
+    ('InputError', 'teeth', 'must be >= 1', 'teeth: must be >= 1')
+    """
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (_rebuilt, (type(self), self.args, dict(self.__dict__)))
 
 
 class InputError(RcsaError, ValueError):
