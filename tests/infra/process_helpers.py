@@ -37,3 +37,19 @@ def sleeping(chunk: float, shared: Any) -> int:
     """Sleeps ``chunk`` seconds, then answers its process id."""
     time.sleep(chunk)
     return os.getpid()
+
+
+def _refuse_to_load() -> None:
+    raise TypeError("this result cannot be rebuilt here")
+
+
+class Unreadable:
+    """A result that pickles in the worker but cannot be unpickled by the caller."""
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (_refuse_to_load, ())
+
+
+def unreadable(chunk: int, shared: Any) -> Any:
+    """Answers chunk 1 with a result the caller cannot read back."""
+    return Unreadable() if chunk == 1 else chunk

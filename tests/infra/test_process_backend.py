@@ -81,6 +81,12 @@ def test_a_worker_that_dies_fails_the_map_and_the_next_map_works(backend):
     assert list(backend.map(helpers.dying, [0, 2])) == [(0, 0), (1, 2)]
 
 
+def test_a_result_that_cannot_be_read_back_says_so_not_that_a_worker_died(backend):
+    with pytest.raises(ChunkFailed, match="could not be read back .*this result cannot be rebuilt here"):
+        list(backend.map(helpers.unreadable, [0, 1, 2]))
+    assert list(backend.map(helpers.unreadable, [0, 2])) == [(0, 0), (1, 2)]
+
+
 def test_a_caller_that_stops_waiting_terminates_the_workers(backend):
     class Stop(Exception):
         pass

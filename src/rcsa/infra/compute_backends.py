@@ -225,6 +225,18 @@ def _start_worker() -> None:
         os.environ.setdefault(key, value)
 
 
+def _broken_pool_reason(exc: BrokenProcessPool, i: int, n: int) -> str:
+    """Why a process pool broke while chunk ``i`` of ``n`` ran: a result the caller could not read
+    back (the pool keeps the reader's error, a quoted traceback, as the cause: its last line is
+    said), else a worker that died."""
+    lines = str(exc.__cause__ or "").replace("'''", "").strip().splitlines()
+    if lines:
+        return (f"the result of chunk {i + 1} of {n} could not be read back from its worker process "
+                f"({lines[-1].strip()}); the work was stopped")
+    return (f"a worker process died while chunk {i + 1} of {n} was running (killed, or out of memory); "
+            "the work was stopped")
+
+
 class ProcessBackend:
     """Runs chunks in ``workers`` processes of this machine (module docstring).
 
@@ -309,9 +321,8 @@ class ProcessBackend:
                 i = index.pop(future)
                 try:
                     out[i] = future.result()
-                except BrokenProcessPool:
-                    raise ChunkFailed(f"a worker process died while chunk {i + 1} of {n} was running (killed, "
-                                      "or out of memory); the work was stopped") from None
+                except BrokenProcessPool as exc:
+                    raise ChunkFailed(_broken_pool_reason(exc, i, n)) from None
             return out
 
         finished_cleanly = False
