@@ -173,9 +173,10 @@ def main() -> None:
           f"{t_warm * 1e3:8.1f} ms   resolved lobes / prediction {t_sdm / t_warm:7.1f}x  (target <= 25x)")
     print(f"  in CPU time: lobes {cpu[0]:.2f} s, prediction {warm[0] * 1e3:.1f} ms, ratio {cpu[0] / warm[0]:7.1f}x")
     request = {"assembly": ra1(GRID), **CUT, **low, "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 500}}
-    t_app, _ = _timed(lambda: rcsa.stability_lobes(request), args.repeat)
+    t_app, app_result = _timed(lambda: rcsa.stability_lobes(request), args.repeat)
     print(f"  end to end, a request with only the cut (auto: predict + exact modes + resolved SDM) {t_app:6.2f} s")
-    spread = _spread(request, args.repeat, t_app, t_warm)
+    whole = np.array([np.nan if x is None else x for x in app_result["depth_limit_m"]], dtype=float)
+    spread = _spread(request, whole, args.repeat, t_app, t_warm)
     figures = {"speeds": int(SPEEDS.size), "modes_per_direction": exact.n_modes // 2, "resolved_s": t_sdm,
                "resolved_cpu_s": cpu[0], "resolved_speeds": int(result.resolved.sum()), "refined_speeds": refined,
                "steps_min": int(result.steps.min()), "steps_max": int(result.steps.max()),
@@ -187,13 +188,12 @@ def main() -> None:
     record.write("lobes", figures, load_start=load)
 
 
-def _spread(request: dict, repeat: int, t_app: float, t_warm: float) -> dict:
+def _spread(request: dict, whole: np.ndarray, repeat: int, t_app: float, t_warm: float) -> dict:
     """The same request end to end with its speeds shared by two worker processes, as ``rcsa lobes``
     runs here by default (``--workers 0``: one per core): the workers started in the call (a
     fresh ``ProcessBackend(2)`` each time, as one command pays), and kept from the call before
-    (as a long-running caller that keeps its backend)."""
+    (as a long-running caller that keeps its backend); their limits against ``whole``, one process's."""
     fresh, kept, agree = [], [], 0.0
-    whole = stability_lobes_answer(request).nominal.depth_limit_m
     for _ in range(repeat):
         backend = ProcessBackend(2)
         try:

@@ -215,18 +215,13 @@ def spread_sdm_solver(backend: Backend) -> SdmSolver | None:
         return None
 
     def solve(model: ModalModel, speeds_rpm: np.ndarray, settings: dict[str, Any]) -> SemiDiscretizationResult:
-        from rcsa.analysis.lobes.semi_discretization import (
-            merged_result,
-            semi_discretization_lobes,
-            speed_costs,
-            speed_parts,
-        )
+        from rcsa.analysis.lobes.semi_discretization import merged_result, speed_costs, speed_parts
 
         n_parts = min(SDM_PARTS_PER_SLOT * _slots(backend), speeds_rpm.size // SDM_MIN_SPEEDS_PER_PART)
         cost = speed_costs(model, speeds_rpm, teeth=settings["teeth"], radial_immersion=settings["radial_immersion"],
                            milling=settings["milling"], steps_per_period=settings["steps_per_period"])
         if n_parts <= 1 or float(cost.sum()) < SDM_MIN_SPREAD_COST:
-            return semi_discretization_lobes(model, spindle_speed_rpm=speeds_rpm, **settings)
+            return _sdm_part(speeds_rpm, (model, settings))
         parts = speed_parts(speeds_rpm, cost, n_parts)
         solved = [r for _, r in backend.map(_sdm_part, parts, shared=(model, settings), on_wait=check_time)]
         # a part computed elsewhere carries a copy of the model: the joined result names the caller's
