@@ -27,6 +27,7 @@ from rcsa.app.analyses import (
 )
 from rcsa.cli import app
 from rcsa.infra.compute_backends import LocalBackend
+from tests.helpers import REPO
 
 #: Insperger & Stépán's single-mode benchmark, 2 teeth, a/D = 0.05 down milling (flip and Hopf lobes):
 #: 150 speeds: four parts for the two slots a backend that does not say has.
@@ -43,17 +44,22 @@ class InlineBackend:
 
     name = "inline"
 
-    def describe(self) -> dict[str, Any]:
-        return {"backend": self.name}
+    def __init__(self, slots: int | None = None) -> None:
+        self.slots = slots
+        self.parts: list[list[tuple[int, np.ndarray]]] = []
 
-    def __init__(self) -> None:
-        self.parts: list[np.ndarray] = []
+    def describe(self) -> dict[str, Any]:
+        return {"backend": self.name} if self.slots is None else {"backend": self.name, "workers": self.slots}
 
     def map(self, fn: Callable[[Any, Any], Any], chunks: Sequence[Any], *, shared: Any = None, ordered: bool = True,
             on_wait: Callable[[], None] | None = None) -> Iterator[tuple[int, Any]]:
         for i, chunk in enumerate(chunks):
-            self.parts.append(np.asarray(chunk))
+            self.parts.append(chunk)
             yield i, fn(chunk, shared)
+
+    def speeds(self, model: int = 0) -> list[np.ndarray]:
+        """The speeds of ``model`` in each part, in order."""
+        return [speeds for part in self.parts for which, speeds in part if which == model]
 
 
 @pytest.fixture(scope="module")
@@ -84,8 +90,10 @@ def assert_same_answers(spread: dict[str, Any], whole: dict[str, Any]) -> None:
 def test_the_parts_are_consecutive_and_cover_every_speed_once(one_call, spread_any_cost):
     backend = InlineBackend()
     spread = stability_lobes_answer(REQUEST, backend=backend)
-    assert len(backend.parts) == 2 * SDM_PARTS_PER_SLOT and all(p.size >= SDM_MIN_SPEEDS_PER_PART for p in backend.parts)
-    np.testing.assert_array_equal(np.concatenate(backend.parts), one_call.nominal.spindle_speed_rpm)
+    parts = backend.speeds()
+    assert len(parts) == len(backend.parts) == 2 * SDM_PARTS_PER_SLOT
+    assert all(p.size >= SDM_MIN_SPEEDS_PER_PART for p in parts)
+    np.testing.assert_array_equal(np.concatenate(parts), one_call.nominal.spindle_speed_rpm)
     assert_same_answers(spread.to_dict(), one_call.to_dict())
     assert spread.nominal.modal_model is not None and spread.nominal.scheme == one_call.nominal.scheme
 
@@ -119,3 +127,34 @@ def test_rcsa_lobes_on_two_worker_processes_answers_as_in_one(tmp_path, one_call
     two = runner.invoke(app, ["lobes", str(request), "--json", "--workers", "2"])
     assert two.exit_code == 0, two.stderr
     assert_same_answers(json.loads(two.stdout), one_call.to_dict())
+
+
+#: The README's robust example made cheaper (two teeth at a/D = 0.05, 24 speeds, 12 draws): its
+#: reduced model solves the nominal modes at four damping levels on a 52-speed stretched grid.
+ROBUST_REQUEST = {**json.loads((REPO / "examples" / "lobes-robust.json").read_text()),
+                  "teeth": 2, "radial_immersion": 0.05, "uncertainty": {"draws": 12, "seed": 1},
+                  "spindle_speed_rpm": {"start": 4000, "stop": 24000, "count": 24}}
+#: The reduced model's diagrams are bracketed to 5e-3 (``robust_sdm``), unchecked: the robust limits
+#: of two ways of solving them differ by at most two brackets.
+ROBUST_AGREE_RTOL = 2 * 5e-3
+
+
+def test_robust_limits_share_their_diagrams_speeds_with_every_damping_level_together(monkeypatch):
+    whole = stability_lobes_answer(ROBUST_REQUEST)
+    monkeypatch.setattr(analyses, "SDM_MIN_SPREAD_COST", 0.0)
+    monkeypatch.setattr(analyses, "SDM_MIN_SPEEDS_PER_PART", 16)
+    backend = InlineBackend(slots=2)
+    spread = stability_lobes_answer(ROBUST_REQUEST, backend=backend)
+    levels = {which for part in backend.parts for which, _ in part}
+    assert len(levels) > 1 and len(backend.parts) == 3  # the 52-speed grid in three slices of >= 16
+    assert all({which for which, _ in part} == levels for part in backend.parts)  # every level in every part
+    grid = np.concatenate(backend.speeds(0))
+    assert grid.size > ROBUST_REQUEST["spindle_speed_rpm"]["count"] and np.all(np.diff(grid) > 0)
+    for level in levels:
+        np.testing.assert_array_equal(np.concatenate(backend.speeds(level)), grid)
+    a, b = spread.robust.depth_limit_m, whole.robust.depth_limit_m
+    assert np.array_equal(np.isnan(a), np.isnan(b))
+    ok = np.isfinite(b)
+    assert np.max(np.abs(a[ok] / b[ok] - 1.0)) <= ROBUST_AGREE_RTOL
+    assert not np.array_equal(a[ok], b[ok])  # solved apart
+    np.testing.assert_array_equal(spread.nominal.depth_limit_m, whole.nominal.depth_limit_m)  # 24 speeds: one call

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
@@ -19,7 +19,7 @@ if TYPE_CHECKING:
     from rcsa.analysis.lobes.modal_model import ModalModel
     from rcsa.analysis.lobes.request import LobesRequest, SdmSolver
     from rcsa.analysis.lobes.robust import RobustLobes, RobustRequest
-    from rcsa.analysis.lobes.semi_discretization import SemiDiscretizationResult
+    from rcsa.analysis.lobes.semi_discretization import DiagramsSolver, SemiDiscretizationResult
     from rcsa.analysis.lobes.zoa import LobeResult
     from rcsa.app.budget import Limits
     from rcsa.infra.compute_backends import Backend
@@ -27,7 +27,7 @@ if TYPE_CHECKING:
     from rcsa.measured.hybrid import MeasurementSource
 
 __all__ = ["ANALYSIS_KINDS", "LobesAnswer", "cutting_conditions", "diagnose", "effects", "identify",
-           "resolve_lobes_references", "run_analysis", "spread_sdm_solver", "stability_lobes", "stability_lobes_answer",
+           "resolve_lobes_references", "run_analysis", "spread_sdm_diagrams", "spread_sdm_solver", "stability_lobes", "stability_lobes_answer",
            "stability_lobes_result",
            "stability_lobes_results", "validate"]
 
@@ -173,12 +173,17 @@ SDM_PARTS_PER_SLOT = 2
 SDM_MIN_SPREAD_COST = 8000.0
 
 
-def _sdm_part(speeds_rpm: np.ndarray, shared: tuple[ModalModel, dict[str, Any]]) -> SemiDiscretizationResult:
-    """One part of a spread semi-discretization, where a worker runs it: the speeds ``speeds_rpm``."""
-    from rcsa.analysis.lobes.semi_discretization import semi_discretization_lobes
+def _sdm_part(part: Sequence[tuple[int, np.ndarray]],
+              shared: tuple[Sequence[ModalModel], dict[str, Any]]) -> list[SemiDiscretizationResult]:
+    """One part of spread semi-discretizations, where a worker runs it: a slice of speeds of each of
+    some models, ``part`` = [(which model, its speeds), …], solved together in one call."""
+    from rcsa.analysis.lobes.semi_discretization import semi_discretization_lobes_many
 
-    model, settings = shared
-    return semi_discretization_lobes(model, spindle_speed_rpm=speeds_rpm, **settings)
+    models, settings = shared
+    which = [i for i, _ in part]
+    floors = settings.get("min_depth_search_max_m")
+    own = settings if floors is None else {**settings, "min_depth_search_max_m": [floors[i] for i in which]}
+    return semi_discretization_lobes_many([models[i] for i in which], spindle_speed_rpm=[s for _, s in part], **own)
 
 
 def _slots(backend: Backend) -> int:
@@ -187,14 +192,18 @@ def _slots(backend: Backend) -> int:
     return max(1, int(described.get("threads") or described.get("workers") or 2))
 
 
-def spread_sdm_solver(backend: Backend) -> SdmSolver | None:
-    """A semi-discretization solver (:data:`~rcsa.analysis.lobes.request.SdmSolver`) that cuts the
-    speed grid into consecutive parts of about equal cost
-    (:func:`~rcsa.analysis.lobes.semi_discretization.speed_parts`: :data:`SDM_PARTS_PER_SLOT` per
-    worker slot, at least :data:`SDM_MIN_SPEEDS_PER_PART` speeds each), solves them on ``backend``
-    and joins them (:func:`~rcsa.analysis.lobes.semi_discretization.merged_result`); work that
-    costs less than :data:`SDM_MIN_SPREAD_COST` is solved here in one call. None for a backend
-    that computes here (one call over every speed is then the fastest).
+def spread_sdm_diagrams(backend: Backend) -> DiagramsSolver | None:
+    """A solver of several semi-discretizations (:data:`~rcsa.analysis.lobes.semi_discretization.
+    DiagramsSolver`) that shares their speeds among ``backend``'s workers and joins each model's
+    answers again (:func:`~rcsa.analysis.lobes.semi_discretization.merged_result`).
+
+    Each model's speed grid is cut into the same number of consecutive slices of about equal cost
+    (:func:`~rcsa.analysis.lobes.semi_discretization.speed_parts`); part ``j`` is the ``j``-th slice
+    of every model, solved in one call (the models stay batched together, as in one call over all).
+    There are :data:`SDM_PARTS_PER_SLOT` parts per worker slot, fewer where the largest grid's slices
+    would hold less than :data:`SDM_MIN_SPEEDS_PER_PART` speeds; work that costs less than
+    :data:`SDM_MIN_SPREAD_COST` in all is solved here in one call. None for a backend that computes
+    here (one call over every model and speed is then the fastest).
 
     Each speed's limit is searched, bracketed and checked on its own, so the parts give the
     answers of one call over every speed; only where each search starts differs (its guess comes
@@ -209,23 +218,63 @@ def spread_sdm_solver(backend: Backend) -> SdmSolver | None:
 
     Returns
     -------
-    SdmSolver or None
+    DiagramsSolver or None
     """
     if backend.name == "local":
         return None
 
-    def solve(model: ModalModel, speeds_rpm: np.ndarray, settings: dict[str, Any]) -> SemiDiscretizationResult:
-        from rcsa.analysis.lobes.semi_discretization import merged_result, speed_costs, speed_parts
+    def solve(models: Sequence[ModalModel], speeds_rpm: Sequence[np.ndarray],
+              settings: dict[str, Any]) -> list[SemiDiscretizationResult]:
+        from rcsa.analysis.lobes.semi_discretization import (
+            merged_result,
+            solve_diagrams_here,
+            speed_costs,
+            speed_parts,
+        )
 
-        n_parts = min(SDM_PARTS_PER_SLOT * _slots(backend), speeds_rpm.size // SDM_MIN_SPEEDS_PER_PART)
-        cost = speed_costs(model, speeds_rpm, teeth=settings["teeth"], radial_immersion=settings["radial_immersion"],
-                           milling=settings["milling"], steps_per_period=settings["steps_per_period"])
-        if n_parts <= 1 or float(cost.sum()) < SDM_MIN_SPREAD_COST:
-            return _sdm_part(speeds_rpm, (model, settings))
-        parts = speed_parts(speeds_rpm, cost, n_parts)
-        solved = [r for _, r in backend.map(_sdm_part, parts, shared=(model, settings), on_wait=check_time)]
-        # a part computed elsewhere carries a copy of the model: the joined result names the caller's
-        return merged_result([replace(r, modal_model=model) for r in solved])
+        steps = settings.get("steps_per_period")
+        if steps is not None and not isinstance(steps, (int, np.integer)):  # per-speed steps: not cut apart
+            return solve_diagrams_here(models, speeds_rpm, settings)
+        costs = [speed_costs(m, s, teeth=settings["teeth"], radial_immersion=settings["radial_immersion"],
+                             milling=settings["milling"], steps_per_period=None if steps is None else int(steps))
+                 for m, s in zip(models, speeds_rpm, strict=True)]
+        n_parts = min(SDM_PARTS_PER_SLOT * _slots(backend), max(s.size for s in speeds_rpm) // SDM_MIN_SPEEDS_PER_PART)
+        if n_parts <= 1 or float(sum(c.sum() for c in costs)) < SDM_MIN_SPREAD_COST:
+            return solve_diagrams_here(models, speeds_rpm, settings)
+        slices = [speed_parts(s, c, n_parts) for s, c in zip(speeds_rpm, costs, strict=True)]
+        parts = [[(i, own[j]) for i, own in enumerate(slices) if j < len(own)] for j in range(n_parts)]
+        solved = [r for _, r in backend.map(_sdm_part, parts, shared=(list(models), settings), on_wait=check_time)]
+        mine: list[list[SemiDiscretizationResult]] = [[] for _ in models]
+        for part, results in zip(parts, solved, strict=True):
+            for (i, _), r in zip(part, results, strict=True):
+                # a part computed elsewhere carries a copy of its model: the joined result names the caller's
+                mine[i].append(replace(r, modal_model=models[i]))
+        return [merged_result(m) for m in mine]
+
+    return solve
+
+
+def spread_sdm_solver(backend: Backend) -> SdmSolver | None:
+    """A semi-discretization solver (:data:`~rcsa.analysis.lobes.request.SdmSolver`) of one model
+    that shares its speeds among ``backend``'s workers as :func:`spread_sdm_diagrams` does; None
+    for a backend that computes here.
+
+    Parameters
+    ----------
+    backend : Backend
+        Worker processes of this machine or a Dask cluster (:mod:`rcsa.infra.compute_backends`).
+
+    Returns
+    -------
+    SdmSolver or None
+    """
+    many = spread_sdm_diagrams(backend)
+    if many is None:
+        return None
+    spread = many
+
+    def solve(model: ModalModel, speeds_rpm: np.ndarray, settings: dict[str, Any]) -> SemiDiscretizationResult:
+        return spread([model], [speeds_rpm], settings)[0]
 
     return solve
 
@@ -247,8 +296,9 @@ def stability_lobes_answer(request: Mapping[str, Any], *, store: MeasurementSour
     service's limits of an answer given at once), ``"auto"`` answers zero-order lobes, marked
     unresolved, where the resolved semi-discretization would exceed them
     (:func:`rcsa.app.budget.auto_lobes_fallback`). With ``backend`` (worker processes or a Dask
-    cluster) the nominal semi-discretization's speeds are shared among its workers
-    (:func:`spread_sdm_solver`); robust limits are computed here.
+    cluster) the semi-discretizations' speeds are shared among its workers: the nominal diagram's
+    (:func:`spread_sdm_solver`) and those of the robust limits' reduced model
+    (:func:`spread_sdm_diagrams`).
 
     Returns
     -------
@@ -256,13 +306,15 @@ def stability_lobes_answer(request: Mapping[str, Any], *, store: MeasurementSour
     """
     parsed, robust, fallback = _parse_lobes(request, within)
     solver = None if backend is None else spread_sdm_solver(backend)
+    diagrams = None if backend is None else spread_sdm_diagrams(backend)
     if fallback is not None:
-        return replace(_answer(parsed, robust, store, max_lines, solver), method_reason=fallback, unchecked=True)
-    return _answer(parsed, robust, store, max_lines, solver)
+        return replace(_answer(parsed, robust, store, max_lines, solver, diagrams), method_reason=fallback,
+                       unchecked=True)
+    return _answer(parsed, robust, store, max_lines, solver, diagrams)
 
 
 def _answer(parsed: LobesRequest, robust: RobustRequest | None, store: MeasurementSource | None,
-            max_lines: int, solver: SdmSolver | None = None) -> LobesAnswer:
+            max_lines: int, solver: SdmSolver | None = None, diagrams: DiagramsSolver | None = None) -> LobesAnswer:
     from rcsa.analysis.lobes.robust import RobustLobes, robust_lobes
     from rcsa.analysis.lobes.robust_sdm import robust_sdm_limits
     from rcsa.analysis.lobes.semi_discretization import SemiDiscretizationResult
@@ -293,7 +345,7 @@ def _answer(parsed: LobesRequest, robust: RobustRequest | None, store: Measureme
         limit = robust_sdm_limits(nominal.modal_model, f, h, draws.h, nominal, robust.confidence,
                                   teeth=parsed.teeth, tangential_coefficient_n_m2=parsed.tangential_coefficient_n_m2,
                                   radial_ratio=parsed.radial_ratio, radial_immersion=parsed.radial_immersion,
-                                  milling=parsed.milling, draws_out=per_draw)
+                                  milling=parsed.milling, draws_out=per_draw, diagrams=diagrams)
         limit.flags.writeable = False
         return LobesAnswer(nominal, RobustLobes(limit, per_draw[0], robust.confidence, options,
                                                 method="semi_discretization"), flute_length_m=flute,

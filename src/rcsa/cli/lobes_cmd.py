@@ -44,9 +44,9 @@ def register(app: typer.Typer) -> None:
         The result JSON goes to stdout (or to -o OUT); on a terminal the absolute limit and the
         best pockets are shown as a table instead (--json: the JSON there too).
 
-        A semi-discretization worth more than a few seconds of one core (64 speeds or more) is
-        shared by --workers processes (default: one per core) or the Dask cluster of
-        --dask-scheduler, in parts of consecutive speeds."""
+        A semi-discretization worth more than a few seconds of one core (64 speeds or more; the
+        robust limits' reduced model too) is shared by --workers processes (default: one per core)
+        or the Dask cluster of --dask-scheduler, in parts of consecutive speeds."""
         # rcsa.app is imported when the command runs, not with the module: `rcsa --help` stays fast
         from rcsa.app.analyses import resolve_lobes_references, stability_lobes_answer
         from rcsa.app.figures import check_picture_path, robust_lobes_figure, save_figure

@@ -47,8 +47,9 @@ import numpy as np
 from rcsa.analysis.lobes.modal_model import ModalModel
 from rcsa.analysis.lobes.robust import robust_depth_limit
 from rcsa.analysis.lobes.semi_discretization import (
+    DiagramsSolver,
     SemiDiscretizationResult,
-    semi_discretization_lobes_many,
+    solve_diagrams_here,
 )
 from rcsa.errors import InputError
 
@@ -216,7 +217,8 @@ def _read(grid: np.ndarray, values: np.ndarray, at: np.ndarray) -> np.ndarray:
 def robust_sdm_limits(model: ModalModel, frequency_hz: np.ndarray, h: np.ndarray, h_draws: np.ndarray,
                       nominal: SemiDiscretizationResult, confidence: float, *, teeth: int,
                       tangential_coefficient_n_m2: float, radial_ratio: float, radial_immersion: float,
-                      milling: Any, draws_out: list[np.ndarray] | None = None) -> np.ndarray:
+                      milling: Any, draws_out: list[np.ndarray] | None = None,
+                      diagrams: DiagramsSolver | None = None) -> np.ndarray:
     """The robust SDM depth limit at the speeds of ``nominal`` (module docstring).
 
     Parameters
@@ -236,6 +238,10 @@ def robust_sdm_limits(model: ModalModel, frequency_hz: np.ndarray, h: np.ndarray
     draws_out : list, optional
         Receives every draw's reduced limit, shape (ndraws, nspeed) (NaN: none below the
         search depth).
+    diagrams : DiagramsSolver, optional
+        How the damping levels' diagrams are solved (default: together, in this process,
+        :func:`~rcsa.analysis.lobes.semi_discretization.solve_diagrams_here`); the application
+        layer may share them among workers.
 
     Returns
     -------
@@ -270,10 +276,10 @@ def robust_sdm_limits(model: ModalModel, frequency_hz: np.ndarray, h: np.ndarray
           "radial_immersion": radial_immersion, "milling": milling}
     # the reduced model's own error (module docstring) dwarfs the discretisation's: its diagrams are
     # solved with the resolving steps but not checked or refined (a screening pass)
-    solved = semi_discretization_lobes_many([_damped(model, lv) for lv in levels], **kw,
-                                            spindle_speed_rpm=[grid] * len(levels),
-                                            min_depth_search_max_m=[nominal.depth_search_max_m] * len(levels),
-                                            depth_rtol=5e-3, check=False)
+    solve = solve_diagrams_here if diagrams is None else diagrams
+    solved = solve([_damped(model, lv) for lv in levels], [grid] * len(levels),
+                   {**kw, "min_depth_search_max_m": [nominal.depth_search_max_m] * len(levels),
+                    "depth_rtol": 5e-3, "check": False})
     table = np.log(np.stack([np.where(np.isfinite(r.depth_limit_m), r.depth_limit_m, _NO_LIMIT) for r in solved]))
     shifted = speed[None, :] / s  # (ndraws, nspeed)
     at_levels = _read(grid, table, shifted)  # (nlevels, ndraws, nspeed)

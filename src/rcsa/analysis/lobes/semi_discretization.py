@@ -99,6 +99,7 @@ from rcsa.model.wire import complex_to_wire, json_float, json_list
 __all__ = [
     "CUT_WINDOW",
     "DEFAULT_STEPS_PER_PERIOD",
+    "DiagramsSolver",
     "FULL_PERIOD",
     "MANY_FIELDS",
     "MAX_REFINEMENTS",
@@ -115,6 +116,7 @@ __all__ = [
     "resolving_steps",
     "semi_discretization_lobes",
     "semi_discretization_lobes_many",
+    "solve_diagrams_here",
     "speed_costs",
     "speed_parts",
     "stable_at_depth_many",
@@ -1094,6 +1096,35 @@ def semi_discretization_lobes_many(
                     break
                 solve.refine(fields, todo, least)
     return [_result(models[i], speeds[i], fields[i], float(ceiling[i]), scheme) for i in range(len(models))]
+
+
+#: How several diagrams are solved: ``solver(models, spindle_speed_rpm, settings)`` answers as
+#: :func:`semi_discretization_lobes_many` ``(models, spindle_speed_rpm=..., **settings)`` — by default
+#: that very call, in this process (:func:`solve_diagrams_here`); the application layer may share the
+#: (model, speeds) work among worker processes or a cluster and join each model's parts again
+#: (:func:`merged_result`).
+DiagramsSolver = Callable[[Sequence[ModalModel], Sequence[np.ndarray], dict[str, Any]],
+                          list[SemiDiscretizationResult]]
+
+
+def solve_diagrams_here(models: Sequence[ModalModel], spindle_speed_rpm: Sequence[np.ndarray],
+                        settings: dict[str, Any]) -> list[SemiDiscretizationResult]:
+    """:data:`DiagramsSolver` in this process: every model and speed in one call.
+
+    Parameters
+    ----------
+    models : sequence of ModalModel
+    spindle_speed_rpm : sequence of numpy.ndarray
+        One speed grid per model, rpm.
+    settings : dict
+        The other keywords of :func:`semi_discretization_lobes_many`.
+
+    Returns
+    -------
+    list of SemiDiscretizationResult
+        One per model, in order.
+    """
+    return semi_discretization_lobes_many(models, spindle_speed_rpm=spindle_speed_rpm, **settings)
 
 
 def stable_at_depth_many(
