@@ -344,6 +344,15 @@ def _analysis_rows() -> list[list[str]]:
                     f"(one process: {lf['end_to_end_s']:.2f} s)" if "spread_2_workers_fresh_s" in lf else ""),
                  goal("≤ 25×", lf["ratio_to_warm_prediction"] <= 25),
                  load_text(lobes["load_average_start"], lobes["load_average_end"]), "lobes.json"])
+    robust = result("robust_lobes")
+    rf = robust["figures"]
+    rows.append([f"robust stability lobes of `examples/lobes-robust.json` ({rf['speeds']} speeds, {rf['draws']} draws; "
+                 "the reduced model's damping levels), warm, end to end (`bench_robust_lobes.py`): one process / its "
+                 "speeds shared by 2 worker processes (`rcsa lobes`' default here)",
+                 f"{rf['one_process_s']:.1f} s / {rf['two_workers_fresh_s']:.1f} s with the workers started in the call "
+                 f"({rf['speedup_fresh']:.2f}× faster), {rf['two_workers_kept_s']:.1f} s with them kept "
+                 f"({rf['speedup_kept']:.2f}×); robust limits within {pct(rf['robust_agreement'], 2)} of one process's",
+                 "", load_text(robust["load_average_start"], robust["load_average_end"]), "robust_lobes.json"])
     for library, what in (("small", "25 single-flute tools Ø1–6 mm (issue 29's range)"),
                           ("multi", "25 two-, three- and four-flute tools Ø3–16 mm")):
         presets = value(f"presets_{library}", "figures.immersions")
