@@ -27,9 +27,8 @@ if TYPE_CHECKING:
     from rcsa.measured.hybrid import MeasurementSource
 
 __all__ = ["ANALYSIS_KINDS", "LobesAnswer", "cutting_conditions", "diagnose", "effects", "identify",
-           "resolve_lobes_references", "run_analysis", "spread_sdm_diagrams", "spread_sdm_solver", "stability_lobes", "stability_lobes_answer",
-           "stability_lobes_result",
-           "stability_lobes_results", "validate"]
+           "resolve_lobes_references", "run_analysis", "spread_sdm_diagrams", "spread_sdm_solver", "stability_lobes",
+           "stability_lobes_answer", "stability_lobes_result", "stability_lobes_results", "validate"]
 
 #: Single computations that may also run as jobs (``Prefer: respond-async``), by the name of
 #: their cost model in :mod:`rcsa.app.budget`.
@@ -233,7 +232,9 @@ def spread_sdm_diagrams(backend: Backend) -> DiagramsSolver | None:
         )
 
         steps = settings.get("steps_per_period")
-        if steps is not None and not isinstance(steps, (int, np.integer)):  # per-speed steps: not cut apart
+        per_speed = (steps is not None and not isinstance(steps, (int, np.integer))) or \
+            settings.get("scan_start_m") is not None
+        if per_speed:  # settings given speed by speed are not cut apart
             return solve_diagrams_here(models, speeds_rpm, settings)
         costs = [speed_costs(m, s, teeth=settings["teeth"], radial_immersion=settings["radial_immersion"],
                              milling=settings["milling"], steps_per_period=None if steps is None else int(steps))
@@ -271,7 +272,7 @@ def spread_sdm_solver(backend: Backend) -> SdmSolver | None:
     many = spread_sdm_diagrams(backend)
     if many is None:
         return None
-    spread = many
+    spread: DiagramsSolver = many  # the name the closure keeps, known not to be None
 
     def solve(model: ModalModel, speeds_rpm: np.ndarray, settings: dict[str, Any]) -> SemiDiscretizationResult:
         return spread([model], [speeds_rpm], settings)[0]
