@@ -73,14 +73,15 @@ def spread_any_cost(monkeypatch):
     monkeypatch.setattr(analyses, "SDM_MIN_SPREAD_COST", 0.0)
 
 
-def assert_same_answers(spread: dict[str, Any], whole: dict[str, Any]) -> None:
-    """The same answers within ``AGREE_RTOL``, and solved apart: where each speed's search starts
-    moves some limits within their brackets (a call that was not split gives them bit for bit)."""
+def assert_same_answers(spread: dict[str, Any], whole: dict[str, Any], apart: bool = True) -> None:
+    """The same answers within ``AGREE_RTOL`` and, with ``apart``, solved apart: where each speed's
+    search starts moves some limits within their brackets (a call that was not split gives them bit
+    for bit)."""
     a, b = np.array(spread["depth_limit_m"], dtype=float), np.array(whole["depth_limit_m"], dtype=float)
     assert np.array_equal(np.isnan(a), np.isnan(b))
     ok = np.isfinite(b)
     assert np.max(np.abs(a[ok] / b[ok] - 1.0)) <= AGREE_RTOL
-    assert not np.array_equal(a[ok], b[ok])
+    assert not apart or not np.array_equal(a[ok], b[ok])
     assert spread["instability"] == whole["instability"]
     assert spread["spindle_speed_rpm"] == whole["spindle_speed_rpm"]
     assert spread["resolved"] == whole["resolved"]
@@ -158,3 +159,31 @@ def test_robust_limits_share_their_diagrams_speeds_with_every_damping_level_toge
     assert np.max(np.abs(a[ok] / b[ok] - 1.0)) <= ROBUST_AGREE_RTOL
     assert not np.array_equal(a[ok], b[ok])  # solved apart
     np.testing.assert_array_equal(spread.nominal.depth_limit_m, whole.nominal.depth_limit_m)  # 24 speeds: one call
+
+
+def test_models_with_grids_of_any_size_are_spread_together_and_joined_each_on_its_own(monkeypatch, spread_any_cost):
+    """Slices are taken model by model: a short grid has fewer of them (its last parts hold only the
+    longer grids), and a grid cut in fewer slices than asked leaves no empty part behind."""
+    from rcsa.analysis.lobes import semi_discretization as sd
+    from rcsa.analysis.lobes.modal_model import ModalModel
+
+    models = [ModalModel.of([922.0], [0.011], [1 / 0.03993], [0]), ModalModel.of([1400.0], [0.02], [20.0], [0])]
+    speeds = [np.linspace(5000.0, 25000.0, 100), np.array([8000.0, 16000.0])]
+    settings = {"teeth": 2, "tangential_coefficient_n_m2": 6e8, "radial_ratio": 1 / 3, "radial_immersion": 0.05,
+                "milling": "down", "min_depth_search_max_m": [0.01, 0.02]}
+    whole = sd.solve_diagrams_here(models, speeds, settings)
+    backend = InlineBackend(slots=2)
+    spread = analyses.spread_sdm_diagrams(backend)
+    assert spread is not None
+    apart = spread(models, speeds, settings)
+    assert [len(part) for part in backend.parts] == [2, 2, 1]  # 100 speeds in three slices, 2 in two
+    for a, b, s in zip(apart, whole, speeds, strict=True):
+        assert a.modal_model is b.modal_model is not None
+        np.testing.assert_array_equal(a.spindle_speed_rpm, s)
+        assert a.depth_search_max_m == b.depth_search_max_m
+        assert_same_answers({**a.to_dict(), "depth_limit_m": a.depth_limit_m.tolist()},
+                            {**b.to_dict(), "depth_limit_m": b.depth_limit_m.tolist()}, apart=a is apart[0])
+    monkeypatch.setattr(sd, "speed_parts", lambda s, c, n: [np.asarray(s, dtype=float)])  # one slice each
+    backend = InlineBackend(slots=2)
+    analyses.spread_sdm_diagrams(backend)(models, speeds, settings)
+    assert [len(part) for part in backend.parts] == [2]

@@ -243,7 +243,8 @@ def spread_sdm_diagrams(backend: Backend) -> DiagramsSolver | None:
         if n_parts <= 1 or float(sum(c.sum() for c in costs)) < SDM_MIN_SPREAD_COST:
             return solve_diagrams_here(models, speeds_rpm, settings)
         slices = [speed_parts(s, c, n_parts) for s, c in zip(speeds_rpm, costs, strict=True)]
-        parts = [[(i, own[j]) for i, own in enumerate(slices) if j < len(own)] for j in range(n_parts)]
+        parts = [part for j in range(n_parts)  # a grid of few speeds (or one costly speed) has fewer slices
+                 if (part := [(i, own[j]) for i, own in enumerate(slices) if j < len(own)])]
         solved = [r for _, r in backend.map(_sdm_part, parts, shared=(list(models), settings), on_wait=check_time)]
         mine: list[list[SemiDiscretizationResult]] = [[] for _ in models]
         for part, results in zip(parts, solved, strict=True):
