@@ -54,7 +54,7 @@ from rcsa.analysis.lobes.zoa import (  # noqa: E402
     directional_factors,
     engagement_angles_rad,
 )
-from rcsa.app.analyses import stability_lobes_answer  # noqa: E402
+from rcsa.app.analyses import LobesAnswer, stability_lobes_answer  # noqa: E402
 from rcsa.infra.compute_backends import ProcessBackend  # noqa: E402
 from rcsa.model.contract import parse_assembly  # noqa: E402
 from rcsa.reference import ra1  # noqa: E402
@@ -188,12 +188,12 @@ def main() -> None:
     record.write("lobes", figures, load_start=load)
 
 
-def _spread(request: dict, whole: np.ndarray, repeat: int, t_app: float, t_warm: float) -> dict:
-    """The same request end to end with its speeds shared by two worker processes, as ``rcsa lobes``
-    runs here by default (``--workers 0``: one per core): the workers started in the call (a
-    fresh ``ProcessBackend(2)`` each time, as one command pays), and kept from the call before
-    (as a long-running caller that keeps its backend); their limits against ``whole``, one process's."""
-    fresh, kept, agree = [], [], 0.0
+def on_two_workers(request: dict, repeat: int) -> tuple[list[float], list[float], list[LobesAnswer]]:
+    """``request`` end to end with its semi-discretizations shared by two worker processes, ``repeat``
+    times: the seconds with the workers started in the call (a fresh ``ProcessBackend(2)`` each time,
+    as one command pays), those with them kept from the call before (as a long-running caller that
+    keeps its backend), and the answers of the kept calls."""
+    fresh, kept, answers = [], [], []
     for _ in range(repeat):
         backend = ProcessBackend(2)
         try:
@@ -201,11 +201,20 @@ def _spread(request: dict, whole: np.ndarray, repeat: int, t_app: float, t_warm:
             stability_lobes_answer(request, backend=backend)
             fresh.append(time.perf_counter() - t0)
             t0 = time.perf_counter()
-            part = stability_lobes_answer(request, backend=backend).nominal.depth_limit_m
+            answers.append(stability_lobes_answer(request, backend=backend))
             kept.append(time.perf_counter() - t0)
         finally:
             backend.close()
-        agree = max(agree, float(np.nanmax(np.abs(part / whole - 1))))
+    return fresh, kept, answers
+
+
+def _spread(request: dict, whole: np.ndarray, repeat: int, t_app: float, t_warm: float) -> dict:
+    """The same request end to end with its speeds shared by two worker processes, as ``rcsa lobes``
+    runs here by default (``--workers 0``: one per core): the workers started in the call (a
+    fresh ``ProcessBackend(2)`` each time, as one command pays), and kept from the call before
+    (as a long-running caller that keeps its backend); their limits against ``whole``, one process's."""
+    fresh, kept, answers = on_two_workers(request, repeat)
+    agree = max(float(np.nanmax(np.abs(a.nominal.depth_limit_m / whole - 1))) for a in answers)
     t_fresh, t_kept = statistics.median(fresh), statistics.median(kept)
     print(f"  … its speeds shared by 2 worker processes (rcsa lobes' default here): workers started in the call "
           f"{t_fresh:6.2f} s ({t_app / t_fresh:.2f}x faster, {t_fresh / t_warm:.0f}x the warm prediction), workers "

@@ -10,7 +10,7 @@ are kept, as a user's second call has them):
 * in this process (``LocalBackend``: one call over every level and speed), the baseline;
 * with the speeds shared by two worker processes (``ProcessBackend(2)``, ``rcsa lobes``' default
   on this 2-core VM; ``rcsa.app.analyses.spread_sdm_diagrams``): the workers started in the call
-  (as one command pays), and kept from the call before;
+  (as one command pays), and kept from the call before (``bench_lobes.on_two_workers``);
 * the robust limits of the two against each other (the reduced model's diagrams are bracketed
   to 0.5 %, so where each speed's search starts may move them within that).
 
@@ -38,9 +38,10 @@ import numpy as np  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from benchmarks import record  # noqa: E402
+from benchmarks.bench_lobes import on_two_workers  # noqa: E402
 
 from rcsa.app.analyses import stability_lobes_answer  # noqa: E402
-from rcsa.infra.compute_backends import LocalBackend, ProcessBackend  # noqa: E402
+from rcsa.infra.compute_backends import LocalBackend  # noqa: E402
 
 REQUEST = Path(__file__).resolve().parents[1] / "examples" / "lobes-robust.json"
 
@@ -74,21 +75,9 @@ def main() -> None:
         here.append(time.perf_counter() - t0)
         cpu_here.append(time.process_time() - c0)
     nominal_one, robust_one = _limits(one)
-    fresh, kept, agree_nominal, agree_robust = [], [], 0.0, 0.0
-    for _ in range(args.repeat):
-        backend = ProcessBackend(2)
-        try:
-            t0 = time.perf_counter()
-            stability_lobes_answer(request, backend=backend)
-            fresh.append(time.perf_counter() - t0)
-            t0 = time.perf_counter()
-            two = stability_lobes_answer(request, backend=backend)
-            kept.append(time.perf_counter() - t0)
-        finally:
-            backend.close()
-        nominal_two, robust_two = _limits(two)
-        agree_nominal = max(agree_nominal, _worst(nominal_two, nominal_one))
-        agree_robust = max(agree_robust, _worst(robust_two, robust_one))
+    fresh, kept, answers = on_two_workers(request, args.repeat)
+    agree_nominal = max(_worst(_limits(two)[0], nominal_one) for two in answers)
+    agree_robust = max(_worst(_limits(two)[1], robust_one) for two in answers)
     t_here, t_fresh, t_kept = (statistics.median(x) for x in (here, fresh, kept))
     print(f"  one process (baseline)                        {t_here:6.2f} s  (CPU {statistics.median(cpu_here):.2f} s)")
     print(f"  2 worker processes, started in the call       {t_fresh:6.2f} s  ({t_here / t_fresh:.2f}x faster)")
