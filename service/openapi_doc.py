@@ -22,7 +22,7 @@ from typing import Any
 from fastapi.routing import APIRoute
 
 from .errors import iter_routes
-from .security import require_read, require_write
+from .security import access_of
 
 __all__ = ["OPTIONAL_KEY", "document_job_token", "mark_anonymous_operations", "operation_id", "route_access",
            "write_operations"]
@@ -32,17 +32,8 @@ OPTIONAL_KEY: list[dict[str, list[str]]] = [{}, {"APIKey": []}]
 
 
 def route_access(route: APIRoute) -> str | None:
-    """``"write"``, ``"read"`` or None: the strictest access among a route's dependencies."""
-    found: set[str] = set()
-    todo = [route.dependant]
-    while todo:
-        dep = todo.pop()
-        if dep.call is require_write:
-            found.add("write")
-        elif dep.call is require_read:
-            found.add("read")
-        todo.extend(dep.dependencies)
-    return "write" if "write" in found else ("read" if found else None)
+    """``"write"``, ``"read"`` or None: the route's access (:func:`service.security.access_of`)."""
+    return access_of(route.dependant)
 
 
 def mark_anonymous_operations(doc: dict[str, Any], routes: Iterable[Any], anonymous_read: bool) -> None:

@@ -41,7 +41,6 @@ from typing import Any
 
 from fastapi import Request
 from fastapi.concurrency import run_in_threadpool
-from fastapi.dependencies.models import Dependant
 from fastapi.exceptions import RequestValidationError
 from fastapi.routing import APIRoute
 from starlette.responses import Response
@@ -53,7 +52,7 @@ from rcsa.infra.api_keys import Principal
 
 from .errors import BodyTooLarge, malformed_body
 from .middleware import BODY_LIMIT_KEY
-from .security import principal, require_read, require_write
+from .security import access_of, principal, require_read, require_write
 from .state import ensure_state
 
 __all__ = ["BODY_LIMIT_KEY", "MAX_BODY_EXTENSION", "OFF_LOOP_BYTES", "ServiceRequest", "ServiceRoute",
@@ -124,20 +123,6 @@ class ServiceRequest(Request):
         return validated if validated is not None else await self.document()
 
 
-def _access(dependant: Dependant) -> str | None:
-    """``"write"``, ``"read"`` or None: the strictest access among a route's dependencies."""
-    found: set[str] = set()
-    todo = [dependant]
-    while todo:
-        dep = todo.pop()
-        if dep.call is require_write:
-            found.add("write")
-        elif dep.call is require_read:
-            found.add("read")
-        todo.extend(dep.dependencies)
-    return "write" if "write" in found else ("read" if found else None)
-
-
 class ServiceRoute(APIRoute):
     """An ``APIRoute`` with the checks of the module docstring in front of its handler."""
 
@@ -153,7 +138,7 @@ class ServiceRoute(APIRoute):
         inner = self.wrap_handler(super().get_route_handler())
         limit_given = (self.openapi_extra or {}).get(MAX_BODY_EXTENSION)
         route_limit = int(limit_given) if limit_given is not None else None
-        access = _access(self.dependant)
+        access = access_of(self.dependant)
         where = f"{sorted(self.methods or ())[0] if self.methods else ''} {self.path}".strip()
         timed = "POST" in (self.methods or set()) and access == "read"  # writes finish what they start
 

@@ -16,6 +16,7 @@ from __future__ import annotations
 from typing import Annotated
 
 from fastapi import Depends, Security
+from fastapi.dependencies.models import Dependant
 from fastapi.security import APIKeyHeader
 
 from rcsa.infra.api_keys import Principal
@@ -23,7 +24,7 @@ from rcsa.infra.api_keys import Principal
 from .deps import StateDep
 from .errors import ProblemError
 
-__all__ = ["ReadAccess", "WriteAccess", "api_key_header", "principal", "require_read", "require_write"]
+__all__ = ["ReadAccess", "WriteAccess", "access_of", "api_key_header", "principal", "require_read", "require_write"]
 
 api_key_header = APIKeyHeader(
     name="X-API-Key", auto_error=False, scheme_name="APIKey",
@@ -67,3 +68,21 @@ def require_write(who: Annotated[Principal, Depends(principal)]) -> Principal:
 
 ReadAccess = Annotated[Principal, Depends(require_read)]
 WriteAccess = Annotated[Principal, Depends(require_write)]
+
+
+def access_of(dependant: Dependant) -> str | None:
+    """``"write"``, ``"read"`` or None: the strictest access among a route's dependencies.
+
+    The one rule both the request checks (``service/routing.py``) and the OpenAPI document
+    (``service/openapi_doc.py``) read a route's access by.
+    """
+    found: set[str] = set()
+    todo = [dependant]
+    while todo:
+        dep = todo.pop()
+        if dep.call is require_write:
+            found.add("write")
+        elif dep.call is require_read:
+            found.add("read")
+        todo.extend(dep.dependencies)
+    return "write" if "write" in found else ("read" if found else None)
