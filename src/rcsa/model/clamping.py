@@ -40,7 +40,8 @@ from rcsa.physics.materials import Material
 from rcsa.physics.sections import BeamTheory, Section, ShearModel, shear_coefficient, tube
 
 __all__ = ["BULK_COEFFICIENTS", "CALIBRATED_GEOMETRY_RANGES", "FITTED", "BulkCoefficients", "arc_per_length", "clamped_holder_chain",
-           "clamping_notes", "face_contact", "interface_per_length"]
+           "clamping_notes", "face_contact", "interface_per_length",
+           "step_cone_length_m"]
 
 _TOL_M = 1e-12
 
@@ -216,6 +217,34 @@ class _HolderPiece:
     stiffness_diameter_m: float
 
 
+def step_cone_length_m(step_cone: float, big_diameter_m: float, small_diameter_m: float, section_length_m: float
+                       ) -> float:
+    """How far a holder section's stiffness cone reaches from a step down to a smaller section.
+
+    ``ℓ = step_cone (D − d)/2``, at most the section's length (:class:`BulkCoefficients`).
+
+    Parameters
+    ----------
+    step_cone : float
+        The cone's length per radial step height (``BulkCoefficients.step_cone``).
+    big_diameter_m, small_diameter_m : float
+        Outer diameters of the section and of its smaller neighbour, m.
+    section_length_m : float
+        The section's length, m.
+
+    Returns
+    -------
+    float
+        ℓ, m.
+
+    Examples
+    --------
+    >>> round(step_cone_length_m(1.0, 0.040, 0.026, 0.030), 6), step_cone_length_m(1.0, 0.063, 0.010, 0.024)
+    (0.007, 0.024)
+    """
+    return min(step_cone * (big_diameter_m - small_diameter_m) / 2.0, section_length_m)
+
+
 def _holder_pieces(holder: HolderSpec, step_cone: float) -> list[_HolderPiece]:
     """The holder cut into uniform pieces, with each step's stiffness cone (:class:`BulkCoefficients`)."""
     segs = holder.segments
@@ -228,7 +257,7 @@ def _holder_pieces(holder: HolderSpec, step_cone: float) -> list[_HolderPiece]:
         for j, at in ((i - 1, x0), (i + 1, x1)):
             small = segs[j].outer_diameter_m if 0 <= j < len(segs) else big
             if step_cone > 0 and small < big:
-                cones.append((at, small, min(step_cone * (big - small) / 2.0, seg.length_m)))
+                cones.append((at, small, step_cone_length_m(step_cone, big, small, seg.length_m)))
         cuts = {x0, x1}
         for at, _, ell in cones:
             cuts.update(at + np.sign(x0 + x1 - 2 * at) * ell * np.arange(1, CONE_PIECES + 1) / CONE_PIECES)
