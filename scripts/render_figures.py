@@ -341,7 +341,11 @@ def _analysis_rows() -> list[list[str]]:
                     f"{lf['spread_2_workers_fresh_s']:.2f} s = {lf['spread_fresh_ratio_to_warm_prediction']:.0f}× "
                     f"with the workers started in the call, {lf['spread_2_workers_kept_s']:.2f} s = "
                     f"{lf['spread_kept_ratio_to_warm_prediction']:.0f}× with them kept "
-                    f"(one process: {lf['end_to_end_s']:.2f} s)" if "spread_2_workers_fresh_s" in lf else ""),
+                    f"(one process: {lf['end_to_end_s']:.2f} s)" if "spread_2_workers_fresh_s" in lf else "")
+                 + (f"; {lf['evaluations_per_speed']:.1f} (speed, depth) evaluations a speed at "
+                    f"{lf['seconds_per_evaluation'] * 1e3:.2f} ms each: at {lf['floor_evaluations_per_speed']} a speed, "
+                    f"the least a checked limit could need, {lf['floor_ratio_to_warm_prediction']:.0f}×"
+                    if "evaluations" in lf else ""),
                  goal("≤ 25×", lf["ratio_to_warm_prediction"] <= 25),
                  load_text(lobes["load_average_start"], lobes["load_average_end"]), "lobes.json"])
     robust = result("robust_lobes")
