@@ -22,10 +22,12 @@ calibration cases) and is then scored on every case and both bases
   a stiff shank deforms less than a thick body (the committed fit tried only the opposite sign).
 
 None of them brings the thin nose within 1.5 %; the record says by how much each moves it and
-what it costs elsewhere (``benchmarks/results/clamping_model_forms.json``, rendered in
+what it costs elsewhere. It also solves the thin nose's 3-D reference again on finer meshes
+(:data:`MESH_FACTORS`): its modes still move there, but the ratio of its two modes does not, and
+the beam's ratio stays about 3 % under it, so the miss is the model's, not the reference's (``benchmarks/results/clamping_model_forms.json``, rendered in
 ``docs/model.md``). The variants live only here: the product keeps the committed form.
 
-Run: ``.venv/bin/python benchmarks/clamping_model_forms.py`` (about 5 minutes on one core).
+Run: ``.venv/bin/python benchmarks/clamping_model_forms.py`` (about 8 minutes on one core).
 """
 
 from __future__ import annotations
@@ -44,7 +46,8 @@ sys.path.insert(0, str(REPO))
 
 from tests.oracles.solid3d import clamping_fit  # noqa: E402
 from tests.oracles.solid3d.clamping_scores import CALIBRATION_CASES, INFORMATION, score_row  # noqa: E402
-from tests.oracles.solid3d.dataset import BASES, reference_cases  # noqa: E402
+from tests.oracles.solid3d.dataset import BASES, FREQUENCY_HZ, reference_cases, with_mesh  # noqa: E402
+from tests.oracles.solid3d.solve import CUTOFF_FACTOR, build, solve_model  # noqa: E402
 
 import rcsa.model.clamping as clamping  # noqa: E402
 from rcsa.physics.sections import shear_coefficient  # noqa: E402
@@ -53,6 +56,9 @@ from record import load_average, write  # noqa: E402
 #: The issue's targets: every peak within 1.5 % in frequency and 15 % in height.
 TARGET = {"frequency": 0.015, "height": 0.15}
 NOSES = ("nose_od1.6d", "nose_od2.2d", "nose_od3.2d", "nose_od4d")
+#: Element sizes (× the data set's, every size and the grading) the thin nose's 3-D reference is
+#: solved again at, the data set's first.
+MESH_FACTORS = (1.0, 0.794, 0.63)
 
 
 @dataclass(frozen=True, slots=True)
@@ -177,12 +183,35 @@ def run_variant(name: str, fit_rows: list[clamping_fit.Row]) -> dict[str, Any]:
     return out
 
 
+def reference_on_finer_meshes(name: str = "nose_od1.6d") -> dict[str, Any]:
+    """The case's 3-D reference (clamped base) on the meshes of :data:`MESH_FACTORS`: its first two
+    natural frequencies and their ratio, against the committed model's peaks."""
+    case = reference_cases()[name][0]
+    meshes = []
+    for factor in MESH_FACTORS:
+        t0 = time.perf_counter()
+        model = build(with_mesh(case, factor), "elastic", CUTOFF_FACTOR * float(FREQUENCY_HZ[-1]))
+        frf = solve_model(model, FREQUENCY_HZ, "clamped")
+        assert frf.natural_frequencies_hz is not None
+        modes = [float(x) for x in frf.natural_frequencies_hz[:2]]
+        meshes.append({"factor": factor, "n_dof": frf.n_dof, "natural_frequencies_hz": modes,
+                       "ratio": modes[1] / modes[0], "seconds": time.perf_counter() - t0})
+        print(f"  {name} 3-D, sizes x{factor:g}: {frf.n_dof} DOF, modes {modes[0]:.2f} / {modes[1]:.2f} Hz, "
+              f"ratio {modes[1] / modes[0]:.4f}", flush=True)
+    beam = [float(p["model_hz"]) for p in score_row(name, "clamped", "clamping")["peaks"]]
+    first, finest = meshes[0]["natural_frequencies_hz"], meshes[-1]["natural_frequencies_hz"]
+    return {"case": name, "base": "clamped", "meshes": meshes, "model_hz": beam, "model_ratio": beam[1] / beam[0],
+            "finest_shift": [b / a - 1.0 for a, b in zip(first, finest, strict=True)],
+            "model_error_vs_finest": [m / f - 1.0 for m, f in zip(beam, finest, strict=True)]}
+
+
 def main() -> None:
     load = load_average()
     fit_rows = clamping_fit.prepare(CALIBRATION_CASES)
     variants = {name: run_variant(name, fit_rows) for name in VARIANTS}
     write("clamping_model_forms", {"target": TARGET, "calibration_cases": list(CALIBRATION_CASES),
-                                   "variants": variants}, load_start=load)
+                                   "variants": variants, "thin_nose_reference": reference_on_finer_meshes()},
+          load_start=load)
 
 
 if __name__ == "__main__":
