@@ -183,7 +183,7 @@ def main() -> None:
           f"{t_warm * 1e3:8.1f} ms   resolved lobes / prediction {t_sdm / t_warm:7.1f}x  (target <= 25x)")
     floor = FLOOR_EVALUATIONS * SPEEDS.size * per_eval_s
     print(f"  (speed, depth) evaluations {evaluations} ({evaluations / SPEEDS.size:.1f} a speed, "
-          f"{per_eval_s * 1e3:.2f} ms each); at {FLOOR_EVALUATIONS} a speed, the least a checked limit needs: "
+          f"{per_eval_s * 1e3:.2f} ms each); at {FLOOR_EVALUATIONS} a speed, the least a checked limit could need: "
           f"{floor:.2f} s = {floor / t_warm:.0f}x the warm prediction")
     print(f"  in CPU time: lobes {cpu[0]:.2f} s, prediction {warm[0] * 1e3:.1f} ms, ratio {cpu[0] / warm[0]:7.1f}x")
     request = {"assembly": ra1(GRID), **CUT, **low, "spindle_speed_rpm": {"start": 2000, "stop": 30000, "count": 500}}
