@@ -18,14 +18,16 @@ calibration cases) and is then scored on every case and both bases
   coefficient instead of its hollow section's (short holder tubes between steps and the
   bonded shank cannot warp as a long thin tube does; a thin wall gains most);
 * ``thin_wall_interface``: the holder side of the interface's surface compliance scales with
-  the wall, ``τ/(τ + τ₀)`` (``τ = (D − d)/d``, the wall over the bore's radius; τ₀ fitted): a thin wall bonded on
-  a stiff shank deforms less than a thick body (the committed fit tried only the opposite sign).
+  the wall, ``τ/(τ + τ₀)`` (``τ = (D − d)/d``, the wall over the bore's radius; τ₀ fitted): a
+  thin wall bonded on a stiff shank deforms less than a thick body (the committed fit tried only
+  the opposite sign).
 
 None of them brings the thin nose within 1.5 %; the record says by how much each moves it and
 what it costs elsewhere. It also solves the thin nose's 3-D reference again on finer meshes
 (:data:`MESH_FACTORS`): its modes still move there, but the ratio of its two modes does not, and
-the beam's ratio stays about 3 % under it, so the miss is the model's, not the reference's (``benchmarks/results/clamping_model_forms.json``, rendered in
-``docs/model.md``). The variants live only here: the product keeps the committed form.
+the beam's ratio stays about 3 % under it, so the miss is the model's, not the reference's
+(``benchmarks/results/clamping_model_forms.json``, rendered in ``docs/model.md``). The variants
+live only here: the product keeps the committed form.
 
 Run: ``.venv/bin/python benchmarks/clamping_model_forms.py`` (about 8 minutes on one core).
 """
