@@ -271,12 +271,13 @@ def spread_sdm_solver(backend: Backend) -> SdmSolver | None:
     SdmSolver or None
     """
     many = spread_sdm_diagrams(backend)
-    if many is None:
-        return None
-    spread: DiagramsSolver = many  # the name the closure keeps, known not to be None
+    return None if many is None else _one_model(many)
 
+
+def _one_model(many: DiagramsSolver) -> SdmSolver:
+    """``many`` as a solver of one model's diagram."""
     def solve(model: ModalModel, speeds_rpm: np.ndarray, settings: dict[str, Any]) -> SemiDiscretizationResult:
-        return spread([model], [speeds_rpm], settings)[0]
+        return many([model], [speeds_rpm], settings)[0]
 
     return solve
 
@@ -307,8 +308,8 @@ def stability_lobes_answer(request: Mapping[str, Any], *, store: MeasurementSour
     LobesAnswer
     """
     parsed, robust, fallback = _parse_lobes(request, within)
-    solver = None if backend is None else spread_sdm_solver(backend)
     diagrams = None if backend is None else spread_sdm_diagrams(backend)
+    solver = None if diagrams is None else _one_model(diagrams)  # spread_sdm_solver, from the same closure
     if fallback is not None:
         return replace(_answer(parsed, robust, store, max_lines, solver, diagrams), method_reason=fallback,
                        unchecked=True)
