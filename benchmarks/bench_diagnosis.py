@@ -93,6 +93,7 @@ def _first_calls(case: str, run, modules_before_first_call: bool) -> dict:
 
     problem._DRAW_CACHE.clear()
     cold_again = run()
+    counted = _count_first_call(run)
     assembly = ra1({"start_hz": 1.0, "stop_hz": 10000.0, "step_hz": 1.0})
     predictions.SIDES.size = 0  # cold, as bench_engine.py times it: no spindle side kept across calls
     yardstick = []
@@ -116,7 +117,60 @@ def _first_calls(case: str, run, modules_before_first_call: bool) -> dict:
             "verdict": first[2]["verdict"]["effect"], "phases_of_first_s": first[2].get("analysis", {}).get("timings_s"),
             "load_average": os.getloadavg(), "rcsa": str(Path(rcsa.__file__).parent),
             "scipy_loaded": any(m == "scipy" or m.startswith("scipy.") for m in sys.modules),
-            "diagnosis_modules_before_first_call": modules_before_first_call}
+            "diagnosis_modules_before_first_call": modules_before_first_call,
+            "first_call_counted": {**counted, "over_warm_prediction_cpu": {
+                name: cpu / pwc for name, cpu in counted["cpu_s_by_phase"].items()}
+                | {"insertion_fits": counted["insertion_fits_cpu_s"] / pwc}}}
+
+
+def _count_first_call(run) -> dict:
+    """An untimed repeat of the first call with its per-process caches dropped (the Monte-Carlo Σ,
+    the whole-insertion interpolants and the two-ports kept from them; the modules stay
+    imported), counting what it does:
+    the model's tool-point solves (``Solver.tip_h``: one configuration at one stickout) and the
+    CPU of each phase of the diagnosis, and the interpolants built and their CPU. It says where
+    a first diagnosis's time goes, and what a phase would cost whatever the rest did."""
+    from rcsa.analysis.diagnosis import chain_items, perturbed_model, problem, state
+    from rcsa.physics import insertion
+
+    problem._DRAW_CACHE.clear()
+    kept_fits, insertion._WHOLE_FITS = insertion._WHOLE_FITS, insertion._BandFits(insertion._FITS_MAX)
+    kept_ports, chain_items._TWO_PORTS = chain_items._TWO_PORTS, type(chain_items._TWO_PORTS)(
+        chain_items.TWO_PORTS_KEPT)
+    solves, fits = [0], [0, 0.0]
+    by_phase: dict[str, int] = {}
+    cpu_by_phase: dict[str, float] = {}
+    last = [0, time.process_time()]
+    tip_h, make_fit, mark = perturbed_model.Solver.tip_h, insertion._make_insertion_fit, state._Phases.mark
+
+    def counted_tip_h(self, parts, lines=slice(None)):
+        solves[0] += 1
+        return tip_h(self, parts, lines)
+
+    def counted_fit(ins, top):
+        c0 = time.process_time()
+        try:
+            return make_fit(ins, top)
+        finally:
+            fits[0] += 1
+            fits[1] += time.process_time() - c0
+
+    def counted_mark(self, name):
+        now = time.process_time()
+        by_phase[name], cpu_by_phase[name] = solves[0] - last[0], now - last[1]
+        last[:] = [solves[0], now]
+        mark(self, name)
+
+    last[1] = time.process_time()
+    perturbed_model.Solver.tip_h, insertion._make_insertion_fit, state._Phases.mark = (
+        counted_tip_h, counted_fit, counted_mark)
+    try:
+        run()
+    finally:
+        perturbed_model.Solver.tip_h, insertion._make_insertion_fit, state._Phases.mark = tip_h, make_fit, mark
+        insertion._WHOLE_FITS, chain_items._TWO_PORTS = kept_fits, kept_ports
+    return {"tip_solves_by_phase": by_phase, "tip_solves": solves[0], "cpu_s_by_phase": cpu_by_phase,
+            "insertion_fits": fits[0], "insertion_fits_cpu_s": fits[1]}
 
 
 def first_call_child(case: str, request_path: str) -> dict:
