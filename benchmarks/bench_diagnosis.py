@@ -124,12 +124,12 @@ def _first_calls(case: str, run, modules_before_first_call: bool) -> dict:
 
 
 def _count_first_call(run) -> dict:
-    """An untimed repeat of the first call with its per-process caches dropped (the Monte-Carlo Σ,
-    the whole-insertion interpolants and the two-ports kept from them; the modules stay
-    imported), counting what it does:
-    the model's tool-point solves (``Solver.tip_h``: one configuration at one stickout) and the
-    CPU of each phase of the diagnosis, and the interpolants built and their CPU. It says where
-    a first diagnosis's time goes, and what a phase would cost whatever the rest did."""
+    """An untimed repeat of the first call with its per-process caches dropped (the Monte-Carlo
+    Σ, the whole-insertion interpolants and the two-ports kept from them; the modules stay
+    imported), counting what it does: the model's tool-point solves (``Solver.tip_h``: one
+    configuration at one stickout) and the CPU of each phase of the diagnosis, and the
+    interpolants built and their CPU. It says where a first diagnosis's time goes, and what a
+    phase costs whatever the others did."""
     from rcsa.analysis.diagnosis import chain_items, perturbed_model, problem, state
     from rcsa.physics import insertion
 
