@@ -132,11 +132,11 @@ def _count_first_call(run) -> dict:
     phase costs whatever the others did."""
     from rcsa.analysis.diagnosis import chain_items, perturbed_model, problem, state
     from rcsa.physics import insertion
+    from rcsa.physics.subassembly_cache import LruStore
 
     problem._DRAW_CACHE.clear()
     kept_fits, insertion._WHOLE_FITS = insertion._WHOLE_FITS, insertion._BandFits(insertion._FITS_MAX)
-    kept_ports, chain_items._TWO_PORTS = chain_items._TWO_PORTS, type(chain_items._TWO_PORTS)(
-        chain_items.TWO_PORTS_KEPT)
+    kept_ports, chain_items._TWO_PORTS = chain_items._TWO_PORTS, LruStore(chain_items.TWO_PORTS_KEPT)
     solves, fits = [0], [0, 0.0]
     by_phase: dict[str, int] = {}
     cpu_by_phase: dict[str, float] = {}
